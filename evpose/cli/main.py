@@ -1,0 +1,72 @@
+"""The single ``evpose`` entry point.
+
+Subcommands are resolved lazily: only the module of the command being run is
+imported, so ``evpose info`` does not pay for importing gtsam, open3d or viser.
+Each module exposes ``main(...)``; its signature and docstring are the CLI (tyro).
+Errors caused by input (:class:`~evpose.errors.EvposeError`) print one line and exit 2.
+"""
+
+from __future__ import annotations
+
+import importlib
+import sys
+
+from evpose.errors import EvposeError
+
+# name -> (module, one-line description). Order is the order of ``evpose --help``.
+COMMANDS: dict[str, tuple[str, str]] = {
+    "info": ("evpose.cli.info", "describe a recording, map or trajectory"),
+    "convert": ("evpose.cli.convert", "convert a recording to evpose HDF5"),
+    "simulate": ("evpose.cli.simulate", "simulate an event camera + IMU recording with ground truth"),
+    "build-map": ("evpose.cli.build_map", "build a contour map from a raw point cloud"),
+    "track": ("evpose.cli.track", "track the camera pose against a map (EV-Pose)"),
+    "eval": ("evpose.cli.eval", "compare an estimated trajectory with ground truth"),
+    "bench": ("evpose.cli.bench", "run the benchmark suite and write a report"),
+    "sweep": ("evpose.cli.sweep", "evaluate a parameter grid over recordings"),
+    "slam": ("evpose.cli.slam", "map-free event(-inertial) SLAM"),
+    "app": ("evpose.cli.app", "start the browser-based viewer"),
+}
+
+
+def _usage() -> str:
+    width = max(len(n) for n in COMMANDS)
+    lines = ["usage: evpose COMMAND [ARGS...]", "", "commands:"]
+    lines += [f"  {name:<{width}}  {desc}" for name, (_, desc) in COMMANDS.items()]
+    lines += ["", "Run 'evpose COMMAND --help' for a command's options."]
+    return "\n".join(lines)
+
+
+def run(argv: list[str]) -> int:
+    """Run one subcommand; returns the process exit code."""
+    if not argv or argv[0] in ("-h", "--help", "help"):
+        print(_usage())
+        return 0 if argv else 2
+    if argv[0] == "--version":
+        from evpose import __version__
+
+        print(__version__)
+        return 0
+    name = argv[0]
+    if name not in COMMANDS:
+        print(f"evpose: error: unknown command {name!r}\n\n{_usage()}", file=sys.stderr)
+        return 2
+    import tyro
+
+    module = importlib.import_module(COMMANDS[name][0])
+    try:
+        result = tyro.cli(module.main, args=argv[1:], prog=f"evpose {name}", description=module.main.__doc__)
+    except EvposeError as exc:
+        print(f"evpose {name}: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"evpose {name}: interrupted", file=sys.stderr)
+        return 130
+    return int(result) if isinstance(result, int) else 0
+
+
+def main() -> None:
+    sys.exit(run(sys.argv[1:]))
+
+
+if __name__ == "__main__":
+    main()

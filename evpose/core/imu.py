@@ -1,0 +1,69 @@
+"""IMU sample arrays in the body frame B."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from evpose.errors import InputError
+
+
+@dataclass(frozen=True)
+class ImuSamples:
+    """Time-sorted accelerometer and gyroscope samples.
+
+    The accelerometer measures specific force ``f = R_wb^T (a_w - g_w)`` with
+    ``g_w = (0, 0, -9.81)`` m/s^2 in z-up worlds, so a resting IMU reads +9.81 on
+    its up axis.
+    """
+
+    t: np.ndarray
+    """Timestamps, int64 microseconds (IMU clock)."""
+    acc: np.ndarray
+    """Specific force, float64 (N, 3), m/s^2, body frame."""
+    gyro: np.ndarray
+    """Angular rate, float64 (N, 3), rad/s, body frame."""
+
+    @classmethod
+    def from_arrays(cls, t, acc, gyro) -> "ImuSamples":
+        t = np.ascontiguousarray(t, dtype=np.int64)
+        acc = np.ascontiguousarray(acc, dtype=np.float64).reshape(-1, 3)
+        gyro = np.ascontiguousarray(gyro, dtype=np.float64).reshape(-1, 3)
+        if not (t.shape[0] == acc.shape[0] == gyro.shape[0]):
+            raise ValueError(f"IMU columns differ in length: {t.shape[0]}, {acc.shape[0]}, {gyro.shape[0]}")
+        return cls(t, acc, gyro)
+
+    @classmethod
+    def empty(cls) -> "ImuSamples":
+        return cls.from_arrays(np.zeros(0, np.int64), np.zeros((0, 3)), np.zeros((0, 3)))
+
+    def __len__(self) -> int:
+        return int(self.t.shape[0])
+
+    def __getitem__(self, index) -> "ImuSamples":
+        return ImuSamples(self.t[index], self.acc[index], self.gyro[index])
+
+    @property
+    def rate_hz(self) -> float:
+        """Median sample rate in Hz (0 for fewer than two samples)."""
+        if len(self) < 2:
+            return 0.0
+        return float(1e6 / np.median(np.diff(self.t)))
+
+    def time_window(self, t0_us: int, t1_us: int) -> "ImuSamples":
+        i0 = int(np.searchsorted(self.t, t0_us, side="left"))
+        i1 = int(np.searchsorted(self.t, t1_us, side="left"))
+        return self[i0:i1]
+
+    def validate(self, source: str | None = None) -> None:
+        if len(self) == 0:
+            return
+        bad = np.flatnonzero(np.diff(self.t) <= 0)
+        if bad.size:
+            i = int(bad[0]) + 1
+            raise InputError(source, f"timestamp {int(self.t[i])} us does not increase (previous {int(self.t[i - 1])} us)", f"IMU sample {i}")
+        finite = np.isfinite(self.acc).all(axis=1) & np.isfinite(self.gyro).all(axis=1)
+        bad = np.flatnonzero(~finite)
+        if bad.size:
+            raise InputError(source, "NaN or infinite value", f"IMU sample {int(bad[0])}")

@@ -1,0 +1,114 @@
+"""Pose trajectories: timestamps plus ``T_world_cam`` (camera-to-world) poses."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial.transform import Rotation, Slerp
+
+from evpose.errors import InputError
+
+
+def pose_matrix(rotation: Rotation, position: np.ndarray) -> np.ndarray:
+    """Stack rotations and translations into (N, 4, 4) homogeneous matrices."""
+    mats = rotation.as_matrix().reshape(-1, 3, 3)
+    n = mats.shape[0]
+    out = np.zeros((n, 4, 4))
+    out[:, :3, :3] = mats
+    out[:, :3, 3] = np.asarray(position, dtype=np.float64).reshape(n, 3)
+    out[:, 3, 3] = 1.0
+    return out
+
+
+def invert_pose(T: np.ndarray) -> np.ndarray:
+    """Inverse of one (4, 4) or many (N, 4, 4) rigid transforms."""
+    T = np.asarray(T, dtype=np.float64)
+    R = T[..., :3, :3]
+    t = T[..., :3, 3]
+    out = np.zeros_like(T)
+    Rt = np.swapaxes(R, -1, -2)
+    out[..., :3, :3] = Rt
+    out[..., :3, 3] = -np.einsum("...ij,...j->...i", Rt, t)
+    out[..., 3, 3] = 1.0
+    return out
+
+
+@dataclass(frozen=True)
+class Trajectory:
+    """Time-stamped poses ``T_world_cam`` (maps camera-frame points into the world)."""
+
+    t: np.ndarray
+    """Timestamps, int64 microseconds, strictly increasing."""
+    position: np.ndarray
+    """Camera centre in the world, float64 (N, 3), metres."""
+    quat_xyzw: np.ndarray
+    """Orientation of the camera in the world as unit quaternions (x, y, z, w), float64 (N, 4)."""
+
+    @classmethod
+    def from_arrays(cls, t, position, quat_xyzw) -> "Trajectory":
+        t = np.ascontiguousarray(t, dtype=np.int64)
+        position = np.ascontiguousarray(position, dtype=np.float64).reshape(-1, 3)
+        q = np.ascontiguousarray(quat_xyzw, dtype=np.float64).reshape(-1, 4)
+        if not (t.shape[0] == position.shape[0] == q.shape[0]):
+            raise ValueError("trajectory columns differ in length")
+        norms = np.linalg.norm(q, axis=1, keepdims=True)
+        q = q / np.where(norms > 0, norms, 1.0)
+        return cls(t, position, q)
+
+    @classmethod
+    def from_matrices(cls, t, T_world_cam: np.ndarray) -> "Trajectory":
+        T = np.asarray(T_world_cam, dtype=np.float64).reshape(-1, 4, 4)
+        q = Rotation.from_matrix(T[:, :3, :3]).as_quat()
+        return cls.from_arrays(t, T[:, :3, 3], q)
+
+    @classmethod
+    def empty(cls) -> "Trajectory":
+        return cls.from_arrays(np.zeros(0, np.int64), np.zeros((0, 3)), np.zeros((0, 4)))
+
+    def __len__(self) -> int:
+        return int(self.t.shape[0])
+
+    def __getitem__(self, index) -> "Trajectory":
+        return Trajectory(self.t[index], self.position[index], self.quat_xyzw[index])
+
+    @property
+    def rotation(self) -> Rotation:
+        return Rotation.from_quat(self.quat_xyzw)
+
+    def matrices(self) -> np.ndarray:
+        """All poses as (N, 4, 4) ``T_world_cam`` matrices."""
+        return pose_matrix(self.rotation, self.position)
+
+    def matrix(self, i: int) -> np.ndarray:
+        return pose_matrix(Rotation.from_quat(self.quat_xyzw[i]), self.position[i])[0]
+
+    def interpolate(self, t_query_us) -> "Trajectory":
+        """Poses at the given times: linear in position, slerp in rotation; times are clamped to the span."""
+        tq = np.atleast_1d(np.asarray(t_query_us, dtype=np.int64))
+        if len(self) == 0:
+            raise ValueError("cannot interpolate an empty trajectory")
+        if len(self) == 1:
+            return Trajectory.from_arrays(tq, np.repeat(self.position, tq.size, 0), np.repeat(self.quat_xyzw, tq.size, 0))
+        tc = np.clip(tq, self.t[0], self.t[-1]).astype(np.float64)
+        ts = self.t.astype(np.float64)
+        pos = np.stack([np.interp(tc, ts, self.position[:, k]) for k in range(3)], axis=1)
+        rot = Slerp(ts, self.rotation)(tc)
+        return Trajectory.from_arrays(tq, pos, rot.as_quat())
+
+    def time_window(self, t0_us: int, t1_us: int) -> "Trajectory":
+        i0 = int(np.searchsorted(self.t, t0_us, side="left"))
+        i1 = int(np.searchsorted(self.t, t1_us, side="left"))
+        return self[i0:i1]
+
+    def validate(self, source: str | None = None) -> None:
+        if len(self) == 0:
+            return
+        bad = np.flatnonzero(np.diff(self.t) <= 0)
+        if bad.size:
+            i = int(bad[0]) + 1
+            raise InputError(source, f"timestamp {int(self.t[i])} us does not increase (previous {int(self.t[i - 1])} us)", f"pose {i}")
+        finite = np.isfinite(self.position).all(axis=1) & np.isfinite(self.quat_xyzw).all(axis=1)
+        bad = np.flatnonzero(~finite)
+        if bad.size:
+            raise InputError(source, "NaN or infinite value", f"pose {int(bad[0])}")

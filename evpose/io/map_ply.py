@@ -1,0 +1,190 @@
+"""Contour maps as PLY files with named per-vertex properties.
+
+Schema (binary little-endian, one ``vertex`` element):
+
+=================  =======  ===================================================
+property           type     meaning
+=================  =======  ===================================================
+x y z              double   position in the world, metres
+enx eny enz        float    in-plane outward edge normal (unit, 0 if unknown)
+nx ny nz           float    plane normal (unit, 0 if unknown)
+region             int      region id (-1 none)
+curvature          float    surface variation at the point
+brightness_sign    char     +1 brighter along the edge normal, -1 darker, 0 unknown
+=================  =======  ===================================================
+
+Plain point clouds (``.ply``/``.pcd`` without these properties) are read with
+open3d and become maps with unknown attributes.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from evpose.core.contour_map import ContourMap
+from evpose.errors import InputError
+from evpose.io.atomic import atomic_path
+
+_PLY_TYPES = {
+    "char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1",
+    "short": "i2", "int16": "i2", "ushort": "u2", "uint16": "u2",
+    "int": "i4", "int32": "i4", "uint": "u4", "uint32": "u4",
+    "float": "f4", "float32": "f4", "double": "f8", "float64": "f8",
+}
+
+_SCHEMA = [
+    ("x", "f8"), ("y", "f8"), ("z", "f8"),
+    ("enx", "f4"), ("eny", "f4"), ("enz", "f4"),
+    ("nx", "f4"), ("ny", "f4"), ("nz", "f4"),
+    ("region", "i4"), ("curvature", "f4"), ("brightness_sign", "i1"),
+]
+_NAMES = {"f8": "double", "f4": "float", "i4": "int", "i1": "char"}
+
+
+class MapFileError(InputError):
+    """A map file that cannot be read as a point cloud or contour map."""
+
+
+def write_contour_map(path: str | Path, cmap: ContourMap, comment: str = "evpose contour map") -> None:
+    """Write ``cmap`` atomically as binary PLY with the schema above."""
+    n = len(cmap)
+    rec = np.empty(n, dtype=[(name, "<" + t) for name, t in _SCHEMA])
+    rec["x"], rec["y"], rec["z"] = cmap.points.T
+    rec["enx"], rec["eny"], rec["enz"] = cmap.edge_normal.T
+    rec["nx"], rec["ny"], rec["nz"] = cmap.plane_normal.T
+    rec["region"] = cmap.region_id
+    rec["curvature"] = cmap.curvature
+    rec["brightness_sign"] = cmap.brightness_sign
+    header = ["ply", "format binary_little_endian 1.0", f"comment {comment}", f"element vertex {n}"]
+    header += [f"property {_NAMES[t]} {name}" for name, t in _SCHEMA]
+    header.append("end_header")
+    with atomic_path(path) as tmp:
+        with open(tmp, "wb") as fh:
+            fh.write(("\n".join(header) + "\n").encode("ascii"))
+            fh.write(rec.tobytes())
+
+
+def _parse_header(fh, path: Path):
+    first = fh.readline()
+    if first.strip() != b"ply":
+        return None
+    fmt = None
+    elements: list[tuple[str, int, list[tuple[str, str]]]] = []
+    while True:
+        line = fh.readline()
+        if not line:
+            raise MapFileError(path, "PLY header has no end_header")
+        words = line.decode("ascii", "replace").split()
+        if not words or words[0] in ("comment", "obj_info"):
+            continue
+        if words[0] == "format":
+            fmt = words[1]
+        elif words[0] == "element":
+            elements.append((words[1], int(words[2]), []))
+        elif words[0] == "property":
+            if not elements:
+                raise MapFileError(path, "PLY property before any element")
+            if words[1] == "list":
+                elements[-1][2].append((words[-1], "list"))
+            elif words[1] in _PLY_TYPES:
+                elements[-1][2].append((words[2], _PLY_TYPES[words[1]]))
+            else:
+                raise MapFileError(path, f"unknown PLY property type {words[1]!r}")
+        elif words[0] == "end_header":
+            return fmt, elements
+
+
+def _read_vertices(path: Path) -> np.ndarray | None:
+    """Structured vertex array for simple PLY files, None where open3d must take over."""
+    with open(path, "rb") as fh:
+        parsed = _parse_header(fh, path)
+        if parsed is None:
+            return None
+        fmt, elements = parsed
+        if not elements or elements[0][0] != "vertex" or any(t == "list" for _, t in elements[0][2]):
+            return None
+        _, n, props = elements[0]
+        if fmt == "binary_little_endian":
+            dtype = np.dtype([(name, "<" + t) for name, t in props])
+            raw = fh.read(n * dtype.itemsize)
+            if len(raw) < n * dtype.itemsize:
+                raise MapFileError(path, f"file is truncated: header promises {n} vertices, data holds {len(raw) // dtype.itemsize}")
+            return np.frombuffer(raw, dtype=dtype, count=n)
+        if fmt == "ascii":
+            dtype = np.dtype([(name, t) for name, t in props])
+            out = np.empty(n, dtype=dtype)
+            for i in range(n):
+                line = fh.readline()
+                vals = line.split()
+                if len(vals) != len(props):
+                    raise MapFileError(path, f"expected {len(props)} values, got {len(vals)}", f"vertex {i}")
+                try:
+                    out[i] = tuple(float(v) for v in vals)
+                except ValueError:
+                    raise MapFileError(path, "not a number", f"vertex {i}") from None
+            return out
+        return None
+
+
+def _check_points(points: np.ndarray, path: Path) -> None:
+    if points.shape[0] == 0:
+        raise MapFileError(path, "point cloud is empty")
+    bad = np.flatnonzero(~np.isfinite(points).all(axis=1))
+    if bad.size:
+        raise MapFileError(path, "NaN or infinite coordinate", f"point {int(bad[0])}")
+
+
+def read_contour_map(path: str | Path) -> ContourMap:
+    """Read a contour map written by :func:`write_contour_map`, or any point cloud open3d reads."""
+    path = Path(path)
+    if not path.is_file():
+        raise MapFileError(path, "no such file")
+    verts = None
+    if path.suffix.lower() == ".ply":
+        try:
+            verts = _read_vertices(path)
+        except (ValueError, UnicodeDecodeError) as exc:
+            raise MapFileError(path, f"malformed PLY ({exc})") from None
+    if verts is not None and all(name in verts.dtype.names for name in ("x", "y", "z")):
+        names = set(verts.dtype.names)
+        pts = np.stack([verts["x"], verts["y"], verts["z"]], axis=1).astype(np.float64)
+        _check_points(pts, path)
+        attrs = {}
+        if {"enx", "eny", "enz"} <= names:
+            attrs["edge_normal"] = np.stack([verts["enx"], verts["eny"], verts["enz"]], axis=1)
+        if {"nx", "ny", "nz"} <= names:
+            attrs["plane_normal"] = np.stack([verts["nx"], verts["ny"], verts["nz"]], axis=1)
+        if "region" in names:
+            attrs["region_id"] = verts["region"]
+        if "curvature" in names:
+            attrs["curvature"] = verts["curvature"]
+        if "brightness_sign" in names:
+            attrs["brightness_sign"] = verts["brightness_sign"]
+        return ContourMap.from_points(pts, **attrs)
+    return ContourMap.from_points(read_point_cloud(path)[0])
+
+
+def read_point_cloud(path: str | Path) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """Raw cloud via open3d: positions (N, 3) and optional ``normals``/``colors`` (N, 3)."""
+    import open3d as o3d
+
+    path = Path(path)
+    if not path.is_file():
+        raise MapFileError(path, "no such file")
+    if path.suffix.lower() not in (".ply", ".pcd", ".xyz", ".xyzn", ".xyzrgb", ".pts"):
+        raise MapFileError(path, f"not a point-cloud file (unknown suffix {path.suffix!r})")
+    with open(path, "rb") as fh:
+        head = fh.read(64)
+    if path.suffix.lower() == ".ply" and not head.startswith(b"ply"):
+        raise MapFileError(path, "not a PLY file (missing 'ply' magic)")
+    pcd = o3d.io.read_point_cloud(str(path))
+    pts = np.asarray(pcd.points, dtype=np.float64)
+    _check_points(pts, path)
+    extra = {}
+    if pcd.has_normals():
+        extra["normals"] = np.asarray(pcd.normals, dtype=np.float64)
+    if pcd.has_colors():
+        extra["colors"] = np.asarray(pcd.colors, dtype=np.float64)
+    return pts, extra

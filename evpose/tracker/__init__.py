@@ -1,0 +1,1 @@
+"""Visible-map culling, event-map registration and the steppable tracking engine."""
