@@ -58,6 +58,10 @@ def run(argv: list[str]) -> int:
     except EvposeError as exc:
         print(f"evpose {name}: error: {exc}", file=sys.stderr)
         return 2
+    except BrokenPipeError:
+        # Output piped into e.g. `head`, which closed early: not an error of ours.
+        sys.stderr.close()
+        return 0
     except KeyboardInterrupt:
         print(f"evpose {name}: interrupted", file=sys.stderr)
         return 130

@@ -11,6 +11,12 @@ from pathlib import Path
 from evpose.errors import InputError
 
 
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
 def _check_not_input(dst: Path, inputs: tuple[Path, ...]) -> None:
     for src in inputs:
         try:
@@ -44,6 +50,8 @@ def atomic_path(dst: str | Path, inputs: tuple[str | Path, ...] = (), is_dir: bo
         tmp = Path(name)
     try:
         yield tmp
+        # mkstemp/mkdtemp create 0600/0700; give the result the permissions a plain open() would.
+        os.chmod(tmp, (0o777 if is_dir else 0o666) & ~_umask())
         if is_dir and dst.exists():
             shutil.rmtree(dst) if dst.is_dir() else dst.unlink()
         os.replace(tmp, dst)

@@ -1,0 +1,147 @@
+"""Recognise a recording on disk and open it: ECD folder, evpose HDF5, event h5, ROS1/ROS2 bag.
+
+:func:`open_stream` gives everything except the events in memory plus a
+generator of event batches, so :mod:`evpose.io.convert` can stream any source
+with bounded memory; :func:`open_recording` reads it all.
+"""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable, Iterator
+
+from evpose.core.events import EventArray
+from evpose.core.recording import Recording
+from evpose.errors import ConfigError, InputError
+
+
+class SourceFormat(str, enum.Enum):
+    """Formats :func:`detect_format` recognises."""
+
+    ECD = "ecd"
+    EVPOSE_H5 = "evpose-h5"
+    EVENT_H5 = "event-h5"
+    ROS1_BAG = "ros1-bag"
+    ROS2_BAG = "ros2-bag"
+
+
+@dataclass
+class RecordingStream:
+    """A recording whose events are read batch by batch."""
+
+    context: Recording
+    """Calibration, IMU, ground truth and metadata; ``events`` is empty."""
+    format: SourceFormat
+    """What the source was recognised as."""
+    batches: Callable[[Callable[[int], None] | None], Iterator[EventArray]]
+    """``batches(on_progress)`` yields the events in time order; ``on_progress(n)`` advances by ``n`` progress units."""
+    progress_total: int
+    """Progress units in the whole source (bytes or events)."""
+    progress_unit: str
+    """``"B"`` or ``"ev"``."""
+
+
+def check_events(ev: EventArray, offset: int, last_t: int | None, size: tuple[int, int] | None, source: str | Path, record: str = "event") -> None:
+    """Validate one batch whose first event has global index ``offset``; errors name ``{record} {index}``."""
+    try:
+        ev.validate(*(size if size else (None, None)), source=str(source))
+    except InputError as exc:
+        i = int(exc.record.split()[-1]) if exc.record else 0
+        raise InputError(source, exc.problem, f"{record} {offset + i}") from None
+    if last_t is not None and len(ev) and int(ev.t[0]) < last_t:
+        raise InputError(source, f"timestamp {int(ev.t[0])} us is earlier than the previous {last_t} us (timestamps must be sorted)", f"{record} {offset}")
+
+
+def _is_hdf5(path: Path) -> bool:
+    try:
+        with open(path, "rb") as fh:
+            return fh.read(8) == b"\x89HDF\r\n\x1a\n"
+    except OSError:
+        return False
+
+
+def detect_format(path: str | Path) -> SourceFormat:
+    """What ``path`` holds, from its layout and magic bytes (not just its suffix)."""
+    from evpose.io import ecd, h5
+
+    path = Path(path)
+    if not path.exists():
+        raise InputError(path, "no such file or folder")
+    if path.is_dir():
+        if ecd.is_ecd_folder(path):
+            return SourceFormat.ECD
+        if (path / "metadata.yaml").is_file() or any(path.glob("*.db3")) or any(path.glob("*.mcap")):
+            return SourceFormat.ROS2_BAG
+        raise InputError(path, "folder is neither an ECD folder (events.txt) nor a ROS2 bag (metadata.yaml)")
+    suffix = path.suffix.lower()
+    if suffix == ".bag":
+        return SourceFormat.ROS1_BAG
+    if suffix in (".db3", ".mcap"):
+        return SourceFormat.ROS2_BAG
+    if _is_hdf5(path):
+        return SourceFormat.EVPOSE_H5 if h5.is_recording_h5(path) else SourceFormat.EVENT_H5
+    if suffix in (".h5", ".hdf5"):
+        raise InputError(path, "not an HDF5 file (bad signature)")
+    raise InputError(path, f"unrecognised recording (suffix {suffix!r}); expected an ECD folder, .h5/.hdf5, .bag, ROS2 bag folder, .db3 or .mcap")
+
+
+def open_stream(path: str | Path, width: int | None = None, height: int | None = None, **options) -> RecordingStream:
+    """Open ``path`` for streaming. ``width``/``height`` state the sensor size where the format lacks it.
+
+    ``options`` go to the format's reader (bag topics: ``events_topic``, ``imu_topic``, ``pose_topic``).
+    """
+    path = Path(path)
+    if (width is None) != (height is None):
+        raise ConfigError("give both width and height of the sensor, or neither")
+    if width is not None and (width <= 0 or height <= 0 or width > 65536 or height > 65536):
+        raise ConfigError(f"sensor size must be 1..65536 pixels, got {width}x{height}")
+    fmt = detect_format(path)
+    if fmt is SourceFormat.ECD:
+        from evpose.io import ecd
+
+        ctx, size = ecd.read_ecd_context(path, width, height)
+        w, h = size if size else (None, None)
+        events = path / ecd.EVENTS_FILE
+        return RecordingStream(ctx, fmt, lambda cb=None: ecd.iter_ecd_events(events, w, h, on_bytes=cb), events.stat().st_size, "B")
+    if fmt is SourceFormat.EVPOSE_H5:
+        from evpose.io.h5 import H5RecordingReader
+
+        with H5RecordingReader(path) as r:
+            ctx = Recording(EventArray.empty(), r.imu, r.ground_truth, r.calibration, dict(r.metadata), source=path)
+            n = r.n_events
+
+        size = ctx.sensor_size
+
+        def batches(cb=None):
+            offset, last = 0, None
+            with H5RecordingReader(path) as reader:
+                for b in reader.iter_chunks():
+                    check_events(b, offset, last, size, path)
+                    offset, last = offset + len(b), (int(b.t[-1]) if len(b) else last)
+                    if cb:
+                        cb(len(b))
+                    yield b
+
+        return RecordingStream(ctx, fmt, batches, n, "ev")
+    if fmt is SourceFormat.EVENT_H5:
+        from evpose.io import event_h5
+
+        return event_h5.open_event_h5_stream(path, width, height)
+    from evpose.io import rosbag
+
+    return rosbag.open_bag_stream(path, **options)
+
+
+def open_recording(path: str | Path, width: int | None = None, height: int | None = None, **options) -> Recording:
+    """Read any supported recording fully into memory (see :func:`detect_format`)."""
+    path = Path(path)
+    if detect_format(path) is SourceFormat.EVPOSE_H5:
+        from evpose.io.h5 import read_recording_h5
+
+        return read_recording_h5(path)
+    stream = open_stream(path, width, height, **options)
+    rec = stream.context
+    rec.events = EventArray.concatenate(list(stream.batches(None)))
+    return rec

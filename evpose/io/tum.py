@@ -1,0 +1,49 @@
+"""TUM trajectory files: one pose per line, ``t tx ty tz qx qy qz qw``, t in seconds, pose = ``T_world_cam``."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from evpose.core.trajectory import Trajectory
+from evpose.errors import InputError
+from evpose.io.atomic import atomic_path
+from evpose.io.text_table import TimeUnit, read_table, write_table
+
+
+def read_tum(path: str | Path, unit: TimeUnit = TimeUnit.SECONDS) -> Trajectory:
+    """Read a TUM file (``#`` comments allowed). Times must strictly increase; quaternions are normalised."""
+    t, v = read_table(path, 8, unit=unit)
+    if t.size == 0:
+        raise InputError(path, "contains no poses")
+    norms = np.linalg.norm(v[:, 3:7], axis=1)
+    bad = np.flatnonzero(norms < 1e-9)
+    if bad.size:
+        raise InputError(path, "quaternion has zero length", f"pose {int(bad[0])}")
+    return Trajectory.from_arrays(t, v[:, 0:3], v[:, 3:7])
+
+
+def write_tum(path: str | Path, traj: Trajectory, inputs: tuple = ()) -> None:
+    """Write ``traj`` atomically; times as exact seconds (6 decimals), values in full float64 precision."""
+    with atomic_path(path, inputs=inputs) as tmp:
+        with open(tmp, "w", encoding="utf-8") as fh:
+            write_table(fh, traj.t, np.hstack([traj.position, traj.quat_xyzw]), header="t tx ty tz qx qy qz qw (T_world_cam, t in s)")
+
+
+def is_tum_file(path: str | Path) -> bool:
+    """True if the first data line of ``path`` has 8 numbers (cheap sniff for ``evpose info``)."""
+    try:
+        with open(path, encoding="utf-8") as fh:
+            for line in fh:
+                s = line.strip()
+                if not s or s.startswith("#"):
+                    continue
+                parts = s.split()
+                if len(parts) != 8:
+                    return False
+                [float(p) for p in parts]
+                return True
+    except (OSError, UnicodeDecodeError, ValueError):
+        return False
+    return False

@@ -1,0 +1,65 @@
+"""``evpose info`` on recordings of every format, contour maps and TUM trajectories."""
+
+import json
+
+import numpy as np
+import pytest
+
+from evpose.cli.main import run
+from evpose.core.contour_map import ContourMap
+from evpose.core.events import EventArray
+from evpose.core.recording import Recording
+from evpose.core.trajectory import Trajectory
+from evpose.io.ecd import write_ecd_folder
+from evpose.io.map_ply import write_contour_map
+from evpose.io.tum import write_tum
+
+
+def info(capsys, *args):
+    capsys.readouterr()
+    code = run(["info", *map(str, args)])
+    out = capsys.readouterr()
+    return code, out.out, out.err
+
+
+def test_ecd_folder_without_size_says_the_size_is_unknown(tmp_path, capsys):
+    t = np.arange(0, 1_000_000, 100)
+    write_ecd_folder(tmp_path / "s", Recording(EventArray.from_arrays(t, t % 200, t % 100, t % 2)))
+    (tmp_path / "s" / "evpose.json").unlink()
+    (tmp_path / "s" / "calib.txt").write_text("1 2 3 4 0 0 0 0 0\n")
+    code, out, _ = info(capsys, tmp_path / "s")
+    assert code == 0
+    assert "events        10000" in out and "sensor size   unknown" in out
+    assert "calib.txt has intrinsics but no sensor size" in out
+    code, out, _ = info(capsys, tmp_path / "s", "--width", "240", "--height", "180", "--json-output")
+    s = json.loads(out)
+    assert s["sensor_size"] == [240, 180] and s["calibration"]["fx"] == 1.0
+    assert s["event_rate_hz"] == pytest.approx(10000 / 0.9999)
+
+
+def test_tum_trajectory_reports_poses_duration_and_path_length(tmp_path, capsys):
+    t = np.arange(11) * 100_000
+    pos = np.stack([np.arange(11) * 0.1, np.zeros(11), np.zeros(11)], axis=1)
+    write_tum(tmp_path / "traj.txt", Trajectory.from_arrays(t, pos, np.tile([0, 0, 0, 1.0], (11, 1))))
+    code, out, _ = info(capsys, tmp_path / "traj.txt", "--json-output")
+    s = json.loads(out)
+    assert (s["poses"], s["duration_s"]) == (11, 1.0)
+    assert s["path_length_m"] == pytest.approx(1.0)
+
+
+def test_contour_map_reports_points_bounds_regions_and_attributes(tmp_path, capsys):
+    pts = np.array([[0, 0, 0], [1, 2, 3], [-1, 0, 1.0]])
+    cmap = ContourMap.from_points(pts, region_id=[0, 0, 1], edge_normal=[[1, 0, 0]] * 3, brightness_sign=[1, 0, -1])
+    write_contour_map(tmp_path / "m.ply", cmap)
+    code, out, _ = info(capsys, tmp_path / "m.ply", "--json-output")
+    s = json.loads(out)
+    assert s["points"] == 3 and s["regions"] == 2 and s["edge_normals"] and s["brightness_signs"]
+    assert s["bounds_min_m"] == [-1, 0, 0] and s["bounds_max_m"] == [1, 2, 3]
+    code, out, _ = info(capsys, tmp_path / "m.ply")
+    assert "points        3" in out and "known for 66.7 % of points" in out
+
+
+def test_text_file_that_is_not_a_trajectory_exits_2(tmp_path, capsys):
+    (tmp_path / "x.txt").write_text("hello world\n")
+    code, _, err = info(capsys, tmp_path / "x.txt")
+    assert code == 2 and "not a TUM trajectory" in err

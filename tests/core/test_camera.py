@@ -1,0 +1,117 @@
+"""CameraCalibration: projection, distortion and their inverses for both lens models."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from evpose.core.camera import CameraCalibration, DistortionModel
+from evpose.errors import InputError
+
+coef = st.floats(allow_nan=False, allow_infinity=False)
+
+
+def radtan(k1, k2, p1, p2, k3):
+    return CameraCalibration(640, 480, 400.0, 410.0, 320.0, 240.0, DistortionModel.RADTAN, (k1, k2, p1, p2, k3))
+
+
+def kb(k1, k2, k3, k4):
+    return CameraCalibration(1280, 720, 700.0, 700.0, 640.0, 360.0, DistortionModel.EQUIDISTANT, (k1, k2, k3, k4))
+
+
+radtan_cams = st.builds(
+    radtan,
+    st.floats(-0.3, 0.3), st.floats(-0.1, 0.1), st.floats(-0.005, 0.005), st.floats(-0.005, 0.005), st.floats(-0.01, 0.01),
+)
+kb_cams = st.builds(kb, st.floats(-0.05, 0.05), st.floats(-0.01, 0.01), st.floats(-0.005, 0.005), st.floats(-0.001, 0.001))
+# Normalised coordinates inside the region where these models are monotonic (|a|,|b| <= 0.5).
+normalized = st.tuples(st.floats(-0.5, 0.5), st.floats(-0.5, 0.5))
+
+
+@settings(max_examples=150, deadline=None)
+@given(radtan_cams, normalized)
+def test_radtan_distort_then_undistort_returns_the_point(cam, ab):
+    ab = np.array([ab])
+    back = cam.undistort_normalized(cam.distort_normalized(ab))
+    np.testing.assert_allclose(back, ab, atol=1e-9, rtol=0)
+
+
+@settings(max_examples=150, deadline=None)
+@given(kb_cams, normalized)
+def test_equidistant_distort_then_undistort_returns_the_point(cam, ab):
+    ab = np.array([ab])
+    back = cam.undistort_normalized(cam.distort_normalized(ab))
+    np.testing.assert_allclose(back, ab, atol=1e-9, rtol=0)
+
+
+@settings(max_examples=150, deadline=None)
+@given(st.one_of(radtan_cams, kb_cams), normalized, st.floats(0.2, 50.0))
+def test_unproject_of_project_is_the_bearing_of_the_point(cam, ab, z):
+    P = np.array([[ab[0] * z, ab[1] * z, z]])
+    ray = cam.unproject(cam.project(P))
+    np.testing.assert_allclose(ray, P / np.linalg.norm(P), atol=1e-9, rtol=0)
+
+
+@settings(max_examples=150, deadline=None)
+@given(st.one_of(radtan_cams, kb_cams), normalized)
+def test_project_of_unproject_returns_the_pixel(cam, ab):
+    uv = cam.project(np.array([[ab[0], ab[1], 1.0]]))
+    back = cam.project(cam.unproject(uv))
+    np.testing.assert_allclose(back, uv, atol=1e-9, rtol=0)
+
+
+@settings(max_examples=50, deadline=None)
+@given(kb_cams, st.floats(0.0, 1.3), st.floats(-np.pi, np.pi))
+def test_equidistant_round_trips_wide_angles(cam, theta, phi):
+    d = np.array([[np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)]])
+    np.testing.assert_allclose(cam.unproject(cam.project(d)), d, atol=1e-9, rtol=0)
+
+
+def test_undistort_pixels_matches_pinhole_projection_of_the_same_point():
+    cam = radtan(-0.25, 0.05, 0.001, -0.002, 0.0)
+    P = np.array([[0.3, -0.2, 1.5], [-0.4, 0.25, 2.0]])
+    ideal = cam.without_distortion().project(P)
+    np.testing.assert_allclose(cam.undistort_pixels(cam.project(P)), ideal, atol=1e-9)
+
+
+def test_undistortion_table_matches_undistort_pixels():
+    cam = CameraCalibration(24, 18, 20.0, 20.0, 12.0, 9.0, DistortionModel.RADTAN, (-0.2, 0.03, 0.0, 0.0, 0.0))
+    table = cam.undistortion_table
+    assert table.shape == (18, 24, 2)
+    np.testing.assert_allclose(table[5, 7], cam.undistort_pixels(np.array([[7.0, 5.0]]))[0], atol=1e-4)
+
+
+def test_points_behind_the_camera_project_to_nan():
+    cam = radtan(0.0, 0.0, 0.0, 0.0, 0.0)
+    assert np.isnan(cam.project(np.array([[0.0, 0.0, -1.0]]))).all()
+
+
+def test_calibration_round_trips_through_dict_with_extrinsic_and_offset():
+    T = np.eye(4)
+    T[:3, 3] = [0.01, -0.02, 0.03]
+    cam = CameraCalibration(346, 260, 300.0, 301.0, 170.0, 130.0, DistortionModel.EQUIDISTANT, (0.01, 0.002, 0.0, 0.0), T, 1234)
+    back = CameraCalibration.from_dict(cam.to_dict())
+    assert back.to_dict() == cam.to_dict()
+    np.testing.assert_array_equal(back.T_cam_imu, T)
+    assert back.time_offset_us == 1234
+
+
+@pytest.mark.parametrize(
+    "model, dist",
+    [(DistortionModel.RADTAN, (0.1, 0.2)), (DistortionModel.EQUIDISTANT, (0.1, 0.2, 0.3, 0.4, 0.5)), (DistortionModel.NONE, (0.1,))],
+)
+def test_wrong_number_of_distortion_coefficients_is_an_input_error(model, dist):
+    with pytest.raises(InputError, match="coefficients"):
+        CameraCalibration(10, 10, 5.0, 5.0, 5.0, 5.0, model, dist)
+
+
+def test_non_finite_or_non_positive_calibration_is_an_input_error():
+    with pytest.raises(InputError, match="NaN"):
+        CameraCalibration(10, 10, float("nan"), 5.0, 5.0, 5.0)
+    with pytest.raises(InputError, match="positive"):
+        CameraCalibration(0, 10, 5.0, 5.0, 5.0, 5.0)
+
+
+def test_from_dict_names_the_missing_field_and_the_file():
+    with pytest.raises(InputError, match="cal.json: calibration is missing the field 'fx'"):
+        CameraCalibration.from_dict({"width": 1, "height": 1, "fy": 1, "cx": 0, "cy": 0}, source="cal.json")

@@ -1,0 +1,48 @@
+"""Trajectory: matrices, inversion, interpolation, validation."""
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from evpose.core.trajectory import Trajectory, invert_pose
+from evpose.errors import InputError
+
+
+def make():
+    t = np.array([0, 1_000_000, 2_000_000])
+    rot = Rotation.from_euler("z", [[0], [90], [180]], degrees=True)
+    return Trajectory.from_arrays(t, [[0, 0, 0], [1, 0, 0], [2, 0, 0]], rot.as_quat())
+
+
+def test_matrices_round_trip_through_from_matrices():
+    tr = make()
+    back = Trajectory.from_matrices(tr.t, tr.matrices())
+    np.testing.assert_allclose(back.matrices(), tr.matrices(), atol=1e-12)
+
+
+def test_invert_pose_gives_identity_when_composed():
+    T = make().matrices()
+    np.testing.assert_allclose(T @ invert_pose(T), np.broadcast_to(np.eye(4), T.shape), atol=1e-12)
+
+
+def test_interpolate_is_linear_in_position_and_slerp_in_rotation():
+    mid = make().interpolate([500_000])
+    np.testing.assert_allclose(mid.position[0], [0.5, 0, 0])
+    assert Rotation.from_quat(mid.quat_xyzw[0]).as_euler("zyx", degrees=True)[0] == pytest.approx(45.0)
+
+
+def test_interpolate_clamps_outside_the_span():
+    out = make().interpolate([-5, 9_000_000])
+    np.testing.assert_allclose(out.position, [[0, 0, 0], [2, 0, 0]])
+
+
+def test_quaternions_are_normalised():
+    tr = Trajectory.from_arrays([0], [[0, 0, 0]], [[0, 0, 0, 2.0]])
+    np.testing.assert_allclose(tr.quat_xyzw, [[0, 0, 0, 1.0]])
+
+
+def test_validate_rejects_non_increasing_time_and_nan():
+    with pytest.raises(InputError, match="pose 1"):
+        Trajectory.from_arrays([5, 5], np.zeros((2, 3)), [[0, 0, 0, 1]] * 2).validate()
+    with pytest.raises(InputError, match="pose 0: NaN"):
+        Trajectory.from_arrays([5], [[np.nan, 0, 0]], [[0, 0, 0, 1]]).validate()

@@ -1,0 +1,137 @@
+"""ECD text folders: round trip, sensor size rules, every bad-input case with its line."""
+
+import numpy as np
+import pytest
+
+from io_factory import assert_same_recording
+from evpose.core.camera import DistortionModel
+from evpose.errors import InputError
+from evpose.io.ecd import iter_ecd_events, read_ecd_events, read_ecd_folder, write_ecd_folder
+
+
+def test_round_trip_through_our_folder_is_lossless(tmp_path, recording):
+    write_ecd_folder(tmp_path / "seq", recording)
+    assert_same_recording(recording, read_ecd_folder(tmp_path / "seq"))
+
+
+def test_plain_ecd_folder_without_size_has_no_calibration_but_keeps_calib_values(tmp_path):
+    d = tmp_path / "ecd"
+    d.mkdir()
+    (d / "events.txt").write_text("0.000000000 10 20 1\n0.000001000 11 21 0\n")
+    (d / "calib.txt").write_text("199.09 198.70 132.19 110.71 -0.368 0.150 -0.0003 -0.0003 0.0\n")
+    (d / "imu.txt").write_text("0.0 0 0 9.81 0 0 0\n0.001 0 0 9.81 0 0 0.1\n")
+    (d / "groundtruth.txt").write_text("0.0 1 2 3 0 0 0 1\n0.01 1 2 3 0 0 0 1\n")
+    rec = read_ecd_folder(d)
+    assert rec.calibration is None and rec.sensor_size is None
+    assert rec.metadata["ecd_calib_txt"][0] == pytest.approx(199.09)
+    assert rec.events.t.tolist() == [0, 1] and rec.events.p.tolist() == [1, -1]
+    assert rec.imu.t.tolist() == [0, 1000] and rec.imu.gyro[1, 2] == pytest.approx(0.1)
+    assert len(rec.ground_truth) == 2
+    sized = read_ecd_folder(d, 240, 180)
+    assert sized.calibration.model is DistortionModel.RADTAN and sized.sensor_size == (240, 180)
+    assert sized.calibration.dist[0] == pytest.approx(-0.368)
+
+
+def test_timestamps_are_parsed_exactly_to_microseconds(tmp_path):
+    f = tmp_path / "events.txt"
+    f.write_text("1468939993.0670000 1 1 1\n1468939993.0670005 1 1 1\n1468939993.067001499 1 1 0\n1.5e-3 1 1 0\n".replace("1.5e-3", "1468939993.0670015"))
+    ev = next(iter_ecd_events(f))
+    assert ev.t.tolist() == [1468939993067000, 1468939993067001, 1468939993067001, 1468939993067002]
+
+
+def test_exponent_notation_crlf_tabs_and_comments_are_accepted(tmp_path):
+    f = tmp_path / "events.txt"
+    f.write_bytes(b"# t x y p\r\n1e-6\t3  4 1\r\n\n2.5E-6 5 6 -1\n")
+    ev = next(iter_ecd_events(f))
+    assert ev.t.tolist() == [1, 3] and ev.x.tolist() == [3, 5] and ev.p.tolist() == [1, -1]
+
+
+def test_last_line_without_newline_is_read(tmp_path):
+    f = tmp_path / "events.txt"
+    f.write_text("0.1 1 2 1\n0.2 3 4 0")
+    assert read_ecd_events(f).t.tolist() == [100_000, 200_000]
+
+
+def test_small_blocks_give_the_same_events_as_one_block(tmp_path, recording):
+    write_ecd_folder(tmp_path / "s", recording)
+    whole = np.concatenate([b.t for b in iter_ecd_events(tmp_path / "s" / "events.txt")])
+    blocks = list(iter_ecd_events(tmp_path / "s" / "events.txt", block_bytes=4096))
+    assert len(blocks) > 10
+    np.testing.assert_array_equal(np.concatenate([b.t for b in blocks]), whole)
+    np.testing.assert_array_equal(whole, recording.events.t)
+
+
+BAD_LINES = [
+    ("0.1 1 2 1\n0.2 1 2\n", "line 2: expected 4 values 't x y p', got fewer"),
+    ("0.1 1 2 1 7\n", "line 1: expected 4 values 't x y p', got more"),
+    ("0.1 1 2 1\nabc 1 2 1\n", "line 2: timestamp is not a number"),
+    ("nan 1 2 1\n", "line 1: timestamp is not a number"),
+    ("inf 1 2 1\n", "line 1: timestamp is not a number"),
+    ("0.1 1.5 2 1\n", "line 1: x is not a non-negative integer"),
+    ("0.1 -1 2 1\n", "line 1: x is not a non-negative integer"),
+    ("0.1 1 nan 1\n", "line 1: y is not a non-negative integer"),
+    ("0.1 1 2 2\n", "line 1: polarity is not 0 or 1"),
+    ("0.2 1 2 1\n\n0.1 1 2 1\n", "line 3: timestamp is earlier than the previous event's"),
+    ("0.1 240 2 1\n", "line 1: x is outside the sensor width"),
+    ("0.1 1 180 1\n", "line 1: y is outside the sensor height"),
+    ("0.1 70000 2 1\n", "line 1: x is outside the sensor width"),
+    ("1e30 1 2 1\n", "line 1: timestamp is out of range"),
+]
+
+
+@pytest.mark.parametrize("text, message", BAD_LINES)
+def test_bad_event_lines_name_file_line_and_problem(tmp_path, text, message):
+    f = tmp_path / "events.txt"
+    f.write_text(text)
+    with pytest.raises(InputError) as err:
+        list(iter_ecd_events(f, 240, 180))
+    assert str(err.value).startswith(f"{f}: {message}")
+    assert "\n" not in str(err.value)
+
+
+def test_bad_line_far_into_the_file_is_counted_across_blocks(tmp_path):
+    f = tmp_path / "events.txt"
+    f.write_text("".join(f"0.{i:06d} 1 2 1\n" for i in range(5000)) + "0.5 1 2 x\n")
+    with pytest.raises(InputError, match="line 5001: polarity"):
+        list(iter_ecd_events(f, block_bytes=1000))
+
+
+@pytest.mark.parametrize(
+    "name, text, message",
+    [
+        ("events.txt", "", "contains no events"),
+        ("calib.txt", "1 2 3\n", "expected 9 values"),
+        ("calib.txt", "1 2 3 4 5 6 7 8 x\n", "not a number"),
+        ("calib.txt", "1 2 3 4 5 6 7 8 nan\n", "NaN or infinite"),
+        ("imu.txt", "0.0 1 2 3 4 5\n", "line 1: expected 7 values, got 6"),
+        ("imu.txt", "0.0 1 2 3 4 5 6\n0.0 1 2 3 4 5 6\n", "line 2: timestamp 0.0 does not increase"),
+        ("imu.txt", "0.0 1 2 nan 4 5 6\n", "line 1: NaN or infinite value"),
+        ("imu.txt", "", "contains no IMU samples"),
+        ("groundtruth.txt", "0.0 1 2 3 0 0 0 0\n", "pose 0: quaternion has zero length"),
+        ("groundtruth.txt", "0.0 1 2 3 0 0 0\n", "line 1: expected 8 values"),
+    ],
+)
+def test_bad_side_files_name_file_record_and_problem(tmp_path, name, text, message):
+    d = tmp_path / "ecd"
+    d.mkdir()
+    (d / "events.txt").write_text("0.1 1 2 1\n")
+    (d / name).write_text(text)
+    with pytest.raises(InputError, match=message) as err:
+        read_ecd_folder(d, 240, 180)
+    assert str(err.value).startswith(str(d / name))
+
+
+def test_missing_folder_and_missing_events_file(tmp_path):
+    with pytest.raises(InputError, match="no such folder"):
+        read_ecd_folder(tmp_path / "nope")
+    (tmp_path / "x").mkdir()
+    with pytest.raises(InputError, match="events.txt: no such file"):
+        read_ecd_folder(tmp_path / "x")
+
+
+def test_write_is_atomic_and_never_overwrites_the_input_folder(tmp_path, recording):
+    write_ecd_folder(tmp_path / "seq", recording)
+    rec = read_ecd_folder(tmp_path / "seq")
+    with pytest.raises(InputError, match="refusing to overwrite an input"):
+        write_ecd_folder(tmp_path / "seq", rec)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["seq"]

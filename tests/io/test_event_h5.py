@@ -1,0 +1,130 @@
+"""TUM-VIE / VECtor / DSEC event h5 files with their sibling calibration and ground truth."""
+
+import json
+
+import h5py
+import hdf5plugin
+import numpy as np
+import pytest
+import yaml
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from io_factory import make_recording
+from evpose.core.camera import DistortionModel
+from evpose.core.events import EventArray
+from evpose.errors import InputError
+from evpose.io.event_h5 import EventH5Reader, write_event_h5
+from evpose.io.open import SourceFormat, detect_format, open_recording
+from evpose.io.tum import write_tum
+
+
+def test_dsec_style_file_with_blosc_zstd_and_offset_round_trips(tmp_path):
+    rec = make_recording(n=5000, width=640, height=480)
+    path = tmp_path / "events.h5"
+    write_event_h5(path, rec.events, t_offset_us=rec.t_start_us - 17, compression=hdf5plugin.Blosc(cname="zstd", clevel=3))
+    assert detect_format(path) is SourceFormat.EVENT_H5
+    back = open_recording(path)
+    for c in "txyp":
+        np.testing.assert_array_equal(getattr(back.events, c), getattr(rec.events, c))
+    assert back.sensor_size is None and back.metadata["t_offset_us"] == rec.t_start_us - 17
+
+
+_REC = make_recording(n=4000, seed=5, duration_us=30_000)
+
+
+@pytest.fixture(scope="module")
+def dsec(tmp_path_factory):
+    path = tmp_path_factory.mktemp("dsec") / "events.h5"
+    write_event_h5(path, _REC.events, t_offset_us=_REC.t_start_us - 1234)
+    return path
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(_REC.t_start_us - 2000, _REC.t_end_us + 2000), st.integers(0, 35_000))
+def test_windowed_read_through_ms_to_idx_equals_slicing(dsec, t0, length):
+    with EventH5Reader(dsec) as r:
+        got = r.read_events(t0, t0 + length)
+    np.testing.assert_array_equal(got.t, _REC.events.time_window(t0, t0 + length).t)
+
+
+def test_tum_vie_layout_reads_basalt_calibration_and_mocap(tmp_path):
+    rec = make_recording(n=2000, width=1280, height=720)
+    write_event_h5(tmp_path / "mocap-desk-events_left.h5", rec.events, with_ms_to_idx=False)
+    intr = {"camera_type": "kb4", "intrinsics": {"fx": 1050.0, "fy": 1049.0, "cx": 640.5, "cy": 360.2, "k1": 0.01, "k2": -0.002, "k3": 0.0005, "k4": -0.0001}}
+    calib = {"value0": {"intrinsics": [intr, intr], "resolution": [[1280, 720], [1280, 720]], "T_imu_cam": [{"px": 0.1, "py": 0.0, "pz": 0.0, "qx": 0.0, "qy": 0.0, "qz": 0.0, "qw": 1.0}] * 2}}
+    (tmp_path / "camera-calibrationA.json").write_text(json.dumps(calib))
+    gt = rec.ground_truth
+    with open(tmp_path / "mocap_data.txt", "w") as fh:
+        fh.write("# timestamp[us] tx ty tz qx qy qz qw\n")
+        for t, p, q in zip(gt.t, gt.position, gt.quat_xyzw):
+            fh.write(f"{t} {' '.join(repr(float(v)) for v in p)} {' '.join(repr(float(v)) for v in q)}\n")
+    imu = rec.imu
+    with open(tmp_path / "imu_data.txt", "w") as fh:
+        fh.write("# timestamp [us] gx gy gz [rad/s] ax ay az [m/s^2] temperature\n")
+        for t, g, a in zip(imu.t, imu.gyro.tolist(), imu.acc.tolist()):
+            fh.write(f"{t}.0 {' '.join(map(repr, g))} {' '.join(map(repr, a))} 31.5\n")
+    back = open_recording(tmp_path / "mocap-desk-events_left.h5")
+    np.testing.assert_array_equal(back.imu.t, imu.t)
+    np.testing.assert_array_equal(back.imu.gyro, imu.gyro)
+    np.testing.assert_array_equal(back.imu.acc, imu.acc)
+    cal = back.calibration
+    assert (cal.width, cal.height, cal.model) == (1280, 720, DistortionModel.EQUIDISTANT)
+    assert cal.dist == (0.01, -0.002, 0.0005, -0.0001)
+    np.testing.assert_allclose(cal.T_cam_imu[:3, 3], [-0.1, 0, 0])
+    np.testing.assert_array_equal(back.ground_truth.t, gt.t)
+    np.testing.assert_array_equal(back.events.t, rec.events.t)
+
+
+def test_vector_layout_reads_kalibr_yaml_and_tum_ground_truth(tmp_path):
+    rec = make_recording(n=2000, width=640, height=480)
+    write_event_h5(tmp_path / "corner_slow1.synced.left_event.hdf5", rec.events, t_offset_us=rec.t_start_us)
+    cam0 = {"camera_model": "pinhole", "intrinsics": [327.3, 327.1, 304.9, 235.4], "distortion_model": "radtan", "distortion_coeffs": [-0.03, 0.04, 0.001, -0.002], "resolution": [640, 480], "T_cam_imu": np.eye(4).tolist(), "timeshift_cam_imu": 0.0025}
+    (tmp_path / "camchain.yaml").write_text(yaml.safe_dump({"cam0": cam0}))
+    write_tum(tmp_path / "corner_slow1.synced.gt.txt", rec.ground_truth)
+    back = open_recording(tmp_path / "corner_slow1.synced.left_event.hdf5")
+    assert back.calibration.model is DistortionModel.RADTAN and back.calibration.dist[-1] == 0.0
+    assert back.calibration.time_offset_us == 2500
+    assert back.metadata["ground_truth_file"] == "corner_slow1.synced.gt.txt"
+    np.testing.assert_array_equal(back.ground_truth.t, rec.ground_truth.t)
+
+
+def test_events_outside_the_stated_sensor_are_named(tmp_path):
+    ev = EventArray.from_arrays([1, 2, 3], [5, 700, 5], [5, 5, 5], [1, 0, 1])
+    write_event_h5(tmp_path / "events.h5", ev)
+    with pytest.raises(InputError, match="events.h5: event 1: x=700 is outside the sensor width 640"):
+        open_recording(tmp_path / "events.h5", 640, 480)
+
+
+def test_unsorted_and_bad_polarity_events_are_named(tmp_path):
+    write_event_h5(tmp_path / "u.h5", EventArray.from_arrays([1, 5, 3], [0, 0, 0], [0, 0, 0], [1, 0, 1]), with_ms_to_idx=False)
+    with pytest.raises(InputError, match="u.h5: event 2: timestamp 3 us is earlier"):
+        open_recording(tmp_path / "u.h5")
+    with h5py.File(tmp_path / "p.h5", "w") as f:
+        for c, v in (("x", [0, 0]), ("y", [0, 0]), ("t", [0, 1]), ("p", [1, 7])):
+            f[f"events/{c}"] = np.array(v)
+    with pytest.raises(InputError, match="p.h5: event 1: polarity 7"):
+        open_recording(tmp_path / "p.h5")
+
+
+def test_h5_without_the_events_layout_names_what_is_missing(tmp_path):
+    with h5py.File(tmp_path / "a.h5", "w") as f:
+        f["foo"] = 1
+    with pytest.raises(InputError, match="no 'events' group"):
+        open_recording(tmp_path / "a.h5")
+    with h5py.File(tmp_path / "b.h5", "w") as f:
+        f["events/x"] = np.zeros(3)
+    with pytest.raises(InputError, match="missing dataset"):
+        open_recording(tmp_path / "b.h5")
+    with h5py.File(tmp_path / "c.h5", "w") as f:
+        for c in "xytp":
+            f[f"events/{c}"] = np.zeros(0)
+    with pytest.raises(InputError, match="contains no events"):
+        open_recording(tmp_path / "c.h5")
+
+
+def test_bad_sibling_calibration_is_named(tmp_path):
+    write_event_h5(tmp_path / "e.h5", EventArray.from_arrays([1], [0], [0], [1]))
+    (tmp_path / "camchain.yaml").write_text(yaml.safe_dump({"cam0": {"intrinsics": [1, 2, 3], "resolution": [640, 480]}}))
+    with pytest.raises(InputError, match="camchain.yaml: cam0: not a kalibr camera calibration"):
+        open_recording(tmp_path / "e.h5")

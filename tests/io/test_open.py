@@ -1,0 +1,57 @@
+"""open_recording recognises every format from its layout and rejects what it cannot read."""
+
+import pytest
+
+from io_factory import assert_same_recording, make_recording
+from evpose.errors import InputError
+from evpose.io.ecd import write_ecd_folder
+from evpose.io.event_h5 import write_event_h5
+from evpose.io.h5 import write_recording_h5
+from evpose.io.open import SourceFormat, detect_format, open_recording
+from evpose.io.rosbag import write_rosbag
+
+
+def test_detects_each_format(tmp_path):
+    rec = make_recording(n=200, duration_us=20_000)
+    write_ecd_folder(tmp_path / "ecd", rec)
+    write_recording_h5(tmp_path / "r.h5", rec)
+    write_event_h5(tmp_path / "e.hdf5", rec.events)
+    write_rosbag(tmp_path / "b.bag", rec)
+    write_rosbag(tmp_path / "b2", rec, ros2=True)
+    assert detect_format(tmp_path / "ecd") is SourceFormat.ECD
+    assert detect_format(tmp_path / "r.h5") is SourceFormat.EVPOSE_H5
+    assert detect_format(tmp_path / "e.hdf5") is SourceFormat.EVENT_H5
+    assert detect_format(tmp_path / "b.bag") is SourceFormat.ROS1_BAG
+    assert detect_format(tmp_path / "b2") is SourceFormat.ROS2_BAG
+    assert_same_recording(rec, open_recording(tmp_path / "ecd"))
+    assert_same_recording(rec, open_recording(tmp_path / "r.h5"))
+
+
+@pytest.mark.parametrize(
+    "name, make, message",
+    [
+        ("nothing", None, "no such file or folder"),
+        ("empty_dir", "dir", "neither an ECD folder"),
+        ("notes.txt", "text", "unrecognised recording"),
+        ("fake.h5", "text", "not an HDF5 file"),
+    ],
+)
+def test_unrecognised_inputs_are_named(tmp_path, name, make, message):
+    p = tmp_path / name
+    if make == "dir":
+        p.mkdir()
+    elif make == "text":
+        p.write_text("hello\n")
+    with pytest.raises(InputError, match=message):
+        open_recording(p)
+
+
+def test_sensor_size_needs_both_sides_and_positive_values(tmp_path):
+    from evpose.errors import ConfigError
+
+    rec = make_recording(n=10, duration_us=1000)
+    write_ecd_folder(tmp_path / "ecd", rec)
+    with pytest.raises(ConfigError, match="both width and height"):
+        open_recording(tmp_path / "ecd", width=240)
+    with pytest.raises(ConfigError, match="1..65536"):
+        open_recording(tmp_path / "ecd", width=0, height=10)

@@ -1,0 +1,120 @@
+"""ROS1/ROS2 bags: the packed-bytes EventArray codec matches rosbags, bags round trip, bad bags are named."""
+
+import numpy as np
+import pytest
+
+from io_factory import assert_same_recording, make_recording
+from evpose.core.events import EventArray
+from evpose.errors import InputError
+from evpose.io.open import open_recording, open_stream
+from evpose.io.rosbag import (
+    EVENT_ARRAY,
+    decode_event_array,
+    encode_event_array_cdr,
+    encode_event_array_ros1,
+    make_typestore,
+    write_rosbag,
+)
+
+
+@pytest.mark.parametrize("n", [0, 1, 2, 7])
+@pytest.mark.parametrize("ros2", [False, True])
+def test_event_array_bytes_equal_rosbags_serialisation(n, ros2):
+    rng = np.random.default_rng(n)
+    ev = EventArray.from_arrays(np.sort(rng.integers(0, 10**13, n)), rng.integers(0, 640, n), rng.integers(0, 480, n), rng.integers(0, 2, n))
+    store = make_typestore(ros1=not ros2)
+    Msg, Event = store.types[EVENT_ARRAY], store.types["dvs_msgs/msg/Event"]
+    Header, Time = store.types["std_msgs/msg/Header"], store.types["builtin_interfaces/msg/Time"]
+    t0 = int(ev.t[0]) if n else 0
+    events = [Event(x=int(x), y=int(y), ts=Time(sec=int(t // 10**6), nanosec=int(t % 10**6) * 1000), polarity=bool(p > 0)) for t, x, y, p in zip(ev.t, ev.x, ev.y, ev.p)]
+    hdr = Header(stamp=Time(sec=t0 // 10**6, nanosec=(t0 % 10**6) * 1000), frame_id="", **({} if ros2 else {"seq": 3}))
+    msg = Msg(header=hdr, height=480, width=640, events=events)
+    ref = bytes(store.serialize_cdr(msg, EVENT_ARRAY) if ros2 else store.serialize_ros1(msg, EVENT_ARRAY))
+    ours = encode_event_array_cdr(ev, 640, 480) if ros2 else encode_event_array_ros1(ev, 640, 480, seq=3)
+    assert ours == ref
+    got, w, h = decode_event_array(ref, ros2)
+    assert (w, h, len(got)) == (640, 480, n)
+    for c in "txyp":
+        np.testing.assert_array_equal(getattr(got, c), getattr(ev, c))
+
+
+@pytest.mark.parametrize("ros2", [False, True])
+def test_bag_round_trip_keeps_events_imu_ground_truth_and_calibration(tmp_path, ros2):
+    rec = make_recording(n=3000, duration_us=500_000)
+    path = tmp_path / ("b" if ros2 else "b.bag")
+    write_rosbag(path, rec, ros2=ros2, events_per_message=700)
+    back = open_recording(path)
+    assert back.metadata["source_format"] == ("ros2-bag" if ros2 else "ros1-bag")
+    assert back.metadata["events_topic"] == "/dvs/events"
+    assert_same_recording(rec, back, metadata=False, extrinsic=False)
+
+
+def test_ros2_db3_file_is_opened_through_its_folder(tmp_path):
+    rec = make_recording(n=100, duration_us=10_000)
+    write_rosbag(tmp_path / "b", rec, ros2=True)
+    db3 = next((tmp_path / "b").glob("*.db3"))
+    assert len(open_recording(db3).events) == 100
+
+
+def test_unknown_topic_lists_what_the_bag_has(tmp_path):
+    rec = make_recording(n=100, duration_us=10_000)
+    write_rosbag(tmp_path / "b.bag", rec)
+    with pytest.raises(InputError, match=r"b.bag: unknown events topic '/cam/events'; the bag has: .*/dvs/events \(dvs_msgs/msg/EventArray\)"):
+        open_stream(tmp_path / "b.bag", events_topic="/cam/events")
+    with pytest.raises(InputError, match="carries sensor_msgs/msg/Imu, not dvs_msgs/msg/EventArray"):
+        open_stream(tmp_path / "b.bag", events_topic="/dvs/imu")
+
+
+def test_bag_without_events_is_an_input_error(tmp_path):
+    rec = make_recording(n=0)
+    write_rosbag(tmp_path / "b.bag", rec)
+    with pytest.raises(InputError, match="topic '/dvs/events' has no messages"):
+        open_recording(tmp_path / "b.bag")
+
+
+def test_unsorted_events_name_the_message_and_event(tmp_path):
+    rec = make_recording(n=1000, duration_us=100_000)
+    t = rec.events.t.copy()
+    t[730] = t[0] - 1
+    rec.events = EventArray(t, rec.events.x, rec.events.y, rec.events.p)
+    write_rosbag(tmp_path / "b.bag", rec, events_per_message=100)
+    with pytest.raises(InputError, match=r"/dvs/events message 7, event 30: timestamp .* earlier"):
+        open_recording(tmp_path / "b.bag")
+
+
+def test_pixels_outside_the_stated_sensor_are_named(tmp_path):
+    rec = make_recording(n=500, duration_us=100_000, width=64, height=48)
+    rec.calibration = None
+    rec.metadata = {"width": 32, "height": 48}
+    write_rosbag(tmp_path / "b.bag", rec, events_per_message=100)
+    with pytest.raises(InputError, match=r"/dvs/events message \d+, event \d+: x=\d+ is outside the sensor width 32"):
+        open_recording(tmp_path / "b.bag")
+
+
+def test_bag_without_event_topic_lists_its_topics(tmp_path):
+    from rosbags.rosbag1 import Writer
+
+    store = make_typestore(ros1=True)
+    with Writer(tmp_path / "imu.bag") as w:
+        w.add_connection("/imu", "sensor_msgs/msg/Imu", typestore=store)
+    with pytest.raises(InputError, match=r"no dvs_msgs/msg/EventArray topic; the bag has: /imu \(sensor_msgs/msg/Imu\)"):
+        open_recording(tmp_path / "imu.bag")
+
+
+def test_truncated_event_message_is_named(tmp_path):
+    from rosbags.rosbag1 import Writer
+
+    store = make_typestore(ros1=True)
+    ev = EventArray.from_arrays([1, 2, 3], [0, 1, 2], [0, 1, 2], [0, 1, 1])
+    with Writer(tmp_path / "t.bag") as w:
+        c = w.add_connection("/dvs/events", EVENT_ARRAY, typestore=store)
+        w.write(c, 1000, encode_event_array_ros1(ev[:2], 8, 8))
+        w.write(c, 2000, encode_event_array_ros1(ev, 8, 8)[:-5])
+    with pytest.raises(InputError, match=r"t.bag: /dvs/events message 1: malformed EventArray"):
+        open_recording(tmp_path / "t.bag")
+
+
+def test_corrupt_bag_is_an_input_error(tmp_path):
+    (tmp_path / "x.bag").write_bytes(b"not a bag at all")
+    with pytest.raises(InputError, match="x.bag: cannot open bag"):
+        open_recording(tmp_path / "x.bag")
