@@ -1,0 +1,98 @@
+"""Configuration of the IMU fusion backends (factor graph, error-state EKF, IMU-only dead reckoning)."""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass, field
+
+
+class FusionBackend(str, enum.Enum):
+    """Which estimator fuses the registrations with the IMU."""
+
+    FACTOR_GRAPH = "factor_graph"
+    """gtsam iSAM2 per registration + fixed-lag sliding window (the EV-Pose MHFO scheme)."""
+    EKF = "ekf"
+    """Error-state EKF baseline with the same inputs."""
+    IMU_ONLY = "imu_only"
+    """Dead reckoning from the initial state; registrations are ignored."""
+
+
+class RobustLoss(str, enum.Enum):
+    """M-estimator applied to the registration factor (whitened residual)."""
+
+    NONE = "none"
+    HUBER = "huber"
+    CAUCHY = "cauchy"
+
+
+@dataclass
+class FusionConfig:
+    """Noise model and graph shape of the IMU fusion.
+
+    Noise densities are continuous-time (Kalibr/Allan-deviation convention): the
+    discrete standard deviation of one sample is ``density * sqrt(rate)``.
+    """
+
+    backend: FusionBackend = FusionBackend.FACTOR_GRAPH
+    """Estimator that fuses registrations with the IMU."""
+    accel_noise_density: float = field(default=2.0e-3, metadata={"min": 1e-5, "max": 1.0, "step": 1e-4, "unit": "m/s^2/sqrt(Hz)"})
+    """Accelerometer white-noise density, m/s^2/sqrt(Hz)."""
+    gyro_noise_density: float = field(default=1.7e-4, metadata={"min": 1e-6, "max": 0.1, "step": 1e-5, "unit": "rad/s/sqrt(Hz)"})
+    """Gyroscope white-noise density, rad/s/sqrt(Hz)."""
+    accel_bias_random_walk: float = field(default=3.0e-3, metadata={"min": 1e-7, "max": 1.0, "step": 1e-5, "unit": "m/s^3/sqrt(Hz)"})
+    """Accelerometer bias random-walk density, m/s^3/sqrt(Hz)."""
+    gyro_bias_random_walk: float = field(default=2.0e-5, metadata={"min": 1e-8, "max": 0.1, "step": 1e-6, "unit": "rad/s^2/sqrt(Hz)"})
+    """Gyroscope bias random-walk density, rad/s^2/sqrt(Hz)."""
+    gravity: float = field(default=9.81, metadata={"min": 9.7, "max": 9.9, "step": 0.001, "unit": "m/s^2"})
+    """Gravity magnitude along world -z (z-up world), m/s^2."""
+    integration_sigma: float = field(default=1.0e-4, metadata={"min": 0.0, "max": 0.1, "step": 1e-5, "unit": "m"})
+    """Integration (discretisation) noise of preintegration, standard deviation per sqrt(s) (gtsam's integrationCovariance = sigma^2 I), m."""
+    registration_loss: RobustLoss = RobustLoss.HUBER
+    """Robust kernel on the registration pose factor."""
+    registration_loss_scale: float = field(default=3.0, metadata={"min": 0.1, "max": 20.0, "step": 0.1, "unit": "sigma"})
+    """Threshold of the robust kernel on the whitened residual (in standard deviations)."""
+    registration_default_sigma_rot: float = field(default=0.01, metadata={"min": 1e-5, "max": 0.5, "step": 1e-4, "unit": "rad"})
+    """Rotation sigma used when a registration comes without covariance, rad."""
+    registration_default_sigma_trans: float = field(default=0.01, metadata={"min": 1e-5, "max": 1.0, "step": 1e-4, "unit": "m"})
+    """Translation sigma used when a registration comes without covariance, m."""
+    registration_min_sigma: float = field(default=1.0e-4, metadata={"min": 0.0, "max": 0.1, "step": 1e-5, "unit": "rad|m"})
+    """Floor added in quadrature to the registration covariance diagonal so an over-confident registration cannot freeze the filter, rad or m."""
+    constant_velocity_sigma: float = field(default=2.0, metadata={"min": 0.01, "max": 100.0, "step": 0.01, "unit": "m/s/sqrt(s)"})
+    """Weak constant-velocity prior between consecutive states: velocity change sigma per sqrt(s), m/s/sqrt(s)."""
+    window_states: int = field(default=15, metadata={"min": 2, "max": 200, "step": 1, "unit": "states"})
+    """Sliding-window length N: states older than the newest N are marginalised."""
+    reoptimize_every: int = field(default=5, metadata={"min": 1, "max": 100, "step": 1, "unit": "updates"})
+    """Joint optimisation of the window every K updates."""
+    reoptimize_iterations: int = field(default=2, metadata={"min": 1, "max": 20, "step": 1, "unit": "iterations"})
+    """Extra relinearising iSAM2 iterations run at each joint optimisation."""
+    relinearize_threshold: float = field(default=1.0e-3, metadata={"min": 1e-6, "max": 1.0, "step": 1e-4, "unit": "tangent"})
+    """iSAM2 relinearisation threshold on the tangent-space delta of any variable."""
+    init_sigma_rot: float = field(default=0.01, metadata={"min": 1e-6, "max": 1.0, "step": 1e-4, "unit": "rad"})
+    """Prior sigma on the initial orientation, rad."""
+    init_sigma_trans: float = field(default=0.01, metadata={"min": 1e-6, "max": 10.0, "step": 1e-4, "unit": "m"})
+    """Prior sigma on the initial position, m."""
+    init_sigma_velocity: float = field(default=0.5, metadata={"min": 1e-4, "max": 20.0, "step": 0.01, "unit": "m/s"})
+    """Prior sigma on a given initial velocity, m/s."""
+    unknown_velocity_sigma: float = field(default=10.0, metadata={"min": 0.1, "max": 100.0, "step": 0.1, "unit": "m/s"})
+    """Prior sigma on the initial velocity when none is given (it starts at zero), m/s."""
+    init_sigma_acc_bias: float = field(default=0.1, metadata={"min": 1e-5, "max": 2.0, "step": 1e-3, "unit": "m/s^2"})
+    """Prior sigma on the initial accelerometer bias, m/s^2."""
+    init_sigma_gyro_bias: float = field(default=0.01, metadata={"min": 1e-6, "max": 0.5, "step": 1e-4, "unit": "rad/s"})
+    """Prior sigma on the initial gyroscope bias, rad/s."""
+    compute_covariance: bool = True
+    """Report the marginal pose covariance with every update (costs a little latency)."""
+
+    def validate(self) -> None:
+        from evpose.errors import ConfigError
+
+        positive = ("accel_noise_density", "gyro_noise_density", "accel_bias_random_walk", "gyro_bias_random_walk", "gravity",
+                    "registration_loss_scale", "registration_default_sigma_rot", "registration_default_sigma_trans",
+                    "constant_velocity_sigma", "unknown_velocity_sigma", "init_sigma_rot", "init_sigma_trans", "init_sigma_velocity",
+                    "init_sigma_acc_bias", "init_sigma_gyro_bias", "relinearize_threshold")
+        for name in positive:
+            if not getattr(self, name) > 0:
+                raise ConfigError(f"fusion.{name} must be positive, got {getattr(self, name)}")
+        if self.window_states < 2:
+            raise ConfigError(f"fusion.window_states must be >= 2, got {self.window_states}")
+        if self.reoptimize_every < 1 or self.reoptimize_iterations < 1:
+            raise ConfigError("fusion.reoptimize_every and fusion.reoptimize_iterations must be >= 1")

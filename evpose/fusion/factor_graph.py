@@ -1,0 +1,259 @@
+"""Factor-graph fusion of registrations with IMU preintegration (EV-Pose MHFO, later stage).
+
+States ``X(i)`` (IMU-body Pose3), ``V(i)`` (world velocity) and ``B(i)``
+(ConstantBias) at every registration time. Factors: ``CombinedImuFactor``
+between consecutive states (bias random walk included), the registration as a
+robust pose prior with its covariance, a weak constant-velocity prior
+(``BetweenFactorVector`` on ``V``), and priors on the first state.
+
+* Inter-TS fusion: one iSAM2 update per registration gives the estimate at once.
+* Joint optimisation: an ``IncrementalFixedLagSmoother`` keeps the newest N
+  states (smoother "time" = state index, lag N-1) and marginalises the older
+  ones; every K updates the window is re-optimised with extra relinearising
+  iSAM2 iterations.
+
+A failed registration (``None``) adds a state constrained only by the IMU and
+constant-velocity factors: the pose is IMU-propagated, marked degraded, and its
+covariance grows honestly. The first successful registration after a loss
+enters with a plain Gaussian (not robust) noise model and triggers a joint
+optimisation, so a large correction is accepted at once (re-acquisition).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from evpose.core.camera import CameraCalibration
+from evpose.core.imu import ImuSamples
+from evpose.core.trajectory import Trajectory
+from evpose.fusion.config import FusionConfig, RobustLoss
+from evpose.fusion.preintegration import ImuBuffer, make_preintegration_params
+from evpose.fusion.propagation import NavPropagator, imu_rate_trajectory
+from evpose.fusion.state import Extrinsic, FusedState
+
+
+def registration_covariance(config: FusionConfig, covariance_6x6: np.ndarray | None) -> np.ndarray:
+    """Registration covariance (rotation, translation; camera frame) with defaults and a floor.
+
+    A missing, non-finite or non-positive-definite covariance (a degenerate
+    registration Hessian) falls back to the configured default sigmas.
+    """
+    sr, st = config.registration_default_sigma_rot, config.registration_default_sigma_trans
+    cov = np.diag([sr * sr] * 3 + [st * st] * 3)
+    if covariance_6x6 is not None:
+        c = np.asarray(covariance_6x6, dtype=np.float64).reshape(6, 6)
+        c = 0.5 * (c + c.T)
+        if np.isfinite(c).all():
+            try:
+                np.linalg.cholesky(c)  # positive definite (cheaper than an eigen-decomposition)
+                cov = c
+            except np.linalg.LinAlgError:
+                pass
+    return cov + np.eye(6) * config.registration_min_sigma**2
+
+
+def usable_pose(T: np.ndarray | None) -> np.ndarray | None:
+    """The measured pose as a 4x4 array, or None if missing or not finite (treated as a failed registration)."""
+    if T is None:
+        return None
+    T = np.asarray(T, dtype=np.float64).reshape(4, 4)
+    return T if np.isfinite(T).all() else None
+
+
+def robust_noise(config: FusionConfig, cov: np.ndarray, robust: bool = True):
+    import gtsam
+
+    base = gtsam.noiseModel.Gaussian.Covariance(cov)
+    if not robust or config.registration_loss is RobustLoss.NONE:
+        return base
+    k = config.registration_loss_scale
+    if config.registration_loss is RobustLoss.HUBER:
+        est = gtsam.noiseModel.mEstimator.Huber.Create(k)
+    else:
+        est = gtsam.noiseModel.mEstimator.Cauchy.Create(k)
+    return gtsam.noiseModel.Robust.Create(est, base)
+
+
+class FactorGraphFusion:
+    """iSAM2 / fixed-lag-smoother fusion of registration poses with the IMU."""
+
+    def __init__(self, config: FusionConfig | None = None, calibration: CameraCalibration | None = None):
+        import gtsam
+
+        self.config = config or FusionConfig()
+        self.config.validate()
+        T_cam_imu = np.eye(4) if calibration is None else calibration.T_cam_imu
+        self.time_offset_us = 0 if calibration is None else int(calibration.time_offset_us)
+        self.extrinsic = Extrinsic(T_cam_imu)
+        self.params = make_preintegration_params(self.config)
+        self.buffer = ImuBuffer(self.time_offset_us)
+        self._gtsam = gtsam
+        self._log: list[tuple] = []
+        self._init_args: tuple | None = None
+        self._reset()
+
+    # ------------------------------------------------------------------ state
+    def _reset(self) -> None:
+        self.smoother = None
+        self.index = -1
+        self.n_updates = 0
+        self.propagator = NavPropagator(self.buffer, self.params, self.extrinsic)
+        self.history: list[tuple] = []
+        self.degraded = False
+        self.last_state: FusedState | None = None
+
+    @property
+    def initialized(self) -> bool:
+        return self.index >= 0
+
+    def _keys(self, i: int):
+        X, V, B = self._gtsam.symbol_shorthand.X, self._gtsam.symbol_shorthand.V, self._gtsam.symbol_shorthand.B
+        return X(i), V(i), B(i)
+
+    def _new_smoother(self):
+        gtsam = self._gtsam
+        p = gtsam.ISAM2Params()
+        p.setRelinearizeThreshold(self.config.relinearize_threshold)
+        p.relinearizeSkip = 1
+        # Cholesky reports an indeterminate system on the bias keys (information spans ~1e12 between the
+        # bias random walk over a few ms and the pose priors); QR factorises the same graph robustly.
+        p.setFactorization("QR")
+        # Smoother "time" is the state index, so the lag is exactly N-1 states.
+        return gtsam.IncrementalFixedLagSmoother(float(self.config.window_states - 1), p)
+
+    # ------------------------------------------------------------ public API
+    def initialize(self, t_us: int, T_world_cam: np.ndarray, velocity_world=None, acc_bias=None, gyro_bias=None) -> FusedState:
+        """Start the graph at a known camera pose (and optional velocity / biases)."""
+        gtsam = self._gtsam
+        z = np.zeros(3)
+        v = z if velocity_world is None else np.asarray(velocity_world, np.float64).reshape(3)
+        ba = z if acc_bias is None else np.asarray(acc_bias, np.float64).reshape(3)
+        bg = z if gyro_bias is None else np.asarray(gyro_bias, np.float64).reshape(3)
+        T_wc = np.asarray(T_world_cam, np.float64).reshape(4, 4)
+        # The arguments as given (None stays None: it selects the unknown-velocity prior on replay too).
+        self._init_args = (int(t_us), T_wc.copy(), None if velocity_world is None else v.copy(), ba.copy(), bg.copy())
+        self._init_imu = len(self.buffer)
+        self._log = []
+        self._reset()
+        c = self.config
+        T_wi = self.extrinsic.imu_pose(T_wc)
+        _, gyro_m = self.buffer.measurement_at(t_us)
+        v_imu = self.extrinsic.imu_velocity(T_wi[:3, :3], v, gyro_m - bg)
+        pose = gtsam.Pose3(T_wi)
+        bias = gtsam.imuBias.ConstantBias(ba, bg)
+        x, vk, b = self._keys(0)
+        graph = gtsam.NonlinearFactorGraph()
+        graph.add(gtsam.PriorFactorPose3(x, pose, gtsam.noiseModel.Diagonal.Sigmas(np.array([c.init_sigma_rot] * 3 + [c.init_sigma_trans] * 3))))
+        sigma_v = c.init_sigma_velocity if velocity_world is not None else c.unknown_velocity_sigma
+        graph.add(gtsam.PriorFactorVector(vk, v_imu, gtsam.noiseModel.Isotropic.Sigma(3, sigma_v)))
+        graph.add(gtsam.PriorFactorConstantBias(b, bias, gtsam.noiseModel.Diagonal.Sigmas(np.array([c.init_sigma_acc_bias] * 3 + [c.init_sigma_gyro_bias] * 3))))
+        values = gtsam.Values()
+        values.insert(x, pose)
+        values.insert(vk, v_imu)
+        values.insert(b, bias)
+        self.smoother = self._new_smoother()
+        self.smoother.update(graph, values, {x: 0.0, vk: 0.0, b: 0.0})
+        self.index = 0
+        self.t_state_us = int(t_us)
+        return self._finish_state(int(t_us), degraded=False)
+
+    def add_imu(self, imu: ImuSamples) -> None:
+        """Buffer IMU samples (IMU clock; the calibration's time offset is applied)."""
+        self.buffer.add(imu)
+
+    def update(self, t_us: int, T_world_cam_measured: np.ndarray | None, covariance_6x6: np.ndarray | None = None) -> FusedState:
+        """Fuse one registration (``None`` = registration failed: propagate and mark degraded)."""
+        if not self.initialized:
+            raise RuntimeError("FactorGraphFusion.update called before initialize")
+        t_us = int(t_us)
+        if t_us <= self.t_state_us:
+            raise ValueError(f"update time {t_us} us is not after the last state at {self.t_state_us} us")
+        # The IMU count is logged too: a replay must see exactly the samples this call saw.
+        T_meas = usable_pose(T_world_cam_measured)
+        self._log.append((t_us, None if T_meas is None else T_meas.copy(),
+                          None if covariance_6x6 is None else np.array(covariance_6x6, np.float64), len(self.buffer)))
+        return self._add_state(t_us, T_meas, covariance_6x6)
+
+    def predict(self, t_us: int) -> FusedState:
+        """IMU propagation from the latest state to ``t_us`` without adding a factor."""
+        if not self.initialized:
+            raise RuntimeError("FactorGraphFusion.predict called before initialize")
+        return self.propagator.predict(int(t_us), degraded=self.degraded)
+
+    def imu_rate_poses(self, t0_us: int, t1_us: int) -> Trajectory:
+        """Camera poses at IMU sample times in ``[t0, t1)``, each propagated from the state before it."""
+        return imu_rate_trajectory(self.history, self.buffer, self.params, self.extrinsic, int(t0_us), int(t1_us))
+
+    def snapshot(self) -> dict:
+        """Everything needed to rebuild this exact state: the inputs since initialisation (replayed on restore)."""
+        return {"init": self._init_args, "init_imu": getattr(self, "_init_imu", 0), "log": list(self._log), "imu": self.buffer.samples}
+
+    def restore(self, snap: dict) -> None:
+        """Rebuild the graph by replaying the recorded inputs: bit-identical to the uninterrupted run."""
+        imu = snap["imu"]
+        self.buffer = ImuBuffer(self.time_offset_us)
+        log = list(snap["log"])
+        if snap["init"] is None:
+            self.buffer.set_samples(imu)
+            self._init_args = None
+            self._log = []
+            self._reset()
+            return
+        self.buffer.set_samples(imu[: snap["init_imu"]])
+        self.initialize(*snap["init"])
+        for t_us, T, cov, n_imu in log:
+            self.buffer.set_samples(imu[:n_imu])
+            self.update(t_us, T, cov)
+        self.buffer.set_samples(imu)
+
+    # -------------------------------------------------------------- internals
+    def _add_state(self, t_us: int, T_meas_cam: np.ndarray | None, cov_cam: np.ndarray | None) -> FusedState:
+        gtsam = self._gtsam
+        c = self.config
+        i, j = self.index, self.index + 1
+        xi, vi, bi = self._keys(i)
+        xj, vj, bj = self._keys(j)
+        pim = self.propagator.preintegration_to(t_us)
+        nav_pred = pim.predict(self.propagator.nav, self.propagator.bias)
+        dt = (t_us - self.t_state_us) * 1e-6
+
+        graph = gtsam.NonlinearFactorGraph()
+        graph.add(gtsam.CombinedImuFactor(xi, vi, xj, vj, bi, bj, pim))
+        degraded = T_meas_cam is None
+        reacquire = self.degraded and not degraded
+        if not degraded:
+            cov = self.extrinsic.imu_covariance(registration_covariance(c, cov_cam))
+            graph.add(gtsam.PriorFactorPose3(xj, gtsam.Pose3(self.extrinsic.imu_pose(T_meas_cam)), robust_noise(c, cov, robust=not reacquire)))
+        graph.add(gtsam.BetweenFactorVector(vi, vj, np.zeros(3), gtsam.noiseModel.Isotropic.Sigma(3, c.constant_velocity_sigma * np.sqrt(dt))))
+        values = gtsam.Values()
+        values.insert(xj, nav_pred.pose())
+        values.insert(vj, np.asarray(nav_pred.velocity(), np.float64))
+        values.insert(bj, self.propagator.bias)
+        stamp = float(j)
+        self.smoother.update(graph, values, {xj: stamp, vj: stamp, bj: stamp})
+        self.index = j
+        self.t_state_us = t_us
+        self.n_updates += 1
+        if reacquire or self.n_updates % c.reoptimize_every == 0:
+            self._joint_optimisation()
+        self.degraded = degraded
+        return self._finish_state(t_us, degraded=degraded)
+
+    def _joint_optimisation(self) -> None:
+        """Re-optimise the whole window: extra relinearising iSAM2 iterations with no new factors."""
+        for _ in range(self.config.reoptimize_iterations):
+            self.smoother.update()
+
+    def _finish_state(self, t_us: int, degraded: bool) -> FusedState:
+        x, v, b = self._keys(self.index)
+        pose = self.smoother.calculateEstimatePose3(x)
+        vel = np.asarray(self.smoother.calculateEstimateVector(v), np.float64)
+        bias = self.smoother.calculateEstimateConstantBias(b)
+        nav = self._gtsam.NavState(pose, vel)
+        self.propagator.anchor(t_us, nav, bias)
+        self.history.append((t_us, nav, bias))
+        if len(self.history) > self.config.window_states + 2:
+            del self.history[0]
+        cov = np.asarray(self.smoother.marginalCovariance(x)) if self.config.compute_covariance else None
+        self.last_state = self.propagator.fused_state(t_us, nav, bias, cov, degraded)
+        return self.last_state

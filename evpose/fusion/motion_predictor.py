@@ -1,0 +1,46 @@
+"""Adapter: any fusion backend as the tracker's ``MotionPredictor`` (reset / predict / update / snapshot / restore).
+
+The tracker's predictor protocol only reports successful registrations. The
+adapter adds :meth:`report`, which the fused modes call once per step with the
+registration result (or ``None`` when it failed) and its covariance, so the
+backend can mark degraded poses; ``update`` is ``report`` without covariance.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from evpose.core.imu import ImuSamples
+from evpose.fusion.state import FusedState
+
+
+class FusionMotionPredictor:
+    """Predicts the camera pose with IMU propagation from the fused state."""
+
+    def __init__(self, fusion, imu: ImuSamples | None = None, initial_velocity_world: np.ndarray | None = None):
+        self.fusion = fusion
+        if imu is not None:
+            fusion.add_imu(imu)
+        self.initial_velocity_world = initial_velocity_world
+        self.last: FusedState | None = None
+
+    def reset(self, t_us: int, T_world_cam: np.ndarray) -> None:
+        self.last = self.fusion.initialize(int(t_us), T_world_cam, self.initial_velocity_world)
+
+    def predict(self, t_us: int) -> np.ndarray:
+        return self.fusion.predict(int(t_us)).T_world_cam
+
+    def update(self, t_us: int, T_world_cam: np.ndarray) -> None:
+        self.report(t_us, T_world_cam, None)
+
+    def report(self, t_us: int, T_world_cam: np.ndarray | None, covariance_6x6: np.ndarray | None) -> FusedState:
+        """Fuse one step's registration (``None`` = failed) and return the fused state."""
+        self.last = self.fusion.update(int(t_us), T_world_cam, covariance_6x6)
+        return self.last
+
+    def snapshot(self) -> dict:
+        return {"fusion": self.fusion.snapshot(), "last": None if self.last is None else self.last.copy()}
+
+    def restore(self, state: dict) -> None:
+        self.fusion.restore(state["fusion"])
+        self.last = None if state["last"] is None else state["last"].copy()

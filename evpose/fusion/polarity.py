@@ -1,0 +1,330 @@
+"""Polarity prediction for map points (EV-Pose MHFO early stage, section V-A).
+
+The rule, stated once. The brightness gradient of a map point (dark -> bright)
+is ``g = brightness_sign * edge_normal`` in the world (ContourMap convention).
+Its image direction is ``J_pi(X_c) R_cw g``. The point's image motion is the
+motion field ``u_dot = J_pi(X_c) (-omega x X_c - R_cw v)`` from the camera's
+angular rate ``omega`` (camera frame, bias-corrected gyro), its world velocity
+``v`` and the point's depth. Brightness constancy ``dL/dt = -grad L . u_dot``
+makes the pixel brighter (ON, +1) when the image gradient and the image motion
+are opposed (angle > 90 deg) and darker (OFF, -1) when they agree.
+
+Buffer zone: within ``delta`` of 90 deg the prediction is unreliable and the
+point keeps both polarities (0). ``delta`` widens adaptively by the angle the
+flow uncertainty subtends, ``atan(flow_sigma / |u_dot|)``, so slow or
+uncertain motion widens it; below ``min_image_speed`` everything is 0.
+
+Online sign learning: each point's sign is learned from the polarities it
+triggers, ``sign = observed * geometric`` where ``geometric`` is the
+prediction with sign +1; votes accumulate per map point. Points without a map
+sign use the learned one; with ``learned_overrides_map`` a confident learned
+sign also replaces a contradicting map sign.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numba as nb
+import numpy as np
+
+
+@dataclass
+class PolarityFilterConfig:
+    """Parameters of the polarity prediction and its buffer zone."""
+
+    enabled: bool = True
+    """Predict polarities (False: every point uses both, i.e. plain STPE)."""
+    buffer_deg: float = field(default=20.0, metadata={"min": 0.0, "max": 89.0, "step": 0.5, "unit": "deg"})
+    """Base half-width of the buffer zone around 90 deg, degrees."""
+    flow_sigma_px_s: float = field(default=15.0, metadata={"min": 0.0, "max": 500.0, "step": 1.0, "unit": "px/s"})
+    """Assumed uncertainty of the predicted image motion; widens the buffer by atan(sigma/speed), px/s."""
+    max_buffer_deg: float = field(default=70.0, metadata={"min": 0.0, "max": 90.0, "step": 0.5, "unit": "deg"})
+    """Upper limit of the adaptive buffer half-width, degrees."""
+    min_image_speed_px_s: float = field(default=20.0, metadata={"min": 0.0, "max": 1000.0, "step": 1.0, "unit": "px/s"})
+    """Below this image speed a point keeps both polarities, px/s."""
+    min_gradient_visibility: float = field(default=0.2, metadata={"min": 0.0, "max": 1.0, "step": 0.01, "unit": "ratio"})
+    """Minimum foreshortening of the projected edge normal (1 = parallel to the image plane) to trust its direction."""
+    learn_min_votes: int = field(default=3, metadata={"min": 1, "max": 100, "step": 1, "unit": "votes"})
+    """Net votes a point needs before a learned brightness sign is used."""
+    learned_overrides_map: bool = True
+    """A confident learned sign replaces the map's sign where they disagree (map signs from cloud albedo miss
+    shading edges, e.g. creases between faces of one albedo: on the simulated landing scene only 69 % of them
+    match the polarities the points trigger, while the learned signs are consistent over time)."""
+    patch_radius_px: float = field(default=2.0, metadata={"min": 0.5, "max": 10.0, "step": 0.5, "unit": "px"})
+    """Radius of a point's patch when classifying events or reading observed polarities, pixels."""
+
+
+@dataclass
+class PolarityPrediction:
+    """Per-point prediction with the quantities behind it (for the viewer and reports)."""
+
+    polarity: np.ndarray
+    """+1 / -1 / 0 (buffer zone: both), int8 (N,)."""
+    angle_deg: np.ndarray
+    """Angle between projected gradient and image motion, degrees (NaN if undefined), float32 (N,)."""
+    speed_px_s: np.ndarray
+    """Image speed of the point, px/s, float32 (N,)."""
+    buffer_deg: np.ndarray
+    """Buffer half-width used for the point, degrees, float32 (N,)."""
+    geometric: np.ndarray
+    """Prediction with brightness sign +1 (the learning reference), int8 (N,)."""
+
+
+def image_motion(points_world, edge_normal_world, T_world_cam, omega_cam, v_world, K):
+    """Projected edge-normal direction and motion field per point: (normal_img (N,2), flow_px_s (N,2), depth (N,))."""
+    P = np.asarray(points_world, np.float64).reshape(-1, 3)
+    n = np.asarray(edge_normal_world, np.float64).reshape(-1, 3)
+    T = np.asarray(T_world_cam, np.float64)
+    R_cw = T[:3, :3].T
+    X = (P - T[:3, 3]) @ R_cw.T
+    nc = n @ R_cw.T
+    v_c = R_cw @ np.asarray(v_world, np.float64).reshape(3)
+    Xdot = -np.cross(np.asarray(omega_cam, np.float64).reshape(3), X) - v_c
+    fx, fy = K[0, 0], K[1, 1]
+    Z = X[:, 2]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        iz = np.where(Z > 1e-9, 1.0 / Z, np.nan)
+
+        def jac(d):
+            return np.stack([fx * (d[:, 0] - X[:, 0] * iz * d[:, 2]) * iz, fy * (d[:, 1] - X[:, 1] * iz * d[:, 2]) * iz], axis=1)
+
+        return jac(nc), jac(Xdot), Z
+
+
+class PolarityPredictor:
+    """Predicts ON/OFF per visible map point and learns unknown brightness signs online."""
+
+    def __init__(self, config: PolarityFilterConfig | None = None):
+        self.config = config or PolarityFilterConfig()
+        self._votes = np.zeros(0, np.int32)
+        self._last_index: np.ndarray | None = None
+        self._last_geometric: np.ndarray | None = None
+        self.last: PolarityPrediction | None = None
+
+    # ------------------------------------------------------------ prediction
+    def predict_full(self, points_world, edge_normal_world, brightness_sign, T_world_cam, omega_cam, v_world, K,
+                     point_index: np.ndarray | None = None) -> PolarityPrediction:
+        c = self.config
+        n_img, flow, Z = image_motion(points_world, edge_normal_world, T_world_cam, omega_cam, v_world, K)
+        N = n_img.shape[0]
+        sign = np.asarray(brightness_sign, np.int8).reshape(N).copy()
+        if point_index is not None:
+            point_index = np.asarray(point_index, np.int64).reshape(N)
+            learned = self.learned_sign(point_index)
+            take = (learned != 0) & ((sign == 0) | c.learned_overrides_map)
+            sign = np.where(take, learned, sign).astype(np.int8)
+        speed = np.hypot(flow[:, 0], flow[:, 1])
+        gnorm = np.hypot(n_img[:, 0], n_img[:, 1])
+        # Foreshortening: image length of the unit normal relative to a normal parallel to the image plane.
+        f_mean = 0.5 * (K[0, 0] + K[1, 1])
+        with np.errstate(invalid="ignore", divide="ignore"):
+            visibility = gnorm * Z / f_mean
+            cosang = (n_img[:, 0] * flow[:, 0] + n_img[:, 1] * flow[:, 1]) / (gnorm * speed)
+        angle = np.degrees(np.arccos(np.clip(cosang, -1.0, 1.0)))
+        buffer = np.minimum(c.buffer_deg + np.degrees(np.arctan2(c.flow_sigma_px_s, speed)), c.max_buffer_deg)
+        reliable = (np.isfinite(angle) & (Z > 0) & (speed >= c.min_image_speed_px_s)
+                    & (visibility >= c.min_gradient_visibility) & (np.abs(angle - 90.0) > buffer))
+        # Brightness constancy: opposed gradient and motion (angle > 90 deg) -> ON for a +1 sign.
+        geometric = np.where(reliable, np.where(angle > 90.0, 1, -1), 0).astype(np.int8)
+        pol = (geometric * sign).astype(np.int8) if c.enabled else np.zeros(N, np.int8)
+        self._last_index = point_index
+        self._last_geometric = geometric
+        self.last = PolarityPrediction(pol, angle.astype(np.float32), speed.astype(np.float32), buffer.astype(np.float32), geometric)
+        return self.last
+
+    def predict(self, points_world, edge_normal_world, brightness_sign, T_world_cam, omega_cam, v_world, K,
+                point_index: np.ndarray | None = None) -> np.ndarray:
+        """int8 (N,) in {+1, -1, 0 (buffer zone or unknown sign: use both)}.
+
+        ``point_index`` (map indices of the points) enables learned signs for
+        points whose ``brightness_sign`` is 0 and lets :meth:`learn` use this call.
+        """
+        return self.predict_full(points_world, edge_normal_world, brightness_sign, T_world_cam, omega_cam, v_world, K, point_index).polarity
+
+    # -------------------------------------------------------------- learning
+    def learned_sign(self, point_index: np.ndarray) -> np.ndarray:
+        """Learned brightness sign per map point (0 until ``learn_min_votes`` net votes)."""
+        idx = np.asarray(point_index, np.int64)
+        out = np.zeros(idx.shape, np.int8)
+        ok = idx < self._votes.shape[0]
+        v = self._votes[idx[ok]]
+        out[ok] = np.where(np.abs(v) >= self.config.learn_min_votes, np.sign(v), 0)
+        return out
+
+    def learn(self, point_index, observed_polarity) -> None:
+        """Vote each point's brightness sign from the polarity it triggered (0 = no evidence).
+
+        Uses the geometry of the last :meth:`predict` call that was given ``point_index``.
+        """
+        if self._last_index is None:
+            return
+        idx = np.asarray(point_index, np.int64).ravel()
+        obs = np.asarray(observed_polarity, np.int8).ravel()
+        order = np.argsort(self._last_index, kind="stable")
+        pos = np.searchsorted(self._last_index[order], idx)
+        pos = np.clip(pos, 0, max(order.size - 1, 0))
+        found = (order.size > 0) & (self._last_index[order[pos]] == idx) if order.size else np.zeros(idx.shape, bool)
+        geo = np.where(found, self._last_geometric[order[pos]] if order.size else 0, 0)
+        vote = (obs.astype(np.int32) * geo.astype(np.int32))
+        use = vote != 0
+        if not use.any():
+            return
+        need = int(idx[use].max()) + 1
+        if need > self._votes.shape[0]:
+            self._votes = np.concatenate([self._votes, np.zeros(need - self._votes.shape[0], np.int32)])
+        np.add.at(self._votes, idx[use], vote[use])
+
+    def snapshot(self) -> dict:
+        return {"votes": self._votes.copy(),
+                "last_index": None if self._last_index is None else self._last_index.copy(),
+                "last_geometric": None if self._last_geometric is None else self._last_geometric.copy()}
+
+    def restore(self, snap: dict) -> None:
+        self._votes = snap["votes"].copy()
+        self._last_index = None if snap["last_index"] is None else snap["last_index"].copy()
+        self._last_geometric = None if snap["last_geometric"] is None else snap["last_geometric"].copy()
+
+
+# ------------------------------------------------------------------ events
+@nb.njit(cache=True)
+def _nearest_point_grid(uv, radius, width, height):
+    idx = np.full((height, width), -1, np.int32)
+    dist = np.full((height, width), np.inf)
+    r = int(np.ceil(radius))
+    r2 = radius * radius
+    for k in range(uv.shape[0]):
+        u = uv[k, 0]
+        v = uv[k, 1]
+        if not (np.isfinite(u) and np.isfinite(v)):
+            continue
+        cu = int(np.floor(u + 0.5))
+        cv = int(np.floor(v + 0.5))
+        for yy in range(cv - r, cv + r + 1):
+            if yy < 0 or yy >= height:
+                continue
+            for xx in range(cu - r, cu + r + 1):
+                if xx < 0 or xx >= width:
+                    continue
+                d = (xx - u) * (xx - u) + (yy - v) * (yy - v)
+                if d <= r2 and d < dist[yy, xx]:
+                    dist[yy, xx] = d
+                    idx[yy, xx] = k
+    return idx
+
+
+@nb.njit(cache=True)
+def _classify(ex, ey, ep, grid, predicted, out_label, out_point):
+    h, w = grid.shape
+    for i in range(ex.shape[0]):
+        x = int(np.floor(ex[i] + 0.5))
+        y = int(np.floor(ey[i] + 0.5))
+        k = -1
+        if 0 <= x < w and 0 <= y < h:
+            k = grid[y, x]
+        out_point[i] = k
+        if k < 0:
+            out_label[i] = -1
+        elif predicted[k] == 0 or predicted[k] == ep[i]:
+            out_label[i] = 1
+        else:
+            out_label[i] = 0
+
+
+def classify_events(x, y, p, projected_uv, predicted_polarity, radius_px: float, width: int, height: int):
+    """Label events by the predicted polarity of the nearest projected map point within ``radius_px``.
+
+    ``x``/``y`` must be in the same (ideal pinhole) pixel frame as ``projected_uv``.
+    Returns ``(label int8 (E,), point int32 (E,))``: label 1 = kept (polarity
+    matches or buffer zone), 0 = removed by the polarity filter, -1 = in no
+    point's patch (unused by registration); point = index into ``projected_uv`` or -1.
+    """
+    uv = np.ascontiguousarray(projected_uv, np.float64).reshape(-1, 2)
+    grid = _nearest_point_grid(uv, float(radius_px), int(width), int(height))
+    ex = np.ascontiguousarray(x, np.float64)
+    ey = np.ascontiguousarray(y, np.float64)
+    ep = np.ascontiguousarray(p, np.int8)
+    label = np.empty(ex.shape[0], np.int8)
+    point = np.empty(ex.shape[0], np.int32)
+    _classify(ex, ey, ep, grid, np.ascontiguousarray(predicted_polarity, np.int8), label, point)
+    return label, point
+
+
+def observed_point_polarity(point, p, n_points: int) -> np.ndarray:
+    """Majority polarity of the events assigned to each point (from :func:`classify_events`), 0 if none or tied."""
+    point = np.asarray(point, np.int64)
+    p = np.asarray(p, np.int64)
+    m = point >= 0
+    score = np.bincount(point[m], weights=p[m], minlength=n_points)
+    return np.sign(score).astype(np.int8)
+
+
+def filter_summary(label: np.ndarray) -> dict:
+    """Share of events the polarity filter removed: of those in point patches, and of all."""
+    n = int(label.size)
+    inside = int(np.count_nonzero(label >= 0))
+    removed = int(np.count_nonzero(label == 0))
+    return {"events": n, "events_in_patches": inside, "events_removed": removed,
+            "removed_share_of_patches": removed / inside if inside else 0.0, "removed_share_of_all": removed / n if n else 0.0}
+
+
+class MapPolaritySelector:
+    """Adapter to the tracker's ``polarity_selector`` hook: ``(T_world_cam, t_us, map_indices) -> int8``.
+
+    ``motion`` is any fusion backend (its ``predict(t_us)`` gives the bias-corrected
+    angular rate and the fused velocity). After registration, :meth:`observe`
+    classifies the step's events against the prediction (kept / removed /
+    outside patches, for reports and the viewer) and feeds sign learning.
+    Counts of the last call are kept in ``last_counts``.
+    """
+
+    def __init__(self, predictor: PolarityPredictor, contour_map, K: np.ndarray, motion, calibration=None):
+        self.predictor = predictor
+        self.map = contour_map
+        self.K = np.asarray(K, np.float64)
+        self.motion = motion
+        self.calibration = calibration
+        self.last_counts: dict = {}
+
+    def __call__(self, T_world_cam: np.ndarray, t_us: int, map_indices: np.ndarray) -> np.ndarray:
+        idx = np.asarray(map_indices, np.int64)
+        state = self.motion.predict(int(t_us))
+        omega = np.zeros(3) if state.omega_cam is None else state.omega_cam
+        m = self.map
+        pol = self.predictor.predict(m.points[idx], m.edge_normal[idx], m.brightness_sign[idx], T_world_cam, omega,
+                                     state.velocity_world, self.K, idx)
+        self.last_counts = {"points": int(idx.size), "points_single_polarity": int(np.count_nonzero(pol)),
+                            "points_both": int(np.count_nonzero(pol == 0))}
+        return pol
+
+    def observe(self, events, T_world_cam: np.ndarray, map_indices: np.ndarray, polarity: np.ndarray,
+                width: int, height: int) -> np.ndarray:
+        """Label the step's events (1 kept, 0 removed by polarity, -1 in no patch), learn signs; returns the labels.
+
+        Events are on sensor pixels; with a distorted ``calibration`` they are
+        moved to the ideal pinhole frame the map is projected in.
+        """
+        idx = np.asarray(map_indices, np.int64)
+        T = np.asarray(T_world_cam, np.float64)
+        X = (self.map.points[idx] - T[:3, 3]) @ T[:3, :3]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            z = np.where(X[:, 2] > 1e-9, X[:, 2], np.nan)
+            uv = np.stack([self.K[0, 0] * X[:, 0] / z + self.K[0, 2], self.K[1, 1] * X[:, 1] / z + self.K[1, 2]], axis=1)
+        x, y = events.x.astype(np.float64), events.y.astype(np.float64)
+        cal = self.calibration
+        if cal is not None and getattr(cal, "dist", ()):
+            table = cal.undistortion_table
+            xy = table[events.y, events.x].astype(np.float64)
+            x, y = xy[:, 0], xy[:, 1]
+        label, point = classify_events(x, y, events.p, uv, polarity, self.predictor.config.patch_radius_px, width, height)
+        self.predictor.learn(idx, observed_point_polarity(point, events.p, idx.size))
+        self.last_counts.update(filter_summary(label))
+        return label
+
+    def snapshot(self) -> dict:
+        """Learned signs (the motion source is snapshotted by its owner)."""
+        return {"predictor": self.predictor.snapshot(), "last_counts": dict(self.last_counts)}
+
+    def restore(self, snap: dict) -> None:
+        self.predictor.restore(snap["predictor"])
+        self.last_counts = dict(snap["last_counts"])

@@ -1,0 +1,31 @@
+"""Helpers shared by the fusion tests (a plain module: importing from conftest is ambiguous across test folders)."""
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from evpose.fusion.synthetic import AnalyticMotion, AnalyticMotionConfig
+
+
+def make_motion(**kw) -> AnalyticMotion:
+    return AnalyticMotion(AnalyticMotionConfig(**kw))
+
+
+def noisy_registrations(motion, T_cam_imu, times_us, sigma_trans, sigma_rot, seed=0):
+    """Ground-truth camera poses perturbed by Gaussian noise of the given sigmas (body frame), with their covariance."""
+    rng = np.random.default_rng(seed)
+    gt = motion.camera_trajectory(times_us, T_cam_imu)
+    out = []
+    for k in range(len(gt)):
+        T = gt.matrix(k)
+        T[:3, :3] = T[:3, :3] @ Rotation.from_rotvec(rng.normal(0, sigma_rot, 3)).as_matrix()
+        T[:3, 3] += T[:3, :3] @ rng.normal(0, sigma_trans, 3)
+        out.append(T)
+    cov = np.diag([sigma_rot**2] * 3 + [sigma_trans**2] * 3)
+    return gt, out, cov
+
+
+def pose_errors(T_est, T_gt):
+    """(translation error m, rotation error rad)."""
+    dt = np.linalg.norm(T_est[:3, 3] - T_gt[:3, 3])
+    dr = np.linalg.norm(Rotation.from_matrix(T_est[:3, :3].T @ T_gt[:3, :3]).as_rotvec())
+    return dt, dr

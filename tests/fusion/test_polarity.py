@@ -1,0 +1,190 @@
+"""Polarity prediction checked against events rendered from brightness (a miniature ESIM over a painted square)."""
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from evpose.fusion.polarity import (
+    MapPolaritySelector,
+    PolarityFilterConfig,
+    PolarityPredictor,
+    classify_events,
+    filter_summary,
+    observed_point_polarity,
+)
+from evpose.fusion.state import FusedState
+from evpose.core.contour_map import ContourMap
+
+W, H = 240, 180
+K = np.array([[200.0, 0, 119.5], [0, 200.0, 89.5], [0, 0, 1]])
+R_DOWN = np.diag([1.0, -1.0, -1.0])  # camera z along world -z
+
+
+def _brightness(x, y, half=0.5, soft=0.012):
+    s = lambda a: 1.0 / (1.0 + np.exp(-a / soft))  # noqa: E731
+    return 0.15 + 0.7 * s(half - np.abs(x)) * s(half - np.abs(y))
+
+
+def _pose(t, p0, R0, v, w):
+    T = np.eye(4)
+    T[:3, :3] = R0 @ Rotation.from_rotvec(w * t).as_matrix()
+    T[:3, 3] = p0 + v * t
+    return T
+
+
+def _render_log(T):
+    vs, us = np.mgrid[0:H, 0:W].astype(np.float64)
+    d = np.stack([(us - K[0, 2]) / K[0, 0], (vs - K[1, 2]) / K[1, 1], np.ones_like(us)], -1) @ T[:3, :3].T
+    lam = -T[2, 3] / d[..., 2]
+    hit = T[:3, 3] + lam[..., None] * d
+    return np.log(_brightness(hit[..., 0], hit[..., 1]))
+
+
+def _events(T0, T1, C=0.12):
+    dl = _render_log(T1) - _render_log(T0)
+    ys, xs = np.nonzero(np.abs(dl) >= C)
+    return xs.astype(np.float64), ys.astype(np.float64), np.sign(dl[ys, xs]).astype(np.int8)
+
+
+def _square_map(half=0.5, step=0.01, corner_gap=0.04):
+    s = np.arange(-half + corner_gap, half - corner_gap + 1e-9, step)
+    pts, nrm = [], []
+    for axis, sign in ((0, 1), (0, -1), (1, 1), (1, -1)):
+        p = np.zeros((s.size, 3))
+        p[:, axis] = sign * half
+        p[:, 1 - axis] = s
+        n = np.zeros((s.size, 3))
+        n[:, axis] = sign
+        pts.append(p)
+        nrm.append(n)
+    pts, nrm = np.concatenate(pts), np.concatenate(nrm)
+    # Brightness falls outward (bright square on dark ground): gradient = -edge_normal.
+    return ContourMap.from_points(pts, edge_normal=nrm, brightness_sign=-np.ones(len(pts), np.int8))
+
+
+def _project(points, T):
+    R_cw = T[:3, :3].T
+    X = (points - T[:3, 3]) @ R_cw.T
+    return np.stack([K[0, 0] * X[:, 0] / X[:, 2] + K[0, 2], K[1, 1] * X[:, 1] / X[:, 2] + K[1, 2]], 1)
+
+
+def _trial(rng, cmap, predictor, use_map_sign=True, dt=0.012):
+    p0 = np.array([rng.uniform(-0.1, 0.1), rng.uniform(-0.1, 0.1), rng.uniform(1.6, 2.2)])
+    R0 = R_DOWN @ Rotation.from_rotvec(rng.normal(0, 0.08, 3)).as_matrix()
+    v = rng.normal(0, 1, 3)
+    v *= rng.uniform(1.0, 2.5) / np.linalg.norm(v)
+    w = rng.normal(0, 1, 3)
+    w *= rng.uniform(0.2, 1.0) / np.linalg.norm(w)
+    T0, T1, Tm = _pose(-dt / 2, p0, R0, v, w), _pose(dt / 2, p0, R0, v, w), _pose(0.0, p0, R0, v, w)
+    x, y, p = _events(T0, T1)
+    idx = np.arange(len(cmap))
+    sign = cmap.brightness_sign if use_map_sign else np.zeros(len(cmap), np.int8)
+    pred = predictor.predict(cmap.points, cmap.edge_normal, sign, Tm, w, v, K, point_index=idx)
+    label, point = classify_events(x, y, p, _project(cmap.points, Tm), pred, 2.0, W, H)
+    return x, y, p, pred, label, point
+
+
+def test_polarity_prediction_agrees_with_rendered_events_outside_buffer():
+    rng = np.random.default_rng(3)
+    cmap = _square_map()
+    pred_cfg = PolarityFilterConfig()
+    agree = total = 0
+    for _ in range(8):
+        _, _, p, pred, label, point = _trial(rng, cmap, PolarityPredictor(pred_cfg))
+        judged = (point >= 0) & (pred[np.maximum(point, 0)] != 0)
+        agree += int(np.count_nonzero(judged & (label == 1)))
+        total += int(np.count_nonzero(judged))
+    assert total > 2000
+    assert agree / total >= 0.9, agree / total
+
+
+def test_polarity_rule_with_flipped_sign_disagrees_with_rendered_events():
+    # The check discriminates: the opposite convention (the paper's '< 90 deg -> ON' read with our gradient) fails.
+    rng = np.random.default_rng(3)
+    cmap = _square_map()
+    flipped = ContourMap.from_points(cmap.points, edge_normal=cmap.edge_normal, brightness_sign=-cmap.brightness_sign)
+    agree = total = 0
+    for _ in range(3):
+        _, _, p, pred, label, point = _trial(rng, flipped, PolarityPredictor())
+        judged = (point >= 0) & (pred[np.maximum(point, 0)] != 0)
+        agree += int(np.count_nonzero(judged & (label == 1)))
+        total += int(np.count_nonzero(judged))
+    assert total > 500 and agree / total < 0.1
+
+
+def test_filter_removes_opposite_polarity_events_and_reports_share():
+    rng = np.random.default_rng(5)
+    cmap = _square_map()
+    _, _, p, pred, label, point = _trial(rng, cmap, PolarityPredictor())
+    s = filter_summary(label)
+    assert s["events_in_patches"] > 0 and 0.0 <= s["removed_share_of_all"] <= s["removed_share_of_patches"] <= 1.0
+    # A removed event is exactly one whose point predicts the other polarity.
+    removed = label == 0
+    assert np.all(pred[point[removed]] == -p[removed])
+
+
+def test_unknown_brightness_signs_are_learned_online():
+    rng = np.random.default_rng(11)
+    cmap = _square_map()
+    predictor = PolarityPredictor(PolarityFilterConfig(learn_min_votes=2))
+    for k in range(6):
+        x, y, p, pred, label, point = _trial(rng, cmap, predictor, use_map_sign=False)
+        if k == 0:
+            assert np.all(pred == 0)  # nothing learned yet -> both polarities everywhere
+        predictor.learn(np.arange(len(cmap)), observed_point_polarity(point, p, len(cmap)))
+    learned = predictor.learned_sign(np.arange(len(cmap)))
+    known = learned != 0
+    assert known.mean() > 0.5
+    assert np.mean(learned[known] == cmap.brightness_sign[known]) >= 0.95
+
+
+def test_buffer_zone_widens_when_image_motion_is_slow():
+    cmap = _square_map()
+    T = _pose(0.0, np.array([0.0, 0.0, 2.0]), R_DOWN, np.zeros(3), np.zeros(3))
+    pr = PolarityPredictor()
+    fast = pr.predict_full(cmap.points, cmap.edge_normal, cmap.brightness_sign, T, np.zeros(3), np.array([1.0, 0.3, 0.0]), K)
+    slow = pr.predict_full(cmap.points, cmap.edge_normal, cmap.brightness_sign, T, np.zeros(3), np.array([0.05, 0.015, 0.0]), K)
+    still = pr.predict_full(cmap.points, cmap.edge_normal, cmap.brightness_sign, T, np.zeros(3), np.zeros(3), K)
+    assert np.all(slow.buffer_deg > fast.buffer_deg)
+    assert np.count_nonzero(slow.polarity) < np.count_nonzero(fast.polarity)
+    assert np.all(still.polarity == 0)
+    # Pure x motion over a square: the x-facing edges are predicted, the y-facing ones (parallel motion) are not.
+    assert np.count_nonzero(fast.polarity) > 0
+
+
+def test_selector_adapter_uses_fused_motion():
+    cmap = _square_map()
+    T = _pose(0.0, np.array([0.0, 0.0, 2.0]), R_DOWN, np.zeros(3), np.zeros(3))
+
+    class Motion:
+        def predict(self, t_us):
+            return FusedState(t_us, T, np.array([1.0, 0.0, 0.0]), np.zeros(3), np.zeros(3), omega_cam=np.zeros(3))
+
+    sel = MapPolaritySelector(PolarityPredictor(), cmap, K, Motion())
+    idx = np.arange(0, len(cmap), 3)
+    pol = sel(T, 1000, idx)
+    assert pol.shape == idx.shape and pol.dtype == np.int8
+    assert sel.last_counts["points"] == idx.size
+    assert sel.last_counts["points_single_polarity"] + sel.last_counts["points_both"] == idx.size
+    # Events on a predicted-ON point: ON kept, OFF removed; far away: outside every patch.
+    from evpose.core.events import EventArray
+
+    k = int(np.flatnonzero(pol == 1)[0])
+    uv = _project(cmap.points[idx[k : k + 1]], T)[0]
+    ev = EventArray.from_arrays([1, 2, 3], [round(uv[0])] * 2 + [0], [round(uv[1])] * 2 + [0], np.array([1, -1, 1], np.int8))
+    label = sel.observe(ev, T, idx, pol, W, H)
+    assert label.tolist() == [1, 0, -1]
+    assert sel.last_counts["events_removed"] == 1
+
+
+def test_learned_signs_survive_snapshot_and_restore():
+    rng = np.random.default_rng(13)
+    cmap = _square_map()
+    pr = PolarityPredictor(PolarityFilterConfig(learn_min_votes=1))
+    x, y, p, pred, label, point = _trial(rng, cmap, pr, use_map_sign=False)
+    pr.learn(np.arange(len(cmap)), observed_point_polarity(point, p, len(cmap)))
+    snap = pr.snapshot()
+    learned = pr.learned_sign(np.arange(len(cmap)))
+    assert np.count_nonzero(learned) > 0
+    pr.learn(np.arange(len(cmap)), -observed_point_polarity(point, p, len(cmap)) * 5)
+    pr.restore(snap)
+    assert np.array_equal(pr.learned_sign(np.arange(len(cmap))), learned)
