@@ -1,0 +1,99 @@
+"""Tracking benchmarks: STPE accuracy (ATE/ARE, no alignment: we start from ground truth) and per-update latency
+on the simulator's moderate landing scenario at 240x180 and 346x260, map from ``build_contour_map`` on the raw cloud.
+
+Simulations and maps are cached under ``ctx.work_dir`` (they take minutes on the
+shared 2-core machine). Latency is reported per module (wall time, as the
+tracker measures it) and as the CPU time of each whole update, because the
+cores are shared with other processes and wall time then includes queueing.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from pathlib import Path
+
+import numpy as np
+
+from evpose.bench import BenchContext
+from evpose.bench.stats import latency_summary, peak_rss_mb
+
+MODULES = ("noise_filter", "time_surface", "culling", "distance_field", "registration", "total")
+
+
+def landing_case(work_dir: Path, resolution: tuple[int, int], seconds: float, seed: int = 0):
+    """(Recording, ContourMap) of the moderate landing scenario, simulated and mapped once, then read from the cache."""
+    from evpose.io.h5 import read_recording_h5
+    from evpose.io.map_ply import read_contour_map, write_contour_map
+
+    w, h = resolution
+    folder = Path(work_dir) / "tracking" / f"landing_{w}x{h}_{seconds:g}s_seed{seed}"
+    rec_path = folder / "landing.h5"
+    map_path = folder / "landing_map.ply"
+    if not (rec_path.is_file() and map_path.is_file()):
+        from evpose.mapping import build_contour_map
+        from evpose.sim import SimulationConfig, simulate
+        from evpose.sim.outputs import write_simulation
+
+        folder.mkdir(parents=True, exist_ok=True)
+        result = simulate(SimulationConfig(scenario="landing", seconds=seconds, resolution=(w, h), seed=seed))
+        write_simulation(result, rec_path, cloud=False)
+        write_contour_map(map_path, build_contour_map(result.cloud_points, intensity=result.cloud_intensity))
+    return read_recording_h5(rec_path), read_contour_map(map_path)
+
+
+def track_and_score(recording, contour_map, config=None) -> dict:
+    """Run a TrackingSession from ground truth to the end; accuracy, losses and latency figures."""
+    from evpose.eval.metrics import Alignment, EvalConfig, evaluate
+    from evpose.tracker.config import TrackerConfig
+    from evpose.tracker.session import TrackingSession
+    from evpose.tracker.step_result import TrackStatus
+
+    session = TrackingSession(recording, contour_map, config or TrackerConfig())
+    cpu_ms = []
+    while True:
+        c0 = time.thread_time()
+        r = session.step()
+        if r is None:
+            break
+        cpu_ms.append((time.thread_time() - c0) * 1e3)
+    results = session.results
+    lost = [r for r in results if r.status is not TrackStatus.OK]
+    out = {
+        "updates": len(results),
+        "lost_updates": len(lost),
+        "first_lost_s": (lost[0].t_us - session.t0_us) * 1e-6 if lost else -1.0,
+        "events": len(recording.events),
+    }
+    cfg = EvalConfig(align=Alignment.NONE)
+    for name, traj in (("", session.trajectory()), ("all_", session.trajectory(include_lost=True))):
+        if len(traj) >= 3:
+            ev = evaluate(traj, recording.ground_truth, cfg)
+            out[f"{name}ate_rmse_mm"] = ev.ate["rmse"] * 1e3
+            out[f"{name}ate_max_mm"] = ev.ate["max"] * 1e3
+            out[f"{name}are_rmse_deg"] = ev.are["rmse"]
+    # Skip the first updates (numba and cache warm-up) in latency figures.
+    warm = results[5:] if len(results) > 10 else results
+    for m in MODULES:
+        out.update(latency_summary([r.timings_ms[m] for r in warm if m in r.timings_ms], f"{m}_"))
+    out.update(latency_summary(cpu_ms[5:] if len(cpu_ms) > 10 else cpu_ms, "update_cpu_"))
+    out["points_used_median"] = float(np.median([r.counts.get("points_used", 0) for r in results]))
+    out["iterations_median"] = float(np.median([r.counts.get("iterations", 0) for r in results]))
+    out["load_average_1min"] = os.getloadavg()[0]
+    out["peak_rss_mb"] = peak_rss_mb()
+    return out
+
+
+def _bench(resolution):
+    def run(ctx: BenchContext) -> dict:
+        seconds = 1.0 if ctx.quick else 2.0
+        rec, cmap = landing_case(ctx.work_dir, resolution, seconds, ctx.seed)
+        out = {"resolution": f"{resolution[0]}x{resolution[1]}", "seconds": seconds, "map_points": len(cmap)}
+        out.update(track_and_score(rec, cmap))
+        return out
+
+    run.__doc__ = f"STPE on the moderate landing scenario at {resolution[0]}x{resolution[1]}, from ground truth."
+    return run
+
+
+BENCHMARKS = {"landing_240x180": _bench((240, 180)), "landing_346x260": _bench((346, 260))}

@@ -1,0 +1,371 @@
+"""Event-map registration (STPE): robust Levenberg-Marquardt on SE(3) minimising the TDF at projected map points.
+
+Residual per map point ``r_k = TDF(pi(T_cam_world p_k))`` (bilinear), Jacobian
+``grad TDF(u) * d pi / dX * dX / d xi`` with the pose perturbed on the right,
+``T_world_cam <- T_world_cam * Exp(xi)``, ``xi = (omega, v)`` in gtsam's Pose3
+tangent order (rotation, translation). Then ``X' = X + [X]x omega - v``, so
+``dr/domega = g x X`` and ``dr/dv = -g`` with ``g = dr/dX``.
+
+IRLS: the robust weight multiplies residual *and* Jacobian (normal equations
+``J^T W J xi = -J^T W r``), unlike ESVO which weights the residual only.
+Covariance is ``(J^T W J)^-1 * sigma^2`` with the weighted residual variance.
+All per-point work for one linearisation is one numba pass; the 6x6 solve and
+the SE(3) update (gtsam ``Pose3.Expmap``) run in Python, a few microseconds per
+iteration.
+"""
+
+from __future__ import annotations
+
+import enum
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import gtsam
+import numba as nb
+import numpy as np
+
+from evpose.frontend.distance_field import TemporalDistanceField, bilinear_sample, bilinear_sample_curvature, polarity_slots
+
+
+class RobustLoss(str, enum.Enum):
+    """Robust loss ``rho`` on the TDF residual."""
+
+    L2 = "l2"
+    HUBER = "huber"
+    CAUCHY = "cauchy"
+    TUKEY = "tukey"
+
+
+_LOSS_ID = {RobustLoss.L2: 0, RobustLoss.HUBER: 1, RobustLoss.CAUCHY: 2, RobustLoss.TUKEY: 3}
+
+
+@dataclass
+class RegistrationConfig:
+    """Registration settings."""
+
+    max_points: int = field(default=1500, metadata={"min": 50, "max": 20000, "step": 50, "unit": "points"})
+    """Visible points used per step; more are subsampled with a fixed stride (deterministic), points."""
+    second_order: bool = True
+    """Newton steps using the TDF's curvature (points on the TDF minimum still constrain the pose) instead of Gauss-Newton."""
+    max_iterations: int = field(default=10, metadata={"min": 1, "max": 100, "step": 1, "unit": "iterations"})
+    """Levenberg-Marquardt iterations per step, at most."""
+    robust_loss: RobustLoss = RobustLoss.HUBER
+    """Robust loss on the residual."""
+    robust_scale: float = field(default=0.3, metadata={"min": 0.01, "max": 2.0, "step": 0.01, "unit": "TDF"})
+    """Scale of the robust loss, in TDF units (the TDF runs from 0 on an edge to 1 far from events)."""
+    inlier_threshold: float = field(default=0.7, metadata={"min": 0.05, "max": 1.0, "step": 0.01, "unit": "TDF"})
+    """A point is an inlier if its final TDF value is below this, TDF units."""
+    lm_lambda: float = field(default=0.01, metadata={"min": 0.0, "max": 10.0, "step": 1e-4, "unit": "ratio"})
+    """Initial Levenberg-Marquardt damping, relative to the Hessian diagonal."""
+    lm_lambda_min: float = field(default=0.001, metadata={"min": 0.0, "max": 10.0, "step": 1e-3, "unit": "ratio"})
+    """Smallest damping: the TDF minimum is not zero, so undamped Gauss-Newton steps overshoot, relative."""
+    convergence_rotation_rad: float = field(default=1e-5, metadata={"min": 1e-8, "max": 1e-2, "step": 1e-6, "unit": "rad"})
+    """Stop when an accepted step rotates less than this, radians (and translates less than below)."""
+    convergence_translation_m: float = field(default=1e-5, metadata={"min": 1e-8, "max": 1e-2, "step": 1e-6, "unit": "m"})
+    """Stop when an accepted step translates less than this, metres."""
+    convergence_cost_ratio: float = field(default=1e-4, metadata={"min": 0.0, "max": 0.1, "step": 1e-5, "unit": "ratio"})
+    """Also stop when an accepted step lowers the mean cost by less than this fraction."""
+    prior_translation_m: float = field(default=0.002, metadata={"min": 0.0, "max": 1.0, "step": 0.001, "unit": "m"})
+    """Std of a Gaussian prior pulling the pose towards the prediction, translation, metres (0 = no prior).
+
+    Directions the visible map barely constrains (tilt vs. sideways shift over flat
+    ground) then follow the motion model instead of drifting with small biases."""
+    prior_rotation_deg: float = field(default=0.05, metadata={"min": 0.0, "max": 10.0, "step": 0.01, "unit": "deg"})
+    """Std of the same prior, rotation, degrees (0 = no prior)."""
+    prior_residual_sigma: float = field(default=0.2, metadata={"min": 0.01, "max": 1.0, "step": 0.01, "unit": "TDF"})
+    """Typical TDF residual of one point, which converts the prior stds into the cost's units, TDF units."""
+    min_points: int = field(default=30, metadata={"min": 6, "max": 1000, "step": 1, "unit": "points"})
+    """Fewer points projecting into the image than this means the track is lost, points."""
+    min_inlier_ratio: float = field(default=0.15, metadata={"min": 0.0, "max": 1.0, "step": 0.01, "unit": "ratio"})
+    """Fewer inliers than this share of the points used means the track is lost."""
+    max_condition: float = field(default=1e8, metadata={"min": 1e3, "max": 1e14, "step": 1e3, "unit": "ratio"})
+    """Largest acceptable condition number of the (scaled) Hessian; above it the geometry is degenerate."""
+
+
+@dataclass
+class RegistrationResult:
+    """Outcome of one registration."""
+
+    T_world_cam: np.ndarray
+    """Refined pose (4, 4); the initial pose if registration failed before moving."""
+    success: bool
+    reason: str
+    """Why it failed, in plain words ('' on success)."""
+    covariance: np.ndarray | None
+    """(6, 6) body-frame covariance (rotation, translation), or None if the Hessian is singular."""
+    iterations: int
+    points_used: int
+    """Points that projected inside the image at the final pose."""
+    inliers: int
+    cost: float
+    """Final robust cost (sum of rho over points inside the image)."""
+    residuals: np.ndarray
+    """float32 (M,) final TDF value per input point (1 if outside the image)."""
+    weights: np.ndarray
+    """float32 (M,) final robust weight per input point (0 if outside)."""
+    uv: np.ndarray
+    """float32 (M, 2) final projections, ideal-pinhole pixels (NaN behind the camera)."""
+
+
+@nb.njit(cache=True, inline="always")
+def _rho_weight(r, loss, k):
+    """(rho(r), IRLS weight rho'(r)/r) of a residual for the chosen loss with scale ``k``."""
+    a = abs(r)
+    if loss == 1:
+        if a <= k:
+            return 0.5 * r * r, 1.0
+        return k * (a - 0.5 * k), k / a
+    if loss == 2:
+        q = (r / k) ** 2
+        return 0.5 * k * k * np.log1p(q), 1.0 / (1.0 + q)
+    if loss == 3:
+        if a >= k:
+            return k * k / 6.0, 0.0
+        q = 1.0 - (r / k) ** 2
+        return k * k / 6.0 * (1.0 - q * q * q), q * q
+    return 0.5 * r * r, 1.0
+
+
+@nb.njit(cache=True)
+def _linearise(points, slots, R_cw, t_cw, fx, fy, cx, cy, value, grad_u, grad_v, hess, box, second_order, loss, k, inlier_thr, H, b, res, wts, uv):
+    """Residuals, weights, projections and the weighted normal equations at one pose.
+
+    Returns (cost, points inside the image, inliers, sum of w r^2).
+    """
+    for i in range(6):
+        b[i] = 0.0
+        for j in range(6):
+            H[i, j] = 0.0
+    cost = 0.0
+    inside = 0
+    inl = 0
+    swr2 = 0.0
+    J = np.empty(6)
+    Ju = np.empty(6)
+    Jv = np.empty(6)
+    Q1 = np.empty(6)
+    Q2 = np.empty(6)
+    for i in range(points.shape[0]):
+        px = points[i, 0]
+        py = points[i, 1]
+        pz = points[i, 2]
+        X = R_cw[0, 0] * px + R_cw[0, 1] * py + R_cw[0, 2] * pz + t_cw[0]
+        Y = R_cw[1, 0] * px + R_cw[1, 1] * py + R_cw[1, 2] * pz + t_cw[1]
+        Z = R_cw[2, 0] * px + R_cw[2, 1] * py + R_cw[2, 2] * pz + t_cw[2]
+        res[i] = 1.0
+        wts[i] = 0.0
+        if Z <= 1e-6:
+            uv[i, 0] = np.nan
+            uv[i, 1] = np.nan
+            continue
+        iz = 1.0 / Z
+        u = fx * X * iz + cx
+        v = fy * Y * iz + cy
+        uv[i, 0] = u
+        uv[i, 1] = v
+        f, fu, fv, ok = bilinear_sample(value, grad_u, grad_v, box, np.int64(slots[i]), u, v)
+        if not ok:
+            continue
+        inside += 1
+        rho, w = _rho_weight(f, loss, k)
+        res[i] = f
+        wts[i] = w
+        cost += rho
+        if f < inlier_thr:
+            inl += 1
+        swr2 += w * f * f
+        # Rows of d(u, v)/d xi: p_u = d u/dX, p_v = d v/dX; d/domega = p x X, d/dv = -p.
+        pux = fx * iz
+        puz = -fx * X * iz * iz
+        pvy = fy * iz
+        pvz = -fy * Y * iz * iz
+        Ju[0] = -puz * Y
+        Ju[1] = puz * X - pux * Z
+        Ju[2] = pux * Y
+        Ju[3] = -pux
+        Ju[4] = 0.0
+        Ju[5] = -puz
+        Jv[0] = pvy * Z - pvz * Y
+        Jv[1] = pvz * X
+        Jv[2] = -pvy * X
+        Jv[3] = 0.0
+        Jv[4] = -pvy
+        Jv[5] = -pvz
+        for a in range(6):
+            J[a] = fu * Ju[a] + fv * Jv[a]
+            b[a] += w * f * J[a]
+        if not second_order:
+            # Gauss-Newton: J^T W J.
+            for a in range(6):
+                wa = w * J[a]
+                for c in range(a, 6):
+                    H[a, c] += wa * J[c]
+            continue
+        # Newton on 0.5 f^2 in the image: A = grad f grad f^T + f * Hess f, clamped to PSD, so points
+        # sitting on the TDF minimum (zero gradient) still hold the pose through the curvature.
+        huu, huv, hvv = bilinear_sample_curvature(hess, box, np.int64(slots[i]), u, v)
+        a11 = fu * fu + f * huu
+        a12 = fu * fv + f * huv
+        a22 = fv * fv + f * hvv
+        tr = 0.5 * (a11 + a22)
+        det = a11 * a22 - a12 * a12
+        disc = tr * tr - det
+        if disc < 0.0:
+            disc = 0.0
+        sq = np.sqrt(disc)
+        l1 = tr + sq
+        l2 = tr - sq
+        # Eigenvector of l1 (the other is orthogonal).
+        if abs(a12) > 1e-12:
+            e1u = l1 - a22
+            e1v = a12
+        elif a11 >= a22:
+            e1u = 1.0
+            e1v = 0.0
+        else:
+            e1u = 0.0
+            e1v = 1.0
+        nrm = np.sqrt(e1u * e1u + e1v * e1v)
+        e1u /= nrm
+        e1v /= nrm
+        s1 = np.sqrt(l1) if l1 > 0.0 else 0.0
+        s2 = np.sqrt(l2) if l2 > 0.0 else 0.0
+        for a in range(6):
+            Q1[a] = s1 * (e1u * Ju[a] + e1v * Jv[a])
+            Q2[a] = s2 * (-e1v * Ju[a] + e1u * Jv[a])
+        for a in range(6):
+            q1 = w * Q1[a]
+            q2 = w * Q2[a]
+            for c in range(a, 6):
+                H[a, c] += q1 * Q1[c] + q2 * Q2[c]
+    for a in range(6):
+        for c in range(a):
+            H[a, c] = H[c, a]
+    return cost, inside, inl, swr2
+
+
+def subsample_indices(n: int, max_points: int) -> np.ndarray:
+    """Deterministic, evenly strided subset of ``range(n)`` of at most ``max_points`` indices."""
+    if n <= max_points:
+        return np.arange(n, dtype=np.int64)
+    return np.floor(np.arange(max_points) * (n / max_points)).astype(np.int64)
+
+
+def _prior_terms(pose: gtsam.Pose3, prior):
+    """(cost, gradient, information) of the pose prior at ``pose`` (right-perturbation tangent), or zeros."""
+    if prior is None:
+        return 0.0, np.zeros(6), np.zeros((6, 6))
+    T_prior, info = prior
+    e = gtsam.Pose3.Logmap(T_prior.between(pose))
+    return 0.5 * float(e @ info @ e), info @ e, info
+
+
+def _levenberg_marquardt(pts, slots, fld, pose, K, config, loss, k, thr, prior=None):
+    """Robust LM on one field; returns (pose, cost, inside, inliers, sum w r^2, H, residuals, weights, uv, iterations)."""
+    m = pts.shape[0]
+    fx, fy, cx, cy = float(K[0, 0]), float(K[1, 1]), float(K[0, 2]), float(K[1, 2])
+
+    def lin(p: gtsam.Pose3, bufs):
+        T_cw = p.inverse().matrix()
+        return _linearise(pts, slots, np.ascontiguousarray(T_cw[:3, :3]), np.ascontiguousarray(T_cw[:3, 3]), fx, fy, cx, cy,
+                          fld.value, fld.grad_u, fld.grad_v, fld.hess, fld.box, bool(config.second_order), loss, k, thr, *bufs)
+
+    cur = [np.zeros((6, 6)), np.zeros(6), np.empty(m), np.empty(m), np.empty((m, 2))]
+    trial = [np.zeros((6, 6)), np.zeros(6), np.empty(m), np.empty(m), np.empty((m, 2))]
+    cost, inside, inl, swr2 = lin(pose, cur)
+    pc, pg, pI = _prior_terms(pose, prior)
+    lam = float(config.lm_lambda)
+    min_lam = float(config.lm_lambda_min)
+    it = 0
+    for it in range(1, int(config.max_iterations) + 1):
+        if inside < 6:
+            break
+        H, b = cur[0] + pI, cur[1] + pg
+        A = H + lam * np.diag(np.diag(H) + 1e-12)
+        try:
+            delta = -np.linalg.solve(A, b)
+        except np.linalg.LinAlgError:
+            break
+        if not np.all(np.isfinite(delta)):
+            break
+        cand = pose.compose(gtsam.Pose3.Expmap(delta))
+        c_cost, c_inside, c_inl, c_swr2 = lin(cand, trial)
+        c_pc, c_pg, _ = _prior_terms(cand, prior)
+        # Compare mean cost: the set of points inside the image may change with the pose.
+        old_mean = (cost + pc) / max(inside, 1)
+        new_mean = (c_cost + c_pc) / c_inside if c_inside > 0 else np.inf
+        if c_inside >= 6 and new_mean <= old_mean:
+            pose = cand
+            cost, inside, inl, swr2 = c_cost, c_inside, c_inl, c_swr2
+            pc, pg = c_pc, c_pg
+            cur, trial = trial, cur
+            lam = max(lam * 0.3, min_lam)
+            small = np.linalg.norm(delta[:3]) < config.convergence_rotation_rad and np.linalg.norm(delta[3:]) < config.convergence_translation_m
+            if small or old_mean - new_mean < config.convergence_cost_ratio * old_mean:
+                break
+        else:
+            lam = lam * 10.0 if lam > 0 else 1e-4
+            if lam > 1e6:
+                break
+    return pose, cost, inside, inl, swr2, cur[0] + pI, cur[2], cur[3], cur[4], it
+
+
+def register_to_map(
+    field_: TemporalDistanceField | Sequence[TemporalDistanceField],
+    points_world: np.ndarray,
+    T_world_cam_init: np.ndarray,
+    K: np.ndarray,
+    config: RegistrationConfig,
+    point_polarity: np.ndarray | None = None,
+    T_world_cam_prior: np.ndarray | None = None,
+) -> RegistrationResult:
+    """Refine ``T_world_cam_init`` so the map points ``points_world`` (M, 3) land on low TDF.
+
+    ``field_`` is one field or a coarse-to-fine sequence (each level starts from the
+    previous level's pose; the health checks and the covariance use the last).
+    Fields must already be computed for the polarities ``point_polarity`` asks for
+    (per point +1 / -1 / 0 = combined; None = combined for all). ``K`` is the ideal
+    pinhole matrix the fields live in. ``T_world_cam_prior`` (default: the initial
+    pose) is where the optional pose prior of ``config`` pulls.
+    """
+    levels = [field_] if isinstance(field_, TemporalDistanceField) else list(field_)
+    pts = np.ascontiguousarray(points_world, dtype=np.float64).reshape(-1, 3)
+    m = pts.shape[0]
+    slots = polarity_slots(point_polarity, m)
+    loss = _LOSS_ID[RobustLoss(config.robust_loss)]
+    k = float(config.robust_scale)
+    thr = float(config.inlier_threshold)
+    pose = gtsam.Pose3(np.asarray(T_world_cam_init, dtype=np.float64))
+    if m == 0 or not levels:
+        z = np.zeros(0, np.float32)
+        return RegistrationResult(pose.matrix(), False, "no map points to register", None, 0, 0, 0, 0.0, z, z, np.zeros((0, 2), np.float32))
+    prior = None
+    if config.prior_translation_m > 0 and config.prior_rotation_deg > 0:
+        s_r = np.radians(config.prior_rotation_deg)
+        s_t = config.prior_translation_m
+        info = np.diag([1 / s_r**2] * 3 + [1 / s_t**2] * 3) * config.prior_residual_sigma**2
+        T_p = gtsam.Pose3(np.asarray(T_world_cam_init if T_world_cam_prior is None else T_world_cam_prior, dtype=np.float64))
+        prior = (T_p, info)
+    total_it = 0
+    for fld in levels:
+        pose, cost, inside, inl, swr2, H, res, wts, uv, it = _levenberg_marquardt(pts, slots, fld, pose, K, config, loss, k, thr, prior)
+        total_it += it
+
+    def result(ok, reason, cov):
+        return RegistrationResult(pose.matrix(), ok, reason, cov, total_it, int(inside), int(inl), float(cost),
+                                  res.astype(np.float32), wts.astype(np.float32), uv.astype(np.float32))
+
+    # Health checks and covariance at the final pose.
+    if inside < config.min_points:
+        return result(False, f"only {inside} map points project into the image (need {config.min_points})", None)
+    if inl < config.min_inlier_ratio * inside:
+        return result(False, f"only {inl} of {inside} map points lie on recent events (TDF < {thr:g})", None)
+    if not np.all(np.isfinite(H)):
+        return result(False, "registration produced non-finite values", None)
+    d = np.sqrt(np.maximum(np.diag(H), 1e-300))
+    eig = np.linalg.eigvalsh(H / np.outer(d, d))
+    if eig[0] <= 0 or eig[-1] / eig[0] > config.max_condition:
+        return result(False, "degenerate geometry: the visible map does not constrain all 6 degrees of freedom", None)
+    sigma2 = swr2 / max(inl - 6, 1)
+    cov = np.linalg.inv(H) * sigma2
+    return result(True, "", 0.5 * (cov + cov.T))

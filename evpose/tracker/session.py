@@ -1,0 +1,167 @@
+"""TrackingSession: drives a :class:`Tracker` over a :class:`Recording` one update at a time, with seeking.
+
+The session owns the cursors into the recording (event index, step index),
+keeps a full-state snapshot every ``config.snapshot_every`` steps, and can
+``seek`` to any time by restoring the nearest earlier snapshot and replaying;
+the replayed state equals an uninterrupted run because every stage is
+deterministic. This is the object the CLI, the benchmarks and the viewer use.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from evpose.core.contour_map import ContourMap
+from evpose.core.recording import Recording
+from evpose.core.trajectory import Trajectory
+from evpose.errors import InputError
+from evpose.tracker.config import TrackerConfig
+from evpose.tracker.step_result import StepResult, TrackStatus
+from evpose.tracker.tracker import MotionPredictor, PolaritySelector, Tracker
+
+
+class TrackingSession:
+    """One tracking run over a recording: ``step()`` until it returns None; ``seek(t)`` to go back or forward."""
+
+    def __init__(
+        self,
+        recording: Recording,
+        contour_map: ContourMap,
+        config: TrackerConfig | None = None,
+        initial_pose: np.ndarray | None = None,
+        t_start_us: int | None = None,
+        predictor: MotionPredictor | None = None,
+        polarity_selector: PolaritySelector | None = None,
+    ):
+        """``initial_pose`` None -> the ground-truth pose at the first time with ``warmup_ms`` of events before it
+        (the first ground-truth pose when events precede it); else that pose at ``t_start_us`` (default: the first event)."""
+        self.recording = recording
+        self.config = config if config is not None else TrackerConfig()
+        src = str(recording.source) if recording.source else None
+        if recording.calibration is None:
+            raise InputError(src, "the recording has no camera calibration; tracking needs intrinsics")
+        events = recording.events
+        if len(events) == 0:
+            raise InputError(src, "the recording has no events")
+        if self.config.rate_hz <= 0:
+            raise InputError(None, f"rate_hz must be positive, got {self.config.rate_hz}")
+        if initial_pose is None:
+            gt = recording.ground_truth
+            if gt is None or len(gt) == 0:
+                raise InputError(src, "no initial pose given and the recording has no ground truth to start from")
+            # Start where the front end has seen ``warmup_ms`` of events, so the first update has a field to register on.
+            warm = int(round(self.config.warmup_ms * 1e3))
+            t0 = max(int(gt.t[0]), int(events.t[0]) + warm) if t_start_us is None else int(t_start_us)
+            if t0 > int(gt.t[-1]):
+                raise InputError(src, "the ground truth ends before the first event; cannot start from it")
+            pose0 = gt.interpolate(t0).matrix(0)
+        else:
+            pose0 = np.asarray(initial_pose, dtype=np.float64).reshape(4, 4)
+            t0 = int(events.t[0]) if t_start_us is None else int(t_start_us)
+        self.tracker = Tracker(self.config, contour_map, recording.calibration, predictor, polarity_selector)
+        n_vis = self.tracker.start(pose0, t0)
+        if initial_pose is None and self.config.initial_velocity_from_ground_truth:
+            # Starting "from ground truth" gives the motion model the true initial velocity too.
+            t_prev = t0 - max(int(round(1e6 / float(self.config.rate_hz))), 1)
+            if t_prev >= int(gt.t[0]):
+                self.tracker.predictor.reset(t_prev, gt.interpolate(t_prev).matrix(0))
+                self.tracker.predictor.update(t0, pose0)
+        need = self.config.registration.min_points
+        if n_vis < need:
+            raise InputError(
+                src,
+                f"only {n_vis} map points are in view at the initial pose (need {need}): are the map and the recording in the same frame?",
+            )
+        self.t0_us = t0
+        self.dt_us = max(int(round(1e6 / float(self.config.rate_hz))), 1)
+        self.t_end_us = int(events.t[-1])
+        # Warm-up: let the front end see the events just before the start.
+        w0 = t0 - int(round(self.config.warmup_ms * 1e3))
+        i0, i1 = events.index_range(w0, t0)
+        if i1 > i0:
+            self.tracker.feed(events[i0:i1])
+        self._cursor = i1
+        self._step_index = 0
+        self.results: list[StepResult] = []
+        """StepResults so far, one per update, in time order."""
+        self._snapshots: dict[int, tuple[dict, int]] = {}
+        self._take_snapshot()
+
+    # ------------------------------------------------------------------ state
+    @property
+    def t_us(self) -> int:
+        """Time of the last update (the start time before the first)."""
+        return self.t0_us + self._step_index * self.dt_us
+
+    @property
+    def step_count(self) -> int:
+        return self._step_index
+
+    @property
+    def total_steps(self) -> int:
+        """Number of updates a full run makes."""
+        return max((self.t_end_us - self.t0_us) // self.dt_us, 0)
+
+    @property
+    def done(self) -> bool:
+        return self._step_index >= self.total_steps
+
+    def _take_snapshot(self) -> None:
+        self._snapshots[self._step_index] = (self.tracker.snapshot(), self._cursor)
+
+    # ------------------------------------------------------------------- run
+    def step(self, debug: bool = False) -> StepResult | None:
+        """One update at the next grid time; None once the recording's events are exhausted."""
+        if self.done:
+            return None
+        until = self.t_us + self.dt_us
+        ev = self.recording.events
+        i1 = int(np.searchsorted(ev.t, until, side="left"))
+        batch = ev[self._cursor : i1]
+        imu = None
+        if self.recording.imu is not None:
+            off = self.recording.calibration.time_offset_us
+            imu = self.recording.imu.time_window(self.t_us + off, until + off)
+        result = self.tracker.step(until, batch, imu=imu, debug=debug)
+        self._cursor = i1
+        self._step_index += 1
+        self.results.append(result)
+        if self._step_index % int(self.config.snapshot_every) == 0:
+            self._take_snapshot()
+        return result
+
+    def run(self, progress=None) -> list[StepResult]:
+        """Step to the end; ``progress(result)`` is called after each update (e.g. a tqdm update)."""
+        while (r := self.step()) is not None:
+            if progress is not None:
+                progress(r)
+        return self.results
+
+    def seek(self, t_us: int, debug: bool = False) -> StepResult | None:
+        """Move to the last update at or before ``t_us`` (restore the nearest snapshot, replay); returns it.
+
+        The state afterwards equals an uninterrupted run's; ``debug`` asks for the
+        debug products of the update landed on.
+        """
+        target = int(np.clip((int(t_us) - self.t0_us) // self.dt_us, 0, self.total_steps))
+        if target < self._step_index:
+            # Back: restore the nearest snapshot at or before the target; forward: just step
+            # (results between must exist, and replaying is what makes them).
+            base = max(k for k in self._snapshots if k <= target)
+            state, cursor = self._snapshots[base]
+            self.tracker.restore(state)
+            self._cursor = cursor
+            self._step_index = base
+            del self.results[base:]
+        last = self.results[-1] if self.results else None
+        while self._step_index < target:
+            last = self.step(debug=debug and self._step_index == target - 1)
+        return last
+
+    def trajectory(self, include_lost: bool = False) -> Trajectory:
+        """Poses of the updates so far (only those with a trustworthy status unless ``include_lost``)."""
+        good = (TrackStatus.OK, TrackStatus.DEGRADED)
+        sel = [r for r in self.results if include_lost or r.status in good]
+        if not sel:
+            return Trajectory.empty()
+        return Trajectory.from_matrices(np.array([r.t_us for r in sel], dtype=np.int64), np.stack([r.pose for r in sel]))

@@ -1,0 +1,258 @@
+"""The steppable tracking engine: front end (filter, SP-TS, TDF) + visible map + registration, one update per ``step``.
+
+``Tracker.step(until_t_us, events)`` consumes the events the caller hands it
+(those since the previous step, time-sorted), updates the front end, predicts
+the pose, culls the map, builds the TDF around the projected map and registers.
+The full state (filter and SP-TS maps, predictor, pose, clock) is copied by
+``snapshot()`` and put back by ``restore()``; everything is deterministic, so a
+restored tracker fed the same events reproduces the same results bit for bit.
+
+Plug-in points for fusion (issue 7): ``predictor`` (any :class:`MotionPredictor`,
+e.g. IMU-driven) and ``polarity_selector`` (per used map point +1 / -1 / 0 for
+the TDF it is evaluated on). ``stpe`` mode uses constant velocity and the
+combined-polarity TDF.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Callable
+
+import numpy as np
+
+from evpose.core.camera import CameraCalibration
+from evpose.core.contour_map import ContourMap
+from evpose.core.events import EventArray
+from evpose.core.imu import ImuSamples
+from evpose.errors import InputError
+from evpose.frontend.distance_field import TemporalDistanceField
+from evpose.frontend.noise_filter import ConsistencyNoiseFilter
+from evpose.frontend.time_surface import SeparatedTimeSurface
+from evpose.tracker.config import MotionModel, TrackerConfig
+from evpose.tracker.predictor import ConstantPosePredictor, ConstantVelocityPredictor, MotionPredictor
+from evpose.tracker.registration import register_to_map, subsample_indices
+from evpose.tracker.step_result import StepDebug, StepResult, TrackStatus
+from evpose.tracker.visible_map import VisibleMap, visible_points
+
+PolaritySelector = Callable[[np.ndarray, int, np.ndarray], "np.ndarray | None"]
+"""``(T_world_cam_predicted, t_us, map_point_indices) -> int8 polarity per point (+1/-1/0) or None (all combined)``."""
+
+
+def _ms(t0: float) -> float:
+    return (time.perf_counter() - t0) * 1e3
+
+
+class Tracker:
+    """EV-Pose STPE engine over one contour map and one calibrated camera."""
+
+    def __init__(
+        self,
+        config: TrackerConfig,
+        contour_map: ContourMap,
+        calibration: CameraCalibration | None,
+        predictor: MotionPredictor | None = None,
+        polarity_selector: PolaritySelector | None = None,
+    ):
+        if calibration is None:
+            raise InputError(None, "the recording has no camera calibration; tracking needs intrinsics")
+        if contour_map is None or len(contour_map) == 0:
+            raise InputError(None, "the map has no points")
+        if not np.all(np.isfinite(contour_map.points)):
+            raise InputError(None, "the map has NaN or infinite coordinates")
+        self.config = config
+        self.map = contour_map
+        self.calibration = calibration
+        self.K = calibration.K
+        w, h = calibration.width, calibration.height
+        self.width, self.height = w, h
+        self._points = np.ascontiguousarray(contour_map.points, dtype=np.float64)
+        self.visible_map = VisibleMap(self._points, self.K, w, h)
+        self.noise_filter = ConsistencyNoiseFilter(config.noise_filter, w, h)
+        self.time_surface = SeparatedTimeSurface(config.time_surface, w, h, calibration)
+        self.distance_field = TemporalDistanceField(config.distance_field, w, h)
+        coarse = int(config.distance_field.coarse_blur_px)
+        self.coarse_field = TemporalDistanceField(config.distance_field.level(coarse), w, h) if coarse > 0 else None
+        """Optional coarser field registered first (coarse-to-fine), None when ``coarse_blur_px`` is 0."""
+        if predictor is None:
+            predictor = ConstantPosePredictor() if config.motion_model is MotionModel.CONSTANT_POSE else ConstantVelocityPredictor()
+        self.predictor = predictor
+        self.polarity_selector = polarity_selector
+        self._pose: np.ndarray | None = None
+        self._t_us: int | None = None
+        self._steps = 0
+
+    # ------------------------------------------------------------------ state
+    @property
+    def pose(self) -> np.ndarray | None:
+        """Current ``T_world_cam`` estimate (4, 4), None before :meth:`start`."""
+        return None if self._pose is None else self._pose.copy()
+
+    @property
+    def t_us(self) -> int | None:
+        return self._t_us
+
+    def visible_count(self, T_world_cam: np.ndarray) -> int:
+        """How many map points survive culling at a pose (to check an initial pose before tracking)."""
+        return int(visible_points(self._points, T_world_cam, self.K, self.width, self.height, self.config.visible_map).size)
+
+    def feed(self, events: EventArray) -> np.ndarray:
+        """Push events through the noise filter into the SP-TS without a pose update; returns the keep-mask."""
+        keep = self.noise_filter.filter(events)
+        self.time_surface.update(events, keep)
+        return keep
+
+    def start(self, T_world_cam: np.ndarray, t_us: int) -> int:
+        """Set the initial pose at ``t_us``; returns the number of map points visible from it."""
+        T = np.asarray(T_world_cam, dtype=np.float64).reshape(4, 4)
+        if not np.all(np.isfinite(T)):
+            raise InputError(None, "the initial pose has NaN or infinite values")
+        self._pose = T.copy()
+        self._t_us = int(t_us)
+        self.predictor.reset(int(t_us), T)
+        return self.visible_count(T)
+
+    def snapshot(self) -> dict:
+        """Deep copy of the full engine state."""
+        return {
+            "noise_filter": self.noise_filter.snapshot(),
+            "time_surface": self.time_surface.snapshot(),
+            "predictor": self.predictor.snapshot(),
+            "visible_map": self.visible_map.snapshot(),
+            "pose": None if self._pose is None else self._pose.copy(),
+            "t_us": self._t_us,
+            "steps": self._steps,
+        }
+
+    def restore(self, state: dict) -> None:
+        self.noise_filter.restore(state["noise_filter"])
+        self.time_surface.restore(state["time_surface"])
+        self.predictor.restore(state["predictor"])
+        self.visible_map.restore(state["visible_map"])
+        self._pose = None if state["pose"] is None else state["pose"].copy()
+        self._t_us = state["t_us"]
+        self._steps = state["steps"]
+
+    # ------------------------------------------------------------------- step
+    def step(self, until_t_us: int, events: EventArray, imu: ImuSamples | None = None, debug: bool = False) -> StepResult:
+        """Consume ``events`` (those up to ``until_t_us``), update the pose at ``until_t_us``.
+
+        ``imu`` is ignored in ``stpe`` mode (fused modes use it through the predictor).
+        """
+        until = int(until_t_us)
+        timings: dict[str, float] = {}
+        t_total = time.perf_counter()
+
+        t0 = time.perf_counter()
+        keep = self.noise_filter.filter(events)
+        timings["noise_filter"] = _ms(t0)
+        t0 = time.perf_counter()
+        self.time_surface.update(events, keep)
+        timings["time_surface"] = _ms(t0)
+        n_in = len(events)
+        n_kept = int(np.count_nonzero(keep))
+        counts = {"events_in": n_in, "events_kept": n_kept}
+        self._steps += 1
+
+        if self._pose is None:
+            self._t_us = until
+            timings["total"] = _ms(t_total)
+            return StepResult(until, np.full((4, 4), np.nan), TrackStatus.NOT_INITIALISED, "no initial pose", timings_ms=timings, counts=counts)
+
+        predicted = self.predictor.predict(until)
+        t0 = time.perf_counter()
+        visible = self.visible_map.visible(predicted, self.config.visible_map)
+        used = visible[subsample_indices(visible.size, int(self.config.registration.max_points))]
+        pts = self._points[used]
+        roi = self._field_box(pts, predicted)
+        timings["culling"] = _ms(t0)
+        counts.update(points_visible=int(visible.size), points_used=int(used.size))
+
+        polarity = None if self.polarity_selector is None else self.polarity_selector(predicted, until, used)
+        t0 = time.perf_counter()
+        pols = (0,) if polarity is None else tuple(sorted({int(p) for p in np.unique(polarity)}))
+        curv = bool(self.config.registration.second_order)
+        self.distance_field.compute(self.time_surface, until, pols, roi, curv)
+        levels = [self.distance_field]
+        if self.coarse_field is not None:
+            self.coarse_field.compute(self.time_surface, until, pols, self._field_box(pts, predicted, True), curv)
+            levels.insert(0, self.coarse_field)
+        timings["distance_field"] = _ms(t0)
+
+        t0 = time.perf_counter()
+        if used.size < self.config.registration.min_points:
+            reg = None
+            reason = f"only {visible.size} map points in view at the predicted pose (need {self.config.registration.min_points})"
+        else:
+            reg = register_to_map(levels, pts, predicted, self.K, self.config.registration, polarity)
+            reason = reg.reason
+        timings["registration"] = _ms(t0)
+
+        ok = reg is not None and reg.success
+        if ok:
+            self._pose = reg.T_world_cam.copy()
+            self.predictor.update(until, self._pose)
+            status = TrackStatus.OK
+        else:
+            # Keep coasting on the prediction so the next update can recover.
+            self._pose = predicted.copy()
+            status = TrackStatus.LOST
+        self._t_us = until
+        if reg is not None:
+            counts.update(inliers=reg.inliers, iterations=reg.iterations, points_in_image=reg.points_used)
+        else:
+            counts.update(inliers=0, iterations=0, points_in_image=0)
+        timings["total"] = _ms(t_total)
+
+        result = StepResult(
+            t_us=until,
+            pose=self._pose.copy(),
+            status=status,
+            reason="" if ok else reason,
+            registration_pose=None if reg is None else reg.T_world_cam.copy(),
+            covariance=None if not ok else reg.covariance,
+            timings_ms=timings,
+            counts=counts,
+        )
+        if debug:
+            result.debug = self._debug(until, events, keep, visible, used, reg, polarity)
+        return result
+
+    # ---------------------------------------------------------------- helpers
+    def _field_box(self, pts: np.ndarray, T_world_cam: np.ndarray, coarse: bool = False) -> tuple[int, int, int, int] | None:
+        """Row/column box around the projected points plus the margin and blur radius; None = whole image."""
+        if pts.shape[0] == 0:
+            return (0, 0, 0, 0)
+        R_cw = T_world_cam[:3, :3].T
+        Xc = pts @ R_cw.T - R_cw @ T_world_cam[:3, 3]
+        z = np.maximum(Xc[:, 2], 1e-6)
+        u = self.K[0, 0] * Xc[:, 0] / z + self.K[0, 2]
+        v = self.K[1, 1] * Xc[:, 1] / z + self.K[1, 2]
+        blur = int(self.config.distance_field.coarse_blur_px if coarse else self.config.distance_field.blur_px)
+        pad = int(self.config.field_margin_px) + blur
+        c0 = int(np.floor(u.min())) - pad
+        c1 = int(np.ceil(u.max())) + pad + 1
+        r0 = int(np.floor(v.min())) - pad
+        r1 = int(np.ceil(v.max())) + pad + 1
+        return (max(r0, 0), min(r1, self.height), max(c0, 0), min(c1, self.width))
+
+    def _debug(self, until, events, keep, visible, used, reg, polarity) -> StepDebug:
+        m = used.size
+        extra = {}
+        for p in (1, -1):
+            slot = 1 if p > 0 else 2
+            if slot in self.distance_field.slots_ready:
+                extra[f"tdf_{'positive' if p > 0 else 'negative'}"] = self.distance_field.image(p)
+        return StepDebug(
+            ts_positive=self.time_surface.image(until, 1),
+            ts_negative=self.time_surface.image(until, -1),
+            tdf=self.distance_field.image(0),
+            visible_index=visible.astype(np.int64),
+            point_index=used.astype(np.int64),
+            projected_uv=reg.uv if reg is not None else np.full((m, 2), np.nan, np.float32),
+            residuals=reg.residuals if reg is not None else np.ones(m, np.float32),
+            weights=reg.weights if reg is not None else np.zeros(m, np.float32),
+            predicted_polarity=np.zeros(m, np.int8) if polarity is None else np.asarray(polarity, np.int8),
+            events_kept=events[keep],
+            events_removed=events[~keep],
+            extra=extra,
+        )

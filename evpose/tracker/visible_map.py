@@ -1,0 +1,152 @@
+"""Visible map: the contour-map points a camera at a given pose can see.
+
+FoV culling with an expanded margin (the registration may move the pose, so
+points just outside the predicted view are kept), a depth range, and occlusion
+by a coarse z-buffer: per image cell only points within a depth tolerance of the
+nearest point in that cell survive. Contour points of one edge share a depth, so
+they survive together; a far edge hidden behind a near surface's contour does
+not. One numba pass to project, one to build the z-buffer, one to select.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numba as nb
+import numpy as np
+
+
+@dataclass
+class VisibleMapConfig:
+    """Culling settings."""
+
+    fov_margin_px: float = field(default=20.0, metadata={"min": 0.0, "max": 200.0, "step": 1.0, "unit": "px"})
+    """Keep points projecting up to this far outside the image, pixels."""
+    min_depth_m: float = field(default=0.05, metadata={"min": 0.0, "max": 10.0, "step": 0.01, "unit": "m"})
+    """Points closer than this along the optical axis are dropped, metres."""
+    max_depth_m: float = field(default=1000.0, metadata={"min": 0.1, "max": 10000.0, "step": 1.0, "unit": "m"})
+    """Points farther than this are dropped, metres."""
+    occlusion: bool = True
+    """Drop points behind the nearest point of their image cell."""
+    occlusion_cell_px: int = field(default=8, metadata={"min": 2, "max": 64, "step": 1, "unit": "px"})
+    """Side of the z-buffer cells, pixels."""
+    occlusion_tolerance: float = field(default=0.15, metadata={"min": 0.0, "max": 2.0, "step": 0.01, "unit": "ratio"})
+    """A point is occluded if deeper than (1 + this) x the nearest depth in its cell, relative."""
+
+
+@nb.njit(cache=True)
+def _cull_kernel(points, R_cw, t_cw, fx, fy, cx, cy, width, height, margin, zmin, zmax, occlusion, cell, tol, out_idx):
+    n = points.shape[0]
+    gw = int((width + 2 * margin) // cell) + 1
+    gh = int((height + 2 * margin) // cell) + 1
+    zbuf = np.full(gh * gw, np.inf)
+    cand = np.empty(n, dtype=np.int64)
+    cell_of = np.empty(n, dtype=np.int64)
+    depth = np.empty(n)
+    m = 0
+    for i in range(n):
+        px = points[i, 0]
+        py = points[i, 1]
+        pz = points[i, 2]
+        X = R_cw[0, 0] * px + R_cw[0, 1] * py + R_cw[0, 2] * pz + t_cw[0]
+        Y = R_cw[1, 0] * px + R_cw[1, 1] * py + R_cw[1, 2] * pz + t_cw[1]
+        Z = R_cw[2, 0] * px + R_cw[2, 1] * py + R_cw[2, 2] * pz + t_cw[2]
+        if not (Z > zmin and Z < zmax):
+            continue
+        u = fx * X / Z + cx
+        v = fy * Y / Z + cy
+        if not (u >= -margin and u <= width - 1 + margin and v >= -margin and v <= height - 1 + margin):
+            continue
+        k = int((v + margin) // cell) * gw + int((u + margin) // cell)
+        cand[m] = i
+        cell_of[m] = k
+        depth[m] = Z
+        if Z < zbuf[k]:
+            zbuf[k] = Z
+        m += 1
+    out = 0
+    for j in range(m):
+        if occlusion and depth[j] > zbuf[cell_of[j]] * (1.0 + tol):
+            continue
+        out_idx[out] = cand[j]
+        out += 1
+    return out
+
+
+def visible_points(points_world: np.ndarray, T_world_cam: np.ndarray, K: np.ndarray, width: int, height: int, config: VisibleMapConfig) -> np.ndarray:
+    """Indices (int64, ascending) of the map points visible from ``T_world_cam`` with an ideal pinhole ``K``."""
+    T = np.asarray(T_world_cam, dtype=np.float64)
+    R_cw = np.ascontiguousarray(T[:3, :3].T)
+    t_cw = -R_cw @ T[:3, 3]
+    out = np.empty(points_world.shape[0], dtype=np.int64)
+    n = _cull_kernel(
+        points_world, R_cw, t_cw, float(K[0, 0]), float(K[1, 1]), float(K[0, 2]), float(K[1, 2]),
+        int(width), int(height), float(config.fov_margin_px), float(config.min_depth_m), float(config.max_depth_m),
+        bool(config.occlusion), float(config.occlusion_cell_px), float(config.occlusion_tolerance), out,
+    )
+    return out[:n].copy()
+
+
+class VisibleMap:
+    """Culling with a cached superset: a wider cull is redone only when the camera moved enough to matter.
+
+    The superset is culled with ``extra_px`` more margin and without occlusion; as
+    long as the camera has moved less than ``extra_px`` of image motion for the
+    nearest superset point, every point the exact cull would consider lies in the
+    superset, so the result equals :func:`visible_points` on the whole map, at a
+    fraction of the cost for large maps.
+    """
+
+    def __init__(self, points_world: np.ndarray, K: np.ndarray, width: int, height: int, extra_px: float = 80.0):
+        self.points = np.ascontiguousarray(points_world, dtype=np.float64)
+        self.K = np.asarray(K, dtype=np.float64)
+        self.width = int(width)
+        self.height = int(height)
+        self.extra_px = float(extra_px)
+        self._cache: tuple[np.ndarray, np.ndarray, float] | None = None
+        """(pose the superset was culled at, superset indices, nearest superset depth in metres)."""
+        self._sup_points = np.zeros((0, 3))
+
+    def _still_valid(self, T_world_cam: np.ndarray) -> bool:
+        if self._cache is None:
+            return False
+        T0, _, zmin = self._cache
+        R_rel = T0[:3, :3].T @ T_world_cam[:3, :3]
+        angle = float(np.arccos(np.clip((np.trace(R_rel) - 1.0) / 2.0, -1.0, 1.0)))
+        dist = float(np.linalg.norm(T_world_cam[:3, 3] - T0[:3, 3]))
+        f = max(self.K[0, 0], self.K[1, 1])
+        if dist >= zmin:
+            return False
+        # Worst-case image motion: rotation moves every point by <= f * angle (small angles, with slack),
+        # translation moves a point at depth z by <= f * dist / (z - dist).
+        return f * (1.5 * angle + dist / (zmin - dist)) < 0.5 * self.extra_px
+
+    def visible(self, T_world_cam: np.ndarray, config: VisibleMapConfig) -> np.ndarray:
+        """Indices (ascending) of the visible points, as :func:`visible_points` gives them."""
+        T = np.asarray(T_world_cam, dtype=np.float64)
+        if not self._still_valid(T):
+            wide = VisibleMapConfig(
+                fov_margin_px=config.fov_margin_px + self.extra_px, min_depth_m=config.min_depth_m,
+                max_depth_m=config.max_depth_m, occlusion=False,
+            )
+            sup = visible_points(self.points, T, self.K, self.width, self.height, wide)
+            if sup.size:
+                Xc = (self.points[sup] - T[:3, 3]) @ T[:3, :3]
+                zmin = float(Xc[:, 2].min())
+            else:
+                zmin = float(config.min_depth_m)
+            self._cache = (T.copy(), sup, max(zmin, float(config.min_depth_m), 1e-6))
+            self._sup_points = np.ascontiguousarray(self.points[sup])
+        sup = self._cache[1]
+        if sup.size == 0:
+            return sup.copy()
+        return sup[visible_points(self._sup_points, T, self.K, self.width, self.height, config)]
+
+    def snapshot(self) -> dict:
+        return {"cache": None if self._cache is None else (self._cache[0].copy(), self._cache[1].copy(), self._cache[2])}
+
+    def restore(self, state: dict) -> None:
+        c = state["cache"]
+        self._cache = None if c is None else (c[0].copy(), c[1].copy(), c[2])
+        if c is not None:
+            self._sup_points = np.ascontiguousarray(self.points[c[1]])

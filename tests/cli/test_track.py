@@ -1,0 +1,84 @@
+"""``evpose track``: TUM output, timings file, and one-line errors for bad input."""
+
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tracker"))
+from tracker_synthetic import generate  # noqa: E402
+
+from evpose.cli.main import run  # noqa: E402
+from evpose.io.h5 import write_recording_h5  # noqa: E402
+from evpose.io.map_ply import write_contour_map  # noqa: E402
+from evpose.io.tum import read_tum  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    rec, cmap, _ = generate(duration_s=0.12, seed=4)
+    d = tmp_path_factory.mktemp("track")
+    write_recording_h5(d / "rec.h5", rec)
+    write_contour_map(d / "map.ply", cmap)
+    return d, rec
+
+
+def test_track_writes_a_tum_trajectory_and_timings(files):
+    d, rec = files
+    code = run(["track", str(d / "rec.h5"), "--map", str(d / "map.ply"), "--out", str(d / "est.txt"), "--rate-hz", "100",
+                "--timings", str(d / "t.json"), "--no-progress"])
+    assert code == 0
+    est = read_tum(d / "est.txt")
+    doc = json.loads((d / "t.json").read_text())
+    n = len(doc["updates"])
+    assert n >= 7 and len(est) == n and np.all(np.diff(est.t) == 10_000)
+    gt = rec.ground_truth.interpolate(est.t)
+    assert np.max(np.linalg.norm(est.position - gt.position, axis=1)) < 0.03
+    assert "registration" in doc["modules"]
+    assert doc["summary_ms"]["total"]["n"] == n and doc["config"]["rate_hz"] == 100.0
+
+
+def test_track_accepts_an_explicit_initial_pose(files, tmp_path):
+    d, rec = files
+    T = rec.ground_truth.interpolate(rec.t_start_us)
+    pose = " ".join(str(v) for v in np.concatenate([T.position[0], T.quat_xyzw[0]]))
+    code = run(["track", str(d / "rec.h5"), "--map", str(d / "map.ply"), "--out", str(tmp_path / "e.txt"), "--init", pose, "--no-progress"])
+    assert code == 0 and len(read_tum(tmp_path / "e.txt")) > 10
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["--init", "1 2 3"], "--init expects"),
+        (["--mode", "warp"], "--mode must be one of"),
+        (["--rate-hz", "0"], "--rate-hz must be positive"),
+        (["--config", "missing.yaml"], "cannot read the config file"),
+    ],
+)
+def test_track_bad_options_are_one_line_errors(files, tmp_path, capsys, args, message):
+    d, _ = files
+    code = run(["track", str(d / "rec.h5"), "--map", str(d / "map.ply"), "--out", str(tmp_path / "e.txt"), "--no-progress", *args])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and message in err and len(err.splitlines()) == 1
+    assert not (tmp_path / "e.txt").exists()
+
+
+def test_track_refuses_to_overwrite_its_input(files, capsys):
+    d, _ = files
+    code = run(["track", str(d / "rec.h5"), "--map", str(d / "map.ply"), "--out", str(d / "map.ply"), "--no-progress"])
+    assert code == 2 and "overwrite" in capsys.readouterr().err
+
+
+def test_track_with_a_map_in_another_frame_fails_with_one_line(files, tmp_path, capsys):
+    d, rec = files
+    from evpose.io.map_ply import read_contour_map
+
+    cmap = read_contour_map(d / "map.ply")
+    import dataclasses
+
+    write_contour_map(tmp_path / "far.ply", dataclasses.replace(cmap, points=cmap.points + 100.0))
+    code = run(["track", str(d / "rec.h5"), "--map", str(tmp_path / "far.ply"), "--out", str(tmp_path / "e.txt"), "--no-progress"])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and "same frame" in err and len(err.splitlines()) == 1

@@ -1,0 +1,118 @@
+"""TDF: ~0 on the newest events, gradients at query points, box computation equals the full image."""
+
+import numpy as np
+
+from evpose.core.events import EventArray
+from evpose.frontend.distance_field import DistanceFieldConfig, TemporalDistanceField, decay_lut
+from evpose.frontend.time_surface import SeparatedTimeSurface, TimeSurfaceConfig
+
+W, H = 80, 60
+
+
+def edge_surface(eta_ms=10.0):
+    """A vertical edge that swept from column 20 to 40, one column per ms, ending at t = 20 ms."""
+    ts = SeparatedTimeSurface(TimeSurfaceConfig(eta_ms=eta_ms), W, H)
+    t, x, y = [], [], []
+    for k in range(21):
+        t += [k * 1_000] * 40
+        x += [20 + k] * 40
+        y += list(range(10, 50))
+    ts.update(EventArray.from_arrays(t, x, y, [1] * len(t)))
+    return ts
+
+
+def test_tdf_is_zero_on_the_newest_events_without_blur():
+    ts = edge_surface()
+    f = TemporalDistanceField(DistanceFieldConfig(blur_px=0), W, H)
+    f.compute(ts, 20_000)
+    img = f.image(0)
+    assert np.all(img[10:50, 40] < 1e-3)
+    assert np.all(img[:, 60] == 1.0)  # never fired
+    # Rises behind the edge following 1 - exp(-dt/eta).
+    assert np.isclose(img[30, 30], 1 - np.exp(-1.0), atol=1e-3)
+
+
+def test_blurred_tdf_keeps_its_minimum_on_the_edge_rows():
+    ts = edge_surface()
+    f = TemporalDistanceField(DistanceFieldConfig(blur_px=5), W, H)
+    f.compute(ts, 20_000)
+    img = f.image(0)
+    row = img[30]
+    assert np.argmin(row) in (38, 39, 40)
+    assert row[45] > row[40]
+
+
+def test_decay_table_matches_the_exponential():
+    eta_us = 7_300.0
+    table, shift = decay_lut(eta_us)
+    dt = np.arange(0, 12 * 7_300, 37)
+    approx = table[np.minimum((dt + ((1 << shift) >> 1)) >> shift, table.size - 1)]
+    assert np.max(np.abs(approx - (1 - np.exp(-dt / eta_us)))) < 1e-3
+
+
+def test_sampled_gradient_matches_finite_differences_of_the_field():
+    ts = edge_surface()
+    f = TemporalDistanceField(DistanceFieldConfig(blur_px=5), W, H)
+    f.compute(ts, 20_000)
+    uv = np.array([[35.0, 30.0], [41.0, 25.0], [30.0, 40.0]])
+    _, grad, inside = f.sample(uv)
+    assert inside.all()
+    img = f.image(0).astype(np.float64)
+    for (u, v), g in zip(uv.astype(int), grad):
+        assert np.isclose(g[0], (img[v, u + 1] - img[v, u - 1]) / 2, atol=1e-6)
+        assert np.isclose(g[1], (img[v + 1, u] - img[v - 1, u]) / 2, atol=1e-6)
+
+
+def test_sampling_outside_the_image_reports_no_evidence():
+    ts = edge_surface()
+    f = TemporalDistanceField(DistanceFieldConfig(), W, H)
+    f.compute(ts, 20_000)
+    val, grad, inside = f.sample(np.array([[-1.0, 5.0], [W - 0.5, 5.0], [5.0, np.nan]]))
+    assert not inside.any() and np.all(val == 1.0) and np.all(grad == 0.0)
+
+
+def test_field_in_a_padded_box_equals_the_full_field_inside_it():
+    ts = edge_surface()
+    full = TemporalDistanceField(DistanceFieldConfig(blur_px=5), W, H)
+    full.compute(ts, 20_000)
+    box = TemporalDistanceField(DistanceFieldConfig(blur_px=5), W, H)
+    box.compute(ts, 20_000, roi=(5, 55, 10, 60))
+    inner = (slice(9, 51), slice(14, 56))  # the box minus the blur radius + gradient stencil
+    assert np.allclose(box.value[0][inner], full.value[0][inner], atol=1e-6)
+    assert np.allclose(box.grad_u[0][inner], full.grad_u[0][inner], atol=1e-6)
+    assert np.all(box.image(0)[:, :10] == 1.0)
+    val, grad, inside = box.sample(np.array([[5.0, 30.0], [30.0, 30.0]]))
+    assert inside.tolist() == [False, True] and val[0] == 1.0 and np.all(grad[0] == 0.0)
+
+
+def test_recomputing_with_a_smaller_box_clears_the_previous_one():
+    ts = edge_surface()
+    f = TemporalDistanceField(DistanceFieldConfig(), W, H)
+    f.compute(ts, 20_000)
+    f.compute(ts, 20_000, roi=(0, 5, 0, 5))
+    assert np.all(f.image(0)[10:50, 40] == 1.0)
+    assert not f.sample(np.array([[40.0, 30.0]]))[2][0]
+
+
+def test_per_polarity_fields_are_computed_on_request():
+    ts = edge_surface()
+    f = TemporalDistanceField(DistanceFieldConfig(blur_px=0), W, H)
+    f.compute(ts, 20_000, polarities=(1, -1))
+    assert f.slots_ready == (1, 2)
+    assert f.image(1)[30, 40] < 1e-3
+    assert np.all(f.image(-1) == 1.0)  # no OFF events
+    val, _, _ = f.sample(np.array([[40.0, 30.0], [40.0, 30.0]]), polarity=np.array([1, -1]))
+    assert val[0] < 1e-3 and val[1] == 1.0
+
+
+def test_curvature_images_are_second_differences_of_the_field():
+    ts = edge_surface()
+    f = TemporalDistanceField(DistanceFieldConfig(blur_px=5), W, H)
+    f.compute(ts, 20_000, curvature=True)
+    img = f.image(0).astype(np.float64)
+    r, c = 30, 39
+    assert np.isclose(f.hess[0, 0, r, c], img[r, c + 1] - 2 * img[r, c] + img[r, c - 1], atol=1e-6)
+    assert np.isclose(f.hess[2, 0, r, c], img[r + 1, c] - 2 * img[r, c] + img[r - 1, c], atol=1e-6)
+    cross = (img[r + 1, c + 1] - img[r + 1, c - 1] - img[r - 1, c + 1] + img[r - 1, c - 1]) / 4
+    assert np.isclose(f.hess[1, 0, r, c], cross, atol=1e-6)
+    assert f.hess[0, 0, r, 40] > 0  # the field's valley along the edge is convex across it

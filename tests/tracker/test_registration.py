@@ -1,0 +1,115 @@
+"""Registration: converges from perturbed poses, exact Jacobian, explicit failure, covariance."""
+
+import gtsam
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+from tracker_synthetic import generate
+
+from evpose.frontend.distance_field import DistanceFieldConfig, TemporalDistanceField
+from evpose.frontend.noise_filter import ConsistencyNoiseFilter, NoiseFilterConfig
+from evpose.frontend.time_surface import SeparatedTimeSurface, TimeSurfaceConfig
+from evpose.tracker import registration as reg
+from evpose.tracker.registration import RegistrationConfig, register_to_map
+from evpose.tracker.visible_map import VisibleMapConfig, visible_points
+
+
+COARSE_BLUR = 21
+
+
+@pytest.fixture(scope="module")
+def scene():
+    rec, cmap, _ = generate(duration_s=0.25, seed=3)
+    cal = rec.calibration
+    t_query = 200_000
+    ev = rec.events.time_window(0, t_query)
+    nf = ConsistencyNoiseFilter(NoiseFilterConfig(), cal.width, cal.height)
+    ts = SeparatedTimeSurface(TimeSurfaceConfig(), cal.width, cal.height, cal)
+    ts.update(ev, nf.filter(ev))
+    field = TemporalDistanceField(DistanceFieldConfig(), cal.width, cal.height)
+    field.compute(ts, t_query)
+    coarse = TemporalDistanceField(DistanceFieldConfig(blur_px=COARSE_BLUR), cal.width, cal.height)
+    coarse.compute(ts, t_query)
+    T_gt = rec.ground_truth.interpolate(t_query).matrix(0)
+    pts = cmap.points[visible_points(cmap.points, T_gt, cal.K, cal.width, cal.height, VisibleMapConfig())]
+    return field, pts, T_gt, cal, coarse
+
+
+def pose_error(A, B):
+    dt = np.linalg.norm(A[:3, 3] - B[:3, 3])
+    da = np.degrees(Rotation.from_matrix(A[:3, :3].T @ B[:3, :3]).magnitude())
+    return dt, da
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_registration_converges_from_3cm_2deg_perturbations(scene, seed):
+    field, pts, T_gt, cal, coarse = scene
+    rng = np.random.default_rng(seed)
+    rot = rng.normal(size=3)
+    trans = rng.normal(size=3)
+    xi = np.concatenate([np.radians(2.0) * rot / np.linalg.norm(rot), 0.03 * trans / np.linalg.norm(trans)])
+    T0 = (gtsam.Pose3(T_gt) * gtsam.Pose3.Expmap(xi)).matrix()
+    res = register_to_map([coarse, field], pts, T0, cal.K, RegistrationConfig(max_iterations=40, prior_translation_m=0.0, prior_rotation_deg=0.0))
+    assert res.success, res.reason
+    dt, da = pose_error(res.T_world_cam, T_gt)
+    assert dt < 0.012 and da < 0.4, (dt, da)
+
+
+def test_registration_jacobian_matches_finite_differences_on_a_smooth_field(scene):
+    field, pts, T_gt, cal, coarse = scene
+    f = TemporalDistanceField(DistanceFieldConfig(), cal.width, cal.height)
+    vv, uu = np.mgrid[0 : cal.height, 0 : cal.width].astype(np.float64)
+    # A bilinear field is represented exactly by bilinear interpolation, value and gradient alike.
+    f.value[0] = 0.01 * uu - 0.02 * vv + 1e-4 * uu * vv
+    f.grad_u[0] = 0.01 + 1e-4 * vv
+    f.grad_v[0] = -0.02 + 1e-4 * uu
+    f.box[:] = (0, cal.height, 0, cal.width)
+    P = np.ascontiguousarray(pts)
+    m = P.shape[0]
+    slots = np.zeros(m, np.int8)
+
+    def lin(T):
+        Tcw = np.linalg.inv(T)
+        H, b = np.zeros((6, 6)), np.zeros(6)
+        out = reg._linearise(P, slots, np.ascontiguousarray(Tcw[:3, :3]), np.ascontiguousarray(Tcw[:3, 3]), cal.fx, cal.fy, cal.cx, cal.cy,
+                             f.value, f.grad_u, f.grad_v, f.hess, f.box, False, 0, 1.0, 1.0, H, b, np.empty(m), np.empty(m), np.empty((m, 2)))
+        return out[0], b
+
+    _, b = lin(T_gt)
+    eps = 1e-5
+    for k in range(6):
+        d = np.zeros(6)
+        d[k] = eps
+        cp, _ = lin((gtsam.Pose3(T_gt) * gtsam.Pose3.Expmap(d)).matrix())
+        cm, _ = lin((gtsam.Pose3(T_gt) * gtsam.Pose3.Expmap(-d)).matrix())
+        assert np.isclose((cp - cm) / (2 * eps), b[k], rtol=1e-4, atol=1e-3)
+
+
+def test_registration_reports_a_covariance_at_success(scene):
+    field, pts, T_gt, cal, coarse = scene
+    res = register_to_map(field, pts, T_gt, cal.K, RegistrationConfig())
+    assert res.success
+    assert res.covariance.shape == (6, 6)
+    assert np.all(np.linalg.eigvalsh(res.covariance) > 0)
+    assert res.residuals.shape == (pts.shape[0],) and res.uv.shape == (pts.shape[0], 2)
+
+
+def test_registration_without_events_fails_with_a_reason(scene):
+    _, pts, T_gt, cal, _ = scene
+    empty = TemporalDistanceField(DistanceFieldConfig(), cal.width, cal.height)
+    empty.compute(SeparatedTimeSurface(TimeSurfaceConfig(), cal.width, cal.height), 200_000)
+    res = register_to_map(empty, pts, T_gt, cal.K, RegistrationConfig())
+    assert not res.success and "recent events" in res.reason
+
+
+def test_registration_with_the_map_out_of_view_fails(scene):
+    field, pts, T_gt, cal, coarse = scene
+    res = register_to_map(field, pts + np.array([0.0, 0.0, 50.0]), T_gt, cal.K, RegistrationConfig())
+    assert not res.success and "project into the image" in res.reason
+
+
+def test_subsampling_is_deterministic_and_evenly_spread():
+    idx = reg.subsample_indices(10_000, 1500)
+    assert idx.size == 1500 and np.array_equal(idx, reg.subsample_indices(10_000, 1500))
+    assert idx[0] == 0 and idx[-1] > 9_990 and np.all(np.diff(idx) > 0)
+    assert np.array_equal(reg.subsample_indices(10, 1500), np.arange(10))

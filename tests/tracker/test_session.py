@@ -1,0 +1,67 @@
+"""TrackingSession: stepping over a recording, seeking equals an uninterrupted run, bad-input errors."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+from tracker_synthetic import generate
+
+from evpose.errors import InputError
+from evpose.tracker.config import TrackerConfig
+from evpose.tracker.session import TrackingSession
+from evpose.tracker.step_result import TrackStatus
+
+
+@pytest.fixture(scope="module")
+def scene():
+    rec, cmap, _ = generate(duration_s=0.2, seed=2)
+    return rec, cmap
+
+
+def test_session_steps_to_the_end_and_builds_a_trajectory(scene):
+    rec, cmap = scene
+    s = TrackingSession(rec, cmap, TrackerConfig(rate_hz=200.0))
+    results = s.run()
+    assert s.step() is None and s.done
+    assert len(results) == s.total_steps == (rec.t_end_us - s.t0_us) // 5_000
+    assert [r.t_us for r in results] == [s.t0_us + 5_000 * (k + 1) for k in range(len(results))]
+    traj = s.trajectory()
+    assert len(traj) == sum(r.status is TrackStatus.OK for r in results) > 0.9 * len(results)
+
+
+def test_seek_back_and_forward_equals_an_uninterrupted_run(scene):
+    rec, cmap = scene
+    cfg = TrackerConfig(snapshot_every=7)
+    straight = TrackingSession(rec, cmap, cfg)
+    ref = straight.run()
+    s = TrackingSession(rec, cmap, dataclasses.replace(cfg))
+    for _ in range(30):
+        s.step()
+    for k in (12, 3, 25, 0, len(ref) - 1):
+        r = s.seek(ref[k].t_us)
+        assert r.t_us == ref[k].t_us and len(s.results) == k + 1
+        assert np.array_equal(r.pose, ref[k].pose) and r.counts == ref[k].counts
+    s.run()
+    assert all(np.array_equal(a.pose, b.pose) for a, b in zip(s.results, ref))
+
+
+def test_session_without_ground_truth_needs_an_initial_pose(scene):
+    rec, cmap = scene
+    bare = dataclasses.replace(rec, ground_truth=None)
+    with pytest.raises(InputError, match="initial pose"):
+        TrackingSession(bare, cmap)
+    s = TrackingSession(bare, cmap, initial_pose=rec.ground_truth.matrix(0), t_start_us=int(rec.ground_truth.t[0]))
+    assert s.step().status is TrackStatus.OK
+
+
+def test_session_without_calibration_is_an_input_error(scene):
+    rec, cmap = scene
+    with pytest.raises(InputError, match="calibration"):
+        TrackingSession(dataclasses.replace(rec, calibration=None), cmap)
+
+
+def test_map_in_another_frame_is_an_input_error(scene):
+    rec, cmap = scene
+    moved = dataclasses.replace(cmap, points=cmap.points + np.array([100.0, 0.0, 0.0]))
+    with pytest.raises(InputError, match="same frame"):
+        TrackingSession(rec, moved)

@@ -1,0 +1,123 @@
+"""Tracker engine: accuracy on a generated scene, determinism, snapshot/restore, status, debug products."""
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+from tracker_synthetic import generate
+
+from evpose.core.events import EventArray
+from evpose.errors import InputError
+from evpose.tracker.config import TrackerConfig
+from evpose.tracker.step_result import TrackStatus
+from evpose.tracker.tracker import Tracker
+
+DT_US = 5_000
+
+
+@pytest.fixture(scope="module")
+def scene():
+    rec, cmap, _ = generate(duration_s=0.3, seed=1)
+    return rec, cmap
+
+
+def run(tracker, rec, t0, n, debug_at=()):
+    out = []
+    for k in range(n):
+        t1 = t0 + DT_US
+        out.append(tracker.step(t1, rec.events.time_window(t0, t1), debug=k in debug_at))
+        t0 = t1
+    return out
+
+
+def started(rec, cmap, config=None):
+    tr = Tracker(config or TrackerConfig(), cmap, rec.calibration)
+    tr.start(rec.ground_truth.matrix(0), int(rec.ground_truth.t[0]))
+    return tr
+
+
+def test_tracker_follows_the_generated_trajectory(scene):
+    rec, cmap = scene
+    results = run(started(rec, cmap), rec, 0, 55)
+    assert all(r.status is TrackStatus.OK for r in results), [r.reason for r in results if r.reason]
+    gt = rec.ground_truth.interpolate([r.t_us for r in results])
+    err = np.linalg.norm(np.stack([r.pose[:3, 3] for r in results]) - gt.position, axis=1)
+    ang = (Rotation.from_matrix(np.stack([r.pose[:3, :3] for r in results])) * gt.rotation.inv()).magnitude()
+    assert np.sqrt(np.mean(err**2)) < 0.015
+    assert np.degrees(np.sqrt(np.mean(ang**2))) < 0.5
+
+
+def test_tracker_is_bit_identical_across_runs(scene):
+    rec, cmap = scene
+    a = run(started(rec, cmap), rec, 0, 12)
+    b = run(started(rec, cmap), rec, 0, 12)
+    for x, y in zip(a, b):
+        assert np.array_equal(x.pose, y.pose) and np.array_equal(x.covariance, y.covariance) and x.counts == y.counts
+
+
+def test_snapshot_restore_then_replay_equals_an_uninterrupted_run(scene):
+    rec, cmap = scene
+    straight = run(started(rec, cmap), rec, 0, 16)
+    tr = started(rec, cmap)
+    run(tr, rec, 0, 8)
+    snap = tr.snapshot()
+    run(tr, rec, 8 * DT_US, 5)  # go on, then come back
+    tr.restore(snap)
+    replay = run(tr, rec, 8 * DT_US, 8)
+    for x, y in zip(straight[8:], replay):
+        assert np.array_equal(x.pose, y.pose) and x.counts == y.counts
+
+
+def test_step_reports_timings_counts_and_a_covariance(scene):
+    rec, cmap = scene
+    r = run(started(rec, cmap), rec, 0, 3)[-1]
+    assert set(r.timings_ms) >= {"noise_filter", "time_surface", "distance_field", "culling", "registration", "total"}
+    assert r.counts["events_in"] >= r.counts["events_kept"] > 0
+    assert r.counts["points_used"] > 0 and r.counts["inliers"] > 0
+    assert r.covariance.shape == (6, 6) and np.all(np.linalg.eigvalsh(r.covariance) > 0)
+    assert r.debug is None
+
+
+def test_debug_products_only_when_asked(scene):
+    rec, cmap = scene
+    res = run(started(rec, cmap), rec, 0, 4, debug_at=(3,))
+    assert res[2].debug is None
+    d = res[3].debug
+    h, w = rec.calibration.height, rec.calibration.width
+    assert d.ts_positive.shape == d.ts_negative.shape == d.tdf.shape == (h, w)
+    m = d.point_index.size
+    assert d.projected_uv.shape == (m, 2) and d.residuals.shape == d.weights.shape == d.predicted_polarity.shape == (m,)
+    assert np.isin(d.point_index, d.visible_index).all()
+    assert len(d.events_kept) + len(d.events_removed) == res[3].counts["events_in"]
+    assert d.tdf.min() < 0.5  # the field is computed where the map projects
+
+
+def test_step_before_start_is_not_initialised(scene):
+    rec, cmap = scene
+    tr = Tracker(TrackerConfig(), cmap, rec.calibration)
+    r = tr.step(5_000, rec.events.time_window(0, 5_000))
+    assert r.status is TrackStatus.NOT_INITIALISED
+
+
+def test_tracker_without_events_reports_lost_with_a_reason(scene):
+    rec, cmap = scene
+    tr = started(rec, cmap)
+    r = tr.step(5_000, EventArray.empty())
+    assert r.status is TrackStatus.LOST and "recent events" in r.reason
+
+
+def test_map_out_of_view_is_lost_not_garbage(scene):
+    rec, cmap = scene
+    tr = Tracker(TrackerConfig(), cmap, rec.calibration)
+    T = rec.ground_truth.matrix(0).copy()
+    T[:3, 3] += [100.0, 0.0, 0.0]
+    assert tr.start(T, 0) == 0
+    r = tr.step(5_000, rec.events.time_window(0, 5_000))
+    assert r.status is TrackStatus.LOST and "in view" in r.reason
+
+
+def test_tracker_needs_a_calibration_and_a_map(scene):
+    rec, cmap = scene
+    with pytest.raises(InputError, match="calibration"):
+        Tracker(TrackerConfig(), cmap, None)
+    with pytest.raises(InputError, match="no points"):
+        Tracker(TrackerConfig(), cmap[np.zeros(len(cmap), bool)], rec.calibration)
