@@ -55,6 +55,7 @@ def main(
     map: Path,  # noqa: A002 - the CLI flag is --map
     out: Path,
     mode: str | None = None,
+    fusion: str | None = None,
     rate_hz: float | None = None,
     init: str = "gt",
     config: Path | None = None,
@@ -69,7 +70,9 @@ def main(
         recording: Anything ``evpose info`` reads (ECD folder, evpose .h5, event .h5, bag).
         map: Contour map from ``evpose build-map`` (.ply) or a plain point cloud (.ply/.pcd).
         out: TUM trajectory of ``T_world_cam``, one line per successful update.
-        mode: stpe (default from the config), stpe+filter or full.
+        mode: stpe, stpe+filter or full (default from the config).
+        fusion: Fusion backend of the fused modes: factor_graph (iSAM2 + fixed-lag window), ekf (error-state EKF
+            baseline) or imu_only (dead reckoning from the initial state).
         rate_hz: Pose updates per second of recording time (default from the config: 200).
         init: 'gt' (first ground-truth pose) or 'tx ty tz qx qy qz qw' (pose at the first event).
         config: Tracker configuration, YAML or JSON (see ``evpose.tracker.config``).
@@ -104,8 +107,14 @@ def main(
         if not rate_hz > 0:
             raise InputError(None, f"--rate-hz must be positive, got {rate_hz}")
         cfg.rate_hz = float(rate_hz)
-    if cfg.mode is not TrackerMode.STPE:
-        raise InputError(None, f"mode {cfg.mode.value!r} needs the fusion engine, which this build does not provide; use --mode stpe")
+    if fusion is not None:
+        from evpose.fusion import FusionBackend
+
+        aliases = {"imu-only": "imu_only", "factor-graph": "factor_graph"}
+        try:
+            cfg.fusion.backend = FusionBackend(aliases.get(fusion, fusion))
+        except ValueError:
+            raise InputError(None, f"--fusion must be one of {', '.join(b.value for b in FusionBackend)}, got {fusion!r}") from None
     initial = parse_init(init)
     cmap = read_contour_map(map)
     rec = open_recording(recording, width, height)

@@ -19,6 +19,9 @@ from evpose.errors import InputError
 from evpose.frontend.distance_field import DistanceFieldConfig
 from evpose.frontend.noise_filter import NoiseFilterConfig
 from evpose.frontend.time_surface import TimeSurfaceConfig
+from evpose.fusion.config import FusionConfig
+from evpose.fusion.ego_motion import EgoMotionConfig
+from evpose.fusion.polarity import PolarityFilterConfig
 from evpose.io.atomic import atomic_path
 from evpose.tracker.registration import RegistrationConfig
 from evpose.tracker.visible_map import VisibleMapConfig
@@ -46,7 +49,7 @@ class MotionModel(str, enum.Enum):
 class TrackerConfig:
     """Everything the tracking engine needs besides the map and the calibration."""
 
-    mode: TrackerMode = TrackerMode.STPE
+    mode: TrackerMode = TrackerMode.FULL
     """Which parts of EV-Pose run."""
     rate_hz: float = field(default=200.0, metadata={"min": 10.0, "max": 1000.0, "step": 10.0, "unit": "Hz"})
     """Pose updates per second of recording time, Hz."""
@@ -65,6 +68,12 @@ class TrackerConfig:
     distance_field: DistanceFieldConfig = field(default_factory=DistanceFieldConfig)
     visible_map: VisibleMapConfig = field(default_factory=VisibleMapConfig)
     registration: RegistrationConfig = field(default_factory=RegistrationConfig)
+    polarity: PolarityFilterConfig = field(default_factory=PolarityFilterConfig)
+    """Motion-instructed polarity filter (``stpe+filter`` and ``full``)."""
+    fusion: FusionConfig = field(default_factory=FusionConfig)
+    """IMU fusion (``full``; ``stpe+filter`` uses it only for the motion the polarity filter needs)."""
+    ego_motion: EgoMotionConfig = field(default_factory=lambda: EgoMotionConfig(enabled=False))
+    """Ego-motion infrastructure extraction (``full`` only): drop events the IMU-predicted motion does not explain."""
 
 
 def config_to_dict(cfg) -> dict:

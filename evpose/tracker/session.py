@@ -15,7 +15,8 @@ from evpose.core.contour_map import ContourMap
 from evpose.core.recording import Recording
 from evpose.core.trajectory import Trajectory
 from evpose.errors import InputError
-from evpose.tracker.config import TrackerConfig
+from evpose.tracker.config import TrackerConfig, TrackerMode
+from evpose.tracker.modes import build_motion_components
 from evpose.tracker.step_result import StepResult, TrackStatus
 from evpose.tracker.tracker import MotionPredictor, PolaritySelector, Tracker
 
@@ -58,9 +59,24 @@ class TrackingSession:
         else:
             pose0 = np.asarray(initial_pose, dtype=np.float64).reshape(4, 4)
             t0 = int(events.t[0]) if t_start_us is None else int(t_start_us)
-        self.tracker = Tracker(self.config, contour_map, recording.calibration, predictor, polarity_selector)
+        v0 = None
+        seed_velocity = initial_pose is None and self.config.initial_velocity_from_ground_truth
+        if seed_velocity:
+            h = 5000  # central difference over +-5 ms of ground truth, microseconds
+            p = gt.interpolate(np.array([max(t0 - h, int(gt.t[0])), min(t0 + h, int(gt.t[-1]))])).position
+            v0 = (p[1] - p[0]) / (2 * h * 1e-6)
+        components = None
+        if predictor is None and polarity_selector is None:
+            has_imu = recording.imu is not None and len(recording.imu) > 1
+            components = build_motion_components(self.config, contour_map, recording.calibration, has_imu, v0, src)
+        self.tracker = Tracker(self.config, contour_map, recording.calibration, predictor, polarity_selector, components)
         n_vis = self.tracker.start(pose0, t0)
-        if initial_pose is None and self.config.initial_velocity_from_ground_truth:
+        if components is not None and components.motion is not None:
+            # IMU samples just before the start let the first preintegration interpolate at t0.
+            off = recording.calibration.time_offset_us
+            components.motion.fusion.add_imu(recording.imu.time_window(t0 + off - 20_000, t0 + off))
+        fused_pose = components is not None and components.drives_pose
+        if seed_velocity and not fused_pose:
             # Starting "from ground truth" gives the motion model the true initial velocity too.
             t_prev = t0 - max(int(round(1e6 / float(self.config.rate_hz))), 1)
             if t_prev >= int(gt.t[0]):

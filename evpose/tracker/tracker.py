@@ -32,6 +32,7 @@ from evpose.tracker.config import MotionModel, TrackerConfig
 from evpose.tracker.predictor import ConstantPosePredictor, ConstantVelocityPredictor, MotionPredictor
 from evpose.tracker.registration import register_to_map, subsample_indices
 from evpose.tracker.step_result import StepDebug, StepResult, TrackStatus
+from evpose.tracker.modes import MotionComponents
 from evpose.tracker.visible_map import VisibleMap, visible_points
 
 PolaritySelector = Callable[[np.ndarray, int, np.ndarray], "np.ndarray | None"]
@@ -52,7 +53,11 @@ class Tracker:
         calibration: CameraCalibration | None,
         predictor: MotionPredictor | None = None,
         polarity_selector: PolaritySelector | None = None,
+        components: MotionComponents | None = None,
     ):
+        """``components`` (from :func:`~evpose.tracker.modes.build_motion_components`) add the IMU fusion,
+        polarity filter and ego-motion filter of the fused modes; explicit ``predictor`` /
+        ``polarity_selector`` arguments take precedence over them."""
         if calibration is None:
             raise InputError(None, "the recording has no camera calibration; tracking needs intrinsics")
         if contour_map is None or len(contour_map) == 0:
@@ -73,6 +78,11 @@ class Tracker:
         coarse = int(config.distance_field.coarse_blur_px)
         self.coarse_field = TemporalDistanceField(config.distance_field.level(coarse), w, h) if coarse > 0 else None
         """Optional coarser field registered first (coarse-to-fine), None when ``coarse_blur_px`` is 0."""
+        self.components = components if components is not None else MotionComponents()
+        if predictor is None and self.components.drives_pose:
+            predictor = self.components.motion
+        if polarity_selector is None:
+            polarity_selector = self.components.polarity_selector
         if predictor is None:
             predictor = ConstantPosePredictor() if config.motion_model is MotionModel.CONSTANT_POSE else ConstantVelocityPredictor()
         self.predictor = predictor
@@ -109,6 +119,8 @@ class Tracker:
         self._pose = T.copy()
         self._t_us = int(t_us)
         self.predictor.reset(int(t_us), T)
+        if self._side_motion() is not None:
+            self._side_motion().reset(int(t_us), T)
         return self.visible_count(T)
 
     def snapshot(self) -> dict:
@@ -117,6 +129,8 @@ class Tracker:
             "noise_filter": self.noise_filter.snapshot(),
             "time_surface": self.time_surface.snapshot(),
             "predictor": self.predictor.snapshot(),
+            "motion": self._side_motion().snapshot() if self._side_motion() is not None else None,
+            "selector": self.polarity_selector.snapshot() if hasattr(self.polarity_selector, "snapshot") else None,
             "visible_map": self.visible_map.snapshot(),
             "pose": None if self._pose is None else self._pose.copy(),
             "t_us": self._t_us,
@@ -127,30 +141,53 @@ class Tracker:
         self.noise_filter.restore(state["noise_filter"])
         self.time_surface.restore(state["time_surface"])
         self.predictor.restore(state["predictor"])
+        if state.get("motion") is not None:
+            self._side_motion().restore(state["motion"])
+        if state.get("selector") is not None:
+            self.polarity_selector.restore(state["selector"])
         self.visible_map.restore(state["visible_map"])
         self._pose = None if state["pose"] is None else state["pose"].copy()
         self._t_us = state["t_us"]
         self._steps = state["steps"]
 
+    def _side_motion(self):
+        """The fusion backend when it runs beside (not as) the predictor, as in ``stpe+filter``."""
+        motion = self.components.motion
+        return motion if motion is not None and motion is not self.predictor else None
+
     # ------------------------------------------------------------------- step
     def step(self, until_t_us: int, events: EventArray, imu: ImuSamples | None = None, debug: bool = False) -> StepResult:
         """Consume ``events`` (those up to ``until_t_us``), update the pose at ``until_t_us``.
 
-        ``imu`` is ignored in ``stpe`` mode (fused modes use it through the predictor).
+        ``imu`` holds the IMU samples since the previous step (IMU clock); ``stpe`` mode ignores it,
+        the fused modes feed it to the fusion backend before predicting.
         """
         until = int(until_t_us)
         timings: dict[str, float] = {}
         t_total = time.perf_counter()
+        motion = self.components.motion
+        if motion is not None and imu is not None and len(imu):
+            motion.fusion.add_imu(imu)
 
         t0 = time.perf_counter()
         keep = self.noise_filter.filter(events)
         timings["noise_filter"] = _ms(t0)
+        ego = self.components.ego_motion
+        n_ego_removed = 0
+        if ego is not None and self._pose is not None and len(events):
+            t0 = time.perf_counter()
+            keep_ego = self._ego_motion_keep(events, keep, until)
+            n_ego_removed = int(np.count_nonzero(keep & ~keep_ego))
+            keep &= keep_ego
+            timings["ego_motion"] = _ms(t0)
         t0 = time.perf_counter()
         self.time_surface.update(events, keep)
         timings["time_surface"] = _ms(t0)
         n_in = len(events)
         n_kept = int(np.count_nonzero(keep))
         counts = {"events_in": n_in, "events_kept": n_kept}
+        if ego is not None:
+            counts["events_ego_removed"] = n_ego_removed
         self._steps += 1
 
         if self._pose is None:
@@ -167,7 +204,10 @@ class Tracker:
         timings["culling"] = _ms(t0)
         counts.update(points_visible=int(visible.size), points_used=int(used.size))
 
+        t0 = time.perf_counter()
         polarity = None if self.polarity_selector is None else self.polarity_selector(predicted, until, used)
+        if self.polarity_selector is not None:
+            timings["polarity_filter"] = _ms(t0)
         t0 = time.perf_counter()
         pols = (0,) if polarity is None else tuple(sorted({int(p) for p in np.unique(polarity)}))
         curv = bool(self.config.registration.second_order)
@@ -188,7 +228,21 @@ class Tracker:
         timings["registration"] = _ms(t0)
 
         ok = reg is not None and reg.success
-        if ok:
+        fused = None
+        covariance = None if not ok else reg.covariance
+        if motion is not None:
+            t0 = time.perf_counter()
+            fused = motion.report(until, reg.T_world_cam if ok else None, reg.covariance if ok else None)
+            timings["fusion"] = _ms(t0)
+        t_prev = self._t_us
+        if self.components.drives_pose:
+            # Fused output: a failed registration is bridged by IMU propagation (degraded), never dropped.
+            self._pose = fused.T_world_cam.copy()
+            covariance = fused.covariance
+            status = TrackStatus.OK if ok and not fused.degraded else TrackStatus.DEGRADED
+            if status is TrackStatus.DEGRADED and ok:
+                reason = "IMU dead reckoning: the fusion backend ignores registrations"
+        elif ok:
             self._pose = reg.T_world_cam.copy()
             self.predictor.update(until, self._pose)
             status = TrackStatus.OK
@@ -197,6 +251,13 @@ class Tracker:
             self._pose = predicted.copy()
             status = TrackStatus.LOST
         self._t_us = until
+        if self.polarity_selector is not None and hasattr(self.polarity_selector, "observe") and polarity is not None:
+            # Label this step's events against the prediction (reports, viewer) and learn point signs from them.
+            t0 = time.perf_counter()
+            labels = self.polarity_selector.observe(events[keep], self._pose, used, polarity, self.width, self.height)
+            counts["events_polarity_removed"] = int(np.count_nonzero(labels == 0))
+            counts["points_single_polarity"] = int(np.count_nonzero(polarity))
+            timings["polarity_filter"] = timings.get("polarity_filter", 0.0) + _ms(t0)
         if reg is not None:
             counts.update(inliers=reg.inliers, iterations=reg.iterations, points_in_image=reg.points_used)
         else:
@@ -207,17 +268,38 @@ class Tracker:
             t_us=until,
             pose=self._pose.copy(),
             status=status,
-            reason="" if ok else reason,
+            reason="" if status is TrackStatus.OK else reason,
             registration_pose=None if reg is None else reg.T_world_cam.copy(),
-            covariance=None if not ok else reg.covariance,
+            covariance=covariance,
+            velocity=None if fused is None else fused.velocity_world.copy(),
             timings_ms=timings,
             counts=counts,
         )
+        if debug and motion is not None and t_prev is not None:
+            result.imu_poses = motion.fusion.imu_rate_poses(t_prev, until)
         if debug:
             result.debug = self._debug(until, events, keep, visible, used, reg, polarity)
         return result
 
     # ---------------------------------------------------------------- helpers
+    def _ego_motion_keep(self, events: EventArray, keep: np.ndarray, until: int) -> np.ndarray:
+        """Keep-mask of the ego-motion filter over this step's events (only noise-filtered ones are judged)."""
+        state = self.components.motion.predict(until)
+        omega = np.zeros(3) if state.omega_cam is None else state.omega_cam
+        x = events.x.astype(np.float64)
+        y = events.y.astype(np.float64)
+        if self.calibration.dist:
+            xy = self.calibration.undistortion_table[events.y, events.x].astype(np.float64)
+            x, y = xy[:, 0], xy[:, 1]
+        out = np.ones(len(events), bool)
+        idx = np.flatnonzero(keep)
+        if idx.size:
+            out[idx] = self.components.ego_motion.filter(
+                x[idx], y[idx], events.t[idx], state.T_world_cam, omega, state.velocity_world, self.K,
+                self.width, self.height, points_world=self._points, t_ref_us=until,
+            )
+        return out
+
     def _field_box(self, pts: np.ndarray, T_world_cam: np.ndarray, coarse: bool = False) -> tuple[int, int, int, int] | None:
         """Row/column box around the projected points plus the margin and blur radius; None = whole image."""
         if pts.shape[0] == 0:

@@ -27,7 +27,7 @@ def files(tmp_path_factory):
 
 def test_track_writes_a_tum_trajectory_and_timings(files):
     d, rec = files
-    code = run(["track", str(d / "rec.h5"), "--map", str(d / "map.ply"), "--out", str(d / "est.txt"), "--rate-hz", "100",
+    code = run(["track", str(d / "rec.h5"), "--map", str(d / "map.ply"), "--out", str(d / "est.txt"), "--mode", "stpe", "--rate-hz", "100",
                 "--timings", str(d / "t.json"), "--no-progress"])
     assert code == 0
     est = read_tum(d / "est.txt")
@@ -44,7 +44,7 @@ def test_track_accepts_an_explicit_initial_pose(files, tmp_path):
     d, rec = files
     T = rec.ground_truth.interpolate(rec.t_start_us)
     pose = " ".join(str(v) for v in np.concatenate([T.position[0], T.quat_xyzw[0]]))
-    code = run(["track", str(d / "rec.h5"), "--map", str(d / "map.ply"), "--out", str(tmp_path / "e.txt"), "--init", pose, "--no-progress"])
+    code = run(["track", str(d / "rec.h5"), "--map", str(d / "map.ply"), "--out", str(tmp_path / "e.txt"), "--init", pose, "--mode", "stpe", "--no-progress"])
     assert code == 0 and len(read_tum(tmp_path / "e.txt")) > 10
 
 
@@ -79,6 +79,14 @@ def test_track_with_a_map_in_another_frame_fails_with_one_line(files, tmp_path, 
     import dataclasses
 
     write_contour_map(tmp_path / "far.ply", dataclasses.replace(cmap, points=cmap.points + 100.0))
-    code = run(["track", str(d / "rec.h5"), "--map", str(tmp_path / "far.ply"), "--out", str(tmp_path / "e.txt"), "--no-progress"])
+    code = run(["track", str(d / "rec.h5"), "--map", str(tmp_path / "far.ply"), "--out", str(tmp_path / "e.txt"), "--mode", "stpe", "--no-progress"])
     err = capsys.readouterr().err.strip()
     assert code == 2 and "same frame" in err and len(err.splitlines()) == 1
+
+
+def test_track_in_a_fused_mode_without_imu_is_a_one_line_error(files, tmp_path, capsys):
+    d, _ = files
+    code = run(["track", str(d / "rec.h5"), "--map", str(d / "map.ply"), "--out", str(tmp_path / "e.txt"), "--mode", "full", "--no-progress"])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and "needs IMU data" in err and len(err.splitlines()) == 1
+    assert not (tmp_path / "e.txt").exists()

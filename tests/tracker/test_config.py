@@ -60,4 +60,4 @@ def test_every_numeric_field_has_slider_metadata_and_a_docstring_unit():
 
 def test_config_dict_is_plain():
     d = config_to_dict(TrackerConfig())
-    assert d["mode"] == "stpe" and isinstance(d["registration"]["robust_loss"], str)
+    assert d["mode"] == "full" and isinstance(d["registration"]["robust_loss"], str)

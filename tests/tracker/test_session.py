@@ -7,9 +7,12 @@ import pytest
 from tracker_synthetic import generate
 
 from evpose.errors import InputError
-from evpose.tracker.config import TrackerConfig
+from evpose.tracker.config import TrackerConfig, TrackerMode
 from evpose.tracker.session import TrackingSession
 from evpose.tracker.step_result import TrackStatus
+
+# The synthetic scene has no IMU; these tests are about the STPE engine itself.
+STPE = TrackerConfig(mode=TrackerMode.STPE)
 
 
 @pytest.fixture(scope="module")
@@ -20,7 +23,7 @@ def scene():
 
 def test_session_steps_to_the_end_and_builds_a_trajectory(scene):
     rec, cmap = scene
-    s = TrackingSession(rec, cmap, TrackerConfig(rate_hz=200.0))
+    s = TrackingSession(rec, cmap, TrackerConfig(mode=TrackerMode.STPE, rate_hz=200.0))
     results = s.run()
     assert s.step() is None and s.done
     assert len(results) == s.total_steps == (rec.t_end_us - s.t0_us) // 5_000
@@ -31,7 +34,7 @@ def test_session_steps_to_the_end_and_builds_a_trajectory(scene):
 
 def test_seek_back_and_forward_equals_an_uninterrupted_run(scene):
     rec, cmap = scene
-    cfg = TrackerConfig(snapshot_every=7)
+    cfg = TrackerConfig(mode=TrackerMode.STPE, snapshot_every=7)
     straight = TrackingSession(rec, cmap, cfg)
     ref = straight.run()
     s = TrackingSession(rec, cmap, dataclasses.replace(cfg))
@@ -49,19 +52,19 @@ def test_session_without_ground_truth_needs_an_initial_pose(scene):
     rec, cmap = scene
     bare = dataclasses.replace(rec, ground_truth=None)
     with pytest.raises(InputError, match="initial pose"):
-        TrackingSession(bare, cmap)
-    s = TrackingSession(bare, cmap, initial_pose=rec.ground_truth.matrix(0), t_start_us=int(rec.ground_truth.t[0]))
+        TrackingSession(bare, cmap, STPE)
+    s = TrackingSession(bare, cmap, STPE, initial_pose=rec.ground_truth.matrix(0), t_start_us=int(rec.ground_truth.t[0]))
     assert s.step().status is TrackStatus.OK
 
 
 def test_session_without_calibration_is_an_input_error(scene):
     rec, cmap = scene
     with pytest.raises(InputError, match="calibration"):
-        TrackingSession(dataclasses.replace(rec, calibration=None), cmap)
+        TrackingSession(dataclasses.replace(rec, calibration=None), cmap, STPE)
 
 
 def test_map_in_another_frame_is_an_input_error(scene):
     rec, cmap = scene
     moved = dataclasses.replace(cmap, points=cmap.points + np.array([100.0, 0.0, 0.0]))
     with pytest.raises(InputError, match="same frame"):
-        TrackingSession(rec, moved)
+        TrackingSession(rec, moved, STPE)

@@ -1,0 +1,188 @@
+"""Geometry between regions: snapping contour points onto plane intersections, orienting plane normals.
+
+Where two fitted planes meet at a crease (a box's top and wall, a wall and the ground),
+the true edge is their line of intersection. The planes are fitted to thousands of
+points, so that line is far more precise than any boundary traced from noisy points;
+contour points next to a non-parallel adjacent region are projected onto it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def snap_to_intersections(
+    points: np.ndarray,
+    region: np.ndarray,
+    labels: np.ndarray,
+    tree,
+    plane_c: np.ndarray,
+    plane_n: np.ndarray,
+    radius: float,
+    min_angle_rad: float,
+    max_shift: float,
+    reliable: np.ndarray | None = None,
+    k: int = 16,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Project contour points onto the intersection line of their plane and the nearest other region's plane.
+
+    ``points`` (M, 3) lie on the plane of ``region`` (M,). A point is moved only if a cloud
+    point of another region lies within ``radius`` m, the planes differ by at least
+    ``min_angle_rad``, and the move is shorter than ``max_shift`` m.
+    ``reliable`` (R,) bool: regions whose plane is trustworthy as a snap target (a narrow
+    strip such as the 15 cm side of a low step has a poorly constrained tilt, and its
+    intersection line would be wrong); None = all.
+    Returns the new points and the adjacent region per point (-1 where none).
+    """
+    m = points.shape[0]
+    out = points.copy()
+    adjacent = np.full(m, -1, np.int32)
+    if m == 0:
+        return out, adjacent
+    dist, idx = tree.query(points, k=k, distance_upper_bound=radius)
+    dist = dist.reshape(m, -1)
+    idx = idx.reshape(m, -1)
+    valid = np.isfinite(dist)
+    nb_lab = np.where(valid, labels[np.where(valid, idx, 0)], -1)
+    other = (nb_lab >= 0) & (nb_lab != region[:, None])
+    if reliable is not None:
+        other &= reliable[np.maximum(nb_lab, 0)]
+    has = other.any(axis=1)
+    first = np.argmax(other, axis=1)  # nearest qualifying neighbour (query results are sorted)
+    s = np.where(has, nb_lab[np.arange(m), first], -1)
+    r = region
+    ok = s >= 0
+    nr = plane_n[r]
+    ns = plane_n[np.where(ok, s, 0)]
+    cosang = np.abs(np.einsum("md,md->m", nr, ns))
+    ok &= cosang < np.cos(min_angle_rad)
+    # Closest point x to p with n_r.x = h_r and n_s.x = h_s (Lagrange; 2x2 Gram system).
+    hr = np.einsum("md,md->m", nr, plane_c[r])
+    hs = np.einsum("md,md->m", ns, plane_c[np.where(ok, s, 0)])
+    g11 = np.ones(m)
+    g12 = np.einsum("md,md->m", nr, ns)
+    g22 = np.ones(m)
+    det = g11 * g22 - g12 * g12
+    ok &= det > 1e-9
+    det = np.where(ok, det, 1.0)
+    rr = np.einsum("md,md->m", nr, points) - hr
+    rs = np.einsum("md,md->m", ns, points) - hs
+    lam_r = (g22 * rr - g12 * rs) / det
+    lam_s = (g11 * rs - g12 * rr) / det
+    x = points - lam_r[:, None] * nr - lam_s[:, None] * ns
+    ok &= np.linalg.norm(x - points, axis=1) < max_shift
+    out[ok] = x[ok]
+    adjacent[ok] = s[ok]
+    return out, adjacent
+
+
+def orient_plane_normals(
+    normals: np.ndarray,
+    centroids: np.ndarray,
+    points: np.ndarray,
+    labels: np.ndarray,
+    input_normals: np.ndarray | None,
+    viewpoint: np.ndarray | None,
+    reach: float,
+    bounds: np.ndarray | None = None,
+) -> np.ndarray:
+    """Give each region's plane normal a sign that points to the side the surface is seen from.
+
+    In order of preference: the majority sign of the input cloud's own normals; towards
+    ``viewpoint``; for non-vertical planes (|n_z| >= 0.5) up (+z, z-up worlds); for
+    vertical planes towards the side where the ground (points of non-vertical regions
+    lower than the plane's centroid, within ``reach`` m of it) lies - the ground in front
+    of a building wall or a room wall is what the scanner stood on. Falls back to the
+    direction from the plane to the cloud's centre. ``bounds`` (R, 2, 3): each region's
+    bounding box (computed here if None).
+    """
+    from evpose.mapping.spatial import BoxIndex
+
+    out = normals.copy()
+    n_reg = normals.shape[0]
+    if n_reg == 0:
+        return out
+    if input_normals is not None:
+        valid = labels >= 0
+        dots = np.einsum("nd,nd->n", input_normals[valid], normals[labels[valid]])
+        votes = np.bincount(labels[valid], weights=np.sign(dots), minlength=n_reg)
+        sign = np.where(votes < 0, -1.0, 1.0)
+        return out * sign[:, None]
+    if viewpoint is not None:
+        d = np.einsum("rd,rd->r", np.asarray(viewpoint)[None, :] - centroids, normals)
+        return out * np.where(d < 0, -1.0, 1.0)[:, None]
+    horizontal = np.abs(normals[:, 2]) >= 0.5
+    out[horizontal] *= np.where(normals[horizontal, 2] < 0, -1.0, 1.0)[:, None]
+    ground_mask = (labels >= 0) & horizontal[np.maximum(labels, 0)]
+    gpts = points[ground_mask]
+    centre = points.mean(axis=0)
+    if bounds is None:
+        bounds = np.stack([[points[labels == r].min(axis=0), points[labels == r].max(axis=0)] for r in range(n_reg)])
+    index = BoxIndex(gpts) if gpts.shape[0] else None
+    for r in np.flatnonzero(~horizontal):
+        c, n = centroids[r], normals[r]
+        hi = bounds[r, 1] + reach
+        hi[2] = min(hi[2], c[2])  # only ground lower than the plane's centre
+        box = index.query(bounds[r, 0] - reach, hi) if index is not None else np.zeros(0, np.int64)
+        off = (gpts[box] - c) @ n
+        off = off[(np.abs(off) > 1e-3) & (np.abs(off) < reach)]
+        vote = float(np.sum(np.sign(off)))
+        if vote == 0.0:
+            vote = float((centre - c) @ n)
+        if vote < 0:
+            out[r] = -n
+    return out
+
+
+def snap_to_steps(
+    points: np.ndarray,
+    edge_normals: np.ndarray,
+    region: np.ndarray,
+    movable: np.ndarray,
+    cloud: np.ndarray,
+    labels: np.ndarray,
+    tree,
+    plane_n: np.ndarray,
+    radius: float,
+    min_offset: float,
+    max_offset: float,
+    max_shift: float,
+    min_count: int = 3,
+    k: int = 32,
+) -> np.ndarray:
+    """Move contour points of a low step onto the step's face, measured from the face's own points.
+
+    A landing pad 15 cm high on a sparse scan has no region on its sides, so there is no
+    crease to snap to, and the boundary estimated from the top's (or the ground's) points
+    alone scatters by centimetres. The side's points, though, are there: points of other
+    surfaces (or unassigned) within ``radius`` of the contour point, between ``min_offset``
+    and ``max_offset`` off the region's plane and within ``max_shift`` of the edge along the
+    edge normal mark where the face is. Points in ``movable`` (not already on a crease) are
+    moved along their edge normal to the median position of those points.
+    """
+    out = points.copy()
+    m = points.shape[0]
+    if m == 0 or not movable.any():
+        return out
+    sel = np.flatnonzero(movable)
+    dist, idx = tree.query(points[sel], k=k, distance_upper_bound=radius)
+    dist = dist.reshape(sel.size, -1)
+    idx = idx.reshape(sel.size, -1)
+    valid = np.isfinite(dist)
+    safe = np.where(valid, idx, 0)
+    rel = cloud[safe] - points[sel][:, None, :]
+    off = np.abs(np.einsum("mkd,md->mk", rel, plane_n[region[sel]]))
+    along = np.einsum("mkd,md->mk", rel, edge_normals[sel])
+    face = valid & (labels[safe] != region[sel][:, None]) & (off >= min_offset) & (off <= max_offset)
+    face &= np.abs(along) <= max_shift
+    count = face.sum(axis=1)
+    ok = count >= min_count
+    if ok.any():
+        import warnings
+
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            shift = np.nanmedian(np.where(face, along, np.nan), axis=1)
+        rows = sel[ok]
+        out[rows] += shift[ok, None] * edge_normals[rows]
+    return out

@@ -1,0 +1,262 @@
+"""``build_contour_map``: a raw point cloud in, the contour map EV-Pose tracks against out.
+
+Stages (EV-Pose VI-B, NOTES.md "Map construction"):
+
+1. optional voxel downsampling (deterministic averaging per voxel);
+2. kNN PCA normals and curvature ``lambda0/(lambda0+lambda1+lambda2)``;
+3. region growing (seeds by lowest curvature, normal-angle, curvature and plane-offset
+   limits), noise fragments of one plane merged, small regions dropped, a plane per
+   region, regions extended up to their edges;
+4. per region: project, rasterise, close, trace, resample, refine to the points,
+   straighten straight runs, drop the scan's own rim; contour points next to another
+   plane snapped onto the planes' intersection line, contour points of low steps
+   (no region on the step's face) moved onto the face's points;
+5. per point: edge normal, plane normal, region, curvature, brightness sign.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from evpose.core.contour_map import ContourMap
+from evpose.errors import InputError
+from evpose.mapping.adjacency import orient_plane_normals, snap_to_intersections, snap_to_steps
+from evpose.mapping.brightness import brightness_signs
+from evpose.mapping.contours import trace_region
+from evpose.mapping.normals import estimate_neighbourhoods, voxel_downsample
+from evpose.mapping.region_growing import extend_to_planes, fit_regions, grow_regions, merge_coplanar, refit_planes
+from evpose.mapping.spatial import BoxIndex
+
+
+class MapBuildError(InputError):
+    """A cloud from which no contour map can be built (empty, NaN, too few points, no contour)."""
+
+
+@dataclass(frozen=True)
+class MapBuildConfig:
+    """Parameters of contour-map construction. Lengths in metres, angles in degrees."""
+
+    voxel_m: float = field(default=0.0, metadata={"min": 0.0, "max": 0.2, "step": 0.005, "unit": "m"})
+    """Voxel edge for downsampling before anything else, metres; 0 = keep every point."""
+    k_neighbours: int = field(default=16, metadata={"min": 6, "max": 100, "step": 1, "unit": "points"})
+    """Neighbours per point for PCA normals/curvature and the region-growing graph."""
+    angle_threshold_deg: float = field(default=15.0, metadata={"min": 1.0, "max": 45.0, "step": 0.5, "unit": "deg"})
+    """Largest angle between neighbouring normals inside one region, degrees."""
+    plane_angle_deg: float = field(default=25.0, metadata={"min": 1.0, "max": 90.0, "step": 0.5, "unit": "deg"})
+    """Largest angle between a point's normal and its region's mean normal, degrees (keeps regions planar)."""
+    merge_angle_deg: float = field(default=10.0, metadata={"min": 0.0, "max": 45.0, "step": 0.5, "unit": "deg"})
+    """Neighbouring regions whose planes agree within this angle (and plane_distance_m) are merged, degrees."""
+    curvature_limit: float = field(default=0.06, metadata={"min": 0.001, "max": 0.33, "step": 0.001, "unit": ""})
+    """Points with larger curvature join a region but do not grow it (and never seed one); dimensionless."""
+    min_region_points: int = field(default=40, metadata={"min": 3, "max": 100000, "step": 10, "unit": "points"})
+    """Regions with fewer points are dropped."""
+    plane_distance_m: float = field(default=0.015, metadata={"min": 0.001, "max": 0.1, "step": 0.001, "unit": "m"})
+    """Unassigned points within this distance of a neighbouring region's plane join that region (~3x range noise), metres."""
+    extend_passes: int = field(default=4, metadata={"min": 0, "max": 20, "step": 1, "unit": "passes"})
+    """kNN hops by which regions may grow onto their planes after region growing."""
+    cell_m: float = field(default=0.0, metadata={"min": 0.0, "max": 0.2, "step": 0.001, "unit": "m"})
+    """Raster cell for contour tracing, metres; 0 = 1.5x the median point spacing."""
+    close_cells: int = field(default=2, metadata={"min": 0, "max": 10, "step": 1, "unit": "cells"})
+    """Radius of the morphological closing that bridges sampling gaps, raster cells."""
+    min_hole_m2: float = field(default=0.0, metadata={"min": 0.0, "max": 1.0, "step": 0.001, "unit": "m^2"})
+    """Holes in a region smaller than this are filled (sampling gaps), square metres; 0 = max(0.01, (8x spacing)^2)."""
+    contour_spacing_m: float = field(default=0.01, metadata={"min": 0.002, "max": 0.2, "step": 0.001, "unit": "m"})
+    """Distance between consecutive contour points, metres."""
+    adjacent_m: float = field(default=0.0, metadata={"min": 0.0, "max": 0.5, "step": 0.005, "unit": "m"})
+    """A boundary is an object contour only if another surface lies within this distance; otherwise it is the scan's rim, metres; 0 = max(3x spacing, 5 cm)."""
+    snap: bool = True
+    """Snap contour points next to a non-parallel region onto the two planes' intersection line, and points of low steps onto the step's face."""
+    snap_radius_m: float = field(default=0.0, metadata={"min": 0.0, "max": 0.5, "step": 0.005, "unit": "m"})
+    """Search radius for the adjacent region whose plane intersection the contour is snapped to, metres; 0 = max(3x spacing, 4 cm)."""
+    snap_min_angle_deg: float = field(default=30.0, metadata={"min": 5.0, "max": 90.0, "step": 1.0, "unit": "deg"})
+    """Only planes meeting at least at this angle define a crease to snap to, degrees."""
+    snap_max_shift_m: float = field(default=0.0, metadata={"min": 0.0, "max": 0.5, "step": 0.005, "unit": "m"})
+    """Largest move of a contour point onto a crease line, metres; 0 = the snap radius."""
+    brightness_radius_m: float = field(default=0.0, metadata={"min": 0.0, "max": 0.5, "step": 0.01, "unit": "m"})
+    """Neighbourhood compared on either side of the edge for the brightness sign, metres; 0 = max(4x spacing, 8 cm)."""
+    brightness_threshold: float = field(default=0.05, metadata={"min": 0.0, "max": 1.0, "step": 0.01, "unit": ""})
+    """Smallest median-intensity difference (intensity range scaled to [0, 1]) for a non-zero sign."""
+    viewpoint: tuple[float, float, float] | None = None
+    """Where the scan was seen from (world, metres); plane normals face it. None = z-up heuristics."""
+
+
+@dataclass(frozen=True)
+class _Scales:
+    """Lengths actually used, after resolving the config's 'auto' (0) fields from the point spacing."""
+
+    cell: float
+    min_hole: float
+    adjacent: float
+    snap_radius: float
+    snap_shift: float
+    brightness_radius: float
+
+
+def _scales(cfg: MapBuildConfig, spacing: float) -> _Scales:
+    cell = cfg.cell_m if cfg.cell_m > 0 else max(1.5 * spacing, 1e-3)
+    snap_r = cfg.snap_radius_m if cfg.snap_radius_m > 0 else max(3.0 * spacing, 0.04)
+    return _Scales(
+        cell=cell,
+        min_hole=cfg.min_hole_m2 if cfg.min_hole_m2 > 0 else max(0.01, (8.0 * spacing) ** 2),
+        adjacent=cfg.adjacent_m if cfg.adjacent_m > 0 else max(3.0 * spacing, 0.05),
+        snap_radius=snap_r,
+        snap_shift=cfg.snap_max_shift_m if cfg.snap_max_shift_m > 0 else snap_r,
+        brightness_radius=cfg.brightness_radius_m if cfg.brightness_radius_m > 0 else max(4.0 * spacing, 0.08),
+    )
+
+
+def _progress(enabled: bool, total: int, desc: str):
+    if not enabled:
+        return None
+    from tqdm import tqdm
+
+    return tqdm(total=total, desc=desc, unit="step", leave=False)
+
+
+def build_contour_map(
+    points: np.ndarray,
+    normals: np.ndarray | None = None,
+    intensity: np.ndarray | None = None,
+    config: MapBuildConfig = MapBuildConfig(),
+    progress: bool = False,
+) -> ContourMap:
+    """Contour map of a raw cloud: ``points`` (N, 3) m, optional ``normals`` (N, 3) and ``intensity`` (N,) or RGB (N, 3).
+
+    Deterministic: the same input and config give a bit-identical map.
+    Raises :class:`MapBuildError` for empty/non-finite clouds and clouds without any object contour.
+    """
+    from evpose.mapping.brightness import intensity_from_colors
+
+    pts = np.asarray(points, dtype=np.float64)
+    if pts.ndim != 2 or pts.shape[1] != 3:
+        raise MapBuildError(None, f"points must have shape (N, 3), got {pts.shape}")
+    if pts.shape[0] == 0:
+        raise MapBuildError(None, "point cloud is empty")
+    bad = np.flatnonzero(~np.isfinite(pts).all(axis=1))
+    if bad.size:
+        raise MapBuildError(None, "NaN or infinite coordinate", f"point {int(bad[0])}")
+    inten = None if intensity is None else intensity_from_colors(intensity)
+    if inten is not None and inten.shape[0] != pts.shape[0]:
+        raise MapBuildError(None, f"intensity has {inten.shape[0]} values for {pts.shape[0]} points")
+    if inten is not None and not np.isfinite(inten).all():
+        raise MapBuildError(None, "NaN or infinite intensity", f"point {int(np.flatnonzero(~np.isfinite(inten))[0])}")
+    nrm_in = None if normals is None else np.asarray(normals, dtype=np.float64)
+    if nrm_in is not None and nrm_in.shape != pts.shape:
+        raise MapBuildError(None, f"normals have shape {nrm_in.shape}, points {pts.shape}")
+    if nrm_in is not None and not np.isfinite(nrm_in).all():
+        nrm_in = None  # unusable normals only cost the orientation hint
+
+    cfg = config
+    bar = _progress(progress, 6, "build-map")
+
+    def stage(name):
+        if bar is not None:
+            bar.set_description(f"build-map: {name}")
+            bar.update(1)
+
+    pts, inten, nrm_in = voxel_downsample(pts, cfg.voxel_m, inten, nrm_in)
+    if pts.shape[0] < max(cfg.k_neighbours, 10):
+        raise MapBuildError(None, f"only {pts.shape[0]} points; at least {max(cfg.k_neighbours, 10)} are needed")
+    stage("normals")
+    nb = estimate_neighbourhoods(pts, cfg.k_neighbours)
+
+    stage("regions")
+    cos_t = math.cos(math.radians(cfg.angle_threshold_deg))
+    labels = grow_regions(pts, nb.normals, nb.curvature, nb.indices, cos_t, cfg.curvature_limit,
+                          math.cos(math.radians(cfg.plane_angle_deg)), 3.0 * cfg.plane_distance_m)
+    # Merge before dropping small regions: noise splits a plane into fragments that are small
+    # one by one.
+    labels, regions = fit_regions(pts, labels, 3)
+    labels = merge_coplanar(pts, nb.indices, labels, regions, math.cos(math.radians(cfg.merge_angle_deg)),
+                            cfg.plane_distance_m)
+    labels, regions = fit_regions(pts, labels, cfg.min_region_points)
+    if regions.sizes.size == 0:
+        raise MapBuildError(None, "no smooth surface found (no region reaches min_region_points)")
+    labels = extend_to_planes(pts, nb.indices, labels, regions, cfg.plane_distance_m, cfg.extend_passes)
+    regions = refit_planes(pts, labels, regions.sizes.size)
+
+    stage("contours")
+    sc = _scales(cfg, nb.spacing)
+    cell = sc.cell
+    order = np.argsort(labels, kind="stable")
+    starts = np.searchsorted(labels[order], np.arange(regions.sizes.size + 1))
+    bounds = np.stack([[pts[order[starts[r]:starts[r + 1]]].min(axis=0), pts[order[starts[r]:starts[r + 1]]].max(axis=0)]
+                       for r in range(regions.sizes.size)])
+    plane_n = orient_plane_normals(
+        regions.normals, regions.centroids, pts, labels, nrm_in,
+        None if cfg.viewpoint is None else np.asarray(cfg.viewpoint, np.float64), reach=0.5, bounds=bounds,
+    )
+    index = BoxIndex(pts)
+    far = 10.0 * sc.adjacent
+    pts3, en3, reg3 = [], [], []
+    region_bar = _progress(progress, regions.sizes.size, "contours")
+    for r in range(regions.sizes.size):
+        own = pts[order[starts[r]:starts[r + 1]]]
+        c, n, ax = regions.centroids[r], regions.normals[r], regions.axes[r]
+        box = index.query(bounds[r, 0] - far, bounds[r, 1] + far)
+        box = box[labels[box] != r]
+        off = (pts[box] - c) @ n
+        # Unassigned points on this very plane are its own stragglers, not another surface.
+        # (Noise puts a few of them further off than plane_distance_m: allow 5 sigma of the fit.)
+        straggler_m = max(cfg.plane_distance_m, 5.0 * regions.rms[r])
+        other = ~((labels[box] == -1) & (np.abs(off) < straggler_m))
+        rel = pts[box] - c
+        o2 = np.stack([rel @ ax[0], rel @ ax[1]], axis=1)
+        adjacent2d = o2[other & (np.abs(off) <= sc.adjacent)]
+        near2d = o2[other & (np.abs(off) <= far)]
+        own_rel = own - c
+        own2d = np.stack([own_rel @ ax[0], own_rel @ ax[1]], axis=1)
+        rc = trace_region(own2d, adjacent2d, near2d, cell, cfg.close_cells, sc.min_hole,
+                          cfg.contour_spacing_m, sc.adjacent)
+        p2, e2 = rc.points2d[rc.keep], rc.normals2d[rc.keep]
+        pts3.append(c + p2[:, :1] * ax[0] + p2[:, 1:] * ax[1])
+        en3.append(e2[:, :1] * ax[0] + e2[:, 1:] * ax[1])
+        reg3.append(np.full(p2.shape[0], r, np.int32))
+        if region_bar is not None:
+            region_bar.update(1)
+    if region_bar is not None:
+        region_bar.close()
+    cpts = np.concatenate(pts3)
+    cen = np.concatenate(en3)
+    creg = np.concatenate(reg3)
+    if cpts.shape[0] == 0:
+        if bar is not None:
+            bar.close()
+        raise MapBuildError(None, "no object contour found (all points coplanar, or only the scan's rim)")
+
+    stage("creases")
+    if cfg.snap:
+        cpts, crease = snap_to_intersections(
+            cpts, creg, labels, nb.tree, regions.centroids, regions.normals,
+            sc.snap_radius, math.radians(cfg.snap_min_angle_deg), sc.snap_shift,
+            reliable=(regions.minor_std >= 3.0 * nb.spacing) & (regions.rms <= cfg.plane_distance_m),
+        )
+        cen_unit = cen / np.maximum(np.linalg.norm(cen, axis=1, keepdims=True), 1e-12)
+        cpts = snap_to_steps(
+            cpts, cen_unit, creg, crease < 0, pts, labels, nb.tree, regions.normals,
+            radius=2.0 * cell, min_offset=cfg.plane_distance_m, max_offset=sc.adjacent, max_shift=1.5 * cell,
+        )
+    _, nearest = nb.tree.query(cpts, k=1)
+    curv = nb.curvature[np.asarray(nearest, np.int64)]
+
+    stage("brightness")
+    if inten is not None:
+        signs = brightness_signs(cpts, cen, creg, labels, inten, nb.tree, sc.brightness_radius,
+                                 margin=0.5 * cell, threshold=cfg.brightness_threshold)
+    else:
+        signs = np.zeros(cpts.shape[0], np.int8)
+    stage("done")
+    if bar is not None:
+        bar.close()
+    en_unit = cen / np.maximum(np.linalg.norm(cen, axis=1, keepdims=True), 1e-12)
+    return ContourMap.from_points(
+        cpts,
+        edge_normal=en_unit.astype(np.float32),
+        plane_normal=plane_n[creg].astype(np.float32),
+        region_id=creg,
+        curvature=curv.astype(np.float32),
+        brightness_sign=signs,
+    )

@@ -1,0 +1,63 @@
+"""Which motion components each tracker mode plugs into the engine.
+
+================  ====================  ==========================  =================
+mode              pose prediction       per-point polarity          output pose
+================  ====================  ==========================  =================
+``stpe``          constant velocity     combined TDF                registration
+``stpe+filter``   constant velocity     predicted from IMU motion   registration
+``full``          IMU fusion backend    predicted from IMU motion   fused
+================  ====================  ==========================  =================
+
+In ``stpe+filter`` a fusion backend still runs beside the registration, because
+the polarity prediction needs the bias-corrected angular rate and the velocity;
+its output is simply not the answer. ``fusion.backend`` picks the factor graph,
+the EKF baseline or IMU-only dead reckoning.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from evpose.core.camera import CameraCalibration
+from evpose.core.contour_map import ContourMap
+from evpose.errors import InputError
+from evpose.fusion import FusionMotionPredictor, MapPolaritySelector, PolarityPredictor, make_fusion
+from evpose.fusion.ego_motion import EgoMotionFilter
+from evpose.tracker.config import TrackerConfig, TrackerMode
+
+
+@dataclass
+class MotionComponents:
+    """The pieces a mode adds to the bare STPE engine (all None in ``stpe`` mode)."""
+
+    motion: FusionMotionPredictor | None = None
+    """IMU fusion fed with every registration; source of angular rate and velocity."""
+    polarity_selector: MapPolaritySelector | None = None
+    ego_motion: EgoMotionFilter | None = None
+    drives_pose: bool = False
+    """True when ``motion`` is also the pose predictor and its fused estimate is the output."""
+
+
+def build_motion_components(
+    config: TrackerConfig,
+    contour_map: ContourMap,
+    calibration: CameraCalibration,
+    has_imu: bool,
+    initial_velocity_world: np.ndarray | None = None,
+    source: str | None = None,
+) -> MotionComponents:
+    """Build what ``config.mode`` needs; raises InputError when the mode needs an IMU the recording lacks."""
+    mode = TrackerMode(config.mode)
+    if mode is TrackerMode.STPE:
+        return MotionComponents()
+    if not has_imu:
+        raise InputError(source, f"mode {mode.value!r} needs IMU data and the recording has none (use --mode stpe)")
+    config.fusion.validate()
+    motion = FusionMotionPredictor(make_fusion(config.fusion, calibration), None, initial_velocity_world)
+    selector = None
+    if config.polarity.enabled:
+        selector = MapPolaritySelector(PolarityPredictor(config.polarity), contour_map, calibration.K, motion.fusion, calibration)
+    ego = EgoMotionFilter(config.ego_motion) if (mode is TrackerMode.FULL and config.ego_motion.enabled) else None
+    return MotionComponents(motion, selector, ego, drives_pose=mode is TrackerMode.FULL)

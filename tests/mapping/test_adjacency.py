@@ -1,0 +1,55 @@
+"""Snapping contour points onto creases and steps; plane-normal orientation."""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from evpose.mapping.adjacency import orient_plane_normals, snap_to_intersections, snap_to_steps
+
+
+def test_contour_point_next_to_a_perpendicular_plane_lands_on_their_crease():
+    # Region 0: z = 0.5 (top); region 1: x = 1 (wall). A top contour point 2 cm short of the edge.
+    yy, zz = np.meshgrid(np.linspace(0, 1, 21), np.linspace(0, 0.5, 11))
+    cloud = np.column_stack([np.ones(yy.size), yy.ravel(), zz.ravel()])
+    labels = np.ones(yy.size, np.int32)
+    pts = np.array([[0.98, 0.5, 0.5]])
+    c = np.array([[0.5, 0.5, 0.5], [1.0, 0.5, 0.25]])
+    n = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])
+    out, adj = snap_to_intersections(pts, np.array([0]), labels, cKDTree(cloud), c, n, 0.1, np.radians(30), 0.05)
+    assert np.allclose(out[0], [1.0, 0.5, 0.5]) and adj[0] == 1
+
+
+def test_parallel_neighbour_is_not_a_crease():
+    cloud = np.column_stack([np.linspace(1.0, 1.2, 20), np.full(20, 0.5), np.zeros(20)])
+    c = np.array([[0.5, 0.5, 0.5], [1.1, 0.5, 0.0]])
+    n = np.array([[0.0, 0.0, 1.0], [0.0, 0.0, 1.0]])
+    out, adj = snap_to_intersections(np.array([[0.98, 0.5, 0.5]]), np.array([0]), np.ones(20, np.int32),
+                                     cKDTree(cloud), c, n, 1.0, np.radians(30), 1.0)
+    assert adj[0] == -1 and np.allclose(out[0], [0.98, 0.5, 0.5])
+
+
+def test_step_face_points_pull_the_contour_onto_the_face():
+    # A 15 cm step: the face at x = 1.5 has unassigned points between z = 0 and 0.15.
+    rng = np.random.default_rng(0)
+    face = np.column_stack([1.5 + rng.normal(0, 0.003, 40), rng.uniform(0.4, 0.6, 40), rng.uniform(0.02, 0.13, 40)])
+    top = np.column_stack([rng.uniform(1.0, 1.5, 200), rng.uniform(0.4, 0.6, 200), np.full(200, 0.15)])
+    cloud = np.vstack([face, top])
+    labels = np.concatenate([np.full(40, -1), np.zeros(200)]).astype(np.int32)
+    pts = np.array([[1.46, 0.5, 0.15]])
+    out = snap_to_steps(pts, np.array([[1.0, 0.0, 0.0]]), np.array([0]), np.array([True]), cloud, labels,
+                        cKDTree(cloud), np.array([[0.0, 0.0, 1.0]]), radius=0.15, min_offset=0.015,
+                        max_offset=0.2, max_shift=0.1)
+    assert abs(out[0, 0] - 1.5) < 0.005 and np.allclose(out[0, 1:], pts[0, 1:])
+
+
+def test_plane_normals_face_up_and_walls_face_the_ground_in_front_of_them():
+    rng = np.random.default_rng(1)
+    ground = np.column_stack([rng.uniform(-2, 2, 3000), rng.uniform(-2, 0, 3000), np.zeros(3000)])
+    wall = np.column_stack([rng.uniform(-2, 2, 1000), np.zeros(1000), rng.uniform(0, 2, 1000)])
+    pts = np.vstack([ground, wall])
+    labels = np.concatenate([np.zeros(3000), np.ones(1000)]).astype(np.int32)
+    normals = np.array([[0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])  # both initially wrong
+    centroids = np.array([ground.mean(axis=0), wall.mean(axis=0)])
+    out = orient_plane_normals(normals, centroids, pts, labels, None, None, reach=0.5)
+    assert np.allclose(out[0], [0, 0, 1]) and np.allclose(out[1], [0, -1, 0])

@@ -1,0 +1,98 @@
+"""``evpose build-map`` end to end (evpose/cli/build_map.py) and cloud reading (evpose/mapping/cloud_input.py)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from evpose.cli.main import run
+from evpose.errors import InputError
+from evpose.io.map_ply import read_contour_map
+from evpose.mapping.cloud_input import load_cloud
+from evpose.mapping.synthetic import Box, boxes_on_ground
+
+
+@pytest.fixture(scope="module")
+def small_scan():
+    return boxes_on_ground((Box((0.0, 0.0), (0.8, 0.8, 0.4), albedo_top=0.9),), half_extent=1.2, seed=8)
+
+
+def _write_ply_with_colours(path, scan):
+    import open3d as o3d
+
+    pcd = o3d.geometry.PointCloud()
+    pcd.points = o3d.utility.Vector3dVector(scan.points)
+    pcd.colors = o3d.utility.Vector3dVector(np.repeat(scan.intensity[:, None], 3, axis=1))
+    o3d.io.write_point_cloud(str(path), pcd)
+
+
+def _write_pcd_with_intensity(path, scan):
+    import open3d as o3d
+
+    pc = o3d.t.geometry.PointCloud(o3d.core.Tensor(scan.points))
+    pc.point["intensity"] = o3d.core.Tensor(scan.intensity[:, None].astype(np.float32) * 255)
+    o3d.t.io.write_point_cloud(str(path), pc)
+
+
+def test_build_map_writes_a_contour_map_the_tracker_can_read(tmp_path, small_scan, capsys):
+    cloud = tmp_path / "scan_cloud.ply"
+    _write_ply_with_colours(cloud, small_scan)
+    out = tmp_path / "scan_map.ply"
+    assert run(["build-map", str(cloud), "--out", str(out), "--quiet"]) == 0
+    cmap = read_contour_map(out)
+    assert len(cmap) > 100 and cmap.has_edge_normals
+    assert np.any(cmap.brightness_sign != 0)
+    assert set(np.unique(cmap.region_id)) <= set(range(100))
+
+
+def test_pcd_intensity_field_is_read_as_brightness(tmp_path, small_scan):
+    cloud = tmp_path / "scan.pcd"
+    _write_pcd_with_intensity(cloud, small_scan)
+    raw = load_cloud(cloud)
+    assert raw.intensity is not None and raw.intensity.shape == (small_scan.points.shape[0],)
+    assert np.allclose(raw.points, small_scan.points, atol=1e-5)
+
+
+@pytest.mark.parametrize(
+    "content, name, message",
+    [
+        (b"hello, not a cloud\n", "junk.pcd", "no points could be read"),
+        (b"not a ply\n", "junk.ply", "not a PLY file"),
+        (b"x y z\n", "cloud.txt", "not a point-cloud file"),
+    ],
+)
+def test_bad_files_fail_with_one_line_and_exit_code_2(tmp_path, capsys, content, name, message):
+    bad = tmp_path / name
+    bad.write_bytes(content)
+    assert run(["build-map", str(bad), "--out", str(tmp_path / "m.ply"), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and message in err[0] and name in err[0]
+    assert not (tmp_path / "m.ply").exists()
+
+
+def test_coplanar_cloud_without_contour_exits_2(tmp_path, capsys):
+    flat = boxes_on_ground((), half_extent=1.0, seed=9)
+    cloud = tmp_path / "flat.ply"
+    _write_ply_with_colours(cloud, flat)
+    assert run(["build-map", str(cloud), "--out", str(tmp_path / "m.ply"), "--quiet"]) == 2
+    assert "no object contour" in capsys.readouterr().err
+
+
+def test_nan_point_is_reported_with_its_index(tmp_path, small_scan, capsys):
+    bad = tmp_path / "nan.ply"
+    pts = small_scan.points[:50].copy()
+    pts[7, 0] = np.nan
+    header = f"ply\nformat ascii 1.0\nelement vertex {len(pts)}\nproperty float x\nproperty float y\nproperty float z\nend_header\n"
+    bad.write_text(header + "\n".join(f"{x} {y} {z}" for x, y, z in pts) + "\n")
+    with pytest.raises(InputError, match="point 7"):
+        load_cloud(bad)
+    assert run(["build-map", str(bad), "--out", str(tmp_path / "m.ply"), "--quiet"]) == 2
+    assert "point 7" in capsys.readouterr().err
+
+
+def test_output_onto_the_input_is_refused(tmp_path, small_scan, capsys):
+    cloud = tmp_path / "scan.ply"
+    _write_ply_with_colours(cloud, small_scan)
+    before = cloud.read_bytes()
+    assert run(["build-map", str(cloud), "--out", str(cloud), "--quiet"]) == 2
+    assert cloud.read_bytes() == before

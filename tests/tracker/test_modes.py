@@ -1,0 +1,117 @@
+"""The tracker modes on a simulated landing with IMU: stpe, stpe+filter, full (factor graph / EKF / IMU-only)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from evpose.core.contour_map import ContourMap
+from evpose.eval.metrics import Alignment, EvalConfig, evaluate
+from evpose.fusion import FusionBackend
+from evpose.tracker.config import TrackerConfig, TrackerMode
+from evpose.tracker.modes import build_motion_components
+from evpose.tracker.session import TrackingSession
+from evpose.tracker.step_result import TrackStatus
+
+SECONDS = 0.5
+
+
+@pytest.fixture(scope="module")
+def landing(sim_landing_small):
+    """The first half second of the small simulated landing and a map sampled along its true edges (2 cm)."""
+    res = sim_landing_small
+    rec = res.recording
+    pts = []
+    for a, b in res.edges:
+        n = max(int(np.linalg.norm(b - a) / 0.02), 1)
+        pts.append(a + (b - a) * (np.arange(n) / n)[:, None])
+    t_end = int(rec.events.t[0] + SECONDS * 1e6)
+    import dataclasses
+
+    short = dataclasses.replace(rec, events=rec.events.time_window(int(rec.events.t[0]), t_end))
+    return short, ContourMap.from_points(np.concatenate(pts))
+
+
+def _run(rec, cmap, mode, backend=FusionBackend.FACTOR_GRAPH):
+    cfg = TrackerConfig(mode=mode)
+    cfg.fusion.backend = backend
+    s = TrackingSession(rec, cmap, cfg)
+    s.run()
+    return s
+
+
+def _ate_mm(session, rec):
+    return evaluate(session.trajectory(), rec.ground_truth, EvalConfig(align=Alignment.NONE)).ate["rmse"] * 1e3
+
+
+def test_full_mode_fuses_the_imu_and_beats_registration_alone(landing):
+    rec, cmap = landing
+    stpe = _run(rec, cmap, TrackerMode.STPE)
+    full = _run(rec, cmap, TrackerMode.FULL)
+    r = full.results[-1]
+    assert r.velocity is not None and r.velocity.shape == (3,)
+    assert r.covariance is not None and r.covariance.shape == (6, 6)
+    assert "fusion" in r.timings_ms
+    assert all(x.status in (TrackStatus.OK, TrackStatus.DEGRADED) for x in full.results)
+    assert _ate_mm(full, rec) < _ate_mm(stpe, rec)
+
+
+def test_full_mode_seek_back_replays_bit_identically(landing):
+    rec, cmap = landing
+    cfg = TrackerConfig(mode=TrackerMode.FULL, snapshot_every=10)
+    s = TrackingSession(rec, cmap, cfg)
+    ref = [x.pose.copy() for x in s.run()]
+    r = s.seek(s.results[23].t_us)
+    assert np.array_equal(r.pose, ref[23])
+    s.run()
+    assert all(np.array_equal(a.pose, b) for a, b in zip(s.results, ref))
+
+
+def test_imu_only_backend_marks_every_pose_degraded(landing):
+    rec, cmap = landing
+    s = TrackingSession(rec, cmap, TrackerConfig(mode=TrackerMode.FULL, fusion=_backend(FusionBackend.IMU_ONLY)))
+    for _ in range(5):
+        r = s.step()
+    assert r.status is TrackStatus.DEGRADED and "dead reckoning" in r.reason
+
+
+def _backend(backend):
+    from evpose.fusion import FusionConfig
+
+    return FusionConfig(backend=backend)
+
+
+def test_debug_step_in_full_mode_carries_imu_rate_poses(landing):
+    rec, cmap = landing
+    s = TrackingSession(rec, cmap, TrackerConfig(mode=TrackerMode.FULL))
+    s.step()
+    r = s.step(debug=True)
+    assert r.imu_poses is not None and len(r.imu_poses) >= 1
+    assert np.all(np.diff(r.imu_poses.t) > 0)
+
+
+def test_polarity_filter_mode_labels_events_and_reports_counts(landing):
+    rec, cmap = landing
+    # Give the map points edge normals (perpendicular to the edge, horizontal) so polarity can be predicted;
+    # their brightness signs are unknown and learned online.
+    seg_dir = np.gradient(cmap.points, axis=0)
+    normals = np.cross(seg_dir, [0.0, 0.0, 1.0])
+    normals /= np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-9)
+    cm = ContourMap.from_points(cmap.points, edge_normal=normals)
+    s = TrackingSession(rec, cm, TrackerConfig(mode=TrackerMode.STPE_FILTER))
+    results = [s.step() for _ in range(30)]
+    assert all("polarity_filter" in r.timings_ms and "events_polarity_removed" in r.counts for r in results)
+    assert all(r.velocity is not None for r in results)
+
+
+def test_fused_mode_needs_imu(landing):
+    import dataclasses
+
+    from evpose.errors import InputError
+
+    rec, cmap = landing
+    with pytest.raises(InputError, match="needs IMU"):
+        build_motion_components(TrackerConfig(mode=TrackerMode.FULL), cmap, rec.calibration, has_imu=False)
+    bare = dataclasses.replace(rec, imu=None)
+    with pytest.raises(InputError, match="needs IMU"):
+        TrackingSession(bare, cmap, TrackerConfig(mode=TrackerMode.STPE_FILTER))
