@@ -54,7 +54,7 @@ def run(argv: list[str]) -> int:
 
     module = importlib.import_module(COMMANDS[name][0])
     try:
-        result = tyro.cli(module.main, args=argv[1:], prog=f"evpose {name}", description=module.main.__doc__)
+        result = tyro.cli(module.main, args=argv[1:], prog=f"evpose {name}")
     except EvposeError as exc:
         print(f"evpose {name}: error: {exc}", file=sys.stderr)
         return 2

@@ -1,0 +1,308 @@
+"""GUI controls generated from configuration dataclasses (the same ones tyro turns into the CLI).
+
+Walks a dataclass recursively: nested dataclasses become folders, enums
+dropdowns, bools checkboxes, numbers sliders when ``metadata`` gives min/max
+(else number inputs), everything else a text input holding JSON. Each control's
+hint is the field's attribute docstring plus its unit.
+"""
+
+from __future__ import annotations
+
+import ast
+import dataclasses
+import enum
+import functools
+import inspect
+import json
+import textwrap
+import types
+import typing
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable
+
+import yaml
+
+from evpose.errors import ConfigError, InputError
+
+
+@dataclass(frozen=True)
+class FieldSpec:
+    """One leaf field of a (nested) configuration dataclass."""
+
+    path: tuple[str, ...]
+    """Attribute names from the root config down to this field."""
+    type: Any
+    """Resolved annotation."""
+    default: Any
+    metadata: dict
+    doc: str
+    """Attribute docstring (may be empty)."""
+
+    @property
+    def name(self) -> str:
+        return ".".join(self.path)
+
+    @property
+    def label(self) -> str:
+        unit = self.metadata.get("unit")
+        base = self.path[-1].replace("_", " ")
+        return f"{base} [{unit}]" if unit else base
+
+
+@functools.lru_cache(maxsize=None)
+def attribute_docs(cls: type) -> dict[str, str]:
+    """Attribute docstrings (a string literal right under a field) of a class, by field name."""
+    try:
+        tree = ast.parse(textwrap.dedent(inspect.getsource(cls)))
+    except (OSError, TypeError, SyntaxError):
+        return {}
+    body = tree.body[0].body if tree.body and isinstance(tree.body[0], ast.ClassDef) else []
+    out: dict[str, str] = {}
+    for prev, node in zip(body, body[1:]):
+        if isinstance(prev, ast.AnnAssign) and isinstance(prev.target, ast.Name):
+            if isinstance(node, ast.Expr) and isinstance(node.value, ast.Constant) and isinstance(node.value.value, str):
+                out[prev.target.id] = " ".join(node.value.value.split())
+    return out
+
+
+def _unwrap_optional(tp):
+    origin = typing.get_origin(tp)
+    if origin in (typing.Union, types.UnionType):
+        args = [a for a in typing.get_args(tp) if a is not type(None)]
+        if len(args) == 1:
+            return args[0], True
+    return tp, False
+
+
+def field_specs(config) -> list[FieldSpec]:
+    """Leaf fields of a config instance (or class), depth first in declaration order."""
+    cls = config if isinstance(config, type) else type(config)
+    inst = config if not isinstance(config, type) else cls()
+    return list(_walk(cls, inst, ()))
+
+
+def _walk(cls, inst, prefix):
+    hints = typing.get_type_hints(cls)
+    docs = attribute_docs(cls)
+    for f in dataclasses.fields(cls):
+        if not f.init:
+            continue
+        tp = hints.get(f.name, f.type)
+        value = getattr(inst, f.name)
+        if dataclasses.is_dataclass(value) and not isinstance(value, type):
+            yield from _walk(type(value), value, prefix + (f.name,))
+            continue
+        yield FieldSpec(prefix + (f.name,), tp, value, dict(f.metadata), docs.get(f.name, ""))
+
+
+def get_path(config, path: tuple[str, ...]):
+    for name in path:
+        config = getattr(config, name)
+    return config
+
+
+def replace_path(config, path: tuple[str, ...], value):
+    """A copy of ``config`` with the field at ``path`` set to ``value`` (nested dataclasses copied, not mutated)."""
+    if len(path) == 1:
+        return dataclasses.replace(config, **{path[0]: value})
+    child = getattr(config, path[0])
+    return dataclasses.replace(config, **{path[0]: replace_path(child, path[1:], value)})
+
+
+def to_plain(config) -> dict:
+    """A JSON/YAML-safe nested dict of a config (enums by value, tuples as lists, paths as strings)."""
+
+    def conv(v):
+        if dataclasses.is_dataclass(v) and not isinstance(v, type):
+            return {f.name: conv(getattr(v, f.name)) for f in dataclasses.fields(v) if f.init}
+        if isinstance(v, enum.Enum):
+            return v.value
+        if isinstance(v, (tuple, list)):
+            return [conv(x) for x in v]
+        if isinstance(v, Path):
+            return str(v)
+        if hasattr(v, "tolist"):
+            return v.tolist()
+        return v
+
+    return conv(config)
+
+
+def coerce(spec: FieldSpec, value):
+    """Convert a value from a widget or a file to the field's type; ConfigError if impossible."""
+    tp, optional = _unwrap_optional(spec.type)
+    if value is None or (optional and value == ""):
+        if optional:
+            return None
+        raise ConfigError(f"{spec.name}: a value is required")
+    try:
+        if isinstance(tp, type) and issubclass(tp, enum.Enum):
+            return tp(value)
+        if tp is bool:
+            if isinstance(value, str):
+                return value.strip().lower() in ("1", "true", "yes", "on")
+            return bool(value)
+        if tp is int:
+            return int(round(float(value)))
+        if tp is float:
+            return float(value)
+        if tp is str:
+            return str(value)
+        if tp is Path:
+            return Path(value)
+        if isinstance(value, str):
+            value = json.loads(value)
+        origin = typing.get_origin(tp)
+        if origin in (tuple, list):
+            return origin(value)
+        return value
+    except (ValueError, TypeError, json.JSONDecodeError) as exc:
+        raise ConfigError(f"{spec.name}: cannot use {value!r} ({exc})") from None
+
+
+def from_plain(cls: type, data: dict, source: str | None = None):
+    """Build a config of class ``cls`` from a nested dict; unknown keys are refused with their path."""
+    if not isinstance(data, dict):
+        raise InputError(source, "configuration must be a mapping")
+    cfg = cls()
+    specs = {s.path: s for s in field_specs(cfg)}
+    nested = {s.path[: i + 1] for s in specs.values() for i in range(len(s.path) - 1)}
+
+    def walk(d: dict, prefix: tuple[str, ...]):
+        nonlocal cfg
+        for key, value in d.items():
+            path = prefix + (str(key),)
+            if path in specs:
+                try:
+                    cfg = replace_path(cfg, path, coerce(specs[path], value))
+                except ConfigError as exc:
+                    raise InputError(source, str(exc), ".".join(path)) from None
+            elif path in nested and isinstance(value, dict):
+                walk(value, path)
+            else:
+                raise InputError(source, "unknown configuration field", ".".join(path))
+
+    walk(data, ())
+    return cfg
+
+
+def load_config_file(cls: type, path: str | Path):
+    """Read a YAML/JSON configuration file written by :func:`save_config_file`."""
+    path = Path(path)
+    try:
+        data = yaml.safe_load(path.read_text())
+    except OSError as exc:
+        raise InputError(path, f"cannot read ({exc.strerror})") from None
+    except yaml.YAMLError as exc:
+        raise InputError(path, f"not valid YAML/JSON ({str(exc).splitlines()[0]})") from None
+    return from_plain(cls, data or {}, str(path))
+
+
+def save_config_file(config, path: str | Path) -> None:
+    from evpose.io.atomic import atomic_path
+
+    with atomic_path(path) as tmp:
+        Path(tmp).write_text(yaml.safe_dump(to_plain(config), sort_keys=False))
+
+
+class ConfigGui:
+    """Controls for every leaf field of a config; ``on_change(new_config)`` fires on each edit."""
+
+    def __init__(self, gui, config, on_change: Callable[[object], None]):
+        self.gui = gui
+        self.cls = type(config)
+        self.config = config
+        self.on_change = on_change
+        self.handles: dict[tuple[str, ...], Any] = {}
+        self._muted = False
+        self._folders: dict[tuple[str, ...], Any] = {}
+        for spec in field_specs(config):
+            self._add(spec)
+
+    def _container(self, path: tuple[str, ...]):
+        # Nested dataclasses become (collapsed) folders, created in declaration order.
+        if not path:
+            return None
+        if path not in self._folders:
+            parent = self._container(path[:-1])
+            if parent is not None:
+                with parent:
+                    self._folders[path] = self.gui.add_folder(path[-1].replace("_", " "), expand_by_default=False)
+            else:
+                self._folders[path] = self.gui.add_folder(path[-1].replace("_", " "), expand_by_default=False)
+        return self._folders[path]
+
+    def _add(self, spec: FieldSpec) -> None:
+        folder = self._container(spec.path[:-1])
+        if folder is not None:
+            with folder:
+                handle = self._widget(spec)
+        else:
+            handle = self._widget(spec)
+        self.handles[spec.path] = handle
+
+        @handle.on_update
+        def _(event, spec=spec, handle=handle):
+            if self._muted:
+                return
+            try:
+                value = coerce(spec, handle.value)
+            except ConfigError:
+                return  # half-typed text: wait for a valid value
+            if value == get_path(self.config, spec.path):
+                return
+            self.config = replace_path(self.config, spec.path, value)
+            self.on_change(self.config)
+
+    def _widget(self, spec: FieldSpec):
+        tp, optional = _unwrap_optional(spec.type)
+        hint = spec.doc or None
+        md = spec.metadata
+        value = spec.default
+        if isinstance(tp, type) and issubclass(tp, enum.Enum):
+            return self.gui.add_dropdown(spec.label, [m.value for m in tp], initial_value=tp(value).value, hint=hint)
+        if tp is bool:
+            return self.gui.add_checkbox(spec.label, bool(value), hint=hint)
+        if tp in (int, float) and value is not None:
+            lo, hi = md.get("min"), md.get("max")
+            step = md.get("step", 1 if tp is int else None)
+            if lo is not None and hi is not None:
+                if step is None:
+                    step = (hi - lo) / 100.0
+                return self.gui.add_slider(spec.label, min=lo, max=hi, step=step, initial_value=min(max(value, lo), hi), hint=hint)
+            return self.gui.add_number(spec.label, value, min=lo, max=hi, step=step, hint=hint)
+        text = "" if value is None else (value if isinstance(value, str) else json.dumps(to_plain(value)))
+        return self.gui.add_text(spec.label, str(text), hint=hint)
+
+    def set_config(self, config) -> None:
+        """Show ``config`` in the controls without firing ``on_change``."""
+        self.config = config
+        self._muted = True
+        try:
+            for spec in field_specs(config):
+                handle = self.handles.get(spec.path)
+                if handle is None:
+                    continue
+                v = spec.default
+                if isinstance(v, enum.Enum):
+                    v = v.value
+                elif not isinstance(v, (bool, int, float, str)) and v is not None:
+                    v = json.dumps(to_plain(v))
+                elif v is None:
+                    v = ""
+                handle.value = v
+        finally:
+            self._muted = False
+
+    def reset(self) -> None:
+        self.set_config(self.cls())
+        self.on_change(self.config)
+
+    def remove(self) -> None:
+        for h in self.handles.values():
+            h.remove()
+        for f in self._folders.values():
+            f.remove()
+        self.handles.clear()
+        self._folders.clear()

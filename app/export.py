@@ -1,0 +1,102 @@
+"""Exports from the viewer: trajectory (TUM), configuration (YAML), screenshot (PNG), short GIF of the 3D view."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+
+from app.config_gui import save_config_file
+from evpose.core.trajectory import Trajectory
+from evpose.io.atomic import atomic_path
+
+
+def tum_text(traj: Trajectory) -> str:
+    """TUM lines ``t tx ty tz qx qy qz qw`` (t in seconds, pose ``T_world_cam``)."""
+    lines = [
+        f"{t / 1e6:.6f} {p[0]:.9f} {p[1]:.9f} {p[2]:.9f} {q[0]:.9f} {q[1]:.9f} {q[2]:.9f} {q[3]:.9f}"
+        for t, p, q in zip(traj.t, traj.position, traj.quat_xyzw)
+    ]
+    return "\n".join(lines) + ("\n" if lines else "")
+
+
+def write_tum(traj: Trajectory, path: str | Path) -> Path:
+    path = Path(path)
+    try:
+        from evpose.io.tum import write_tum as project_write_tum  # the IO layer's writer, when it exists
+    except ImportError:
+        project_write_tum = None
+    if project_write_tum is not None:
+        project_write_tum(path, traj)
+        return path
+    with atomic_path(path) as tmp:
+        Path(tmp).write_text(tum_text(traj))
+    return path
+
+
+def write_config(config, path: str | Path) -> Path:
+    save_config_file(config, path)
+    return Path(path)
+
+
+def write_png(rgb: np.ndarray, path: str | Path) -> Path:
+    import imageio.v3 as iio
+
+    path = Path(path)
+    with atomic_path(path) as tmp:
+        iio.imwrite(tmp, np.ascontiguousarray(rgb[..., :3]), extension=".png")
+    return path
+
+
+def write_gif(frames: list[np.ndarray], path: str | Path, fps: float = 10.0) -> Path:
+    import imageio.v3 as iio
+
+    if not frames:
+        raise ValueError("no frames to write")
+    path = Path(path)
+    with atomic_path(path) as tmp:
+        iio.imwrite(tmp, np.stack([f[..., :3] for f in frames]), extension=".gif", duration=1000.0 / fps, loop=0)
+    return path
+
+
+def stamped_name(stem: str, suffix: str) -> str:
+    """``stem-YYYYmmdd-HHMMSS.suffix`` so repeated exports never overwrite each other."""
+    return f"{stem}-{time.strftime('%Y%m%d-%H%M%S')}{suffix}"
+
+
+def _render_client(app, client):
+    if client is None:
+        clients = list(app.server.get_clients().values())
+        if not clients:
+            raise ValueError("a screenshot needs a connected browser")
+        client = clients[0]
+    return client
+
+
+def export_action(app, what: str, client=None, gif_frames: int = 16) -> Path:
+    """Run one export of the viewer ``app``: 'trajectory', 'config', 'screenshot' or 'GIF'; returns the file."""
+    out_dir = Path(app.cfg.export_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    if what == "trajectory":
+        traj = app.player.call(lambda eng: eng.trajectory()).result(60)
+        if len(traj) == 0:
+            raise ValueError("no estimated poses yet (the events-only view tracks nothing)")
+        return write_tum(traj, out_dir / stamped_name("trajectory", ".txt"))
+    if what == "config":
+        cfg = app.player.call(lambda eng: eng.config).result(60)
+        return write_config(cfg, out_dir / stamped_name("config", ".yaml"))
+    client = _render_client(app, client)
+    if what == "screenshot":
+        img = client.get_render(height=540, width=960, transport_format="png", timeout=20.0)
+        return write_png(img, out_dir / stamped_name("screenshot", ".png"))
+    if what == "GIF":
+        frames = []
+        was_playing = app.player.state.value == "playing"
+        for _ in range(gif_frames):
+            if not was_playing:
+                app.player.step_forward()
+                app.player.wait_idle(10.0)
+            frames.append(client.get_render(height=270, width=480, transport_format="jpeg", timeout=20.0))
+        return write_gif(frames, out_dir / stamped_name("view", ".gif"), fps=8.0)
+    raise ValueError(f"unknown export {what!r}")

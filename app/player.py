@@ -1,0 +1,353 @@
+"""Playback: one engine thread, a play/pause state machine, real-time pacing and coalesced reconfiguration.
+
+Every browser tab sends commands into one queue; only the worker thread
+touches the engine, so several tabs cannot corrupt its state (they all see the
+same session, like viewers of one shared player). Frames are handed to
+``on_frame`` from the worker thread, at most ``max_ui_fps`` times a second
+while playing (every step is still computed), always after a step, seek or
+reconfiguration.
+"""
+
+from __future__ import annotations
+
+import enum
+import queue
+import threading
+import time
+from concurrent.futures import Future
+from dataclasses import dataclass, field
+from typing import Callable
+
+from app.engine import Engine
+from app.frame import Frame
+
+
+class PlayState(str, enum.Enum):
+    """Whether the worker advances the engine on its own."""
+
+    PAUSED = "paused"
+    PLAYING = "playing"
+
+
+class RerunFrom(str, enum.Enum):
+    """Where a configuration change restarts the computation."""
+
+    CURRENT = "current step"
+    """Recompute up to the current time with the new configuration (what a headless run with it shows there)."""
+    START = "start"
+    """Go back to the first step."""
+
+
+@dataclass
+class PlayerConfig:
+    """Pacing and coalescing of the player."""
+
+    max_ui_fps: float = field(default=20.0, metadata={"min": 1.0, "max": 60.0, "step": 1.0, "unit": "Hz"})
+    """Most frames a second pushed to the browser while playing, Hz."""
+    coalesce_s: float = field(default=0.3, metadata={"min": 0.0, "max": 2.0, "step": 0.05, "unit": "s"})
+    """Quiet time after the last parameter change before the engine is rebuilt, seconds."""
+    max_lag_s: float = field(default=0.5, metadata={"min": 0.1, "max": 5.0, "step": 0.1, "unit": "s"})
+    """Lag behind the wall clock after which pacing restarts from now instead of rushing, seconds."""
+    draw_share_factor: float = field(default=3.0, metadata={"min": 0.0, "max": 20.0, "step": 0.5, "unit": "ratio"})
+    """While playing, frames are at least this many draw durations apart, so drawing cannot starve the engine, ratio."""
+    prefetch: bool = True
+    """While paused, run ahead in slices so later seeks only replay a few steps."""
+    prefetch_steps: int = field(default=5, metadata={"min": 1, "max": 500, "step": 1, "unit": "steps"})
+    """Steps per prefetch slice (a command waits at most one slice), steps."""
+
+
+EngineFactory = Callable[[object], Engine]
+"""Builds an engine from a configuration (None = the engine's defaults)."""
+
+
+class Player:
+    """Owns the engine and the thread that drives it."""
+
+    def __init__(self, factory: EngineFactory, on_frame: Callable[[Frame, Engine], None], config=None,
+                 player_config: PlayerConfig | None = None, on_error: Callable[[str], None] | None = None,
+                 on_engine: Callable[[Engine], None] | None = None):
+        self.pc = player_config or PlayerConfig()
+        self._on_frame = on_frame
+        self._on_error = on_error or (lambda msg: None)
+        self._on_engine = on_engine or (lambda engine: None)
+        """Called (worker thread) whenever the engine is replaced: new recording or new configuration."""
+        self._queue: queue.Queue = queue.Queue()
+        self._lock = threading.Lock()
+        self._pending: tuple[object, RerunFrom] | None = None
+        self._pending_deadline = 0.0
+        self.state = PlayState.PAUSED
+        self.speed = 1.0
+        self.loop = False
+        self.config_applies = 0
+        """How many times a configuration change rebuilt the engine (coalescing makes this small)."""
+        self.last_seek_ms = 0.0
+        self.last_frame: Frame | None = None
+        self._factory = factory
+        self.engine: Engine = factory(config)
+        self._ready: Frame | None = None
+        self._anchor = (0.0, 0)
+        self._last_publish = 0.0
+        self._draw_s = 0.0
+        self._unpublished: Frame | None = None
+        self._play_stats = [0.0, 0]  # wall seconds and media microseconds spent playing
+        self._last_advance_wall: float | None = None
+        self._prefetching = self.pc.prefetch
+        self._thread = threading.Thread(target=self._run, name="evpose-player", daemon=True)
+        self._running = True
+        self._thread.start()
+
+    # ----- commands (any thread) -----
+    def play(self) -> None:
+        self._queue.put(("play",))
+
+    def pause(self) -> None:
+        self._queue.put(("pause",))
+
+    def toggle(self) -> None:
+        self._queue.put(("toggle",))
+
+    def step_forward(self) -> None:
+        self._queue.put(("step", 1))
+
+    def step_back(self) -> None:
+        self._queue.put(("step", -1))
+
+    def seek(self, t_us: int) -> None:
+        self._queue.put(("seek", int(t_us)))
+
+    def set_speed(self, speed: float) -> None:
+        self._queue.put(("speed", float(min(10.0, max(0.1, speed)))))
+
+    def set_loop(self, loop: bool) -> None:
+        self._queue.put(("loop", bool(loop)))
+
+    def set_config(self, config, rerun: RerunFrom = RerunFrom.CURRENT) -> None:
+        """Ask for a rebuild with ``config``; calls within ``coalesce_s`` of each other collapse into one."""
+        with self._lock:
+            self._pending = (config, RerunFrom(rerun))
+            self._pending_deadline = time.monotonic() + self.pc.coalesce_s
+        self._queue.put(("wake",))
+
+    def load(self, factory: EngineFactory, config=None) -> None:
+        """Switch to another recording/map without restarting the server."""
+        self._queue.put(("load", factory, config))
+
+    def call(self, fn: Callable[[Engine], object]) -> Future:
+        """Run ``fn(engine)`` on the worker thread (safe access to engine state); returns a Future."""
+        fut: Future = Future()
+        self._queue.put(("call", fn, fut))
+        return fut
+
+    def wait_idle(self, timeout: float = 30.0) -> bool:
+        """Block until all queued commands and pending changes are done (tests, exports)."""
+        return self.call(lambda e: None).result(timeout) is None and self._wait_pending(timeout)
+
+    def _wait_pending(self, timeout: float) -> bool:
+        end = time.monotonic() + timeout
+        while time.monotonic() < end:
+            with self._lock:
+                pending = self._pending is not None
+            if not pending:
+                # The rebuild may still be running on the worker: queue behind it.
+                return self.call(lambda e: None).result(timeout) is None
+            time.sleep(0.02)
+        return False
+
+    def stop(self) -> None:
+        self._running = False
+        self._queue.put(("stop",))
+        self._thread.join(timeout=5.0)
+
+    def stats(self) -> dict:
+        wall, media = self._play_stats
+        f = self.last_frame
+        return {
+            "state": self.state.value, "speed": self.speed, "loop": self.loop,
+            "t_us": f.t_us if f else None, "index": f.index if f else None,
+            "real_time_factor": (media / 1e6) / wall if wall > 0 else 0.0,
+            "config_applies": self.config_applies, "last_seek_ms": self.last_seek_ms,
+        }
+
+    # ----- worker thread -----
+    def _publish(self, frame: Frame | None, force: bool = True) -> None:
+        if frame is None:
+            return
+        self.last_frame = frame
+        now = time.monotonic()
+        # While playing, drawing may take at most ~1/(1+draw_share_factor) of the time: slow draws lower the frame rate.
+        interval = max(1.0 / self.pc.max_ui_fps, self.pc.draw_share_factor * self._draw_s)
+        if not force and now - self._last_publish < interval:
+            self._unpublished = frame
+            return
+        self._unpublished = None
+        self._last_publish = now
+        try:
+            self._on_frame(frame, self.engine)
+        except Exception as exc:  # a drawing bug must not kill playback
+            self._on_error(f"display failed: {exc!r}")
+        self._draw_s = time.monotonic() - now
+
+    def _flush_unpublished(self) -> None:
+        if self._unpublished is not None:
+            self._publish(self._unpublished)
+
+    def _reanchor(self) -> None:
+        t = self.last_frame.t_us if self.last_frame else self.engine.t_start_us
+        self._anchor = (time.monotonic(), t)
+
+    def _timed_seek(self, t_us: int) -> Frame | None:
+        t0 = time.perf_counter()
+        frame = self.engine.seek(t_us)
+        self.last_seek_ms = (time.perf_counter() - t0) * 1e3
+        return frame
+
+    def _handle(self, cmd: tuple) -> None:
+        kind = cmd[0]
+        if kind in ("seek", "load"):
+            self._ready = None
+        if kind == "play" or (kind == "toggle" and self.state == PlayState.PAUSED):
+            if self.last_frame is None or self.engine.current_t_us >= self.engine.t_end_us:
+                self._publish(self._timed_seek(self.engine.t_start_us) if self.last_frame else self.engine.step())
+            self.state = PlayState.PLAYING
+            self._last_advance_wall = None
+            self._reanchor()
+        elif kind == "pause" or kind == "toggle":
+            self.state = PlayState.PAUSED
+            if self._ready is not None:
+                self._unpublished = self._ready
+                self._ready = None
+            # Redraw once so every tab shows the paused state and the latest step.
+            self._publish(self._unpublished if self._unpublished is not None else self.last_frame)
+        elif kind == "step":
+            self.state = PlayState.PAUSED
+            self._flush_unpublished()
+            if cmd[1] > 0:
+                # A frame computed ahead for playback is exactly the next step.
+                frame = self._ready if self._ready is not None else self.engine.step()
+            else:
+                current = self.last_frame.index if self.last_frame else 0
+                frame = self.engine.seek_step(max(0, current - 1))
+            self._ready = None
+            self._publish(frame if frame is not None else self.last_frame)
+        elif kind == "seek":
+            self._publish(self._timed_seek(cmd[1]))
+            self._last_advance_wall = None
+            self._reanchor()
+        elif kind == "speed":
+            self.speed = cmd[1]
+            self._reanchor()
+        elif kind == "loop":
+            self.loop = cmd[1]
+        elif kind == "load":
+            self.state = PlayState.PAUSED
+            self.engine = cmd[1](cmd[2])
+            self._factory = cmd[1]
+            self.last_frame = None
+            self._prefetching = self.pc.prefetch
+            self._on_engine(self.engine)
+            self._publish(self.engine.step())
+        elif kind == "call":
+            try:
+                cmd[2].set_result(cmd[1](self.engine))
+            except Exception as exc:
+                cmd[2].set_exception(exc)
+
+    def _apply_pending(self) -> None:
+        with self._lock:
+            config, rerun = self._pending
+            self._pending = None
+        t_now = self.last_frame.t_us if self.last_frame else None
+        self._ready = None
+        try:
+            engine = self._factory(config)
+        except Exception as exc:
+            self._on_error(f"configuration rejected: {exc}")
+            return
+        self.engine = engine
+        self._prefetching = self.pc.prefetch
+        self.config_applies += 1
+        self._on_engine(engine)
+        if rerun == RerunFrom.START or t_now is None:
+            frame = self.engine.step()
+        else:
+            frame = self._timed_seek(t_now)
+        self._publish(frame)
+        self._reanchor()
+
+    def _timeout(self) -> float | None:
+        waits = []
+        with self._lock:
+            if self._pending is not None:
+                waits.append(self._pending_deadline - time.monotonic())
+        if self.state == PlayState.PLAYING:
+            if self._ready is None:
+                waits.append(0.0)
+            else:
+                waits.append(self._due(self._ready) - time.monotonic())
+        elif self._prefetching:
+            waits.append(0.0)
+        return max(0.0, min(waits)) if waits else None
+
+    def _due(self, frame: Frame) -> float:
+        wall0, media0 = self._anchor
+        return wall0 + (frame.t_us - media0) / 1e6 / self.speed
+
+    def _run(self) -> None:
+        while self._running:
+            try:
+                cmd = self._queue.get(timeout=self._timeout())
+            except queue.Empty:
+                cmd = None
+            if cmd is not None:
+                if cmd[0] == "stop":
+                    break
+                try:
+                    self._handle(cmd)
+                except Exception as exc:
+                    self.state = PlayState.PAUSED
+                    self._on_error(f"{cmd[0]} failed: {exc}")
+                continue
+            with self._lock:
+                due_config = self._pending is not None and time.monotonic() >= self._pending_deadline
+            if due_config:
+                self._apply_pending()
+                continue
+            if self.state == PlayState.PLAYING:
+                self._advance()
+            elif self._prefetching:
+                try:
+                    self._prefetching = self.engine.prefetch(self.pc.prefetch_steps)
+                except Exception as exc:
+                    self._prefetching = False
+                    self._on_error(f"prefetch failed: {exc}")
+
+    def _advance(self) -> None:
+        if self._ready is None:
+            try:
+                self._ready = self.engine.step()
+            except Exception as exc:
+                self.state = PlayState.PAUSED
+                self._on_error(f"step failed: {exc}")
+                return
+            if self._ready is None:
+                self._flush_unpublished()
+                if self.loop:
+                    self._publish(self._timed_seek(self.engine.t_start_us))
+                    self._reanchor()
+                else:
+                    self.state = PlayState.PAUSED
+                return
+        now = time.monotonic()
+        due = self._due(self._ready)
+        if now < due:
+            return
+        if now - due > self.pc.max_lag_s:
+            self._reanchor()
+        prev_t = self.last_frame.t_us if self.last_frame else self._ready.t_us
+        frame, self._ready = self._ready, None
+        wall_prev = self._last_advance_wall
+        if wall_prev is not None:
+            self._play_stats[0] += now - wall_prev
+            self._play_stats[1] += frame.t_us - prev_t
+        self._last_advance_wall = now
+        self._publish(frame, force=False)

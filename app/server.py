@@ -1,0 +1,474 @@
+"""The viewer: a viser server composing the player, scene, panels, plots, parameters, browser, layouts and export.
+
+One engine per server, owned by the player's worker thread; every browser tab
+drives and sees that same session (commands are serialised through one queue,
+so concurrent tabs cannot corrupt it). Per-tab state is only the 3D camera.
+"""
+
+from __future__ import annotations
+
+import socket
+import threading
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import viser
+
+from app.browser import DataEntry, DataRoots, EntryKind, guess_map_for, load_cloud, load_map, load_recording
+from app.config_gui import ConfigGui, load_config_file
+from app.engine import Engine, EventsOnlyEngine, TrackerEngine
+from app.export import export_action, write_config
+from app.frame import Frame
+from app.layouts import LAYOUT_DIR, PANELS, Layout, list_layouts, save_layout
+from app.panels import OverlayColour, panel_images
+from app.player import Player, PlayerConfig, PlayState, RerunFrom
+from app.plots import PlotsView
+from app.scene import SceneView
+from app.teaching import STAGE_PANEL, Stage, teaching_markdown
+from evpose.errors import EvposeError, InputError
+
+NO_MAP = "(no map: events only)"
+SLOW_REFRESH_S = 0.25
+"""While playing, plots and trajectory polylines refresh at most this often, seconds."""
+NO_MAP_NOTE = "No contour map selected: showing events and time surfaces only. Tracking needs a map of the scene."
+
+
+@dataclass
+class AppConfig:
+    """How the viewer is served and where it looks for data."""
+
+    data: list[Path] = field(default_factory=lambda: [Path("demo_data"), Path("maps")])
+    """Folders searched for recordings and maps; nothing outside them can be opened."""
+    host: str = "127.0.0.1"
+    """Interface to listen on (localhost by default)."""
+    port: int = 8080
+    """TCP port."""
+    layout: str = "debug"
+    """Layout from layouts/ applied at start."""
+    export_dir: Path = Path("evpose_exports")
+    """Where exports are written (also offered as browser downloads)."""
+    layout_dir: Path = LAYOUT_DIR
+    """Folder of layout files."""
+    player: PlayerConfig = field(default_factory=PlayerConfig)
+    """Pacing, coalescing and prefetch of the player."""
+
+
+def check_port_free(host: str, port: int) -> None:
+    """Raise a one-line error if the port is taken (viser would silently move to another port)."""
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+        s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        try:
+            s.bind((host, port))
+        except OSError as exc:
+            raise InputError(None, f"cannot serve on {host}:{port}: {exc.strerror or exc}; is another viewer running? choose another --port") from None
+
+
+def engine_factory(recording, contour_map):
+    """A config -> Engine function for this recording/map pair, with the reason when tracking is impossible."""
+    if contour_map is None:
+        return lambda cfg: EventsOnlyEngine(recording, cfg, explanation=NO_MAP_NOTE)
+    try:
+        import evpose.tracker.session  # noqa: F401
+    except ImportError as exc:
+        note = f"The tracker is not available in this build ({exc}); showing events only."
+        return lambda cfg: EventsOnlyEngine(recording, cfg, explanation=note)
+
+    def make(cfg):
+        try:
+            return TrackerEngine(recording, contour_map, cfg)
+        except EvposeError as exc:
+            # Still show events and time surfaces, and say why tracking cannot run.
+            return EventsOnlyEngine(recording, None, explanation=f"Tracking cannot start: {exc}")
+
+    return make
+
+
+class ViewerApp:
+    """The running viewer."""
+
+    def __init__(self, cfg: AppConfig):
+        self.cfg = cfg
+        check_port_free(cfg.host, cfg.port)
+        self.roots = DataRoots(cfg.data)
+        self.server = viser.ViserServer(host=cfg.host, port=cfg.port, label="evpose", verbose=False)
+        self.gui = self.server.gui
+        self.scene = SceneView(self.server)
+        self.entries: list[DataEntry] = []
+        self.recording = None
+        self.contour_map = None
+        self.player: Player | None = None
+        self.config_gui: ConfigGui | None = None
+        self.overlay = OverlayColour.RESIDUAL
+        self.stage = Stage.TDF
+        self.last_frame: Frame | None = None
+        self.layout: Layout | None = None
+        self._select_lock = threading.Lock()
+        self.frames_published = 0
+        self._last_slow = 0.0
+        self._build_main_panel()
+        self._build_panels()
+        self.refresh_entries()
+        self.apply_layout_name(cfg.layout)
+        self._bind_hotkeys()
+        recs = [e for e in self.entries if e.kind == EntryKind.RECORDING and e.error is None]
+        if recs:
+            self.select(recs[0].label)
+
+    # ------------------------------------------------------------------ GUI construction
+    def _build_main_panel(self) -> None:
+        g = self.gui
+        g.main_panel.dock_left()
+        with g.add_folder("Recording"):
+            self.rec_dropdown = g.add_dropdown("recording", ["(none found)"], hint="Recordings under the --data folders")
+            self.map_dropdown = g.add_dropdown("map", [NO_MAP], hint="Contour map to track against")
+            self.rescan_button = g.add_button("rescan data folders")
+            self.rec_info = g.add_markdown("")
+        with g.add_folder("Playback"):
+            self.play_button = g.add_button("play / pause (space)")
+            self.step_buttons = g.add_button_group("step", ["< back", "forward >"])
+            self.time_slider = g.add_slider("time [s]", min=0.0, max=1.0, step=0.001, initial_value=0.0)
+            self.speed_slider = g.add_slider("speed [x]", min=0.1, max=10.0, step=0.1, initial_value=1.0)
+            self.loop_box = g.add_checkbox("loop", False)
+            self.status = g.add_markdown("_no recording loaded_")
+        with g.add_folder("3D view", expand_by_default=False):
+            self.toggle_boxes = {}
+            for name in ("contour_map", "raw_cloud", "ground_truth", "registration", "fused", "imu_poses", "frustum", "follow"):
+                self.toggle_boxes[name] = g.add_checkbox(name.replace("_", " "), getattr(self.scene.toggles, name))
+            self.overlay_dropdown = g.add_dropdown("TDF points coloured by", [o.value for o in OverlayColour], initial_value=self.overlay.value)
+        with g.add_folder("Layout", expand_by_default=False):
+            self.layout_dropdown = g.add_dropdown("layout", ["debug"])
+            self.layout_name = g.add_text("save as", "my_layout")
+            self.layout_save = g.add_button("save current layout")
+        with g.add_folder("Export", expand_by_default=False):
+            self.export_buttons = g.add_button_group("export", ["trajectory", "config", "screenshot", "GIF"])
+            self.export_info = g.add_markdown("")
+        self._wire_main_panel()
+
+    def _wire_main_panel(self) -> None:
+        self.rec_dropdown.on_update(lambda e: e.client is not None and self.select(self.rec_dropdown.value))
+        self.map_dropdown.on_update(lambda e: e.client is not None and self.select(self.rec_dropdown.value, self.map_dropdown.value))
+        self.rescan_button.on_click(lambda e: self.refresh_entries())
+        self.play_button.on_click(lambda e: self.player and self.player.toggle())
+        self.step_buttons.on_click(lambda e: self.player and (self.player.step_back() if e.target.value == "< back" else self.player.step_forward()))
+        self.time_slider.on_update(lambda e: e.client is not None and self.player and self.player.seek(self._slider_to_us(self.time_slider.value)))
+        self.speed_slider.on_update(lambda e: self.player and self.player.set_speed(self.speed_slider.value))
+        self.loop_box.on_update(lambda e: self.player and self.player.set_loop(self.loop_box.value))
+        for name, box in self.toggle_boxes.items():
+            box.on_update(lambda e, name=name, box=box: self._set_toggle(name, box.value))
+        self.overlay_dropdown.on_update(lambda e: self._set_overlay(self.overlay_dropdown.value))
+        self.layout_dropdown.on_update(lambda e: e.client is not None and self.apply_layout_name(self.layout_dropdown.value))
+        self.layout_save.on_click(lambda e: self.save_current_layout(self.layout_name.value, e.client))
+        self.export_buttons.on_click(lambda e: self.export(e.target.value, e.client))
+
+    def _build_panels(self) -> None:
+        g = self.gui
+        self.panels = {}
+        self.panels["images"] = p = g.add_panel()
+        blank = np.zeros((48, 64, 3), np.uint8)
+        with p.add_tab("Images"):
+            self.image_handles = {name: g.add_image(blank, label=name, format="jpeg", jpeg_quality=85)
+                                  for name in ("SP-TS positive", "SP-TS negative", "TDF + map points", "events kept / removed")}
+        self.panels["plots"] = p = g.add_panel()
+        self.plots = PlotsView(g, p.add_tab("Plots"))
+        self.panels["teaching"] = p = g.add_panel()
+        with p.add_tab("How it works"):
+            self.stage_dropdown = g.add_dropdown("stage", [s.value for s in Stage], initial_value=self.stage.value)
+            self.teaching_text = g.add_markdown(teaching_markdown(self.stage, None))
+            self.teaching_image = g.add_image(blank, label="live", format="jpeg")
+        self.stage_dropdown.on_update(lambda e: self._set_stage(self.stage_dropdown.value))
+        self.panels["parameters"] = p = g.add_panel()
+        self.params_tab = p.add_tab("Parameters")
+        with self.params_tab:
+            self.rerun_dropdown = g.add_dropdown("on change re-run from", [r.value for r in RerunFrom], initial_value=RerunFrom.CURRENT.value)
+            self.param_buttons = g.add_button_group("configuration", ["reset", "save", "load"])
+            self.config_path = g.add_text("config file", "evpose_exports/config.yaml", hint="Path for save/load (load: inside the data folders or the export folder)")
+            self.param_info = g.add_markdown("")
+        self.param_buttons.on_click(lambda e: self._param_action(e.target.value))
+
+    def _bind_hotkeys(self) -> None:
+        g = self.gui
+        for label, key, fn in (("play / pause", "space", lambda: self.player and self.player.toggle()),
+                               ("step forward", "arrowright", lambda: self.player and self.player.step_forward()),
+                               ("step back", "arrowleft", lambda: self.player and self.player.step_back()),
+                               ("faster", "arrowup", lambda: self._nudge_speed(2.0)),
+                               ("slower", "arrowdown", lambda: self._nudge_speed(0.5)),
+                               ("to start", "home", lambda: self.player and self.player.seek(self.player.engine.t_start_us))):
+            cmd = g.add_command(label, hotkey=key)
+            cmd.on_trigger(lambda e, fn=fn: fn())
+
+    # ------------------------------------------------------------------ data
+    def refresh_entries(self) -> None:
+        self.entries = self.roots.scan()
+        recs = [e for e in self.entries if e.kind == EntryKind.RECORDING]
+        maps = [e for e in self.entries if e.kind == EntryKind.MAP]
+        self.rec_dropdown.options = [e.display for e in recs] or ["(none found)"]
+        self.map_dropdown.options = [NO_MAP] + [e.display for e in maps]
+        self.rec_info.content = self._scan_note()
+
+    def _scan_note(self) -> str:
+        recs = [e for e in self.entries if e.kind == EntryKind.RECORDING]
+        maps = [e for e in self.entries if e.kind == EntryKind.MAP]
+        bad = [e for e in self.entries if e.error]
+        note = f"{len(recs)} recordings, {len(maps)} maps under " + ", ".join(f"`{r}`" for r in self.roots.roots)
+        missing = [r for r in self.roots.roots if not r.is_dir()]
+        if missing:
+            note += "\n\n" + "; ".join(f"`{r}` does not exist" for r in missing)
+        if bad:
+            note += "\n\n**Unreadable:**\n" + "\n".join(f"- `{e.label}`: {e.error}" for e in bad)
+        return note
+
+    def _entry(self, display: str) -> DataEntry | None:
+        for e in self.entries:
+            if display in (e.display, e.label):
+                return e
+        return None
+
+    def select(self, rec_display: str, map_display: str | None = None) -> bool:
+        """Load a recording (and a map, guessed if not given); errors are shown, never raised to the server."""
+        with self._select_lock:  # two tabs switching at once load one after the other
+            return self._select(rec_display, map_display)
+
+    def _select(self, rec_display: str, map_display: str | None) -> bool:
+        entry = self._entry(rec_display)
+        if entry is None or entry.kind != EntryKind.RECORDING:
+            return False
+        try:
+            if entry.error:
+                raise InputError(entry.path, entry.error)
+            path = self.roots.check(entry.path)
+            recording = load_recording(path)
+            maps = [e for e in self.entries if e.kind == EntryKind.MAP]
+            if map_display is None:
+                map_entry = guess_map_for(entry, maps, recording.metadata)
+            else:
+                map_entry = None if map_display == NO_MAP else self._entry(map_display)
+            if map_entry is not None and map_entry.error:
+                raise InputError(map_entry.path, map_entry.error)
+            cmap = load_map(self.roots.check(map_entry.path)) if map_entry is not None else None
+            cloud = self._cloud_for(map_entry)
+        except EvposeError as exc:
+            self.rec_info.content = f"**Cannot open:** {exc}\n\n" + self._scan_note()
+            self._notify("cannot open", str(exc), "red")
+            return False
+        self.rec_dropdown.value = entry.display
+        self.map_dropdown.value = map_entry.display if map_entry is not None else NO_MAP
+        s = recording.summary()
+        self.rec_info.content = (f"`{entry.label}`: {s['events']:,} events, {s['duration_s']:.2f} s, "
+                                 f"{s['sensor_size']}; map: {map_entry.label if map_entry else 'none'}"
+                                 + ("" if cmap is not None else f"\n\n_{NO_MAP_NOTE}_") + "\n\n" + self._scan_note())
+        self.time_slider.max = max(0.001, (recording.t_end_us - recording.t_start_us) / 1e6)
+        factory = engine_factory(recording, cmap)
+
+        def reset_view(_engine=None):
+            # Runs on the player thread (or before it exists) so no frame of the old recording is drawn over it.
+            self.recording, self.contour_map = recording, cmap
+            self.scene.load(cmap, cloud, recording.ground_truth, recording.calibration)
+            self.scene.apply_toggles()
+            self.plots.remove()
+
+        if self.player is None:
+            reset_view()
+            self.player = Player(factory, self._on_frame, player_config=self.cfg.player,
+                                 on_error=lambda m: self._notify("viewer", m, "red"),
+                                 on_engine=self._rebuild_config_gui)
+            self._rebuild_config_gui(self.player.engine)
+            self.player.seek(recording.t_start_us)
+        else:
+            self.player.call(reset_view)
+            # Keep the user's tuned parameters across recordings when the engine kind stays the same.
+            self.player.load(factory, self.config_gui.config if self.config_gui is not None else None)
+        return True
+
+    def _cloud_for(self, map_entry: DataEntry | None):
+        if map_entry is None:
+            return None
+        stem = map_entry.path.name.lower().removesuffix("_map.ply").removesuffix(".ply")
+        for e in self.entries:
+            if e.kind == EntryKind.CLOUD and e.error is None and e.path.name.lower().startswith(stem):
+                try:
+                    return load_cloud(e.path)
+                except EvposeError:
+                    return None
+        return None
+
+    # ------------------------------------------------------------------ per-step drawing (player thread)
+    def _on_frame(self, frame: Frame, engine: Engine) -> None:
+        # Images of hidden panels are neither drawn nor sent.
+        show_images = self.layout is None or self.layout.panels["images"].visible
+        show_teaching = self.layout is None or self.layout.panels["teaching"].visible
+        imgs = panel_images(frame, self.overlay) if (show_images or show_teaching) else {}
+        # Plots and trajectories change slowly: while playing they refresh a few times a second.
+        now = time.monotonic()
+        slow = self.player is None or self.player.state != PlayState.PLAYING or now - self._last_slow >= SLOW_REFRESH_S
+        history = engine.history if slow else []
+        with self.server.atomic():
+            for name, img in imgs.items() if show_images else ():
+                self.image_handles[name].image = img
+            self.scene.update(frame, history if slow else None)
+            if slow:
+                self._last_slow = now
+                self.plots.update(history, self.recording.ground_truth if self.recording is not None else None)
+            if show_teaching:
+                self.teaching_text.content = teaching_markdown(self.stage, frame)
+                self.teaching_image.image = imgs[STAGE_PANEL[self.stage]]
+            self.time_slider.value = round((frame.t_us - engine.t_start_us) / 1e6, 3)
+            st = self.player.stats() if self.player else {}
+            self.status.content = (f"t = {frame.t_us / 1e6:.3f} s, step {frame.index}, **{frame.status}**"
+                                   + (f" ({frame.reason})" if frame.reason and frame.status != "events only" else "")
+                                   + f"\n\n{st.get('state', '')} at {st.get('speed', 1):.1f}x, "
+                                   f"real-time factor {st.get('real_time_factor', 0):.2f}")
+        self.frames_published += 1
+        self.last_frame = frame  # last, so whoever sees it also sees everything drawn for it
+
+    def _rebuild_config_gui(self, engine: Engine) -> None:
+        if self.config_gui is not None and type(self.config_gui.config) is type(engine.config):
+            # The controls are the source of the engine's config; pushing it back would fight a user still dragging.
+            note = engine.explanation or f"{type(engine.config).__name__}: changes re-run the tracker."
+            if self.param_info.content != note:  # re-rendering the panel would steal a dragging user's focus
+                self.param_info.content = note
+            return
+        if self.config_gui is not None:
+            self.config_gui.remove()
+        with self.params_tab:
+            self.config_gui = ConfigGui(self.gui, engine.config, self._config_changed)
+        note = engine.explanation or f"{type(engine.config).__name__}: changes re-run the tracker."
+        self.param_info.content = note
+
+    def _config_changed(self, config) -> None:
+        if self.player is not None:
+            self.player.set_config(config, RerunFrom(self.rerun_dropdown.value))
+
+    def _param_action(self, action: str) -> None:
+        if self.config_gui is None:
+            return
+        try:
+            if action == "reset":
+                self.config_gui.reset()
+                self.param_info.content = "configuration reset to defaults"
+            elif action == "save":
+                path = write_config(self.config_gui.config, self._export_path(self.config_path.value))
+                self.param_info.content = f"saved `{path}`"
+            elif action == "load":
+                path = self._readable_config_path(self.config_path.value)
+                cfg = load_config_file(self.config_gui.cls, path)
+                self.config_gui.set_config(cfg)
+                self._config_changed(cfg)
+                self.param_info.content = f"loaded `{path}`"
+        except EvposeError as exc:
+            self.param_info.content = f"**{action} failed:** {exc}"
+
+    def _export_path(self, path: str) -> Path:
+        """Writes go to the export folder only, whatever path was typed (by file name)."""
+        self.cfg.export_dir.mkdir(parents=True, exist_ok=True)
+        return self.cfg.export_dir / Path(path).name
+
+    def _readable_config_path(self, path: str) -> Path:
+        p = Path(path)
+        export = (self.cfg.export_dir / p.name).resolve()
+        if export.is_file() and (not p.is_absolute() or p.resolve() == export):
+            return export
+        return self.roots.check(p)
+
+    # ------------------------------------------------------------------ view options
+    def _set_toggle(self, name: str, value: bool) -> None:
+        setattr(self.scene.toggles, name, bool(value))
+        if self.layout is not None:
+            setattr(self.layout.scene, name, bool(value))
+        self.scene.apply_toggles()
+
+    def _set_overlay(self, value: str) -> None:
+        self.overlay = OverlayColour(value)
+        self._redraw()
+
+    def _set_stage(self, value: str) -> None:
+        self.stage = Stage(value)
+        self._redraw()
+
+    def _redraw(self) -> None:
+        if self.player is not None and self.last_frame is not None:
+            frame = self.last_frame
+            self.player.call(lambda eng: self._on_frame(frame, eng))
+
+    def _nudge_speed(self, factor: float) -> None:
+        self.speed_slider.value = float(np.clip(round(self.speed_slider.value * factor, 1), 0.1, 10.0))
+
+    def _slider_to_us(self, seconds: float) -> int:
+        t0 = self.recording.t_start_us if self.recording is not None else 0
+        return int(round(t0 + seconds * 1e6))
+
+    def _notify(self, title: str, body: str, color: str = "gray") -> None:
+        for client in self.server.get_clients().values():
+            client.add_notification(title, body, auto_close_seconds=6.0, color=color)
+
+    # ------------------------------------------------------------------ layouts
+    def available_layouts(self) -> dict:
+        return list_layouts(self.cfg.layout_dir)
+
+    def apply_layout_name(self, name: str) -> bool:
+        found = self.available_layouts()
+        usable = sorted(k for k, v in found.items() if isinstance(v, Layout))
+        self.layout_dropdown.options = usable or ["debug"]
+        layout = found.get(name)
+        if not isinstance(layout, Layout):
+            if isinstance(layout, str):
+                self._notify("layout", layout, "red")
+            layout = found.get("debug") if isinstance(found.get("debug"), Layout) else Layout("debug")
+        self.apply_layout(layout)
+        return True
+
+    def apply_layout(self, layout: Layout) -> None:
+        self.layout = layout
+        self.gui.configure_theme(dark_mode=layout.dark_mode, show_share_button=False, control_width="medium")
+        # Absolute placements first, so panels stacked on others find their anchor placed.
+        order = sorted(PANELS, key=lambda p: ":" in layout.panels[p].dock)
+        for name in order:
+            place, panel = layout.panels[name], self.panels[name]
+            panel.visible = place.visible
+            if place.dock == "left":
+                panel.dock_left()
+            elif place.dock == "right":
+                panel.dock_right()
+            elif place.dock == "float":
+                panel.float(x=-15 if name != "teaching" else 60, y=15)
+            else:
+                where, anchor = place.dock.split(":")
+                (panel.dock_above if where == "above" else panel.dock_below)(self.panels[anchor])
+            if place.width:
+                panel.set_width(place.width)
+        for name, box in self.toggle_boxes.items():
+            box.value = getattr(layout.scene, name)
+        self.scene.toggles = type(layout.scene)(**vars(layout.scene))
+        self.scene.apply_toggles()
+        if layout.name in self.layout_dropdown.options:
+            self.layout_dropdown.value = layout.name
+
+    def save_current_layout(self, name: str, client=None) -> Path | None:
+        try:
+            base = self.layout or Layout(name)
+            layout = Layout(name, base.description, base.dark_mode, dict(base.panels), type(self.scene.toggles)(**vars(self.scene.toggles)))
+            path = save_layout(layout, self.cfg.layout_dir)
+        except EvposeError as exc:
+            self._notify("layout", str(exc), "red")
+            return None
+        self.layout_dropdown.options = sorted(k for k, v in self.available_layouts().items() if isinstance(v, Layout))
+        self.layout_dropdown.value = name
+        return path
+
+    # ------------------------------------------------------------------ export
+    def export(self, what: str, client=None) -> Path | None:
+        try:
+            path = export_action(self, what, client)
+        except (EvposeError, ValueError, TimeoutError) as exc:
+            self.export_info.content = f"**{what} export failed:** {exc}"
+            return None
+        self.export_info.content = f"wrote `{path}`"
+        if client is not None and path is not None:
+            client.send_file_download(path.name, path.read_bytes())
+        return path
+
+    def stop(self) -> None:
+        if self.player is not None:
+            self.player.stop()
+        self.server.stop()

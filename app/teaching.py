@@ -1,0 +1,102 @@
+"""Plain-words explanations of each EV-Pose stage, filled with the live figures of the step on screen."""
+
+from __future__ import annotations
+
+import enum
+
+import numpy as np
+
+from app.frame import Frame
+
+
+class Stage(str, enum.Enum):
+    """The stage the teaching panel explains."""
+
+    EVENTS = "events"
+    SP_TS = "SP-TS"
+    TDF = "TDF"
+    POLARITY = "polarity prediction"
+    REGISTRATION = "registration"
+    FUSION = "fusion"
+
+
+EXPLANATIONS: dict[Stage, str] = {
+    Stage.EVENTS: (
+        "An event camera does not take pictures. Each pixel reports, on its own, the moment its brightness "
+        "changes by a set amount: an **ON** event (red) when it gets brighter, **OFF** (blue) when darker. "
+        "Moving edges therefore light up as thin lines of events. A noise filter throws away lonely events "
+        "whose neighbours stayed silent (grey in the *events kept / removed* panel)."
+    ),
+    Stage.SP_TS: (
+        "The **separated-polarity time surface** keeps, for every pixel, the time of its latest ON event and, "
+        "separately, of its latest OFF event. Shown as `exp(-age / eta)`: a pixel that just fired is bright, and "
+        "it fades as time passes. The result looks like an edge with a comet tail behind it: the tail points "
+        "back along the way the edge came."
+    ),
+    Stage.TDF: (
+        "The **temporal distance field** is `1 - time surface`: near 0 exactly on the newest edge, growing behind "
+        "it. It acts as a landscape of valleys along the edges. The contour map points are projected into it "
+        "from the current pose guess; each point's height in the landscape is its *residual*."
+    ),
+    Stage.POLARITY: (
+        "**Polarity prediction**: from the IMU's rotation rate and the fused velocity, the tracker predicts how each "
+        "map edge moves in the image, and so whether it should produce ON or OFF events. Each point is then "
+        "compared only with the time surface of its predicted polarity (red/blue in 3D), which removes the "
+        "events and distractions of the other polarity. Points whose motion is nearly parallel to the edge sit "
+        "in the *buffer zone* (yellow) and use both; so does every point when polarity prediction is off (mode `stpe`)."
+    ),
+    Stage.REGISTRATION: (
+        "**Registration** moves the 6-DoF pose until the projected map points fall into the valleys of the TDF "
+        "(least squares with a robust loss, Gauss-Newton). Points far from any valley get small weights, so "
+        "clutter does not pull the pose. The TDF panel colours each point by its residual (green = on an edge)."
+    ),
+    Stage.FUSION: (
+        "**Fusion** combines each registration with the IMU in a factor graph (gtsam): the IMU predicts the motion "
+        "between registrations at its high rate (small axes in 3D), registration corrects the drift. The orange "
+        "line is the fused trajectory, purple the raw registrations, green the ground truth."
+    ),
+}
+
+STAGE_PANEL: dict[Stage, str] = {
+    Stage.EVENTS: "events kept / removed",
+    Stage.SP_TS: "SP-TS positive",
+    Stage.TDF: "TDF + map points",
+    Stage.POLARITY: "TDF + map points",
+    Stage.REGISTRATION: "TDF + map points",
+    Stage.FUSION: "TDF + map points",
+}
+"""Which live image illustrates each stage."""
+
+
+def live_facts(stage: Stage, frame: Frame | None) -> str:
+    """One or two sentences of figures from the step on screen for ``stage``."""
+    if frame is None:
+        return "_Press play or step to see live figures._"
+    c = frame.counts
+    t = f"At t = {frame.t_us / 1e6:.3f} s (step {frame.index}): "
+    if stage == Stage.EVENTS:
+        n_in = c.get("events_in", len(frame.events_kept) + len(frame.events_removed))
+        kept = c.get("events_kept", len(frame.events_kept))
+        on = int(np.sum(frame.events_kept.p > 0))
+        return t + f"{n_in} events arrived, {kept} kept ({on} ON, {kept - on} OFF)."
+    if stage == Stage.SP_TS:
+        fresh_p = int(np.sum(frame.ts_positive > 0.5))
+        fresh_n = int(np.sum(frame.ts_negative > 0.5))
+        return t + f"{fresh_p} pixels carry a fresh ON edge and {fresh_n} a fresh OFF edge (surface > 0.5)."
+    if stage == Stage.TDF:
+        return t + f"{int(np.sum(frame.tdf < 0.5))} pixels lie in an edge valley (TDF < 0.5), lowest value {float(frame.tdf.min()):.2f}."
+    if frame.point_index is None:
+        return t + "no map is loaded, so there is nothing to register: " + (frame.reason or "tracking needs a map.")
+    if stage == Stage.POLARITY:
+        pol = frame.predicted_polarity if frame.predicted_polarity is not None else np.zeros(0, np.int8)
+        return t + f"{int(np.sum(pol > 0))} points predicted ON, {int(np.sum(pol < 0))} OFF, {int(np.sum(pol == 0))} in the buffer zone."
+    if stage == Stage.REGISTRATION:
+        res = frame.residuals if frame.residuals is not None else np.zeros(0)
+        med = float(np.median(res)) if len(res) else float("nan")
+        return t + f"{len(res)} points used, {c.get('inliers', 0)} inliers, median residual {med:.3f}; status **{frame.status}**."
+    n_imu = 0 if frame.imu_poses is None else len(frame.imu_poses)
+    return t + f"{n_imu} IMU-rate poses since the last registration; status **{frame.status}**" + (f" ({frame.reason})" if frame.reason else ".")
+
+
+def teaching_markdown(stage: Stage, frame: Frame | None) -> str:
+    return f"### {stage.value}\n\n{EXPLANATIONS[stage]}\n\n**Now:** {live_facts(stage, frame)}\n\n_Image: {STAGE_PANEL[stage]}_"

@@ -1,0 +1,61 @@
+"""Recordings browser: listing, unreadable files with reasons, and the data-root restriction."""
+
+import os
+
+import pytest
+
+from app.browser import DataRoots, EntryKind, guess_map_for, load_recording
+from evpose.core.contour_map import ContourMap
+from evpose.errors import InputError
+from evpose.io.h5 import write_recording_h5
+from evpose.io.map_ply import write_contour_map
+
+
+@pytest.fixture
+def data_dir(tmp_path, bar_recording):
+    root = tmp_path / "data"
+    (root / "sub").mkdir(parents=True)
+    write_recording_h5(root / "squares_run1.h5", bar_recording)
+    (root / "sub" / "broken.h5").write_bytes(b"not hdf5 at all")
+    write_contour_map(root / "squares_map.ply", ContourMap.from_points([[0, 0, 0], [1, 0, 0], [0, 1, 0]]))
+    (root / "bad_map.ply").write_text("hello")
+    return root
+
+
+def test_scan_lists_recordings_and_maps_and_explains_unreadable_files(data_dir):
+    entries = DataRoots([data_dir]).scan()
+    by_name = {e.path.name: e for e in entries}
+    assert by_name["squares_run1.h5"].kind == EntryKind.RECORDING and by_name["squares_run1.h5"].error is None
+    assert by_name["broken.h5"].error == "not an HDF5 file"
+    assert "unreadable" in by_name["broken.h5"].display
+    assert by_name["squares_map.ply"].kind == EntryKind.MAP and by_name["squares_map.ply"].error is None
+    assert "PLY" in by_name["bad_map.ply"].error
+
+
+def test_paths_outside_the_data_roots_are_refused(data_dir, tmp_path):
+    roots = DataRoots([data_dir])
+    assert roots.check(data_dir / "squares_run1.h5") == (data_dir / "squares_run1.h5").resolve()
+    assert roots.check("squares_run1.h5") == (data_dir / "squares_run1.h5").resolve()
+    secret = tmp_path / "secret.h5"
+    secret.write_bytes(b"x")
+    for bad in (secret, data_dir / ".." / "secret.h5", "../secret.h5", "/etc/passwd"):
+        with pytest.raises(InputError, match="outside the data directories"):
+            roots.check(bad)
+
+
+def test_a_symlink_leading_out_of_the_roots_is_listed_but_refused(data_dir, tmp_path):
+    outside = tmp_path / "outside.h5"
+    outside.write_bytes(b"x")
+    os.symlink(outside, data_dir / "link.h5")
+    entry = {e.path.name: e for e in DataRoots([data_dir]).scan()}["link.h5"]
+    assert entry.error and "outside" in entry.error
+    with pytest.raises(InputError):
+        DataRoots([data_dir]).check(data_dir / "link.h5")
+
+
+def test_map_is_guessed_from_the_recording_name_and_recordings_load(data_dir):
+    entries = DataRoots([data_dir]).scan()
+    rec = next(e for e in entries if e.path.name == "squares_run1.h5")
+    maps = [e for e in entries if e.kind == EntryKind.MAP]
+    assert guess_map_for(rec, maps).path.name == "squares_map.ply"
+    assert len(load_recording(rec.path).events) > 0

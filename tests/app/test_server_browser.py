@@ -1,0 +1,187 @@
+"""The viewer in a real headless Chromium: panels, playback, stepping, parameters, recordings, layouts, 3D canvas."""
+
+import io
+import socket
+import time
+
+import numpy as np
+import pytest
+
+from app.engine import TrackerEngine
+from app.player import PlayerConfig
+from app.server import AppConfig, ViewerApp
+from evpose.io.h5 import write_recording_h5
+from evpose.io.map_ply import write_contour_map
+
+pytestmark = pytest.mark.browser
+
+CHROMIUM_ARGS = ["--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage", "--disable-background-networking",
+                 "--disable-component-update", "--disable-sync", "--no-first-run"]
+
+
+def wait_for(cond, timeout=40.0, what="condition", detail=None):
+    end = time.time() + timeout
+    while time.time() < end:
+        if cond():
+            return
+        time.sleep(0.05)
+    raise AssertionError(f"timed out waiting for {what}" + (f" ({detail()})" if detail else ""))
+
+
+@pytest.fixture(scope="module")
+def viewer(tmp_path_factory, squares_scene):
+    from app_scenes import sweeping_bar_recording
+
+    root = tmp_path_factory.mktemp("data")
+    rec, cmap = squares_scene
+    write_recording_h5(root / "squares.h5", rec)
+    write_contour_map(root / "squares_map.ply", cmap)
+    write_recording_h5(root / "bar.h5", sweeping_bar_recording())
+    (root / "corrupt.h5").write_bytes(b"broken")
+    layouts = tmp_path_factory.mktemp("layouts")
+    from app.layouts import LAYOUT_DIR
+
+    for f in LAYOUT_DIR.glob("*.json"):
+        (layouts / f.name).write_text(f.read_text())
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    # No idle-time prefetch here (tested in test_engine): it would compete for the CPU with the browser.
+    app = ViewerApp(AppConfig(data=[root], port=port, export_dir=tmp_path_factory.mktemp("exports"), layout_dir=layouts,
+                              player=PlayerConfig(prefetch=False)))
+    yield app
+    app.stop()
+
+
+@pytest.fixture(scope="module")
+def page(viewer):
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as p:
+        browser = p.chromium.launch(executable_path="/usr/bin/chromium", args=CHROMIUM_ARGS)
+        pg = browser.new_page(viewport={"width": 1400, "height": 900})
+        pg.goto(f"http://127.0.0.1:{viewer.cfg.port}")
+        pg.get_by_text("SP-TS positive").first.wait_for(timeout=30_000)
+        yield pg
+        browser.close()
+
+
+def choose(page, label, option):
+    page.get_by_label(label, exact=True).click()
+    page.get_by_role("option", name=option, exact=True).click()
+
+
+def control_row(page, label):
+    """The row of a labelled control (viser sliders are not <label>-associated inputs)."""
+    lab = page.locator("label", has_text=label).filter(has_text=label).first
+    return lab.locator("xpath=ancestor::div[contains(@class,'mantine-Flex-root')][1]")
+
+
+def image_sources(page):
+    return page.locator("img").evaluate_all("els => els.map(e => e.src)")
+
+
+def test_panels_and_controls_exist(page, viewer):
+    for text in ("SP-TS positive", "SP-TS negative", "TDF + map points", "events kept / removed", "Plots", "Parameters"):
+        assert page.get_by_text(text, exact=True).count() >= 1, text
+    for name in ("play / pause (space)", "< back", "forward >", "rescan data folders"):
+        assert page.get_by_role("button", name=name).count() == 1, name
+    for label in ("loop", "recording", "map"):
+        assert page.get_by_label(label, exact=True).count() >= 1, label
+    for label in ("time [s]", "speed [x]"):
+        assert control_row(page, label).get_by_role("slider").count() == 1, label
+    assert "corrupt.h5" in page.content()  # listed as unreadable, server still up
+
+
+def test_switch_recording_play_step_and_see_images_and_trajectory_change(page, viewer):
+    choose(page, "recording", "data0/squares.h5" if "data0" in viewer.rec_dropdown.options[0] else
+           next(o for o in viewer.rec_dropdown.options if o.endswith("squares.h5")))
+    wait_for(lambda: isinstance(viewer.player.engine, TrackerEngine) and viewer.last_frame is not None, timeout=90, what="tracker loaded")
+    page.get_by_role("button", name="play / pause (space)").click()
+    wait_for(lambda: viewer.last_frame.index >= 10, what="playback")
+    page.get_by_role("button", name="play / pause (space)").click()
+    wait_for(lambda: viewer.player.state.value == "paused", what="pause")
+    viewer.player.seek(viewer.recording.t_start_us + 200_000)  # away from the end, however far playback got
+    viewer.player.wait_idle()
+    before_idx = viewer.last_frame.index
+    before_img = viewer.image_handles["SP-TS positive"].image.copy()
+    before_traj = len(viewer.player.engine.history)
+    srcs = image_sources(page)
+    page.get_by_role("button", name="forward >").click()
+    wait_for(lambda: viewer.last_frame.index == before_idx + 1, what="step forward",
+             detail=lambda: f"{before_idx} -> {viewer.last_frame.index}, {viewer.player.stats()}")
+    assert not np.array_equal(viewer.image_handles["SP-TS positive"].image, before_img)
+    assert len(viewer.player.engine.history) == before_traj + 1
+    wait_for(lambda: image_sources(page) != srcs, what="browser images update")
+    page.get_by_role("button", name="< back").click()
+    wait_for(lambda: viewer.last_frame.index == before_idx, what="step back")
+    # The keyboard shortcut toggles playback too.
+    page.mouse.click(780, 450)
+    page.keyboard.press("Space")
+    wait_for(lambda: viewer.player.state.value == "playing", what="space plays")
+    page.keyboard.press("Space")
+    wait_for(lambda: viewer.player.state.value == "paused", what="space pauses")
+
+
+def test_moving_a_parameter_reruns_the_tracker(page, viewer):
+    viewer.player.wait_idle()
+    img = viewer.image_handles["SP-TS positive"].image.copy()
+    applies = viewer.player.config_applies
+    page.get_by_text("time surface", exact=True).click()
+    thumb = control_row(page, "eta ms [ms]").get_by_role("slider")
+    thumb.focus()
+    for _ in range(6):  # six quick slider moves: coalesced into one re-run
+        page.keyboard.press("ArrowRight")
+    # The browser throttles slider messages itself; the player coalesces what arrives within its window.
+    wait_for(lambda: viewer.player.engine.config.time_surface.eta_ms == 13.0, timeout=30, what="final slider value applied")
+    viewer.player.wait_idle()
+    assert applies < viewer.player.config_applies <= applies + 3
+    assert not np.array_equal(viewer.image_handles["SP-TS positive"].image, img)
+
+
+def test_switch_layout_and_the_3d_canvas_is_not_blank(page, viewer, tmp_path):
+    page.get_by_text("Layout", exact=True).click()
+    choose(page, "layout", "teaching")
+    wait_for(lambda: viewer.layout is not None and viewer.layout.name == "teaching", what="layout switch")
+    page.get_by_text("How it works", exact=True).first.wait_for(timeout=10_000)
+    time.sleep(1.0)
+    shot = tmp_path / "viewer.png"
+    page.screenshot(path=str(shot))
+    import imageio.v3 as iio
+
+    canvas = page.locator("canvas").first.bounding_box()
+    img = iio.imread(shot)
+    x0, y0 = int(canvas["x"]), int(canvas["y"])
+    crop = img[y0 + 20:y0 + int(canvas["height"]) - 20, x0 + 20:x0 + int(canvas["width"]) - 20, :3].astype(float)
+    assert crop.std() > 5.0 and len(np.unique(crop.reshape(-1, 3), axis=0)) > 20
+    # The viewer's own screenshot export renders the 3D view through the connected browser.
+    path = viewer.export("screenshot")
+    assert path is not None, viewer.export_info.content
+    render = iio.imread(io.BytesIO(path.read_bytes()))
+    assert render.std() > 5.0
+
+
+def test_two_tabs_see_one_session_and_a_gif_can_be_exported(page, viewer):
+    from app.export import export_action
+
+    other = page.context.browser.new_page(viewport={"width": 1400, "height": 900})
+    try:
+        other.goto(f"http://127.0.0.1:{viewer.cfg.port}")
+        other.get_by_text("SP-TS positive").first.wait_for(timeout=30_000)
+        viewer.player.seek(viewer.recording.t_start_us + 100_000)
+        viewer.player.wait_idle()
+        idx = viewer.last_frame.index
+        other.get_by_role("button", name="forward >").click()
+        wait_for(lambda: viewer.last_frame.index == idx + 1, what="step from the second tab")
+        page.get_by_role("button", name="forward >").click()
+        wait_for(lambda: viewer.last_frame.index == idx + 2, what="step from the first tab")
+        want = f"step {idx + 2}"
+        for pg in (page, other):
+            pg.get_by_text(want).first.wait_for(timeout=10_000)
+        path = export_action(viewer, "GIF", gif_frames=3)
+        import imageio.v3 as iio
+
+        frames = iio.imread(path, index=None)
+        assert frames.shape[0] == 3 and frames.std() > 5.0
+    finally:
+        other.close()
