@@ -243,13 +243,9 @@ class TrackerEngine(Engine):
     def _goto(self, k: int) -> None:
         """Put the session in the state after ``k`` steps: restore the best snapshot, replay the rest."""
         s = self.session
-        snaps = s._snapshots  # noqa: SLF001
-        base = max(j for j in snaps if j <= k)
+        base = max(j for j in s.snapshot_steps if j <= k)
         if not (base <= s.step_count <= k):
-            state, cursor = snaps[base]
-            s.tracker.restore(state)
-            s._cursor, s._step_index = cursor, base  # noqa: SLF001
-            del s.results[base:]
+            s.restore_snapshot(base)
             # Restoring ahead of the computed results: fill them from the cache.
             s.results.extend(self._known[i] for i in range(len(s.results), base))
         while s.step_count < k and self._plain_step() is not None:
@@ -257,9 +253,8 @@ class TrackerEngine(Engine):
 
     def _mark(self) -> None:
         s = self.session
-        if s.step_count not in s._snapshots:  # noqa: SLF001
-            s._take_snapshot()  # noqa: SLF001
-            self._extra.add(s.step_count)
+        if s.step_count not in s.snapshot_steps:
+            self._extra.add(s.take_snapshot())
 
     def seek_step(self, index: int) -> Frame | None:
         k = int(np.clip(index, 0, max(self.session.total_steps - 1, 0)))
@@ -275,7 +270,7 @@ class TrackerEngine(Engine):
         unchanged (same deterministic steps).
         """
         s = self.session
-        frontier = max(s._snapshots)  # noqa: SLF001
+        frontier = s.snapshot_steps[-1]
         if frontier >= s.total_steps:
             return False
         shown = s.step_count
@@ -288,7 +283,7 @@ class TrackerEngine(Engine):
         reached = s.step_count
         for j in list(self._extra):  # keep only the shown step and the new frontier off the grid
             if j not in (shown, reached):
-                s._snapshots.pop(j, None)  # noqa: SLF001
+                s.drop_snapshot(j)
                 self._extra.discard(j)
         self._goto(shown)
         return reached < s.total_steps

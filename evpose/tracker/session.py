@@ -125,6 +125,34 @@ class TrackingSession:
     def _take_snapshot(self) -> None:
         self._snapshots[self._step_index] = (self.tracker.snapshot(), self._cursor)
 
+    # ------------------------------------------------------------- snapshots
+    @property
+    def snapshot_steps(self) -> list[int]:
+        """Step counts at which a full-state snapshot is kept, ascending."""
+        return sorted(self._snapshots)
+
+    def take_snapshot(self) -> int:
+        """Keep a snapshot of the current state (in addition to the regular grid); returns its step count."""
+        self._take_snapshot()
+        return self._step_index
+
+    def drop_snapshot(self, step: int) -> None:
+        """Forget the snapshot at ``step`` (the one at step 0 is always kept)."""
+        if step != 0:
+            self._snapshots.pop(int(step), None)
+
+    def restore_snapshot(self, step: int) -> None:
+        """Put the engine in the state of the snapshot at ``step`` (must be in :attr:`snapshot_steps`).
+
+        ``results`` is cut to ``step`` entries where it is longer; a caller that
+        restores past the computed results must extend ``results`` itself.
+        """
+        state, cursor = self._snapshots[int(step)]
+        self.tracker.restore(state)
+        self._cursor = cursor
+        self._step_index = int(step)
+        del self.results[int(step):]
+
     # ------------------------------------------------------------------- run
     def step(self, debug: bool = False) -> StepResult | None:
         """One update at the next grid time; None once the recording's events are exhausted."""
@@ -163,12 +191,7 @@ class TrackingSession:
         if target < self._step_index:
             # Back: restore the nearest snapshot at or before the target; forward: just step
             # (results between must exist, and replaying is what makes them).
-            base = max(k for k in self._snapshots if k <= target)
-            state, cursor = self._snapshots[base]
-            self.tracker.restore(state)
-            self._cursor = cursor
-            self._step_index = base
-            del self.results[base:]
+            self.restore_snapshot(max(k for k in self._snapshots if k <= target))
         last = self.results[-1] if self.results else None
         while self._step_index < target:
             last = self.step(debug=debug and self._step_index == target - 1)
