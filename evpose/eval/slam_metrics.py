@@ -1,0 +1,153 @@
+"""Metrics of the event-SLAM paper over an atlas of disconnected maps (eqs. 9 and 10), computed with evo.
+
+- **Normalised RPE** (eq. 9): per map, the mean RPE between consecutive
+  estimates (evo, delta = 1 frame) after aligning the map to ground truth
+  (Umeyama with scale for event-only runs, without for inertial runs), divided
+  by the map's travelled distance; then averaged over the maps. Translation:
+  metres per metre (unitless); rotation: degrees per metre.
+- **Stability** (eq. 10): tracked time ``tau(t)`` (s) and travelled distance
+  ``tau(p)`` (m) summed over the maps; the paper's stability column is their
+  product (m s). The distance uses ground-truth positions at the estimate
+  times, because event-only maps have no metric scale of their own.
+- **ATE** of each aligned map, and as a share of its travelled distance.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from evpose.core.trajectory import Trajectory
+from evpose.errors import InputError
+
+
+@dataclass
+class MapMetrics:
+    """Figures of one map of the atlas."""
+
+    poses: int
+    tracked_time_s: float
+    """Time between the map's first and last estimate, s."""
+    distance_m: float
+    """Ground-truth path length over the map's estimates, m."""
+    scale: float
+    """Alignment scale (1 without scale correction)."""
+    ate_m: float
+    """RMS absolute position error after alignment, m."""
+    rpe_trans_m: float
+    """Mean RPE translation between consecutive estimates, m."""
+    rpe_rot_deg: float
+    """Mean RPE rotation between consecutive estimates, degrees."""
+
+    @property
+    def ate_percent(self) -> float:
+        return 100.0 * self.ate_m / self.distance_m if self.distance_m > 0 else float("nan")
+
+
+@dataclass
+class SlamMetrics:
+    """Atlas-level figures (the paper's Table I columns plus ATE)."""
+
+    maps: list[MapMetrics] = field(default_factory=list)
+    duration_s: float = 0.0
+    """Span of the ground truth (or recording) the run covered, s."""
+
+    @property
+    def rpe_trans_per_m(self) -> float:
+        """Eq. (9), translation: mean over maps of RPE / distance (m/m)."""
+        v = [m.rpe_trans_m / m.distance_m for m in self.maps if m.distance_m > 0]
+        return float(np.mean(v)) if v else float("nan")
+
+    @property
+    def rpe_rot_deg_per_m(self) -> float:
+        """Eq. (9), rotation: mean over maps of RPE / distance (deg/m)."""
+        v = [m.rpe_rot_deg / m.distance_m for m in self.maps if m.distance_m > 0]
+        return float(np.mean(v)) if v else float("nan")
+
+    @property
+    def tracked_time_s(self) -> float:
+        return float(sum(m.tracked_time_s for m in self.maps))
+
+    @property
+    def distance_m(self) -> float:
+        return float(sum(m.distance_m for m in self.maps))
+
+    @property
+    def stability(self) -> float:
+        """Travelled distance x tracked time, m s (eq. 10, as in the paper's Table I)."""
+        return self.tracked_time_s * self.distance_m
+
+    @property
+    def tracked_fraction(self) -> float:
+        return self.tracked_time_s / self.duration_s if self.duration_s > 0 else 0.0
+
+    @property
+    def ate_percent(self) -> float:
+        """Distance-weighted ATE share over maps, percent of travelled distance."""
+        d = self.distance_m
+        return float(100.0 * sum(m.ate_m for m in self.maps) / d) if d > 0 and self.maps else float("nan")
+
+    def to_dict(self) -> dict:
+        return {
+            "maps": len(self.maps),
+            "rpe_trans_per_m": self.rpe_trans_per_m,
+            "rpe_rot_deg_per_m": self.rpe_rot_deg_per_m,
+            "tracked_time_s": self.tracked_time_s,
+            "distance_m": self.distance_m,
+            "stability_m_s": self.stability,
+            "tracked_fraction": self.tracked_fraction,
+            "ate_percent": self.ate_percent,
+            "ate_percent_max": max((m.ate_percent for m in self.maps), default=float("nan")),
+            "per_map": [vars(m) | {"ate_percent": m.ate_percent} for m in self.maps],
+        }
+
+
+def _evo(traj: Trajectory):
+    from evo.core.trajectory import PoseTrajectory3D
+
+    return PoseTrajectory3D(positions_xyz=traj.position.copy(), orientations_quat_wxyz=traj.quat_xyzw[:, [3, 0, 1, 2]].copy(), timestamps=traj.t / 1e6)
+
+
+def map_metrics(est: Trajectory, gt: Trajectory, correct_scale: bool) -> MapMetrics | None:
+    """Metrics of one map; None if it has fewer than three poses inside the ground truth's span or cannot be aligned."""
+    from evo.core import metrics
+
+    inside = (est.t >= gt.t[0]) & (est.t <= gt.t[-1])
+    est = est[inside]
+    if len(est) < 3:
+        return None
+    # Ground truth interpolated at the estimate times: exact association, no time tolerance to tune.
+    ref = gt.interpolate(est.t)
+    e, r = _evo(est), _evo(ref)
+    from evo.core.geometry import GeometryException
+
+    try:
+        _, _, s = e.align(r, correct_scale=correct_scale)
+    except GeometryException:
+        return None  # a straight-line or single-point map cannot be aligned (Umeyama is degenerate)
+    ape = metrics.APE(metrics.PoseRelation.translation_part)
+    ape.process_data((r, e))
+    rpe_t = metrics.RPE(metrics.PoseRelation.translation_part, 1.0, metrics.Unit.frames, all_pairs=False)
+    rpe_t.process_data((r, e))
+    rpe_r = metrics.RPE(metrics.PoseRelation.rotation_angle_deg, 1.0, metrics.Unit.frames, all_pairs=False)
+    rpe_r.process_data((r, e))
+    dist = float(np.sum(np.linalg.norm(np.diff(ref.position, axis=0), axis=1)))
+    return MapMetrics(
+        poses=len(est), tracked_time_s=float((est.t[-1] - est.t[0]) / 1e6), distance_m=dist, scale=float(s),
+        ate_m=float(ape.get_statistic(metrics.StatisticsType.rmse)),
+        rpe_trans_m=float(rpe_t.get_statistic(metrics.StatisticsType.mean)),
+        rpe_rot_deg=float(rpe_r.get_statistic(metrics.StatisticsType.mean)),
+    )
+
+
+def atlas_metrics(estimates: list[Trajectory], gt: Trajectory, correct_scale: bool, duration_s: float | None = None) -> SlamMetrics:
+    """Eqs. (9)-(10) over the maps of an atlas (one trajectory per map) against one ground truth."""
+    if gt is None or len(gt) < 2:
+        raise InputError(None, "SLAM metrics need a ground truth with at least two poses")
+    out = SlamMetrics(duration_s=float(duration_s if duration_s is not None else (gt.t[-1] - gt.t[0]) / 1e6))
+    for est in estimates:
+        mm = map_metrics(est, gt, correct_scale)
+        if mm is not None:
+            out.maps.append(mm)
+    return out
