@@ -1,0 +1,101 @@
+"""``evpose slam RECORDING --out EST.txt``: map-free event(-inertial) SLAM, one TUM trajectory per map of the atlas."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import tyro
+
+from evpose.errors import InputError
+
+
+def output_paths(out: Path, n_maps: int) -> list[Path]:
+    """``EST.map0.txt``, ``EST.map1.txt``... next to ``out``."""
+    return [out.with_name(f"{out.stem}.map{k}{out.suffix or '.txt'}") for k in range(n_maps)]
+
+
+def main(
+    recording: tyro.conf.Positional[Path],
+    out: Path,
+    mode: str = "event",
+    config: Path | None = None,
+    summary: Path | None = None,
+    width: int | None = None,
+    height: int | None = None,
+) -> int:
+    """Run SLAM without a prior map on RECORDING and write TUM trajectories (``T_world_cam`` per MCI).
+
+    OUT receives the longest map's trajectory; every map k of the atlas is also
+    written to OUT with ``.map<k>`` before the suffix. Event-only maps have an
+    arbitrary scale (evaluate with ``--align sim3``). A JSON summary (statuses,
+    per-map sizes, per-MCI latencies and, with ground truth, the paper's metrics)
+    goes to SUMMARY (default: OUT with suffix ``.slam.json``).
+
+    Args:
+        recording: Anything ``evpose info`` reads (ECD folder, evpose .h5, event .h5, bag); needs a calibration.
+        out: TUM trajectory of the longest map.
+        mode: event or event-inertial.
+        config: SLAM configuration, YAML or JSON (see ``evpose.slam.config``).
+        summary: Where to write the JSON summary.
+        width: Sensor width, for formats that do not state it.
+        height: Sensor height, for formats that do not state it.
+    """
+    from collections import Counter
+
+    from evpose.bench.stats import latency_summary
+    from evpose.eval.slam_metrics import atlas_metrics
+    from evpose.io.atomic import atomic_path
+    from evpose.io.open import open_recording
+    from evpose.io.tum import write_tum
+    from evpose.slam.config import SlamConfig, SlamMode
+    from evpose.slam.config_io import config_to_dict, load_slam_config
+    from evpose.slam.system import run_slam
+
+    try:
+        slam_mode = SlamMode(mode)
+    except ValueError:
+        raise InputError(None, f"--mode must be one of {[m.value for m in SlamMode]}, got {mode!r}") from None
+    cfg = load_slam_config(config) if config is not None else SlamConfig()
+    cfg.mode = slam_mode
+    import cv2
+
+    # One OpenCV thread: no oversubscription of small machines, and the per-stage CPU timings
+    # in the summary then cover all the work.
+    cv2.setNumThreads(1)
+    rec = open_recording(recording, width, height)
+    rec.validate()
+    if len(rec.events) == 0:
+        raise InputError(recording, "the recording has no events")
+    run = run_slam(rec, cfg)
+    inputs = tuple(p for p in (recording, config) if p is not None)
+    maps = [m for m in run.atlas.maps if m.traj_t]
+    trajs = [m.trajectory() for m in maps]
+    for path, traj in zip(output_paths(out, len(trajs)), trajs):
+        write_tum(path, traj, inputs=inputs)
+    if trajs:
+        write_tum(out, max(trajs, key=len), inputs=inputs)
+    doc = {
+        "recording": str(recording),
+        "config": config_to_dict(cfg),
+        "mcis": len(run.results),
+        "status_counts": dict(sorted(Counter(r.status.value for r in run.results).items())),
+        "hypothesis_counts": dict(sorted(Counter(r.hypothesis for r in run.results).items())),
+        "maps": [{"id": m.id, "poses": len(m.traj_t), "keyframes": len(m.keyframes), "points": len(m.points), "lost_reason": m.lost_reason,
+                  "imu_initialised": m.imu_initialised, "imu_scale": m.scale} for m in maps],
+        "latency_ms": {k: latency_summary([r.timings_ms[k] for r in run.results if k in r.timings_ms]) for k in ("mci", "tracking", "total", "mci_cpu", "tracking_cpu")},
+        "wall_s": run.wall_s,
+        "duration_s": run.duration_s,
+    }
+    if rec.ground_truth is not None and len(rec.ground_truth) >= 2 and trajs:
+        doc["metrics"] = atlas_metrics(trajs, rec.ground_truth, correct_scale=slam_mode is SlamMode.EVENT, duration_s=run.duration_s).to_dict()
+    summary = summary or out.with_suffix(".slam.json")
+    with atomic_path(summary, inputs=inputs) as tmp:
+        tmp.write_text(json.dumps(doc, indent=2, default=float) + "\n")
+    if not trajs:
+        reasons = Counter(r.reason for r in run.results if r.reason)
+        why = reasons.most_common(1)[0][0] if reasons else "no motion-compensated image was produced (too few events, no texture or a still camera)"
+        print(f"evpose slam: not initialised: {why}")
+        return 1
+    print(f"evpose slam: {len(trajs)} map(s), {sum(len(t) for t in trajs)} poses -> {out}")
+    return 0

@@ -1,0 +1,111 @@
+"""Maps of keyframes and points, and the atlas of disconnected maps a run leaves behind."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from evpose.core.trajectory import Trajectory
+
+
+@dataclass
+class Keyframe:
+    id: int
+    t_us: int
+    """Time of the MCI the keyframe was made from, us."""
+    T_wc: np.ndarray
+    """Pose ``T_world_cam`` (4, 4), map units."""
+    obs: dict[int, np.ndarray] = field(default_factory=dict)
+    """Track id -> ideal-pinhole pixel (2,) in this keyframe."""
+
+
+@dataclass
+class MapPoint:
+    id: int
+    xyz: np.ndarray
+    """World position (3,), map units."""
+    obs: dict[int, np.ndarray] = field(default_factory=dict)
+    """Keyframe id -> observed pixel (2,)."""
+    track_id: int = -1
+    """Feature track that observes it (KLT tracks carry associations, no descriptors)."""
+    created_kf: int = 0
+
+
+@dataclass
+class SlamMap:
+    """One connected map: keyframes, points and the per-MCI trajectory, in its own frame and scale."""
+
+    id: int
+    keyframes: list[Keyframe] = field(default_factory=list)
+    points: dict[int, MapPoint] = field(default_factory=dict)
+    traj_t: list[int] = field(default_factory=list)
+    traj_T: list[np.ndarray] = field(default_factory=list)
+    imu_initialised: bool = False
+    """Event-inertial mode: the map was scaled to metres and gravity-aligned by the IMU initialisation."""
+    scale: float = 1.0
+    """Metres per original map unit applied by the IMU initialisation."""
+    inertial: object = None
+    """:class:`evpose.slam.inertial_ba.InertialState` once the IMU is initialised."""
+    lost_reason: str = ""
+    """Why tracking of this map ended ("" while active or at the end of the recording)."""
+
+    def keyframe(self, kf_id: int) -> Keyframe:
+        for kf in self.keyframes:
+            if kf.id == kf_id:
+                return kf
+        raise KeyError(kf_id)
+
+    def add_pose(self, t_us: int, T_wc: np.ndarray) -> None:
+        # Trajectories need strictly increasing times; a repeated MCI time replaces the old pose.
+        if self.traj_t and t_us <= self.traj_t[-1]:
+            self.traj_T[-1] = T_wc.copy()
+            return
+        self.traj_t.append(int(t_us))
+        self.traj_T.append(T_wc.copy())
+
+    def transform(self, R: np.ndarray, s: float) -> None:
+        """Apply ``x -> s R x`` to the whole map (keyframes, points, trajectory)."""
+        def tf(T):
+            out = T.copy()
+            out[:3, :3] = R @ T[:3, :3]
+            out[:3, 3] = s * (R @ T[:3, 3])
+            return out
+
+        for kf in self.keyframes:
+            kf.T_wc = tf(kf.T_wc)
+        for p in self.points.values():
+            p.xyz = s * (R @ p.xyz)
+        self.traj_T = [tf(T) for T in self.traj_T]
+
+    def trajectory(self) -> Trajectory:
+        """Per-MCI poses of this map as a :class:`Trajectory` (``T_world_cam``)."""
+        if not self.traj_t:
+            return Trajectory.empty()
+        return Trajectory.from_matrices(np.array(self.traj_t, np.int64), np.stack(self.traj_T))
+
+    def point_array(self) -> np.ndarray:
+        """All point positions (M, 3), ordered by point id."""
+        if not self.points:
+            return np.zeros((0, 3))
+        return np.stack([self.points[k].xyz for k in sorted(self.points)])
+
+
+@dataclass
+class Atlas:
+    """All maps of a run; a new one starts whenever tracking is lost and re-initialises."""
+
+    maps: list[SlamMap] = field(default_factory=list)
+
+    @property
+    def active(self) -> SlamMap | None:
+        return self.maps[-1] if self.maps else None
+
+    def new_map(self) -> SlamMap:
+        m = SlamMap(id=len(self.maps))
+        self.maps.append(m)
+        return m
+
+    def trajectories(self) -> list[Trajectory]:
+        """One trajectory per map that tracked at least one pose."""
+        return [m.trajectory() for m in self.maps if m.traj_t]

@@ -1,0 +1,84 @@
+"""Local bundle adjustment of a map's recent keyframes and their points (gtsam, Huber reprojection factors, LM)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from evpose.slam.atlas import SlamMap
+
+
+@dataclass
+class BaReport:
+    keyframes: int = 0
+    """Keyframes optimised (not counting fixed ones)."""
+    points: int = 0
+    """Points optimised."""
+    initial_error: float = 0.0
+    """Total factor-graph error before optimisation."""
+    final_error: float = 0.0
+    """... and after."""
+
+
+def local_bundle_adjustment(m: SlamMap, K: np.ndarray, window: int, iterations: int, huber_px: float, n_fixed: int = 1) -> BaReport:
+    """Optimise the last ``window`` keyframes of ``m`` and the points they see, in place.
+
+    The ``n_fixed`` oldest keyframes of the window (two while the map has only
+    its two initial keyframes, fixing the monocular scale) are held by tight
+    priors; keyframes outside the window that see the same points contribute
+    their observations with fixed poses. Points with fewer than two
+    observations are left out.
+    """
+    import gtsam
+    from gtsam.symbol_shorthand import L, X
+
+    if iterations <= 0 or len(m.keyframes) < 2:
+        return BaReport()
+    kfs = m.keyframes[-window:]
+    free_ids = [kf.id for kf in kfs]
+    fixed_ids = set(free_ids[: max(n_fixed, 2 if len(m.keyframes) <= 2 else n_fixed)])
+    kf_by_id = {kf.id: kf for kf in m.keyframes}
+    in_window = set(free_ids)
+    pt_ids = sorted({pid for pid, p in m.points.items() if any(k in in_window for k in p.obs)})
+    cal = gtsam.Cal3_S2(K[0, 0], K[1, 1], 0.0, K[0, 2], K[1, 2])
+    noise = gtsam.noiseModel.Robust.Create(gtsam.noiseModel.mEstimator.Huber.Create(huber_px), gtsam.noiseModel.Isotropic.Sigma(2, 1.0))
+    tight = gtsam.noiseModel.Isotropic.Sigma(6, 1e-6)
+    graph = gtsam.NonlinearFactorGraph()
+    values = gtsam.Values()
+    used_kfs: set[int] = set()
+    used_pts = []
+    for pid in pt_ids:
+        p = m.points[pid]
+        obs = sorted(p.obs.items())
+        if len(obs) < 2:
+            continue
+        used_pts.append(pid)
+        values.insert(L(pid), gtsam.Point3(*p.xyz))
+        for kid, uv in obs:
+            graph.add(gtsam.GenericProjectionFactorCal3_S2(np.asarray(uv, np.float64), noise, X(kid), L(pid), cal))
+            used_kfs.add(kid)
+    if not used_pts:
+        return BaReport()
+    n_free = 0
+    for kid in sorted(used_kfs):
+        pose = gtsam.Pose3(kf_by_id[kid].T_wc)
+        values.insert(X(kid), pose)
+        if kid in fixed_ids or kid not in in_window:
+            graph.add(gtsam.PriorFactorPose3(X(kid), pose, tight))
+        else:
+            n_free += 1
+    params = gtsam.LevenbergMarquardtParams()
+    params.setMaxIterations(int(iterations))
+    e0 = graph.error(values)
+    try:
+        result = gtsam.LevenbergMarquardtOptimizer(graph, values, params).optimize()
+    except RuntimeError:
+        # An indeterminate system (e.g. a point seen along one ray) leaves the map as it was.
+        return BaReport(n_free, len(used_pts), e0, e0)
+    for kid in sorted(used_kfs):
+        if kid in in_window and kid not in fixed_ids:
+            kf_by_id[kid].T_wc = result.atPose3(X(kid)).matrix()
+    for pid in used_pts:
+        m.points[pid].xyz = np.asarray(result.atPoint3(L(pid)), np.float64)
+    return BaReport(n_free, len(used_pts), e0, graph.error(result))

@@ -1,0 +1,166 @@
+"""Configuration of the map-free event(-inertial) SLAM pipeline, one dataclass per component.
+
+Defaults follow the paper (second seed, section V): ``N_x = 3``, initial ``N_e``
+2000 events, Gaussian splat sigma 1, KLT with two pyramid levels, a 23x23
+block and a bidirectional error of at most one pixel.
+"""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass, field
+
+from evpose.slam.inertial import InertialConfig
+
+
+class SlamMode(str, enum.Enum):
+    """Which sensors the pipeline uses."""
+
+    EVENT = "event"
+    """Events only (monocular, the map has an arbitrary scale)."""
+    EVENT_INERTIAL = "event-inertial"
+    """Events plus IMU: gyroscope rotation priors for the MCI warps; IMU initialisation gives each map metric scale and gravity."""
+
+
+@dataclass
+class EventImageConfig:
+    """How events become images (tiny frames and MCIs)."""
+
+    sigma_px: float = field(default=1.0, metadata={"min": 0.5, "max": 3.0, "step": 0.1, "unit": "px"})
+    """Standard deviation of the Gaussian splat of one event, pixels."""
+    use_polarity: bool = False
+    """Sum signed polarities (True) or count events (False)."""
+
+
+@dataclass
+class EventWindowConfig:
+    """Event window selection (paper Algorithm 1)."""
+
+    initial_events: int = field(default=2000, metadata={"min": 200, "max": 50000, "step": 100, "unit": "events"})
+    """Initial size ``N_e`` of a tiny window, events."""
+    min_events: int = field(default=300, metadata={"min": 50, "max": 10000, "step": 50, "unit": "events"})
+    """Lower clamp of the adapted ``N_e``, events."""
+    max_events: int = field(default=40000, metadata={"min": 1000, "max": 500000, "step": 1000, "unit": "events"})
+    """Upper clamp of the adapted ``N_e``, events."""
+    expected_frames: int = field(default=3, metadata={"min": 1, "max": 20, "step": 1, "unit": "frames"})
+    """``N_x``: tiny frames expected per reconstruction window, frames."""
+    max_tiny_frames: int = field(default=12, metadata={"min": 2, "max": 100, "step": 1, "unit": "frames"})
+    """``th_Nf``: a slow window with at least this many tiny frames is still dispatched, frames."""
+    min_event_rate: float = field(default=1.0, metadata={"min": 0.0, "max": 50.0, "step": 0.1, "unit": "events/px/s"})
+    """``th_e``: tiny windows with a lower event generation rate (eq. 6) are rejected, events per pixel per second."""
+    feature_displacement_px: float = field(default=4.0, metadata={"min": 1.0, "max": 20.0, "step": 0.5, "unit": "px"})
+    """``th_fd``: median feature displacement that triggers an MCI, pixels."""
+    min_features: int = field(default=8, metadata={"min": 3, "max": 200, "step": 1, "unit": "features"})
+    """Fewest tracked features for a tiny frame to count, features."""
+    reference_features: int = field(default=80, metadata={"min": 8, "max": 500, "step": 4, "unit": "features"})
+    """FAST features detected in the reference tiny frame, features."""
+    overlap: float = field(default=0.5, metadata={"min": 0.0, "max": 0.9, "step": 0.05, "unit": "fraction"})
+    """Overlap of consecutive reconstruction windows, fraction of a window."""
+
+
+@dataclass
+class FeatureConfig:
+    """FAST detection with a bucketing grid and pyramidal KLT tracking (both OpenCV)."""
+
+    fast_threshold: int = field(default=8, metadata={"min": 1, "max": 80, "step": 1, "unit": "grey levels"})
+    """FAST intensity threshold on the 8-bit normalised image, grey levels."""
+    min_eigen_quality: float = field(default=0.001, metadata={"min": 0.0, "max": 0.5, "step": 0.005, "unit": "ratio"})
+    """FAST corners need a Shi-Tomasi score of at least this share of the image's best, ratio."""
+    grid_cols: int = field(default=8, metadata={"min": 1, "max": 32, "step": 1, "unit": "cells"})
+    """Bucketing grid columns, cells."""
+    grid_rows: int = field(default=6, metadata={"min": 1, "max": 32, "step": 1, "unit": "cells"})
+    """Bucketing grid rows, cells."""
+    per_cell: int = field(default=4, metadata={"min": 1, "max": 50, "step": 1, "unit": "features"})
+    """Strongest features kept per grid cell, features."""
+    min_distance_px: float = field(default=8.0, metadata={"min": 1.0, "max": 40.0, "step": 1.0, "unit": "px"})
+    """New features keep this far from existing tracks, pixels."""
+    border_px: int = field(default=8, metadata={"min": 0, "max": 40, "step": 1, "unit": "px"})
+    """Features closer than this to the image border are ignored, pixels."""
+    klt_window_px: int = field(default=23, metadata={"min": 5, "max": 51, "step": 2, "unit": "px"})
+    """KLT block size, pixels (odd)."""
+    klt_levels: int = field(default=2, metadata={"min": 0, "max": 5, "step": 1, "unit": "levels"})
+    """KLT pyramid levels above the base image, levels."""
+    klt_max_bidir_error_px: float = field(default=1.0, metadata={"min": 0.1, "max": 5.0, "step": 0.1, "unit": "px"})
+    """Tracks whose forward-backward KLT error exceeds this are dropped, pixels."""
+    target_tracks: int = field(default=150, metadata={"min": 20, "max": 1000, "step": 10, "unit": "tracks"})
+    """New features are detected on an MCI when fewer tracks survive, tracks."""
+
+
+@dataclass
+class MciConfig:
+    """Motion-compensated image generation (paper Algorithm 2)."""
+
+    patch_px: int = field(default=16, metadata={"min": 4, "max": 64, "step": 2, "unit": "px"})
+    """Side of the non-overlapping patches of the local-STD sharpness score, pixels."""
+    time_slices: int = field(default=24, metadata={"min": 1, "max": 256, "step": 1, "unit": "slices"})
+    """Events are warped with one transform per time slice of the window (Exp(psi dt) sampled), slices."""
+    use_map_depth: bool = True
+    """H1: SE(3) warp with the map's median depth when a map exists."""
+    use_feature_fit: bool = True
+    """H2: Sim(2) warp fitted to the feature tracks."""
+    use_pose_prior: bool = True
+    """H3: SE(3) warp from the IMU / last-pose prior with the average depth of eq. (5)."""
+
+
+@dataclass
+class InitializationConfig:
+    """Two-view map initialisation with essential/homography model selection."""
+
+    min_matches: int = field(default=20, metadata={"min": 8, "max": 500, "step": 1, "unit": "matches"})
+    """Fewest feature matches to attempt initialisation, matches."""
+    ransac_threshold_px: float = field(default=1.0, metadata={"min": 0.2, "max": 5.0, "step": 0.1, "unit": "px"})
+    """RANSAC inlier threshold for E and H, pixels."""
+    ambiguity_ratio: float = field(default=0.9, metadata={"min": 0.5, "max": 1.0, "step": 0.05, "unit": "ratio"})
+    """Reject a homography when its second-best decomposition triangulates this share of the best's points (ORB-SLAM uses 0.75; the paper relaxes it), ratio."""
+    homography_ratio: float = field(default=0.45, metadata={"min": 0.0, "max": 1.0, "step": 0.05, "unit": "ratio"})
+    """Pick the homography when ``S_H / (S_H + S_E)`` exceeds this (ORB-SLAM's heuristic), ratio."""
+    min_parallax_deg: float = field(default=1.0, metadata={"min": 0.1, "max": 10.0, "step": 0.1, "unit": "deg"})
+    """Median triangulation angle needed to accept the two views, degrees."""
+    min_triangulated: int = field(default=15, metadata={"min": 8, "max": 500, "step": 1, "unit": "points"})
+    """Fewest good triangulated points to accept the map, points."""
+    max_frames: int = field(default=8, metadata={"min": 1, "max": 100, "step": 1, "unit": "MCIs"})
+    """The reference view is replaced after this many MCIs without success, MCIs."""
+
+
+@dataclass
+class TrackingConfig:
+    """Local-map tracking, keyframe insertion and local mapping."""
+
+    reprojection_threshold_px: float = field(default=2.5, metadata={"min": 0.5, "max": 10.0, "step": 0.1, "unit": "px"})
+    """Inlier threshold of PnP RANSAC and of map-point checks, pixels."""
+    min_inliers: int = field(default=12, metadata={"min": 6, "max": 200, "step": 1, "unit": "points"})
+    """Tracking is lost below this many pose inliers, points."""
+    min_inlier_ratio: float = field(default=0.5, metadata={"min": 0.0, "max": 1.0, "step": 0.05, "unit": "ratio"})
+    """Tracking is lost when fewer than this share of the tracked map points are pose inliers (tracks jumped to other features), ratio."""
+    keyframe_tracked_ratio: float = field(default=0.7, metadata={"min": 0.1, "max": 1.0, "step": 0.05, "unit": "ratio"})
+    """New keyframe when tracked map points drop below this share of the last keyframe's, ratio."""
+    keyframe_displacement_px: float = field(default=20.0, metadata={"min": 2.0, "max": 100.0, "step": 1.0, "unit": "px"})
+    """New keyframe when the median key-point displacement from the last keyframe exceeds this, pixels."""
+    min_triangulation_deg: float = field(default=1.0, metadata={"min": 0.1, "max": 10.0, "step": 0.1, "unit": "deg"})
+    """New map points need this parallax between keyframes, degrees."""
+    min_observations: int = field(default=2, metadata={"min": 2, "max": 10, "step": 1, "unit": "keyframes"})
+    """Points seen by fewer keyframes after three newer keyframes are culled, keyframes."""
+    local_window: int = field(default=6, metadata={"min": 2, "max": 30, "step": 1, "unit": "keyframes"})
+    """Keyframes optimised by local bundle adjustment, keyframes."""
+    ba_iterations: int = field(default=10, metadata={"min": 0, "max": 100, "step": 1, "unit": "iterations"})
+    """Levenberg-Marquardt iterations of local BA (0 disables it), iterations."""
+    ba_huber_px: float = field(default=2.0, metadata={"min": 0.1, "max": 10.0, "step": 0.1, "unit": "px"})
+    """Huber threshold of the reprojection factors, pixels."""
+
+
+@dataclass
+class SlamConfig:
+    """Everything the SLAM pipeline needs; tyro builds the CLI and the viewer its GUI from it."""
+
+    mode: SlamMode = SlamMode.EVENT
+    """Sensors to use."""
+    inertial: InertialConfig = field(default_factory=InertialConfig)
+    """IMU initialisation (event-inertial mode only)."""
+    image: EventImageConfig = field(default_factory=EventImageConfig)
+    window: EventWindowConfig = field(default_factory=EventWindowConfig)
+    features: FeatureConfig = field(default_factory=FeatureConfig)
+    mci: MciConfig = field(default_factory=MciConfig)
+    initialization: InitializationConfig = field(default_factory=InitializationConfig)
+    tracking: TrackingConfig = field(default_factory=TrackingConfig)
+    seed: int = 0
+    """Seed of OpenCV's RANSAC generator, reset before every call so runs repeat bit for bit."""

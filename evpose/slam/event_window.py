@@ -1,0 +1,257 @@
+"""Event window selection (paper Algorithm 1): tiny windows, tiny frames, KLT tracks, MCI trigger and ``N_e`` adaptation.
+
+Events arrive already undistorted (float ideal-pinhole pixels). Tiny windows of
+``N_e`` events are tested against the event-generation rate ``th_e`` (eq. 6),
+splatted into tiny frames, and FAST features of the first frame are tracked by
+KLT through the following ones. When the median feature displacement (eq. 7)
+exceeds ``th_fd`` the collected events form a reconstruction window for an
+MCI, and ``N_e`` becomes ``floor(N_f N_e / N_x)`` (eq. 8).
+"""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+
+from evpose.slam.config import EventImageConfig, EventWindowConfig, FeatureConfig
+from evpose.slam.event_image import event_image, to_uint8
+from evpose.slam.features import detect_features, track_features
+
+
+class WindowEvent(str, enum.Enum):
+    """What the last tiny window did, for status reporting."""
+
+    WAITING = "waiting"
+    """Not enough events buffered for a tiny window yet."""
+    LOW_RATE = "low_rate"
+    """The tiny window's event rate was below ``th_e`` (camera still or too slow); state was reset."""
+    NO_TEXTURE = "no_texture"
+    """Too few FAST features in the tiny frame to start a reference."""
+    TRACKING = "tracking"
+    """Features tracked; displacement still below ``th_fd``."""
+    DISPATCHED = "dispatched"
+    """A reconstruction window was emitted."""
+
+
+@dataclass
+class ReconstructionWindow:
+    """Events and feature tracks for one MCI."""
+
+    t: np.ndarray
+    """Event times, int64 us (sorted)."""
+    x: np.ndarray
+    """Undistorted columns, float64 px."""
+    y: np.ndarray
+    """Undistorted rows, float64 px."""
+    p: np.ndarray
+    """Polarities, int8 +1/-1."""
+    ref_pts: np.ndarray
+    """Feature positions in the reference tiny frame, float32 (M, 2) px."""
+    cur_pts: np.ndarray
+    """Their positions in the last tiny frame, float32 (M, 2) px."""
+    t_ref_us: int
+    """Mean event time of the reference tiny frame, us."""
+    t_cur_us: int
+    """Mean event time of the last tiny frame, us."""
+    n_frames: int
+    """Tiny frames in this window (``N_f``)."""
+    median_displacement_px: float
+    """``M_fd`` at dispatch, px."""
+    forced: bool = False
+    """Dispatched by the ``th_Nf`` rule or a feature loss, not by the displacement test."""
+
+    @property
+    def t_end_us(self) -> int:
+        return int(self.t[-1]) if len(self.t) else 0
+
+
+@dataclass
+class _Chunk:
+    t: np.ndarray
+    x: np.ndarray
+    y: np.ndarray
+    p: np.ndarray
+
+
+@dataclass
+class WindowState:
+    """Mutable state of the selector (copyable by snapshot/restore)."""
+
+    n_events: int
+    buf: _Chunk
+    chunks: list = field(default_factory=list)
+    prev_window: _Chunk | None = None
+    ref_pts: np.ndarray | None = None
+    cur_pts: np.ndarray | None = None
+    alive: np.ndarray | None = None
+    prev8: np.ndarray | None = None
+    t_ref_us: int = 0
+    t_cur_us: int = 0
+    n_frames: int = 0
+    median_displacement_px: float = 0.0
+
+
+def _empty_chunk() -> _Chunk:
+    return _Chunk(np.zeros(0, np.int64), np.zeros(0), np.zeros(0), np.zeros(0, np.int8))
+
+
+def _cat(chunks: list[_Chunk]) -> _Chunk:
+    if not chunks:
+        return _empty_chunk()
+    return _Chunk(*(np.concatenate([getattr(c, k) for c in chunks]) for k in "txyp"))
+
+
+class EventWindowSelector:
+    """Algorithm 1 as an explicit state machine; ``push`` returns the reconstruction windows completed."""
+
+    def __init__(self, window: EventWindowConfig, features: FeatureConfig, image: EventImageConfig, width: int, height: int, seed: int = 0):
+        self.cfg = window
+        self.fcfg = features
+        self.icfg = image
+        self.width = int(width)
+        self.height = int(height)
+        self.seed = int(seed)
+        self.state = WindowState(n_events=int(window.initial_events), buf=_empty_chunk())
+        self.last_tiny_image: np.ndarray | None = None
+        """Last tiny frame (float32 splat), for the viewer."""
+        self.last_event = WindowEvent.WAITING
+        self.n_events_history: list[int] = [self.state.n_events]
+        """``N_e`` after every dispatch, events."""
+
+    @property
+    def n_events(self) -> int:
+        """Current tiny-window size ``N_e``, events."""
+        return self.state.n_events
+
+    def snapshot(self) -> WindowState:
+        import copy
+
+        return copy.deepcopy(self.state)
+
+    def restore(self, state: WindowState) -> None:
+        import copy
+
+        self.state = copy.deepcopy(state)
+
+    # ------------------------------------------------------------------ input
+    def push(self, t: np.ndarray, x: np.ndarray, y: np.ndarray, p: np.ndarray) -> list[ReconstructionWindow]:
+        s = self.state
+        if len(t):
+            s.buf = _cat([s.buf, _Chunk(np.asarray(t, np.int64), np.asarray(x, np.float64), np.asarray(y, np.float64), np.asarray(p, np.int8))])
+        out: list[ReconstructionWindow] = []
+        while len(s.buf.t) >= s.n_events:
+            n = s.n_events
+            tiny = _Chunk(s.buf.t[:n], s.buf.x[:n], s.buf.y[:n], s.buf.p[:n])
+            s.buf = _Chunk(s.buf.t[n:], s.buf.x[n:], s.buf.y[n:], s.buf.p[n:])
+            rw = self._process_tiny(tiny)
+            if rw is not None:
+                out.append(rw)
+        if not out and len(s.buf.t) < s.n_events and self.last_event is WindowEvent.DISPATCHED:
+            self.last_event = WindowEvent.WAITING
+        return out
+
+    # --------------------------------------------------------------- stages
+    def _reset(self, keep_overlap: bool) -> None:
+        s = self.state
+        s.prev_window = _cat(s.chunks) if keep_overlap and s.chunks else None
+        s.chunks = []
+        s.ref_pts = s.cur_pts = s.alive = s.prev8 = None
+        s.n_frames = 0
+        s.median_displacement_px = 0.0
+
+    def _process_tiny(self, tiny: _Chunk) -> ReconstructionWindow | None:
+        s, cfg = self.state, self.cfg
+        dt_s = max(int(tiny.t[-1] - tiny.t[0]), 1) / 1e6
+        rate = len(tiny.t) / (dt_s * self.width * self.height)  # eq. (6)
+        if rate < cfg.min_event_rate:
+            self.last_event = WindowEvent.LOW_RATE
+            if s.n_frames >= cfg.max_tiny_frames and s.ref_pts is not None:
+                return self._dispatch(forced=True)
+            # Restart from the initial state: slow, noisy data must not blur the next MCI.
+            self._reset(keep_overlap=False)
+            return None
+        img = event_image(tiny.x, tiny.y, tiny.p if self.icfg.use_polarity else None, self.width, self.height, self.icfg.sigma_px)
+        self.last_tiny_image = img
+        img8 = to_uint8(img)
+        t_mid = int(np.mean(tiny.t))
+        if s.ref_pts is None:
+            pts = detect_features(img8, self.fcfg, max_total=cfg.reference_features)
+            if len(pts) < cfg.min_features:
+                self.last_event = WindowEvent.NO_TEXTURE
+                self._reset(keep_overlap=False)
+                return None
+            s.ref_pts, s.cur_pts, s.alive = pts, pts.copy(), np.ones(len(pts), bool)
+            s.prev8, s.t_ref_us, s.t_cur_us = img8, t_mid, t_mid
+            s.chunks = [tiny]
+            s.n_frames = 1
+            self.last_event = WindowEvent.TRACKING
+            return None
+        s.chunks.append(tiny)
+        s.n_frames += 1
+        idx = np.flatnonzero(s.alive)
+        new, ok = track_features(s.prev8, img8, s.cur_pts[idx], self.fcfg)
+        s.cur_pts[idx[ok]] = new[ok]
+        s.alive[idx[~ok]] = False
+        s.prev8, s.t_cur_us = img8, t_mid
+        self._reject_outliers()
+        alive = np.flatnonzero(s.alive)
+        if len(alive) < cfg.min_features:
+            # Features vanished (large motion or texture change): dispatch what we have if it spans motion.
+            if s.n_frames >= 2:
+                return self._dispatch(forced=True)
+            self._reset(keep_overlap=False)
+            self.last_event = WindowEvent.NO_TEXTURE
+            return None
+        s.median_displacement_px = float(np.median(np.linalg.norm(s.cur_pts[alive] - s.ref_pts[alive], axis=1)))  # eq. (7)
+        if s.median_displacement_px > cfg.feature_displacement_px:
+            return self._dispatch(forced=False)
+        if s.n_frames >= cfg.max_tiny_frames * 4:
+            # Bounded memory for a camera that emits events without moving its features (flicker, noise).
+            return self._dispatch(forced=True)
+        self.last_event = WindowEvent.TRACKING
+        return None
+
+    def _reject_outliers(self) -> None:
+        """RANSAC on the fundamental matrix between reference and current features (the two-view test of Algorithm 1)."""
+        s = self.state
+        alive = np.flatnonzero(s.alive)
+        if len(alive) < 12:
+            return
+        a, b = s.ref_pts[alive], s.cur_pts[alive]
+        if np.median(np.linalg.norm(a - b, axis=1)) < 1.0:
+            return  # too little motion: F is degenerate, keep the KLT verdict
+        cv2.setRNGSeed(self.seed)
+        _, mask = cv2.findFundamentalMat(a, b, cv2.FM_RANSAC, 1.0, 0.999)
+        if mask is not None:
+            s.alive[alive[mask.ravel() == 0]] = False
+
+    def _dispatch(self, forced: bool) -> ReconstructionWindow:
+        s, cfg = self.state, self.cfg
+        cur = _cat(s.chunks)
+        parts = []
+        if s.prev_window is not None and cfg.overlap > 0 and len(s.prev_window.t):
+            k = int(round(len(s.prev_window.t) * min(cfg.overlap / (1.0 - cfg.overlap), 1.0)))
+            if k > 0:
+                pw = s.prev_window
+                parts.append(_Chunk(pw.t[-k:], pw.x[-k:], pw.y[-k:], pw.p[-k:]))
+        parts.append(cur)
+        ev = _cat(parts)
+        alive = s.alive if s.alive is not None else np.zeros(0, bool)
+        rw = ReconstructionWindow(
+            t=ev.t, x=ev.x, y=ev.y, p=ev.p,
+            ref_pts=s.ref_pts[alive].copy() if s.ref_pts is not None else np.zeros((0, 2), np.float32),
+            cur_pts=s.cur_pts[alive].copy() if s.cur_pts is not None else np.zeros((0, 2), np.float32),
+            t_ref_us=s.t_ref_us, t_cur_us=s.t_cur_us, n_frames=s.n_frames,
+            median_displacement_px=s.median_displacement_px, forced=forced,
+        )
+        if not forced:
+            # eq. (8): fewer frames than expected -> the camera is fast -> smaller tiny windows, and vice versa.
+            n_new = (s.n_frames * s.n_events) // cfg.expected_frames
+            s.n_events = int(np.clip(n_new, cfg.min_events, cfg.max_events))
+            self.n_events_history.append(s.n_events)
+        self._reset(keep_overlap=True)
+        self.last_event = WindowEvent.DISPATCHED
+        return rw

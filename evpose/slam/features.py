@@ -1,0 +1,86 @@
+"""Bucketed FAST detection and pyramidal KLT tracking with a forward-backward check (OpenCV)."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from evpose.slam.config import FeatureConfig
+
+
+def detect_features(img8: np.ndarray, cfg: FeatureConfig, existing: np.ndarray | None = None, max_total: int | None = None) -> np.ndarray:
+    """FAST corners spread by a bucketing grid: the ``per_cell`` strongest per cell, away from ``existing`` points.
+
+    Returns float32 (N, 2) pixel positions, ordered by cell then response so the
+    output is deterministic.
+    """
+    h, w = img8.shape
+    fast = cv2.FastFeatureDetector_create(threshold=int(cfg.fast_threshold), nonmaxSuppression=True)
+    kps = fast.detect(img8, None)
+    if not kps:
+        return np.zeros((0, 2), np.float32)
+    pts = np.array([k.pt for k in kps], np.float32)
+    # The paper runs FAST with a near-zero threshold and filters by response; on event images FAST
+    # also fires along straight edges, where KLT slides (aperture problem). Ranking by the
+    # Shi-Tomasi minimum eigenvalue keeps corners and drops edge points and faint noise.
+    eig = cv2.cornerMinEigenVal(img8, blockSize=5, ksize=3)
+    iu = np.clip(pts[:, 0].round().astype(int), 0, w - 1)
+    iv = np.clip(pts[:, 1].round().astype(int), 0, h - 1)
+    resp = eig[iv, iu].astype(np.float32)
+    b = cfg.border_px
+    keep = (pts[:, 0] >= b) & (pts[:, 0] < w - b) & (pts[:, 1] >= b) & (pts[:, 1] < h - b)
+    keep &= resp >= cfg.min_eigen_quality * float(eig.max())
+    if existing is not None and len(existing):
+        # Occupancy mask around existing tracks keeps new features from doubling old ones.
+        mask = np.zeros((h, w), np.uint8)
+        for u, v in np.round(existing).astype(int):
+            cv2.circle(mask, (int(u), int(v)), int(cfg.min_distance_px), 255, -1)
+        iu = np.clip(pts[:, 0].round().astype(int), 0, w - 1)
+        iv = np.clip(pts[:, 1].round().astype(int), 0, h - 1)
+        keep &= mask[iv, iu] == 0
+    pts, resp = pts[keep], resp[keep]
+    if not len(pts):
+        return np.zeros((0, 2), np.float32)
+    cell_x = np.minimum((pts[:, 0] * cfg.grid_cols / w).astype(int), cfg.grid_cols - 1)
+    cell_y = np.minimum((pts[:, 1] * cfg.grid_rows / h).astype(int), cfg.grid_rows - 1)
+    cell = cell_y * cfg.grid_cols + cell_x
+    # Sort by cell, then strongest first, ties broken by position: a total order.
+    order = np.lexsort((pts[:, 0], pts[:, 1], -resp, cell))
+    pts, cell, resp = pts[order], cell[order], resp[order]
+    rank = np.zeros(len(pts), int)
+    starts = np.flatnonzero(np.r_[True, cell[1:] != cell[:-1]])
+    for s, e in zip(starts, np.r_[starts[1:], len(pts)]):
+        rank[s:e] = np.arange(e - s)
+    sel = rank < cfg.per_cell
+    pts, resp = pts[sel], resp[sel]
+    if max_total is not None and len(pts) > max_total:
+        top = np.lexsort((pts[:, 0], pts[:, 1], -resp))[:max_total]
+        pts = pts[np.sort(top)]
+    return np.ascontiguousarray(pts, np.float32)
+
+
+def track_features(prev8: np.ndarray, cur8: np.ndarray, pts: np.ndarray, cfg: FeatureConfig, guess: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Track ``pts`` from ``prev8`` into ``cur8``; returns (new positions (N, 2) float32, ok mask (N,)).
+
+    A track survives when both directions converge, the forward-backward error is
+    at most ``klt_max_bidir_error_px`` and the point stays inside the image.
+    """
+    n = len(pts)
+    if n == 0:
+        return np.zeros((0, 2), np.float32), np.zeros(0, bool)
+    p0 = np.ascontiguousarray(pts, np.float32).reshape(-1, 1, 2)
+    win = (int(cfg.klt_window_px), int(cfg.klt_window_px))
+    crit = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 30, 0.01)
+    flags = 0
+    p1_init = None
+    if guess is not None:
+        p1_init = np.ascontiguousarray(guess, np.float32).reshape(-1, 1, 2).copy()
+        flags = cv2.OPTFLOW_USE_INITIAL_FLOW
+    p1, st1, _ = cv2.calcOpticalFlowPyrLK(prev8, cur8, p0, p1_init, winSize=win, maxLevel=int(cfg.klt_levels), criteria=crit, flags=flags)
+    p0b, st2, _ = cv2.calcOpticalFlowPyrLK(cur8, prev8, p1, None, winSize=win, maxLevel=int(cfg.klt_levels), criteria=crit)
+    p1 = p1.reshape(-1, 2)
+    fb = np.linalg.norm(p0b.reshape(-1, 2) - p0.reshape(-1, 2), axis=1)
+    h, w = cur8.shape
+    ok = (st1.ravel() == 1) & (st2.ravel() == 1) & (fb <= cfg.klt_max_bidir_error_px)
+    ok &= (p1[:, 0] >= 0) & (p1[:, 0] <= w - 1) & (p1[:, 1] >= 0) & (p1[:, 1] <= h - 1)
+    return p1.astype(np.float32), ok

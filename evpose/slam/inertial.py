@@ -1,0 +1,160 @@
+"""Event-inertial pieces: IMU preintegration between keyframes (gtsam) and IMU initialisation.
+
+The initialisation follows the visual-inertial alignment used by ORB-SLAM3 /
+VINS-Mono: with the keyframe poses of an up-to-scale visual map fixed, the
+preintegrated IMU deltas between consecutive keyframes are linear in the map
+scale ``s``, the gravity vector ``g`` (map frame) and the keyframe velocities;
+a gyroscope bias is estimated first from the rotation residuals. The map is then
+scaled to metres and rotated so gravity points along ``-z``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from evpose.core.imu import ImuSamples
+
+GRAVITY = 9.81
+
+
+@dataclass
+class InertialConfig:
+    """IMU initialisation settings (event-inertial mode)."""
+
+    init_keyframes: int = field(default=6, metadata={"min": 3, "max": 50, "step": 1, "unit": "keyframes"})
+    """Keyframes the map needs before the IMU is initialised, keyframes."""
+    init_min_span_s: float = field(default=0.8, metadata={"min": 0.1, "max": 10.0, "step": 0.1, "unit": "s"})
+    """Time the keyframes must span before initialising, seconds."""
+    max_gravity_error: float = field(default=0.25, metadata={"min": 0.01, "max": 1.0, "step": 0.01, "unit": "ratio"})
+    """The unconstrained gravity estimate must have a norm within this share of 9.81 m/s^2, ratio."""
+    max_residual_ratio: float = field(default=0.02, metadata={"min": 0.001, "max": 0.5, "step": 0.001, "unit": "ratio"})
+    """RMS residual of the alignment over the RMS of the IMU deltas above which initialisation is refused, ratio."""
+    inertial_ba: bool = True
+    """After IMU initialisation, local BA adds IMU preintegration factors between keyframes (gtsam ImuFactor)."""
+    acc_noise: float = field(default=0.05, metadata={"min": 1e-4, "max": 1.0, "step": 1e-3, "unit": "m/s^2"})
+    """Accelerometer white-noise sigma per sample used by the inertial BA, m/s^2."""
+    gyro_noise: float = field(default=0.005, metadata={"min": 1e-5, "max": 0.1, "step": 1e-4, "unit": "rad/s"})
+    """Gyroscope white-noise sigma per sample used by the inertial BA, rad/s."""
+
+
+@dataclass
+class Preintegrated:
+    """IMU deltas between two times, body frame of the first (gtsam's PreintegratedImuMeasurements)."""
+
+    dt: float
+    """Duration, s."""
+    dR: np.ndarray
+    """Rotation delta (3, 3)."""
+    dv: np.ndarray
+    """Velocity delta without gravity (3,), m/s."""
+    dp: np.ndarray
+    """Position delta without gravity (3,), m."""
+
+
+def preintegrate(imu: ImuSamples, t0_us: int, t1_us: int, gyro_bias: np.ndarray | None = None) -> Preintegrated:
+    """Integrate the samples covering ``[t0, t1)`` (sample-and-hold, clipped at both ends)."""
+    import gtsam
+
+    params = gtsam.PreintegrationParams.MakeSharedU(GRAVITY)
+    params.setAccelerometerCovariance(np.eye(3) * 1e-4)
+    params.setGyroscopeCovariance(np.eye(3) * 1e-6)
+    params.setIntegrationCovariance(np.eye(3) * 1e-8)
+    bias = gtsam.imuBias.ConstantBias(np.zeros(3), np.zeros(3) if gyro_bias is None else np.asarray(gyro_bias, np.float64))
+    pim = gtsam.PreintegratedImuMeasurements(params, bias)
+    i0 = max(int(np.searchsorted(imu.t, t0_us, side="right")) - 1, 0)
+    i1 = int(np.searchsorted(imu.t, t1_us, side="left"))
+    for k in range(i0, max(i1, i0 + 1)):
+        a = max(int(imu.t[k]), t0_us)
+        b = min(int(imu.t[k + 1]) if k + 1 < len(imu) else t1_us, t1_us)
+        if b > a:
+            pim.integrateMeasurement(imu.acc[k], imu.gyro[k], (b - a) / 1e6)
+    return Preintegrated(pim.deltaTij(), pim.deltaRij().matrix(), np.asarray(pim.deltaVij()), np.asarray(pim.deltaPij()))
+
+
+@dataclass
+class ImuInitResult:
+    ok: bool
+    reason: str = ""
+    scale: float = 1.0
+    """Metres per map unit."""
+    gravity: np.ndarray | None = None
+    """Gravity in the (unscaled) map frame, m/s^2 (3,)."""
+    gyro_bias: np.ndarray | None = None
+    """rad/s (3,)."""
+    R_align: np.ndarray | None = None
+    """Rotation taking map-frame vectors to the gravity-aligned frame (gravity -> (0, 0, -9.81))."""
+    velocities: np.ndarray | None = None
+    """IMU velocity at each keyframe in the gravity-aligned frame, m/s (N, 3)."""
+
+
+def initialize_imu(times_us: list[int], T_wc: list[np.ndarray], imu: ImuSamples, T_cam_imu: np.ndarray, time_offset_us: int, cfg: InertialConfig) -> ImuInitResult:
+    """Scale, gravity, gyro bias (and velocities) from keyframe poses and the IMU; see the module docstring."""
+    n = len(times_us)
+    if n < 3:
+        return ImuInitResult(False, f"{n} keyframes < 3")
+    T_cb = np.asarray(T_cam_imu, np.float64)
+    R_cb, t_cb = T_cb[:3, :3], T_cb[:3, 3]
+    R_wb = [T[:3, :3] @ R_cb for T in T_wc]
+    t_imu = [int(t) + int(time_offset_us) for t in times_us]
+    if t_imu[0] < imu.t[0] or t_imu[-1] > imu.t[-1]:
+        return ImuInitResult(False, "IMU samples do not cover the keyframes")
+    pre0 = [preintegrate(imu, a, b) for a, b in zip(t_imu[:-1], t_imu[1:])]
+    # Gyro bias: the IMU rotation drifts from the visual one by about Exp(b dt).
+    num = np.zeros(3)
+    den = 0.0
+    for k, p in enumerate(pre0):
+        dR_vis = R_wb[k].T @ R_wb[k + 1]
+        num += Rotation.from_matrix(dR_vis.T @ p.dR).as_rotvec()
+        den += p.dt
+    bg = num / max(den, 1e-9)
+    pre = [preintegrate(imu, a, b, bg) for a, b in zip(t_imu[:-1], t_imu[1:])]
+    # Unknowns x = [s, g (3), v_0 .. v_{n-1} (3n)] in the map frame.
+    m = len(pre)
+    A = np.zeros((6 * m, 4 + 3 * n))
+    y = np.zeros(6 * m)
+    for k, p in enumerate(pre):
+        Ri, dt = R_wb[k], p.dt
+        pi, pj = T_wc[k][:3, 3], T_wc[k + 1][:3, 3]
+        # The IMU origin sits at t_cb in the camera frame: p_wb = s p_wc + R_wc t_cb (metric lever arm).
+        lever = T_wc[k + 1][:3, :3] @ t_cb - T_wc[k][:3, :3] @ t_cb
+        r = slice(6 * k, 6 * k + 3)
+        # s (pj - pi) + lever = v_i dt + g dt^2 / 2 + R_i dp
+        A[r, 0] = pj - pi
+        A[r, 1:4] = -0.5 * dt * dt * np.eye(3)
+        A[r, 4 + 3 * k : 7 + 3 * k] = -dt * np.eye(3)
+        y[r] = Ri @ p.dp - lever
+        r = slice(6 * k + 3, 6 * k + 6)
+        # v_j - v_i - g dt = R_i dv
+        A[r, 4 + 3 * (k + 1) : 7 + 3 * (k + 1)] = np.eye(3)
+        A[r, 4 + 3 * k : 7 + 3 * k] = -np.eye(3)
+        A[r, 1:4] = -dt * np.eye(3)
+        y[r] = Ri @ p.dv
+    x, *_ = np.linalg.lstsq(A, y, rcond=None)
+    s, g = float(x[0]), x[1:4]
+    if not np.isfinite(x).all() or s <= 0:
+        return ImuInitResult(False, f"scale estimate {s:.3g} is not positive")
+    if abs(np.linalg.norm(g) - GRAVITY) > cfg.max_gravity_error * GRAVITY:
+        return ImuInitResult(False, f"gravity estimate {np.linalg.norm(g):.2f} m/s^2 is implausible")
+    # Refine with |g| = 9.81: fix the gravity direction, re-solve scale and velocities.
+    g = g / np.linalg.norm(g) * GRAVITY
+    keep = [0] + list(range(4, 4 + 3 * n))
+    x2, *_ = np.linalg.lstsq(A[:, keep], y - A[:, 1:4] @ g, rcond=None)
+    s = float(x2[0])
+    resid = A[:, keep] @ x2 - (y - A[:, 1:4] @ g)
+    ratio = float(np.sqrt(np.mean(resid**2)) / max(np.sqrt(np.mean(y**2)), 1e-12))
+    if not np.isfinite(s) or s <= 0:
+        return ImuInitResult(False, f"scale estimate {s:.3g} is not positive after the gravity refinement")
+    if ratio > cfg.max_residual_ratio:
+        # Visual keyframes that drift disagree with the IMU; a scale fitted to them would be wrong.
+        return ImuInitResult(False, f"visual and inertial motion disagree (residual {100 * ratio:.1f} % of the IMU deltas)")
+    # Rotation taking g/|g| to -z.
+    down = g / GRAVITY
+    target = np.array([0.0, 0.0, -1.0])
+    axis = np.cross(down, target)
+    ang = np.arctan2(np.linalg.norm(axis), down @ target)
+    R_align = Rotation.from_rotvec(axis / np.linalg.norm(axis) * ang).as_matrix() if np.linalg.norm(axis) > 1e-12 else np.eye(3)
+    vel = x2[1:].reshape(n, 3) @ R_align.T
+    return ImuInitResult(True, "", s, g, bg, R_align, vel)

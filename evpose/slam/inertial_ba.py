@@ -1,0 +1,112 @@
+"""Inertial local bundle adjustment (gtsam): reprojection factors plus IMU preintegration factors between keyframes.
+
+Runs on maps the IMU initialisation made metric and gravity-aligned (gravity
+along -z, gtsam's ``MakeSharedU`` convention). Variables per keyframe of the
+window: body pose ``T_world_imu`` and velocity; one gyro/accelerometer bias for
+the window. Camera poses are recovered through ``T_cam_imu``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from evpose.core.imu import ImuSamples
+from evpose.core.trajectory import invert_pose
+from evpose.slam.atlas import SlamMap
+from evpose.slam.inertial import GRAVITY
+
+
+@dataclass
+class InertialState:
+    """Per-map inertial state kept between optimisations."""
+
+    velocities: dict
+    """Keyframe id -> world velocity of the IMU (3,), m/s."""
+    bias_acc: np.ndarray
+    """Accelerometer bias (3,), m/s^2."""
+    bias_gyro: np.ndarray
+    """Gyroscope bias (3,), rad/s."""
+
+
+def _pim(imu: ImuSamples, t0_us: int, t1_us: int, bias, acc_sigma: float, gyro_sigma: float):
+    import gtsam
+
+    params = gtsam.PreintegrationParams.MakeSharedU(GRAVITY)
+    params.setAccelerometerCovariance(np.eye(3) * acc_sigma**2)
+    params.setGyroscopeCovariance(np.eye(3) * gyro_sigma**2)
+    params.setIntegrationCovariance(np.eye(3) * 1e-8)
+    pim = gtsam.PreintegratedImuMeasurements(params, bias)
+    i0 = max(int(np.searchsorted(imu.t, t0_us, side="right")) - 1, 0)
+    i1 = int(np.searchsorted(imu.t, t1_us, side="left"))
+    for k in range(i0, max(i1, i0 + 1)):
+        a = max(int(imu.t[k]), t0_us)
+        b = min(int(imu.t[k + 1]) if k + 1 < len(imu) else t1_us, t1_us)
+        if b > a:
+            pim.integrateMeasurement(imu.acc[k], imu.gyro[k], (b - a) / 1e6)
+    return pim
+
+
+def inertial_local_bundle_adjustment(m: SlamMap, state: InertialState, K: np.ndarray, imu: ImuSamples, T_cam_imu: np.ndarray, time_offset_us: int,
+                                     window: int, iterations: int, huber_px: float, acc_sigma: float = 0.05, gyro_sigma: float = 0.005) -> float:
+    """Optimise the last ``window`` keyframes (poses, velocities), the window's bias and the points they see, in place.
+
+    The oldest keyframe of the window is held by a tight prior (the IMU fixes scale and
+    gravity direction, so one pose suffices). Returns the final graph error (nan if skipped).
+    """
+    import gtsam
+    from gtsam.symbol_shorthand import B, L, V, X
+
+    kfs = m.keyframes[-window:]
+    if iterations <= 0 or len(kfs) < 2:
+        return float("nan")
+    T_cb = np.asarray(T_cam_imu, np.float64)
+    T_bc = invert_pose(T_cb)
+    body_P_cam = gtsam.Pose3(T_bc)
+    ids = [kf.id for kf in kfs]
+    in_window = set(ids)
+    cal = gtsam.Cal3_S2(K[0, 0], K[1, 1], 0.0, K[0, 2], K[1, 2])
+    noise = gtsam.noiseModel.Robust.Create(gtsam.noiseModel.mEstimator.Huber.Create(huber_px), gtsam.noiseModel.Isotropic.Sigma(2, 1.0))
+    graph = gtsam.NonlinearFactorGraph()
+    values = gtsam.Values()
+    bias = gtsam.imuBias.ConstantBias(state.bias_acc, state.bias_gyro)
+    values.insert(B(0), bias)
+    graph.add(gtsam.PriorFactorConstantBias(B(0), bias, gtsam.noiseModel.Diagonal.Sigmas(np.r_[np.full(3, 0.1), np.full(3, 0.01)])))
+    for i, kf in enumerate(kfs):
+        T_wb = kf.T_wc @ T_cb
+        values.insert(X(kf.id), gtsam.Pose3(T_wb))
+        v = state.velocities.get(kf.id)
+        if v is None:
+            prev = kfs[i - 1] if i > 0 else None
+            v = ((kf.T_wc[:3, 3] - prev.T_wc[:3, 3]) / max((kf.t_us - prev.t_us) / 1e6, 1e-6)) if prev is not None else np.zeros(3)
+        values.insert(V(kf.id), np.asarray(v, np.float64))
+    graph.add(gtsam.PriorFactorPose3(X(ids[0]), gtsam.Pose3(kfs[0].T_wc @ T_cb), gtsam.noiseModel.Isotropic.Sigma(6, 1e-6)))
+    graph.add(gtsam.PriorFactorVector(V(ids[0]), values.atVector(V(ids[0])), gtsam.noiseModel.Isotropic.Sigma(3, 0.5)))
+    for a, b in zip(kfs[:-1], kfs[1:]):
+        pim = _pim(imu, a.t_us + time_offset_us, b.t_us + time_offset_us, bias, acc_sigma, gyro_sigma)
+        graph.add(gtsam.ImuFactor(X(a.id), V(a.id), X(b.id), V(b.id), B(0), pim))
+    pts = []
+    for pid in sorted(m.points):
+        p = m.points[pid]
+        obs = [(kid, uv) for kid, uv in sorted(p.obs.items()) if kid in in_window]
+        if len(obs) < 2:
+            continue
+        pts.append(pid)
+        values.insert(L(pid), gtsam.Point3(*p.xyz))
+        for kid, uv in obs:
+            graph.add(gtsam.GenericProjectionFactorCal3_S2(np.asarray(uv, np.float64), noise, X(kid), L(pid), cal, body_P_cam))
+    params = gtsam.LevenbergMarquardtParams()
+    params.setMaxIterations(int(iterations))
+    try:
+        result = gtsam.LevenbergMarquardtOptimizer(graph, values, params).optimize()
+    except RuntimeError:
+        return float("nan")
+    for kf in kfs:
+        kf.T_wc = result.atPose3(X(kf.id)).matrix() @ T_bc
+        state.velocities[kf.id] = np.asarray(result.atVector(V(kf.id)))
+    for pid in pts:
+        m.points[pid].xyz = np.asarray(result.atPoint3(L(pid)), np.float64)
+    b = result.atConstantBias(B(0))
+    state.bias_acc, state.bias_gyro = np.asarray(b.accelerometer()), np.asarray(b.gyroscope())
+    return float(graph.error(result))

@@ -1,0 +1,132 @@
+"""Two-view map initialisation: essential vs homography model selection with RANSAC (ORB-SLAM's heuristic, OpenCV solvers)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from evpose.core.trajectory import invert_pose
+from evpose.slam.config import InitializationConfig
+from evpose.slam.geometry import good_triangulation, parallax_deg, pose_from_rt, triangulate
+
+# chi-square 95 % bounds for 1 and 2 degrees of freedom (ORB-SLAM's model scores, sigma = 1 px).
+_CHI2_1 = 3.841
+_CHI2_2 = 5.991
+
+
+@dataclass
+class TwoViewResult:
+    """Outcome of a two-view initialisation attempt."""
+
+    ok: bool
+    reason: str = ""
+    """Why it failed, in plain words."""
+    T_wc2: np.ndarray | None = None
+    """Pose of the second view with the first at the origin, ``T_world_cam``; baseline scaled so the median depth is 1."""
+    points: np.ndarray | None = None
+    """Triangulated world points (N, 3) (NaN where ``good`` is False)."""
+    good: np.ndarray | None = None
+    """Mask of the matches that became map points (N,)."""
+    model: str = ""
+    """"essential" or "homography"."""
+    homography_ratio: float = 0.0
+    """``S_H / (S_H + S_E)``."""
+    median_parallax_deg: float = 0.0
+
+
+def _score_h(H: np.ndarray, p1: np.ndarray, p2: np.ndarray) -> float:
+    def transfer(M, a, b):
+        q = np.c_[a, np.ones(len(a))] @ M.T
+        with np.errstate(divide="ignore", invalid="ignore"):
+            d2 = np.sum((q[:, :2] / q[:, 2:3] - b) ** 2, axis=1)
+        return np.nan_to_num(d2, nan=1e9, posinf=1e9)
+
+    try:
+        Hi = np.linalg.inv(H)
+    except np.linalg.LinAlgError:
+        return 0.0
+    d21 = transfer(H, p1, p2)
+    d12 = transfer(Hi, p2, p1)
+    return float(np.sum(np.where(d21 < _CHI2_2, _CHI2_2 - d21, 0.0)) + np.sum(np.where(d12 < _CHI2_2, _CHI2_2 - d12, 0.0)))
+
+
+def _score_f(F: np.ndarray, p1: np.ndarray, p2: np.ndarray) -> float:
+    x1 = np.c_[p1, np.ones(len(p1))]
+    x2 = np.c_[p2, np.ones(len(p2))]
+    l2 = x1 @ F.T
+    l1 = x2 @ F
+    num = np.sum(x2 * l2, axis=1) ** 2
+    d2 = num / np.maximum(l2[:, 0] ** 2 + l2[:, 1] ** 2, 1e-12)
+    d1 = num / np.maximum(l1[:, 0] ** 2 + l1[:, 1] ** 2, 1e-12)
+    # ORB-SLAM scores F inliers with the 2-dof constant so H and F scores are comparable.
+    return float(np.sum(np.where(d2 < _CHI2_1, _CHI2_2 - d2, 0.0)) + np.sum(np.where(d1 < _CHI2_1, _CHI2_2 - d1, 0.0)))
+
+
+def _evaluate(K, R, t, p1, p2, cfg) -> tuple[int, np.ndarray, np.ndarray, np.ndarray]:
+    T_cw2 = pose_from_rt(R, t)
+    T_wc2 = invert_pose(T_cw2)
+    X = triangulate(K, np.eye(4), T_cw2, p1, p2)
+    good = good_triangulation(K, np.eye(4), T_wc2, p1, p2, X, 2.0 * max(cfg.ransac_threshold_px, 1.0), 0.0)
+    return int(good.sum()), good, X, T_wc2
+
+
+def initialize_two_view(K: np.ndarray, p1: np.ndarray, p2: np.ndarray, cfg: InitializationConfig, seed: int = 0) -> TwoViewResult:
+    """Relative pose and structure from matched ideal-pinhole pixels ``p1`` (first view) and ``p2`` (second)."""
+    p1 = np.asarray(p1, np.float64).reshape(-1, 2)
+    p2 = np.asarray(p2, np.float64).reshape(-1, 2)
+    n = len(p1)
+    if n < cfg.min_matches:
+        return TwoViewResult(False, f"{n} matches < {cfg.min_matches}")
+    if np.median(np.linalg.norm(p1 - p2, axis=1)) < 1.0:
+        return TwoViewResult(False, "features barely moved (no baseline)")
+    cv2.setRNGSeed(seed)
+    E, mask_e = cv2.findEssentialMat(p1, p2, K, cv2.RANSAC, 0.999, cfg.ransac_threshold_px)
+    cv2.setRNGSeed(seed)
+    H, mask_h = cv2.findHomography(p1, p2, cv2.RANSAC, cfg.ransac_threshold_px)
+    if E is None or E.shape != (3, 3):
+        E = None
+    s_h = _score_h(H, p1, p2) if H is not None else 0.0
+    s_f = 0.0
+    if E is not None:
+        Ki = np.linalg.inv(K)
+        s_f = _score_f(Ki.T @ E @ Ki, p1, p2)
+    if s_h + s_f <= 0:
+        return TwoViewResult(False, "neither an essential matrix nor a homography fits the matches")
+    ratio = s_h / (s_h + s_f)
+    candidates = []
+    if ratio > cfg.homography_ratio and H is not None:
+        model = "homography"
+        _, Rs, ts, _ = cv2.decomposeHomographyMat(H, K)
+        for R, t in zip(Rs, ts):
+            if np.linalg.norm(t) < 1e-9:
+                continue
+            candidates.append(_evaluate(K, R, t.ravel() / np.linalg.norm(t), p1, p2, cfg))
+    elif E is not None:
+        model = "essential"
+        inl = mask_e.ravel().astype(bool)
+        _, R, t, _ = cv2.recoverPose(E, p1[inl], p2[inl], K)
+        candidates.append(_evaluate(K, R, t.ravel(), p1, p2, cfg))
+    else:
+        return TwoViewResult(False, "essential matrix estimation failed", homography_ratio=ratio)
+    if not candidates:
+        return TwoViewResult(False, f"no valid {model} decomposition", homography_ratio=ratio)
+    counts = sorted((c[0] for c in candidates), reverse=True)
+    best = max(candidates, key=lambda c: c[0])
+    # Like ORB-SLAM, an ambiguous homography decomposition (two similar winners) is rejected.
+    if model == "homography" and len(counts) > 1 and counts[1] > cfg.ambiguity_ratio * counts[0]:
+        return TwoViewResult(False, "ambiguous homography decomposition", model=model, homography_ratio=ratio)
+    n_good, good, X, T_wc2 = best
+    if n_good < cfg.min_triangulated:
+        return TwoViewResult(False, f"{n_good} triangulated points < {cfg.min_triangulated}", model=model, homography_ratio=ratio)
+    par = float(np.median(parallax_deg(np.eye(4), T_wc2, X[good])))
+    if par < cfg.min_parallax_deg:
+        return TwoViewResult(False, f"median parallax {par:.2f} deg < {cfg.min_parallax_deg}", model=model, homography_ratio=ratio, median_parallax_deg=par)
+    # Monocular scale is arbitrary: fix it so the median scene depth in the first view is 1.
+    scale = float(np.median(X[good, 2]))
+    X = X / scale
+    T_wc2 = T_wc2.copy()
+    T_wc2[:3, 3] /= scale
+    X[~good] = np.nan
+    return TwoViewResult(True, "", T_wc2, X, good, model, ratio, par)

@@ -1,0 +1,102 @@
+"""Local mapping: keyframe decision and insertion, triangulation of new points, point culling.
+
+Feature associations come from KLT tracks (one track id per key point), not
+descriptors, so a map point is tied to the track that created it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from evpose.core.trajectory import invert_pose
+from evpose.slam.atlas import Keyframe, MapPoint, SlamMap
+from evpose.slam.config import TrackingConfig
+from evpose.slam.geometry import good_triangulation, triangulate
+
+
+def need_keyframe(m: SlamMap, tr_ids: np.ndarray, tr_uv: np.ndarray, n_tracked_points: int, cfg: TrackingConfig) -> bool:
+    """The paper's heuristics: tracked map points fell below a share of the last keyframe's, or key points moved far."""
+    last = m.keyframes[-1]
+    n_last = sum(1 for tid in last.obs if tid in _point_tracks(m))
+    if n_last and n_tracked_points < cfg.keyframe_tracked_ratio * n_last:
+        return True
+    common = [(last.obs[t], uv) for t, uv in zip(tr_ids.tolist(), tr_uv) if t in last.obs]
+    if not common:
+        return True
+    disp = np.median([np.linalg.norm(a - b) for a, b in common])
+    return bool(disp > cfg.keyframe_displacement_px)
+
+
+def _point_tracks(m: SlamMap) -> set[int]:
+    return {p.track_id for p in m.points.values()}
+
+
+def insert_keyframe(m: SlamMap, t_us: int, T_wc: np.ndarray, tr_ids: np.ndarray, tr_uv: np.ndarray, track_to_point: dict[int, int]) -> Keyframe:
+    """Add a keyframe observing every current track; tracks with map points add an observation to their point."""
+    kf_id = m.keyframes[-1].id + 1 if m.keyframes else 0
+    kf = Keyframe(kf_id, int(t_us), T_wc.copy(), {int(t): np.asarray(uv, np.float64).copy() for t, uv in zip(tr_ids.tolist(), tr_uv)})
+    m.keyframes.append(kf)
+    for tid, uv in kf.obs.items():
+        pid = track_to_point.get(tid)
+        if pid is not None and pid in m.points:
+            m.points[pid].obs[kf_id] = uv
+    return kf
+
+
+def triangulate_new_points(m: SlamMap, K: np.ndarray, kf: Keyframe, track_to_point: dict[int, int], cfg: TrackingConfig, next_point_id: int) -> int:
+    """Triangulate tracks of ``kf`` without a point against the oldest keyframe that saw them; returns the next free point id."""
+    by_kf: dict[int, list[int]] = {}
+    for tid in sorted(kf.obs):
+        if tid in track_to_point:
+            continue
+        for old in m.keyframes[:-1]:
+            if tid in old.obs:
+                by_kf.setdefault(old.id, []).append(tid)
+                break
+    for old_id, tids in sorted(by_kf.items()):
+        old = m.keyframe(old_id)
+        uv1 = np.array([old.obs[t] for t in tids])
+        uv2 = np.array([kf.obs[t] for t in tids])
+        X = triangulate(K, invert_pose(old.T_wc), invert_pose(kf.T_wc), uv1, uv2)
+        good = good_triangulation(K, old.T_wc, kf.T_wc, uv1, uv2, X, 2.0 * cfg.reprojection_threshold_px, cfg.min_triangulation_deg)
+        for k in np.flatnonzero(good):
+            tid = tids[k]
+            m.points[next_point_id] = MapPoint(next_point_id, X[k].copy(), {old.id: uv1[k], kf.id: uv2[k]}, tid, kf.id)
+            track_to_point[tid] = next_point_id
+            next_point_id += 1
+    return next_point_id
+
+
+def cull_points(m: SlamMap, K: np.ndarray, track_to_point: dict[int, int], cfg: TrackingConfig) -> int:
+    """Remove points behind a keyframe or reprojecting badly, and young points few keyframes confirmed; returns how many."""
+    if not m.points:
+        return 0
+    kf_index = {kf.id: i for i, kf in enumerate(m.keyframes)}
+    T_cw = np.stack([invert_pose(kf.T_wc) for kf in m.keyframes])
+    newest = m.keyframes[-1].id if m.keyframes else 0
+    pids = sorted(m.points)
+    # One row per observation, vectorised: point index, keyframe index, observed pixel.
+    rows = [(j, kf_index[kid], uv) for j, pid in enumerate(pids) for kid, uv in m.points[pid].obs.items() if kid in kf_index]
+    bad = np.zeros(len(pids), bool)
+    if rows:
+        pj = np.array([r[0] for r in rows])
+        kk = np.array([r[1] for r in rows])
+        uv = np.array([r[2] for r in rows], np.float64)
+        X = np.stack([m.points[pid].xyz for pid in pids])[pj]
+        Xc = np.einsum("nij,nj->ni", T_cw[kk, :3, :3], X) + T_cw[kk, :3, 3]
+        z = Xc[:, 2]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            proj = Xc[:, :2] / z[:, None] * np.array([K[0, 0], K[1, 1]]) + np.array([K[0, 2], K[1, 2]])
+            err = np.linalg.norm(proj - uv, axis=1)
+        obs_bad = ~(z > 0) | ~np.isfinite(err) | (err > 2.0 * cfg.reprojection_threshold_px)
+        np.logical_or.at(bad, pj, obs_bad)
+    removed = []
+    for j, pid in enumerate(pids):
+        p = m.points[pid]
+        if bad[j] or (newest - p.created_kf >= 3 and len(p.obs) < cfg.min_observations):
+            removed.append(pid)
+    for pid in removed:
+        tid = m.points.pop(pid).track_id
+        if track_to_point.get(tid) == pid:
+            del track_to_point[tid]
+    return len(removed)

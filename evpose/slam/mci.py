@@ -1,0 +1,211 @@
+"""Motion-compensated images (paper Algorithm 2): warp hypotheses H1-H4, local-STD scoring, selection.
+
+Every hypothesis is a constant velocity over the window (``psi = Log(theta)/dT``);
+events are moved forward to the window's last timestamp with ``Exp(psi dt)``,
+sampled once per time slice. A Sim(2) motion and an SE(3) motion seen through a
+fronto-parallel plane at one depth are both pixel homographies, so one splat
+kernel renders them all.
+"""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from evpose.slam.config import EventImageConfig, MciConfig
+from evpose.slam.event_image import event_image, local_std_score, to_uint8
+from evpose.slam.event_window import ReconstructionWindow
+
+
+class Hypothesis(str, enum.Enum):
+    """The warps of Algorithm 2."""
+
+    H1_MAP_DEPTH = "H1"
+    """SE(3) constant velocity from the tracked poses, median depth of the map."""
+    H2_SIM2 = "H2"
+    """Sim(2) fitted to the window's feature tracks."""
+    H3_POSE_PRIOR = "H3"
+    """SE(3) from the IMU / last-pose prior, average depth fitted to the feature tracks (eq. 5)."""
+    H4_NONE = "H4"
+    """No compensation: the plain event histogram."""
+
+
+@dataclass
+class MotionPrior:
+    """What the rest of the system knows about the camera motion when a window is reconstructed."""
+
+    omega: np.ndarray | None = None
+    """Angular velocity of the camera in its own frame, rad/s (3,): IMU gyro or last poses."""
+    velocity: np.ndarray | None = None
+    """Linear velocity of the camera in its own frame, map units/s (3,), from the last poses."""
+    map_depth: float | None = None
+    """Median depth of the map points in the current view, map units."""
+
+
+@dataclass
+class MciResult:
+    """The dispatched image and what was tried."""
+
+    t_us: int
+    """Reference time of the MCI (the window's last event), us."""
+    image: np.ndarray
+    """Selected MCI, float32 (H, W)."""
+    image8: np.ndarray
+    """Its 8-bit form, uint8 (H, W)."""
+    hypothesis: Hypothesis
+    scores: dict[str, float] = field(default_factory=dict)
+    """Mean local STD per tried hypothesis ("H1".."H4")."""
+    n_events: int = 0
+    sim2: np.ndarray | None = None
+    """Fitted Sim(2) motion over the track interval (3x3 px), kept as the next prior."""
+    depth: float | None = None
+    """Scene depth of the H3 fit, map units."""
+
+
+def _slices(t: np.ndarray, n_slices: int) -> tuple[np.ndarray, np.ndarray]:
+    """Slice index per event and each slice's time before the window end, seconds."""
+    t0, t1 = int(t[0]), int(t[-1])
+    span = max(t1 - t0, 1)
+    idx = np.minimum(((t - t0) * n_slices) // span, n_slices - 1).astype(np.int64)
+    centres = t0 + (np.arange(n_slices) + 0.5) * span / n_slices
+    return idx, (t1 - centres) / 1e6
+
+
+def fit_sim2(ref: np.ndarray, cur: np.ndarray, seed: int = 0) -> np.ndarray | None:
+    """Similarity (3x3) mapping ``ref`` onto ``cur`` by RANSAC (OpenCV ``estimateAffinePartial2D``); None if it fails."""
+    if len(ref) < 3:
+        return None
+    cv2.setRNGSeed(seed)
+    A, inl = cv2.estimateAffinePartial2D(np.asarray(ref, np.float32), np.asarray(cur, np.float32), method=cv2.RANSAC, ransacReprojThreshold=1.5)
+    if A is None:
+        return None
+    return np.vstack([A, [0.0, 0.0, 1.0]])
+
+
+def sim2_homographies(M: np.ndarray, seconds: float, dts: np.ndarray) -> np.ndarray:
+    """Per-slice warps ``Exp(Log(M) dt / seconds)`` of a similarity ``M`` (3x3), in closed form.
+
+    Writing the similarity as ``x -> e^z x + t`` in complex numbers (``e^z = s e^{i theta}``),
+    its fractional power ``alpha`` is ``x -> e^{alpha z} x + t (e^{alpha z} - 1) / (e^z - 1)``.
+    """
+    ez = complex(M[0, 0], M[1, 0])
+    if abs(ez) < 1e-9:
+        return np.repeat(np.eye(3)[None], len(dts), axis=0)
+    z = np.log(ez)
+    t = complex(M[0, 2], M[1, 2])
+    alpha = np.asarray(dts, np.float64) / max(seconds, 1e-9)
+    eaz = np.exp(alpha * z)
+    denom = ez - 1.0
+    # (e^{az} - 1) / (e^z - 1) -> alpha as the motion vanishes.
+    ratio = np.where(abs(denom) > 1e-12, (eaz - 1.0) / (denom if abs(denom) > 1e-12 else 1.0), alpha)
+    ta = t * ratio
+    out = np.zeros((len(alpha), 3, 3))
+    out[:, 0, 0] = eaz.real
+    out[:, 0, 1] = -eaz.imag
+    out[:, 1, 0] = eaz.imag
+    out[:, 1, 1] = eaz.real
+    out[:, 0, 2] = ta.real
+    out[:, 1, 2] = ta.imag
+    out[:, 2, 2] = 1.0
+    return out
+
+
+def se3_homographies(K: np.ndarray, omega: np.ndarray, velocity: np.ndarray, depth: float, dts: np.ndarray) -> np.ndarray:
+    """Per-slice ``K (R + t e3^T / Z) K^-1`` moving a point seen ``dt`` before the end to the end frame.
+
+    ``omega``/``velocity`` are the camera's own-frame rates; a camera rotating by
+    ``R_wc(dt) = Exp(omega dt)`` sees static points rotate by its inverse.
+    """
+    Ki = np.linalg.inv(K)
+    out = np.empty((len(dts), 3, 3))
+    e3 = np.array([0.0, 0.0, 1.0])
+    inv_depth = 1.0 / max(depth, 1e-6)
+    for k, dt in enumerate(dts):
+        R = Rotation.from_rotvec(np.asarray(omega) * dt).as_matrix().T
+        t = -R @ (np.asarray(velocity) * dt)
+        out[k] = K @ (R + np.outer(t, e3) * inv_depth) @ Ki
+    return out
+
+
+def fit_average_depth(K: np.ndarray, omega: np.ndarray, velocity: np.ndarray, ref: np.ndarray, cur: np.ndarray, seconds: float) -> float | None:
+    """Eq. (5) for one unknown: the depth whose SE(3) warp best maps ``ref`` tracks onto ``cur``.
+
+    With a fronto-parallel plane the warped point is ``(a + w b) / (a_z + w b_z)``
+    with ``a = K R K^-1 x``, ``b = K t`` and ``w`` the inverse depth, so the robust
+    (median) reprojection error is evaluated for a whole grid of ``w`` at once.
+    """
+    if len(ref) < 3 or np.linalg.norm(velocity) < 1e-12 or seconds <= 0:
+        return None
+    Ki = np.linalg.inv(K)
+    R = Rotation.from_rotvec(np.asarray(omega) * seconds).as_matrix().T
+    t = -R @ (np.asarray(velocity) * seconds)
+    a = np.c_[ref, np.ones(len(ref))] @ (K @ R @ Ki).T
+    b = K @ t
+
+    def best(ws):
+        q = a[None, :, :] + ws[:, None, None] * b[None, None, :]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            uv = q[..., :2] / q[..., 2:3]
+            err = np.median(np.linalg.norm(uv - cur[None], axis=2), axis=1)
+        err = np.where(np.isfinite(err), err, np.inf)
+        return int(np.argmin(err)), err
+
+    grid = np.geomspace(1e-3, 1e3, 241)
+    k, err = best(grid)
+    if not np.isfinite(err[k]):
+        return None
+    fine = np.linspace(grid[max(k - 1, 0)], grid[min(k + 1, len(grid) - 1)], 101)
+    k2, _ = best(fine)
+    return float(1.0 / fine[k2])
+
+
+class MciGenerator:
+    """Renders every applicable hypothesis for a window, scores them and keeps the sharpest."""
+
+    def __init__(self, cfg: MciConfig, image: EventImageConfig, K: np.ndarray, width: int, height: int, seed: int = 0):
+        self.cfg = cfg
+        self.icfg = image
+        self.K = np.asarray(K, np.float64)
+        self.width = int(width)
+        self.height = int(height)
+        self.seed = int(seed)
+
+    def _render(self, rw: ReconstructionWindow, idx: np.ndarray | None, H: np.ndarray | None) -> np.ndarray:
+        p = rw.p if self.icfg.use_polarity else None
+        return event_image(rw.x, rw.y, p, self.width, self.height, self.icfg.sigma_px, idx, H)
+
+    def generate(self, rw: ReconstructionWindow, prior: MotionPrior | None = None) -> MciResult:
+        prior = prior or MotionPrior()
+        cands: dict[Hypothesis, np.ndarray] = {}
+        idx, dts = _slices(rw.t, self.cfg.time_slices)
+        track_s = (rw.t_cur_us - rw.t_ref_us) / 1e6
+        sim2 = None
+        depth = None
+        # Warps map a point seen dt before the end to the end: the tracks go forward in time, so
+        # a warp over dt is the tracked motion raised to dt / track_s.
+        if self.cfg.use_feature_fit and track_s > 0 and len(rw.ref_pts) >= 3:
+            sim2 = fit_sim2(rw.ref_pts, rw.cur_pts, self.seed)
+            if sim2 is not None:
+                H = sim2_homographies(sim2, track_s, dts)
+                cands[Hypothesis.H2_SIM2] = self._render(rw, idx, H)
+        have_motion = prior.omega is not None or prior.velocity is not None
+        omega = np.zeros(3) if prior.omega is None else np.asarray(prior.omega, np.float64)
+        vel = np.zeros(3) if prior.velocity is None else np.asarray(prior.velocity, np.float64)
+        if self.cfg.use_map_depth and have_motion and prior.map_depth is not None and prior.map_depth > 0:
+            H = se3_homographies(self.K, omega, vel, prior.map_depth, dts)
+            cands[Hypothesis.H1_MAP_DEPTH] = self._render(rw, idx, H)
+        if self.cfg.use_pose_prior and have_motion:
+            depth = fit_average_depth(self.K, omega, vel, rw.ref_pts, rw.cur_pts, track_s) if track_s > 0 else None
+            z = depth if depth is not None else (prior.map_depth or 1.0)
+            H = se3_homographies(self.K, omega, vel, z, dts)
+            cands[Hypothesis.H3_POSE_PRIOR] = self._render(rw, idx, H)
+        cands[Hypothesis.H4_NONE] = self._render(rw, None, None)
+        scores = {h.value: local_std_score(img, self.cfg.patch_px) for h, img in cands.items()}
+        # Highest score wins; ties go to the earlier hypothesis in H1..H4 order (deterministic).
+        best = max(sorted(cands, key=lambda h: h.value), key=lambda h: scores[h.value])
+        img = cands[best]
+        return MciResult(t_us=rw.t_end_us, image=img, image8=to_uint8(img), hypothesis=best, scores=scores, n_events=len(rw.t), sim2=sim2, depth=depth)

@@ -1,0 +1,62 @@
+"""What one SLAM step returns: the contract between the SLAM engine, the CLI, the benchmarks and the viewer."""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+class SlamStatus(str, enum.Enum):
+    """Health of the SLAM system after a step."""
+
+    WAITING = "waiting"
+    """No new MCI in this step (collecting events, or the camera is still / untextured; see ``reason``)."""
+    NOT_INITIALISED = "not_initialised"
+    """An MCI was processed but no map exists yet (two-view initialisation pending)."""
+    OK = "ok"
+    """The MCI was tracked against the active map."""
+    LOST = "lost"
+    """Tracking failed on this MCI; the next map of the atlas will be initialised."""
+
+
+@dataclass
+class SlamStepResult:
+    """Outcome of ``EventSlam.step``: the state after the last MCI of the step (or the window state if none)."""
+
+    t_us: int
+    """Time of the last MCI (or of the last event seen), us."""
+    status: SlamStatus
+    reason: str = ""
+    """Why the status is not OK, in plain words."""
+    pose: np.ndarray | None = None
+    """``T_world_cam`` (4, 4) in the active map's frame and scale, when tracked."""
+    map_id: int = -1
+    """Index of the active map in the atlas (-1 before the first map)."""
+    tiny_frame: np.ndarray | None = None
+    """Last tiny frame, float32 (H, W)."""
+    mci: np.ndarray | None = None
+    """Selected MCI, float32 (H, W), if one was made in this step."""
+    hypothesis: str = ""
+    """Name of the selected MCI hypothesis ("H1".."H4")."""
+    hypothesis_scores: dict[str, float] = field(default_factory=dict)
+    """Mean local STD of every hypothesis tried."""
+    features: np.ndarray | None = None
+    """Tracked feature positions on the MCI, float32 (N, 2), ideal pixels."""
+    feature_ids: np.ndarray | None = None
+    """Their track ids, int64 (N,)."""
+    feature_has_point: np.ndarray | None = None
+    """Whether each track carries a map point, bool (N,)."""
+    keyframe: bool = False
+    """A keyframe was inserted at this MCI."""
+    map_points: np.ndarray | None = None
+    """Points of the active map, (M, 3) map units."""
+    n_events_window: int = 0
+    """Tiny-window size ``N_e`` after this step, events."""
+    mcis: int = 0
+    """MCIs processed in this step."""
+    timings_ms: dict[str, float] = field(default_factory=dict)
+    """Per stage for the last MCI, ms: wall 'mci', 'tracking' (KLT, pose, keyframe, local BA), 'total'; CPU 'mci_cpu', 'tracking_cpu'."""
+    counts: dict[str, int] = field(default_factory=dict)
+    """tracks, inliers, map_points, keyframes ..."""

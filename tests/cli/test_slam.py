@@ -1,0 +1,58 @@
+import json
+import sys
+from pathlib import Path
+
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "slam"))
+from slam_synthetic import make_recording  # noqa: E402
+
+from evpose.cli.main import run  # noqa: E402
+from evpose.io.h5 import write_recording_h5  # noqa: E402
+from evpose.io.tum import read_tum  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def moving_h5(tmp_path_factory):
+    path = tmp_path_factory.mktemp("slam") / "moving.h5"
+    write_recording_h5(path, make_recording(duration_s=1.2, speed=1.5, seed=11))
+    return path
+
+
+def test_slam_cli_writes_a_tum_file_per_map_and_a_summary(moving_h5, tmp_path):
+    out = tmp_path / "est.txt"
+    assert run(["slam", str(moving_h5), "--out", str(out)]) == 0
+    traj = read_tum(out)
+    assert len(traj) >= 5
+    assert read_tum(tmp_path / "est.map0.txt").t.tolist() == traj.t.tolist()
+    doc = json.loads((tmp_path / "est.slam.json").read_text())
+    assert doc["maps"][0]["poses"] == len(traj)
+    assert doc["metrics"]["tracked_fraction"] > 0.5
+    assert doc["latency_ms"]["total"]["median_ms"] > 0
+
+
+def test_slam_cli_reports_bad_mode_and_bad_config_in_one_line(moving_h5, tmp_path, capsys):
+    assert run(["slam", str(moving_h5), "--out", str(tmp_path / "a.txt"), "--mode", "lidar"]) == 2
+    assert "--mode" in capsys.readouterr().err
+    cfg = tmp_path / "cfg.yaml"
+    cfg.write_text("window:\n  initial_evnts: 10\n")
+    assert run(["slam", str(moving_h5), "--out", str(tmp_path / "a.txt"), "--config", str(cfg)]) == 2
+    err = capsys.readouterr().err
+    assert "window.initial_evnts" in err and len(err.strip().splitlines()) == 1
+
+
+def test_slam_cli_on_a_still_camera_says_not_initialised(tmp_path, capsys):
+    path = tmp_path / "still.h5"
+    write_recording_h5(path, make_recording(duration_s=0.3, still=True))
+    assert run(["slam", str(path), "--out", str(tmp_path / "e.txt")]) == 1
+    assert "not initialised" in capsys.readouterr().out
+    assert not (tmp_path / "e.txt").exists()
+
+
+def test_slam_cli_event_inertial_mode_needs_imu(tmp_path, capsys):
+    rec = make_recording(duration_s=0.2, speed=1.5)
+    rec.imu = None
+    path = tmp_path / "noimu.h5"
+    write_recording_h5(path, rec)
+    assert run(["slam", str(path), "--out", str(tmp_path / "e.txt"), "--mode", "event-inertial"]) == 2
+    assert "IMU" in capsys.readouterr().err

@@ -1,0 +1,84 @@
+"""A tiny synthetic event generator for SLAM tests: 3D points seen along a known trajectory, events splatted at their projections.
+
+Each visible point emits events at a constant rate (independent of its image
+speed), so a faster camera yields fewer events per pixel of motion, which is
+what the ``N_e`` adaptation of Algorithm 1 reacts to.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from evpose.core.camera import CameraCalibration
+from evpose.core.events import EventArray
+from evpose.core.imu import ImuSamples
+from evpose.core.recording import Recording
+from evpose.core.trajectory import Trajectory, invert_pose
+
+
+def make_points(n: int, seed: int, depth=(3.0, 6.0), half_width: float = 3.0) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    z = rng.uniform(*depth, n)
+    x = rng.uniform(-half_width, half_width, n)
+    y = rng.uniform(-0.75 * half_width, 0.75 * half_width, n)
+    return np.stack([x, y, z], axis=1)
+
+
+def make_trajectory(duration_s: float, speed: float, rate_hz: float = 1000.0, yaw_rate: float = 0.05, seed: int = 0, shake: float = 0.0) -> Trajectory:
+    """Sideways motion along x at ``speed`` m/s with a slow sinusoidal bob and yaw; ``shake`` (m) adds a 1 Hz back-and-forth that excites the accelerometer."""
+    t = np.arange(0.0, duration_s + 1e-9, 1.0 / rate_hz)
+    w = 2 * np.pi * 1.0
+    pos = np.stack([speed * t - speed * duration_s / 2 + shake * np.sin(w * t), 0.05 * np.sin(2.0 * t) + 0.5 * shake * np.sin(0.7 * w * t), 0.1 * np.sin(1.3 * t)], axis=1)
+    rot = Rotation.from_rotvec(np.stack([0.02 * np.sin(1.7 * t), yaw_rate * np.sin(1.1 * t), 0.01 * t], axis=1))
+    return Trajectory.from_arrays((t * 1e6).astype(np.int64), pos, rot.as_quat())
+
+
+def make_recording(duration_s: float = 1.0, speed: float = 0.4, n_points: int = 220, events_per_point_per_ms: float = 2.0,
+                   width: int = 240, height: int = 180, seed: int = 0, calibration: CameraCalibration | None = None,
+                   still: bool = False, noise_rate_hz: float = 2000.0, gyro_bias=(0.004, -0.003, 0.002), shake: float = 0.0) -> Recording:
+    rng = np.random.default_rng(seed)
+    calib = calibration or CameraCalibration(width, height, 200.0, 200.0, width / 2 - 0.5, height / 2 - 0.5)
+    pts = make_points(n_points, seed)
+    gt = make_trajectory(duration_s, 0.0 if still else speed, yaw_rate=0.0 if still else 0.05, shake=shake)
+    if still:
+        gt = Trajectory.from_arrays(gt.t, np.zeros_like(gt.position), np.tile([0, 0, 0, 1.0], (len(gt), 1)))
+    T = gt.matrices()
+    ts, xs, ys, ps = [], [], [], []
+    step_us = 250
+    lam = events_per_point_per_ms * step_us / 1000.0
+    pol = np.where(rng.random(n_points) < 0.5, 1, -1)
+    for t_us in range(0, int(duration_s * 1e6), step_us):
+        k = min(int(t_us // 1000), len(T) - 1)
+        T_cw = invert_pose(T[k])
+        Xc = pts @ T_cw[:3, :3].T + T_cw[:3, 3]
+        uv = calib.project(Xc)
+        vis = (Xc[:, 2] > 0.1) & np.isfinite(uv).all(axis=1) & (uv[:, 0] > 0) & (uv[:, 0] < calib.width - 1) & (uv[:, 1] > 0) & (uv[:, 1] < calib.height - 1)
+        counts = rng.poisson(lam, n_points) * vis
+        if still:
+            counts = rng.poisson(lam * 0.02, n_points) * vis  # a still camera: almost no events
+        idx = np.repeat(np.arange(n_points), counts)
+        if idx.size == 0:
+            continue
+        jitter = rng.normal(0.0, 0.35, (idx.size, 2))
+        e_uv = np.rint(uv[idx] + jitter)
+        ok = (e_uv[:, 0] >= 0) & (e_uv[:, 0] < calib.width) & (e_uv[:, 1] >= 0) & (e_uv[:, 1] < calib.height)
+        tt = t_us + rng.integers(0, step_us, idx.size)
+        ts.append(tt[ok]); xs.append(e_uv[ok, 0]); ys.append(e_uv[ok, 1]); ps.append(pol[idx][ok])
+    n_noise = rng.poisson(noise_rate_hz * duration_s)
+    ts.append(rng.integers(0, int(duration_s * 1e6), n_noise)); xs.append(rng.integers(0, calib.width, n_noise))
+    ys.append(rng.integers(0, calib.height, n_noise)); ps.append(np.where(rng.random(n_noise) < 0.5, 1, -1))
+    t = np.concatenate(ts); order = np.argsort(t, kind="stable")
+    ev = EventArray.from_arrays(t[order], np.concatenate(xs)[order], np.concatenate(ys)[order], np.concatenate(ps)[order])
+    # IMU = camera frame (T_cam_imu = I), 1 kHz, noise-free, plus a constant gyro bias. Gravity points
+    # along +y of this world (the camera's "down" at rest): f = R^T (a_w - g_w).
+    R = gt.rotation.as_matrix()
+    dR = np.einsum("nji,njk->nik", R[:-1], R[1:])
+    gyro = Rotation.from_matrix(dR).as_rotvec() / 1e-3 + gyro_bias
+    gyro = np.vstack([gyro, gyro[-1:]])
+    # Samples hold over [t_k, t_k+1): the forward-difference acceleration integrates back to the positions.
+    v = np.diff(gt.position, axis=0) / 1e-3
+    a_w = np.vstack([np.diff(v, axis=0) / 1e-3, np.zeros((2, 3))])
+    acc = np.einsum("nji,nj->ni", R, a_w - np.array([0.0, 9.81, 0.0]))
+    imu = ImuSamples.from_arrays(gt.t, acc, gyro)
+    return Recording(events=ev, imu=imu, ground_truth=gt, calibration=calib, metadata={"scenario": "synthetic-points", "seed": seed})

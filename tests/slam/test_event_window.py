@@ -1,0 +1,56 @@
+import numpy as np
+
+from evpose.slam.config import EventImageConfig, EventWindowConfig, FeatureConfig
+from evpose.slam.event_window import EventWindowSelector, WindowEvent
+from slam_synthetic import make_recording
+
+
+def _run(rec, cfg=None):
+    sel = EventWindowSelector(cfg or EventWindowConfig(), FeatureConfig(), EventImageConfig(), 240, 180)
+    ev = rec.events
+    out = sel.push(ev.t, ev.x.astype(float), ev.y.astype(float), ev.p)
+    return sel, out
+
+
+def test_tiny_window_size_shrinks_for_a_fast_camera_and_grows_for_a_slow_one():
+    fast, out_fast = _run(make_recording(duration_s=0.5, speed=3.0, seed=1))
+    slow, out_slow = _run(make_recording(duration_s=0.5, speed=0.4, seed=1))
+    assert len(out_fast) > len(out_slow) >= 1
+    # eq. (8) keeps about N_x tiny frames per window: the fast camera needs fewer events per frame.
+    assert fast.n_events < slow.n_events
+    assert fast.n_events_history[-1] <= max(fast.n_events_history[1:3])
+    assert all(abs(w.n_frames - 3) <= 1 for w in out_fast[3:])
+
+
+def test_windows_are_triggered_by_feature_displacement_and_overlap():
+    sel, out = _run(make_recording(duration_s=0.4, speed=2.0, seed=2))
+    assert len(out) >= 3
+    for w in out:
+        assert w.median_displacement_px > 4.0 and not w.forced
+        assert np.all(np.diff(w.t) >= 0)
+        assert len(w.ref_pts) == len(w.cur_pts) >= 8
+    # 50 % overlap: each MCI window is the previous trigger window plus the new one.
+    for a, b in zip(out[:-1], out[1:]):
+        assert a.t[0] <= b.t[0] < a.t[-1] < b.t[-1]
+        shared = np.intersect1d(a.t, b.t).size
+        assert shared > 0
+
+
+def test_still_camera_yields_no_window_and_reports_low_rate():
+    sel, out = _run(make_recording(duration_s=0.3, still=True))
+    assert out == []
+    assert sel.last_event is WindowEvent.LOW_RATE
+
+
+def test_selector_is_deterministic_across_push_chunking():
+    rec = make_recording(duration_s=0.3, speed=2.0, seed=4)
+    _, whole = _run(rec)
+    sel = EventWindowSelector(EventWindowConfig(), FeatureConfig(), EventImageConfig(), 240, 180)
+    ev = rec.events
+    parts = []
+    for a in range(0, len(ev), 7777):
+        b = min(a + 7777, len(ev))
+        parts += sel.push(ev.t[a:b], ev.x[a:b].astype(float), ev.y[a:b].astype(float), ev.p[a:b])
+    assert len(parts) == len(whole)
+    for a, b in zip(parts, whole):
+        assert np.array_equal(a.t, b.t) and np.array_equal(a.cur_pts, b.cur_pts)
