@@ -9,6 +9,7 @@ cores are shared with other processes and wall time then includes queueing.
 
 from __future__ import annotations
 
+import hashlib
 import os
 import time
 from pathlib import Path
@@ -21,25 +22,39 @@ from evpose.bench.stats import latency_summary, peak_rss_mb
 MODULES = ("noise_filter", "time_surface", "culling", "distance_field", "registration", "total")
 
 
+def _mapping_key() -> str:
+    """Hex digest of every source file of ``evpose.mapping`` (a changed map builder must not reuse old maps)."""
+    import evpose.mapping
+
+    h = hashlib.sha256()
+    for src in sorted(Path(evpose.mapping.__file__).parent.glob("*.py")):
+        h.update(src.name.encode())
+        h.update(src.read_bytes())
+    return h.hexdigest()[:16]
+
+
 def landing_case(work_dir: Path, resolution: tuple[int, int], seconds: float, seed: int = 0):
-    """(Recording, ContourMap) of the moderate landing scenario, simulated and mapped once, then read from the cache."""
-    from evpose.io.h5 import read_recording_h5
+    """(Recording, ContourMap) of the moderate landing scenario, simulated and mapped once, then read from the cache.
+
+    The simulation is cached by :func:`evpose.sim.cache.load_or_simulate`, keyed by
+    the configuration *and* the simulator's source; the map next to it, keyed also
+    by the map builder's source. (An earlier cache keyed only by resolution and
+    duration silently paired the tracker with stale simulations and maps.)
+    """
     from evpose.io.map_ply import read_contour_map, write_contour_map
+    from evpose.sim import SimulationConfig
+    from evpose.sim.cache import load_or_simulate, simulation_key
 
     w, h = resolution
-    folder = Path(work_dir) / "tracking" / f"landing_{w}x{h}_{seconds:g}s_seed{seed}"
-    rec_path = folder / "landing.h5"
-    map_path = folder / "landing_map.ply"
-    if not (rec_path.is_file() and map_path.is_file()):
+    config = SimulationConfig(scenario="landing", seconds=seconds, resolution=(w, h), seed=seed)
+    cache = Path(work_dir) / "tracking" / "sim"
+    map_path = cache / f"landing_map-{simulation_key(config)}-{_mapping_key()}.ply"
+    result = load_or_simulate(config, cache)
+    if not map_path.is_file():
         from evpose.mapping import build_contour_map
-        from evpose.sim import SimulationConfig, simulate
-        from evpose.sim.outputs import write_simulation
 
-        folder.mkdir(parents=True, exist_ok=True)
-        result = simulate(SimulationConfig(scenario="landing", seconds=seconds, resolution=(w, h), seed=seed))
-        write_simulation(result, rec_path, cloud=False)
-        write_contour_map(map_path, build_contour_map(result.cloud_points, intensity=result.cloud_intensity))
-    return read_recording_h5(rec_path), read_contour_map(map_path)
+        write_contour_map(map_path, build_contour_map(result.cloud_points, intensity=result.cloud_intensity))  # atomic
+    return result.recording, read_contour_map(map_path)
 
 
 def track_and_score(recording, contour_map, config=None) -> dict:

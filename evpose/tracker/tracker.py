@@ -18,6 +18,7 @@ from __future__ import annotations
 import time
 from typing import Callable
 
+import gtsam
 import numpy as np
 
 from evpose.core.camera import CameraCalibration
@@ -223,7 +224,10 @@ class Tracker:
             reg = None
             reason = f"only {visible.size} map points in view at the predicted pose (need {self.config.registration.min_points})"
         else:
-            reg = register_to_map(levels, pts, predicted, self.K, self.config.registration, polarity)
+            # The TDF's minimum trails moving edges; registration compensates with the camera's twist.
+            dt_s = (until - self._t_us) * 1e-6
+            twist = gtsam.Pose3.Logmap(gtsam.Pose3(self._pose).between(gtsam.Pose3(predicted))) / dt_s if dt_s > 0 else None
+            reg = register_to_map(levels, pts, predicted, self.K, self.config.registration, polarity, twist_per_s=twist)
             reason = reg.reason
         timings["registration"] = _ms(t0)
 

@@ -30,8 +30,11 @@ class VisibleMapConfig:
     """Drop points behind the nearest point of their image cell."""
     occlusion_cell_px: int = field(default=8, metadata={"min": 2, "max": 64, "step": 1, "unit": "px"})
     """Side of the z-buffer cells, pixels."""
-    occlusion_tolerance: float = field(default=0.15, metadata={"min": 0.0, "max": 2.0, "step": 0.01, "unit": "ratio"})
-    """A point is occluded if deeper than (1 + this) x the nearest depth in its cell, relative."""
+    occlusion_tolerance: float = field(default=0.05, metadata={"min": 0.0, "max": 2.0, "step": 0.01, "unit": "ratio"})
+    """A point is occluded if deeper than (1 + this) x the nearest depth in its cell, relative.
+
+    Must be below (object height / camera distance) to cull the hidden back edges of
+    low objects: 0.15 kept the far bottom edges of 0.4-0.7 m crates seen from 4 m."""
 
 
 @nb.njit(cache=True)

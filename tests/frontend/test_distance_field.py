@@ -116,3 +116,21 @@ def test_curvature_images_are_second_differences_of_the_field():
     cross = (img[r + 1, c + 1] - img[r + 1, c - 1] - img[r - 1, c + 1] + img[r - 1, c - 1]) / 4
     assert np.isclose(f.hess[1, 0, r, c], cross, atol=1e-6)
     assert f.hess[0, 0, r, 40] > 0  # the field's valley along the edge is convex across it
+
+
+def _subpixel_argmin(row):
+    i = int(np.argmin(row))
+    a, b, c = (float(v) for v in row[i - 1 : i + 2])
+    return i + 0.5 * (a - c) / (a - 2 * b + c)
+
+
+def test_blurred_minimum_trails_a_moving_edge_more_with_a_wider_blur():
+    # The field is one-sided (a ramp behind the edge, 1 ahead of it), so a blur pulls its
+    # minimum back along the motion: the lag registration compensates with ``field_lag_ms``.
+    ts = edge_surface()
+    lags = []
+    for blur in (3, 5):
+        f = TemporalDistanceField(DistanceFieldConfig(blur_px=blur), W, H)
+        f.compute(ts, 20_000)
+        lags.append(40.0 - _subpixel_argmin(f.image(0)[30]))
+    assert 0.2 < lags[0] < lags[1] < 2.0, lags

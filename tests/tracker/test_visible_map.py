@@ -56,3 +56,12 @@ def test_cached_culling_equals_the_exact_cull_along_a_path():
         T[:3, :3] = (Rotation.from_rotvec([0.01 * k, -0.005 * k, 0.02 * k]) * base).as_matrix()
         T[:3, 3] = [0.02 * k, -0.01 * k, 2.0 - 0.01 * k]
         assert np.array_equal(vm.visible(T, cfg), visible_points(pts, T, K, W, H, cfg))
+
+
+def test_default_culls_the_hidden_bottom_edge_of_a_low_box_seen_from_above():
+    # Looking straight down from 4 m at a 0.5 m box: its top rim (3.5 m away) hides the
+    # ground contact line right below it (4 m away), 14 % deeper.
+    top = np.array([[0.0, 0.0, 3.5], [0.005, 0.0, 3.5]])
+    bottom = np.array([[0.0, 0.0, 4.0], [0.006, 0.0, 4.0]])
+    idx = visible_points(np.concatenate([top, bottom]), np.eye(4), K, W, H, VisibleMapConfig())
+    assert idx.tolist() == [0, 1]

@@ -1,0 +1,52 @@
+"""``evpose simulate``: outputs next to each other, one-line errors with exit code 2."""
+
+import numpy as np
+import pytest
+
+from evpose.cli.main import run
+
+
+def test_simulate_writes_ecd_folder_cloud_and_edges(tmp_path, capsys):
+    out = tmp_path / "rec"
+    code = run(["simulate", "--scenario", "landing", "--out", str(out), "--seconds", "0.03", "--resolution", "64x48", "--seed", "3", "--cloud-density", "5"])
+    assert code == 0
+    assert (out / "events.txt").exists() and (out / "imu.txt").exists() and (out / "groundtruth.txt").exists()
+    assert (tmp_path / "rec_cloud.ply").stat().st_size > 0
+    with np.load(tmp_path / "rec_edges.npz") as z:
+        assert z["segments"].ndim == 3 and z["segments"].shape[1:] == (2, 3)
+    assert "events" in capsys.readouterr().out
+
+
+def test_simulate_writes_readable_h5(tmp_path):
+    from evpose.io.h5 import read_recording_h5
+
+    out = tmp_path / "rec.h5"
+    assert run(["simulate", "--scenario", "indoor", "--out", str(out), "--seconds", "0.03", "--resolution", "64x48", "--no-cloud"]) == 0
+    rec = read_recording_h5(out)
+    assert len(rec.events) > 0 and rec.metadata["scenario"] == "indoor" and rec.calibration.width == 64
+    assert not (tmp_path / "rec_cloud.ply").exists()
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["--scenario", "mars"], "unknown scenario"),
+        (["--scenario", "landing", "--resolution", "0x0"], "impossible resolution"),
+        (["--scenario", "landing", "--resolution", "346by260"], "WIDTHxHEIGHT"),
+        (["--scenario", "landing", "--seconds", "-2"], "duration must be positive"),
+        (["--scenario", "landing", "--cloud-density", "0"], "cloud density must be positive"),
+    ],
+)
+def test_bad_input_prints_one_line_and_exits_2(tmp_path, capsys, args, message):
+    assert run(["simulate", "--out", str(tmp_path / "x.h5"), *args]) == 2
+    err = capsys.readouterr().err.strip()
+    assert message in err and "\n" not in err
+
+
+def test_unwritable_output_exits_2(tmp_path, capsys):
+    locked = tmp_path / "locked"
+    locked.mkdir()
+    (locked / "file").write_text("x")
+    # A path under a regular file can never be created.
+    assert run(["simulate", "--scenario", "landing", "--out", str(locked / "file" / "x.h5"), "--seconds", "0.01", "--resolution", "32x24"]) == 2
+    assert capsys.readouterr().err.count("\n") == 1
