@@ -288,7 +288,7 @@ class Tracker:
     # ---------------------------------------------------------------- helpers
     def _ego_motion_keep(self, events: EventArray, keep: np.ndarray, until: int) -> np.ndarray:
         """Keep-mask of the ego-motion filter over this step's events (only noise-filtered ones are judged)."""
-        state = self.components.motion.predict(until)
+        state = self.components.motion.fusion.predict(until)
         omega = np.zeros(3) if state.omega_cam is None else state.omega_cam
         x = events.x.astype(np.float64)
         y = events.y.astype(np.float64)

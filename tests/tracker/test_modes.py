@@ -115,3 +115,14 @@ def test_fused_mode_needs_imu(landing):
     bare = dataclasses.replace(rec, imu=None)
     with pytest.raises(InputError, match="needs IMU"):
         TrackingSession(bare, cmap, TrackerConfig(mode=TrackerMode.STPE_FILTER))
+
+
+def test_ego_motion_filter_runs_before_the_time_surface_in_full_mode(landing):
+    rec, cmap = landing
+    cfg = TrackerConfig(mode=TrackerMode.FULL)
+    cfg.ego_motion.enabled = True
+    s = TrackingSession(rec, cmap, cfg)
+    results = [s.step() for _ in range(20)]
+    assert all("ego_motion" in r.timings_ms and "events_ego_removed" in r.counts for r in results)
+    assert all(r.counts["events_ego_removed"] <= r.counts["events_in"] for r in results)
+    assert all(r.status in (TrackStatus.OK, TrackStatus.DEGRADED) for r in results)
