@@ -302,7 +302,8 @@ class ConfigGui:
     def remove(self) -> None:
         for h in self.handles.values():
             h.remove()
-        for f in self._folders.values():
+        # Innermost first: removing a folder also removes the folders inside it (a second remove warns).
+        for _, f in sorted(self._folders.items(), key=lambda kv: -len(kv[0])):
             f.remove()
         self.handles.clear()
         self._folders.clear()

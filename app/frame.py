@@ -10,6 +10,34 @@ from evpose.core.events import EventArray
 
 
 @dataclass
+class SlamView:
+    """What a SLAM step adds to a frame (``evpose.slam.SlamStepResult``, in the viewer's terms)."""
+
+    tiny_frame: np.ndarray | None
+    """Last tiny frame, float32 (H, W)."""
+    mci: np.ndarray | None
+    """Selected motion-compensated image, float32 (H, W), when one was made in this step."""
+    hypothesis: str
+    """Name of the selected MCI hypothesis ("H1".."H4"), "" without an MCI."""
+    hypothesis_scores: dict[str, float]
+    """Score (mean local STD) of every hypothesis tried."""
+    features: np.ndarray | None
+    """Tracked feature positions on the MCI, (N, 2) pixels."""
+    feature_has_point: np.ndarray | None
+    """Whether each track carries a map point, bool (N,)."""
+    keyframe: bool
+    """A keyframe was inserted at this step."""
+    map_id: int
+    """Active map of the atlas (-1 before the first)."""
+    map_points: np.ndarray | None
+    """Points of the active map, (M, 3) map units."""
+    keyframe_poses: np.ndarray | None
+    """``T_world_cam`` of the active map's keyframes, (K, 4, 4) map units."""
+    mci_t_us: int | None = None
+    """Time of the MCI shown (a step without a new MCI shows the last one), us."""
+
+
+@dataclass
 class Frame:
     """One step as displayed: images, per-point products and the scalar figures the plots use."""
 
@@ -53,6 +81,8 @@ class Frame:
     """Wall time per module, milliseconds."""
     counts: dict[str, int] = field(default_factory=dict)
     """events_in, events_kept, points_visible, points_used, inliers ..."""
+    slam: SlamView | None = None
+    """SLAM products when the SLAM engine made this frame."""
 
 
 @dataclass

@@ -88,8 +88,58 @@ def events_image(kept: EventArray, removed: EventArray, width: int, height: int)
     return upscale(rgb)
 
 
+SLAM_PANELS = ("tiny frame", "MCI + tracked features", "events (SLAM)")
+"""Image panels of SLAM mode (the tracking panels' images do not exist there)."""
+
+
+def _normalised_grey(img: np.ndarray | None, shape: tuple[int, int]) -> np.ndarray:
+    if img is None:
+        return np.zeros((*shape, 3), np.uint8)
+    a = np.asarray(img, np.float32)
+    # Event images are counts with a few bright pixels: scale to the 99th percentile so edges stay visible.
+    hi = float(np.percentile(a, 99.0)) if a.size else 1.0
+    g = (np.clip(a / max(hi, 1e-12), 0.0, 1.0) * 255.0).astype(np.uint8)
+    return np.repeat(g[..., None], 3, axis=2)
+
+
+def mci_image(frame: Frame) -> np.ndarray:
+    """The selected MCI in grey, tracked features drawn on it: green with a map point, yellow without; a red border on keyframes."""
+    v = frame.slam
+    shape = frame.ts_positive.shape
+    rgb = upscale(_normalised_grey(v.mci, shape))
+    s = _scale_for(shape[1])
+    h, w = rgb.shape[:2]
+    if v.features is not None and len(v.features):
+        has = v.feature_has_point if v.feature_has_point is not None else np.zeros(len(v.features), bool)
+        cols = np.where(has[:, None], [40, 230, 60], [250, 210, 0]).astype(np.uint8)
+        px = np.round((v.features[:, 0] + 0.5) * s - 0.5).astype(np.int64)
+        py = np.round((v.features[:, 1] + 0.5) * s - 0.5).astype(np.int64)
+        r = max(2, s)
+        for dy in range(-r + 1, r):
+            for dx in range(-r + 1, r):
+                x, y = px + dx, py + dy
+                ok = (x >= 0) & (x < w) & (y >= 0) & (y < h)
+                rgb[y[ok], x[ok]] = cols[ok]
+    if v.keyframe:
+        b = max(2, s)
+        rgb[:b], rgb[-b:], rgb[:, :b], rgb[:, -b:] = (230, 40, 40), (230, 40, 40), (230, 40, 40), (230, 40, 40)
+    return rgb
+
+
+def slam_panel_images(frame: Frame) -> dict[str, np.ndarray]:
+    """SLAM mode's panels: the last tiny frame, the selected MCI with tracked features, the step's events."""
+    h, w = frame.ts_positive.shape
+    return {
+        "tiny frame": upscale(_normalised_grey(frame.slam.tiny_frame, (h, w))),
+        "MCI + tracked features": mci_image(frame),
+        "events (SLAM)": events_image(frame.events_kept, frame.events_removed, w, h),
+    }
+
+
 def panel_images(frame: Frame, colour_by: OverlayColour = OverlayColour.RESIDUAL) -> dict[str, np.ndarray]:
-    """All four panel images of a frame, by panel name."""
+    """All panel images of a frame, by panel name (SLAM frames: :func:`slam_panel_images`)."""
+    if frame.slam is not None:
+        return slam_panel_images(frame)
     h, w = frame.ts_positive.shape
     return {
         "SP-TS positive": ts_image(frame.ts_positive, True),

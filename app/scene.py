@@ -156,7 +156,29 @@ class SceneView:
             self._nodes["map"].colors = map_colours(len(self.contour_map), frame)
         if history is not None:
             self._trajectories(history)
+        if frame.slam is not None:
+            self._slam(frame)
         self._camera(frame)
+
+    def _slam(self, frame: Frame) -> None:
+        """SLAM mode: the growing map of the active atlas map and its keyframes (in that map's own frame and scale)."""
+        scene = self.server.scene
+        v = frame.slam
+        if v.map_points is not None and len(v.map_points):
+            pts = np.asarray(v.map_points, np.float32)
+            # Event-only maps have an arbitrary scale: size the points to the map itself.
+            extent = float(max(np.ptp(pts, axis=0).max(), 1e-3))
+            self._set("slam_map", scene.add_point_cloud("/slam/map_points", pts, np.tile(np.array([[20, 160, 220]], np.uint8), (len(pts), 1)),
+                                                         point_size=0.008 * extent, point_shape="circle"))
+            if v.keyframe_poses is not None and len(v.keyframe_poses):
+                P = v.keyframe_poses
+                self._set("slam_kf", scene.add_batched_axes(
+                    "/slam/keyframes", batched_wxyzs=np.stack([_wxyz(T) for T in P]), batched_positions=P[:, :3, 3].astype(np.float32),
+                    axes_length=0.04 * extent, axes_radius=0.003 * extent))
+        elif "slam_map" in self._nodes and v.map_id < 0:
+            for name in ("slam_map", "slam_kf"):
+                if name in self._nodes:
+                    self._nodes.pop(name).remove()
 
     def _trajectories(self, history: list[StepSummary]) -> None:
         t = self.toggles

@@ -22,10 +22,11 @@ from app.engine import Engine, EventsOnlyEngine, TrackerEngine
 from app.export import export_action, write_config
 from app.frame import Frame
 from app.layouts import LAYOUT_DIR, PANELS, Layout, list_layouts, save_layout
-from app.panels import OverlayColour, panel_images
+from app.panels import SLAM_PANELS, OverlayColour, panel_images
 from app.player import Player, PlayerConfig, PlayState, RerunFrom
 from app.plots import PlotsView
 from app.scene import SceneView
+from app.slam_engine import slam_engine_factory, slam_markdown
 from app.teaching import STAGE_PANEL, Stage, teaching_markdown
 from evpose.errors import EvposeError, InputError
 
@@ -65,8 +66,14 @@ def check_port_free(host: str, port: int) -> None:
             raise InputError(None, f"cannot serve on {host}:{port}: {exc.strerror or exc}; is another viewer running? choose another --port") from None
 
 
-def engine_factory(recording, contour_map):
+MODES = ("tracking", "slam")
+"""Viewer modes: EV-Pose tracking against a map, or map-free event SLAM (``evpose.slam``)."""
+
+
+def engine_factory(recording, contour_map, mode: str = "tracking"):
     """A config -> Engine function for this recording/map pair, with the reason when tracking is impossible."""
+    if mode == "slam":
+        return slam_engine_factory(recording)
     if contour_map is None:
         return lambda cfg: EventsOnlyEngine(recording, cfg, explanation=NO_MAP_NOTE)
     try:
@@ -123,6 +130,7 @@ class ViewerApp:
         with g.add_folder("Recording"):
             self.rec_dropdown = g.add_dropdown("recording", ["(none found)"], hint="Recordings under the --data folders")
             self.map_dropdown = g.add_dropdown("map", [NO_MAP], hint="Contour map to track against")
+            self.mode_dropdown = g.add_dropdown("mode", list(MODES), initial_value=MODES[0], hint="tracking: EV-Pose against the map; slam: map-free event SLAM")
             self.rescan_button = g.add_button("rescan data folders")
             self.rec_info = g.add_markdown("")
         with g.add_folder("Playback"):
@@ -149,6 +157,7 @@ class ViewerApp:
     def _wire_main_panel(self) -> None:
         self.rec_dropdown.on_update(lambda e: e.client is not None and self.select(self.rec_dropdown.value))
         self.map_dropdown.on_update(lambda e: e.client is not None and self.select(self.rec_dropdown.value, self.map_dropdown.value))
+        self.mode_dropdown.on_update(lambda e: e.client is not None and self.set_mode(self.mode_dropdown.value))
         self.rescan_button.on_click(lambda e: self.refresh_entries())
         self.play_button.on_click(lambda e: self.player and self.player.toggle())
         self.step_buttons.on_click(lambda e: self.player and (self.player.step_back() if e.target.value == "< back" else self.player.step_forward()))
@@ -170,6 +179,9 @@ class ViewerApp:
         with p.add_tab("Images"):
             self.image_handles = {name: g.add_image(blank, label=name, format="jpeg", jpeg_quality=85)
                                   for name in ("SP-TS positive", "SP-TS negative", "TDF + map points", "events kept / removed")}
+        with p.add_tab("SLAM"):
+            self.slam_info = g.add_markdown("_SLAM mode shows here (Recording > mode: slam)._")
+            self.image_handles.update({name: g.add_image(blank, label=name, format="jpeg", jpeg_quality=85) for name in SLAM_PANELS})
         self.panels["plots"] = p = g.add_panel()
         self.plots = PlotsView(g, p.add_tab("Plots"))
         self.panels["teaching"] = p = g.add_panel()
@@ -225,6 +237,18 @@ class ViewerApp:
                 return e
         return None
 
+    @property
+    def mode(self) -> str:
+        return self.mode_dropdown.value
+
+    def set_mode(self, mode: str) -> bool:
+        """Switch between tracking and SLAM on the loaded recording (and map)."""
+        if mode not in MODES:
+            return False
+        self.mode_dropdown.value = mode
+        map_display = self.map_dropdown.value if self.map_dropdown.value in self.map_dropdown.options else None
+        return self.select(self.rec_dropdown.value, map_display)
+
     def select(self, rec_display: str, map_display: str | None = None) -> bool:
         """Load a recording (and a map, guessed if not given); errors are shown, never raised to the server."""
         with self._select_lock:  # two tabs switching at once load one after the other
@@ -257,9 +281,9 @@ class ViewerApp:
         s = recording.summary()
         self.rec_info.content = (f"`{entry.label}`: {s['events']:,} events, {s['duration_s']:.2f} s, "
                                  f"{s['sensor_size']}; map: {map_entry.label if map_entry else 'none'}"
-                                 + ("" if cmap is not None else f"\n\n_{NO_MAP_NOTE}_") + "\n\n" + self._scan_note())
+                                 + ("" if cmap is not None or self.mode == "slam" else f"\n\n_{NO_MAP_NOTE}_") + "\n\n" + self._scan_note())
         self.time_slider.max = max(0.001, (recording.t_end_us - recording.t_start_us) / 1e6)
-        factory = engine_factory(recording, cmap)
+        factory = engine_factory(recording, cmap, self.mode)
 
         def reset_view(_engine=None):
             # Runs on the player thread (or before it exists) so no frame of the old recording is drawn over it.
@@ -310,7 +334,9 @@ class ViewerApp:
             if slow:
                 self._last_slow = now
                 self.plots.update(history, self.recording.ground_truth if self.recording is not None else None)
-            if show_teaching:
+            if frame.slam is not None:
+                self.slam_info.content = slam_markdown(frame)
+            if show_teaching and STAGE_PANEL[self.stage] in imgs:
                 self.teaching_text.content = teaching_markdown(self.stage, frame)
                 self.teaching_image.image = imgs[STAGE_PANEL[self.stage]]
             self.time_slider.value = round((frame.t_us - engine.t_start_us) / 1e6, 3)

@@ -1,4 +1,7 @@
-"""``evpose eval EST GT``: ATE / ARE / RTE / RRE of a trajectory, per speed bin, with optional JSON and plots."""
+"""``evpose eval EST GT``: ATE / ARE / RTE / RRE of a trajectory, per speed bin, with optional JSON and plots.
+
+``--atlas``: the event-SLAM paper's metrics over the maps of an atlas (``EST.map<k>.txt``).
+"""
 
 from __future__ import annotations
 
@@ -38,6 +41,41 @@ def format_speed_bins(bins: dict) -> str:
     return "\n".join(lines)
 
 
+def format_atlas(summary: dict) -> str:
+    """The event-SLAM paper's figures (Table I) and one line per map."""
+    lines = [
+        f"maps {summary['maps']}, scale {'corrected (sim3)' if summary['correct_scale'] else 'not corrected (se3)'}",
+        f"RPE trans [m/m]    {summary['rpe_trans_per_m']:.5f}",
+        f"RPE rot [deg/m]    {summary['rpe_rot_deg_per_m']:.5f}",
+        f"tracked time [s]   {summary['tracked_time_s']:.3f} of {summary['duration_s']:.3f} ({100 * summary['tracked_fraction']:.1f} %)",
+        f"distance [m]       {summary['distance_m']:.3f}",
+        f"stability [m s]    {summary['stability_m_s']:.4f}",
+        f"ATE [% of dist.]   {summary['ate_percent']:.3f} (worst map {summary['ate_percent_max']:.3f})",
+        f"{'map':4} {'poses':>6} {'time [s]':>9} {'dist [m]':>9} {'scale':>8} {'ATE [mm]':>9} {'RPE t [mm]':>10} {'RPE r [deg]':>11}",
+    ]
+    for k, m in enumerate(summary["per_map"]):
+        lines.append(f"{k:<4} {m['poses']:>6} {m['tracked_time_s']:9.3f} {m['distance_m']:9.3f} {m['scale']:8.4f} {m['ate_m'] * 1e3:9.3f} {m['rpe_trans_m'] * 1e3:10.3f} {m['rpe_rot_deg']:11.4f}")
+    return "\n".join(lines)
+
+
+def evaluate_atlas(estimate: Path, ground_truth: Path, maps: tuple[Path, ...], correct_scale: bool, duration_s: float | None) -> dict:
+    """Eqs. (9)-(10) of the event-SLAM paper over ``maps`` (default: the ``EST.map<k>`` files next to ESTIMATE)."""
+    from evpose.errors import InputError
+    from evpose.eval.inputs import atlas_duration_s, atlas_paths, load_estimate, load_ground_truth
+    from evpose.eval.slam_metrics import atlas_metrics
+
+    paths = list(maps) or atlas_paths(estimate)
+    trajs = [load_estimate(p) for p in paths]
+    gt = load_ground_truth(ground_truth)
+    if duration_s is None:
+        duration_s = atlas_duration_s(estimate)
+    result = atlas_metrics(trajs, gt, correct_scale=correct_scale, duration_s=duration_s)
+    if not result.maps:
+        raise InputError(paths[0], f"none of the {len(paths)} map trajectories has 3 poses inside the ground truth's time span that can be aligned")
+    return {"estimate": str(estimate), "ground_truth": str(ground_truth), "map_files": [str(p) for p in paths], "correct_scale": correct_scale,
+            "duration_s": result.duration_s, **result.to_dict()}
+
+
 def main(
     estimate: tyro.conf.Positional[Path],
     ground_truth: tyro.conf.Positional[Path],
@@ -50,6 +88,10 @@ def main(
     rpe_delta_unit: Literal["frames", "meters", "degrees", "radians"] = "frames",
     rpe_all_pairs: bool = False,
     quiet: bool = False,
+    atlas: bool = False,
+    maps: tuple[Path, ...] = (),
+    correct_scale: bool = False,
+    duration_s: float | None = None,
 ) -> int:
     """Compare an estimated trajectory (TUM file) with ground truth (TUM file or any recording with ground truth).
 
@@ -70,11 +112,25 @@ def main(
         rpe_delta_unit: Unit of rpe_delta.
         rpe_all_pairs: Use every (overlapping) pose pair rpe_delta apart, not consecutive disjoint pairs (evo's --all_pairs).
         quiet: Do not print the table.
+        atlas: SLAM atlas mode: the event-SLAM paper's metrics (RPE per metre averaged over maps, stability = distance x tracked time, tracked fraction, ATE %) over the maps ``EST.map<k>.txt`` next to ESTIMATE (or ESTIMATE alone if there are none).
+        maps: Atlas mode with these map trajectories (TUM) instead of the ``EST.map<k>.txt`` files.
+        correct_scale: Atlas mode: align each map with scale (sim3), as for event-only runs; --align sim3 implies it.
+        duration_s: Atlas mode: span of the recording for the tracked fraction, s (default: from ``EST.slam.json``, else the ground truth's span).
     """
+    from evpose.io.atomic import atomic_path
+
+    if atlas or maps:
+        summary = evaluate_atlas(estimate, ground_truth, maps, correct_scale or align == "sim3", duration_s)
+        if not quiet:
+            print(format_atlas(summary))
+        if json is not None:
+            with atomic_path(json, inputs=(estimate, ground_truth, *map(Path, summary["map_files"]))) as tmp:
+                tmp.write_text(jsonlib.dumps(summary, indent=2) + "\n")
+        return 0
+
     from evpose.eval.inputs import load_estimate, load_ground_truth
     from evpose.eval.metrics import evaluate
     from evpose.eval.speed_bins import speed_bins
-    from evpose.io.atomic import atomic_path
 
     config = EvalConfig(
         align=Alignment(align),

@@ -44,3 +44,36 @@ def load_ground_truth(path: str | Path) -> Trajectory:
         raise InputError(path, "recording has no ground truth")
     gt.validate(str(path))
     return gt
+
+
+def atlas_paths(estimate: Path) -> list[Path]:
+    """The per-map files ``evpose slam --out EST.txt`` writes next to EST (``EST.map0.txt``, ``EST.map1.txt``...), in map order.
+
+    Without any, the atlas is EST alone (a single-map run, or a trajectory from another system).
+    """
+    import re
+
+    estimate = Path(estimate)
+    suffix = estimate.suffix or ".txt"
+    pattern = re.compile(re.escape(estimate.stem) + r"\.map(\d+)" + re.escape(suffix) + "$")
+    found = []
+    if estimate.parent.is_dir():
+        for p in estimate.parent.iterdir():
+            m = pattern.match(p.name)
+            if m and p.is_file():
+                found.append((int(m.group(1)), p))
+    return [p for _, p in sorted(found)] or [estimate]
+
+
+def atlas_duration_s(estimate: Path) -> float | None:
+    """The recording span stated in ``EST.slam.json`` (``evpose slam``'s summary), if that file is there and says it."""
+    import json
+
+    summary = Path(estimate).with_suffix(".slam.json")
+    if not summary.is_file():
+        return None
+    try:
+        value = json.loads(summary.read_text()).get("duration_s")
+    except (ValueError, AttributeError):
+        raise InputError(summary, "not a JSON object (expected evpose slam's summary)") from None
+    return float(value) if isinstance(value, (int, float)) and value > 0 else None

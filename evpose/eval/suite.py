@@ -13,7 +13,7 @@ from __future__ import annotations
 import enum
 import resource
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
@@ -22,6 +22,9 @@ from evpose.eval.scenarios import ScenarioSpec
 
 MODES = ("stpe", "stpe+filter", "full", "ekf", "imu-only")
 """Every mode the suite knows; a mode the tracker does not offer yet is reported as not available."""
+
+SLAM_MODES = {"slam-event": "event", "slam-event-inertial": "event-inertial"}
+"""Suite modes that run map-free SLAM (``evpose.slam``, ``SlamMode`` values) instead of map-based tracking; they have no rate."""
 
 
 class SuiteName(str, enum.Enum):
@@ -68,10 +71,13 @@ _VEL_FULL = Study("velocity", "Drone velocity (paper Fig. 15)", ("landing_slow",
 _HDR = Study("hdr", "HDR (paper Fig. 17)", ("landing", "landing_hdr", "landing_flicker"), ("full",), (200.0,))
 _DYN = Study("dynamics", "Scene dynamics (paper Fig. 18)", ("landing", "landing_dynamic", "landing_noisy"), ("full", "stpe+filter"), (200.0,))
 _SYSTEMS = Study("systems", "Latency of the systems (paper Table I)", ("landing",), MODES, (200.0,))
+_SLAM = Study("slam", "Event-based SLAM without a map (SLAM paper Table I: RPE per metre, stability)", ("landing_slow", "landing"), tuple(SLAM_MODES), (0.0,))
+_SLAM_QUICK = replace(_SLAM, scenarios=("landing",))
+"""About 1 s per mode on the quick suite's 0.5 s landing flight, which the other studies simulate anyway."""
 
 SUITES: dict[SuiteName, SuiteConfig] = {
-    SuiteName.QUICK: SuiteConfig(240, 180, 0.5, 0, (_SYSTEMS, _ABLATION, _FUSION, _FREQ, _VEL)),
-    SuiteName.FULL: SuiteConfig(346, 260, 2.0, 0, (_SYSTEMS, _ABLATION, _FUSION, _FREQ, _VEL_FULL, _HDR, _DYN)),
+    SuiteName.QUICK: SuiteConfig(240, 180, 0.5, 0, (_SYSTEMS, _ABLATION, _FUSION, _FREQ, _VEL, _SLAM_QUICK)),
+    SuiteName.FULL: SuiteConfig(346, 260, 2.0, 0, (_SYSTEMS, _ABLATION, _FUSION, _FREQ, _VEL_FULL, _HDR, _DYN, _SLAM)),
 }
 
 
@@ -92,7 +98,8 @@ def run_keys(cfg: SuiteConfig) -> list[tuple[str, str, float]]:
 
 
 def run_name(scenario: str, mode: str, rate: float) -> str:
-    return f"{scenario}/{mode}/{rate:g}hz"
+    # SLAM runs (rate 0) make an MCI whenever the adaptive event window fills: they have no rate.
+    return f"{scenario}/{mode}" if mode in SLAM_MODES else f"{scenario}/{mode}/{rate:g}hz"
 
 
 def simulation_jobs(cfg: SuiteConfig, cache_dir: str) -> list[Job]:
@@ -103,6 +110,9 @@ def tracking_jobs(cfg: SuiteConfig, cache_dir: str) -> list[Job]:
     out = []
     for scenario, mode, rate in run_keys(cfg):
         spec = ScenarioSpec(scenario, cfg.seconds, cfg.width, cfg.height, cfg.seed, cfg.cloud_density_per_m2)
+        if mode in SLAM_MODES:
+            out.append(Job(run_name(scenario, mode, rate), "evpose.eval.suite:scenario_slam_job", {"spec": asdict(spec), "mode": mode, "cache_dir": cache_dir}))
+            continue
         out.append(Job(run_name(scenario, mode, rate), "evpose.eval.suite:scenario_tracking_job", {"spec": asdict(spec), "mode": mode, "rate_hz": rate, "cache_dir": cache_dir}))
     return out
 
@@ -225,6 +235,68 @@ def scenario_tracking_job(spec: dict, mode: str, rate_hz: float, cache_dir: str)
     config = _tracker_config(mode, rate_hz)
     sc = load_scenario(ScenarioSpec(**spec), cache_dir)
     return track_and_measure(sc.recording, sc.contour_map, config)
+
+
+def slam_and_measure(recording, mode: str) -> dict:
+    """Run map-free SLAM (``evpose.slam.run_slam``) over a recording: the SLAM paper's metrics (deterministic) and per-MCI latency (measured)."""
+    from collections import Counter
+
+    import cv2
+
+    from evpose.bench.stats import latency_summary
+    from evpose.errors import ConfigError
+    from evpose.eval.slam_metrics import atlas_metrics
+    from evpose.slam import SlamConfig, SlamMode, run_slam
+
+    if mode not in SLAM_MODES:
+        raise ConfigError(f"SLAM mode {mode!r} is unknown (known: {', '.join(SLAM_MODES)})")
+    slam_mode = SlamMode(SLAM_MODES[mode])
+    # One OpenCV thread, as ``evpose slam`` does: the per-stage CPU timings then cover all the work.
+    cv2.setNumThreads(1)
+    ru0 = resource.getrusage(resource.RUSAGE_SELF)
+    run = run_slam(recording, SlamConfig(mode=slam_mode))
+    ru1 = resource.getrusage(resource.RUSAGE_SELF)
+    res = run.results
+    n = len(res)
+    statuses = Counter(r.status.value for r in res)
+    metrics: dict = {
+        "mcis": n,
+        "status_share": {k: v / n for k, v in sorted(statuses.items())} if n else {},
+        "hypothesis_counts": dict(sorted(Counter(r.hypothesis for r in res if r.hypothesis).items())),
+        "atlas_maps": len([m for m in run.atlas.maps if m.traj_t]),
+        "correct_scale": slam_mode is SlamMode.EVENT,
+    }
+    gt = recording.ground_truth
+    trajs = run.trajectories()
+    if gt is None or len(gt) < 2:
+        metrics["slam"] = {"error": "the recording has no ground truth"}
+    elif not trajs:
+        reasons = Counter(r.reason for r in res if r.reason)
+        metrics["slam"] = {"error": "not initialised: " + (reasons.most_common(1)[0][0] if reasons else "no MCI was produced")}
+    else:
+        # Event-only maps have no metric scale: Sim(3) alignment per map, as the paper does.
+        metrics["slam"] = atlas_metrics(trajs, gt, correct_scale=slam_mode is SlamMode.EVENT, duration_s=run.duration_s).to_dict()
+    # The first MCI of a fresh process loads (or compiles) the numba kernels: reported apart.
+    warm = res[1:] if n > 1 else res
+    latency = {k: latency_summary([r.timings_ms[k] for r in warm if k in r.timings_ms]) for k in ("mci", "tracking", "total", "mci_cpu", "tracking_cpu")}
+    cpu_s = (ru1.ru_utime - ru0.ru_utime) + (ru1.ru_stime - ru0.ru_stime)
+    timing = {
+        "latency_ms": latency,
+        "first_mci_ms": res[0].timings_ms.get("total", 0.0) if n else 0.0,
+        "wall_s": run.wall_s,
+        "realtime_factor": run.duration_s / run.wall_s if run.wall_s > 0 else 0.0,
+        "cpu_percent": 100.0 * cpu_s / run.wall_s if run.wall_s > 0 else 0.0,
+        "peak_rss_mb": ru1.ru_maxrss / 1024.0,
+    }
+    return {"metrics": metrics, "timing": timing}
+
+
+def scenario_slam_job(spec: dict, mode: str, cache_dir: str) -> dict:
+    """One SLAM benchmark run: a cached simulated scenario through ``evpose.slam`` in ``mode`` (``slam-event`` / ``slam-event-inertial``)."""
+    from evpose.eval.scenarios import load_scenario
+
+    sc = load_scenario(ScenarioSpec(**spec), cache_dir)
+    return slam_and_measure(sc.recording, mode)
 
 
 def tracking_job(config: dict, recording: str) -> dict:

@@ -16,7 +16,10 @@ TINY = SuiteConfig(
     height=48,
     seconds=0.1,
     seed=0,
-    studies=(Study("systems", "Latency of the systems (paper Table I)", ("landing",), ("stpe", "no-such-mode"), (200.0,)),),
+    studies=(
+        Study("systems", "Latency of the systems (paper Table I)", ("landing",), ("stpe", "no-such-mode"), (200.0,)),
+        Study("slam", "Event-based SLAM", ("landing",), ("slam-event",), (0.0,)),
+    ),
     cloud_density_per_m2=20.0,
 )
 
@@ -117,3 +120,58 @@ def test_suite_on_a_dask_local_cluster_gives_the_same_metrics(first_run, tmp_pat
     name = "landing/stpe/200hz"
     assert not dask.runs[name]["cached"]  # really recomputed on the cluster
     assert dask.runs[name]["result"]["metrics"] == run.runs[name]["result"]["metrics"]
+
+
+def test_slam_study_runs_slam_on_the_suite_recording_and_reports_why_it_did_not_initialise(first_run):
+    out, run = first_run
+    slam = run.runs["landing/slam-event"]
+    assert slam["ok"], slam.get("error")
+    # 0.1 s at 64x48 is too little for an MCI: the run is reported with the reason, not dropped.
+    assert slam["result"]["metrics"]["slam"]["error"].startswith("not initialised")
+    md = (out / "report.md").read_text()
+    assert "## Event-based SLAM" in md and "| landing/slam-event |" in md and "not initialised" in md
+
+
+@pytest.fixture(scope="module")
+def slam_recording():
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "slam"))
+    from slam_synthetic import make_recording
+
+    return make_recording(duration_s=0.6, speed=1.5, seed=11)
+
+
+def test_slam_job_reports_the_slam_papers_metrics_and_per_mci_latency(slam_recording):
+    from evpose.eval.report import SLAM_HEAD, slam_row
+    from evpose.eval.suite import slam_and_measure
+
+    a = slam_and_measure(slam_recording, "slam-event")
+    m, t = a["metrics"], a["timing"]
+    s = m["slam"]
+    assert m["mcis"] > 3 and m["correct_scale"] and s["maps"] >= 1
+    assert s["stability_m_s"] == pytest.approx(s["tracked_time_s"] * s["distance_m"])
+    assert 0.5 < s["tracked_fraction"] <= 1.0 and s["rpe_trans_per_m"] > 0
+    assert t["latency_ms"]["total"]["n"] == m["mcis"] - 1 and t["latency_ms"]["mci"]["median_ms"] > 0  # first MCI reported apart
+    assert a["metrics"] == slam_and_measure(slam_recording, "slam-event")["metrics"]  # deterministic
+    row = slam_row("synthetic/slam-event", {"ok": True, "result": a})
+    assert len(row) == len(SLAM_HEAD) and row[1] == str(s["maps"]) and "Sim(3)" in row[-1]
+
+
+def test_event_inertial_slam_job_is_not_scale_corrected(slam_recording):
+    from evpose.eval.suite import slam_and_measure
+
+    m = slam_and_measure(slam_recording, "slam-event-inertial")["metrics"]
+    assert not m["correct_scale"]
+    assert all(p["scale"] == 1.0 for p in m["slam"]["per_map"])
+
+
+def test_quick_suite_has_a_slam_study_with_both_modes():
+    from evpose.eval.suite import SUITES, run_keys, tracking_jobs
+
+    cfg = SUITES[SuiteName.QUICK]
+    jobs = {j.name: j for j in tracking_jobs(cfg, "/nonexistent")}
+    for mode in ("slam-event", "slam-event-inertial"):
+        assert jobs[f"landing/{mode}"].fn == "evpose.eval.suite:scenario_slam_job"
+    assert ("landing", "slam-event", 0.0) in run_keys(SUITES[SuiteName.FULL])

@@ -133,3 +133,70 @@ def test_eval_refuses_to_overwrite_an_input(files, capsys):
     assert run(["eval", str(est), str(gt), "--json", str(gt), "--quiet"]) == 2
     assert "overwrite" in one_line_error(capsys)
     assert Path(gt).read_bytes() == before
+
+
+def similarity(traj: Trajectory, scale: float, yaw: float, shift) -> Trajectory:
+    """``traj`` seen in another world frame with another unit of length (an event-only SLAM map)."""
+    r = Rotation.from_euler("z", yaw)
+    return Trajectory.from_arrays(traj.t, scale * r.apply(traj.position) + np.asarray(shift), (r * traj.rotation).as_quat())
+
+
+@pytest.fixture()
+def atlas_files(tmp_path):
+    gt = curved()
+    est = perturbed(gt, 1)
+    maps = [similarity(est[10:120], 2.5, 0.7, [1, 2, 3]), similarity(est[150:290], 0.4, -1.2, [0, 0, 5])]
+    write_tum(tmp_path / "gt.txt", gt)
+    write_tum(tmp_path / "est.txt", maps[1])  # evpose slam writes the longest map as EST too: must not count twice
+    for k, m in enumerate(maps):
+        write_tum(tmp_path / f"est.map{k}.txt", m)
+    return tmp_path / "est.txt", tmp_path / "gt.txt", gt, maps
+
+
+def test_atlas_mode_finds_the_map_files_and_computes_the_slam_papers_metrics(tmp_path, atlas_files, capsys):
+    est, gt_file, gt, maps = atlas_files
+    assert run(["eval", str(est), str(gt_file), "--atlas", "--correct-scale", "--json", str(tmp_path / "a.json")]) == 0
+    out = capsys.readouterr().out
+    assert "RPE trans [m/m]" in out and "stability [m s]" in out and "maps 2" in out
+    doc = json.loads((tmp_path / "a.json").read_text())
+    assert doc["map_files"] == [str(tmp_path / "est.map0.txt"), str(tmp_path / "est.map1.txt")]
+    assert [m["poses"] for m in doc["per_map"]] == [110, 140]
+    # Sim(3) alignment undoes each map's own scale; the residual is the 1 cm perturbation.
+    assert [m["scale"] for m in doc["per_map"]] == pytest.approx([1 / 2.5, 1 / 0.4], rel=0.02)
+    assert all(m["ate_m"] < 0.03 for m in doc["per_map"])
+    tracked = (109 + 139) * 0.01
+    dist = sum(float(np.sum(np.linalg.norm(np.diff(gt.position[a:b], axis=0), axis=1))) for a, b in ((10, 120), (150, 290)))
+    assert doc["tracked_time_s"] == pytest.approx(tracked, abs=1e-9)
+    assert doc["distance_m"] == pytest.approx(dist, rel=1e-9)
+    assert doc["stability_m_s"] == pytest.approx(tracked * dist, rel=1e-9)
+    assert doc["tracked_fraction"] == pytest.approx(tracked / 2.99, rel=1e-9)  # default duration: the ground truth's span
+    expected_rpe = np.mean([m["rpe_trans_m"] / m["distance_m"] for m in doc["per_map"]])
+    assert doc["rpe_trans_per_m"] == pytest.approx(expected_rpe, rel=1e-12)
+
+
+def test_atlas_without_scale_correction_shows_the_scale_error(tmp_path, atlas_files):
+    est, gt_file, _, _ = atlas_files
+    assert run(["eval", str(est), str(gt_file), "--atlas", "--json", str(tmp_path / "se3.json"), "--quiet"]) == 0
+    assert run(["eval", str(est), str(gt_file), "--atlas", "--align", "sim3", "--json", str(tmp_path / "sim3.json"), "--quiet"]) == 0
+    se3, sim3 = (json.loads((tmp_path / n).read_text()) for n in ("se3.json", "sim3.json"))
+    assert [m["scale"] for m in se3["per_map"]] == [1.0, 1.0] and sim3["correct_scale"] and not se3["correct_scale"]
+    assert se3["ate_percent"] > 10 * sim3["ate_percent"]
+    assert se3["stability_m_s"] == sim3["stability_m_s"]  # ground-truth distance: independent of the alignment
+
+
+def test_atlas_maps_option_and_duration_from_the_slam_summary(tmp_path, atlas_files):
+    est, gt_file, _, _ = atlas_files
+    est.with_suffix(".slam.json").write_text(json.dumps({"duration_s": 5.0}))
+    assert run(["eval", str(est), str(gt_file), "--maps", str(tmp_path / "est.map1.txt"), "--correct-scale", "--json", str(tmp_path / "m.json"), "--quiet"]) == 0
+    doc = json.loads((tmp_path / "m.json").read_text())
+    assert doc["maps"] == 1 and doc["duration_s"] == 5.0 and doc["tracked_fraction"] == pytest.approx(1.39 / 5.0)
+    assert run(["eval", str(est), str(gt_file), "--atlas", "--duration-s", "10", "--json", str(tmp_path / "d.json"), "--quiet"]) == 0
+    assert json.loads((tmp_path / "d.json").read_text())["duration_s"] == 10.0
+
+
+def test_atlas_without_usable_maps_is_a_one_line_error(tmp_path, files, capsys):
+    _, gt = files
+    late = curved(n=20)
+    write_tum(tmp_path / "late.txt", Trajectory.from_arrays(late.t + 100_000_000, late.position, late.quat_xyzw))
+    assert run(["eval", str(tmp_path / "late.txt"), str(gt), "--atlas"]) == 2
+    assert "none of the 1 map trajectories" in one_line_error(capsys)

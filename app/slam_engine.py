@@ -1,0 +1,154 @@
+"""The map-free event SLAM (``evpose.slam.EventSlam``) as the player drives it: SLAM mode of the viewer.
+
+Steps are fixed slices of events ``[t_start + k w, t_start + (k + 1) w)`` fed to
+``EventSlam.step`` (as ``run_slam`` feeds them), so the state after step k
+equals a headless ``run_slam(..., chunk_us=w)`` at that point. Seeking restores
+the nearest earlier snapshot (``EventSlam.snapshot``, taken every
+``snapshot_every`` steps) and replays the rest: deterministic, hence exact.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from app.engine import Engine, EventsOnlyEngine
+from app.frame import Frame, SlamView, StepSummary
+from evpose.core.events import EventArray
+from evpose.core.recording import Recording
+from evpose.errors import EvposeError
+from evpose.slam import EventSlam, SlamConfig, SlamStepResult
+
+
+@dataclass
+class SlamViewConfig:
+    """Settings of the viewer's SLAM mode."""
+
+    step_us: int = field(default=5_000, metadata={"min": 1_000, "max": 50_000, "step": 1_000, "unit": "us"})
+    """Events fed to SLAM per displayed step, microseconds (``run_slam``'s ``chunk_us``)."""
+    snapshot_every: int = field(default=20, metadata={"min": 1, "max": 500, "step": 1, "unit": "steps"})
+    """Steps between two seek snapshots (memory vs. replay time)."""
+    slam: SlamConfig = field(default_factory=SlamConfig)
+
+
+def slam_view(result: SlamStepResult, slam: EventSlam) -> SlamView:
+    """The step's SLAM products; on a step without an MCI, those of the last MCI (so the panels do not blink)."""
+    shown = result if result.mci is not None or not slam.results else slam.results[-1]
+    m = slam.atlas.active
+    kfs = np.stack([k.T_wc for k in m.keyframes]) if m is not None and m.keyframes else None
+    # The active map as it is now (also between MCIs), not only as the last MCI left it.
+    pts = np.array([p.xyz for p in m.points.values()], np.float64).reshape(-1, 3) if m is not None else None
+    return SlamView(
+        tiny_frame=result.tiny_frame, mci=shown.mci, hypothesis=shown.hypothesis, hypothesis_scores=dict(shown.hypothesis_scores),
+        features=shown.features, feature_has_point=shown.feature_has_point, keyframe=result.keyframe, map_id=result.map_id,
+        map_points=pts, keyframe_poses=kfs, mci_t_us=int(shown.t_us) if shown.mci is not None else None,
+    )
+
+
+class SlamEngine(Engine):
+    """SLAM mode: tiny frames, the selected MCI and its hypothesis scores, tracked features, keyframes and the growing map."""
+
+    def __init__(self, recording: Recording, config: SlamViewConfig | None = None, explanation: str = ""):
+        self.recording = recording
+        self.config = config if isinstance(config, SlamViewConfig) else SlamViewConfig()
+        self.explanation = explanation or ("SLAM mode: no prior map; poses and map are in the active map's own frame"
+                                           + (" and scale (event-only: arbitrary scale)." if self.config.slam.mode.value == "event" else "."))
+        # Raises InputError without calibration, or in event-inertial mode without IMU: the factory shows why.
+        self.slam = EventSlam(self.config.slam, recording.calibration, recording.imu)
+        self.width, self.height = self.slam.width, self.slam.height
+        self._known: dict[int, StepSummary] = {}
+        self._snapshots: dict[int, dict] = {0: self.slam.snapshot()}
+        self.step_count = 0
+        """Steps applied to ``self.slam`` so far."""
+
+    # ---------------------------------------------------------------- steps
+    @property
+    def n_steps(self) -> int:
+        return (self.t_end_us - self.t_start_us) // int(self.config.step_us) + 1
+
+    def _window(self, k: int) -> EventArray:
+        w = int(self.config.step_us)
+        return self.recording.events.time_window(self.t_start_us + k * w, self.t_start_us + (k + 1) * w)
+
+    @property
+    def history(self) -> list[StepSummary]:
+        return [self._known[i] for i in range(self.step_count)]
+
+    def _advance(self) -> tuple[SlamStepResult, EventArray, float] | None:
+        k = self.step_count
+        if k >= self.n_steps:
+            return None
+        window = self._window(k)
+        t0 = time.perf_counter()
+        result = self.slam.step(window)
+        elapsed = (time.perf_counter() - t0) * 1e3
+        self.step_count = k + 1
+        if self.step_count % int(self.config.snapshot_every) == 0 and self.step_count not in self._snapshots:
+            self._snapshots[self.step_count] = self.slam.snapshot()
+        timings = dict(result.timings_ms) if result.mcis else {}
+        timings["step"] = elapsed
+        counts = {**result.counts, "events_in": len(window), "events_kept": len(window), "mcis": result.mcis,
+                  "window_events": result.n_events_window, "map_id": result.map_id}
+        self._known[k] = StepSummary(k, self._step_t(k), result.pose, None, result.status.value, timings, counts)
+        return result, window, elapsed
+
+    def _step_t(self, k: int) -> int:
+        return self.t_start_us + (k + 1) * int(self.config.step_us)
+
+    def step(self) -> Frame | None:
+        out = self._advance()
+        if out is None:
+            return None
+        result, window, _ = out
+        k = self.step_count - 1
+        s = self._known[k]
+        shape = (self.height, self.width)
+        tiny = result.tiny_frame if result.tiny_frame is not None else np.zeros(shape, np.float32)
+        empty = np.zeros(shape, np.float32)
+        return Frame(index=k, t_us=s.t_us, ts_positive=tiny, ts_negative=empty, tdf=result.mci if result.mci is not None else empty,
+                     events_kept=window, events_removed=EventArray.empty(), pose=result.pose, status=s.status,
+                     reason=result.reason, timings_ms=dict(s.timings_ms), counts=dict(s.counts), slam=slam_view(result, self.slam))
+
+    def _goto(self, k: int) -> None:
+        """Put SLAM in the state after ``k`` steps: restore the best snapshot at or before k, replay the rest."""
+        if not (max(j for j in self._snapshots if j <= max(k, 0)) <= self.step_count <= k):
+            base = max(j for j in self._snapshots if j <= k)
+            self.slam.restore(self._snapshots[base])
+            self.step_count = base
+        while self.step_count < k and self._advance() is not None:
+            pass
+
+    def seek_step(self, index: int) -> Frame | None:
+        k = int(np.clip(index, 0, self.n_steps - 1))
+        self._goto(k)
+        return self.step()
+
+    def seek(self, t_us: int) -> Frame | None:
+        w = int(self.config.step_us)
+        return self.seek_step((int(t_us) - self.t_start_us) // w - 1)
+
+
+def slam_engine_factory(recording):
+    """A config -> SlamEngine function; without calibration (or IMU in event-inertial mode) the events-only view says why."""
+    def make(cfg):
+        try:
+            return SlamEngine(recording, cfg if isinstance(cfg, SlamViewConfig) else None)
+        except EvposeError as exc:
+            return EventsOnlyEngine(recording, None, explanation=f"SLAM cannot start: {exc}")
+
+    return make
+
+
+def slam_markdown(frame: Frame) -> str:
+    """The SLAM step in words: selected MCI hypothesis and every hypothesis' score, tracks, keyframe, map size."""
+    v = frame.slam
+    scores = ", ".join(f"{'**' + k + '**' if k == v.hypothesis else k} {s:.4f}" for k, s in sorted(v.hypothesis_scores.items()))
+    n_feat = 0 if v.features is None else len(v.features)
+    with_pt = 0 if v.feature_has_point is None else int(np.count_nonzero(v.feature_has_point))
+    n_pts = 0 if v.map_points is None else len(v.map_points)
+    n_kf = 0 if v.keyframe_poses is None else len(v.keyframe_poses)
+    return (f"map {v.map_id}: {n_pts} points, {n_kf} keyframes{' (keyframe inserted)' if v.keyframe else ''}\n\n"
+            f"MCI{'' if v.mci_t_us is None else f' at {v.mci_t_us / 1e6:.3f} s'} hypothesis scores (mean local STD): {scores or 'no MCI yet'}\n\n"
+            f"tracked features: {n_feat} ({with_pt} with a map point; green with, yellow without)")

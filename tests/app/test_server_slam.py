@@ -1,0 +1,76 @@
+"""The viewer's SLAM mode without a browser: the mode dropdown switches engines, SLAM panels and the words about the MCI are drawn."""
+
+import socket
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "slam"))
+from slam_synthetic import make_recording  # noqa: E402
+
+from app.engine import EventsOnlyEngine, TrackerEngine  # noqa: E402
+from app.player import PlayerConfig  # noqa: E402
+from app.server import AppConfig, ViewerApp  # noqa: E402
+from app.slam_engine import SlamEngine  # noqa: E402
+from evpose.io.h5 import write_recording_h5  # noqa: E402
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.fixture(scope="module")
+def viewer(tmp_path_factory):
+    root = tmp_path_factory.mktemp("slamdata")
+    write_recording_h5(root / "moving.h5", make_recording(duration_s=0.6, speed=1.5, seed=11))
+    app = ViewerApp(AppConfig(data=[root], port=free_port(), export_dir=tmp_path_factory.mktemp("exports"), player=PlayerConfig(prefetch=False)))
+    yield app
+    app.stop()
+
+
+def test_mode_dropdown_switches_to_slam_and_shows_mci_scores_and_map(viewer):
+    viewer.player.wait_idle()
+    assert not isinstance(viewer.player.engine, SlamEngine)
+    assert viewer.set_mode("slam")
+    viewer.player.wait_idle()
+    assert isinstance(viewer.player.engine, SlamEngine)
+    assert "Tracking needs a map" not in viewer.rec_info.content  # SLAM needs none
+    assert "SlamViewConfig" in viewer.param_info.content or "SLAM mode" in viewer.param_info.content
+    for _ in range(60):
+        viewer.player.step_forward()
+    viewer.player.wait_idle()
+    f = viewer.last_frame
+    assert f.slam is not None and f.index == 60
+    import re
+
+    # Between two MCIs the last MCI, its hypothesis scores and the current map stay shown.
+    assert re.search(r"MCI at [\d.]+ s hypothesis scores \(mean local STD\): .*H\d\** \d", viewer.slam_info.content), viewer.slam_info.content
+    assert not viewer.slam_info.content.startswith("map 0: 0 points")
+    assert viewer.image_handles["MCI + tracked features"].image.shape[2] == 3
+    assert "slam_map" in viewer.scene._nodes  # the growing map is drawn
+    path = viewer.export("trajectory")
+    assert path is not None and len([ln for ln in path.read_text().splitlines() if not ln.startswith("#")]) >= 2
+
+
+def test_back_to_tracking_mode_without_a_map_is_the_events_view(viewer):
+    assert viewer.set_mode("tracking")
+    viewer.player.step_forward()
+    viewer.player.wait_idle()
+    assert isinstance(viewer.player.engine, (EventsOnlyEngine, TrackerEngine)) and viewer.last_frame.slam is None
+    assert not viewer.set_mode("lidar")
+
+
+def test_slam_mode_without_imu_for_event_inertial_says_why():
+    from app.slam_engine import slam_engine_factory
+    from app.slam_engine import SlamViewConfig
+    from evpose.slam import SlamConfig, SlamMode
+
+    rec = make_recording(duration_s=0.1, speed=1.5, seed=1)
+    rec.imu = None
+    eng = slam_engine_factory(rec)(SlamViewConfig(slam=SlamConfig(mode=SlamMode.EVENT_INERTIAL)))
+    assert isinstance(eng, EventsOnlyEngine) and "SLAM cannot start" in eng.explanation and "IMU" in eng.explanation
+    assert np.asarray(eng.step().ts_positive).ndim == 2

@@ -1,0 +1,90 @@
+"""SLAM mode of the viewer: the engine equals a headless run_slam, seeks exactly, and its panels show the SLAM products."""
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "slam"))
+from slam_synthetic import make_recording  # noqa: E402
+
+from app.panels import SLAM_PANELS, panel_images  # noqa: E402
+from app.slam_engine import SlamEngine, SlamViewConfig  # noqa: E402
+from evpose.slam import SlamConfig, run_slam  # noqa: E402
+
+
+def with_first_mci(frames) -> int:
+    return next(f.index for f in frames if f.counts["mcis"])
+
+
+@pytest.fixture(scope="module")
+def moving():
+    return make_recording(duration_s=0.6, speed=1.5, seed=11)
+
+
+@pytest.fixture(scope="module")
+def all_frames(moving):
+    eng = SlamEngine(moving)
+    frames = []
+    while (f := eng.step()) is not None:
+        frames.append(f)
+    return eng, frames
+
+
+def test_slam_engine_steps_equal_a_headless_run(moving, all_frames):
+    eng, frames = all_frames
+    headless = run_slam(moving, SlamConfig(), chunk_us=eng.config.step_us)
+    assert len(frames) == eng.n_steps and sum(f.counts["events_in"] for f in frames) == len(moving.events)
+    assert sum(f.counts["mcis"] for f in frames) == len(headless.results) > 3
+    # A step's frame shows the state after its last MCI: the headless result with the same running count.
+    last_mci = np.cumsum([f.counts["mcis"] for f in frames]) - 1
+    for f, i in zip(frames, last_mci):
+        if f.counts["mcis"]:
+            r = headless.results[i]
+            assert f.status == r.status.value and f.slam.map_id == r.map_id and f.slam.hypothesis == r.hypothesis
+            assert (f.pose is None) == (r.pose is None) and (f.pose is None or np.array_equal(f.pose, r.pose))
+    assert any(f.slam.keyframe for f in frames) and any(f.slam.mci is not None and f.slam.hypothesis for f in frames)
+    # A step without a new MCI keeps showing the last one (and says when it was made).
+    quiet = next(f for f in frames[with_first_mci(frames):] if not f.counts["mcis"])
+    assert quiet.slam.mci is not None and quiet.slam.mci_t_us < quiet.t_us
+    last = frames[-1] if frames[-1].slam.map_points is not None else next(f for f in reversed(frames) if f.slam.map_points is not None)
+    assert len(last.slam.map_points) > 0 and last.slam.keyframe_poses.shape[1:] == (4, 4)
+
+
+def test_slam_engine_seek_lands_on_the_uninterrupted_state(moving, all_frames):
+    _, frames = all_frames
+    other = SlamEngine(moving, SlamViewConfig(snapshot_every=7))
+    with_mci = [f.index for f in frames if f.counts["mcis"]]
+    for k in (with_mci[-1], with_mci[0], len(frames) - 1, 3):
+        f = other.seek(frames[k].t_us)
+        assert f.index == k and f.t_us == frames[k].t_us and len(other.history) == k + 1
+        assert f.status == frames[k].status
+        assert (f.pose is None) == (frames[k].pose is None) and (f.pose is None or np.array_equal(f.pose, frames[k].pose))
+        assert (f.slam.mci is None) == (frames[k].slam.mci is None)
+        if f.slam.mci is not None:
+            assert np.array_equal(f.slam.mci, frames[k].slam.mci) and f.slam.hypothesis_scores == frames[k].slam.hypothesis_scores
+
+
+def test_slam_panels_show_tiny_frame_mci_with_features_and_events(all_frames):
+    _, frames = all_frames
+    f = next(f for f in frames if f.slam.mci is not None and f.slam.features is not None and len(f.slam.features))
+    imgs = panel_images(f)
+    assert tuple(imgs) == SLAM_PANELS
+    for img in imgs.values():
+        assert img.dtype == np.uint8 and img.ndim == 3 and img.shape[2] == 3
+    mci = imgs["MCI + tracked features"]
+    green, yellow = (mci == [40, 230, 60]).all(axis=2).any(), (mci == [250, 210, 0]).all(axis=2).any()
+    assert green or yellow
+    assert imgs["tiny frame"].max() > 0
+
+
+def test_event_inertial_slam_engine_without_imu_is_an_input_error(moving):
+    from dataclasses import replace
+
+    from evpose.errors import InputError
+    from evpose.slam import SlamMode
+
+    rec = replace(moving, imu=None)
+    with pytest.raises(InputError, match="IMU"):
+        SlamEngine(rec, SlamViewConfig(slam=SlamConfig(mode=SlamMode.EVENT_INERTIAL)))
