@@ -21,7 +21,6 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable
 
-import yaml
 
 from evpose.errors import ConfigError, InputError
 
@@ -188,22 +187,16 @@ def from_plain(cls: type, data: dict, source: str | None = None):
 
 
 def load_config_file(cls: type, path: str | Path):
-    """Read a YAML/JSON configuration file written by :func:`save_config_file`."""
-    path = Path(path)
-    try:
-        data = yaml.safe_load(path.read_text())
-    except OSError as exc:
-        raise InputError(path, f"cannot read ({exc.strerror})") from None
-    except yaml.YAMLError as exc:
-        raise InputError(path, f"not valid YAML/JSON ({str(exc).splitlines()[0]})") from None
-    return from_plain(cls, data or {}, str(path))
+    """Read a YAML/JSON configuration file (the engine's own reader, so files are interchangeable with the CLI's)."""
+    from evpose.io.config_file import read_config
+
+    return read_config(cls, path)
 
 
 def save_config_file(config, path: str | Path) -> None:
-    from evpose.io.atomic import atomic_path
+    from evpose.io.config_file import write_config
 
-    with atomic_path(path) as tmp:
-        Path(tmp).write_text(yaml.safe_dump(to_plain(config), sort_keys=False))
+    write_config(config, path)
 
 
 class ConfigGui:

@@ -1,0 +1,100 @@
+"""Configuration dataclasses as YAML/JSON files: one implementation for the tracker, SLAM and the viewer.
+
+Files hold a nested mapping mirroring the dataclasses; missing keys keep their
+defaults, unknown keys and wrong types are an :class:`InputError` naming the
+dotted field (a typo must not silently do nothing).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import enum
+import json
+import typing
+from pathlib import Path
+
+from evpose.errors import InputError
+from evpose.io.atomic import atomic_path
+
+
+def config_to_dict(cfg) -> dict:
+    """Nested plain dict (enums as their values) of a config dataclass."""
+    out = {}
+    for f in dataclasses.fields(cfg):
+        v = getattr(cfg, f.name)
+        if dataclasses.is_dataclass(v):
+            v = config_to_dict(v)
+        elif isinstance(v, enum.Enum):
+            v = v.value
+        out[f.name] = v
+    return out
+
+
+def config_from_dict(cls, data: dict, source: str | None = None, prefix: str = ""):
+    """Build dataclass ``cls`` from a nested dict; unknown keys and wrong types raise :class:`InputError`."""
+    if not isinstance(data, dict):
+        raise InputError(source, f"expected a mapping, got {type(data).__name__}", prefix.rstrip(".") or None)
+    hints = typing.get_type_hints(cls)
+    names = {f.name for f in dataclasses.fields(cls)}
+    unknown = sorted(set(data) - names)
+    if unknown:
+        raise InputError(source, f"unknown setting (known: {', '.join(sorted(names))})", prefix + str(unknown[0]))
+    kwargs = {}
+    for name, raw in data.items():
+        typ = hints[name]
+        key = prefix + name
+        if dataclasses.is_dataclass(typ):
+            kwargs[name] = config_from_dict(typ, raw, source, key + ".")
+            continue
+        try:
+            if isinstance(typ, type) and issubclass(typ, enum.Enum):
+                kwargs[name] = typ(raw)
+            elif typ is bool:
+                if not isinstance(raw, bool):
+                    raise ValueError(f"expected true/false, got {raw!r}")
+                kwargs[name] = raw
+            elif typ is int:
+                if isinstance(raw, bool) or float(raw) != int(float(raw)):
+                    raise ValueError(f"expected an integer, got {raw!r}")
+                kwargs[name] = int(float(raw))
+            elif typ is float:
+                if isinstance(raw, bool):
+                    raise ValueError(f"expected a number, got {raw!r}")
+                kwargs[name] = float(raw)
+            else:
+                kwargs[name] = raw
+        except (TypeError, ValueError) as exc:
+            raise InputError(source, str(exc), key) from None
+    return cls(**kwargs)
+
+
+def read_config(cls, path: str | Path):
+    """Read dataclass ``cls`` from ``.yaml``/``.yml``/``.json``; missing keys keep their defaults."""
+    path = Path(path)
+    try:
+        text = path.read_text()
+    except OSError as exc:
+        raise InputError(path, f"cannot read the config file ({exc.strerror})") from None
+    try:
+        if path.suffix.lower() == ".json":
+            data = json.loads(text)
+        else:
+            import yaml
+
+            data = yaml.safe_load(text)
+    except Exception as exc:  # noqa: BLE001 - any parser error is bad input
+        raise InputError(path, f"not valid {'JSON' if path.suffix.lower() == '.json' else 'YAML'} ({str(exc).splitlines()[0]})") from None
+    return config_from_dict(cls, data or {}, str(path))
+
+
+def write_config(cfg, path: str | Path) -> None:
+    """Write a config dataclass atomically as JSON (``.json``) or YAML (anything else)."""
+    path = Path(path)
+    data = config_to_dict(cfg)
+    with atomic_path(path) as tmp:
+        if path.suffix.lower() == ".json":
+            tmp.write_text(json.dumps(data, indent=2) + "\n")
+        else:
+            import yaml
+
+            tmp.write_text(yaml.safe_dump(data, sort_keys=False))
