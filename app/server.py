@@ -121,7 +121,9 @@ class ViewerApp:
         self._bind_hotkeys()
         recs = [e for e in self.entries if e.kind == EntryKind.RECORDING and e.error is None]
         if recs:
-            self.select(recs[0].label)
+            # Open on the shortest-named landing recording (the showcase) when there is one, else the first found.
+            with_map = [e for e in recs if e.path.stem.startswith("landing")]
+            self.select((sorted(with_map, key=lambda e: len(e.path.stem)) or recs)[0].label)
 
     # ------------------------------------------------------------------ GUI construction
     def _build_main_panel(self) -> None:
