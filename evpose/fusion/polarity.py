@@ -92,6 +92,55 @@ def image_motion(points_world, edge_normal_world, T_world_cam, omega_cam, v_worl
         return jac(nc), jac(Xdot), Z
 
 
+_DEG = 180.0 / np.pi  # np.degrees' factor
+
+
+@nb.njit(cache=True, error_model="numpy")  # 0/0 -> NaN as in numpy (no motion: undefined angle)
+def _geometric_kernel(P, nw, R_cw, t_wc, omega, v_c, fx, fy, f_mean, buf_deg, flow_sigma, max_buf, min_speed, min_vis,
+                      angle, speed, buffer, geometric):
+    """Per point: :func:`image_motion` and the sign-+1 prediction of :meth:`PolarityPredictor.predict_full` in one pass.
+
+    The numpy version spends ~0.7 ms per tracker update on ~40 small-array operations for 1500 points;
+    this loop does the same arithmetic (same formulas, NaN propagation and comparisons) in ~20 us.
+    """
+    for i in range(P.shape[0]):
+        d0 = P[i, 0] - t_wc[0]
+        d1 = P[i, 1] - t_wc[1]
+        d2 = P[i, 2] - t_wc[2]
+        X0 = d0 * R_cw[0, 0] + d1 * R_cw[0, 1] + d2 * R_cw[0, 2]
+        X1 = d0 * R_cw[1, 0] + d1 * R_cw[1, 1] + d2 * R_cw[1, 2]
+        Z = d0 * R_cw[2, 0] + d1 * R_cw[2, 1] + d2 * R_cw[2, 2]
+        n0 = nw[i, 0] * R_cw[0, 0] + nw[i, 1] * R_cw[0, 1] + nw[i, 2] * R_cw[0, 2]
+        n1 = nw[i, 0] * R_cw[1, 0] + nw[i, 1] * R_cw[1, 1] + nw[i, 2] * R_cw[1, 2]
+        n2 = nw[i, 0] * R_cw[2, 0] + nw[i, 1] * R_cw[2, 1] + nw[i, 2] * R_cw[2, 2]
+        # Xdot = -omega x X - v_c
+        m0 = -(omega[1] * Z - omega[2] * X1) - v_c[0]
+        m1 = -(omega[2] * X0 - omega[0] * Z) - v_c[1]
+        m2 = -(omega[0] * X1 - omega[1] * X0) - v_c[2]
+        iz = 1.0 / Z if Z > 1e-9 else np.nan
+        gu = fx * (n0 - X0 * iz * n2) * iz
+        gv = fy * (n1 - X1 * iz * n2) * iz
+        fu = fx * (m0 - X0 * iz * m2) * iz
+        fv = fy * (m1 - X1 * iz * m2) * iz
+        sp = np.hypot(fu, fv)
+        gn = np.hypot(gu, gv)
+        vis = gn * Z / f_mean
+        c = (gu * fu + gv * fv) / (gn * sp)
+        if c < -1.0:
+            c = -1.0
+        elif c > 1.0:
+            c = 1.0
+        ang = np.arccos(c) * _DEG
+        b = buf_deg + np.arctan2(flow_sigma, sp) * _DEG
+        if b > max_buf:
+            b = max_buf
+        ok = np.isfinite(ang) and Z > 0 and sp >= min_speed and vis >= min_vis and abs(ang - 90.0) > b
+        angle[i] = ang
+        speed[i] = sp
+        buffer[i] = b
+        geometric[i] = (1 if ang > 90.0 else -1) if ok else 0
+
+
 class PolarityPredictor:
     """Predicts ON/OFF per visible map point and learns unknown brightness signs online."""
 
@@ -106,27 +155,27 @@ class PolarityPredictor:
     def predict_full(self, points_world, edge_normal_world, brightness_sign, T_world_cam, omega_cam, v_world, K,
                      point_index: np.ndarray | None = None) -> PolarityPrediction:
         c = self.config
-        n_img, flow, Z = image_motion(points_world, edge_normal_world, T_world_cam, omega_cam, v_world, K)
-        N = n_img.shape[0]
+        P = np.ascontiguousarray(points_world, np.float64).reshape(-1, 3)
+        N = P.shape[0]
+        T = np.asarray(T_world_cam, np.float64)
+        R_cw = np.ascontiguousarray(T[:3, :3].T)
+        angle = np.empty(N)
+        speed = np.empty(N)
+        buffer = np.empty(N)
+        geometric = np.empty(N, np.int8)
+        _geometric_kernel(P, np.ascontiguousarray(edge_normal_world, np.float64).reshape(-1, 3), R_cw, np.ascontiguousarray(T[:3, 3]),
+                          np.asarray(omega_cam, np.float64).reshape(3), R_cw @ np.asarray(v_world, np.float64).reshape(3),
+                          float(K[0, 0]), float(K[1, 1]), float(0.5 * (K[0, 0] + K[1, 1])), float(c.buffer_deg), float(c.flow_sigma_px_s),
+                          float(c.max_buffer_deg), float(c.min_image_speed_px_s), float(c.min_gradient_visibility), angle, speed, buffer, geometric)
         sign = np.asarray(brightness_sign, np.int8).reshape(N).copy()
         if point_index is not None:
             point_index = np.asarray(point_index, np.int64).reshape(N)
             learned = self.learned_sign(point_index)
             take = (learned != 0) & ((sign == 0) | c.learned_overrides_map)
             sign = np.where(take, learned, sign).astype(np.int8)
-        speed = np.hypot(flow[:, 0], flow[:, 1])
-        gnorm = np.hypot(n_img[:, 0], n_img[:, 1])
-        # Foreshortening: image length of the unit normal relative to a normal parallel to the image plane.
-        f_mean = 0.5 * (K[0, 0] + K[1, 1])
-        with np.errstate(invalid="ignore", divide="ignore"):
-            visibility = gnorm * Z / f_mean
-            cosang = (n_img[:, 0] * flow[:, 0] + n_img[:, 1] * flow[:, 1]) / (gnorm * speed)
-        angle = np.degrees(np.arccos(np.clip(cosang, -1.0, 1.0)))
-        buffer = np.minimum(c.buffer_deg + np.degrees(np.arctan2(c.flow_sigma_px_s, speed)), c.max_buffer_deg)
-        reliable = (np.isfinite(angle) & (Z > 0) & (speed >= c.min_image_speed_px_s)
-                    & (visibility >= c.min_gradient_visibility) & (np.abs(angle - 90.0) > buffer))
-        # Brightness constancy: opposed gradient and motion (angle > 90 deg) -> ON for a +1 sign.
-        geometric = np.where(reliable, np.where(angle > 90.0, 1, -1), 0).astype(np.int8)
+        # The kernel: image direction of the normal and motion field (:func:`image_motion`), speed, angle,
+        # adaptive buffer; foreshortening = image length of the unit normal relative to one parallel to the
+        # image plane; brightness constancy: opposed gradient and motion (angle > 90 deg) -> ON for a +1 sign.
         pol = (geometric * sign).astype(np.int8) if c.enabled else np.zeros(N, np.int8)
         self._last_index = point_index
         self._last_geometric = geometric

@@ -10,6 +10,8 @@ samples). Beyond the last sample the last measurement is held.
 
 from __future__ import annotations
 
+import itertools
+
 import numba as nb
 import numpy as np
 
@@ -36,6 +38,9 @@ def make_preintegration_params(config: FusionConfig, T_cam_imu: np.ndarray | Non
     return p
 
 
+_VERSIONS = itertools.count()
+
+
 class ImuBuffer:
     """All IMU samples received so far, on the camera clock, with piecewise integration."""
 
@@ -44,6 +49,8 @@ class ImuBuffer:
         self._chunks: list[ImuSamples] = []
         self._merged: ImuSamples = ImuSamples.empty()
         self._dirty = False
+        self.version = next(_VERSIONS)
+        """Changes whenever the buffered samples change, unique across buffers (keys caches of integrals over them)."""
 
     def add(self, imu: ImuSamples) -> None:
         """Append samples given on the IMU clock; samples not newer than the last one kept are ignored (overlapping chunks)."""
@@ -62,6 +69,7 @@ class ImuBuffer:
             return
         self._chunks.append(ImuSamples(t[keep], imu.acc[keep], imu.gyro[keep]))
         self._dirty = True
+        self.version = next(_VERSIONS)
 
     @property
     def samples(self) -> ImuSamples:
@@ -86,6 +94,7 @@ class ImuBuffer:
         self._merged = samples
         self._chunks = []
         self._dirty = False
+        self.version = next(_VERSIONS)
 
     def measurement_at(self, t_us: float) -> tuple[np.ndarray, np.ndarray]:
         """Linearly interpolated (acc, gyro) at a time; held constant outside the buffered span."""
@@ -111,9 +120,12 @@ class ImuBuffer:
         i1 = int(np.searchsorted(s.t, t1_us, side="left"))
         bounds = np.concatenate([[t0_us], s.t[i0:i1], [t1_us]]).astype(np.float64)
         mids = 0.5 * (bounds[:-1] + bounds[1:])
-        ts = s.t.astype(np.float64)
-        acc = np.stack([np.interp(mids, ts, s.acc[:, k]) for k in range(3)], axis=1)
-        gyro = np.stack([np.interp(mids, ts, s.gyro[:, k]) for k in range(3)], axis=1)
+        # Interpolate on the samples bracketing [t0, t1] only (t[lo] <= t0, t[hi - 1] >= t1): the same
+        # brackets, so the same values as over the whole buffer, at a cost that does not grow with it.
+        lo, hi = max(i0 - 1, 0), min(i1 + 1, len(s))
+        ts = s.t[lo:hi].astype(np.float64)
+        acc = np.stack([np.interp(mids, ts, s.acc[lo:hi, k]) for k in range(3)], axis=1)
+        gyro = np.stack([np.interp(mids, ts, s.gyro[lo:hi, k]) for k in range(3)], axis=1)
         return np.diff(bounds) * 1e-6, acc, gyro
 
     def integrate(self, pim, t0_us: int, t1_us: int) -> None:

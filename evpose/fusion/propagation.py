@@ -23,14 +23,20 @@ class NavPropagator:
         self.t_us: int | None = None
         self.nav = None
         self.bias = None
+        self._cache_key = None
         self._cache_pim = None
-        self._cache_t: int | None = None
+        self._cache_state_key = None
+        self._cache_state: FusedState | None = None
 
     def anchor(self, t_us: int, nav, bias) -> None:
         """Restart propagation from a new estimated state."""
         self.t_us = int(t_us)
         self.nav = nav
         self.bias = bias
+        self._cache_key = None
+        self._cache_pim = None
+        self._cache_state_key = None
+        self._cache_state = None
 
     def preintegration_to(self, t_us: int):
         """A fresh preintegration from the anchor to ``t_us``.
@@ -42,8 +48,15 @@ class NavPropagator:
         """
         import gtsam
 
+        # One tracker update asks for the same span up to three times (motion prediction, polarity
+        # prediction, the new graph state); the integral is a pure function of the anchor, the buffer
+        # and t, so the last one is reused while none of them changed (callers only read it).
+        key = (self.buffer.version, int(t_us))
+        if self._cache_key == key:
+            return self._cache_pim
         pim = gtsam.PreintegratedCombinedMeasurements(self.params, self.bias)
         self.buffer.integrate(pim, self.t_us, int(t_us))
+        self._cache_key, self._cache_pim = key, pim
         return pim
 
     def predict_nav(self, t_us: int):
@@ -63,7 +76,13 @@ class NavPropagator:
                           np.array(bias.gyroscope(), dtype=np.float64), cov, bool(degraded), self.extrinsic.cam_omega(omega_imu))
 
     def predict(self, t_us: int, degraded: bool = False) -> FusedState:
-        return self.fused_state(t_us, self.predict_nav(t_us), self.bias, None, degraded)
+        # The motion model and the polarity selector both ask for the same time each update: reuse the
+        # state (a copy, so callers may modify theirs) while the anchor and the buffer are unchanged.
+        key = (self.buffer.version, int(t_us), bool(degraded))
+        if self._cache_state_key != key:
+            self._cache_state = self.fused_state(t_us, self.predict_nav(t_us), self.bias, None, degraded)
+            self._cache_state_key = key
+        return self._cache_state.copy()
 
 
 def imu_rate_trajectory(history, buffer: ImuBuffer, params, extrinsic: Extrinsic, t0_us: int, t1_us: int) -> Trajectory:

@@ -133,13 +133,13 @@ class VisibleMap:
                 max_depth_m=config.max_depth_m, occlusion=False,
             )
             sup = visible_points(self.points, T, self.K, self.width, self.height, wide)
+            self._sup_points = np.ascontiguousarray(self.points[sup])  # gathered once, reused below
             if sup.size:
-                Xc = (self.points[sup] - T[:3, 3]) @ T[:3, :3]
+                Xc = (self._sup_points - T[:3, 3]) @ T[:3, :3]
                 zmin = float(Xc[:, 2].min())
             else:
                 zmin = float(config.min_depth_m)
             self._cache = (T.copy(), sup, max(zmin, float(config.min_depth_m), 1e-6))
-            self._sup_points = np.ascontiguousarray(self.points[sup])
         sup = self._cache[1]
         if sup.size == 0:
             return sup.copy()

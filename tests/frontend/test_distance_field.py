@@ -134,3 +134,22 @@ def test_blurred_minimum_trails_a_moving_edge_more_with_a_wider_blur():
         f.compute(ts, 20_000)
         lags.append(40.0 - _subpixel_argmin(f.image(0)[30]))
     assert 0.2 < lags[0] < lags[1] < 2.0, lags
+
+
+def test_derivative_kernel_matches_replicated_border_differences_on_any_box_shape():
+    from evpose.frontend.distance_field import _derivatives_kernel
+
+    rng = np.random.default_rng(3)
+    for h, w in [(2, 2), (2, 7), (9, 3), (17, 31)]:
+        img = rng.random((h, w)).astype(np.float32)
+        outs = [np.full((h + 4, w + 6), 7.0, np.float32) for _ in range(5)]
+        _derivatives_kernel(img, 1, 2, True, *outs)
+        p = np.pad(img, 1, mode="edge")
+        c, lf, rt, up, dn = p[1:-1, 1:-1], p[1:-1, :-2], p[1:-1, 2:], p[:-2, 1:-1], p[2:, 1:-1]
+        d = np.float64
+        # Same arithmetic as the kernel: differences in float32, "x - 2 f0 + y" in float64.
+        want = [0.5 * (rt - lf), 0.5 * (dn - up), rt.astype(d) - 2.0 * c.astype(d) + lf.astype(d),
+                0.25 * (p[2:, 2:] - p[2:, :-2] - p[:-2, 2:] + p[:-2, :-2]), dn.astype(d) - 2.0 * c.astype(d) + up.astype(d)]
+        for got, ref in zip(outs, want):
+            assert np.array_equal(got[1 : 1 + h, 2 : 2 + w], ref.astype(np.float32))
+            assert np.all(got[0] == 7.0) and np.all(got[:, :2] == 7.0)  # nothing written outside the box

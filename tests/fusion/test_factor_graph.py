@@ -162,3 +162,30 @@ def test_unknown_initial_velocity_is_estimated_within_a_fraction_of_a_second(bac
     assert np.linalg.norm(v_true[0]) > 0.5
     v_err = np.array([np.linalg.norm(s.velocity_world - v_true[k]) for k, s in enumerate(states)])
     assert np.all(v_err[60:] < 0.05)
+
+
+def test_repeated_predictions_are_reused_but_follow_new_imu_and_new_states(calibration):
+    m = _noisy_motion(0.2)
+    f = _start(m, calibration)
+    g = _start(m, calibration)
+    t = m.config.t0_us + 20_000
+    first = f.predict(t)
+    first.T_world_cam[:] = 0.0  # callers own what they get
+    assert np.array_equal(f.predict(t).T_world_cam, g.predict(t).T_world_cam)
+    gt, regs, cov = noisy_registrations(m, calibration.T_cam_imu, [t], 0.002, np.radians(0.1), seed=2)
+    f.update(t, regs[0], cov)
+    g.update(t, regs[0], cov)
+    assert np.array_equal(f.predict(t + 5000).T_world_cam, g.predict(t + 5000).T_world_cam)
+
+    # IMU arriving after a prediction changes the next one at the same time.
+    imu = m.imu()
+    t_cut = m.config.t0_us + 10_000
+    h = FactorGraphFusion(FusionConfig(), calibration)
+    h.add_imu(imu[: int(np.searchsorted(imu.t, t_cut))])
+    gt0 = m.camera_trajectory([m.config.t0_us], calibration.T_cam_imu)
+    h.initialize(m.config.t0_us, gt0.matrix(0), m.camera_velocity([m.config.t0_us], calibration.T_cam_imu)[0])
+    early = h.predict(t).T_world_cam
+    h.add_imu(imu)
+    late = h.predict(t).T_world_cam
+    assert not np.array_equal(early, late)
+    assert np.array_equal(late, _start(m, calibration).predict(t).T_world_cam)

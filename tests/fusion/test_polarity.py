@@ -188,3 +188,38 @@ def test_learned_signs_survive_snapshot_and_restore():
     pr.learn(np.arange(len(cmap)), -observed_point_polarity(point, p, len(cmap)) * 5)
     pr.restore(snap)
     assert np.array_equal(pr.learned_sign(np.arange(len(cmap))), learned)
+
+
+def test_fused_prediction_kernel_matches_the_image_motion_formulas():
+    from evpose.fusion.polarity import PolarityFilterConfig, image_motion
+
+    rng = np.random.default_rng(4)
+    K = np.array([[200.0, 0, 173], [0, 201.0, 130], [0, 0, 1]])
+    P = rng.normal(size=(400, 3)) * 2 + [0, 0, 4]
+    P[:5, 2] = -1.0  # behind the camera
+    n = rng.normal(size=(400, 3))
+    n /= np.linalg.norm(n, axis=1, keepdims=True)
+    T = np.eye(4)
+    T[:3, :3] = Rotation.from_rotvec([0.05, -0.1, 0.02]).as_matrix()
+    T[:3, 3] = [0.1, -0.2, 0.05]
+    c = PolarityFilterConfig()
+    for omega, v in [(np.array([0.3, -0.2, 0.5]), np.array([0.4, 0.1, -0.2])), (np.zeros(3), np.zeros(3))]:
+        pred = PolarityPredictor(c).predict_full(P, n, np.ones(400, np.int8), T, omega, v, K)
+        n_img, flow, Z = image_motion(P, n, T, omega, v, K)
+        speed = np.hypot(flow[:, 0], flow[:, 1])
+        gnorm = np.hypot(n_img[:, 0], n_img[:, 1])
+        with np.errstate(invalid="ignore", divide="ignore"):
+            cosang = (n_img * flow).sum(1) / (gnorm * speed)
+            vis = gnorm * Z / (0.5 * (K[0, 0] + K[1, 1]))
+        angle = np.degrees(np.arccos(np.clip(cosang, -1, 1)))
+        buffer = np.minimum(c.buffer_deg + np.degrees(np.arctan2(c.flow_sigma_px_s, speed)), c.max_buffer_deg)
+        np.testing.assert_allclose(pred.speed_px_s, speed, rtol=1e-6)
+        np.testing.assert_allclose(pred.angle_deg, angle, rtol=1e-5, atol=1e-4, equal_nan=True)
+        np.testing.assert_allclose(pred.buffer_deg, buffer, rtol=1e-6)
+        reliable = np.isfinite(angle) & (Z > 0) & (speed >= c.min_image_speed_px_s) & (vis >= c.min_gradient_visibility)
+        clear = reliable & (np.abs(np.abs(angle - 90) - buffer) > 1e-6)  # away from the decision boundary
+        want = np.where(np.abs(angle - 90) > buffer, np.where(angle > 90, 1, -1), 0)
+        assert np.array_equal(pred.geometric[clear], want[clear])
+        assert np.all(pred.geometric[~reliable] == 0)
+        if not omega.any():
+            assert np.all(pred.polarity == 0)  # no motion: no prediction

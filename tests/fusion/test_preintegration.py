@@ -88,3 +88,32 @@ def test_buffer_rejects_nan_and_unsorted_samples_with_input_error():
         buf.add(ImuSamples.from_arrays([0, 1, 2], acc, np.zeros((3, 3))))
     with pytest.raises(InputError, match="does not increase"):
         buf.add(ImuSamples.from_arrays([0, 5, 5], np.zeros((3, 3)), np.zeros((3, 3))))
+
+
+def test_pieces_over_a_long_buffer_equal_interpolation_over_all_samples():
+    rng = np.random.default_rng(5)
+    t = np.cumsum(rng.integers(1500, 2500, 400)).astype(np.int64)
+    buf = ImuBuffer()
+    buf.add(ImuSamples.from_arrays(t, rng.normal(size=(400, 3)), rng.normal(size=(400, 3))))
+    s = buf.samples
+    for t0, t1 in [(int(t[10]) + 7, int(t[12]) - 3), (int(t[0]) - 900, int(t[3])), (int(t[-3]), int(t[-1]) + 800), (int(t[100]), int(t[101]))]:
+        dts, acc, gyro = buf.pieces(t0, t1)
+        bounds = np.concatenate([[t0], s.t[(s.t > t0) & (s.t < t1)], [t1]]).astype(np.float64)
+        mids = 0.5 * (bounds[:-1] + bounds[1:])
+        ts = s.t.astype(np.float64)
+        assert np.array_equal(acc, np.stack([np.interp(mids, ts, s.acc[:, k]) for k in range(3)], axis=1))
+        assert np.array_equal(gyro, np.stack([np.interp(mids, ts, s.gyro[:, k]) for k in range(3)], axis=1))
+        assert np.array_equal(dts, np.diff(bounds) * 1e-6)
+
+
+def test_buffer_version_changes_with_its_samples():
+    buf = ImuBuffer()
+    v0 = buf.version
+    t = np.arange(0, 10_000, 1000, dtype=np.int64)
+    imu = ImuSamples.from_arrays(t, np.ones((10, 3)), np.zeros((10, 3)))
+    buf.add(imu[:5])
+    v1 = buf.version
+    buf.add(imu[:5])  # nothing new
+    assert buf.version == v1 != v0
+    buf.set_samples(imu)
+    assert buf.version != v1 and ImuBuffer().version not in (v0, v1, buf.version)
