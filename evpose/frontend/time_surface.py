@@ -31,24 +31,11 @@ class TimeSurfaceConfig:
 
 
 @nb.njit(cache=True)
-def _update_kernel(t, x, y, p, width, lut, last_flat, combined_flat):
-    """Stamp each event into its polarity's map and the combined map; ``lut``: sensor -> ideal pixel (-1 = outside)."""
-    plane = combined_flat.shape[0]
-    stored = 0
-    for i in range(t.shape[0]):
-        j = lut[np.int64(y[i]) * width + np.int64(x[i])]
-        if j < 0:
-            continue
-        off = 0 if p[i] > 0 else plane
-        last_flat[off + j] = t[i]
-        combined_flat[j] = t[i]
-        stored += 1
-    return stored
+def _update_kernel(t, x, y, p, keep, width, lut, last_flat, combined_flat):
+    """Stamp each kept event into its polarity's map and the combined map; ``lut``: sensor -> ideal pixel (-1 = outside).
 
-
-@nb.njit(cache=True)
-def _update_masked_kernel(t, x, y, p, keep, width, lut, last_flat, combined_flat):
-    """As :func:`_update_kernel` for the events where ``keep`` is true (saves a copy of the batch)."""
+    Taking the mask here (instead of indexing the batch first) saves a copy of every column per step.
+    """
     plane = combined_flat.shape[0]
     stored = 0
     for i in range(t.shape[0]):
@@ -116,8 +103,8 @@ class SeparatedTimeSurface:
         flat = self._last.reshape(-1)
         comb = self._combined.reshape(-1)
         if keep is None:
-            return int(_update_kernel(events.t, events.x, events.y, events.p, self.width, self._lut, flat, comb))
-        return int(_update_masked_kernel(events.t, events.x, events.y, events.p, keep, self.width, self._lut, flat, comb))
+            keep = np.ones(len(events), dtype=np.bool_)
+        return int(_update_kernel(events.t, events.x, events.y, events.p, keep, self.width, self._lut, flat, comb))
 
     def combined_last(self) -> np.ndarray:
         """int64 (H, W): the newest timestamp of either polarity (the combined surface's source; a view)."""
