@@ -11,6 +11,9 @@ none). An event is kept when some event at least ``min_separation`` of the
 window span earlier or later lands within ``radius_px`` of it (per-pixel
 earliest/latest warped time maps, O(1) per event). Depth comes from the map points projected into coarse cells (nearest
 surface per cell); cells without map points take the median map depth.
+The tracker's 5 ms batches are too short for the test on their own, so it
+passes the last ``history_us`` of events as context (``n_context``): they
+support the new events but are not judged again.
 """
 
 from __future__ import annotations
@@ -27,7 +30,7 @@ class EgoMotionConfig:
 
     enabled: bool = True
     """Run the filter (False keeps every event)."""
-    radius_px: float = field(default=1.0, metadata={"min": 0.5, "max": 6.0, "step": 0.5, "unit": "px"})
+    radius_px: float = field(default=1.5, metadata={"min": 0.5, "max": 6.0, "step": 0.5, "unit": "px"})
     """Support radius around a warped event in the other half-window, pixels."""
     min_separation: float = field(default=0.33, metadata={"min": 0.05, "max": 0.5, "step": 0.01, "unit": "window"})
     """Support must come from an event at least this share of the window span earlier or later (<= 0.5 so every event has such a side)."""
@@ -37,18 +40,31 @@ class EgoMotionConfig:
     """Depth used when no map point is in view, metres."""
     min_events: int = field(default=200, metadata={"min": 0, "max": 100000, "step": 10, "unit": "events"})
     """Windows with fewer events are kept whole (too sparse to judge consistency)."""
+    history_us: int = field(default=20_000, metadata={"min": 0, "max": 100_000, "step": 1000, "unit": "us"})
+    """Per-step use (tracker): a step's events are judged within the window of this length ending at the step, earlier events only as support (0 = the batch alone)."""
 
 
 @nb.njit(cache=True)
-def _depth_grid(uv, z, cell, gw, gh):
+def _depth_grid(points, R_cw, p_wc, fx, fy, cx, cy, cell, gw, gh):
+    # Nearest map surface per coarse cell; one pass without temporaries (the map has ~1e5 points, run every step).
     grid = np.full((gh, gw), np.inf)
-    for k in range(uv.shape[0]):
-        if not (z[k] > 0):
+    for k in range(points.shape[0]):
+        d0 = points[k, 0] - p_wc[0]
+        d1 = points[k, 1] - p_wc[1]
+        d2 = points[k, 2] - p_wc[2]
+        z = R_cw[2, 0] * d0 + R_cw[2, 1] * d1 + R_cw[2, 2] * d2
+        if not (z > 1e-6):
             continue
-        cx = int(np.floor(uv[k, 0] / cell))
-        cy = int(np.floor(uv[k, 1] / cell))
-        if 0 <= cx < gw and 0 <= cy < gh and z[k] < grid[cy, cx]:
-            grid[cy, cx] = z[k]
+        X = R_cw[0, 0] * d0 + R_cw[0, 1] * d1 + R_cw[0, 2] * d2
+        Y = R_cw[1, 0] * d0 + R_cw[1, 1] * d1 + R_cw[1, 2] * d2
+        u = fx * X / z + cx
+        v = fy * Y / z + cy
+        if not (u > -1e9 and u < 1e9 and v > -1e9 and v < 1e9):
+            continue
+        gx = int(np.floor(u / cell))
+        gy = int(np.floor(v / cell))
+        if 0 <= gx < gw and 0 <= gy < gh and z < grid[gy, gx]:
+            grid[gy, gx] = z
     return grid
 
 
@@ -125,23 +141,20 @@ class EgoMotionFilter:
         if points_world is None or len(points_world) == 0:
             return np.full((gh, gw), c.default_depth_m)
         T = np.asarray(T_world_cam, np.float64)
-        R_cw = T[:3, :3].T
-        X = (np.asarray(points_world, np.float64) - T[:3, 3]) @ R_cw.T
-        z = X[:, 2]
-        front = z > 1e-6
-        if not front.any():
-            return np.full((gh, gw), c.default_depth_m)
-        uv = np.full((X.shape[0], 2), -1.0)
-        uv[front, 0] = K[0, 0] * X[front, 0] / z[front] + K[0, 2]
-        uv[front, 1] = K[1, 1] * X[front, 1] / z[front] + K[1, 2]
-        grid = _depth_grid(uv, np.where(front, z, -1.0), float(cell), gw, gh)
+        R_cw = np.ascontiguousarray(T[:3, :3].T)
+        pts = np.ascontiguousarray(points_world, np.float64)
+        grid = _depth_grid(pts, R_cw, np.ascontiguousarray(T[:3, 3]), float(K[0, 0]), float(K[1, 1]),
+                           float(K[0, 2]), float(K[1, 2]), float(cell), gw, gh)
         finite = np.isfinite(grid)
         fill = float(np.median(grid[finite])) if finite.any() else c.default_depth_m
         return np.where(finite, grid, fill)
 
     def filter(self, x, y, t, T_world_cam, omega_cam, v_world, K, width: int, height: int,
-               points_world: np.ndarray | None = None, t_ref_us: int | None = None) -> np.ndarray:
-        """Boolean keep mask (E,) for events ``x, y`` (ideal pinhole pixels), ``t`` (us).
+               points_world: np.ndarray | None = None, t_ref_us: int | None = None,
+               n_context: int = 0) -> np.ndarray:
+        """Boolean keep mask (E - n_context,) for events ``x, y`` (ideal pinhole pixels), ``t`` (us).
+
+        The first ``n_context`` events (earlier history) only support the others and are not judged.
 
         ``T_world_cam`` is the pose at ``t_ref_us`` (default: the window's middle),
         ``omega_cam`` the camera angular rate (camera frame, rad/s) and ``v_world``
@@ -152,9 +165,10 @@ class EgoMotionFilter:
         ey = np.ascontiguousarray(y, np.float64)
         et = np.ascontiguousarray(t, np.int64)
         n = ex.shape[0]
-        if not c.enabled or n < max(c.min_events, 2):
-            self.last_counts = {"events": n, "events_removed": 0}
-            return np.ones(n, bool)
+        m = int(n_context)
+        if not c.enabled or n < max(c.min_events, 2) or m >= n:
+            self.last_counts = {"events": n - m, "events_removed": 0}
+            return np.ones(max(n - m, 0), bool)
         t0, t1 = int(et[0]), int(et[-1])
         t_ref = (t0 + t1) // 2 if t_ref_us is None else int(t_ref_us)
         depth = self.depth_image(points_world, T_world_cam, K, width, height)
@@ -167,5 +181,6 @@ class EgoMotionFilter:
         keep = np.empty(n, np.bool_)
         min_sep = max(int(c.min_separation * (t1 - t0)), 1)
         _support(wu, wv, et, int(width), int(height), float(c.radius_px), min_sep, keep)
-        self.last_counts = {"events": n, "events_removed": int(n - np.count_nonzero(keep))}
+        keep = keep[m:]
+        self.last_counts = {"events": n - m, "events_removed": int(keep.size - np.count_nonzero(keep))}
         return keep

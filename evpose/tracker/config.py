@@ -68,7 +68,7 @@ class TrackerConfig:
     """Motion-instructed polarity filter (``stpe+filter`` and ``full``)."""
     fusion: FusionConfig = field(default_factory=FusionConfig)
     """IMU fusion (``full``; ``stpe+filter`` uses it only for the motion the polarity filter needs)."""
-    ego_motion: EgoMotionConfig = field(default_factory=lambda: EgoMotionConfig(enabled=False))
+    ego_motion: EgoMotionConfig = field(default_factory=EgoMotionConfig)
     """Ego-motion infrastructure extraction (``full`` only): drop events the IMU-predicted motion does not explain."""
 
 

@@ -91,6 +91,8 @@ class Tracker:
         self._pose: np.ndarray | None = None
         self._t_us: int | None = None
         self._steps = 0
+        self._ego_history = (np.empty(0), np.empty(0), np.empty(0, np.int64))
+        """Recent noise-filtered events (ideal x, y, t us) the ego-motion filter judges new ones against."""
 
     # ------------------------------------------------------------------ state
     @property
@@ -136,6 +138,7 @@ class Tracker:
             "pose": None if self._pose is None else self._pose.copy(),
             "t_us": self._t_us,
             "steps": self._steps,
+            "ego_history": tuple(a.copy() for a in self._ego_history),
         }
 
     def restore(self, state: dict) -> None:
@@ -150,6 +153,7 @@ class Tracker:
         self._pose = None if state["pose"] is None else state["pose"].copy()
         self._t_us = state["t_us"]
         self._steps = state["steps"]
+        self._ego_history = tuple(a.copy() for a in state["ego_history"])
 
     def _side_motion(self):
         """The fusion backend when it runs beside (not as) the predictor, as in ``stpe+filter``."""
@@ -297,11 +301,21 @@ class Tracker:
             x, y = xy[:, 0], xy[:, 1]
         out = np.ones(len(events), bool)
         idx = np.flatnonzero(keep)
+        ego = self.components.ego_motion
+        hx, hy, ht = self._ego_history
+        # A 5 ms batch is too short for the consistency test: judge it against the last history_us of events too.
+        horizon = int(ego.config.history_us)
+        first = int(np.searchsorted(ht, until - horizon, side="left")) if horizon > 0 else ht.size
+        hx, hy, ht = hx[first:], hy[first:], ht[first:]
+        ax = np.concatenate([hx, x[idx]])
+        ay = np.concatenate([hy, y[idx]])
+        at = np.concatenate([ht, events.t[idx].astype(np.int64)])
         if idx.size:
-            out[idx] = self.components.ego_motion.filter(
-                x[idx], y[idx], events.t[idx], state.T_world_cam, omega, state.velocity_world, self.K,
-                self.width, self.height, points_world=self._points, t_ref_us=until,
+            out[idx] = ego.filter(
+                ax, ay, at, state.T_world_cam, omega, state.velocity_world, self.K,
+                self.width, self.height, points_world=self._points, t_ref_us=until, n_context=ht.size,
             )
+        self._ego_history = (ax, ay, at) if horizon > 0 else self._ego_history
         return out
 
     def _field_box(self, pts: np.ndarray, T_world_cam: np.ndarray, coarse: bool = False) -> tuple[int, int, int, int] | None:

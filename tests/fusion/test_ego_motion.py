@@ -85,3 +85,21 @@ def test_isolated_noise_events_are_dropped_and_sparse_windows_kept_whole():
     assert keep.mean() < 0.5
     few = EgoMotionFilter(EgoMotionConfig(min_events=5000)).filter(x, y, t, T, np.zeros(3), np.zeros(3), K, W, H)
     assert few.all()
+
+
+def test_a_short_batch_is_judged_against_earlier_context_events():
+    # A 5 ms batch alone is too short to separate static from moving edges; 20 ms of context events make it work.
+    rng = np.random.default_rng(0)
+    static, box = _scene()
+    v, w = np.array([2.0, -1.0, -0.3]), np.array([0.3, -0.5, 0.8])
+    x, y, t, src = _events(rng, static, box, v, w, box_v=np.array([-2.0, 2.5, 0.0]), span_us=25_000)
+    m = int(np.searchsorted(t, 20_000))
+    T = _pose(0.025, v, w)
+    f = EgoMotionFilter(EgoMotionConfig())
+    with_context = f.filter(x, y, t, T, w, v, K, W, H, points_world=static, t_ref_us=25_000, n_context=m)
+    assert with_context.shape == (len(t) - m,)
+    assert f.last_counts["events"] == len(t) - m
+    alone = EgoMotionFilter(EgoMotionConfig()).filter(x[m:], y[m:], t[m:], T, w, v, K, W, H, points_world=static, t_ref_us=25_000)
+    s = src[m:]
+    assert with_context[s == 0].mean() > 0.9 and with_context[s == 1].mean() < 0.3
+    assert alone[s == 1].mean() > 0.8
