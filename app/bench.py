@@ -2,7 +2,7 @@
 
 Same registry shape as ``evpose/bench/<area>.py`` (``BENCHMARKS = {name: fn(ctx) -> dict}``);
 it lives in ``app/`` because ``evpose/`` must not import the viewer. Run it directly:
-``python -m app.bench [--recording R.h5 --map M_map.ply] [--seconds S]``.
+``python -m app.bench [--full] [--recording R.h5 --map M_map.ply] [--seconds S] [--seeks N]``.
 Timings on a shared 2-core machine are noisy; each benchmark reports a headless
 baseline measured in the same run.
 """
@@ -10,6 +10,7 @@ baseline measured in the same run.
 from __future__ import annotations
 
 import json
+import os
 import socket
 import subprocess
 import sys
@@ -31,6 +32,10 @@ def _free_port() -> int:
 
 DEMO_OVERRIDE: tuple[Path, Path] | None = None
 """(recording, map) given on the command line, used instead of looking for the demo."""
+PLAY_SECONDS: float | None = None
+"""Wall seconds of each playback phase given on the command line (default: 4 quick, 8 full)."""
+N_SEEKS: int | None = None
+"""Random seek targets per phase given on the command line (default: 4 quick, 10 full)."""
 
 
 def demo_pair(work_dir: Path, seconds: float = 10.0) -> tuple[Path, Path]:
@@ -51,12 +56,13 @@ def demo_pair(work_dir: Path, seconds: float = 10.0) -> tuple[Path, Path]:
     return rec, cmap
 
 
-def _viewer(rec: Path, cmap: Path, work_dir: Path):
+def _viewer(rec: Path, cmap: Path, work_dir: Path, prefetch: bool = True):
+    """The viewer as ``evpose app`` serves it (run-ahead on unless ``prefetch`` is False), with the pair loaded."""
     from app.player import PlayerConfig
     from app.server import AppConfig, ViewerApp
 
     app = ViewerApp(AppConfig(data=sorted({rec.parent.resolve(), cmap.parent.resolve()}), port=_free_port(),
-                              export_dir=work_dir / "exports", player=PlayerConfig(prefetch=False)))
+                              export_dir=work_dir / "exports", player=PlayerConfig(prefetch=prefetch)))
     rec_entry = next(e for e in app.entries if e.path == rec.resolve())
     map_entry = next(e for e in app.entries if e.path == cmap.resolve())
     if not app.select(rec_entry.display, map_entry.display):
@@ -65,91 +71,185 @@ def _viewer(rec: Path, cmap: Path, work_dir: Path):
     return app
 
 
-def headless_real_time_factor(rec_path: Path, map_path: Path, seconds: float) -> dict:
-    """Baseline: the tracker alone (no viewer, debug images on as the viewer asks) over the same span."""
-    from app.browser import load_map, load_recording
-    from app.engine import TrackerEngine
+class DrawMeter:
+    """Wraps the player's frame callback: counts frames, times each draw (wall and thread CPU), signals each one."""
 
-    eng = TrackerEngine(load_recording(rec_path), load_map(map_path))
-    eng.step()  # compile / load numba caches outside the timing
-    t0_media, t0 = eng.current_t_us, time.perf_counter()
-    while eng.current_t_us - t0_media < seconds * 1e6 and eng.step() is not None:
-        pass
+    def __init__(self, player):
+        self.player = player
+        self.inner = player._on_frame
+        self.wall_ms: list[float] = []
+        self.cpu_ms: list[float] = []
+        self.drawn = threading.Event()
+        player._on_frame = self
+
+    def __call__(self, frame, engine) -> None:
+        t0, c0 = time.perf_counter(), time.thread_time()
+        self.inner(frame, engine)
+        self.wall_ms.append((time.perf_counter() - t0) * 1e3)
+        self.cpu_ms.append((time.thread_time() - c0) * 1e3)
+        self.drawn.set()
+
+    def reset(self) -> None:
+        self.wall_ms.clear()
+        self.cpu_ms.clear()
+
+
+def _cpu_s() -> tuple[float, float]:
+    """CPU seconds used so far by this process and by its children (the browser), for the per-phase load they add."""
+    import psutil
+
+    me = psutil.Process()
+    kids = 0.0
+    for c in me.children(recursive=True):
+        try:
+            t = c.cpu_times()
+            kids += t.user + t.system
+        except psutil.Error:
+            pass
+    t = me.cpu_times()
+    return t.user + t.system, kids
+
+
+def _attach_browser(p, app):
+    browser = p.chromium.launch(executable_path="/usr/bin/chromium", args=CHROMIUM_ARGS)
+    page = browser.new_page(viewport={"width": 1400, "height": 900})
+    page.goto(f"http://127.0.0.1:{app.cfg.port}")
+    page.get_by_text("SP-TS positive").first.wait_for(timeout=60_000)
+    return browser
+
+
+def _play(app, meter: DrawMeter, seconds: float) -> dict:
+    """Play at 1x from the start for ``seconds`` of wall time; what the viewer achieved."""
+    app.player.seek(app.recording.t_start_us)
+    app.player.wait_idle(600)
+    meter.reset()
+    t_media0 = app.last_frame.t_us
+    frames0 = app.frames_published
+    cpu0, kids0, load0 = *_cpu_s(), os.getloadavg()[0]
+    t0 = time.perf_counter()
+    app.player.play()
+    time.sleep(seconds)
+    app.player.pause()
+    app.player.wait_idle(600)
     wall = time.perf_counter() - t0
-    return {"headless_real_time_factor": (eng.current_t_us - t0_media) / 1e6 / wall, "headless_steps": len(eng.history)}
+    cpu1, kids1 = _cpu_s()
+    media = (app.last_frame.t_us - t_media0) / 1e6
+    out = {"wall_s": wall, "media_s": media, "real_time_factor": media / wall,
+           "ui_frames_per_s": (app.frames_published - frames0) / wall,
+           "server_cpu_s": cpu1 - cpu0, "browser_cpu_s": kids1 - kids0, "loadavg_1min": [load0, os.getloadavg()[0]]}
+    if meter.wall_ms:
+        out.update(draw_wall_median_ms=float(np.median(meter.wall_ms)), draw_wall_p95_ms=float(np.percentile(meter.wall_ms, 95)),
+                   draw_cpu_median_ms=float(np.median(meter.cpu_ms)))
+    return out
+
+
+def _wait_run_ahead(app, timeout_s: float = 1800.0) -> float:
+    """Block until the run-ahead has reached the end of the recording; seconds waited."""
+    t0 = time.perf_counter()
+    while time.perf_counter() - t0 < timeout_s:
+        done = app.player.call(lambda e: getattr(e, "frontier", 0) >= getattr(e, "n_steps", 0)).result(600)
+        if done:
+            break
+        time.sleep(0.25)
+    return time.perf_counter() - t0
+
+
+def headless_real_time_factor(rec_path: Path, map_path: Path, seconds: float) -> dict:
+    """Baseline in the same run: the tracker alone (plain steps, and debug products on every step) over ``seconds`` of media."""
+    from app.browser import load_map, load_recording
+    from evpose.tracker.session import TrackingSession
+
+    rec, cmap = load_recording(rec_path), load_map(map_path)
+    out = {}
+    for name, debug in (("plain", False), ("debug_every_step", True)):
+        s = TrackingSession(rec, cmap)
+        s.step(debug=debug)  # numba caches outside the timing
+        t0_media, t0, c0 = s.t_us, time.perf_counter(), time.thread_time()
+        while s.t_us - t0_media < seconds * 1e6 and s.step(debug=debug) is not None:
+            del s.results[:]
+        wall, cpu = time.perf_counter() - t0, time.thread_time() - c0
+        media = (s.t_us - t0_media) / 1e6
+        out[f"headless_{name}_real_time_factor"] = media / wall
+        out[f"headless_{name}_cpu_ms_per_step"] = cpu * 1e3 / max((s.t_us - t0_media) // s.dt_us, 1)
+    return out
 
 
 def bench_playback(ctx) -> dict:
-    """Play the moderate demo at 1x for a few seconds with all panels on and a real browser attached."""
+    """Play the moderate demo at 1x with all panels on and headless Chromium attached: right after loading, and once the run-ahead is done."""
     from playwright.sync_api import sync_playwright
 
-    seconds = 4.0 if ctx.quick else 10.0
+    seconds = PLAY_SECONDS or (4.0 if ctx.quick else 8.0)
     rec, cmap = demo_pair(Path(ctx.work_dir))
+    t_load = time.perf_counter()
     app = _viewer(rec, cmap, Path(ctx.work_dir))
+    out: dict = {"recording": str(rec)}
     try:
         with sync_playwright() as p:
-            browser = p.chromium.launch(executable_path="/usr/bin/chromium", args=CHROMIUM_ARGS)
-            page = browser.new_page(viewport={"width": 1400, "height": 900})
-            page.goto(f"http://127.0.0.1:{app.cfg.port}")
-            page.get_by_text("SP-TS positive").first.wait_for(timeout=60_000)
-            app.player.seek(app.recording.t_start_us)
-            app.player.wait_idle(120)
-            frames0, t_media0 = app.frames_published, app.last_frame.t_us
-            t0 = time.perf_counter()
-            app.player.play()
-            time.sleep(seconds)
-            app.player.pause()
-            app.player.wait_idle(60)
-            wall = time.perf_counter() - t0
-            media = (app.last_frame.t_us - t_media0) / 1e6
-            frames = app.frames_published - frames0
-            steps = [s.timings_ms.get("total", np.nan) for s in app.player.engine.history]
+            browser = _attach_browser(p, app)
+            meter = DrawMeter(app.player)
+            out["cold"] = _play(app, meter, seconds)
+            _wait_run_ahead(app)
+            out["run_ahead_done_after_load_s"] = time.perf_counter() - t_load
+            cache = app.player.call(lambda e: (len(e.cache), e.cache.nbytes, e.cache.every) if hasattr(e, "cache") else None).result(60)
+            if cache:
+                out["frame_cache"] = {"frames": cache[0], "mb": cache[1] / 2**20, "every_steps": cache[2]}
+            out["warm"] = _play(app, meter, seconds)
             browser.close()
     finally:
         app.stop()
-    out = {"recording": str(rec), "wall_s": wall, "media_s": media, "real_time_factor": media / wall,
-           "ui_frames_per_s": frames / wall, "step_total_median_ms": float(np.nanmedian(steps)) if steps else float("nan")}
-    out.update(headless_real_time_factor(rec, cmap, media if media > 0 else 1.0))
+    out.update(headless_real_time_factor(rec, cmap, min(seconds, 2.0)))
     return out
 
 
 def bench_seek(ctx) -> dict:
-    """Seek latency (command -> frame drawn) on a 10 s recording after the idle-time prefetch; without it a far seek replays from the start."""
-    from app.browser import load_map, load_recording
-    from app.engine import TrackerEngine
-    from app.player import Player, PlayerConfig
+    """Seek latency (command -> frame drawn by the viewer, browser attached) at random times: right after loading
+    (the run-ahead has barely started), once it is done, and exact (off-grid) seeks for comparison."""
+    from playwright.sync_api import sync_playwright
 
-    rec_path, map_path = demo_pair(Path(ctx.work_dir))
-    rec, cmap = load_recording(rec_path), load_map(map_path)
-    drawn = threading.Event()
-    player = Player(lambda cfg: TrackerEngine(rec, cmap, cfg), lambda f, e: drawn.set(), player_config=PlayerConfig(prefetch=False))
-    rng = np.random.default_rng(ctx.seed)
-    span = rec.t_end_us - rec.t_start_us
-    targets = rec.t_start_us + (rng.random(4 if ctx.quick else 10) * span).astype(np.int64)
-
-    def timed_seek(t):
-        drawn.clear()
-        t0 = time.perf_counter()
-        player.seek(int(t))
-        drawn.wait(600)
-        return (time.perf_counter() - t0) * 1e3
-
-    try:
-        player.step_forward()
-        player.wait_idle(120)
-        # Idle-time prefetch of the whole recording (what the paused viewer does on its own), timed.
-        t0 = time.perf_counter()
-        while player.call(lambda e: e.prefetch(50)).result(600):
-            pass
-        prefetch_s = time.perf_counter() - t0
-        far = timed_seek(rec.t_start_us + int(0.95 * span))
-        warm = [timed_seek(t) for t in targets]
-    finally:
-        player.stop()
     from evpose.bench.stats import latency_summary
 
-    out = {"recording": str(rec_path), "duration_s": span / 1e6, "far_seek_after_prefetch_ms": far, "prefetch_whole_recording_s": prefetch_s}
-    out.update(latency_summary(warm, prefix="seek_"))
+    rec_path, map_path = demo_pair(Path(ctx.work_dir))
+    n = N_SEEKS or (4 if ctx.quick else 10)
+    rng = np.random.default_rng(ctx.seed)
+    app = _viewer(rec_path, map_path, Path(ctx.work_dir))
+    out: dict = {"recording": str(rec_path)}
+    try:
+        rec = app.recording
+        span = rec.t_end_us - rec.t_start_us
+        out["duration_s"] = span / 1e6
+
+        def timed_seek(meter, t):
+            meter.drawn.clear()
+            t0 = time.perf_counter()
+            app.player.seek(int(t))
+            meter.drawn.wait(600)
+            app.player.wait_idle(600)
+            return (time.perf_counter() - t0) * 1e3
+
+        with sync_playwright() as p:
+            browser = _attach_browser(p, app)
+            meter = DrawMeter(app.player)
+            for phase in ("before_run_ahead", "after_run_ahead"):
+                if phase == "after_run_ahead":
+                    out["run_ahead_wait_s"] = _wait_run_ahead(app)
+                load0 = os.getloadavg()[0]
+                targets = rec.t_start_us + (rng.random(n) * span).astype(np.int64)
+                far = timed_seek(meter, rec.t_start_us + int(0.95 * span))
+                lat = [timed_seek(meter, t) for t in targets]
+                frontier = app.player.call(lambda e: getattr(e, "frontier", None)).result(60)
+                out[phase] = {"far_seek_ms": far, **latency_summary(lat + [far], prefix="seek_"),
+                              "frontier_after": frontier, "loadavg_1min": [load0, os.getloadavg()[0]]}
+            # Exact seeks (not snapped to the frame grid) on the engine alone: what a step off the grid costs.
+            targets = rec.t_start_us + (rng.random(max(n // 2, 2)) * span).astype(np.int64) + 1000
+            exact = []
+            for t in targets:
+                t0 = time.perf_counter()
+                app.player.call(lambda e, t=t: e.seek(int(t))).result(600)
+                exact.append((time.perf_counter() - t0) * 1e3)
+            out["exact_engine_seek"] = latency_summary(exact, prefix="seek_")
+            browser.close()
+    finally:
+        app.stop()
     return out
 
 
@@ -167,8 +267,11 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--only", choices=sorted(BENCHMARKS), default=None)
     ap.add_argument("--recording", type=Path, default=None, help="recording to use instead of the moderate demo")
     ap.add_argument("--map", type=Path, default=None, help="its contour map")
+    ap.add_argument("--seconds", type=float, default=None, help="wall seconds of each playback phase")
+    ap.add_argument("--seeks", type=int, default=None, help="random seek targets per phase")
     args = ap.parse_args(argv)
-    global DEMO_OVERRIDE
+    global DEMO_OVERRIDE, PLAY_SECONDS, N_SEEKS
+    PLAY_SECONDS, N_SEEKS = args.seconds, args.seeks
     if args.recording is not None and args.map is not None:
         DEMO_OVERRIDE = (args.recording, args.map)
     ctx = BenchContext(quick=not args.full, work_dir=args.work_dir)

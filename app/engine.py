@@ -1,13 +1,12 @@
-"""Engines the player drives: the EV-Pose tracker session, or an events-only view when there is no map.
+"""Engines the player drives: the base interface and the events-only view (no map); the tracker's is in ``app/tracker_engine.py``.
 
-Both expose the same small interface (``step``, ``seek``, ``history``,
-``trajectory``) and both are deterministic: the state after ``seek(t)`` equals
+All expose the same small interface (``step``, ``seek``, ``history``,
+``trajectory``) and all are deterministic: the state after ``seek(t)`` equals
 the state an uninterrupted headless run reaches at ``t``.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import time
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
@@ -15,7 +14,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from app.frame import Frame, StepSummary
-from evpose.core.contour_map import ContourMap
 from evpose.core.events import EventArray
 from evpose.core.recording import Recording
 from evpose.core.trajectory import Trajectory
@@ -62,6 +60,17 @@ class Engine(ABC):
     def prefetch(self, budget_steps: int) -> bool:
         """Use idle time to make later seeks fast, leaving the displayed state as it is; False when nothing is left to do."""
         return False
+
+    step_us: int | None = None
+    """Media time between two steps, microseconds (None: unknown; playback then asks for every step)."""
+
+    def play_step(self, stride: int) -> Frame | None:
+        """The next frame for playback, at most ``stride`` steps on; engines without a frame cache compute every step."""
+        return self.step()
+
+    def seek_near(self, t_us: int) -> Frame | None:
+        """A seek that may land a few steps before ``t_us`` when that answers faster (default: exact)."""
+        return self.seek(t_us)
 
     def trajectory(self) -> Trajectory:
         """Estimated poses of the steps so far (steps without a pose are left out)."""
@@ -161,135 +170,3 @@ class EventsOnlyEngine(Engine):
         ]
         self._next_index = k
         return self.step()
-
-
-def frame_from_result(result, index: int) -> Frame:
-    """Convert a tracker ``StepResult`` (with debug products) into a displayed frame."""
-    d = result.debug
-    imu = result.imu_poses.matrices() if result.imu_poses is not None and len(result.imu_poses) else None
-    if d is None:
-        empty = np.zeros((1, 1), np.float32)
-        return Frame(index, int(result.t_us), empty, empty, empty, EventArray.empty(), EventArray.empty(),
-                     pose=result.pose, registration_pose=result.registration_pose, status=result.status.value,
-                     reason=result.reason, imu_poses=imu, timings_ms=dict(result.timings_ms), counts=dict(result.counts))
-    return Frame(
-        index=index, t_us=int(result.t_us), ts_positive=d.ts_positive, ts_negative=d.ts_negative, tdf=d.tdf,
-        events_kept=d.events_kept, events_removed=d.events_removed, pose=result.pose,
-        registration_pose=result.registration_pose, status=result.status.value, reason=result.reason,
-        point_index=d.point_index, visible_index=d.visible_index, projected_uv=d.projected_uv,
-        residuals=d.residuals, weights=d.weights, predicted_polarity=d.predicted_polarity, imu_poses=imu,
-        timings_ms=dict(result.timings_ms), counts=dict(result.counts),
-    )
-
-
-def summary_from_result(result, index: int) -> StepSummary:
-    return StepSummary(index, int(result.t_us), result.pose, result.registration_pose, result.status.value,
-                       dict(result.timings_ms), dict(result.counts))
-
-
-class TrackerEngine(Engine):
-    """The EV-Pose ``TrackingSession`` (evpose/tracker/session.py) as the player drives it.
-
-    Seeking and idle-time prefetch work on the session's snapshots. The engine
-    keeps every StepResult it has seen (without debug images) so that after
-    restoring a snapshot *ahead* of the current step the session's ``results``
-    can be filled in; all steps are deterministic, so a cached result equals a
-    recomputed one. This uses the session's private snapshot table; a public
-    ``TrackingSession.snapshot_here()/restore_to(step)`` would remove that.
-    """
-
-    def __init__(self, recording: Recording, contour_map: ContourMap, config=None):
-        from evpose.tracker.config import TrackerConfig
-        from evpose.tracker.session import TrackingSession
-
-        self.recording = recording
-        self.contour_map = contour_map
-        self.config = config if isinstance(config, TrackerConfig) else TrackerConfig()
-        self.session = TrackingSession(recording, contour_map, self.config, initial_pose=None)
-        self.explanation = ""
-        self._known: dict[int, object] = {}
-        """Step index -> StepResult (debug dropped) of every step computed so far."""
-        self._extra: set[int] = set()
-        """Snapshots this engine added off the session's grid (shown step, prefetch frontier)."""
-
-    @property
-    def history(self) -> list[StepSummary]:
-        return [summary_from_result(r, i) for i, r in enumerate(self.session.results)]
-
-    @property
-    def current_t_us(self) -> int:
-        res = self.session.results
-        return int(res[-1].t_us) if res else self.t_start_us
-
-    def trajectory(self) -> Trajectory:
-        return self.session.trajectory()
-
-    def _remember(self, result) -> None:
-        self._known[self.session.step_count - 1] = dataclasses.replace(result, debug=None)
-
-    def _plain_step(self):
-        result = self.session.step()
-        if result is not None:
-            self._remember(result)
-        return result
-
-    def step(self) -> Frame | None:
-        result = self.session.step(debug=True)
-        if result is None:
-            return None
-        self._remember(result)
-        return frame_from_result(result, len(self.session.results) - 1)
-
-    def _goto(self, k: int) -> None:
-        """Put the session in the state after ``k`` steps: restore the best snapshot, replay the rest."""
-        s = self.session
-        base = max(j for j in s.snapshot_steps if j <= k)
-        if not (base <= s.step_count <= k):
-            s.restore_snapshot(base)
-            # Restoring ahead of the computed results: fill them from the cache.
-            s.results.extend(self._known[i] for i in range(len(s.results), base))
-        while s.step_count < k and self._plain_step() is not None:
-            pass
-
-    def _mark(self) -> None:
-        s = self.session
-        if s.step_count not in s.snapshot_steps:
-            self._extra.add(s.take_snapshot())
-
-    def seek_step(self, index: int) -> Frame | None:
-        k = int(np.clip(index, 0, max(self.session.total_steps - 1, 0)))
-        self._goto(k)
-        return self.step()
-
-    def prefetch(self, budget_steps: int = 5) -> bool:
-        """Run a few steps past the furthest snapshot, snapshot there, come back to the shown step.
-
-        Each slice costs two restores and ``budget_steps`` steps, so a command
-        waits at most one slice; once the furthest snapshot reaches the end, any
-        seek replays at most ``snapshot_every`` steps. The shown state is
-        unchanged (same deterministic steps).
-        """
-        s = self.session
-        frontier = s.snapshot_steps[-1]
-        if frontier >= s.total_steps:
-            return False
-        shown = s.step_count
-        self._mark()
-        self._goto(frontier)
-        for _ in range(max(budget_steps, 1)):
-            if self._plain_step() is None:
-                break
-        self._mark()
-        reached = s.step_count
-        for j in list(self._extra):  # keep only the shown step and the new frontier off the grid
-            if j not in (shown, reached):
-                s.drop_snapshot(j)
-                self._extra.discard(j)
-        self._goto(shown)
-        return reached < s.total_steps
-
-    def seek(self, t_us: int) -> Frame | None:
-        # The state after the step before the target, then the target step itself with debug products.
-        s = self.session
-        k = int(np.clip((int(t_us) - s.t0_us) // s.dt_us, 1, max(s.total_steps, 1)))
-        return self.seek_step(k - 1)

@@ -46,11 +46,11 @@ class Frame:
     t_us: int
     """Time of the step, microseconds (camera clock)."""
     ts_positive: np.ndarray
-    """SP-TS of ON events, float32 (H, W) in [0, 1]."""
+    """SP-TS of ON events, float32 (H, W) in [0, 1], or uint8 as displayed (``frame_cache.quantize``: value * 255)."""
     ts_negative: np.ndarray
-    """SP-TS of OFF events, float32 (H, W) in [0, 1]."""
+    """SP-TS of OFF events, float32 (H, W) in [0, 1], or uint8 as displayed."""
     tdf: np.ndarray
-    """Distance field, float32 (H, W); ~0 on the newest edges."""
+    """Distance field, float32 (H, W), or uint8 as displayed; ~0 on the newest edges."""
     events_kept: EventArray
     """Events of this step that passed the filters."""
     events_removed: EventArray

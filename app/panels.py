@@ -8,6 +8,7 @@ import cv2
 import numpy as np
 
 from app.frame import Frame
+from app.frame_cache import quantize
 from evpose.core.events import EventArray
 
 
@@ -25,9 +26,13 @@ def _scale_for(img_w: int) -> int:
 
 
 def colormap(img: np.ndarray, cmap: int, vmin: float = 0.0, vmax: float = 1.0) -> np.ndarray:
-    """float (H, W) -> RGB uint8 (H, W, 3) through an OpenCV colormap."""
-    a = np.clip((np.asarray(img, np.float32) - vmin) / max(vmax - vmin, 1e-12), 0.0, 1.0)
-    bgr = cv2.applyColorMap((a * 255.0).astype(np.uint8), cmap)
+    """float (H, W) in [vmin, vmax], or uint8 already quantized (``frame_cache.quantize``), -> RGB uint8 (H, W, 3)."""
+    if np.asarray(img).dtype == np.uint8:
+        q = np.ascontiguousarray(img)
+    else:
+        a = np.clip((np.asarray(img, np.float32) - vmin) / max(vmax - vmin, 1e-12), 0.0, 1.0)
+        q = (a * 255.0).astype(np.uint8)
+    bgr = cv2.applyColorMap(q, cmap)
     return np.ascontiguousarray(bgr[..., ::-1])
 
 
@@ -42,8 +47,7 @@ def ts_image(ts: np.ndarray, positive: bool) -> np.ndarray:
 
 def tdf_image(frame: Frame, colour_by: OverlayColour = OverlayColour.RESIDUAL) -> np.ndarray:
     """The TDF in grey with each used map point drawn where it projects, coloured by residual/weight/polarity."""
-    grey = np.clip(frame.tdf, 0.0, 1.0)
-    rgb = np.repeat((grey * 255).astype(np.uint8)[..., None], 3, axis=2)
+    rgb = np.repeat(quantize(frame.tdf)[..., None], 3, axis=2)
     rgb = upscale(rgb)
     uv = frame.projected_uv
     if uv is None or len(uv) == 0:
@@ -62,6 +66,8 @@ def tdf_image(frame: Frame, colour_by: OverlayColour = OverlayColour.RESIDUAL) -
             a = 1.0 - a
         cols = np.stack([255 * a, 255 * (1 - a), np.full_like(a, 40)], axis=1)
     h, w = rgb.shape[:2]
+    finite = np.isfinite(uv).all(axis=1)  # points that did not project (failed registration) are not drawn
+    uv, cols = uv[finite], np.asarray(cols)[finite]
     px = np.round((uv[:, 0] + 0.5) * s - 0.5).astype(np.int64)
     py = np.round((uv[:, 1] + 0.5) * s - 0.5).astype(np.int64)
     r = max(1, s // 2)

@@ -4,8 +4,12 @@ Every browser tab sends commands into one queue; only the worker thread
 touches the engine, so several tabs cannot corrupt its state (they all see the
 same session, like viewers of one shared player). Frames are handed to
 ``on_frame`` from the worker thread, at most ``max_ui_fps`` times a second
-while playing (every step is still computed), always after a step, seek or
-reconfiguration.
+while playing, always after a step, seek or reconfiguration. While playing, the
+engine is asked for one frame per publish interval (``Engine.play_step``): an
+engine with a run-ahead reads it back, otherwise it computes it; every step is
+still computed, by the run-ahead or live, so the state shown is always the
+headless run's. When frames must be computed, the stride shrinks to keep the
+frame rate up and the real-time factor shown says the speed achieved.
 """
 
 from __future__ import annotations
@@ -51,9 +55,14 @@ class PlayerConfig:
     draw_share_factor: float = field(default=3.0, metadata={"min": 0.0, "max": 20.0, "step": 0.5, "unit": "ratio"})
     """While playing, frames are at least this many draw durations apart, so drawing cannot starve the engine, ratio."""
     prefetch: bool = True
-    """While paused, run ahead in slices so later seeks only replay a few steps."""
+    """Run ahead in idle time (in slices): the engine computes later steps and keeps their frames, so playback
+    and seeks inside that reach are read back instead of computed."""
     prefetch_steps: int = field(default=5, metadata={"min": 1, "max": 500, "step": 1, "unit": "steps"})
     """Steps per prefetch slice (a command waits at most one slice), steps."""
+    prefetch_while_playing: bool = True
+    """While playing, spend the wait for the next frame's display time running ahead too (one step at a time)."""
+    snap_seeks: bool = True
+    """Seeks may land up to one frame-cache interval (``FrameCacheConfig.every_ms``) before the asked time when that frame is ready."""
 
 
 EngineFactory = Callable[[object], Engine]
@@ -65,12 +74,15 @@ class Player:
 
     def __init__(self, factory: EngineFactory, on_frame: Callable[[Frame, Engine], None], config=None,
                  player_config: PlayerConfig | None = None, on_error: Callable[[str], None] | None = None,
-                 on_engine: Callable[[Engine], None] | None = None):
+                 on_engine: Callable[[Engine], None] | None = None, on_progress: Callable[[Engine], None] | None = None):
         self.pc = player_config or PlayerConfig()
         self._on_frame = on_frame
         self._on_error = on_error or (lambda msg: None)
         self._on_engine = on_engine or (lambda engine: None)
         """Called (worker thread) whenever the engine is replaced: new recording or new configuration."""
+        self._on_progress = on_progress or (lambda engine: None)
+        """Called (worker thread) about once a second while the engine runs ahead with nothing new shown."""
+        self._last_progress = 0.0
         self._queue: queue.Queue = queue.Queue()
         self._lock = threading.Lock()
         self._pending: tuple[object, RerunFrom] | None = None
@@ -85,6 +97,9 @@ class Player:
         self._factory = factory
         self.engine: Engine = factory(config)
         self._ready: Frame | None = None
+        self._ready_stride = 1
+        self._step_wall_s = 0.0
+        """Wall seconds per step of the last playback frame when it had to be computed (0: it was at hand)."""
         self._anchor = (0.0, 0)
         self._last_publish = 0.0
         self._draw_s = 0.0
@@ -195,9 +210,9 @@ class Player:
         t = self.last_frame.t_us if self.last_frame else self.engine.t_start_us
         self._anchor = (time.monotonic(), t)
 
-    def _timed_seek(self, t_us: int) -> Frame | None:
+    def _timed_seek(self, t_us: int, exact: bool = False) -> Frame | None:
         t0 = time.perf_counter()
-        frame = self.engine.seek(t_us)
+        frame = self.engine.seek(t_us) if exact or not self.pc.snap_seeks else self.engine.seek_near(t_us)
         self.last_seek_ms = (time.perf_counter() - t0) * 1e3
         return frame
 
@@ -222,8 +237,14 @@ class Player:
             self.state = PlayState.PAUSED
             self._flush_unpublished()
             if cmd[1] > 0:
-                # A frame computed ahead for playback is exactly the next step.
-                frame = self._ready if self._ready is not None else self.engine.step()
+                nxt = (self.last_frame.index + 1) if self.last_frame is not None else 0
+                if self._ready is not None and self._ready.index == nxt:
+                    frame = self._ready  # computed ahead for playback and exactly the next step
+                elif self._ready is not None or self.last_frame is not None:
+                    # Playback frames may lie several steps on: go to exactly the one after the shown step.
+                    frame = self.engine.seek_step(nxt)
+                else:
+                    frame = self.engine.step()
             else:
                 current = self.last_frame.index if self.last_frame else 0
                 frame = self.engine.seek_step(max(0, current - 1))
@@ -270,7 +291,7 @@ class Player:
         if rerun == RerunFrom.START or t_now is None:
             frame = self.engine.step()
         else:
-            frame = self._timed_seek(t_now)
+            frame = self._timed_seek(t_now, exact=True)
         self._publish(frame)
         self._reanchor()
 
@@ -280,7 +301,7 @@ class Player:
             if self._pending is not None:
                 waits.append(self._pending_deadline - time.monotonic())
         if self.state == PlayState.PLAYING:
-            if self._ready is None:
+            if self._ready is None or (self._prefetching and self.pc.prefetch_while_playing):
                 waits.append(0.0)
             else:
                 waits.append(self._due(self._ready) - time.monotonic())
@@ -315,16 +336,46 @@ class Player:
             if self.state == PlayState.PLAYING:
                 self._advance()
             elif self._prefetching:
-                try:
-                    self._prefetching = self.engine.prefetch(self.pc.prefetch_steps)
-                except Exception as exc:
-                    self._prefetching = False
-                    self._on_error(f"prefetch failed: {exc}")
+                self._prefetch_slice(self.pc.prefetch_steps)
+
+    def _stride(self) -> int:
+        """Steps between two displayed frames at the current speed: one frame per publish interval of media time."""
+        step_us = getattr(self.engine, "step_us", None)
+        if not step_us:
+            return 1
+        interval = max(1.0 / self.pc.max_ui_fps, self.pc.draw_share_factor * self._draw_s)
+        stride = max(1, int(self.speed * interval * 1e6 // step_us))
+        if self._step_wall_s > 0:
+            # Computing steps live (slower than real time): fewer steps per frame keep the frame rate up.
+            stride = min(stride, max(1, int(interval / self._step_wall_s)))
+        return stride
+
+    def _prefetch_slice(self, steps: int) -> None:
+        try:
+            self._prefetching = self.engine.prefetch(steps)
+        except Exception as exc:
+            self._prefetching = False
+            self._on_error(f"prefetch failed: {exc}")
+        now = time.monotonic()
+        if self.state == PlayState.PAUSED and (now - self._last_progress >= 1.0 or not self._prefetching):
+            self._last_progress = now
+            try:
+                self._on_progress(self.engine)
+            except Exception as exc:  # a status-line bug must not stop the run-ahead
+                self._on_error(f"progress display failed: {exc!r}")
 
     def _advance(self) -> None:
         if self._ready is None:
             try:
-                self._ready = self.engine.step()
+                stride = self._stride()
+                before = self.last_frame.index if self.last_frame is not None else -1
+                t0 = time.monotonic()
+                self._ready = self.engine.play_step(stride)
+                self._ready_stride = stride
+                took = time.monotonic() - t0
+                steps = (self._ready.index - before) if self._ready is not None else 0
+                # Wall time per step when frames are computed, not read back (then the speed is the limit).
+                self._step_wall_s = took / steps if steps > 0 and took > 0.5 / self.pc.max_ui_fps else 0.0
             except Exception as exc:
                 self.state = PlayState.PAUSED
                 self._on_error(f"step failed: {exc}")
@@ -340,6 +391,9 @@ class Player:
         now = time.monotonic()
         due = self._due(self._ready)
         if now < due:
+            if self._prefetching and self.pc.prefetch_while_playing:
+                # The next frame is ready early: run ahead one step (a few ms) instead of sleeping.
+                self._prefetch_slice(1)
             return
         if now - due > self.pc.max_lag_s:
             self._reanchor()
@@ -350,4 +404,5 @@ class Player:
             self._play_stats[0] += now - wall_prev
             self._play_stats[1] += frame.t_us - prev_t
         self._last_advance_wall = now
-        self._publish(frame, force=False)
+        # Frames already spaced by the publish interval are all drawn; single steps are thinned to it.
+        self._publish(frame, force=self._ready_stride > 1)

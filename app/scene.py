@@ -4,11 +4,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import cv2
 import numpy as np
 import viser
 import viser.transforms as vtf
 
 from app.frame import Frame, StepSummary
+from app.frame_cache import quantize
 from app.panels import colormap
 from evpose.core.camera import CameraCalibration
 from evpose.core.contour_map import ContourMap
@@ -21,6 +23,10 @@ OFF = np.array([40, 90, 230], np.uint8)
 BUFFER = np.array([240, 200, 0], np.uint8)
 MAX_CLOUD_POINTS = 40_000
 """The raw cloud is thinned to about this many points for display."""
+FRUSTUM_IMAGE_WIDTH = 176
+"""The TDF shown inside the camera frustum is shrunk to at most this width (it is drawn small), pixels."""
+TRAJECTORY_CHUNK = 256
+"""Trajectory polylines are sent in chunks of this many steps; only the newest chunk changes as the run grows."""
 
 
 @dataclass
@@ -38,9 +44,12 @@ class SceneToggles:
     """Move every browser's camera with the tracked camera."""
 
 
-def map_colours(n: int, frame: Frame | None) -> np.ndarray:
-    """Per map point: grey not visible, cyan visible, red/blue predicted ON/OFF, yellow buffer zone."""
-    cols = np.tile(GREY, (n, 1))
+def map_colours(n: int, frame: Frame | None, base: np.ndarray | None = None) -> np.ndarray:
+    """Per map point: grey not visible, cyan visible, red/blue predicted ON/OFF, yellow buffer zone.
+
+    ``base`` (an (n, 3) all-grey array) is copied instead of building one, which is most of the cost on big maps.
+    """
+    cols = base.copy() if base is not None and len(base) == n else np.tile(GREY, (n, 1))
     if frame is None:
         return cols
     if frame.visible_index is not None and len(frame.visible_index):
@@ -64,6 +73,22 @@ def polyline_segments(positions: np.ndarray) -> np.ndarray:
     return np.stack([p[:-1], p[1:]], axis=1)
 
 
+def frustum_image(tdf: np.ndarray) -> np.ndarray:
+    """The TDF as edge strength (JET colour map), shrunk to at most ``FRUSTUM_IMAGE_WIDTH`` pixels wide."""
+    img = colormap(255 - quantize(tdf), 2)  # COLORMAP_JET on 1 - TDF
+    h, w = img.shape[:2]
+    if w > FRUSTUM_IMAGE_WIDTH:
+        f = FRUSTUM_IMAGE_WIDTH / w
+        img = cv2.resize(img, (FRUSTUM_IMAGE_WIDTH, max(1, int(round(h * f)))), interpolation=cv2.INTER_AREA)
+    return img
+
+
+def trajectory_chunks(positions: np.ndarray, chunk: int = TRAJECTORY_CHUNK) -> list[np.ndarray]:
+    """(N, 3) positions -> polyline segments in chunks of ``chunk`` steps; each chunk ends where the next starts."""
+    p = np.asarray(positions, np.float32).reshape(-1, 3)
+    return [polyline_segments(p[i : i + chunk + 1]) for i in range(0, max(len(p) - 1, 0), chunk)]
+
+
 def _wxyz(T: np.ndarray) -> np.ndarray:
     return vtf.SO3.from_matrix(np.asarray(T)[:3, :3]).wxyz
 
@@ -79,6 +104,9 @@ class SceneView:
         self.scale = 1.0
         self.ground_truth: Trajectory | None = None
         self._nodes: dict[str, object] = {}
+        self._grey: np.ndarray | None = None
+        self._drawn_chunks: dict[str, list[tuple[int, object]]] = {}
+        """Per trajectory: for each chunk sent, (points in it, the summary of its last point) to tell whether it changed."""
         server.scene.set_up_direction("+z")
         server.scene.world_axes.visible = False
 
@@ -90,6 +118,7 @@ class SceneView:
         for h in self._nodes.values():
             h.remove()
         self._nodes.clear()
+        self._drawn_chunks.clear()
 
     def load(self, contour_map: ContourMap | None, cloud: tuple[np.ndarray, np.ndarray | None] | None,
              ground_truth: Trajectory | None, calibration: CameraCalibration | None) -> None:
@@ -104,6 +133,7 @@ class SceneView:
                 # Frame the map (what is being tracked), not the whole flight.
                 self.scale = float(max(np.ptp(contour_map.points, axis=0).max(), 0.1))
         pt = 0.006 * self.scale
+        self._grey = np.tile(GREY, (len(contour_map), 1)) if contour_map is not None else None
         if contour_map is not None and len(contour_map):
             self._set("map", self.server.scene.add_point_cloud(
                 "/map", contour_map.points.astype(np.float32), map_colours(len(contour_map), None),
@@ -143,17 +173,19 @@ class SceneView:
 
     def apply_toggles(self) -> None:
         t = self.toggles
-        for name, on in (("map", t.contour_map), ("cloud", t.raw_cloud), ("gt", t.ground_truth), ("reg", t.registration),
-                         ("fused", t.fused), ("imu", t.imu_poses), ("frustum", t.frustum)):
-            if name in self._nodes:
-                self._nodes[name].visible = on
+        shown = {"map": t.contour_map, "cloud": t.raw_cloud, "gt": t.ground_truth, "reg": t.registration,
+                 "fused": t.fused, "imu": t.imu_poses, "frustum": t.frustum}
+        for name, node in self._nodes.items():
+            on = shown.get(name.split("/")[0])  # trajectory chunks are "fused/0", "fused/1", ...
+            if on is not None:
+                node.visible = on
 
     def update(self, frame: Frame, history: list[StepSummary] | None) -> None:
         """Draw the per-step content of ``frame``; ``history`` (None = leave as drawn) gives the trajectories so far."""
         t = self.toggles
         scene = self.server.scene
         if "map" in self._nodes and self.contour_map is not None:
-            self._nodes["map"].colors = map_colours(len(self.contour_map), frame)
+            self._nodes["map"].colors = map_colours(len(self.contour_map), frame, self._grey)
         if history is not None:
             self._trajectories(history)
         if frame.slam is not None:
@@ -182,15 +214,32 @@ class SceneView:
 
     def _trajectories(self, history: list[StepSummary]) -> None:
         t = self.toggles
-        scene = self.server.scene
-        fused = np.array([s.pose[:3, 3] for s in history if s.pose is not None]).reshape(-1, 3)
-        reg = np.array([s.registration_pose[:3, 3] for s in history if s.registration_pose is not None]).reshape(-1, 3)
-        if len(fused) > 1:
-            self._set("fused", scene.add_line_segments("/trajectory/fused", polyline_segments(fused), (230, 120, 20),
-                                                        thickness=3.0, thickness_units="screen", visible=t.fused))
-        if len(reg) > 1:
-            self._set("reg", scene.add_line_segments("/trajectory/registration", polyline_segments(reg), (150, 60, 200),
-                                                      thickness=1.5, thickness_units="screen", visible=t.registration))
+        for key, attr, colour, width, visible in (("fused", "pose", (230, 120, 20), 3.0, t.fused),
+                                                   ("reg", "registration_pose", (150, 60, 200), 1.5, t.registration)):
+            steps = [s for s in history if getattr(s, attr) is not None]
+            self._polyline(key, steps, attr, colour, width, visible)
+
+    def _polyline(self, key: str, steps: list[StepSummary], attr: str, colour, width: float, visible: bool) -> None:
+        """Send the polyline through ``steps`` in bounded chunks: unchanged chunks are not resent, extra ones removed."""
+        drawn = self._drawn_chunks.setdefault(key, [])
+        n_chunks = (len(steps) - 1 + TRAJECTORY_CHUNK - 1) // TRAJECTORY_CHUNK if len(steps) > 1 else 0
+        for i in range(n_chunks):
+            part = steps[i * TRAJECTORY_CHUNK : (i + 1) * TRAJECTORY_CHUNK + 1]
+            sig = (len(part), part[-1])
+            if i < len(drawn) and drawn[i][0] == sig[0] and drawn[i][1] is sig[1]:
+                continue  # the same summaries as last time: the same segments
+            pos = np.array([getattr(s, attr)[:3, 3] for s in part], np.float32)
+            self._set(f"{key}/{i}", self.server.scene.add_line_segments(
+                f"/trajectory/{key}/{i}", polyline_segments(pos), colour, thickness=width, thickness_units="screen", visible=visible))
+            if i < len(drawn):
+                drawn[i] = sig
+            else:
+                drawn.append(sig)
+        for i in range(n_chunks, len(drawn)):
+            node = self._nodes.pop(f"{key}/{i}", None)
+            if node is not None:
+                node.remove()
+        del drawn[n_chunks:]
 
     def _camera(self, frame: Frame) -> None:
         t = self.toggles
@@ -207,7 +256,7 @@ class SceneView:
         if pose is not None and self.calibration is not None:
             c = self.calibration
             fov = 2.0 * np.arctan2(c.height / 2.0, c.fy)
-            img = colormap(1.0 - np.clip(frame.tdf, 0, 1), 2)  # COLORMAP_JET on edge strength
+            img = frustum_image(frame.tdf)
             if "frustum" not in self._nodes:
                 self._set("frustum", scene.add_camera_frustum(
                     "/camera", fov=float(fov), aspect=c.width / c.height, scale=0.06 * self.scale, image=img,

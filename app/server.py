@@ -18,22 +18,24 @@ import viser
 
 from app.browser import DataEntry, DataRoots, EntryKind, guess_map_for, load_cloud, load_map, load_recording
 from app.config_gui import ConfigGui, load_config_file
-from app.engine import Engine, EventsOnlyEngine, TrackerEngine
+from app.engine import Engine
+from app.engine_factory import MODES, NO_MAP_NOTE, engine_factory
 from app.export import export_action, write_config
 from app.frame import Frame
+from app.frame_cache import FrameCacheConfig
 from app.layouts import LAYOUT_DIR, PANELS, Layout, list_layouts, save_layout
 from app.panels import SLAM_PANELS, OverlayColour, panel_images
 from app.player import Player, PlayerConfig, PlayState, RerunFrom
 from app.plots import PlotsView
 from app.scene import SceneView
-from app.slam_engine import slam_engine_factory, slam_markdown
+from app.slam_engine import slam_markdown
+from app.status import status_markdown
 from app.teaching import STAGE_PANEL, Stage, teaching_markdown
 from evpose.errors import EvposeError, InputError
 
 NO_MAP = "(no map: events only)"
 SLOW_REFRESH_S = 0.25
 """While playing, plots and trajectory polylines refresh at most this often, seconds."""
-NO_MAP_NOTE = "No contour map selected: showing events and time surfaces only. Tracking needs a map of the scene."
 
 
 @dataclass
@@ -54,6 +56,8 @@ class AppConfig:
     """Folder of layout files."""
     player: PlayerConfig = field(default_factory=PlayerConfig)
     """Pacing, coalescing and prefetch of the player."""
+    frame_cache: FrameCacheConfig = field(default_factory=FrameCacheConfig)
+    """Which steps the tracker's run-ahead keeps a display frame of, and the memory they may take."""
 
 
 def check_port_free(host: str, port: int) -> None:
@@ -64,32 +68,6 @@ def check_port_free(host: str, port: int) -> None:
             s.bind((host, port))
         except OSError as exc:
             raise InputError(None, f"cannot serve on {host}:{port}: {exc.strerror or exc}; is another viewer running? choose another --port") from None
-
-
-MODES = ("tracking", "slam")
-"""Viewer modes: EV-Pose tracking against a map, or map-free event SLAM (``evpose.slam``)."""
-
-
-def engine_factory(recording, contour_map, mode: str = "tracking"):
-    """A config -> Engine function for this recording/map pair, with the reason when tracking is impossible."""
-    if mode == "slam":
-        return slam_engine_factory(recording)
-    if contour_map is None:
-        return lambda cfg: EventsOnlyEngine(recording, cfg, explanation=NO_MAP_NOTE)
-    try:
-        import evpose.tracker.session  # noqa: F401
-    except ImportError as exc:
-        note = f"The tracker is not available in this build ({exc}); showing events only."
-        return lambda cfg: EventsOnlyEngine(recording, cfg, explanation=note)
-
-    def make(cfg):
-        try:
-            return TrackerEngine(recording, contour_map, cfg)
-        except EvposeError as exc:
-            # Still show events and time surfaces, and say why tracking cannot run.
-            return EventsOnlyEngine(recording, None, explanation=f"Tracking cannot start: {exc}")
-
-    return make
 
 
 class ViewerApp:
@@ -285,7 +263,7 @@ class ViewerApp:
                                  f"{s['sensor_size']}; map: {map_entry.label if map_entry else 'none'}"
                                  + ("" if cmap is not None or self.mode == "slam" else f"\n\n_{NO_MAP_NOTE}_") + "\n\n" + self._scan_note())
         self.time_slider.max = max(0.001, (recording.t_end_us - recording.t_start_us) / 1e6)
-        factory = engine_factory(recording, cmap, self.mode)
+        factory = engine_factory(recording, cmap, self.mode, self.cfg.frame_cache)
 
         def reset_view(_engine=None):
             # Runs on the player thread (or before it exists) so no frame of the old recording is drawn over it.
@@ -298,7 +276,7 @@ class ViewerApp:
             reset_view()
             self.player = Player(factory, self._on_frame, player_config=self.cfg.player,
                                  on_error=lambda m: self._notify("viewer", m, "red"),
-                                 on_engine=self._rebuild_config_gui)
+                                 on_engine=self._rebuild_config_gui, on_progress=self._on_progress)
             self._rebuild_config_gui(self.player.engine)
             self.player.seek(recording.t_start_us)
         else:
@@ -342,13 +320,14 @@ class ViewerApp:
                 self.teaching_text.content = teaching_markdown(self.stage, frame)
                 self.teaching_image.image = imgs[STAGE_PANEL[self.stage]]
             self.time_slider.value = round((frame.t_us - engine.t_start_us) / 1e6, 3)
-            st = self.player.stats() if self.player else {}
-            self.status.content = (f"t = {frame.t_us / 1e6:.3f} s, step {frame.index}, **{frame.status}**"
-                                   + (f" ({frame.reason})" if frame.reason and frame.status != "events only" else "")
-                                   + f"\n\n{st.get('state', '')} at {st.get('speed', 1):.1f}x, "
-                                   f"real-time factor {st.get('real_time_factor', 0):.2f}")
+            self.status.content = status_markdown(frame, engine, self.player.stats() if self.player else {})
         self.frames_published += 1
         self.last_frame = frame  # last, so whoever sees it also sees everything drawn for it
+
+    def _on_progress(self, engine: Engine) -> None:
+        # While paused the run-ahead advances without new frames: refresh the status line alone.
+        if self.last_frame is not None and self.player is not None:
+            self.status.content = status_markdown(self.last_frame, engine, self.player.stats())
 
     def _rebuild_config_gui(self, engine: Engine) -> None:
         if self.config_gui is not None and type(self.config_gui.config) is type(engine.config):

@@ -17,6 +17,7 @@ import numpy as np
 from app.engine import Engine, EventsOnlyEngine
 from app.frame import Frame, SlamView, StepSummary
 from evpose.core.events import EventArray
+from evpose.core.trajectory import Trajectory
 from evpose.core.recording import Recording
 from evpose.errors import EvposeError
 from evpose.slam import EventSlam, SlamConfig, SlamStepResult
@@ -128,6 +129,15 @@ class SlamEngine(Engine):
     def seek(self, t_us: int) -> Frame | None:
         w = int(self.config.step_us)
         return self.seek_step((int(t_us) - self.t_start_us) // w - 1)
+
+    def trajectory(self) -> Trajectory:
+        """The active map's poses so far, refined by its bundle adjustments (as ``evpose slam`` writes them).
+
+        Per-step poses of different maps live in different frames (and, event-only, scales), so
+        exporting them together would draw jumps that are not motion.
+        """
+        m = self.slam.atlas.active
+        return m.trajectory(refined=True) if m is not None else Trajectory.empty()
 
 
 def slam_engine_factory(recording):

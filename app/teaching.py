@@ -7,6 +7,7 @@ import enum
 import numpy as np
 
 from app.frame import Frame
+from app.frame_cache import unit
 
 
 class Stage(str, enum.Enum):
@@ -80,11 +81,11 @@ def live_facts(stage: Stage, frame: Frame | None) -> str:
         on = int(np.sum(frame.events_kept.p > 0))
         return t + f"{n_in} events arrived, {kept} kept ({on} ON, {kept - on} OFF)."
     if stage == Stage.SP_TS:
-        fresh_p = int(np.sum(frame.ts_positive > 0.5))
-        fresh_n = int(np.sum(frame.ts_negative > 0.5))
+        fresh_p = int(np.sum(unit(frame.ts_positive) > 0.5))
+        fresh_n = int(np.sum(unit(frame.ts_negative) > 0.5))
         return t + f"{fresh_p} pixels carry a fresh ON edge and {fresh_n} a fresh OFF edge (surface > 0.5)."
     if stage == Stage.TDF:
-        return t + f"{int(np.sum(frame.tdf < 0.5))} pixels lie in an edge valley (TDF < 0.5), lowest value {float(frame.tdf.min()):.2f}."
+        return t + f"{int(np.sum(unit(frame.tdf) < 0.5))} pixels lie in an edge valley (TDF < 0.5), lowest value {float(unit(frame.tdf).min()):.2f}."
     if frame.point_index is None:
         return t + "no map is loaded, so there is nothing to register: " + (frame.reason or "tracking needs a map.")
     if stage == Stage.POLARITY:

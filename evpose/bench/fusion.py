@@ -8,6 +8,9 @@
   machine inflates much less) for plain iSAM2 updates and for the updates
   that also run the window re-optimisation, ``predict`` and ``imu_rate_poses`` latency, and
   ATE/ARE (RMSE) of raw registrations, factor graph, EKF and IMU-only.
+* ``ablation``: stpe / stpe+filter / full / full with the EKF on the simulated
+  landing (tracking from ground truth): accuracy, latency per module and of the
+  registration front end, share of events the polarity filter removes.
 * ``polarity_sim``: the simulator's landing scenario, a contour map built from
   its cloud, ground-truth poses and motion: agreement of the predicted polarity
   with the events near each point (outside the buffer zone), share of events
@@ -71,8 +74,10 @@ def bench_backends(ctx) -> dict:
     out: dict = {"updates": len(times), "rate_hz": rate_hz, **_load()}
     out["registration_ate_mm"], out["registration_are_deg"] = _rmse([_errors(regs[k], gt.matrix(k)) for k in range(skip, len(gt))])
 
-    runs = [("factor_graph", FusionConfig()), ("factor_graph_nocov", FusionConfig(compute_covariance=False)),
-            ("ekf", FusionConfig(backend=FusionBackend.EKF)), ("imu_only", FusionConfig(backend=FusionBackend.IMU_ONLY))]
+    # These registrations have white noise, so their covariance is taken as is (no scaling for correlated errors).
+    white = {"registration_covariance_scale": 1.0}
+    runs = [("factor_graph", FusionConfig(**white)), ("factor_graph_nocov", FusionConfig(compute_covariance=False, **white)),
+            ("ekf", FusionConfig(backend=FusionBackend.EKF, **white)), ("imu_only", FusionConfig(backend=FusionBackend.IMU_ONLY, **white))]
     for name, cfg in runs:
         f = make_fusion(cfg, cal)
         f.add_imu(imu)
@@ -174,7 +179,7 @@ def _polarity_run(rec, traj, cmap, learn: bool, seconds: float, ego=None) -> dic
 
 def bench_polarity_sim(ctx) -> dict:
     """Polarity filter (map signs vs online-learned signs) and ego-motion filter on the simulated landing."""
-    from evpose.fusion import EgoMotionFilter
+    from evpose.fusion import EgoMotionConfig, EgoMotionFilter
     from evpose.mapping import build_contour_map
     from evpose.sim import SimulationConfig, simulate
 
@@ -192,7 +197,8 @@ def bench_polarity_sim(ctx) -> dict:
         out[f"{name}_map_points_with_sign_share"] = float(np.mean(cmap.brightness_sign != 0))
         for learn in (False, True):
             tag = f"{name}_{'learned' if learn else 'map'}_signs_"
-            run = _polarity_run(sim.recording, sim.trajectory, cmap, learn, seconds, ego=EgoMotionFilter() if learn else None)
+            ego = EgoMotionFilter(EgoMotionConfig(enabled=True)) if learn else None
+            run = _polarity_run(sim.recording, sim.trajectory, cmap, learn, seconds, ego=ego)
             out.update({tag + k: v for k, v in run.items()})
     out.update(_load())
     out["peak_rss_mb"] = peak_rss_mb()
@@ -224,7 +230,7 @@ def bench_ego_motion_dynamic(ctx) -> dict:
     """
     if ctx.quick:
         return {"skipped": "full suite only (the moving objects enter the view after ~1 s of simulated flight)"}
-    from evpose.fusion import EgoMotionFilter
+    from evpose.fusion import EgoMotionConfig, EgoMotionFilter
     from evpose.mapping import build_contour_map
     from evpose.sim import SimulationConfig, simulate
     from evpose.tracker.visible_map import VisibleMapConfig, visible_points
@@ -236,7 +242,7 @@ def bench_ego_motion_dynamic(ctx) -> dict:
     K = cal.K
     out: dict = {"scenario": "landing_dynamic", "resolution": f"{res[0]}x{res[1]}", "seconds": seconds}
     for window_us in (20_000, 50_000):
-        ego = EgoMotionFilter()
+        ego = EgoMotionFilter(EgoMotionConfig(enabled=True))
         kd = nd = ks = ns = 0
         ms = []
         for t1 in range(1_000_000, int(seconds * 1e6), 3 * 3333):
@@ -260,4 +266,196 @@ def bench_ego_motion_dynamic(ctx) -> dict:
     return out
 
 
-BENCHMARKS = {"backends": bench_backends, "polarity_sim": bench_polarity_sim, "ego_motion_dynamic": bench_ego_motion_dynamic}
+ABLATION = (("stpe", "stpe", None), ("stpe+filter", "stpe+filter", None), ("stpe+filter_per_point_fields", "stpe+filter", False),
+            ("full", "full", None), ("full_per_point_fields", "full", False), ("full_ekf", "full:ekf", None))
+"""(name, mode[:fusion backend], polarity.event_filter override) of the ablation runs."""
+
+
+def ablation_run(recording, contour_map, mode: str, event_filter: bool | None = None) -> dict:
+    """One tracking run from ground truth: accuracy, losses, per-module latency and the polarity filter's counts.
+
+    ``stpe_latency`` is the registration front end per update (distance field +
+    polarity filter + registration, wall); ``events_removed_share`` is the share
+    of the noise-filtered events entering the SP-TS that ``T_align`` does not show
+    to registration (outside every map point's patch, or of the polarity the
+    patch does not accept), summed over the run.
+    """
+    from evpose.eval.metrics import Alignment, EvalConfig, evaluate
+    from evpose.fusion import FusionBackend
+    from evpose.tracker.config import TrackerConfig, TrackerMode
+    from evpose.tracker.session import TrackingSession
+    from evpose.tracker.step_result import TrackStatus
+
+    name, _, backend = mode.partition(":")
+    cfg = TrackerConfig(mode=TrackerMode(name))
+    if backend:
+        cfg.fusion.backend = FusionBackend(backend)
+    if event_filter is not None:
+        cfg.polarity.event_filter = bool(event_filter)
+    session = TrackingSession(recording, contour_map, cfg)
+    cpu = []
+    while True:
+        c0 = time.thread_time()
+        r = session.step()
+        if r is None:
+            break
+        cpu.append((time.thread_time() - c0) * 1e3)
+    res = session.results
+    out: dict = {"updates": len(res), "lost_updates": sum(r.status is not TrackStatus.OK for r in res)}
+    traj = session.trajectory()
+    if len(traj) >= 3:
+        ev = evaluate(traj, recording.ground_truth, EvalConfig(align=Alignment.NONE))
+        out["ate_rmse_mm"], out["are_rmse_deg"] = ev.ate["rmse"] * 1e3, ev.are["rmse"]
+    warm = res[5:] if len(res) > 10 else res
+    for m in ("distance_field", "polarity_filter", "registration", "fusion", "ego_motion", "culling", "total"):
+        out.update({k: v for k, v in latency_summary([r.timings_ms[m] for r in warm if m in r.timings_ms], f"{m}_").items()
+                    if k.endswith(("median_ms", "p99_ms"))})
+    stpe = [sum(r.timings_ms.get(m, 0.0) for m in ("distance_field", "polarity_filter", "registration")) for r in warm]
+    out.update({k: v for k, v in latency_summary(stpe, "stpe_latency_").items() if k.endswith(("median_ms", "p99_ms", "mean_ms"))})
+    out.update({k: v for k, v in latency_summary(cpu[5:] if len(cpu) > 10 else cpu, "update_cpu_").items() if k.endswith(("median_ms", "p99_ms"))})
+    judged = sum(r.counts.get("events_polarity_judged", 0) for r in res)
+    if judged:
+        out["events_removed_share"] = sum(r.counts.get("events_polarity_removed", 0) for r in res) / judged
+        out["events_outside_patches_share"] = sum(r.counts.get("events_outside_patches", 0) for r in res) / judged
+        out["events_wrong_polarity_share"] = sum(r.counts.get("events_wrong_polarity", 0) for r in res) / judged
+    used = sum(r.counts.get("points_used", 0) for r in res)
+    if "points_single_polarity" in res[-1].counts and used:
+        out["points_single_polarity_share"] = sum(r.counts.get("points_single_polarity", 0) for r in res) / used
+    out["iterations_median"] = float(np.median([r.counts.get("iterations", 0) for r in res]))
+    return out
+
+
+def bench_ablation(ctx) -> dict:
+    """EV-Pose ablation (paper Fig. 19) on the simulated moderate landing from ground truth, all runs in one process:
+    stpe, stpe+filter, full, full with the EKF, and the filter's per-point-field variant (no T_align) for comparison."""
+    from evpose.bench.tracking import landing_case
+
+    res, seconds = ((240, 180), 1.0) if ctx.quick else ((346, 260), 2.0)
+    rec, cmap = landing_case(ctx.work_dir, res, seconds, ctx.seed)
+    out: dict = {"resolution": f"{res[0]}x{res[1]}", "seconds": seconds, "map_points": len(cmap)}
+    for name, mode, event_filter in ABLATION:
+        if ctx.quick and event_filter is not None:
+            continue  # the quick suite keeps to the four modes of the paper's figure
+        out.update({f"{name}_{k}": v for k, v in ablation_run(rec, cmap, mode, event_filter).items()})
+    base = out.get("stpe_stpe_latency_median_ms")
+    if base:
+        out["filter_stpe_latency_change_pct"] = 100.0 * (out["stpe+filter_stpe_latency_median_ms"] - base) / base
+    out.update(_load())
+    return out
+
+
+def _flight_inputs(seconds: float, rate_hz: float, seed: int):
+    """A MEMS-IMU analytic flight and noisy registrations at ``rate_hz`` (2 % gross outliers, a few 50-150 ms losses)."""
+    from evpose.core.camera import CameraCalibration
+    from evpose.fusion.synthetic import AnalyticMotion, AnalyticMotionConfig, default_T_cam_imu
+
+    cal = CameraCalibration(346, 260, 300.0, 300.0, 172.5, 129.5, T_cam_imu=default_T_cam_imu())
+    motion = AnalyticMotion(AnalyticMotionConfig(duration_s=seconds + 0.2, imu_rate_hz=1000.0, acc_bias=(0.08, -0.05, 0.1),
+                                                 gyro_bias=(0.01, -0.02, 0.015), accel_noise_density=2e-3,
+                                                 gyro_noise_density=1.7e-4, seed=seed))
+    t0 = motion.config.t0_us
+    times = t0 + np.round(np.arange(1, int(seconds * rate_hz) + 1) * 1e6 / rate_hz).astype(np.int64)
+    gt = motion.camera_trajectory(times, cal.T_cam_imu)
+    rng = np.random.default_rng(seed + 1)
+    regs: list = []
+    for k in range(len(gt)):
+        T = gt.matrix(k)
+        T[:3, :3] = T[:3, :3] @ Rotation.from_rotvec(rng.normal(0, np.radians(0.3), 3)).as_matrix()
+        T[:3, 3] += T[:3, :3] @ rng.normal(0, 0.005, 3) + (rng.normal(0, 0.1, 3) if rng.random() < 0.02 else 0.0)
+        regs.append(T)
+    for start in rng.integers(100, len(regs) - 50, max(1, len(regs) // 400)):
+        for k in range(int(start), min(len(regs), int(start) + int(rng.integers(10, 30)))):
+            regs[k] = None  # tracking lost: the fusion bridges with the IMU
+    cov = np.diag([np.radians(0.3) ** 2] * 3 + [0.005**2] * 3)
+    first = (int(t0), motion.camera_trajectory([t0], cal.T_cam_imu).matrix(0), motion.camera_velocity([t0], cal.T_cam_imu)[0])
+    return cal, motion.imu(), first, times, regs, cov
+
+
+def _same(a, b) -> bool:
+    return (np.array_equal(a.T_world_cam, b.T_world_cam) and np.array_equal(a.velocity_world, b.velocity_world)
+            and np.array_equal(a.gyro_bias, b.gyro_bias) and np.array_equal(a.acc_bias, b.acc_bias)
+            and np.array_equal(a.covariance, b.covariance))
+
+
+def bench_snapshot_restore(ctx) -> dict:
+    """Factor-graph fusion snapshots (issue 7): cost of ``snapshot``/``restore`` against the step index.
+
+    The fusion runs 200 Hz registrations of a 10 s flight (3 s quick) and takes a
+    snapshot at a few steps; each is restored after the run and the next 20
+    updates must equal the uninterrupted run bit for bit. Baseline in the same
+    run: what restoring cost before, replaying every input since initialisation
+    (``initialize`` + one ``update`` per step, the old ``restore``). Per-update
+    CPU time is compared, updates interleaved, with gtsam's
+    ``IncrementalFixedLagSmoother`` on the same inputs (estimates must be identical).
+    """
+    import gtsam
+
+    from evpose.fusion import FusionConfig
+    from evpose.fusion.factor_graph import FactorGraphFusion
+
+    class GtsamSmootherFusion(FactorGraphFusion):
+        """The same fusion on gtsam's own (uncopyable) fixed-lag smoother: the reference for estimates and cost."""
+
+        def _new_smoother(self):
+            s = super()._new_smoother()
+            return gtsam.IncrementalFixedLagSmoother(s.lag, s.params)
+
+    seconds, rate_hz = (3.0, 200.0) if ctx.quick else (10.0, 200.0)
+    steps = (50, 300, 580) if ctx.quick else (50, 300, 1000, 2000)
+    follow = 20
+    cal, imu, first, times, regs, cov = _flight_inputs(seconds + follow / rate_hz, rate_hz, ctx.seed)
+    cfg = FusionConfig(registration_covariance_scale=1.0)
+
+    def start(cls):
+        f = cls(cfg, cal)
+        f.add_imu(imu)
+        f.initialize(*first)
+        return f
+
+    f, ref = start(FactorGraphFusion), start(GtsamSmootherFusion)
+    states, snaps, cpu_new, cpu_ref = [], {}, [], []
+    snap_cpu, identical = {}, True
+    for k, t in enumerate(times):
+        for which in ((0, 1) if k % 2 else (1, 0)):  # alternate which runs first: no cache-order bias
+            c = time.thread_time()
+            if which == 0:
+                s = f.update(int(t), regs[k], cov)
+            else:
+                r = ref.update(int(t), regs[k], cov)
+            (cpu_new if which == 0 else cpu_ref).append((time.thread_time() - c) * 1e3)
+        identical &= _same(s, r)
+        states.append(s)
+        if k + 1 in steps:
+            c = time.thread_time()
+            snaps[k + 1] = f.snapshot()
+            snap_cpu[k + 1] = (time.thread_time() - c) * 1e3
+    out: dict = {"updates": len(times), "rate_hz": rate_hz, "estimates_identical_to_gtsam_smoother": bool(identical), **_load()}
+    warm = 20  # the first updates include numba's first-call compilation of the IMU integration
+    out.update({k: v for k, v in latency_summary(cpu_new[warm:], "update_cpu_").items()})
+    out.update({k: v for k, v in latency_summary(cpu_ref[warm:], "gtsam_smoother_update_cpu_").items() if not k.endswith("_n")})
+    out["update_cpu_overhead_vs_gtsam_smoother_pct"] = 100.0 * (np.median(cpu_new[warm:]) / np.median(cpu_ref[warm:]) - 1.0)
+    reproduced = True
+    for step in steps:
+        g = FactorGraphFusion(cfg, cal)
+        a, c = time.perf_counter(), time.thread_time()
+        g.restore(snaps[step])
+        out[f"restore_at_{step}_cpu_ms"] = (time.thread_time() - c) * 1e3
+        out[f"restore_at_{step}_wall_ms"] = (time.perf_counter() - a) * 1e3
+        out[f"snapshot_at_{step}_cpu_ms"] = snap_cpu[step]
+        for k in range(step, min(step + follow, len(times))):
+            reproduced &= _same(g.update(int(times[k]), regs[k], cov), states[k])
+        # Before: restore replayed every input since initialisation.
+        c = time.thread_time()
+        h = FactorGraphFusion(cfg, cal)
+        h.add_imu(imu)
+        h.initialize(*first)
+        for k in range(step):
+            h.update(int(times[k]), regs[k], cov)
+        out[f"replay_restore_at_{step}_cpu_ms"] = (time.thread_time() - c) * 1e3
+    out["restored_runs_bit_identical"] = bool(reproduced)
+    out["peak_rss_mb"] = peak_rss_mb()
+    return out
+
+
+BENCHMARKS = {"backends": bench_backends, "polarity_sim": bench_polarity_sim, "ego_motion_dynamic": bench_ego_motion_dynamic,
+              "ablation": bench_ablation, "snapshot_restore": bench_snapshot_restore}

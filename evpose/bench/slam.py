@@ -2,8 +2,10 @@
 
 The synthetic scene (random 3D points, constant-rate events at their
 projections) is generated here so the benchmark needs no simulator run; the
-``scenario`` benchmark uses :mod:`evpose.sim` when it is present (slow: it
-renders the scene), caching the recording in ``ctx.work_dir``.
+``scenario_*`` benchmarks (event-only and E-I-C2 on ``landing`` and ``indoor``)
+use :mod:`evpose.sim` when it is present (slow: it renders the scene), caching
+the recording in ``ctx.work_dir``. Each reports the 1-minute load average, since
+wall times on a shared machine depend on the other processes.
 """
 
 from __future__ import annotations
@@ -69,18 +71,22 @@ def bench_event_image(ctx: BenchContext) -> dict:
     return out
 
 
-def _slam_latencies(rec, ctx: BenchContext) -> dict:
+def _slam_latencies(rec, ctx: BenchContext, config=None) -> dict:
+    import os
+
     import cv2
 
     from evpose.eval.slam_metrics import atlas_metrics
-    from evpose.slam import SlamConfig, run_slam
+    from evpose.slam import SlamConfig, SlamMode, run_slam
 
+    config = config or SlamConfig()
     # Single-threaded OpenCV: the per-thread CPU timings then cover all the work, and the 2-core
     # machine is not oversubscribed by OpenCV's pool.
     cv2.setNumThreads(1)
     run_slam(rec.__class__(events=rec.events[: min(len(rec.events), 200_000)], calibration=rec.calibration), SlamConfig())  # numba warm-up
+    load_before = os.getloadavg()[0]
     t0, c0 = time.perf_counter(), time.process_time()
-    run = run_slam(rec, SlamConfig())
+    run = run_slam(rec, config)
     wall, cpu = time.perf_counter() - t0, time.process_time() - c0
     res = [r for r in run.results]
     out = {}
@@ -96,8 +102,15 @@ def _slam_latencies(rec, ctx: BenchContext) -> dict:
     out["realtime_factor"] = run.duration_s / wall if wall > 0 else 0.0
     out["mcis"] = len(res)
     out["ok_share"] = float(np.mean([r.status.value == "ok" for r in res])) if res else 0.0
+    # Wall times on a shared machine depend on the other processes: the load average says how busy it was.
+    out["load_average_1min"] = float(max(load_before, os.getloadavg()[0]))
+    out["mode"] = config.mode.value
+    if config.mode is SlamMode.EVENT_INERTIAL:
+        out["inertial_configuration"] = config.inertial.configuration.value
+        out["inertial_mcis"] = int(sum(r.status.value == "inertial" for r in res))
     if rec.ground_truth is not None:
-        m = atlas_metrics(run.trajectories(), rec.ground_truth, correct_scale=True, duration_s=run.duration_s)
+        # Event-only maps have an arbitrary scale; event-inertial maps are metric and are not rescaled.
+        m = atlas_metrics(run.trajectories(), rec.ground_truth, correct_scale=config.mode is SlamMode.EVENT, duration_s=run.duration_s)
         out.update({"maps": len(m.maps), "tracked_fraction": m.tracked_fraction, "ate_percent": m.ate_percent,
                     "rpe_trans_per_m": m.rpe_trans_per_m, "rpe_rot_deg_per_m": m.rpe_rot_deg_per_m, "stability_m_s": m.stability})
     out["peak_rss_mb"] = peak_rss_mb()
@@ -110,26 +123,69 @@ def bench_pipeline_synthetic(ctx: BenchContext) -> dict:
     return _slam_latencies(rec, ctx)
 
 
-def bench_scenario(ctx: BenchContext) -> dict:
-    """Event-only SLAM on the simulator's ``landing`` scenario (full suite only; the recording is cached)."""
-    if ctx.quick:
-        return {"skipped": "full suite only (simulating takes minutes)"}
+def bench_projection_search_ab(ctx: BenchContext) -> dict:
+    """Cost and effect of re-finding map points by projection: the synthetic scene with the search on and off, same run."""
+    from evpose.slam import SlamConfig
+
+    rec = _synthetic(1.5 if ctx.quick else 4.0, ctx.seed)
+    off = SlamConfig()
+    off.search.enabled = False
+    on = SlamConfig()
+    on.search.enabled = True
+    out = {}
+    for name, cfg in (("off", off), ("on", on)):
+        r = _slam_latencies(rec, ctx, cfg)
+        for k in ("tracking_median_ms", "tracking_cpu_median_ms", "cpu_ms_per_mci", "ok_share", "tracked_fraction", "ate_percent",
+                  "rpe_trans_per_m", "load_average_1min"):
+            if k in r:
+                out[f"{name}_{k}"] = r[k]
+    return out
+
+
+def _scenario_recording(ctx: BenchContext, scenario: str):
+    """The simulator's ``scenario``, 3 s at 346x260, cached in ``ctx.work_dir``; None when the simulator is absent."""
     try:
         from evpose.sim import SimulationConfig, simulate
     except ImportError:
-        return {"skipped": "evpose.sim not available"}
-    cache = ctx.work_dir / f"slam_landing_3s_seed{ctx.seed}.pkl"
+        return None
+    cache = ctx.work_dir / f"slam_{scenario}_3s_seed{ctx.seed}.pkl"
     if cache.exists():
-        rec = pickle.loads(cache.read_bytes())
-    else:
-        rec = simulate(SimulationConfig(scenario="landing", seconds=3.0, resolution=(346, 260), seed=ctx.seed)).recording
-        ctx.work_dir.mkdir(parents=True, exist_ok=True)
-        cache.write_bytes(pickle.dumps(rec))
-    return _slam_latencies(rec, ctx)
+        return pickle.loads(cache.read_bytes())
+    rec = simulate(SimulationConfig(scenario=scenario, seconds=3.0, resolution=(346, 260), seed=ctx.seed)).recording
+    ctx.work_dir.mkdir(parents=True, exist_ok=True)
+    cache.write_bytes(pickle.dumps(rec))
+    return rec
 
+
+def _scenario_bench(scenario: str, inertial: str | None):
+    def bench(ctx: BenchContext) -> dict:
+        if ctx.quick:
+            return {"skipped": "full suite only (simulating takes minutes)"}
+        from evpose.slam import SlamConfig, SlamMode
+        from evpose.slam.inertial import InertialConfiguration
+
+        rec = _scenario_recording(ctx, scenario)
+        if rec is None:
+            return {"skipped": "evpose.sim not available"}
+        cfg = SlamConfig()
+        if inertial is not None:
+            cfg.mode = SlamMode.EVENT_INERTIAL
+            cfg.inertial.configuration = InertialConfiguration(inertial)
+        return _slam_latencies(rec, ctx, cfg)
+
+    bench.__doc__ = (f"{'Event-only' if inertial is None else 'Event-inertial E-I-' + inertial.upper()} SLAM on the simulator's "
+                     f"``{scenario}`` scenario, 3 s at 346x260 (full suite only; the recording is cached).")
+    return bench
+
+
+bench_scenario = _scenario_bench("landing", None)
 
 BENCHMARKS = {
     "event_image": bench_event_image,
     "pipeline_synthetic": bench_pipeline_synthetic,
+    "projection_search_ab": bench_projection_search_ab,
     "scenario_landing": bench_scenario,
+    "scenario_landing_c2": _scenario_bench("landing", "c2"),
+    "scenario_indoor": _scenario_bench("indoor", None),
+    "scenario_indoor_c2": _scenario_bench("indoor", "c2"),
 }

@@ -19,7 +19,9 @@ import numpy as np
 from evpose.bench import BenchContext
 from evpose.bench.stats import latency_summary, peak_rss_mb
 
-MODULES = ("noise_filter", "time_surface", "culling", "distance_field", "polarity_filter", "registration", "fusion", "total")
+MODULES = ("noise_filter", "time_surface", "culling", "distance_field", "polarity_filter", "registration", "fusion", "total", "total_cpu")
+"""Per-update timings summarised; ``total_cpu`` is the CPU time of ``Tracker.step`` alone (the update the latency
+target is about), ``update_cpu_`` that of the whole session step (it adds the session's periodic snapshots)."""
 
 
 def _mapping_key() -> str:
@@ -77,6 +79,8 @@ def track_and_score(recording, contour_map, config=None) -> dict:
     out = {
         "updates": len(results),
         "lost_updates": len(lost),
+        "lost_only_updates": sum(r.status is TrackStatus.LOST for r in results),
+        "degraded_updates": sum(r.status is TrackStatus.DEGRADED for r in results),
         "first_lost_s": (lost[0].t_us - session.t0_us) * 1e-6 if lost else -1.0,
         "events": len(recording.events),
     }
@@ -111,4 +115,49 @@ def _bench(resolution):
     return run
 
 
-BENCHMARKS = {"landing_240x180": _bench((240, 180)), "landing_346x260": _bench((346, 260))}
+def _bias(ctx: BenchContext) -> dict:
+    """Registration started at ground truth (perfect and built map): bias, RMS error and covariance consistency."""
+    from evpose.bench.registration_bias import registration_bias
+
+    return registration_bias(ctx.work_dir, (346, 260), 1.0 if ctx.quick else 2.0, ctx.seed)
+
+
+def _superset_culling(ctx: BenchContext) -> dict:
+    """Whole-map superset cull of the landing map (346x260) along the ground truth: per-point pass vs block-wise pass.
+
+    Both run in the same process on the same poses (CPU time, thread_time), so the
+    ratio is meaningful on the shared machine; they must return the same indices.
+    """
+    import dataclasses
+
+    from evpose.tracker.config import TrackerConfig
+    from evpose.tracker.visible_map import VisibleMap, visible_points
+
+    rec, cmap = landing_case(ctx.work_dir, (346, 260), 1.0 if ctx.quick else 2.0, ctx.seed)
+    cal = rec.calibration
+    points = np.ascontiguousarray(cmap.points, dtype=np.float64)
+    vm = VisibleMap(points, cal.K, cal.width, cal.height)
+    base = TrackerConfig().visible_map
+    wide = dataclasses.replace(base, fov_margin_px=base.fov_margin_px + vm.extra_px, occlusion=False)
+    gt = rec.ground_truth
+    poses = gt.interpolate(np.linspace(gt.t[0], gt.t[-1], 40).astype(np.int64)).matrices()
+    per_point, blocks = [], []
+    same = True
+    for T in poses:
+        for _ in range(2):  # first call of each compiles / warms caches; keep the second
+            c0 = time.thread_time()
+            a = visible_points(points, T, cal.K, cal.width, cal.height, wide)
+            c1 = time.thread_time()
+            b = vm._superset(T, wide)
+            c2 = time.thread_time()
+        per_point.append((c1 - c0) * 1e3)
+        blocks.append((c2 - c1) * 1e3)
+        same &= bool(np.array_equal(a, b))
+    out = {"map_points": len(points), "identical": same, "load_average_1min": os.getloadavg()[0]}
+    out.update(latency_summary(per_point, "per_point_cpu_"))
+    out.update(latency_summary(blocks, "blocks_cpu_"))
+    return out
+
+
+BENCHMARKS = {"landing_240x180": _bench((240, 180)), "landing_346x260": _bench((346, 260)), "registration_bias_346x260": _bias,
+              "superset_culling_346x260": _superset_culling}

@@ -26,6 +26,8 @@ def main(
     spacing: float = 0.01,
     adjacent: float = 0.0,
     no_snap: bool = False,
+    no_albedo_edges: bool = False,
+    merge_double: float = 0.0,
     viewpoint: tuple[float, float, float] | None = None,
     quiet: bool = False,
 ) -> int:
@@ -45,6 +47,8 @@ def main(
         spacing: Distance between contour points, metres.
         adjacent: A boundary needs another surface within this distance, else it is the scan's rim, metres (0 = auto).
         no_snap: Do not snap contour points onto the intersection line of adjacent planes.
+        no_albedo_edges: Do not trace brightness (painted/albedo) edges inside regions from the cloud's colour or intensity.
+        merge_double: Merge contour points of different regions closer than this into one (an edge traced from both sides), metres (0 = keep both).
         viewpoint: Where the scan was seen from (x y z, metres); plane normals face it.
         quiet: No progress bar or summary.
     """
@@ -62,6 +66,7 @@ def main(
         voxel_m=voxel, k_neighbours=k, angle_threshold_deg=angle_deg, plane_angle_deg=plane_angle_deg,
         curvature_limit=curvature, min_region_points=min_region, plane_distance_m=plane_distance,
         cell_m=cell, contour_spacing_m=spacing, adjacent_m=adjacent, snap=not no_snap, viewpoint=viewpoint,
+        albedo_edges=not no_albedo_edges, merge_double_m=merge_double,
     )
     try:
         cmap = build_contour_map(raw.points, raw.normals, raw.intensity, config, progress=not quiet and sys.stderr.isatty())

@@ -19,6 +19,7 @@ def main(
     recording: tyro.conf.Positional[Path],
     out: Path,
     mode: str = "event",
+    configuration: str | None = None,
     config: Path | None = None,
     summary: Path | None = None,
     width: int | None = None,
@@ -36,6 +37,7 @@ def main(
         recording: Anything ``evpose info`` reads (ECD folder, evpose .h5, event .h5, bag); needs a calibration.
         out: TUM trajectory of the longest map.
         mode: event or event-inertial.
+        configuration: Event-inertial configuration of the paper: c1 (a new map when lost), c2 (continuous: IMU bridges, the default) or c3 (c2 with a fixed tiny-window size); overrides the config file.
         config: SLAM configuration, YAML or JSON (see ``evpose.slam.config``).
         summary: Where to write the JSON summary.
         width: Sensor width, for formats that do not state it.
@@ -50,6 +52,7 @@ def main(
     from evpose.io.tum import write_tum
     from evpose.slam.config import SlamConfig, SlamMode
     from evpose.slam.config_io import config_to_dict, load_slam_config
+    from evpose.slam.inertial import InertialConfiguration
     from evpose.slam.system import run_slam
 
     try:
@@ -58,6 +61,11 @@ def main(
         raise InputError(None, f"--mode must be one of {[m.value for m in SlamMode]}, got {mode!r}") from None
     cfg = load_slam_config(config) if config is not None else SlamConfig()
     cfg.mode = slam_mode
+    if configuration is not None:
+        try:
+            cfg.inertial.configuration = InertialConfiguration(configuration.lower())
+        except ValueError:
+            raise InputError(None, f"--configuration must be one of {[c.value for c in InertialConfiguration]}, got {configuration!r}") from None
     import cv2
 
     # One OpenCV thread: no oversubscription of small machines, and the per-stage CPU timings

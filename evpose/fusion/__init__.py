@@ -12,12 +12,14 @@ Public API::
     fusion.imu_rate_poses(t0_us, t1_us)                     # Trajectory at IMU sample times
 
     from evpose.fusion import PolarityPredictor, PolarityFilterConfig, MapPolaritySelector, classify_events
+    from evpose.fusion import AlignedTimeSurface            # T_align: the polarity filter's output registration reads
     from evpose.fusion import EgoMotionFilter, EgoMotionConfig
     from evpose.fusion import FusionMotionPredictor         # a backend behind the tracker's MotionPredictor hook
 
 gtsam is imported lazily by the backends, so importing this package is cheap.
 """
 
+from evpose.fusion.aligned_surface import AlignedTimeSurface
 from evpose.fusion.config import FusionBackend, FusionConfig, RobustLoss
 from evpose.fusion.ego_motion import EgoMotionConfig, EgoMotionFilter
 from evpose.fusion.motion_predictor import FusionMotionPredictor
@@ -51,6 +53,7 @@ def make_fusion(config: FusionConfig | None = None, calibration=None):
 
 
 __all__ = [
+    "AlignedTimeSurface",
     "EgoMotionConfig",
     "EgoMotionFilter",
     "FusedState",

@@ -7,10 +7,13 @@ robust pose prior with its covariance, a weak constant-velocity prior
 (``BetweenFactorVector`` on ``V``), and priors on the first state.
 
 * Inter-TS fusion: one iSAM2 update per registration gives the estimate at once.
-* Joint optimisation: an ``IncrementalFixedLagSmoother`` keeps the newest N
-  states (smoother "time" = state index, lag N-1) and marginalises the older
-  ones; every K updates the window is re-optimised with extra relinearising
-  iSAM2 iterations.
+* Joint optimisation: a fixed-lag iSAM2 smoother keeps the newest N states
+  (smoother "time" = state index, lag N-1) and marginalises the older ones;
+  every K updates the window is re-optimised with extra relinearising iSAM2
+  iterations. It is :class:`CopyableFixedLagSmoother`, gtsam's
+  ``IncrementalFixedLagSmoother`` algorithm (bit-identical estimates) on a
+  copyable ``ISAM2``, so ``snapshot``/``restore`` cost the same at any step
+  (one iSAM2 copy of the window) instead of replaying every input.
 
 A failed registration (``None``) adds a state constrained only by the IMU and
 constant-velocity factors: the pose is IMU-propagated, marked degraded, and its
@@ -27,13 +30,14 @@ from evpose.core.camera import CameraCalibration
 from evpose.core.imu import ImuSamples
 from evpose.core.trajectory import Trajectory
 from evpose.fusion.config import FusionConfig, RobustLoss
+from evpose.fusion.fixed_lag import CopyableFixedLagSmoother
 from evpose.fusion.preintegration import ImuBuffer, make_preintegration_params
 from evpose.fusion.propagation import NavPropagator, imu_rate_trajectory
 from evpose.fusion.state import Extrinsic, FusedState
 
 
 def registration_covariance(config: FusionConfig, covariance_6x6: np.ndarray | None) -> np.ndarray:
-    """Registration covariance (rotation, translation; camera frame) with defaults and a floor.
+    """Registration covariance (rotation, translation; camera frame), scaled, with defaults and a floor.
 
     A missing, non-finite or non-positive-definite covariance (a degenerate
     registration Hessian) falls back to the configured default sigmas.
@@ -46,7 +50,7 @@ def registration_covariance(config: FusionConfig, covariance_6x6: np.ndarray | N
         if np.isfinite(c).all():
             try:
                 np.linalg.cholesky(c)  # positive definite (cheaper than an eigen-decomposition)
-                cov = c
+                cov = c * float(config.registration_covariance_scale)  # correlated errors: see the config field
             except np.linalg.LinAlgError:
                 pass
     return cov + np.eye(6) * config.registration_min_sigma**2
@@ -88,8 +92,6 @@ class FactorGraphFusion:
         self.params = make_preintegration_params(self.config)
         self.buffer = ImuBuffer(self.time_offset_us)
         self._gtsam = gtsam
-        self._log: list[tuple] = []
-        self._init_args: tuple | None = None
         self._reset()
 
     # ------------------------------------------------------------------ state
@@ -114,12 +116,12 @@ class FactorGraphFusion:
         gtsam = self._gtsam
         p = gtsam.ISAM2Params()
         p.setRelinearizeThreshold(self.config.relinearize_threshold)
-        p.relinearizeSkip = 1
+        p.relinearizeSkip = int(self.config.relinearize_skip)
         # Cholesky reports an indeterminate system on the bias keys (information spans ~1e12 between the
         # bias random walk over a few ms and the pose priors); QR factorises the same graph robustly.
         p.setFactorization("QR")
         # Smoother "time" is the state index, so the lag is exactly N-1 states.
-        return gtsam.IncrementalFixedLagSmoother(float(self.config.window_states - 1), p)
+        return CopyableFixedLagSmoother(float(self.config.window_states - 1), p)
 
     # ------------------------------------------------------------ public API
     def initialize(self, t_us: int, T_world_cam: np.ndarray, velocity_world=None, acc_bias=None, gyro_bias=None) -> FusedState:
@@ -130,10 +132,6 @@ class FactorGraphFusion:
         ba = z if acc_bias is None else np.asarray(acc_bias, np.float64).reshape(3)
         bg = z if gyro_bias is None else np.asarray(gyro_bias, np.float64).reshape(3)
         T_wc = np.asarray(T_world_cam, np.float64).reshape(4, 4)
-        # The arguments as given (None stays None: it selects the unknown-velocity prior on replay too).
-        self._init_args = (int(t_us), T_wc.copy(), None if velocity_world is None else v.copy(), ba.copy(), bg.copy())
-        self._init_imu = len(self.buffer)
-        self._log = []
         self._reset()
         c = self.config
         T_wi = self.extrinsic.imu_pose(T_wc)
@@ -168,11 +166,7 @@ class FactorGraphFusion:
         t_us = int(t_us)
         if t_us <= self.t_state_us:
             raise ValueError(f"update time {t_us} us is not after the last state at {self.t_state_us} us")
-        # The IMU count is logged too: a replay must see exactly the samples this call saw.
-        T_meas = usable_pose(T_world_cam_measured)
-        self._log.append((t_us, None if T_meas is None else T_meas.copy(),
-                          None if covariance_6x6 is None else np.array(covariance_6x6, np.float64), len(self.buffer)))
-        return self._add_state(t_us, T_meas, covariance_6x6)
+        return self._add_state(t_us, usable_pose(T_world_cam_measured), covariance_6x6)
 
     def predict(self, t_us: int) -> FusedState:
         """IMU propagation from the latest state to ``t_us`` without adding a factor."""
@@ -185,26 +179,32 @@ class FactorGraphFusion:
         return imu_rate_trajectory(self.history, self.buffer, self.params, self.extrinsic, int(t0_us), int(t1_us))
 
     def snapshot(self) -> dict:
-        """Everything needed to rebuild this exact state: the inputs since initialisation (replayed on restore)."""
-        return {"init": self._init_args, "init_imu": getattr(self, "_init_imu", 0), "log": list(self._log), "imu": self.buffer.samples}
+        """The whole state, independent of this object: a copy of the smoother (its iSAM2 Bayes tree, values and
+        factors over the window) plus the bookkeeping. Costs the same at any step (the window is bounded)."""
+        p = self.propagator
+        # gtsam NavState / ConstantBias are immutable value types, safe to share; the smoother is copied.
+        return {"smoother": None if self.smoother is None else self.smoother.copy(), "index": self.index,
+                "t_state_us": getattr(self, "t_state_us", None), "n_updates": self.n_updates, "degraded": self.degraded,
+                "anchor": (p.t_us, p.nav, p.bias), "history": list(self.history),
+                "last_state": None if self.last_state is None else self.last_state.copy(), "imu": self.buffer.samples}
 
     def restore(self, snap: dict) -> None:
-        """Rebuild the graph by replaying the recorded inputs: bit-identical to the uninterrupted run."""
-        imu = snap["imu"]
+        """Put back a snapshot; the snapshot stays usable (its smoother is copied again), and the restored fusion fed
+        the same inputs reproduces the uninterrupted run bit for bit."""
         self.buffer = ImuBuffer(self.time_offset_us)
-        log = list(snap["log"])
-        if snap["init"] is None:
-            self.buffer.set_samples(imu)
-            self._init_args = None
-            self._log = []
-            self._reset()
-            return
-        self.buffer.set_samples(imu[: snap["init_imu"]])
-        self.initialize(*snap["init"])
-        for t_us, T, cov, n_imu in log:
-            self.buffer.set_samples(imu[:n_imu])
-            self.update(t_us, T, cov)
-        self.buffer.set_samples(imu)
+        self.buffer.set_samples(snap["imu"])
+        self._reset()
+        self.smoother = None if snap["smoother"] is None else snap["smoother"].copy()
+        self.index = int(snap["index"])
+        if snap["t_state_us"] is not None:
+            self.t_state_us = int(snap["t_state_us"])
+        self.n_updates = int(snap["n_updates"])
+        self.degraded = bool(snap["degraded"])
+        t, nav, bias = snap["anchor"]
+        if t is not None:
+            self.propagator.anchor(t, nav, bias)
+        self.history = list(snap["history"])
+        self.last_state = None if snap["last_state"] is None else snap["last_state"].copy()
 
     # -------------------------------------------------------------- internals
     def _add_state(self, t_us: int, T_meas_cam: np.ndarray | None, cov_cam: np.ndarray | None) -> FusedState:

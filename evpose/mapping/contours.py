@@ -248,8 +248,8 @@ def _dp_indices(p: np.ndarray, i0: int, i1: int, eps: float, out: list[int]) -> 
 
 
 def straighten(p: np.ndarray, outward: np.ndarray, eps: float, min_points: int,
-               inlier: float) -> tuple[np.ndarray, np.ndarray]:
-    """Replace straight runs of a closed chain by their least-squares line.
+               inlier: float, closed: bool = True) -> tuple[np.ndarray, np.ndarray]:
+    """Replace straight runs of a chain (closed, or open if ``closed`` is False) by their least-squares line.
 
     Man-made contours are mostly straight; a Douglas-Peucker split (tolerance ``eps``) finds the
     straight runs, and every run of at least ``min_points`` points is projected onto the
@@ -260,17 +260,27 @@ def straighten(p: np.ndarray, outward: np.ndarray, eps: float, min_points: int,
     Normals of straightened points become the line's normal.
     """
     m = p.shape[0]
-    if m < 2 * min_points:
+    if m < (2 * min_points if closed else min_points):
         return p, outward
-    # Start the loop at the point farthest from the first: a vertex of any polygon fit.
-    start = int(np.argmax(np.hypot(*(p - p[0]).T)))
-    order = np.roll(np.arange(m), -start)
-    q = np.vstack([p[order], p[order[:1]]])
-    cuts: list[int] = []
-    far = int(np.argmax(np.hypot(*(q - q[0]).T)))
-    cuts += [0, far, m]
-    _dp_indices(q, 0, far, eps, cuts)
-    _dp_indices(q, far, m, eps, cuts)
+    if closed:
+        # Start the loop at the point farthest from the first: a vertex of any polygon fit.
+        start = int(np.argmax(np.hypot(*(p - p[0]).T)))
+        order = np.roll(np.arange(m), -start)
+        q = np.vstack([p[order], p[order[:1]]])
+        cuts: list[int] = []
+        far = int(np.argmax(np.hypot(*(q - q[0]).T)))
+        cuts += [0, far, m]
+        _dp_indices(q, 0, far, eps, cuts)
+        _dp_indices(q, far, m, eps, cuts)
+    else:
+        # An open chain's ends are vertices; a chain that closes on itself (a traced loop)
+        # gets its farthest point as a vertex too, or the end-to-end chord would be degenerate.
+        order = np.arange(m)
+        far = int(np.argmax(np.hypot(*(p - p[0]).T)))
+        cuts = [0, far, m - 1]
+        _dp_indices(p, 0, far, eps, cuts)
+        _dp_indices(p, far, m - 1, eps, cuts)
+        cuts = [m if c == m - 1 else c for c in cuts]  # runs are half-open [a, b): the last point joins the last run
     cuts = sorted(set(cuts))
     out_p = p.copy()
     out_n = outward.copy()

@@ -151,3 +151,37 @@ def wall_with_window(
     edges = np.array([(c[i], c[(i + 1) % 4]) for i in range(4)], dtype=np.float64)
     inten = np.clip(0.5 + rng.normal(0, 0.02, p.shape[0]), 0, 1)
     return SyntheticScan(p, inten, edges)
+
+
+def painted_plane(
+    size: float = 3.0,
+    panel: tuple[float, float, float, float] = (0.9, 0.8, 1.2, 1.0),
+    albedo: float = 0.7,
+    panel_albedo: float = 0.2,
+    density: float = 400.0,
+    noise_m: float = 0.005,
+    intensity_noise: float = 0.03,
+    panel_offset_m: float = 0.0,
+    seed: int = 0,
+) -> SyntheticScan:
+    """A horizontal square plane (side ``size`` m, z = 0) with a painted rectangle ``(x0, y0, w, h)`` of another albedo.
+
+    ``panel_offset_m`` > 0 makes the rectangle a thin panel standing that far above the
+    plane (a picture on a wall) with the plane still sampled underneath it, as a simulator
+    sampling every surface produces. The rectangle's border is the only true edge (the
+    plane's own border is the scan's rim). Intensity noise is Gaussian, ``intensity_noise``.
+    """
+    rng = np.random.default_rng(seed)
+    p = _rect(rng, np.zeros(3), np.array([size, 0, 0]), np.array([0, size, 0]), density)
+    x0, y0, w, h = panel
+    inside = (p[:, 0] > x0) & (p[:, 0] < x0 + w) & (p[:, 1] > y0) & (p[:, 1] < y0 + h)
+    inten = np.where(inside, panel_albedo, albedo)
+    if panel_offset_m > 0:
+        top = _rect(rng, np.array([x0, y0, panel_offset_m]), np.array([w, 0, 0]), np.array([0, h, 0]), density)
+        p = np.concatenate([p, top])
+        inten = np.concatenate([np.full(inside.size, albedo), np.full(top.shape[0], panel_albedo)])
+    p = _range_noise(rng, p, np.array([size / 2, size / 2, 4.0]), noise_m)
+    inten = np.clip(inten + rng.normal(0.0, intensity_noise, p.shape[0]), 0, 1)
+    c = [np.array([x0, y0, 0.0]), np.array([x0 + w, y0, 0.0]), np.array([x0 + w, y0 + h, 0.0]), np.array([x0, y0 + h, 0.0])]
+    edges = np.array([(c[i], c[(i + 1) % 4]) for i in range(4)], dtype=np.float64)
+    return SyntheticScan(p, inten, edges)

@@ -7,10 +7,15 @@ Public API::
     result = slam.step(events)      # SlamStepResult
     slam.atlas.maps                 # SlamMap: keyframes, points, trajectory()
     run = run_slam(recording, SlamConfig())
+
+Event-inertial mode (``SlamConfig(mode=SlamMode.EVENT_INERTIAL)``) runs one of the paper's
+configurations, ``config.inertial.configuration``: E-I-C1 (a new map when lost), E-I-C2
+(continuous: IMU bridges over visual failures; the default) or E-I-C3 (C2 with fixed tiny windows).
 """
 
 from evpose.slam.config import SlamConfig, SlamMode
+from evpose.slam.inertial import InertialConfiguration
 from evpose.slam.step_result import SlamStatus, SlamStepResult
 from evpose.slam.system import EventSlam, SlamRun, run_slam
 
-__all__ = ["EventSlam", "SlamConfig", "SlamMode", "SlamRun", "SlamStatus", "SlamStepResult", "run_slam"]
+__all__ = ["EventSlam", "InertialConfiguration", "SlamConfig", "SlamMode", "SlamRun", "SlamStatus", "SlamStepResult", "run_slam"]

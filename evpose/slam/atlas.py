@@ -30,6 +30,8 @@ class MapPoint:
     track_id: int = -1
     """Feature track that observes it (KLT tracks carry associations, no descriptors)."""
     created_kf: int = 0
+    patch: np.ndarray | None = None
+    """Template (uint8, square) around the point's newest keyframe observation, for re-finding it by projection."""
 
 
 @dataclass
@@ -41,6 +43,11 @@ class SlamMap:
     points: dict[int, MapPoint] = field(default_factory=dict)
     traj_t: list[int] = field(default_factory=list)
     traj_T: list[np.ndarray] = field(default_factory=list)
+    """Per-MCI poses as estimated online (``T_world_cam``)."""
+    traj_ref: list[int] = field(default_factory=list)
+    """Per-MCI reference keyframe id (the newest keyframe when the pose was added; -1 without one)."""
+    traj_rel: list[np.ndarray] = field(default_factory=list)
+    """Per-MCI pose relative to its reference keyframe, ``T_kf^-1 T_wc``: later BA moves of the keyframe carry the pose along."""
     imu_initialised: bool = False
     """Event-inertial mode: the map was scaled to metres and gravity-aligned by the IMU initialisation."""
     scale: float = 1.0
@@ -57,12 +64,18 @@ class SlamMap:
         raise KeyError(kf_id)
 
     def add_pose(self, t_us: int, T_wc: np.ndarray) -> None:
+        ref = self.keyframes[-1] if self.keyframes else None
+        rel = np.linalg.solve(ref.T_wc, T_wc) if ref is not None else T_wc.copy()
         # Trajectories need strictly increasing times; a repeated MCI time replaces the old pose.
         if self.traj_t and t_us <= self.traj_t[-1]:
             self.traj_T[-1] = T_wc.copy()
+            self.traj_ref[-1] = ref.id if ref is not None else -1
+            self.traj_rel[-1] = rel
             return
         self.traj_t.append(int(t_us))
         self.traj_T.append(T_wc.copy())
+        self.traj_ref.append(ref.id if ref is not None else -1)
+        self.traj_rel.append(rel)
 
     def transform(self, R: np.ndarray, s: float) -> None:
         """Apply ``x -> s R x`` to the whole map (keyframes, points, trajectory)."""
@@ -77,12 +90,23 @@ class SlamMap:
         for p in self.points.values():
             p.xyz = s * (R @ p.xyz)
         self.traj_T = [tf(T) for T in self.traj_T]
+        for rel in self.traj_rel:
+            rel[:3, 3] *= s  # a relative pose only feels the scale of a world transform
 
-    def trajectory(self) -> Trajectory:
-        """Per-MCI poses of this map as a :class:`Trajectory` (``T_world_cam``)."""
+    def trajectory(self, refined: bool = True) -> Trajectory:
+        """Per-MCI poses of this map as a :class:`Trajectory` (``T_world_cam``).
+
+        ``refined`` (as ORB-SLAM saves its trajectories) composes each pose with the current pose of its
+        reference keyframe, so corrections of later bundle adjustments reach the poses between
+        keyframes; otherwise the poses are those estimated online.
+        """
         if not self.traj_t:
             return Trajectory.empty()
-        return Trajectory.from_matrices(np.array(self.traj_t, np.int64), np.stack(self.traj_T))
+        T = self.traj_T
+        if refined:
+            kf_pose = {kf.id: kf.T_wc for kf in self.keyframes}
+            T = [kf_pose[r] @ rel if r in kf_pose else Tw for r, rel, Tw in zip(self.traj_ref, self.traj_rel, self.traj_T)]
+        return Trajectory.from_matrices(np.array(self.traj_t, np.int64), np.stack(T))
 
     def point_array(self) -> np.ndarray:
         """All point positions (M, 3), ordered by point id."""

@@ -21,14 +21,18 @@ class BaReport:
     """... and after."""
 
 
-def local_bundle_adjustment(m: SlamMap, K: np.ndarray, window: int, iterations: int, huber_px: float, n_fixed: int = 1) -> BaReport:
+def local_bundle_adjustment(m: SlamMap, K: np.ndarray, window: int, iterations: int, huber_px: float, n_fixed: int = 1,
+                            rotation_priors: dict | None = None, rotation_sigma_rad: float = 1e-3) -> BaReport:
     """Optimise the last ``window`` keyframes of ``m`` and the points they see, in place.
 
     The ``n_fixed`` oldest keyframes of the window (two while the map has only
     its two initial keyframes, fixing the monocular scale) are held by tight
     priors; keyframes outside the window that see the same points contribute
     their observations with fixed poses. Points with fewer than two
-    observations are left out.
+    observations are left out. ``rotation_priors`` maps keyframe-id pairs
+    ``(a, b)`` to a measured camera rotation ``R_ca_cb`` (3, 3), e.g. from the
+    gyro; each adds a between factor of ``rotation_sigma_rad`` on the rotation
+    (translation free).
     """
     import gtsam
     from gtsam.symbol_shorthand import L, X
@@ -68,6 +72,12 @@ def local_bundle_adjustment(m: SlamMap, K: np.ndarray, window: int, iterations: 
             graph.add(gtsam.PriorFactorPose3(X(kid), pose, tight))
         else:
             n_free += 1
+    if rotation_priors:
+        # Pose3 tangent order is (rotation, translation): a loose translation sigma leaves it to the images.
+        rot_noise = gtsam.noiseModel.Diagonal.Sigmas(np.r_[np.full(3, rotation_sigma_rad), np.full(3, 1e4)])
+        for (a, b), R_ab in sorted(rotation_priors.items()):
+            if a in used_kfs and b in used_kfs and (a in in_window or b in in_window):
+                graph.add(gtsam.BetweenFactorPose3(X(a), X(b), gtsam.Pose3(gtsam.Rot3(np.asarray(R_ab, np.float64)), np.zeros(3)), rot_noise))
     params = gtsam.LevenbergMarquardtParams()
     params.setMaxIterations(int(iterations))
     e0 = graph.error(values)

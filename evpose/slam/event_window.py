@@ -178,7 +178,7 @@ class EventWindowSelector:
         img8 = to_uint8(img)
         t_mid = int(np.mean(tiny.t))
         if s.ref_pts is None:
-            pts = detect_features(img8, self.fcfg, max_total=cfg.reference_features)
+            pts = detect_features(img8, self.fcfg, max_total=cfg.reference_features, support=img)
             if len(pts) < cfg.min_features:
                 self.last_event = WindowEvent.NO_TEXTURE
                 self._reset(keep_overlap=False)
@@ -247,7 +247,7 @@ class EventWindowSelector:
             t_ref_us=s.t_ref_us, t_cur_us=s.t_cur_us, n_frames=s.n_frames,
             median_displacement_px=s.median_displacement_px, forced=forced,
         )
-        if not forced:
+        if not forced and cfg.adapt_events:
             # eq. (8): fewer frames than expected -> the camera is fast -> smaller tiny windows, and vice versa.
             n_new = (s.n_frames * s.n_events) // cfg.expected_frames
             s.n_events = int(np.clip(n_new, cfg.min_events, cfg.max_events))

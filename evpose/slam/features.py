@@ -8,11 +8,14 @@ import numpy as np
 from evpose.slam.config import FeatureConfig
 
 
-def detect_features(img8: np.ndarray, cfg: FeatureConfig, existing: np.ndarray | None = None, max_total: int | None = None) -> np.ndarray:
+def detect_features(img8: np.ndarray, cfg: FeatureConfig, existing: np.ndarray | None = None, max_total: int | None = None,
+                    support: np.ndarray | None = None) -> np.ndarray:
     """FAST corners spread by a bucketing grid: the ``per_cell`` strongest per cell, away from ``existing`` points.
 
     Returns float32 (N, 2) pixel positions, ordered by cell then response so the
-    output is deterministic.
+    output is deterministic. ``support`` is the float event image (each event adds
+    a mass of one): corners whose surrounding ``support_window_px`` square holds
+    fewer than ``cfg.min_support_ratio`` times the image's mean count per square are dropped.
     """
     h, w = img8.shape
     fast = cv2.FastFeatureDetector_create(threshold=int(cfg.fast_threshold), nonmaxSuppression=True)
@@ -30,6 +33,14 @@ def detect_features(img8: np.ndarray, cfg: FeatureConfig, existing: np.ndarray |
     b = cfg.border_px
     keep = (pts[:, 0] >= b) & (pts[:, 0] < w - b) & (pts[:, 1] >= b) & (pts[:, 1] < h - b)
     keep &= resp >= cfg.min_eigen_quality * float(eig.max())
+    if support is not None and cfg.min_support_ratio > 0:
+        # A background-activity event splats an isolated blob that FAST and Shi-Tomasi both take for a
+        # corner; KLT on it follows noise and a map point on it is garbage. Real corners gather many events.
+        k = int(cfg.support_window_px) | 1
+        sup = np.abs(np.asarray(support, np.float32))
+        mass = cv2.boxFilter(sup, -1, (k, k), normalize=False, borderType=cv2.BORDER_CONSTANT)
+        mean_mass = float(sup.sum()) * k * k / sup.size
+        keep &= mass[iv, iu] >= cfg.min_support_ratio * mean_mass
     if existing is not None and len(existing):
         # Occupancy mask around existing tracks keeps new features from doubling old ones.
         mask = np.zeros((h, w), np.uint8)

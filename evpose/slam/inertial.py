@@ -10,6 +10,7 @@ scaled to metres and rotated so gravity points along ``-z``.
 
 from __future__ import annotations
 
+import enum
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -20,24 +21,59 @@ from evpose.core.imu import ImuSamples
 GRAVITY = 9.81
 
 
+class InertialConfiguration(str, enum.Enum):
+    """The event-inertial configurations of the paper's Tables I and III (event-only is ``SlamMode.EVENT``)."""
+
+    C1 = "c1"
+    """E-I-C1, re-initialising: when tracking is lost a new map starts, with its own IMU initialisation."""
+    C2 = "c2"
+    """E-I-C2, continuous: once the IMU is initialised, visual failures are bridged by IMU propagation and the map
+    keeps growing from the IMU-predicted keyframes; no new map is spawned (unless the bridge runs longer than
+    ``max_bridge_s``). The paper's preferred configuration."""
+    C3 = "c3"
+    """E-I-C3: C2 with a fixed tiny-window size (``window.initial_events``, no adaptation) and no rejection of tiny
+    windows by event rate (the paper's definition)."""
+
+
 @dataclass
 class InertialConfig:
     """IMU initialisation settings (event-inertial mode)."""
 
+    configuration: InertialConfiguration = InertialConfiguration.C2
+    """Which event-inertial configuration of the paper to run."""
+    max_bridge_s: float = field(default=1.0, metadata={"min": 0.0, "max": 10.0, "step": 0.1, "unit": "s"})
+    """C2/C3: longest stretch of IMU-only propagation before the map is given up and a new one started, seconds."""
+
     init_keyframes: int = field(default=6, metadata={"min": 3, "max": 50, "step": 1, "unit": "keyframes"})
     """Keyframes the map needs before the IMU is initialised, keyframes."""
-    init_min_span_s: float = field(default=0.8, metadata={"min": 0.1, "max": 10.0, "step": 0.1, "unit": "s"})
+    init_min_span_s: float = field(default=1.2, metadata={"min": 0.1, "max": 10.0, "step": 0.1, "unit": "s"})
     """Time the keyframes must span before initialising, seconds."""
+    init_min_gap_s: float = field(default=0.3, metadata={"min": 0.0, "max": 2.0, "step": 0.05, "unit": "s"})
+    """Keyframes used by the initialisation are thinned to at least this spacing: the acceleration signal grows with the square of the gap while visual position noise does not, and a noisy displacement regressor biases the scale towards zero, seconds."""
     max_gravity_error: float = field(default=0.25, metadata={"min": 0.01, "max": 1.0, "step": 0.01, "unit": "ratio"})
     """The unconstrained gravity estimate must have a norm within this share of 9.81 m/s^2, ratio."""
     max_residual_ratio: float = field(default=0.02, metadata={"min": 0.001, "max": 0.5, "step": 0.001, "unit": "ratio"})
     """RMS residual of the alignment over the RMS of the IMU deltas above which initialisation is refused, ratio."""
     inertial_ba: bool = True
+    full_ba_after_init: bool = True
+    """Right after a successful initialisation, run the inertial BA once over all keyframes of the map."""
     """After IMU initialisation, local BA adds IMU preintegration factors between keyframes (gtsam ImuFactor)."""
-    acc_noise: float = field(default=0.05, metadata={"min": 1e-4, "max": 1.0, "step": 1e-3, "unit": "m/s^2"})
-    """Accelerometer white-noise sigma per sample used by the inertial BA, m/s^2."""
-    gyro_noise: float = field(default=0.005, metadata={"min": 1e-5, "max": 0.1, "step": 1e-4, "unit": "rad/s"})
-    """Gyroscope white-noise sigma per sample used by the inertial BA, rad/s."""
+    acc_noise: float = field(default=0.01, metadata={"min": 1e-4, "max": 1.0, "step": 1e-3, "unit": "m/s^2/sqrt(Hz)"})
+    """Accelerometer white-noise density used by the inertial BA and IMU propagation (gtsam's continuous-time
+    covariance; about five times a consumer MEMS part's), m/s^2/sqrt(Hz)."""
+    gyro_noise: float = field(default=0.001, metadata={"min": 1e-5, "max": 0.1, "step": 1e-4, "unit": "rad/s/sqrt(Hz)"})
+    """Gyroscope white-noise density used by the inertial BA and IMU propagation (about five times a consumer
+    MEMS part's: looser lets the images bend the gyro's rotations between keyframes), rad/s/sqrt(Hz)."""
+    acc_bias_sigma: float = field(default=0.02, metadata={"min": 1e-4, "max": 1.0, "step": 1e-3, "unit": "m/s^2"})
+    """How far one inertial BA may move the accelerometer bias from its last estimate (1 sigma), m/s^2."""
+    gyro_bias_sigma: float = field(default=0.001, metadata={"min": 1e-5, "max": 0.1, "step": 1e-4, "unit": "rad/s"})
+    """How far one inertial BA may move the gyroscope bias from its last estimate (1 sigma), rad/s."""
+    klt_gyro_prediction: bool = True
+    """Start the KLT tracking between MCIs where the gyro rotation moves each feature."""
+    gyro_prior_deg: float = field(default=0.05, metadata={"min": 0.0, "max": 5.0, "step": 0.01, "unit": "deg"})
+    """Sigma of the gyro-integrated rotation between consecutive poses once the IMU is initialised (bias known), used as a prior by pose tracking (0 disables it), degrees."""
+    gyro_prior_uninit_deg: float = field(default=0.2, metadata={"min": 0.0, "max": 5.0, "step": 0.01, "unit": "deg"})
+    """The same prior before the IMU initialisation, with an unknown gyro bias, also used by the visual local BA (0 disables it): chained step after step, an uncorrected bias would bend the visual map, so it is looser or off, degrees."""
 
 
 @dataclass
@@ -87,11 +123,31 @@ class ImuInitResult:
     R_align: np.ndarray | None = None
     """Rotation taking map-frame vectors to the gravity-aligned frame (gravity -> (0, 0, -9.81))."""
     velocities: np.ndarray | None = None
-    """IMU velocity at each keyframe in the gravity-aligned frame, m/s (N, 3)."""
+    """IMU velocity at each used keyframe in the gravity-aligned frame, m/s (N, 3)."""
+    used: list = field(default_factory=list)
+    """Indices (into the keyframes given) of the keyframes the initialisation used."""
+
+
+def thin_keyframes(times_us: list[int], min_gap_s: float) -> list[int]:
+    """Indices of keyframes kept at least ``min_gap_s`` apart, always keeping the last one."""
+    keep = [0] if times_us else []
+    for k in range(1, len(times_us)):
+        if (times_us[k] - times_us[keep[-1]]) / 1e6 >= min_gap_s:
+            keep.append(k)
+    if len(times_us) > 1 and keep[-1] != len(times_us) - 1:
+        keep[-1] = len(times_us) - 1
+    return keep
 
 
 def initialize_imu(times_us: list[int], T_wc: list[np.ndarray], imu: ImuSamples, T_cam_imu: np.ndarray, time_offset_us: int, cfg: InertialConfig) -> ImuInitResult:
-    """Scale, gravity, gyro bias (and velocities) from keyframe poses and the IMU; see the module docstring."""
+    """Scale, gravity, gyro bias (and velocities) from keyframe poses and the IMU; see the module docstring.
+
+    The keyframes are first thinned to ``cfg.init_min_gap_s``; ``velocities`` are those of the kept keyframes
+    (``ImuInitResult.used`` lists their indices).
+    """
+    used = thin_keyframes(list(times_us), cfg.init_min_gap_s)
+    times_us = [times_us[k] for k in used]
+    T_wc = [T_wc[k] for k in used]
     n = len(times_us)
     if n < 3:
         return ImuInitResult(False, f"{n} keyframes < 3")
@@ -157,4 +213,4 @@ def initialize_imu(times_us: list[int], T_wc: list[np.ndarray], imu: ImuSamples,
     ang = np.arctan2(np.linalg.norm(axis), down @ target)
     R_align = Rotation.from_rotvec(axis / np.linalg.norm(axis) * ang).as_matrix() if np.linalg.norm(axis) > 1e-12 else np.eye(3)
     vel = x2[1:].reshape(n, 3) @ R_align.T
-    return ImuInitResult(True, "", s, g, bg, R_align, vel)
+    return ImuInitResult(True, "", s, g, bg, R_align, vel, used)

@@ -17,7 +17,8 @@ from evpose.slam.geometry import good_triangulation, triangulate
 def need_keyframe(m: SlamMap, tr_ids: np.ndarray, tr_uv: np.ndarray, n_tracked_points: int, cfg: TrackingConfig) -> bool:
     """The paper's heuristics: tracked map points fell below a share of the last keyframe's, or key points moved far."""
     last = m.keyframes[-1]
-    n_last = sum(1 for tid in last.obs if tid in _point_tracks(m))
+    point_tracks = _point_tracks(m)  # once: a set per key point made this quadratic
+    n_last = sum(1 for tid in last.obs if tid in point_tracks)
     if n_last and n_tracked_points < cfg.keyframe_tracked_ratio * n_last:
         return True
     common = [(last.obs[t], uv) for t, uv in zip(tr_ids.tolist(), tr_uv) if t in last.obs]

@@ -64,6 +64,8 @@ class MciResult:
     """Fitted Sim(2) motion over the track interval (3x3 px), kept as the next prior."""
     depth: float | None = None
     """Scene depth of the H3 fit, map units."""
+    candidates: dict = field(default_factory=dict, repr=False)
+    """Every rendered hypothesis ("H1".."H4") -> float32 image: the tracker may prefer the previous MCI's hypothesis."""
 
 
 def _slices(t: np.ndarray, n_slices: int) -> tuple[np.ndarray, np.ndarray]:
@@ -208,4 +210,5 @@ class MciGenerator:
         # Highest score wins; ties go to the earlier hypothesis in H1..H4 order (deterministic).
         best = max(sorted(cands, key=lambda h: h.value), key=lambda h: scores[h.value])
         img = cands[best]
-        return MciResult(t_us=rw.t_end_us, image=img, image8=to_uint8(img), hypothesis=best, scores=scores, n_events=len(rw.t), sim2=sim2, depth=depth)
+        return MciResult(t_us=rw.t_end_us, image=img, image8=to_uint8(img), hypothesis=best, scores=scores, n_events=len(rw.t), sim2=sim2, depth=depth,
+                         candidates={h.value: im for h, im in cands.items()})

@@ -17,6 +17,8 @@ class SlamStatus(str, enum.Enum):
     """An MCI was processed but no map exists yet (two-view initialisation pending)."""
     OK = "ok"
     """The MCI was tracked against the active map."""
+    INERTIAL = "inertial"
+    """Event-inertial C2/C3: visual tracking failed on this MCI; the pose was propagated by the IMU and the map kept."""
     LOST = "lost"
     """Tracking failed on this MCI; the next map of the atlas will be initialised."""
 

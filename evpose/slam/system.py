@@ -3,12 +3,18 @@
 Everything runs in one thread in a fixed order (the paper's implementation uses
 threads and is, by its own README, unstable); OpenCV's RANSAC generator is
 re-seeded before every call, so a run repeats bit for bit.
+
+Event-inertial mode adds: the gyro rotation between MCIs as a prior of pose
+tracking (and, before the IMU initialisation, loosely, of the visual local BA),
+the IMU initialisation on keyframes thinned in time, a full inertial BA right
+after it, IMU-predicted pose guesses, and (E-I-C2/C3) IMU bridges over visual
+failures that keep the map instead of opening a new one.
 """
 
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -24,13 +30,19 @@ from evpose.slam.bundle_adjustment import local_bundle_adjustment
 from evpose.slam.config import SlamConfig, SlamMode
 from evpose.slam.event_window import EventWindowSelector, ReconstructionWindow, WindowEvent
 from evpose.slam.features import detect_features, track_features
-from evpose.slam.inertial import initialize_imu
+from evpose.slam.inertial import InertialConfiguration, initialize_imu
+from evpose.slam.inertial_bridge import predict_camera_pose
 from evpose.slam.inertial_ba import InertialState, inertial_local_bundle_adjustment
 from evpose.slam.initialization import initialize_two_view
 from evpose.slam.local_map import cull_points, insert_keyframe, need_keyframe, triangulate_new_points
-from evpose.slam.mci import MciGenerator, MciResult, MotionPrior
+from evpose.slam.event_image import to_uint8
+from evpose.slam.mci import Hypothesis, MciGenerator, MciResult, MotionPrior
+from evpose.slam.projection_search import refind_points, store_patches
 from evpose.slam.step_result import SlamStatus, SlamStepResult
-from evpose.slam.tracking import estimate_pose
+from evpose.slam.geometry import project
+from evpose.slam.gyro_prior import (camera_delta_rotation, gyro_delta_rotation, keyframe_rotation_priors, reanchor_rotations,
+                                    refine_pose_with_rotation_prior)
+from evpose.slam.tracking import PoseEstimate, estimate_pose
 
 _WINDOW_REASONS = {
     WindowEvent.WAITING: "collecting events",
@@ -48,6 +60,8 @@ class _Frontend:
     ids: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
     uv: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), np.float32))
     prev8: np.ndarray | None = None
+    prev_t: int = 0
+    """Time of the MCI ``prev8`` was made from, us."""
     next_id: int = 0
     track_to_point: dict = field(default_factory=dict)
     init_ref: dict | None = None
@@ -70,7 +84,11 @@ class EventSlam:
         self.K = calibration.K
         self.width, self.height = calibration.width, calibration.height
         self._table = calibration.undistortion_table if calibration.model.value != "none" else None
-        self.window = EventWindowSelector(config.window, config.features, config.image, self.width, self.height, config.seed)
+        wcfg = config.window
+        if self.imu is not None and config.inertial.configuration is InertialConfiguration.C3:
+            # E-I-C3: fixed tiny windows, and no withdrawal of tiny windows by event rate.
+            wcfg = replace(wcfg, adapt_events=False, min_event_rate=0.0)
+        self.window = EventWindowSelector(wcfg, config.features, config.image, self.width, self.height, config.seed)
         self.mci_gen = MciGenerator(config.mci, config.image, self.K, self.width, self.height, config.seed)
         self.atlas = Atlas()
         self.fe = _Frontend()
@@ -81,6 +99,10 @@ class EventSlam:
         self._last_t = 0
         self.last_imu_init = None
         """Outcome of the last IMU initialisation attempt (event-inertial mode)."""
+        self._prev_hypothesis: str | None = None
+        """Hypothesis of the previous MCI ("H1".."H4")."""
+        self._last_visual_t = 0
+        """Time of the last MCI tracked visually (C2/C3 bound their IMU bridges by it), us."""
 
     # --------------------------------------------------------------- public
     def step(self, events: EventArray) -> SlamStepResult:
@@ -115,6 +137,7 @@ class EventSlam:
             "window": self.window.state, "last_tiny": self.window.last_tiny_image, "last_event": self.window.last_event,
             "n_hist": self.window.n_events_history, "atlas": self.atlas, "fe": self.fe, "next_point": self._next_point,
             "state": self._state, "last_t": self._last_t, "imu_init": self.last_imu_init, "n_results": len(self.results),
+            "last_visual_t": self._last_visual_t, "prev_hypothesis": self._prev_hypothesis,
         })
 
     def restore(self, snap: dict) -> None:
@@ -125,6 +148,8 @@ class EventSlam:
         self.window.n_events_history = s["n_hist"]
         self.atlas, self.fe, self._next_point = s["atlas"], s["fe"], s["next_point"]
         self._state, self._last_t, self.last_imu_init = s["state"], s["last_t"], s["imu_init"]
+        self._last_visual_t = s.get("last_visual_t", 0)
+        self._prev_hypothesis = s.get("prev_hypothesis")
         del self.results[s["n_results"]:]
 
     # ------------------------------------------------------------- pipeline
@@ -156,18 +181,44 @@ class EventSlam:
                     prior.velocity = np.zeros(3)
         return prior
 
-    def _track_mci(self, mci: MciResult) -> None:
+    def _track_mci(self, mci: MciResult) -> MciResult:
+        """KLT from the previous MCI; returns the MCI actually used (the previous hypothesis's image may replace the sharpest)."""
         fe = self.fe
         if fe.prev8 is not None and len(fe.ids):
-            new, ok = track_features(fe.prev8, mci.image8, fe.uv, self.cfg.features)
+            guess = self._gyro_flow(fe.prev_t, mci.t_us, fe.uv)
+            new, ok = track_features(fe.prev8, mci.image8, fe.uv, self.cfg.features, guess=guess)
+            keep = self.cfg.mci.keep_hypothesis_survival
+            prev_h = self._prev_hypothesis
+            if keep > 0 and prev_h is not None and prev_h != mci.hypothesis.value and prev_h in mci.candidates and ok.sum() < keep * len(ok):
+                img = mci.candidates[prev_h]
+                alt = replace(mci, image=img, image8=to_uint8(img), hypothesis=Hypothesis(prev_h))
+                new2, ok2 = track_features(fe.prev8, alt.image8, fe.uv, self.cfg.features, guess=guess)
+                if ok2.sum() > ok.sum():
+                    mci, new, ok = alt, new2, ok2
             fe.ids, fe.uv = fe.ids[ok], new[ok]
-        fe.prev8 = mci.image8
+        fe.prev8, fe.prev_t = mci.image8, mci.t_us
+        self._prev_hypothesis = mci.hypothesis.value
+        return mci
 
-    def _replenish(self, img8: np.ndarray) -> None:
+    def _gyro_flow(self, t0_us: int, t1_us: int, uv: np.ndarray) -> np.ndarray | None:
+        """Where the gyro rotation alone moves ``uv`` between two MCIs (the infinite homography ``K R^T K^-1``): KLT's start."""
+        if self.imu is None or not self.cfg.inertial.klt_gyro_prediction:
+            return None
+        m = self.atlas.active
+        bias = m.inertial.bias_gyro if m is not None and m.imu_initialised and m.inertial is not None else None
+        off = self.calib.time_offset_us
+        dR = gyro_delta_rotation(self.imu, int(t0_us) + off, int(t1_us) + off, bias)
+        if dR is None:
+            return None
+        H = self.K @ camera_delta_rotation(dR, self.calib.T_cam_imu).T @ np.linalg.inv(self.K)
+        q = np.c_[uv.astype(np.float64), np.ones(len(uv))] @ H.T
+        return (q[:, :2] / q[:, 2:3]).astype(np.float32)
+
+    def _replenish(self, img8: np.ndarray, img: np.ndarray | None = None) -> None:
         fe = self.fe
         if len(fe.ids) >= self.cfg.features.target_tracks:
             return
-        pts = detect_features(img8, self.cfg.features, existing=fe.uv, max_total=self.cfg.features.target_tracks - len(fe.ids))
+        pts = detect_features(img8, self.cfg.features, existing=fe.uv, max_total=self.cfg.features.target_tracks - len(fe.ids), support=img)
         if len(pts):
             fe.ids = np.concatenate([fe.ids, np.arange(fe.next_id, fe.next_id + len(pts), dtype=np.int64)])
             fe.uv = np.concatenate([fe.uv, pts.astype(np.float32)])
@@ -177,14 +228,14 @@ class EventSlam:
         t0, c0 = time.perf_counter(), time.thread_time()
         mci = self.mci_gen.generate(rw, self._prior(rw))
         t1, c1 = time.perf_counter(), time.thread_time()
-        self._track_mci(mci)
+        mci = self._track_mci(mci)
         keyframe = False
         if self._state is SlamStatus.OK:
             status, reason, pose, keyframe = self._track_map(mci)
         else:
             status, reason, pose = self._try_initialise(mci)
         t2, c2 = time.perf_counter(), time.thread_time()
-        self._replenish(mci.image8)
+        self._replenish(mci.image8, mci.image)
         m = self.atlas.active
         fe = self.fe
         has_pt = np.array([t in fe.track_to_point for t in fe.ids.tolist()], bool)
@@ -205,7 +256,7 @@ class EventSlam:
     def _try_initialise(self, mci: MciResult) -> tuple[SlamStatus, str, np.ndarray | None]:
         fe, icfg = self.fe, self.cfg.initialization
         if fe.init_ref is None:
-            self._replenish(mci.image8)
+            self._replenish(mci.image8, mci.image)
             fe.init_ref = {int(t): uv.astype(np.float64) for t, uv in zip(fe.ids.tolist(), fe.uv)}
             fe.init_ref_t, fe.init_frames = mci.t_us, 0
             return SlamStatus.NOT_INITIALISED, f"initialisation reference set with {len(fe.init_ref)} features", None
@@ -234,10 +285,12 @@ class EventSlam:
         # Global BA of the two-view map (both keyframes' poses fixed: they define frame and scale).
         local_bundle_adjustment(m, self.K, 2, tc.ba_iterations, tc.ba_huber_px, n_fixed=2)
         cull_points(m, self.K, fe.track_to_point, tc)
+        store_patches(m, kf1.id, mci.image8, self.cfg.search.patch_px)
         m.add_pose(kf0.t_us, kf0.T_wc)
         m.add_pose(kf1.t_us, kf1.T_wc)
         fe.init_ref = None
         self._state = SlamStatus.OK
+        self._last_visual_t = mci.t_us
         return SlamStatus.OK, f"map {m.id} initialised ({res.model}, {len(m.points)} points, parallax {res.median_parallax_deg:.1f} deg)", m.keyframes[-1].T_wc.copy()
 
     def _try_imu_init(self, m: SlamMap) -> None:
@@ -251,9 +304,52 @@ class EventSlam:
             m.transform(res.R_align, res.scale)
             m.imu_initialised = True
             m.scale = res.scale
-            m.inertial = InertialState({kf.id: v for kf, v in zip(kfs, res.velocities)}, np.zeros(3), res.gyro_bias.copy())
+            m.inertial = InertialState({kfs[k].id: v for k, v in zip(res.used, res.velocities)}, np.zeros(3), res.gyro_bias.copy())
+            ic, tc = self.cfg.inertial, self.cfg.tracking
+            if ic.inertial_ba and ic.full_ba_after_init:
+                # One inertial BA over every keyframe (as ORB-SLAM3 does after its initialisation): the IMU now
+                # corrects the whole visual map, not only the next local window.
+                inertial_local_bundle_adjustment(m, m.inertial, self.K, self.imu, self.calib.T_cam_imu, self.calib.time_offset_us,
+                                                 len(m.keyframes), tc.ba_iterations, tc.ba_huber_px, ic.acc_noise, ic.gyro_noise,
+                                             ic.acc_bias_sigma, ic.gyro_bias_sigma)
+            self._reanchor_rotations(m)
+
+    def _reanchor_rotations(self, m: SlamMap, refs: set | None = None) -> None:
+        reanchor_rotations(m, self.imu, self.calib.T_cam_imu, self.calib.time_offset_us, m.inertial.bias_gyro, refs)
 
     # ------------------------------------------------------------- tracking
+    def _gyro_rotation(self, t0_us: int, t1_us: int, T_wc0: np.ndarray) -> np.ndarray | None:
+        """Camera orientation at ``t1`` predicted from ``T_wc0`` at ``t0`` by the gyro (event-inertial mode), else None."""
+        if self.imu is None:
+            return None
+        m = self.atlas.active
+        bias = m.inertial.bias_gyro if m is not None and m.imu_initialised and m.inertial is not None else None
+        off = self.calib.time_offset_us
+        dR = gyro_delta_rotation(self.imu, int(t0_us) + off, int(t1_us) + off, bias)
+        if dR is None:
+            return None
+        return T_wc0[:3, :3] @ camera_delta_rotation(dR, self.calib.T_cam_imu)
+
+    def _keyframe_rotation_priors(self, m: SlamMap) -> dict | None:
+        """Gyro rotations between consecutive keyframes of the BA window (event-inertial mode), else None."""
+        if self.imu is None or self.cfg.inertial.gyro_prior_uninit_deg <= 0:
+            return None
+        kfs = m.keyframes[-(self.cfg.tracking.local_window + 1):]
+        return keyframe_rotation_priors(kfs, self.imu, self.calib.T_cam_imu, self.calib.time_offset_us) or None
+
+    def _refine_with_gyro(self, est, Xw: np.ndarray, uv: np.ndarray, R_wc_prior: np.ndarray, sigma_deg: float):
+        """Re-solve the pose with the gyro rotation as a prior (planar scenes confuse tilt with shift; the gyro does not)."""
+        tc = self.cfg.tracking
+        inl = est.inliers
+        T_cw = refine_pose_with_rotation_prior(self.K, Xw[inl], uv[inl], invert_pose(est.T_wc), R_wc_prior.T,
+                                               np.radians(sigma_deg), huber_px=tc.ba_huber_px)
+        proj, z = project(self.K, T_cw, Xw)
+        err = np.linalg.norm(proj - uv, axis=1)
+        inliers = (z > 0) & (err < tc.reprojection_threshold_px)
+        if inliers.sum() < max(tc.min_inliers, tc.min_inlier_ratio * len(Xw)):
+            return est  # the prior disagrees with the images (a wrong bias or a bad time offset): keep the visual pose
+        return PoseEstimate(True, invert_pose(T_cw), inliers, rms_px=float(np.sqrt(np.mean(err[inliers] ** 2))))
+
     def _lose(self, reason: str) -> tuple[SlamStatus, str, None, bool]:
         m = self.atlas.active
         if m is not None:
@@ -267,11 +363,6 @@ class EventSlam:
 
     def _track_map(self, mci: MciResult) -> tuple[SlamStatus, str, np.ndarray | None, bool]:
         m, fe, tc = self.atlas.active, self.fe, self.cfg.tracking
-        sel = [i for i, t in enumerate(fe.ids.tolist()) if fe.track_to_point.get(t) in m.points]
-        if len(sel) < tc.min_inliers:
-            return self._lose(f"{len(sel)} tracked map points < {tc.min_inliers}")
-        Xw = np.stack([m.points[fe.track_to_point[int(fe.ids[i])]].xyz for i in sel])
-        uv = fe.uv[sel].astype(np.float64)
         guess = m.traj_T[-1]
         if len(m.traj_t) >= 2:
             # Constant-velocity prediction, scaled to this MCI's time step.
@@ -284,32 +375,131 @@ class EventSlam:
                 Da[:3, :3] = Rotation.from_rotvec(Dr).as_matrix()
                 Da[:3, 3] = D[:3, 3] * a
                 guess = m.traj_T[-1] @ Da
-        est = estimate_pose(self.K, Xw, uv, guess, tc, self.cfg.seed)
+        R_prior = self._gyro_rotation(m.traj_t[-1], mci.t_us, m.traj_T[-1])
+        if R_prior is not None:
+            guess = guess.copy()
+            guess[:3, :3] = R_prior
+        pred = self._imu_prediction(mci.t_us)
+        if pred is not None:
+            guess = pred  # metric maps: the IMU predicts position as well
+        sel = [i for i, t in enumerate(fe.ids.tolist()) if fe.track_to_point.get(t) in m.points]
+        n_refound = 0
+        if len(sel) < self.cfg.search.prepass_below:
+            n_refound = self._refind(m, mci, guess, self.cfg.search.radius_px)
+            sel = [i for i, t in enumerate(fe.ids.tolist()) if fe.track_to_point.get(t) in m.points]
+        if len(sel) < tc.min_inliers:
+            return self._bridge_or_lose(mci, f"{len(sel)} tracked map points < {tc.min_inliers}")
+        est, sel = self._estimate(m, mci, sel, guess, R_prior)
         if not est.ok:
-            return self._lose(est.reason)
+            return self._bridge_or_lose(mci, est.reason)
+        more = self._refind(m, mci, est.T_wc, self.cfg.search.refine_radius_px)
+        if more:
+            # Second pass with the estimated pose (ORB-SLAM's local-map search): re-solve with the new associations.
+            n_refound += more
+            sel2 = [i for i, t in enumerate(fe.ids.tolist()) if fe.track_to_point.get(t) in m.points]
+            est2, sel2 = self._estimate(m, mci, sel2, est.T_wc, R_prior)
+            if est2.ok:
+                est, sel = est2, sel2
         for k in np.flatnonzero(~est.inliers):
             fe.track_to_point.pop(int(fe.ids[sel[k]]), None)
         T_wc = est.T_wc
+        self._last_visual_t = mci.t_us
         m.add_pose(mci.t_us, T_wc)
         n_tracked = int(est.inliers.sum())
         keyframe = False
         if need_keyframe(m, fe.ids, fe.uv, n_tracked, tc):
             keyframe = True
-            kf = insert_keyframe(m, mci.t_us, T_wc, fe.ids, fe.uv.astype(np.float64), fe.track_to_point)
-            self._next_point = triangulate_new_points(m, self.K, kf, fe.track_to_point, tc, self._next_point)
-            ic = self.cfg.inertial
-            if m.imu_initialised and ic.inertial_ba:
-                inertial_local_bundle_adjustment(m, m.inertial, self.K, self.imu, self.calib.T_cam_imu, self.calib.time_offset_us,
-                                                 tc.local_window, tc.ba_iterations, tc.ba_huber_px, ic.acc_noise, ic.gyro_noise)
-            else:
-                local_bundle_adjustment(m, self.K, tc.local_window, tc.ba_iterations, tc.ba_huber_px, n_fixed=1)
-            cull_points(m, self.K, fe.track_to_point, tc)
-            # BA moved the newest keyframe: the trajectory's last pose follows it.
-            m.add_pose(mci.t_us, m.keyframes[-1].T_wc)
-            if self.imu is not None and not m.imu_initialised:
-                self._try_imu_init(m)
-            T_wc = m.keyframes[-1].T_wc
-        return SlamStatus.OK, f"{n_tracked} inliers, rms {est.rms_px:.2f} px", T_wc.copy(), keyframe
+            T_wc = self._new_keyframe(m, mci.t_us, T_wc, mci.image8)
+        return SlamStatus.OK, f"{n_tracked} inliers ({n_refound} re-found by projection), rms {est.rms_px:.2f} px", T_wc.copy(), keyframe
+
+    def _estimate(self, m: SlamMap, mci: MciResult, sel: list[int], guess: np.ndarray, R_prior: np.ndarray | None) -> tuple[PoseEstimate, list[int]]:
+        """Pose from the map points of the tracks ``sel`` (indices into the frontend's tracks), gyro-refined when a prior exists."""
+        fe = self.fe
+        Xw = np.stack([m.points[fe.track_to_point[int(fe.ids[i])]].xyz for i in sel])
+        uv = fe.uv[sel].astype(np.float64)
+        est = estimate_pose(self.K, Xw, uv, guess, self.cfg.tracking, self.cfg.seed)
+        sigma_deg = self.cfg.inertial.gyro_prior_deg if m.imu_initialised else self.cfg.inertial.gyro_prior_uninit_deg
+        if est.ok and R_prior is not None and sigma_deg > 0:
+            est = self._refine_with_gyro(est, Xw, uv, R_prior, sigma_deg)
+        return est, sel
+
+    def _refind(self, m: SlamMap, mci: MciResult, T_wc: np.ndarray, radius: int) -> int:
+        """Re-find untracked local-map points near their projection by ``T_wc``; each found point gets a new track. Returns how many."""
+        sc, fe = self.cfg.search, self.fe
+        if not sc.enabled:
+            return 0
+        tracked = [i for i, t in enumerate(fe.ids.tolist()) if fe.track_to_point.get(t) in m.points]
+        tracked_pids = {fe.track_to_point[int(fe.ids[i])] for i in tracked}
+        pids, uv = refind_points(m, mci.image8, self.K, T_wc, tracked_pids, fe.uv[tracked], self.cfg.tracking.local_window, radius, sc)
+        if not pids:
+            return 0
+        new_ids = np.arange(fe.next_id, fe.next_id + len(pids), dtype=np.int64)
+        fe.next_id += len(pids)
+        for tid, pid in zip(new_ids.tolist(), pids):
+            p = m.points[pid]
+            if fe.track_to_point.get(p.track_id) == pid:
+                del fe.track_to_point[p.track_id]  # the point's old track died; the new one carries it
+            p.track_id = tid
+            fe.track_to_point[tid] = pid
+        fe.ids = np.concatenate([fe.ids, new_ids])
+        fe.uv = np.concatenate([fe.uv, uv.astype(np.float32)])
+        return len(pids)
+
+    def _new_keyframe(self, m: SlamMap, t_us: int, T_wc: np.ndarray, img8: np.ndarray | None = None) -> np.ndarray:
+        """Insert a keyframe, triangulate, run local (inertial) BA, cull, try the IMU initialisation; returns the adjusted pose."""
+        fe, tc = self.fe, self.cfg.tracking
+        kf = insert_keyframe(m, t_us, T_wc, fe.ids, fe.uv.astype(np.float64), fe.track_to_point)
+        self._next_point = triangulate_new_points(m, self.K, kf, fe.track_to_point, tc, self._next_point)
+        if img8 is not None:
+            store_patches(m, kf.id, img8, self.cfg.search.patch_px)
+        ic = self.cfg.inertial
+        if m.imu_initialised and ic.inertial_ba:
+            inertial_local_bundle_adjustment(m, m.inertial, self.K, self.imu, self.calib.T_cam_imu, self.calib.time_offset_us,
+                                             tc.local_window, tc.ba_iterations, tc.ba_huber_px, ic.acc_noise, ic.gyro_noise,
+                                             ic.acc_bias_sigma, ic.gyro_bias_sigma)
+        else:
+            local_bundle_adjustment(m, self.K, tc.local_window, tc.ba_iterations, tc.ba_huber_px, n_fixed=1,
+                                    rotation_priors=self._keyframe_rotation_priors(m), rotation_sigma_rad=np.radians(max(ic.gyro_prior_uninit_deg, 1e-6)))
+        cull_points(m, self.K, fe.track_to_point, tc)
+        # BA moved the newest keyframe: the trajectory's last pose follows it.
+        m.add_pose(t_us, m.keyframes[-1].T_wc)
+        if m.imu_initialised and m.inertial is not None and len(m.keyframes) >= 2:
+            # The MCIs between the previous keyframe and this one are complete: their rotations follow the gyro.
+            self._reanchor_rotations(m, {m.keyframes[-2].id})
+        if self.imu is not None and not m.imu_initialised:
+            self._try_imu_init(m)
+        return m.keyframes[-1].T_wc
+
+    def _imu_prediction(self, t_us: int) -> np.ndarray | None:
+        """``T_world_cam`` at ``t_us`` propagated by the IMU from the newest keyframe of a metric map, else None."""
+        m = self.atlas.active
+        if self.imu is None or m is None or not m.imu_initialised or m.inertial is None or not m.keyframes:
+            return None
+        ic = self.cfg.inertial
+        pred = predict_camera_pose(m.keyframes[-1], m.inertial, self.imu, self.calib.T_cam_imu, self.calib.time_offset_us, t_us, ic.acc_noise, ic.gyro_noise)
+        return None if pred is None else pred[0]
+
+    def _bridge_or_lose(self, mci: MciResult, reason: str) -> tuple[SlamStatus, str, np.ndarray | None, bool]:
+        """E-I-C2/C3 on a metric map: keep the map, take the pose from the IMU and make a keyframe so new points get triangulated."""
+        m, fe, ic, tc = self.atlas.active, self.fe, self.cfg.inertial, self.cfg.tracking
+        if ic.configuration is InertialConfiguration.C1 or (mci.t_us - self._last_visual_t) / 1e6 > ic.max_bridge_s:
+            return self._lose(reason)
+        T_wc = self._imu_prediction(mci.t_us)
+        if T_wc is None:
+            return self._lose(reason)
+        # Associations that disagree with the IMU pose are the ones that failed (tracks jumped to other features).
+        tids = [t for t in fe.ids.tolist() if fe.track_to_point.get(t) in m.points]
+        if tids:
+            Xw = np.stack([m.points[fe.track_to_point[t]].xyz for t in tids])
+            uv = np.stack([fe.uv[i] for i, t in enumerate(fe.ids.tolist()) if t in set(tids)]).astype(np.float64)
+            proj, z = project(self.K, invert_pose(T_wc), Xw)
+            bad = ~(z > 0) | ~(np.linalg.norm(proj - uv, axis=1) < 2.0 * tc.reprojection_threshold_px)
+            for t, b in zip(tids, bad):
+                if b:
+                    fe.track_to_point.pop(t, None)
+        m.add_pose(mci.t_us, T_wc)
+        T_wc = self._new_keyframe(m, mci.t_us, T_wc, mci.image8)
+        return SlamStatus.INERTIAL, f"visual tracking failed ({reason}); pose propagated by the IMU, map {m.id} kept", T_wc.copy(), True
 
 
 def _imu_init_due(m: SlamMap, cfg) -> bool:

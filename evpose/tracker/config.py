@@ -19,6 +19,7 @@ from evpose.fusion.config import FusionConfig
 from evpose.fusion.ego_motion import EgoMotionConfig
 from evpose.fusion.polarity import PolarityFilterConfig
 from evpose.io.config_file import config_from_dict, config_to_dict, read_config, write_config  # noqa: F401 - re-exported
+from evpose.tracker.motion_filter import MotionFilterConfig
 from evpose.tracker.registration import RegistrationConfig
 from evpose.tracker.visible_map import VisibleMapConfig
 
@@ -38,7 +39,11 @@ class MotionModel(str, enum.Enum):
     """How the tracker predicts the next pose in ``stpe`` mode."""
 
     CONSTANT_VELOCITY = "constant_velocity"
+    """Extrapolate the twist of the recent poses; each registration becomes the pose as it is."""
     CONSTANT_POSE = "constant_pose"
+    """The next pose is the last one."""
+    KALMAN = "kalman"
+    """Constant-velocity Kalman filter fusing each registration with its covariance (``motion_filter``)."""
 
 
 @dataclass
@@ -49,8 +54,13 @@ class TrackerConfig:
     """Which parts of EV-Pose run."""
     rate_hz: float = field(default=200.0, metadata={"min": 10.0, "max": 1000.0, "step": 10.0, "unit": "Hz"})
     """Pose updates per second of recording time, Hz."""
-    motion_model: MotionModel = MotionModel.CONSTANT_VELOCITY
+    motion_model: MotionModel = MotionModel.KALMAN
     """Prediction of the next pose (used for culling and as the registration's start)."""
+    velocity_window_ms: float = field(default=0.0, metadata={"min": 0.0, "max": 200.0, "step": 1.0, "unit": "ms"})
+    """The constant-velocity model fits its twist to the poses of this last stretch (0 = last two poses), milliseconds.
+
+    A two-pose velocity turns the registration noise of each update into velocity
+    noise that the prediction, the lag compensation and the pose prior inherit."""
     initial_velocity_from_ground_truth: bool = True
     """When starting from ground truth, also seed the motion model with the ground-truth velocity at the start."""
     warmup_ms: float = field(default=30.0, metadata={"min": 0.0, "max": 1000.0, "step": 1.0, "unit": "ms"})
@@ -64,6 +74,8 @@ class TrackerConfig:
     distance_field: DistanceFieldConfig = field(default_factory=DistanceFieldConfig)
     visible_map: VisibleMapConfig = field(default_factory=VisibleMapConfig)
     registration: RegistrationConfig = field(default_factory=RegistrationConfig)
+    motion_filter: MotionFilterConfig = field(default_factory=MotionFilterConfig)
+    """Constant-velocity Kalman filter of ``motion_model: kalman`` (``stpe`` mode)."""
     polarity: PolarityFilterConfig = field(default_factory=PolarityFilterConfig)
     """Motion-instructed polarity filter (``stpe+filter`` and ``full``)."""
     fusion: FusionConfig = field(default_factory=FusionConfig)

@@ -1,12 +1,19 @@
 """Which motion components each tracker mode plugs into the engine.
 
-================  ====================  ==========================  =================
-mode              pose prediction       per-point polarity          output pose
-================  ====================  ==========================  =================
-``stpe``          constant velocity     combined TDF                registration
-``stpe+filter``   constant velocity     predicted from IMU motion   registration
-``full``          IMU fusion backend    predicted from IMU motion   fused
-================  ====================  ==========================  =================
+================  ====================  ==============================  =================
+mode              pose prediction       field registration reads        output pose
+================  ====================  ==============================  =================
+``stpe``          constant velocity     combined TDF                    registration
+``stpe+filter``   constant velocity     ``T_align`` (polarity filter)   registration
+``full``          IMU fusion backend    ``T_align`` (polarity filter)   fused
+================  ====================  ==============================  =================
+
+The polarity filter predicts each used map point's polarity from the IMU
+motion (:class:`~evpose.fusion.polarity.MapPolaritySelector`) and builds
+``T_align`` (:mod:`evpose.fusion.aligned_surface`): per point patch only the
+events of the predicted polarity, nothing outside the patches; points whose
+patch shows no recent event are not registered. ``polarity.event_filter =
+False`` keeps the older per-point ON/OFF/combined fields over the whole box.
 
 In ``stpe+filter`` a fusion backend still runs beside the registration, because
 the polarity prediction needs the bias-corrected angular rate and the velocity;

@@ -100,6 +100,8 @@ class TrackingSession:
         self._step_index = 0
         self.results: list[StepResult] = []
         """StepResults so far, one per update, in time order."""
+        self._future: list[StepResult] = []
+        # Results after ``results`` computed before a backward restore: they let forward seeks jump.
         self._snapshots: dict[int, tuple[dict, int]] = {}
         self._take_snapshot()
 
@@ -144,14 +146,26 @@ class TrackingSession:
     def restore_snapshot(self, step: int) -> None:
         """Put the engine in the state of the snapshot at ``step`` (must be in :attr:`snapshot_steps`).
 
-        ``results`` is cut to ``step`` entries where it is longer; a caller that
-        restores past the computed results must extend ``results`` itself.
+        ``results`` is cut to ``step`` entries where it is longer (the cut results are kept,
+        and restored when a later call goes forward over them); a caller that restores past
+        the results ever computed must extend ``results`` itself.
         """
-        state, cursor = self._snapshots[int(step)]
+        step = int(step)
+        state, cursor = self._snapshots[step]
+        aligned = len(self.results) == self._step_index
+        if not aligned:
+            self._future = []  # someone edited ``results``: what lies ahead is no longer known by index
+        if step < len(self.results):
+            # Keep the results cut off: a later forward seek may jump over them (every stage is deterministic).
+            self._future = self.results[step:] + (self._future if aligned else [])
+            del self.results[step:]
+        elif step > len(self.results) and aligned:
+            n = step - len(self.results)
+            self.results.extend(self._future[:n])
+            self._future = self._future[n:]
         self.tracker.restore(state)
         self._cursor = cursor
-        self._step_index = int(step)
-        del self.results[int(step):]
+        self._step_index = step
 
     # ------------------------------------------------------------------- run
     def step(self, debug: bool = False) -> StepResult | None:
@@ -170,6 +184,8 @@ class TrackingSession:
         self._cursor = i1
         self._step_index += 1
         self.results.append(result)
+        if self._future:
+            self._future.pop(0)  # the same result, computed again
         if self._step_index % int(self.config.snapshot_every) == 0:
             self._take_snapshot()
         return result
@@ -189,9 +205,14 @@ class TrackingSession:
         """
         target = int(np.clip((int(t_us) - self.t0_us) // self.dt_us, 0, self.total_steps))
         if target < self._step_index:
-            # Back: restore the nearest snapshot at or before the target; forward: just step
-            # (results between must exist, and replaying is what makes them).
             self.restore_snapshot(max(k for k in self._snapshots if k <= target))
+        elif len(self.results) == self._step_index:
+            # Forward: jump to the last snapshot on the way whose results between are already known
+            # (from before an earlier backward seek); replaying is what makes the others.
+            known = len(self.results) + len(self._future)
+            ahead = [k for k in self._snapshots if self._step_index < k <= min(target, known)]
+            if ahead:
+                self.restore_snapshot(max(ahead))
         last = self.results[-1] if self.results else None
         while self._step_index < target:
             last = self.step(debug=debug and self._step_index == target - 1)

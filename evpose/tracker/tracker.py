@@ -9,7 +9,9 @@ restored tracker fed the same events reproduces the same results bit for bit.
 
 Plug-in points for fusion (issue 7): ``predictor`` (any :class:`MotionPredictor`,
 e.g. IMU-driven) and ``polarity_selector`` (per used map point +1 / -1 / 0 for
-the TDF it is evaluated on). ``stpe`` mode uses constant velocity and the
+the TDF it is evaluated on). ``stpe`` mode uses a constant-velocity Kalman filter
+(:mod:`evpose.tracker.motion_filter`: each registration is fused with its
+covariance instead of copied into the track; ``motion_model`` picks it) and the
 combined-polarity TDF.
 """
 
@@ -30,14 +32,19 @@ from evpose.frontend.distance_field import TemporalDistanceField
 from evpose.frontend.noise_filter import ConsistencyNoiseFilter
 from evpose.frontend.time_surface import SeparatedTimeSurface
 from evpose.tracker.config import MotionModel, TrackerConfig
+from evpose.tracker.motion_filter import ConstantVelocityKalman
 from evpose.tracker.predictor import ConstantPosePredictor, ConstantVelocityPredictor, MotionPredictor
 from evpose.tracker.registration import register_to_map, subsample_indices
 from evpose.tracker.step_result import StepDebug, StepResult, TrackStatus
 from evpose.tracker.modes import MotionComponents
-from evpose.tracker.visible_map import VisibleMap, visible_points
+from evpose.tracker.visible_map import VisibleMap, projected_bounds, visible_points
 
 PolaritySelector = Callable[[np.ndarray, int, np.ndarray], "np.ndarray | None"]
 """``(T_world_cam_predicted, t_us, map_point_indices) -> int8 polarity per point (+1/-1/0) or None (all combined)``."""
+
+
+_NO_PRIOR = np.zeros((6, 6))
+"""Information matrix of "no prior" for :func:`register_to_map`."""
 
 
 def _ms(t0: float) -> float:
@@ -85,7 +92,12 @@ class Tracker:
         if polarity_selector is None:
             polarity_selector = self.components.polarity_selector
         if predictor is None:
-            predictor = ConstantPosePredictor() if config.motion_model is MotionModel.CONSTANT_POSE else ConstantVelocityPredictor()
+            if config.motion_model is MotionModel.CONSTANT_POSE:
+                predictor = ConstantPosePredictor()
+            elif config.motion_model is MotionModel.KALMAN:
+                predictor = ConstantVelocityKalman(config.motion_filter)
+            else:
+                predictor = ConstantVelocityPredictor(window_us=int(round(float(config.velocity_window_ms) * 1e3)))
         self.predictor = predictor
         self.polarity_selector = polarity_selector
         self._pose: np.ndarray | None = None
@@ -170,6 +182,8 @@ class Tracker:
         until = int(until_t_us)
         timings: dict[str, float] = {}
         t_total = time.perf_counter()
+        # CPU time of this thread too: on the shared machine wall time includes waiting for a core.
+        cpu_total = time.thread_time()
         motion = self.components.motion
         if motion is not None and imu is not None and len(imu):
             motion.fusion.add_imu(imu)
@@ -198,6 +212,7 @@ class Tracker:
         if self._pose is None:
             self._t_us = until
             timings["total"] = _ms(t_total)
+            timings["total_cpu"] = (time.thread_time() - cpu_total) * 1e3
             return StepResult(until, np.full((4, 4), np.nan), TrackStatus.NOT_INITIALISED, "no initial pose", timings_ms=timings, counts=counts)
 
         predicted = self.predictor.predict(until)
@@ -211,15 +226,30 @@ class Tracker:
 
         t0 = time.perf_counter()
         polarity = None if self.polarity_selector is None else self.polarity_selector(predicted, until, used)
+        # --- polarity event filter (issue 7, evpose/fusion/aligned_surface.py): registration reads T_align, one field.
+        surface, field_polarity = self.time_surface, polarity
+        if polarity is not None and hasattr(self.polarity_selector, "align"):
+            box = self._field_box(pts, predicted, True) if self.coarse_field is not None else roi
+            aligned = self.polarity_selector.align(self.time_surface, pts, predicted, polarity, box, events, keep, until)
+            if aligned is not None:
+                surface, field_polarity = aligned, None
+                counts.update(aligned.last_counts)
+                with_events = self.polarity_selector.points_to_register()
+                if with_events is not None:
+                    # Points whose patch shows no recent event of their polarity cannot pull the pose: skip them.
+                    used, pts, polarity = used[with_events], pts[with_events], polarity[with_events]
+                counts["points_registered"] = int(used.size)
+        # --- end polarity event filter
         if self.polarity_selector is not None:
             timings["polarity_filter"] = _ms(t0)
         t0 = time.perf_counter()
-        pols = (0,) if polarity is None else tuple(sorted({int(p) for p in np.unique(polarity)}))
-        curv = bool(self.config.registration.second_order)
-        self.distance_field.compute(self.time_surface, until, pols, roi, curv)
+        pols = (0,) if field_polarity is None else tuple(sorted({int(p) for p in np.unique(field_polarity)}))
+        # Registration takes the curvature from the field's values (bit for bit the same): no curvature images.
+        curv = False
+        self.distance_field.compute(surface, until, pols, roi, curv)
         levels = [self.distance_field]
         if self.coarse_field is not None:
-            self.coarse_field.compute(self.time_surface, until, pols, self._field_box(pts, predicted, True), curv)
+            self.coarse_field.compute(surface, until, pols, self._field_box(pts, predicted, True), curv)
             levels.insert(0, self.coarse_field)
         timings["distance_field"] = _ms(t0)
 
@@ -230,8 +260,18 @@ class Tracker:
         else:
             # The TDF's minimum trails moving edges; registration compensates with the camera's twist.
             dt_s = (until - self._t_us) * 1e-6
-            twist = gtsam.Pose3.Logmap(gtsam.Pose3(self._pose).between(gtsam.Pose3(predicted))) / dt_s if dt_s > 0 else None
-            reg = register_to_map(levels, pts, predicted, self.K, self.config.registration, polarity, twist_per_s=twist)
+            if isinstance(self.predictor, (ConstantVelocityPredictor, ConstantVelocityKalman)):
+                # Its fitted twist: the prediction also carries a smoothing correction of the last pose, not motion.
+                twist = self.predictor.twist()
+            else:
+                twist = gtsam.Pose3.Logmap(gtsam.Pose3(self._pose).between(gtsam.Pose3(predicted))) / dt_s if dt_s > 0 else None
+            prior_info = None
+            if isinstance(self.predictor, ConstantVelocityKalman):
+                # The filter fuses the prediction itself; the registration's isotropic prior would count it twice
+                # (all-zero information = no prior), unless the filter's own covariance is asked to act as the prior.
+                prior_info = self.predictor.prior_information(until) if self.config.motion_filter.prior_in_registration else _NO_PRIOR
+            reg = register_to_map(levels, pts, predicted, self.K, self.config.registration, field_polarity, twist_per_s=twist,
+                                  prior_information=prior_info)
             reason = reg.reason
         timings["registration"] = _ms(t0)
 
@@ -250,6 +290,17 @@ class Tracker:
             status = TrackStatus.OK if ok and not fused.degraded else TrackStatus.DEGRADED
             if status is TrackStatus.DEGRADED and ok:
                 reason = "IMU dead reckoning: the fusion backend ignores registrations"
+        elif isinstance(self.predictor, ConstantVelocityKalman):
+            # Registrations are measurements: the filter weighs them against the motion model.
+            if ok:
+                self._pose = self.predictor.correct(until, reg.T_world_cam, reg.covariance)
+                status = TrackStatus.OK if self.predictor.last_fused else TrackStatus.DEGRADED
+                if not self.predictor.last_fused:
+                    reason = f"registration {self.predictor.last_innovation_sigma:.1f} sigma from the motion model: not fused"
+            else:
+                self._pose = self.predictor.coast(until)
+                status = TrackStatus.LOST
+            covariance = self.predictor.covariance()
         elif ok:
             self._pose = reg.T_world_cam.copy()
             self.predictor.update(until, self._pose)
@@ -263,7 +314,7 @@ class Tracker:
             # Label this step's events against the prediction (reports, viewer) and learn point signs from them.
             t0 = time.perf_counter()
             labels = self.polarity_selector.observe(events[keep], self._pose, used, polarity, self.width, self.height)
-            counts["events_polarity_removed"] = int(np.count_nonzero(labels == 0))
+            counts.setdefault("events_polarity_removed", int(np.count_nonzero(labels == 0)))  # T_align's count if it ran
             counts["points_single_polarity"] = int(np.count_nonzero(polarity))
             timings["polarity_filter"] = timings.get("polarity_filter", 0.0) + _ms(t0)
         if reg is not None:
@@ -271,6 +322,7 @@ class Tracker:
         else:
             counts.update(inliers=0, iterations=0, points_in_image=0)
         timings["total"] = _ms(t_total)
+        timings["total_cpu"] = (time.thread_time() - cpu_total) * 1e3
 
         result = StepResult(
             t_us=until,
@@ -322,17 +374,13 @@ class Tracker:
         """Row/column box around the projected points plus the margin and blur radius; None = whole image."""
         if pts.shape[0] == 0:
             return (0, 0, 0, 0)
-        R_cw = T_world_cam[:3, :3].T
-        Xc = pts @ R_cw.T - R_cw @ T_world_cam[:3, 3]
-        z = np.maximum(Xc[:, 2], 1e-6)
-        u = self.K[0, 0] * Xc[:, 0] / z + self.K[0, 2]
-        v = self.K[1, 1] * Xc[:, 1] / z + self.K[1, 2]
+        umin, umax, vmin, vmax = projected_bounds(pts, T_world_cam, self.K)
         blur = int(self.config.distance_field.coarse_blur_px if coarse else self.config.distance_field.blur_px)
         pad = int(self.config.field_margin_px) + blur
-        c0 = int(np.floor(u.min())) - pad
-        c1 = int(np.ceil(u.max())) + pad + 1
-        r0 = int(np.floor(v.min())) - pad
-        r1 = int(np.ceil(v.max())) + pad + 1
+        c0 = int(np.floor(umin)) - pad
+        c1 = int(np.ceil(umax)) + pad + 1
+        r0 = int(np.floor(vmin)) - pad
+        r1 = int(np.ceil(vmax)) + pad + 1
         return (max(r0, 0), min(r1, self.height), max(c0, 0), min(c1, self.width))
 
     def _debug(self, until, events, keep, visible, used, reg, polarity) -> StepDebug:

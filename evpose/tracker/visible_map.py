@@ -6,10 +6,13 @@ by a coarse z-buffer: per image cell only points within a depth tolerance of the
 nearest point in that cell survive. Contour points of one edge share a depth, so
 they survive together; a far edge hidden behind a near surface's contour does
 not. One numba pass to project, one to build the z-buffer, one to select.
+:class:`VisibleMap` caches a wider superset of the whole map, culled block by
+block (bounding spheres of consecutive points), so an update only culls that.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numba as nb
@@ -46,21 +49,30 @@ def _cull_kernel(points, R_cw, t_cw, fx, fy, cx, cy, width, height, margin, zmin
     cand = np.empty(n, dtype=np.int64)
     cell_of = np.empty(n, dtype=np.int64)
     depth = np.empty(n)
+    umax = width - 1 + margin
+    vmax = height - 1 + margin
     m = 0
     for i in range(n):
         px = points[i, 0]
         py = points[i, 1]
         pz = points[i, 2]
-        X = R_cw[0, 0] * px + R_cw[0, 1] * py + R_cw[0, 2] * pz + t_cw[0]
-        Y = R_cw[1, 0] * px + R_cw[1, 1] * py + R_cw[1, 2] * pz + t_cw[1]
+        # Depth first, then each image coordinate only if the previous test passed: most points of a
+        # superset fail one of them. Same expressions as before, so the same points survive.
         Z = R_cw[2, 0] * px + R_cw[2, 1] * py + R_cw[2, 2] * pz + t_cw[2]
         if not (Z > zmin and Z < zmax):
             continue
+        X = R_cw[0, 0] * px + R_cw[0, 1] * py + R_cw[0, 2] * pz + t_cw[0]
         u = fx * X / Z + cx
-        v = fy * Y / Z + cy
-        if not (u >= -margin and u <= width - 1 + margin and v >= -margin and v <= height - 1 + margin):
+        if not (u >= -margin and u <= umax):
             continue
-        k = int((v + margin) // cell) * gw + int((u + margin) // cell)
+        Y = R_cw[1, 0] * px + R_cw[1, 1] * py + R_cw[1, 2] * pz + t_cw[1]
+        v = fy * Y / Z + cy
+        if not (v >= -margin and v <= vmax):
+            continue
+        # floor(a / cell) instead of Python's float ``a // cell`` (an fmod per call, 3x slower overall):
+        # equal for a >= 0 (guaranteed here) when cell is a power of two (the default 8 px); for other
+        # cells they can differ only when a is within one ulp of a cell border.
+        k = int(np.floor((v + margin) / cell)) * gw + int(np.floor((u + margin) / cell))
         cand[m] = i
         cell_of[m] = k
         depth[m] = Z
@@ -73,6 +85,109 @@ def _cull_kernel(points, R_cw, t_cw, fx, fy, cx, cy, width, height, margin, zmin
             continue
         out_idx[out] = cand[j]
         out += 1
+    return out
+
+
+@nb.njit(cache=True)
+def _bounds_kernel(points, R_cw, t_cw, fx, fy, cx, cy):
+    umin = np.inf
+    umax = -np.inf
+    vmin = np.inf
+    vmax = -np.inf
+    for i in range(points.shape[0]):
+        px = points[i, 0]
+        py = points[i, 1]
+        pz = points[i, 2]
+        X = R_cw[0, 0] * px + R_cw[0, 1] * py + R_cw[0, 2] * pz + t_cw[0]
+        Y = R_cw[1, 0] * px + R_cw[1, 1] * py + R_cw[1, 2] * pz + t_cw[1]
+        Z = R_cw[2, 0] * px + R_cw[2, 1] * py + R_cw[2, 2] * pz + t_cw[2]
+        if Z < 1e-6:
+            Z = 1e-6
+        u = fx * X / Z + cx
+        v = fy * Y / Z + cy
+        umin = min(umin, u)
+        umax = max(umax, u)
+        vmin = min(vmin, v)
+        vmax = max(vmax, v)
+    return umin, umax, vmin, vmax
+
+
+def projected_bounds(points_world: np.ndarray, T_world_cam: np.ndarray, K: np.ndarray) -> tuple[float, float, float, float]:
+    """(u min, u max, v min, v max) of the points projected with an ideal pinhole ``K``, pixels (depths clamped
+    to 1e-6 m); one compiled pass, 10x cheaper than the numpy expression for the ~1000 registered points."""
+    T = np.asarray(T_world_cam, dtype=np.float64)
+    R_cw = np.ascontiguousarray(T[:3, :3].T)
+    t_cw = -R_cw @ T[:3, 3]
+    pts = np.ascontiguousarray(points_world, dtype=np.float64)
+    return _bounds_kernel(pts, R_cw, t_cw, float(K[0, 0]), float(K[1, 1]), float(K[0, 2]), float(K[1, 2]))
+
+
+BLOCK_POINTS = 64
+"""Consecutive map points per bounding sphere of the block-wise superset cull (contour maps store neighbours
+together: on the simulated landing 64 points span a 0.3 m sphere, median)."""
+
+
+def point_blocks(points: np.ndarray, block: int = BLOCK_POINTS) -> tuple[np.ndarray, np.ndarray]:
+    """(centres (B, 3), radii (B,)) of the bounding spheres of consecutive runs of ``block`` points.
+
+    Radii are padded by 1e-9 relative + 1e-9 m so rounding can never put a point outside its sphere."""
+    n = points.shape[0]
+    full = n // block
+    groups = [points[: full * block].reshape(full, block, 3)] if full else []
+    if n > full * block:
+        groups.append(points[full * block:][None])
+    centres, radii = [np.zeros((0, 3))], [np.zeros(0)]
+    for q in groups:
+        c = q.mean(axis=1)
+        centres.append(c)
+        radii.append(np.sqrt(((q - c[:, None, :]) ** 2).sum(axis=2).max(axis=1)) * (1 + 1e-9) + 1e-9)
+    return np.concatenate(centres), np.concatenate(radii)
+
+
+@nb.njit(cache=True)
+def _block_cull_kernel(points, centres, radii, block, R_cw, t_cw, fx, fy, cx, cy, width, height, margin, zmin, zmax, out_idx):
+    """:func:`_cull_kernel` without occlusion, skipping whole blocks whose bounding sphere lies outside the depth
+    range or the widened image; the per-point test is the same expressions, so the same indices come out."""
+    umax = width - 1 + margin
+    vmax = height - 1 + margin
+    n = points.shape[0]
+    out = 0
+    for b in range(centres.shape[0]):
+        r = radii[b]
+        Zc = R_cw[2, 0] * centres[b, 0] + R_cw[2, 1] * centres[b, 1] + R_cw[2, 2] * centres[b, 2] + t_cw[2]
+        # R_cw's rows are unit vectors, so every point's camera coordinates lie within r of the centre's.
+        if Zc + r <= zmin or Zc - r >= zmax:
+            continue
+        z0 = Zc - r
+        if z0 > 0.0 and fx > 0.0 and fy > 0.0:
+            z1 = Zc + r
+            Xc = R_cw[0, 0] * centres[b, 0] + R_cw[0, 1] * centres[b, 1] + R_cw[0, 2] * centres[b, 2] + t_cw[0]
+            Yc = R_cw[1, 0] * centres[b, 0] + R_cw[1, 1] * centres[b, 1] + R_cw[1, 2] * centres[b, 2] + t_cw[1]
+            # X / Z over the box [Xc - r, Xc + r] x [z0, z1] (z0 > 0) takes its extremes at the corners; one
+            # pixel of slack against rounding.
+            umin_b = fx * min((Xc - r) / z0, (Xc - r) / z1) + cx
+            umax_b = fx * max((Xc + r) / z0, (Xc + r) / z1) + cx
+            vmin_b = fy * min((Yc - r) / z0, (Yc - r) / z1) + cy
+            vmax_b = fy * max((Yc + r) / z0, (Yc + r) / z1) + cy
+            if umin_b > umax + 1.0 or umax_b < -margin - 1.0 or vmin_b > vmax + 1.0 or vmax_b < -margin - 1.0:
+                continue
+        for i in range(b * block, min((b + 1) * block, n)):
+            px = points[i, 0]
+            py = points[i, 1]
+            pz = points[i, 2]
+            Z = R_cw[2, 0] * px + R_cw[2, 1] * py + R_cw[2, 2] * pz + t_cw[2]
+            if not (Z > zmin and Z < zmax):
+                continue
+            X = R_cw[0, 0] * px + R_cw[0, 1] * py + R_cw[0, 2] * pz + t_cw[0]
+            u = fx * X / Z + cx
+            if not (u >= -margin and u <= umax):
+                continue
+            Y = R_cw[1, 0] * px + R_cw[1, 1] * py + R_cw[1, 2] * pz + t_cw[1]
+            v = fy * Y / Z + cy
+            if not (v >= -margin and v <= vmax):
+                continue
+            out_idx[out] = i
+            out += 1
     return out
 
 
@@ -109,13 +224,31 @@ class VisibleMap:
         self._cache: tuple[np.ndarray, np.ndarray, float] | None = None
         """(pose the superset was culled at, superset indices, nearest superset depth in metres)."""
         self._sup_points = np.zeros((0, 3))
+        self._blocks: tuple[np.ndarray, np.ndarray] | None = None
+        """Bounding spheres of consecutive point runs (:func:`point_blocks`), built on the first superset cull."""
+
+    def _superset(self, T: np.ndarray, wide: VisibleMapConfig) -> np.ndarray:
+        """:func:`visible_points` of the whole map without occlusion, block by block (4x faster on the landing map)."""
+        if self._blocks is None:
+            self._blocks = point_blocks(self.points)
+        R_cw = np.ascontiguousarray(T[:3, :3].T)
+        t_cw = -R_cw @ T[:3, 3]
+        out = np.empty(self.points.shape[0], dtype=np.int64)
+        K = self.K
+        n = _block_cull_kernel(
+            self.points, self._blocks[0], self._blocks[1], BLOCK_POINTS, R_cw, t_cw, float(K[0, 0]), float(K[1, 1]),
+            float(K[0, 2]), float(K[1, 2]), self.width, self.height, float(wide.fov_margin_px),
+            float(wide.min_depth_m), float(wide.max_depth_m), out,
+        )
+        return out[:n].copy()
 
     def _still_valid(self, T_world_cam: np.ndarray) -> bool:
         if self._cache is None:
             return False
         T0, _, zmin = self._cache
         R_rel = T0[:3, :3].T @ T_world_cam[:3, :3]
-        angle = float(np.arccos(np.clip((np.trace(R_rel) - 1.0) / 2.0, -1.0, 1.0)))
+        # math on Python floats: this runs every update, and numpy's scalar clip/arccos cost 3 us more.
+        angle = math.acos(min(max((float(np.trace(R_rel)) - 1.0) / 2.0, -1.0), 1.0))
         dist = float(np.linalg.norm(T_world_cam[:3, 3] - T0[:3, 3]))
         f = max(self.K[0, 0], self.K[1, 1])
         if dist >= zmin:
@@ -132,7 +265,7 @@ class VisibleMap:
                 fov_margin_px=config.fov_margin_px + self.extra_px, min_depth_m=config.min_depth_m,
                 max_depth_m=config.max_depth_m, occlusion=False,
             )
-            sup = visible_points(self.points, T, self.K, self.width, self.height, wide)
+            sup = self._superset(T, wide)
             self._sup_points = np.ascontiguousarray(self.points[sup])  # gathered once, reused below
             if sup.size:
                 Xc = (self._sup_points - T[:3, 3]) @ T[:3, :3]

@@ -148,3 +148,36 @@ def test_commands_from_many_threads_leave_a_consistent_state(bar_recording):
         assert len(p.engine.history) == last.index + 1
     finally:
         p.stop()
+
+
+def test_tracker_playback_from_the_run_ahead_shows_exact_strided_frames(squares_scene):
+    from app.tracker_engine import TrackerEngine
+    from evpose.tracker.session import TrackingSession
+
+    rec, cmap = squares_scene
+    results = TrackingSession(rec, cmap).run()
+    frames = []
+    p = Player(lambda cfg: TrackerEngine(rec, cmap, cfg), lambda f, e: frames.append(f),
+               player_config=PlayerConfig(max_ui_fps=10.0, draw_share_factor=0.0))
+    try:
+        p.step_forward()
+        p.wait_idle()
+        deadline = time.monotonic() + 120
+        while p.call(lambda e: e.frontier < e.n_steps).result(60) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        p.seek(results[40].t_us)
+        p.wait_idle()
+        assert frames[-1].index == 40  # every step is kept: a seek lands exactly
+        n0 = len(frames)
+        p.play()
+        time.sleep(0.25)
+        p.pause()
+        p.wait_idle()
+        played = frames[n0:]
+        assert played and all(b.index - a.index == 20 for a, b in zip(played, played[1:-1]))  # 1x at 10 frames/s, 5 ms steps
+        assert all(np.array_equal(f.pose, results[f.index].pose) for f in played)
+        p.step_back()
+        p.wait_idle()
+        assert frames[-1].index == played[-1].index - 1 and np.array_equal(frames[-1].pose, results[frames[-1].index].pose)
+    finally:
+        p.stop()

@@ -5,7 +5,8 @@ import time
 
 import pytest
 
-from app.engine import EventsOnlyEngine, TrackerEngine
+from app.engine import EventsOnlyEngine
+from app.tracker_engine import TrackerEngine
 from app.player import PlayerConfig
 from app.server import NO_MAP, AppConfig, ViewerApp, check_port_free
 from evpose.cli.main import run

@@ -7,7 +7,7 @@ import time
 import numpy as np
 import pytest
 
-from app.engine import TrackerEngine
+from app.tracker_engine import TrackerEngine
 from app.player import PlayerConfig
 from app.server import AppConfig, ViewerApp
 from evpose.io.h5 import write_recording_h5
@@ -115,12 +115,15 @@ def test_switch_recording_play_step_and_see_images_and_trajectory_change(page, v
     wait_for(lambda: image_sources(page) != srcs, what="browser images update")
     page.get_by_role("button", name="< back").click()
     wait_for(lambda: viewer.last_frame.index == before_idx, what="step back")
-    # The keyboard shortcut toggles playback too.
+    # The keyboard shortcut toggles playback too. Slowly: read back from the run-ahead, the rest of this
+    # short recording would otherwise play to its end (and pause) before the state could be seen.
+    viewer.player.set_speed(0.1)
     page.mouse.click(780, 450)
     page.keyboard.press("Space")
     wait_for(lambda: viewer.player.state.value == "playing", what="space plays")
     page.keyboard.press("Space")
     wait_for(lambda: viewer.player.state.value == "paused", what="space pauses")
+    viewer.player.set_speed(1.0)
 
 
 def test_moving_a_parameter_reruns_the_tracker(page, viewer):

@@ -10,7 +10,8 @@ import pytest
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "slam"))
 from slam_synthetic import make_recording  # noqa: E402
 
-from app.engine import EventsOnlyEngine, TrackerEngine  # noqa: E402
+from app.engine import EventsOnlyEngine  # noqa: E402
+from app.tracker_engine import TrackerEngine  # noqa: E402
 from app.player import PlayerConfig  # noqa: E402
 from app.server import AppConfig, ViewerApp  # noqa: E402
 from app.slam_engine import SlamEngine  # noqa: E402

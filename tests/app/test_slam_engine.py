@@ -88,3 +88,11 @@ def test_event_inertial_slam_engine_without_imu_is_an_input_error(moving):
     rec = replace(moving, imu=None)
     with pytest.raises(InputError, match="IMU"):
         SlamEngine(rec, SlamViewConfig(slam=SlamConfig(mode=SlamMode.EVENT_INERTIAL)))
+
+
+def test_slam_export_is_the_active_maps_refined_trajectory_like_the_cli(moving, all_frames):
+    eng, _ = all_frames
+    headless = run_slam(moving, SlamConfig(), chunk_us=eng.config.step_us)
+    exported, expected = eng.trajectory(), headless.atlas.active.trajectory(refined=True)
+    assert len(exported) == len(expected) > 3
+    assert np.array_equal(exported.t, expected.t) and np.array_equal(exported.matrices(), expected.matrices())

@@ -56,3 +56,16 @@ def test_slam_cli_event_inertial_mode_needs_imu(tmp_path, capsys):
     write_recording_h5(path, rec)
     assert run(["slam", str(path), "--out", str(tmp_path / "e.txt"), "--mode", "event-inertial"]) == 2
     assert "IMU" in capsys.readouterr().err
+
+
+def test_slam_cli_event_inertial_configuration_is_recorded_and_checked(moving_h5, tmp_path, capsys):
+    out = tmp_path / "ei.txt"
+    assert run(["slam", str(moving_h5), "--out", str(out), "--mode", "event-inertial", "--configuration", "c1"]) == 0
+    doc = json.loads((tmp_path / "ei.slam.json").read_text())
+    assert doc["config"]["mode"] == "event-inertial" and doc["config"]["inertial"]["configuration"] == "c1"
+    cfg = tmp_path / "c3.yaml"
+    cfg.write_text("inertial:\n  configuration: c3\n")
+    assert run(["slam", str(moving_h5), "--out", str(out), "--mode", "event-inertial", "--config", str(cfg)]) == 0
+    assert json.loads((tmp_path / "ei.slam.json").read_text())["config"]["inertial"]["configuration"] == "c3"
+    assert run(["slam", str(moving_h5), "--out", str(out), "--configuration", "c9"]) == 2
+    assert "--configuration" in capsys.readouterr().err

@@ -153,3 +153,41 @@ def test_derivative_kernel_matches_replicated_border_differences_on_any_box_shap
         for got, ref in zip(outs, want):
             assert np.array_equal(got[1 : 1 + h, 2 : 2 + w], ref.astype(np.float32))
             assert np.all(got[0] == 7.0) and np.all(got[:, :2] == 7.0)  # nothing written outside the box
+
+
+def test_pixels_older_than_the_decay_table_read_exactly_one_and_younger_ones_the_exponential():
+    # Timestamps straddling the table's last bin (12 eta): the skip for old pixels must agree with the lookup.
+    eta_ms = 10.0
+    ts = SeparatedTimeSurface(TimeSurfaceConfig(eta_ms=eta_ms), W, H)
+    t_query = 200_000
+    table, shift = decay_lut(eta_ms * 1e3)
+    edge = ((table.size - 1) << shift) - ((1 << shift) >> 1)  # smallest age that lands in the last bin
+    ages = np.array([0, 1, 5_000, 10_000, edge - 17, edge - 1, edge, edge + 1, edge + 500, t_query - 1])
+    x = np.arange(ages.size) * 3
+    order = np.argsort(-ages)  # events must arrive in time order
+    ts.update(EventArray.from_arrays((t_query - ages)[order], x[order], np.full(ages.size, 7)[order], np.ones(ages.size)[order]))
+    f = TemporalDistanceField(DistanceFieldConfig(blur_px=0), W, H)
+    f.compute(ts, t_query)
+    got = f.image(0)[7, x]
+    expected = table[np.minimum((ages + ((1 << shift) >> 1)) >> shift, table.size - 1)]
+    assert np.array_equal(got, expected)
+    assert np.all(got[ages >= edge] == 1.0) and np.all(got[ages < edge] < 1.0)
+    assert np.max(np.abs(got - (1 - np.exp(-ages / (eta_ms * 1e3))))) < 1e-3
+
+
+def test_curvature_from_the_field_values_equals_the_curvature_images_bit_for_bit():
+    from evpose.frontend.distance_field import bilinear_curvature_from_value, bilinear_sample_curvature
+
+    ts = edge_surface()
+    rng = np.random.default_rng(2)
+    for box in ((0, H, 0, W), (12, 47, 25, 61), (5, 7, 30, 33)):
+        f = TemporalDistanceField(DistanceFieldConfig(blur_px=3), W, H)
+        f.compute(ts, 20_000, (0,), box, curvature=True)
+        r0, r1, c0, c1 = box
+        # Random points inside the box, its corners and edges (replicated borders).
+        u = np.concatenate([rng.uniform(c0, c1 - 1, 300), [c0, c1 - 1, c0, c1 - 1, c0 + 0.5]])
+        v = np.concatenate([rng.uniform(r0, r1 - 1, 300), [r0, r0, r1 - 1, r1 - 1, r1 - 1.0]])
+        for uu, vv in zip(u, v):
+            a = bilinear_sample_curvature(f.hess, f.box, 0, uu, vv)
+            b = bilinear_curvature_from_value(f.value, f.box, 0, uu, vv)
+            assert a == b, (box, uu, vv, a, b)

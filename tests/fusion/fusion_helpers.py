@@ -6,6 +6,11 @@ from scipy.spatial.transform import Rotation
 from evpose.fusion.synthetic import AnalyticMotion, AnalyticMotionConfig
 
 
+WHITE = {"registration_covariance_scale": 1.0}
+"""FusionConfig keywords for the synthetic registrations here: white noise, so their covariance is taken as is
+(the default scale is for the correlated errors of real registrations)."""
+
+
 def make_motion(**kw) -> AnalyticMotion:
     return AnalyticMotion(AnalyticMotionConfig(**kw))
 

@@ -55,7 +55,7 @@ def test_moving_object_events_are_dropped_and_static_ones_kept():
     static, box = _scene()
     v, w = np.array([2.0, -1.0, -0.3]), np.array([0.3, -0.5, 0.8])
     x, y, t, src = _events(rng, static, box, v, w, box_v=np.array([-2.0, 2.5, 0.0]))
-    f = EgoMotionFilter(EgoMotionConfig())
+    f = EgoMotionFilter(EgoMotionConfig(enabled=True))
     keep = f.filter(x, y, t, _pose(0.015, v, w), w, v, K, W, H, points_world=static, t_ref_us=15_000)
     assert keep[src == 0].mean() > 0.9
     assert keep[src == 1].mean() < 0.3
@@ -69,8 +69,8 @@ def test_fast_flight_keeps_static_events_only_with_ego_motion_compensation():
     v, w = np.array([4.0, -2.0, -0.5]), np.array([0.5, -0.8, 1.5])
     x, y, t, src = _events(rng, static, box, v, w, box_v=np.array([-2.0, 2.5, 0.0]))
     T = _pose(0.015, v, w)
-    compensated = EgoMotionFilter().filter(x, y, t, T, w, v, K, W, H, points_world=static)
-    blind = EgoMotionFilter().filter(x, y, t, T, np.zeros(3), np.zeros(3), K, W, H, points_world=static)
+    compensated = EgoMotionFilter(EgoMotionConfig(enabled=True)).filter(x, y, t, T, w, v, K, W, H, points_world=static)
+    blind = EgoMotionFilter(EgoMotionConfig(enabled=True)).filter(x, y, t, T, np.zeros(3), np.zeros(3), K, W, H, points_world=static)
     assert compensated[src == 0].mean() > 0.95 and compensated[src == 1].mean() < 0.3
     assert blind[src == 0].mean() < 0.7
 
@@ -81,9 +81,9 @@ def test_isolated_noise_events_are_dropped_and_sparse_windows_kept_whole():
     x, y = rng.integers(0, W, n).astype(float), rng.integers(0, H, n).astype(float)
     t = np.sort(rng.integers(0, 20_000, n)).astype(np.int64)
     T = _pose(0.0, np.zeros(3), np.zeros(3))
-    keep = EgoMotionFilter().filter(x, y, t, T, np.zeros(3), np.zeros(3), K, W, H)
+    keep = EgoMotionFilter(EgoMotionConfig(enabled=True)).filter(x, y, t, T, np.zeros(3), np.zeros(3), K, W, H)
     assert keep.mean() < 0.5
-    few = EgoMotionFilter(EgoMotionConfig(min_events=5000)).filter(x, y, t, T, np.zeros(3), np.zeros(3), K, W, H)
+    few = EgoMotionFilter(EgoMotionConfig(enabled=True, min_events=5000)).filter(x, y, t, T, np.zeros(3), np.zeros(3), K, W, H)
     assert few.all()
 
 
@@ -95,11 +95,21 @@ def test_a_short_batch_is_judged_against_earlier_context_events():
     x, y, t, src = _events(rng, static, box, v, w, box_v=np.array([-2.0, 2.5, 0.0]), span_us=25_000)
     m = int(np.searchsorted(t, 20_000))
     T = _pose(0.025, v, w)
-    f = EgoMotionFilter(EgoMotionConfig())
+    f = EgoMotionFilter(EgoMotionConfig(enabled=True))
     with_context = f.filter(x, y, t, T, w, v, K, W, H, points_world=static, t_ref_us=25_000, n_context=m)
     assert with_context.shape == (len(t) - m,)
     assert f.last_counts["events"] == len(t) - m
-    alone = EgoMotionFilter(EgoMotionConfig()).filter(x[m:], y[m:], t[m:], T, w, v, K, W, H, points_world=static, t_ref_us=25_000)
+    alone = EgoMotionFilter(EgoMotionConfig(enabled=True)).filter(x[m:], y[m:], t[m:], T, w, v, K, W, H, points_world=static, t_ref_us=25_000)
     s = src[m:]
     assert with_context[s == 0].mean() > 0.9 and with_context[s == 1].mean() < 0.3
     assert alone[s == 1].mean() > 0.8
+
+
+def test_cached_depth_candidates_give_the_same_grid_as_the_whole_map():
+    rng = np.random.default_rng(4)
+    pts = np.c_[rng.uniform(-6, 6, 20000), rng.uniform(-6, 6, 20000), rng.uniform(0.0, 0.5, 20000)]
+    cached = EgoMotionFilter(EgoMotionConfig(enabled=True))
+    for k in range(40):
+        T = _pose(k * 0.005, np.array([0.4, -0.2, -0.3]), np.array([0.2, 0.1, 0.3]))
+        fresh = EgoMotionFilter(EgoMotionConfig(enabled=True)).depth_image(pts, T, K, W, H)
+        assert np.array_equal(cached.depth_image(pts, T, K, W, H), fresh)

@@ -5,13 +5,13 @@ import numpy as np
 from evpose.fusion.config import FusionConfig
 from evpose.fusion.ekf import ErrorStateEkf
 
-from fusion_helpers import make_motion, noisy_registrations, pose_errors
+from fusion_helpers import WHITE, make_motion, noisy_registrations, pose_errors
 
 
 def _run(calibration, duration_s, lost_span=None, seed=0):
     m = make_motion(duration_s=duration_s, imu_rate_hz=500.0, acc_bias=(0.08, -0.05, 0.1), gyro_bias=(0.01, -0.02, 0.015),
                     accel_noise_density=2e-3, gyro_noise_density=1.7e-4, seed=seed)
-    f = ErrorStateEkf(FusionConfig(), calibration)
+    f = ErrorStateEkf(FusionConfig(**WHITE), calibration)
     f.add_imu(m.imu())
     t0 = m.config.t0_us
     f.initialize(t0, m.camera_trajectory([t0], calibration.T_cam_imu).matrix(0), m.camera_velocity([t0], calibration.T_cam_imu)[0])

@@ -7,7 +7,7 @@ from evpose.errors import ConfigError
 from evpose.fusion.config import FusionConfig
 from evpose.fusion.factor_graph import FactorGraphFusion
 
-from fusion_helpers import make_motion, noisy_registrations, pose_errors
+from fusion_helpers import WHITE, make_motion, noisy_registrations, pose_errors
 
 BIAS_A = (0.08, -0.05, 0.1)
 BIAS_G = (0.01, -0.02, 0.015)
@@ -19,7 +19,7 @@ def _noisy_motion(duration_s, seed=0):
 
 
 def _start(motion, calibration, config=None):
-    f = FactorGraphFusion(config or FusionConfig(), calibration)
+    f = FactorGraphFusion(config or FusionConfig(**WHITE), calibration)
     f.add_imu(motion.imu())
     t0 = motion.config.t0_us
     gt0 = motion.camera_trajectory([t0], calibration.T_cam_imu)
@@ -65,7 +65,7 @@ def test_fusion_recovers_from_a_perturbed_registration(calibration):
 
 def test_gyro_bias_is_estimated_on_a_long_run(calibration):
     m = _noisy_motion(6.0, seed=4)
-    f = _start(m, calibration, FusionConfig(compute_covariance=False))
+    f = _start(m, calibration, FusionConfig(compute_covariance=False, **WHITE))
     times = m.config.t0_us + np.arange(20_000, 6_000_000, 20_000)
     _, regs, cov = noisy_registrations(m, calibration.T_cam_imu, times, 0.003, np.radians(0.2), seed=3)
     for k, t in enumerate(times):
@@ -151,7 +151,7 @@ def test_unknown_initial_velocity_is_estimated_within_a_fraction_of_a_second(bac
     from evpose.fusion import make_fusion
 
     m = _noisy_motion(0.6)
-    f = make_fusion(FusionConfig(backend=backend, compute_covariance=False), calibration)
+    f = make_fusion(FusionConfig(backend=backend, compute_covariance=False, **WHITE), calibration)
     f.add_imu(m.imu())
     t0 = m.config.t0_us
     f.initialize(t0, m.camera_trajectory([t0], calibration.T_cam_imu).matrix(0))  # no velocity given
@@ -180,7 +180,7 @@ def test_repeated_predictions_are_reused_but_follow_new_imu_and_new_states(calib
     # IMU arriving after a prediction changes the next one at the same time.
     imu = m.imu()
     t_cut = m.config.t0_us + 10_000
-    h = FactorGraphFusion(FusionConfig(), calibration)
+    h = FactorGraphFusion(FusionConfig(**WHITE), calibration)
     h.add_imu(imu[: int(np.searchsorted(imu.t, t_cut))])
     gt0 = m.camera_trajectory([m.config.t0_us], calibration.T_cam_imu)
     h.initialize(m.config.t0_us, gt0.matrix(0), m.camera_velocity([m.config.t0_us], calibration.T_cam_imu)[0])
@@ -189,3 +189,84 @@ def test_repeated_predictions_are_reused_but_follow_new_imu_and_new_states(calib
     late = h.predict(t).T_world_cam
     assert not np.array_equal(early, late)
     assert np.array_equal(late, _start(m, calibration).predict(t).T_world_cam)
+
+
+def test_registration_covariance_scale_equals_feeding_the_scaled_covariance(calibration):
+    m = _noisy_motion(0.2)
+    times = m.config.t0_us + np.arange(5000, 200_000, 5000)
+    _, regs, cov = noisy_registrations(m, calibration.T_cam_imu, times, 0.005, np.radians(0.3), seed=2)
+    a = _start(m, calibration, FusionConfig(registration_covariance_scale=30.0))
+    b = _start(m, calibration, FusionConfig(**WHITE))
+    for k, t in enumerate(times):
+        sa, sb = a.update(int(t), regs[k], cov), b.update(int(t), regs[k], 30.0 * cov)
+        assert np.array_equal(sa.T_world_cam, sb.T_world_cam)
+
+
+def test_scaled_registration_covariance_lets_the_imu_smooth_correlated_registration_errors(calibration):
+    # Registrations whose error wanders slowly (0.2 s correlation) plus a third as much white noise: a filter that
+    # believes each covariance follows the noise; the scaled one lets the gyro average it out.
+    from scipy.spatial.transform import Rotation
+
+    m = _noisy_motion(2.0)
+    times = m.config.t0_us + np.arange(5000, 2_000_000, 5000)
+    gt = m.camera_trajectory(times, calibration.T_cam_imu)
+    rng = np.random.default_rng(5)
+    a = np.exp(-1.0 / 40.0)
+    off = np.zeros(6)
+    regs = []
+    for k in range(len(gt)):
+        sig = np.array([np.radians(0.3)] * 3 + [0.005] * 3)
+        off = a * off + np.sqrt(1 - a * a) * rng.normal(0, 1, 6) * sig
+        e = off + rng.normal(0, 1, 6) * sig / 3
+        T = gt.matrix(k)
+        T[:3, :3] = T[:3, :3] @ Rotation.from_rotvec(e[:3]).as_matrix()
+        T[:3, 3] += T[:3, :3] @ e[3:]
+        regs.append(T)
+    cov = np.diag([np.radians(0.3) ** 2] * 3 + [0.005**2] * 3)
+    rot = {}
+    for scale in (1.0, 30.0):
+        f = _start(m, calibration, FusionConfig(registration_covariance_scale=scale))
+        errs = np.array([pose_errors(f.update(int(t), regs[k], cov).T_world_cam, gt.matrix(k)) for k, t in enumerate(times)])
+        rot[scale] = np.sqrt(np.mean(errs[100:, 1] ** 2))
+    assert rot[30.0] < 0.9 * rot[1.0]
+
+
+def test_relinearize_skip_and_covariance_scale_are_validated():
+    with pytest.raises(ConfigError):
+        FactorGraphFusion(FusionConfig(relinearize_skip=0))
+    with pytest.raises(ConfigError):
+        FactorGraphFusion(FusionConfig(registration_covariance_scale=0.0))
+
+
+def test_restore_at_a_late_step_reproduces_the_run_and_the_snapshot_stays_reusable(calibration):
+    m = _noisy_motion(2.2)
+    f = _start(m, calibration)
+    times = m.config.t0_us + np.arange(5000, 2_200_000, 5000)
+    _, regs, cov = noisy_registrations(m, calibration.T_cam_imu, times, 0.002, np.radians(0.1), seed=9)
+    late = 400
+    for k in range(late):
+        f.update(int(times[k]), None if 350 <= k < 360 else regs[k], cov)
+    snap = f.snapshot()
+    assert "log" not in snap  # constant size: the window, not the inputs since initialisation
+    first = [f.update(int(times[k]), regs[k], cov) for k in range(late, late + 20)]
+    for _ in range(2):  # a snapshot restores the same state however often it is used
+        g = FactorGraphFusion(FusionConfig(**WHITE), calibration)
+        g.restore(snap)
+        assert g.index == late and g.degraded is False
+        again = [g.update(int(times[k]), regs[k], cov) for k in range(late, late + 20)]
+        for a, b in zip(first, again):
+            assert np.array_equal(a.T_world_cam, b.T_world_cam) and np.array_equal(a.velocity_world, b.velocity_world)
+            assert np.array_equal(a.acc_bias, b.acc_bias) and np.array_equal(a.covariance, b.covariance)
+        assert np.array_equal(g.predict(int(times[late + 19]) + 2000).T_world_cam, f.predict(int(times[late + 19]) + 2000).T_world_cam)
+
+
+def test_snapshot_of_an_uninitialised_fusion_restores_to_uninitialised(calibration):
+    m = _noisy_motion(0.2)
+    f = FactorGraphFusion(FusionConfig(**WHITE), calibration)
+    f.add_imu(m.imu())
+    snap = f.snapshot()
+    g = _start(m, calibration)
+    g.restore(snap)
+    assert not g.initialized
+    with pytest.raises(RuntimeError):
+        g.update(m.config.t0_us + 10_000, np.eye(4))

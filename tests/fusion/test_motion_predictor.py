@@ -5,13 +5,13 @@ import numpy as np
 from evpose.fusion import FusionConfig, make_fusion
 from evpose.fusion.motion_predictor import FusionMotionPredictor
 
-from fusion_helpers import make_motion, pose_errors
+from fusion_helpers import WHITE, make_motion, pose_errors
 
 
 def test_predictor_adapter_predicts_with_the_imu_and_marks_failures(calibration):
     m = make_motion(duration_s=0.5, imu_rate_hz=500.0)
     t0 = m.config.t0_us
-    p = FusionMotionPredictor(make_fusion(FusionConfig(), calibration), m.imu(), m.camera_velocity([t0], calibration.T_cam_imu)[0])
+    p = FusionMotionPredictor(make_fusion(FusionConfig(**WHITE), calibration), m.imu(), m.camera_velocity([t0], calibration.T_cam_imu)[0])
     times = t0 + np.arange(0, 400_000, 10_000)
     gt = m.camera_trajectory(times, calibration.T_cam_imu)
     p.reset(int(times[0]), gt.matrix(0))

@@ -96,3 +96,17 @@ def test_output_onto_the_input_is_refused(tmp_path, small_scan, capsys):
     before = cloud.read_bytes()
     assert run(["build-map", str(cloud), "--out", str(cloud), "--quiet"]) == 2
     assert cloud.read_bytes() == before
+
+
+def test_build_map_traces_a_painted_panel_unless_told_not_to(tmp_path):
+    from evpose.mapping.synthetic import painted_plane
+
+    scan = painted_plane(size=2.0, panel=(0.6, 0.5, 0.8, 0.9), density=900.0, seed=5)
+    cloud = tmp_path / "panel_cloud.ply"
+    _write_ply_with_colours(cloud, scan)
+    out = tmp_path / "panel_map.ply"
+    assert run(["build-map", str(cloud), "--out", str(out), "--quiet"]) == 0
+    cmap = read_contour_map(out)
+    assert len(cmap) > 200 and np.all(cmap.brightness_sign == 1)
+    # Without brightness edges a lone plane has no contour: a one-line error, exit code 2.
+    assert run(["build-map", str(cloud), "--out", str(tmp_path / "none.ply"), "--quiet", "--no-albedo-edges"]) == 2

@@ -68,3 +68,18 @@ def test_straighten_puts_a_noisy_straight_run_on_one_line():
     err = np.minimum.reduce([np.abs(p[:, 0]), np.abs(1 - p[:, 0]), np.abs(p[:, 1]), np.abs(1 - p[:, 1])])
     assert np.median(err[mid]) < 0.002
     assert np.mean(np.einsum("nd,nd->n", n, normals) > 0.99) > 0.9
+
+
+def test_straighten_open_chain_fits_each_straight_run_and_keeps_the_ends():
+    from evpose.mapping.contours import straighten
+
+    rng = np.random.default_rng(3)
+    # An L: 1 m along x, then 0.6 m along y, 1 cm spacing, 4 mm scatter across each leg.
+    a = np.stack([np.arange(0.0, 1.0, 0.01), rng.normal(0, 0.004, 100)], axis=1)
+    b = np.stack([1.0 + rng.normal(0, 0.004, 60), np.arange(0.0, 0.6, 0.01)], axis=1)
+    p = np.concatenate([a, b])
+    normals = np.concatenate([np.tile([0.0, -1.0], (100, 1)), np.tile([1.0, 0.0], (60, 1))])
+    out, n = straighten(p, normals, eps=0.03, min_points=10, inlier=0.01, closed=False)
+    assert np.abs(out[5:90, 1]).max() < 0.004  # the x leg lies on y ~ 0
+    assert np.abs(out[110:155, 0] - 1.0).max() < 0.004
+    assert np.allclose(n[10:90], [0.0, -1.0], atol=0.02) and np.allclose(n[110:150], [1.0, 0.0], atol=0.02)

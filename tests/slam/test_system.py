@@ -58,8 +58,12 @@ def _scene_switch_recording():
     return Recording(events=ev, calibration=KB)
 
 
-def test_lost_tracking_opens_a_new_map_in_the_atlas():
-    run = run_slam(_scene_switch_recording(), SlamConfig())
+@pytest.mark.parametrize("search", [False, True], ids=["klt-only", "with-projection-search"])
+def test_lost_tracking_opens_a_new_map_in_the_atlas(search):
+    # With the projection search on, the look-alike blobs of the new scene must not be "re-found" as the old map's points.
+    cfg = SlamConfig()
+    cfg.search.enabled = search
+    run = run_slam(_scene_switch_recording(), cfg)
     statuses = [r.status for r in run.results]
     assert SlamStatus.LOST in statuses
     lost = statuses.index(SlamStatus.LOST)

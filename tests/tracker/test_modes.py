@@ -102,6 +102,32 @@ def test_polarity_filter_mode_labels_events_and_reports_counts(landing):
     results = [s.step() for _ in range(30)]
     assert all("polarity_filter" in r.timings_ms and "events_polarity_removed" in r.counts for r in results)
     assert all(r.velocity is not None for r in results)
+    # The event filter (T_align) judged every stored event and registered only points whose patch shows events.
+    for r in results[1:]:
+        c = r.counts
+        assert c["events_polarity_judged"] <= c["events_kept"]
+        assert c["events_polarity_removed"] == c["events_outside_patches"] + c["events_wrong_polarity"] <= c["events_polarity_judged"]
+        assert c["points_registered"] == c["points_used"] and c["points_with_events"] <= c["points_used"]
+    assert sum(r.counts["events_polarity_removed"] for r in results) > 0
+
+
+def test_dropping_empty_points_registers_only_points_whose_patch_shows_events(landing):
+    rec, cmap = landing
+    cfg = TrackerConfig(mode=TrackerMode.FULL)
+    cfg.polarity.drop_empty_points = True
+    s = TrackingSession(rec, cmap, cfg)
+    results = [s.step() for _ in range(10)]
+    assert all(r.counts["points_registered"] == r.counts["points_with_events"] <= r.counts["points_used"] for r in results)
+    assert any(r.counts["points_registered"] < r.counts["points_used"] for r in results)
+
+
+def test_polarity_filter_off_registers_every_used_point_on_per_point_fields(landing):
+    rec, cmap = landing
+    cfg = TrackerConfig(mode=TrackerMode.STPE_FILTER)
+    cfg.polarity.event_filter = False
+    s = TrackingSession(rec, cmap, cfg)
+    results = [s.step() for _ in range(5)]
+    assert all("points_registered" not in r.counts and "events_outside_patches" not in r.counts for r in results)
 
 
 def test_fused_mode_needs_imu(landing):

@@ -72,7 +72,7 @@ def test_registration_jacobian_matches_finite_differences_on_a_smooth_field(scen
         Tcw = np.linalg.inv(T)
         H, b = np.zeros((6, 6)), np.zeros(6)
         out = reg._linearise(P, slots, np.ascontiguousarray(Tcw[:3, :3]), np.ascontiguousarray(Tcw[:3, 3]), cal.fx, cal.fy, cal.cx, cal.cy,
-                             f.value, f.grad_u, f.grad_v, f.hess, f.box, False, 0, 1.0, 1.0, H, b, np.empty(m), np.empty(m), np.empty((m, 2)))
+                             f.value, f.grad_u, f.grad_v, f.box, False, 0, 1.0, 1.0, H, b, np.empty(m), np.empty(m), np.empty((m, 2)))
         return out[0], b
 
     _, b = lin(T_gt)
@@ -150,3 +150,37 @@ def test_lag_compensation_moves_the_pose_towards_ground_truth_on_a_moving_scene(
     e_plain, _ = pose_error(plain.T_world_cam, T_gt)
     e_comp, _ = pose_error(comp.T_world_cam, T_gt)
     assert e_comp < e_plain - 5e-4, (e_comp, e_plain)
+
+
+def test_zero_prior_information_means_no_prior(scene):
+    field, pts, T_gt, cal, coarse = scene
+    T0 = (gtsam.Pose3(T_gt) * gtsam.Pose3.Expmap(np.array([0.01, 0, 0, 0.01, 0, 0]))).matrix()
+    a = register_to_map(field, pts, T0, cal.K, RegistrationConfig(), prior_information=np.zeros((6, 6)))
+    b = register_to_map(field, pts, T0, cal.K, RegistrationConfig(prior_translation_m=0.0, prior_rotation_deg=0.0))
+    assert np.array_equal(a.T_world_cam, b.T_world_cam) and np.array_equal(a.covariance, b.covariance)
+
+
+def test_a_strong_prior_information_holds_the_pose_and_the_covariance_is_the_events_alone(scene):
+    field, pts, T_gt, cal, coarse = scene
+    T0 = (gtsam.Pose3(T_gt) * gtsam.Pose3.Expmap(np.array([0.0, 0.005, 0, 0.01, 0.0, 0]))).matrix()
+    strong = register_to_map(field, pts, T0, cal.K, RegistrationConfig(), prior_information=np.eye(6) * 1e12)
+    assert strong.success
+    assert pose_error(strong.T_world_cam, T0)[0] < 1e-5
+    # The reported covariance carries the events' information only, not the (huge) prior's: near the optimum
+    # it is about what a registration without a prior reports.
+    free = register_to_map(field, pts, T_gt, cal.K, RegistrationConfig(prior_translation_m=0.0, prior_rotation_deg=0.0))
+    strong = register_to_map(field, pts, free.T_world_cam, cal.K, RegistrationConfig(), prior_information=np.eye(6) * 1e12)
+    assert strong.covariance is not None
+    ratio = np.diag(strong.covariance) / np.diag(free.covariance)
+    assert np.all(ratio > 0.2) and np.all(ratio < 5.0), ratio
+
+
+def test_damped_step_solves_the_levenberg_marquardt_system():
+    rng = np.random.default_rng(0)
+    M = rng.normal(size=(6, 6))
+    H = M @ M.T + 0.1 * np.eye(6)
+    b = rng.normal(size=6)
+    lam = 0.3
+    expected = -np.linalg.solve(H + lam * np.diag(np.diag(H) + 1e-12), b)
+    assert np.allclose(reg._damped_step(H, b, lam), expected, rtol=1e-10, atol=1e-12)
+    assert np.all(np.isnan(reg._damped_step(np.zeros((6, 6)), b, 0.0)))

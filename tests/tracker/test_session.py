@@ -68,3 +68,22 @@ def test_map_in_another_frame_is_an_input_error(scene):
     moved = dataclasses.replace(cmap, points=cmap.points + np.array([100.0, 0.0, 0.0]))
     with pytest.raises(InputError, match="same frame"):
         TrackingSession(rec, moved, STPE)
+
+
+def test_forward_seek_over_known_results_jumps_by_snapshot_and_equals_an_uninterrupted_run(scene):
+    rec, cmap = scene
+    cfg = TrackerConfig(mode=TrackerMode.STPE, snapshot_every=5)
+    ref = TrackingSession(rec, cmap, cfg).run()
+    s = TrackingSession(rec, cmap, dataclasses.replace(cfg))
+    s.run()
+    s.seek(ref[2].t_us)
+    calls = []
+    step = s.tracker.step
+    s.tracker.step = lambda *a, **k: calls.append(1) or step(*a, **k)
+    r = s.seek(ref[-2].t_us)
+    # At most one snapshot interval is replayed, not the whole way from step 3.
+    assert len(calls) < cfg.snapshot_every and len(s.results) == len(ref) - 1
+    assert np.array_equal(r.pose, ref[-2].pose)
+    assert all(np.array_equal(a.pose, b.pose) and a.t_us == b.t_us for a, b in zip(s.results, ref))
+    s.run()
+    assert len(s.results) == len(ref) and all(np.array_equal(a.pose, b.pose) for a, b in zip(s.results, ref))

@@ -7,7 +7,8 @@ from tracker_synthetic import generate
 
 from evpose.core.events import EventArray
 from evpose.errors import InputError
-from evpose.tracker.config import TrackerConfig
+from evpose.tracker.config import MotionModel, TrackerConfig
+from evpose.tracker.motion_filter import ConstantVelocityKalman
 from evpose.tracker.step_result import TrackStatus
 from evpose.tracker.tracker import Tracker
 
@@ -46,6 +47,28 @@ def test_tracker_follows_the_generated_trajectory(scene):
     assert np.degrees(np.sqrt(np.mean(ang**2))) < 0.5
 
 
+@pytest.mark.parametrize("window_ms", [0.0, 20.0])
+def test_constant_velocity_motion_model_follows_the_generated_trajectory(scene, window_ms):
+    rec, cmap = scene
+    cfg = TrackerConfig(motion_model=MotionModel.CONSTANT_VELOCITY, velocity_window_ms=window_ms)
+    results = run(started(rec, cmap, cfg), rec, 0, 40)
+    assert all(r.status is TrackStatus.OK for r in results)
+    gt = rec.ground_truth.interpolate([r.t_us for r in results])
+    err = np.linalg.norm(np.stack([r.pose[:3, 3] for r in results]) - gt.position, axis=1)
+    assert np.sqrt(np.mean(err**2)) < 0.015
+
+
+def test_default_motion_model_fuses_each_registration_in_the_kalman_filter(scene):
+    rec, cmap = scene
+    tr = started(rec, cmap)
+    assert isinstance(tr.predictor, ConstantVelocityKalman)
+    r = run(tr, rec, 0, 6)[-1]
+    # The output is the filtered pose, not the raw registration, and its covariance is the filter's.
+    assert not np.array_equal(r.pose, r.registration_pose)
+    assert np.array_equal(r.covariance, tr.predictor.covariance())
+    assert np.all(np.linalg.eigvalsh(r.covariance) > 0)
+
+
 def test_tracker_is_bit_identical_across_runs(scene):
     rec, cmap = scene
     a = run(started(rec, cmap), rec, 0, 12)
@@ -70,7 +93,7 @@ def test_snapshot_restore_then_replay_equals_an_uninterrupted_run(scene):
 def test_step_reports_timings_counts_and_a_covariance(scene):
     rec, cmap = scene
     r = run(started(rec, cmap), rec, 0, 3)[-1]
-    assert set(r.timings_ms) >= {"noise_filter", "time_surface", "distance_field", "culling", "registration", "total"}
+    assert set(r.timings_ms) >= {"noise_filter", "time_surface", "distance_field", "culling", "registration", "total", "total_cpu"}
     assert r.counts["events_in"] >= r.counts["events_kept"] > 0
     assert r.counts["points_used"] > 0 and r.counts["inliers"] > 0
     assert r.covariance.shape == (6, 6) and np.all(np.linalg.eigvalsh(r.covariance) > 0)

@@ -65,3 +65,61 @@ def test_default_culls_the_hidden_bottom_edge_of_a_low_box_seen_from_above():
     bottom = np.array([[0.0, 0.0, 4.0], [0.006, 0.0, 4.0]])
     idx = visible_points(np.concatenate([top, bottom]), np.eye(4), K, W, H, VisibleMapConfig())
     assert idx.tolist() == [0, 1]
+
+
+def test_projected_bounds_are_those_of_the_pinhole_projection():
+    from evpose.tracker.visible_map import projected_bounds
+
+    rng = np.random.default_rng(3)
+    pts = rng.uniform([-2.0, -1.5, 1.0], [2.0, 1.5, 6.0], size=(500, 3))
+    T = np.eye(4)
+    T[:3, :3] = np.array([[np.cos(0.2), 0.0, np.sin(0.2)], [0.0, 1.0, 0.0], [-np.sin(0.2), 0.0, np.cos(0.2)]])
+    T[:3, 3] = [0.3, -0.1, -0.5]
+    Xc = (pts - T[:3, 3]) @ T[:3, :3]
+    u = K[0, 0] * Xc[:, 0] / Xc[:, 2] + K[0, 2]
+    v = K[1, 1] * Xc[:, 1] / Xc[:, 2] + K[1, 2]
+    assert np.allclose(projected_bounds(pts, T, K), (u.min(), u.max(), v.min(), v.max()), rtol=0, atol=1e-9)
+
+
+def test_culling_matches_a_direct_reference_with_occlusion_on_random_points():
+    # Reference: project, keep the FoV (with margin) and depth range, then drop points deeper than
+    # (1 + tol) x the nearest point of their 8 px cell.
+    rng = np.random.default_rng(5)
+    pts = rng.uniform([-3.0, -2.0, -1.0], [3.0, 2.0, 8.0], size=(4000, 3))
+    cfg = VisibleMapConfig(fov_margin_px=15.0, occlusion=True, occlusion_cell_px=8, occlusion_tolerance=0.05)
+    Z = pts[:, 2]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        u = K[0, 0] * pts[:, 0] / Z + K[0, 2]
+        v = K[1, 1] * pts[:, 1] / Z + K[1, 2]
+    m = cfg.fov_margin_px
+    ok = (Z > cfg.min_depth_m) & (Z < cfg.max_depth_m) & (u >= -m) & (u <= W - 1 + m) & (v >= -m) & (v <= H - 1 + m)
+    idx = np.flatnonzero(ok)
+    gw = int((W + 2 * m) // 8) + 1
+    cell = ((v[idx] + m) // 8).astype(int) * gw + ((u[idx] + m) // 8).astype(int)
+    nearest = {}
+    for c, z in zip(cell, Z[idx]):
+        nearest[c] = min(nearest.get(c, np.inf), z)
+    expected = [i for i, c in zip(idx, cell) if Z[i] <= nearest[c] * 1.05]
+    assert visible_points(pts, np.eye(4), K, W, H, cfg).tolist() == expected
+
+
+def test_block_wise_superset_cull_equals_the_per_point_cull_from_any_pose():
+    import dataclasses
+
+    from evpose.tracker.visible_map import VisibleMap
+
+    # Contour-like map: random walks, so consecutive points are neighbours (small blocks), some far away.
+    rng = np.random.default_rng(11)
+    walks = [rng.uniform(-20, 20, 3) + np.cumsum(rng.normal(0, 0.02, (300, 3)), axis=0) for _ in range(40)]
+    pts = np.concatenate(walks)
+    vm = VisibleMap(pts, K, W, H)
+    wide = dataclasses.replace(VisibleMapConfig(), fov_margin_px=60.0, occlusion=False)
+    for _ in range(30):
+        T = np.eye(4)
+        a = rng.normal(0, 1.0, 3)
+        c, s = np.cos(np.linalg.norm(a)), np.sin(np.linalg.norm(a))
+        k = a / np.linalg.norm(a)
+        Kx = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+        T[:3, :3] = np.eye(3) + s * Kx + (1 - c) * Kx @ Kx
+        T[:3, 3] = rng.uniform(-15, 15, 3)
+        assert vm._superset(T, wide).tolist() == visible_points(pts, T, K, W, H, wide).tolist()

@@ -1,0 +1,29 @@
+"""The playback status line: the shown step, the player's state and achieved speed, and how far the run-ahead is."""
+
+from __future__ import annotations
+
+from app.engine import Engine
+from app.frame import Frame
+
+
+def run_ahead_note(engine: Engine) -> str:
+    """'run-ahead: 4.20 of 10.00 s ready' for engines with a run-ahead (empty otherwise)."""
+    n = getattr(engine, "n_steps", None)
+    frontier = getattr(engine, "frontier", None)
+    step_us = getattr(engine, "step_us", None)
+    if not n or frontier is None or not step_us:
+        return ""
+    total = n * step_us / 1e6
+    if frontier >= n:
+        return f"run-ahead done: all {total:.2f} s ready (seeks and 1x playback from memory)"
+    return f"run-ahead: {frontier * step_us / 1e6:.2f} of {total:.2f} s ready (beyond it, steps are computed live)"
+
+
+def status_markdown(frame: Frame, engine: Engine, stats: dict) -> str:
+    """Markdown of the status line under the playback controls."""
+    text = (f"t = {frame.t_us / 1e6:.3f} s, step {frame.index}, **{frame.status}**"
+            + (f" ({frame.reason})" if frame.reason and frame.status != "events only" else "")
+            + f"\n\n{stats.get('state', '')} at {stats.get('speed', 1):.1f}x, "
+            f"real-time factor {stats.get('real_time_factor', 0):.2f}")
+    note = run_ahead_note(engine)
+    return text + (f"\n\n{note}" if note else "")

@@ -1,0 +1,161 @@
+"""Re-finding map points by projection: ORB-SLAM's ``SearchLocalPoints`` adapted to MCIs without descriptors.
+
+KLT associations die for good once a track is lost (on a scene with few
+corners about two thirds of them per MCI), and a map point without a track is
+never seen again, so maps starve. Here the local map's untracked points are
+projected with a predicted pose and looked for in the current MCI by
+normalised cross-correlation of a small patch cut from the keyframe MCI that
+last observed the point; a match must be strong and unique (the second-best
+peak, away from the best, clearly weaker). Event images of the same edges
+under similar motion look alike up to brightness and contrast, which NCC
+ignores; the patch is not warped (the local map spans a few degrees).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+
+from evpose.core.trajectory import invert_pose
+from evpose.slam.atlas import SlamMap
+from evpose.slam.geometry import project
+
+
+@dataclass
+class ProjectionSearchConfig:
+    """Patch search of untracked local-map points around their projection in the current MCI."""
+
+    enabled: bool = False
+    """Re-find local-map points by projection (off: associations come from KLT tracks only). Off by default: on the
+    simulated landing (seeds 0-3, event-only) it lowered the scale-aligned ATE on two seeds and raised it on two."""
+    patch_px: int = field(default=11, metadata={"min": 5, "max": 31, "step": 2, "unit": "px"})
+    """Side of the template cut around a point's observation in its keyframe MCI, pixels (odd)."""
+    radius_px: int = field(default=6, metadata={"min": 1, "max": 30, "step": 1, "unit": "px"})
+    """Search radius around the projection with the motion-model pose (before pose estimation), pixels."""
+    prepass_below: int = field(default=0, metadata={"min": 0, "max": 1000, "step": 1, "unit": "points"})
+    """The first pass (motion-model pose, wide radius) runs only while KLT carries fewer map points than this; the second
+    pass (estimated pose) always runs. 0 by default: as a rescue of a failing KLT step the first pass "re-found" points of
+    an unrelated scene among look-alike blobs and kept a map that should have been lost, points."""
+    refine_radius_px: int = field(default=3, metadata={"min": 1, "max": 15, "step": 1, "unit": "px"})
+    """Search radius around the projection with the estimated pose (second pass), pixels."""
+    min_ncc: float = field(default=0.8, metadata={"min": 0.0, "max": 1.0, "step": 0.01, "unit": "NCC"})
+    """Smallest normalised cross-correlation accepted as a match, NCC."""
+    max_second_ratio: float = field(default=0.9, metadata={"min": 0.0, "max": 1.0, "step": 0.01, "unit": "ratio"})
+    """The best peak outside two pixels of the best match must score below this share of the best (uniqueness), ratio."""
+    min_texture: float = field(default=4.0, metadata={"min": 0.0, "max": 64.0, "step": 0.5, "unit": "grey levels"})
+    """Templates with a lower standard deviation are not searched (a blank patch matches anything), grey levels."""
+
+
+def cut_patch(img8: np.ndarray, uv: np.ndarray, size: int) -> np.ndarray | None:
+    """The ``size`` x ``size`` patch of ``img8`` centred on ``uv`` (sub-pixel, bilinear), or None when it leaves the image."""
+    h, w = img8.shape
+    r = size // 2
+    u, v = float(uv[0]), float(uv[1])
+    if not (r <= u < w - r - 1 and r <= v < h - r - 1):
+        return None
+    return cv2.getRectSubPix(img8, (size, size), (u, v))
+
+
+def search_patch(img8: np.ndarray, patch: np.ndarray, uv: np.ndarray, radius: int, cfg: ProjectionSearchConfig) -> tuple[np.ndarray | None, float]:
+    """Where ``patch`` matches ``img8`` within ``radius`` px of ``uv``: (sub-pixel position or None, best NCC)."""
+    size = patch.shape[0]
+    r = size // 2
+    h, w = img8.shape
+    cu, cv_ = int(round(float(uv[0]))), int(round(float(uv[1])))
+    x0, x1 = max(cu - radius - r, 0), min(cu + radius + r + 1, w)
+    y0, y1 = max(cv_ - radius - r, 0), min(cv_ + radius + r + 1, h)
+    if x1 - x0 < size + 2 or y1 - y0 < size + 2:
+        return None, float("nan")
+    region = img8[y0:y1, x0:x1]
+    if float(cv2.meanStdDev(region)[1][0, 0]) < cfg.min_texture:
+        return None, float("nan")
+    score = cv2.matchTemplate(region, patch, cv2.TM_CCOEFF_NORMED)
+    # NaN where the region is flat under the template.
+    cv2.patchNaNs(score, -1.0)
+    iy, ix = np.unravel_index(int(np.argmax(score)), score.shape)
+    best = float(score[iy, ix])
+    if best < cfg.min_ncc:
+        return None, best
+    if not (0 < iy < score.shape[0] - 1 and 0 < ix < score.shape[1] - 1):
+        return None, best  # the maximum on the search border is the flank of something outside the radius, not a peak
+    away = score.copy()
+    away[max(iy - 2, 0):iy + 3, max(ix - 2, 0):ix + 3] = -1.0
+    if away.size and float(away.max()) >= cfg.max_second_ratio * best:
+        return None, best
+    # Sub-pixel peak by a parabola through the neighbours on each axis.
+    du = _parabola(score, iy, ix, axis=1)
+    dv = _parabola(score, iy, ix, axis=0)
+    return np.array([x0 + ix + r + du, y0 + iy + r + dv]), best
+
+
+def _parabola(score: np.ndarray, iy: int, ix: int, axis: int) -> float:
+    i, n = (ix, score.shape[1]) if axis == 1 else (iy, score.shape[0])
+    if i <= 0 or i >= n - 1:
+        return 0.0
+    a, b, c = (score[iy, i - 1], score[iy, i], score[iy, i + 1]) if axis == 1 else (score[i - 1, ix], score[i, ix], score[i + 1, ix])
+    den = a - 2.0 * b + c
+    return float(np.clip(0.5 * (a - c) / den, -0.5, 0.5)) if den < 0 else 0.0
+
+
+def search_by_projection(img8: np.ndarray, K: np.ndarray, T_cw: np.ndarray, Xw: np.ndarray, patches: list[np.ndarray],
+                         radius: int, cfg: ProjectionSearchConfig, border: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """Look for each point ``Xw[i]`` (with template ``patches[i]``) near its projection by ``T_cw``.
+
+    Returns (indices of the found points (M,), their pixels (M, 2)), in index order.
+    Two points claiming pixels closer than 2 px to each other are both dropped: one of them is wrong.
+    """
+    if len(Xw) == 0:
+        return np.zeros(0, np.int64), np.zeros((0, 2))
+    h, w = img8.shape
+    proj, z = project(K, T_cw, np.asarray(Xw, np.float64))
+    b = max(border, patches[0].shape[0] // 2 if patches else 0)
+    inside = (z > 0) & (proj[:, 0] >= b) & (proj[:, 0] < w - b) & (proj[:, 1] >= b) & (proj[:, 1] < h - b)
+    idx, uv = [], []
+    for i in np.flatnonzero(inside):
+        found, _ = search_patch(img8, patches[i], proj[i], radius, cfg)
+        if found is not None:
+            idx.append(int(i))
+            uv.append(found)
+    if not idx:
+        return np.zeros(0, np.int64), np.zeros((0, 2))
+    idx_a, uv_a = np.array(idx, np.int64), np.array(uv)
+    d = np.linalg.norm(uv_a[:, None] - uv_a[None], axis=2) + np.eye(len(uv_a)) * 1e9
+    unique = d.min(axis=1) >= 2.0
+    return idx_a[unique], uv_a[unique]
+
+
+def local_candidates(m: SlamMap, tracked_pids: set[int], window: int) -> list[int]:
+    """Ids (ascending) of points seen by the last ``window`` keyframes, with a template, not tracked now."""
+    if not m.keyframes:
+        return []
+    first = m.keyframes[-window:][0].id  # keyframe ids grow, so "seen by a recent keyframe" is "newest observation >= first"
+    return [pid for pid, p in sorted(m.points.items()) if p.patch is not None and pid not in tracked_pids and p.obs and max(p.obs) >= first]
+
+
+def refind_points(m: SlamMap, img8: np.ndarray, K: np.ndarray, T_wc: np.ndarray, tracked_pids: set[int], occupied_uv: np.ndarray,
+                  window: int, radius: int, cfg: ProjectionSearchConfig) -> tuple[list[int], np.ndarray]:
+    """Untracked local-map points of ``m`` re-found in ``img8`` near their projection by ``T_wc``: (point ids, pixels (M, 2)).
+
+    Matches within 2 px of ``occupied_uv`` (pixels of points tracked already) are dropped as conflicts.
+    """
+    pids = local_candidates(m, tracked_pids, window)
+    if not pids:
+        return [], np.zeros((0, 2))
+    Xw = np.stack([m.points[p].xyz for p in pids])
+    idx, uv = search_by_projection(img8, K, invert_pose(T_wc), Xw, [m.points[p].patch for p in pids], radius, cfg)
+    if len(idx) and len(occupied_uv):
+        d = np.linalg.norm(uv[:, None] - np.asarray(occupied_uv, np.float64)[None], axis=2).min(axis=1)
+        idx, uv = idx[d >= 2.0], uv[d >= 2.0]
+    return [pids[i] for i in idx.tolist()], uv
+
+
+def store_patches(m: SlamMap, kf_id: int, img8: np.ndarray, size: int) -> None:
+    """Give every point observed in keyframe ``kf_id`` the template around that observation (the newest view wins)."""
+    for p in m.points.values():
+        uv = p.obs.get(kf_id)
+        if uv is not None:
+            patch = cut_patch(img8, uv, size)
+            if patch is not None:
+                p.patch = patch

@@ -1,0 +1,75 @@
+"""3D scene: trajectories go out in bounded chunks (unchanged chunks are not resent), small frustum texture, map colours."""
+
+import socket
+
+import numpy as np
+import pytest
+import viser
+
+from app.frame import StepSummary
+from app.scene import FRUSTUM_IMAGE_WIDTH, GREY, TRAJECTORY_CHUNK, SceneView, frustum_image, map_colours, trajectory_chunks
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def _summaries(n: int) -> list[StepSummary]:
+    out = []
+    for i in range(n):
+        T = np.eye(4)
+        T[:3, 3] = (0.01 * i, np.sin(0.01 * i), 1.0)
+        out.append(StepSummary(i, 5000 * i, T, T.copy(), "ok", {}, {}))
+    return out
+
+
+@pytest.fixture(scope="module")
+def scene():
+    server = viser.ViserServer(host="127.0.0.1", port=_free_port(), verbose=False)
+    yield SceneView(server)
+    server.stop()
+
+
+def test_trajectory_chunks_join_into_the_whole_polyline():
+    p = np.random.default_rng(0).random((600, 3))
+    chunks = trajectory_chunks(p, 256)
+    assert [len(c) for c in chunks] == [256, 256, 87]
+    assert np.allclose(np.concatenate(chunks), np.stack([p[:-1], p[1:]], axis=1))
+
+
+def test_growing_history_resends_only_the_newest_chunk_and_seeking_back_removes_chunks(scene):
+    hist = _summaries(TRAJECTORY_CHUNK * 2 + 40)
+    scene._trajectories(hist[:TRAJECTORY_CHUNK + 10])
+    first = scene._nodes["fused/0"]
+    assert set(k for k in scene._nodes if k.startswith("fused/")) == {"fused/0", "fused/1"}
+    scene._trajectories(hist)
+    assert scene._nodes["fused/0"] is first  # a complete chunk is never resent
+    assert {"fused/1", "fused/2", "reg/2"} <= set(scene._nodes)
+    scene._trajectories(hist[:50])  # a seek back
+    assert scene._nodes["fused/0"] is not first
+    assert not any(k in scene._nodes for k in ("fused/1", "fused/2", "reg/1"))
+    scene.toggles.fused = False
+    scene.apply_toggles()
+    assert scene._nodes["fused/0"].visible is False and scene._nodes["reg/0"].visible is True
+
+
+def test_frustum_image_is_shrunk_and_bright_on_edges():
+    tdf = np.ones((260, 346), np.float32)
+    tdf[100:110, :] = 0.0
+    img = frustum_image(tdf)
+    assert img.shape[1] == FRUSTUM_IMAGE_WIDTH and img.dtype == np.uint8
+    assert frustum_image(np.ones((30, 40), np.float32)).shape == (30, 40, 3)
+
+
+def test_map_colours_from_a_grey_base_equal_the_plain_ones():
+    from app.frame import Frame
+    from evpose.core.events import EventArray
+
+    z = np.zeros((4, 4), np.float32)
+    f = Frame(0, 0, z, z, z, EventArray.empty(), EventArray.empty(), visible_index=np.array([1, 2, 5]),
+              point_index=np.array([2, 5, 7]), predicted_polarity=np.array([1, -1, 0], np.int8))
+    base = np.tile(GREY, (10, 1))
+    a, b = map_colours(10, f), map_colours(10, f, base)
+    assert np.array_equal(a, b) and np.all(base == GREY)

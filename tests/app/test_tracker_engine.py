@@ -1,0 +1,151 @@
+"""Tracker engine: every frame it shows (live, kept by the run-ahead, after seeks) equals the headless run's step."""
+
+import dataclasses
+
+import numpy as np
+
+from app.frame_cache import FrameCacheConfig, quantize
+from app.tracker_engine import TrackerEngine, frame_from_result
+from evpose.tracker.session import TrackingSession
+
+
+def _headless(rec, cmap, debug_at=()):
+    s = TrackingSession(rec, cmap)
+    out = []
+    while True:
+        r = s.step(debug=len(out) in debug_at)
+        if r is None:
+            return out
+        out.append(r)
+
+
+def _same_frame(f, result):
+    ref = frame_from_result(result, f.index)
+    assert f.t_us == ref.t_us and f.status == ref.status
+    assert np.array_equal(f.pose, ref.pose)
+    for name in ("ts_positive", "ts_negative", "tdf"):
+        assert np.array_equal(getattr(f, name), quantize(getattr(ref, name))), name
+    for name in ("projected_uv", "residuals", "weights", "point_index", "visible_index", "predicted_polarity"):
+        assert np.array_equal(getattr(f, name), getattr(ref, name), equal_nan=name in ("projected_uv",)), name
+    assert np.array_equal(f.events_kept.t, ref.events_kept.t) and np.array_equal(f.events_removed.t, ref.events_removed.t)
+
+
+def test_tracker_engine_seek_matches_headless_session(squares_scene):
+    rec, cmap = squares_scene
+    headless = TrackingSession(rec, cmap)
+    results = [headless.step() for _ in range(30)]
+    eng = TrackerEngine(rec, cmap)
+    for k in (25, 7, 29):
+        f = eng.seek(results[k].t_us)
+        assert f.index == k and f.t_us == results[k].t_us
+        assert np.array_equal(f.pose, results[k].pose)
+        assert f.tdf.shape == (rec.calibration.height, rec.calibration.width)
+        assert f.projected_uv is not None and len(f.projected_uv) == len(f.residuals)
+    f = eng.seek_step(eng.history[-1].index - 1)
+    assert np.array_equal(f.pose, results[28].pose)
+    assert len(eng.history) == 29 and all(np.array_equal(h.pose, r.pose) for h, r in zip(eng.history, results))
+
+
+def test_prefetch_leaves_the_shown_step_unchanged_and_keeps_grid_frames(squares_scene):
+    rec, cmap = squares_scene
+    every = 4
+    results = _headless(rec, cmap, debug_at=range(0, 1000, every))
+    eng = TrackerEngine(rec, cmap, cache=FrameCacheConfig(every_ms=every * 5.0))
+    assert eng.cache.every == every
+    for _ in range(10):
+        eng.step()
+    while eng.prefetch(30):
+        pass
+    assert eng.frontier == eng.n_steps == len(results)
+    assert eng.shown_index == 9 and len(eng.history) == 10
+    f = eng.step()
+    assert f.index == 10 and np.array_equal(f.pose, results[10].pose)
+    # The run-ahead kept a frame on every grid step, each equal to the headless run's step there.
+    assert all(k in eng.cache for k in range(0, len(results), every))
+    for k in (0, every * 3, (len(results) - 1) // every * every):
+        _same_frame(eng.cache.get(k), results[k])
+    # It never restores, so it keeps no snapshot but the first.
+    assert eng._ahead.snapshot_steps == [0]
+
+
+def test_seek_near_lands_on_the_kept_frame_at_or_before_the_target(squares_scene):
+    rec, cmap = squares_scene
+    results = _headless(rec, cmap)
+    eng = TrackerEngine(rec, cmap, cache=FrameCacheConfig(every_ms=25.0))  # every 5 steps
+    eng.step()
+    while eng.prefetch(50):
+        pass
+    k = 37
+    f = eng.seek_near(results[k].t_us)
+    assert f.index == 35 and np.array_equal(f.pose, results[35].pose)
+    assert len(eng.history) == 36 and all(np.array_equal(h.pose, r.pose) for h, r in zip(eng.history, results))
+    # Stepping on from a kept frame is exact: the step after it and the one before it.
+    f = eng.step()
+    assert f.index == 36 and np.array_equal(f.pose, results[36].pose)
+    f = eng.seek_step(34)
+    assert f.index == 34 and np.array_equal(f.pose, results[34].pose)
+
+
+def test_seek_past_the_run_ahead_steps_there_and_keeps_the_grid_frame(squares_scene):
+    rec, cmap = squares_scene
+    results = _headless(rec, cmap)
+    eng = TrackerEngine(rec, cmap, cache=FrameCacheConfig(every_ms=25.0))
+    eng.step()
+    eng.prefetch(10)
+    f = eng.seek_near(results[62].t_us)
+    assert f.index == 60 and np.array_equal(f.pose, results[60].pose)
+    assert 60 in eng.cache
+    assert [s.index for s in eng.history] == list(range(61))
+
+
+def test_playback_strides_show_kept_frames_with_a_complete_history(squares_scene):
+    rec, cmap = squares_scene
+    results = _headless(rec, cmap)
+    eng = TrackerEngine(rec, cmap, cache=FrameCacheConfig(every_ms=25.0))
+    eng.step()
+    shown = []
+    while (f := eng.play_step(7)) is not None:
+        shown.append(f.index)
+        assert np.array_equal(f.pose, results[f.index].pose)
+        if len(shown) == 3:
+            while eng.prefetch(50):  # from here on, frames come from the cache
+                pass
+    assert shown[0] == 5 and all(0 < b - a <= 7 for a, b in zip(shown, shown[1:]))
+    assert shown[-1] == len(results) - 1
+    assert all(np.array_equal(h.pose, r.pose) for h, r in zip(eng.history, results))
+    traj = eng.trajectory()
+    assert len(traj) > 0 and traj.t[-1] == results[-1].t_us
+
+
+def test_a_tiny_budget_keeps_the_frames_nearest_the_shown_step(squares_scene):
+    rec, cmap = squares_scene
+    eng = TrackerEngine(rec, cmap, cache=FrameCacheConfig(every_ms=5.0, budget_mb=1.0))
+    eng.step()
+    while eng.prefetch(50):
+        pass
+    assert 0 < eng.cache.nbytes <= eng.cache.budget + max(1, eng.cache.nbytes // max(len(eng.cache), 1))
+    assert len(eng.cache) < eng.n_steps and eng.cache.evicted > 0
+    assert 0 in eng.cache or 1 in eng.cache  # the shown step is 0: the frames kept are the nearest to it
+
+
+def test_a_jump_past_the_run_ahead_is_made_by_the_run_ahead_and_kept(squares_scene):
+    rec, cmap = squares_scene
+    results = _headless(rec, cmap)
+    eng = TrackerEngine(rec, cmap)  # every step kept
+    eng.step()
+    eng.prefetch(5)
+    f = eng.seek(results[70].t_us)
+    assert f.index == 70 and eng.frontier == 71
+    assert all(k in eng.cache for k in range(71))  # every step on the way can now be shown at once
+    f = eng.seek(results[33].t_us)
+    assert f.index == 33 and np.array_equal(f.pose, results[33].pose) and eng.session.step_count <= 1
+
+
+def test_the_run_ahead_started_late_does_not_hold_back_the_shown_session(squares_scene):
+    rec, cmap = squares_scene
+    results = _headless(rec, cmap)
+    eng = TrackerEngine(rec, cmap)
+    f = eng.seek(results[40].t_us)  # no run-ahead yet: the shown session steps there
+    eng.prefetch(3)  # the run-ahead starts at step 0, far behind
+    f = eng.step()
+    assert f.index == 41 and np.array_equal(f.pose, results[41].pose) and eng.frontier == 3

@@ -1,0 +1,115 @@
+"""T_align: the SP-TS seen through each map point's patch and predicted polarity (the polarity event filter)."""
+
+import numpy as np
+
+from evpose.core.events import EventArray
+from evpose.frontend.distance_field import DistanceFieldConfig, TemporalDistanceField
+from evpose.frontend.noise_filter import NEVER_US
+from evpose.frontend.time_surface import SeparatedTimeSurface, TimeSurfaceConfig
+from evpose.fusion.aligned_surface import AlignedTimeSurface
+from evpose.fusion.polarity import classify_events
+
+W, H = 64, 48
+K = np.array([[50.0, 0, 32.0], [0, 50.0, 24.0], [0, 0, 1]])
+DEPTH = 2.0
+
+
+def _points_at(uv):
+    """World points (camera at the origin looking along +z) that project to pixel positions ``uv``."""
+    uv = np.asarray(uv, np.float64).reshape(-1, 2)
+    return np.c_[(uv[:, 0] - K[0, 2]) / K[0, 0] * DEPTH, (uv[:, 1] - K[1, 2]) / K[1, 1] * DEPTH, np.full(len(uv), DEPTH)]
+
+
+def _events(xs, ys, ps, t0=1000):
+    n = len(xs)
+    return EventArray.from_arrays(t=np.arange(t0, t0 + n, dtype=np.int64), x=np.asarray(xs, np.uint16), y=np.asarray(ys, np.uint16),
+                                  p=np.asarray(ps, np.int8))
+
+
+def _surface(ev):
+    s = SeparatedTimeSurface(TimeSurfaceConfig(), W, H)
+    s.update(ev)
+    return s
+
+
+def test_patch_reads_only_the_predicted_polarity_and_nothing_outside_patches():
+    # ON event at (10, 10), OFF event at (11, 10), both near a point predicted ON; an ON event far from any point.
+    ev = _events([10, 11, 40], [10, 10, 30], [1, -1, 1])
+    s = _surface(ev)
+    a = AlignedTimeSurface(W, H).compose(s, _points_at([(10.5, 10.0)]), np.eye(4), K, np.array([1], np.int8), 3.0, None, ev)
+    last = a.last_of(0)
+    assert last[10, 10] == s.last_of(1)[10, 10]
+    assert last[10, 11] == NEVER_US  # OFF event hidden: the point predicts ON
+    assert last[30, 40] == NEVER_US  # no map point near: not shown to registration
+    assert a.last_counts["events_polarity_judged"] == 3
+    assert a.last_counts["events_outside_patches"] == 1
+    assert a.last_counts["events_wrong_polarity"] == 1
+    assert a.last_counts["events_polarity_removed"] == 2
+
+
+def test_buffer_zone_point_keeps_both_polarities():
+    ev = _events([10, 11], [10, 10], [1, -1])
+    s = _surface(ev)
+    a = AlignedTimeSurface(W, H).compose(s, _points_at([(10.5, 10.0)]), np.eye(4), K, np.array([0], np.int8), 3.0, None, ev)
+    assert a.last_of(0)[10, 10] == s.last_of(0)[10, 10] and a.last_of(0)[10, 11] == s.last_of(0)[10, 11]
+    assert a.last_counts["events_polarity_removed"] == 0
+
+
+def test_overlapping_patches_take_the_nearest_points_polarity():
+    # An ON point at column 10 and an OFF point at column 16, patches of 5 px overlap in between.
+    ev = _events([12, 12, 14, 14], [20, 20, 20, 20], [1, -1, 1, -1])
+    s = _surface(ev)
+    pts = _points_at([(10.0, 20.0), (16.0, 20.0)])
+    a = AlignedTimeSurface(W, H).compose(s, pts, np.eye(4), K, np.array([1, -1], np.int8), 5.0, None, ev)
+    assert a.accept[20, 12] == 1 and a.accept[20, 14] == 2
+    assert a.last_of(0)[20, 12] == s.last_of(1)[20, 12]
+    assert a.last_of(0)[20, 14] == s.last_of(-1)[20, 14]
+
+
+def test_distance_field_over_aligned_surface_is_one_outside_patches():
+    ev = _events([10, 40], [10, 30], [1, 1], t0=5000)
+    s = _surface(ev)
+    a = AlignedTimeSurface(W, H).compose(s, _points_at([(10.0, 10.0)]), np.eye(4), K, np.array([1], np.int8), 3.0, None)
+    f = TemporalDistanceField(DistanceFieldConfig(blur_px=0), W, H)
+    f.compute(a, 5010, (0,), None, curvature=False)
+    img = f.image(0)
+    assert img[10, 10] < 0.01
+    assert img[30, 40] == 1.0
+
+
+def test_classify_agrees_with_classify_events_at_the_same_pose():
+    rng = np.random.default_rng(3)
+    uv = np.stack([rng.uniform(5, W - 5, 30), rng.uniform(5, H - 5, 30)], 1)
+    pol = rng.integers(-1, 2, 30).astype(np.int8)
+    ev = _events(rng.integers(0, W, 400), rng.integers(0, H, 400), rng.choice([-1, 1], 400))
+    a = AlignedTimeSurface(W, H).compose(_surface(ev), _points_at(uv), np.eye(4), K, pol, 4.0, None)
+    label, point = a.classify(ev, 2.0)
+    ref_label, ref_point = classify_events(ev.x, ev.y, ev.p, uv, pol, 2.0, W, H)
+    # Equidistant points may be resolved differently; everything else matches.
+    assert np.mean(label == ref_label) > 0.98 and np.mean(point == ref_point) > 0.98
+
+
+def test_compose_is_deterministic_and_stateless():
+    ev = _events([10, 11, 20], [10, 10, 20], [1, -1, -1])
+    s = _surface(ev)
+    pts = _points_at([(10.0, 10.0), (20.0, 20.0)])
+    pol = np.array([1, -1], np.int8)
+    a = AlignedTimeSurface(W, H)
+    a.compose(s, _points_at([(40.0, 30.0), (12.0, 11.0)]), np.eye(4), K, np.array([0, -1], np.int8), 6.0, None, ev)  # an earlier step
+    again = a.compose(s, pts, np.eye(4), K, pol, 3.0, (0, 30, 0, 30), ev)
+    fresh = AlignedTimeSurface(W, H).compose(s, pts, np.eye(4), K, pol, 3.0, (0, 30, 0, 30), ev)
+    assert np.array_equal(again.last_of(0), fresh.last_of(0)) and np.array_equal(again.accept, fresh.accept)
+    assert again.last_counts == fresh.last_counts
+
+
+def test_points_whose_patch_shows_no_recent_accepted_event_are_marked_empty():
+    # Point 0: a fresh ON event in its patch. Point 1: only an OFF event (it predicts ON). Point 2: an ON event
+    # 50 ms old (5 eta). Point 3: nothing.
+    s = SeparatedTimeSurface(TimeSurfaceConfig(eta_ms=10.0), W, H)
+    s.update(_events([30], [40], [1], t0=10_000))
+    s.update(_events([10, 20], [10, 10], [1, -1], t0=59_000))
+    pts = _points_at([(10.0, 10.0), (20.0, 10.0), (30.0, 40.0), (50.0, 30.0)])
+    a = AlignedTimeSurface(W, H).compose(s, pts, np.eye(4), K, np.array([1, 1, 1, 1], np.int8), 3.0, None,
+                                         t_us=60_000, empty_after_eta=3.0)
+    assert a.point_has_events.tolist() == [True, False, False, False]
+    assert a.last_counts["points_with_events"] == 1

@@ -1,0 +1,121 @@
+import gtsam
+import numpy as np
+import pytest
+
+from evpose.fusion import fixed_lag
+from evpose.fusion.config import FusionConfig
+from evpose.fusion.factor_graph import FactorGraphFusion
+from evpose.fusion.fixed_lag import CopyableFixedLagSmoother, keys_to_reeliminate, parse_bayes_tree
+
+from fusion_helpers import WHITE, make_motion, noisy_registrations
+
+X = gtsam.symbol_shorthand.X
+
+
+def _dot(*cliques, edges=()):
+    """A dot text as ISAM2.dot prints it: cliques as (id, label), edges as (parent id, child id)."""
+    lines = ["digraph G{"] + [f'{i}[label="{label}"];' for i, label in cliques] + [f"{a}->{b}" for a, b in edges] + ["}"]
+    return "\n".join(lines)
+
+
+def test_bayes_tree_is_parsed_from_the_dot_text_of_isam2():
+    isam = gtsam.ISAM2(gtsam.ISAM2Params())
+    graph, values = gtsam.NonlinearFactorGraph(), gtsam.Values()
+    noise = gtsam.noiseModel.Isotropic.Sigma(6, 0.1)
+    graph.add(gtsam.PriorFactorPose3(X(0), gtsam.Pose3(), noise))
+    values.insert(X(0), gtsam.Pose3())
+    for i in range(1, 4):
+        graph.add(gtsam.BetweenFactorPose3(X(i - 1), X(i), gtsam.Pose3(), noise))
+        values.insert(X(i), gtsam.Pose3())
+    isam.update(graph, values)
+    cliques, children, owner = parse_bayes_tree(isam.dot())
+    assert sorted(owner) == ["x0", "x1", "x2", "x3"]
+    assert sum(len(f) for f, _ in cliques.values()) == 4
+    roots = [c for c in cliques if not cliques[c][1]]
+    assert len(roots) == 1 and sum(len(v) for v in children.values()) == len(cliques) - 1
+
+
+def test_keys_to_reeliminate_marks_cliques_that_keep_a_marginalised_key_from_being_a_leaf():
+    chain = _dot(("3", "x3, x2"), ("1", "x1 : x2"), ("0", "x0 : x1"), edges=(("3", "1"), ("1", "0")))
+    assert keys_to_reeliminate(chain, {"x0"}) == set()  # already a leaf
+    # x1's child depends on it and holds a kept key: both cliques are re-eliminated.
+    assert keys_to_reeliminate(chain, {"x1"}) == {"x1", "x0"}
+    assert keys_to_reeliminate(chain, {"x1", "x0"}) == set()  # the whole subtree goes
+    # A kept key eliminated before the marginalised one in the same clique.
+    mixed = _dot(("3", "x3"), ("2", "x2, x1 : x3"), edges=(("3", "2"),))
+    assert keys_to_reeliminate(mixed, {"x1"}) == {"x2", "x1"}
+
+
+def test_the_leaf_fast_path_agrees_with_the_full_analysis():
+    chain = _dot(("13", "x3, x2"), ("11", "x1 : x2"), ("10", "x0 : x1"), edges=(("13", "11"), ("11", "10")))
+    assert fixed_lag._only_in_leaf_cliques(chain, {10: "x0"})
+    assert not fixed_lag._only_in_leaf_cliques(chain, {11: "x1"})
+    assert not fixed_lag._only_in_leaf_cliques(chain.replace("10[", "99["), {10: "x0"})  # unknown naming: full analysis
+
+
+class _GtsamSmootherFusion(FactorGraphFusion):
+    def _new_smoother(self):
+        s = super()._new_smoother()
+        return gtsam.IncrementalFixedLagSmoother(s.lag, s.params)
+
+
+@pytest.mark.parametrize("window", [3, 8])
+def test_estimates_equal_gtsam_incremental_fixed_lag_smoother_bit_for_bit(window, calibration, monkeypatch):
+    marked = []
+    full = fixed_lag.keys_to_reeliminate
+    monkeypatch.setattr(fixed_lag, "keys_to_reeliminate", lambda dot, m: marked.append(full(dot, m)) or marked[-1])
+    m = make_motion(duration_s=1.3, imu_rate_hz=500.0, acc_bias=(0.08, -0.05, 0.1), gyro_bias=(0.01, -0.02, 0.015),
+                    accel_noise_density=2e-3, gyro_noise_density=1.7e-4, seed=2)
+    times = m.config.t0_us + np.arange(5000, 1_250_000, 5000)
+    _, regs, cov = noisy_registrations(m, calibration.T_cam_imu, times, 0.005, np.radians(0.3), seed=3)
+    rng = np.random.default_rng(4)
+    for k in range(len(regs)):
+        if rng.random() < 0.03:
+            regs[k] = regs[k].copy()
+            regs[k][:3, 3] += rng.normal(0, 0.1, 3)  # a gross outlier
+    regs = [None if 80 <= k < 110 else T for k, T in enumerate(regs)]  # a tracking loss
+    cfg = FusionConfig(window_states=window, reoptimize_every=3, **WHITE)
+    fused = []
+    for cls in (FactorGraphFusion, _GtsamSmootherFusion):
+        f = cls(cfg, calibration)
+        f.add_imu(m.imu())
+        t0 = m.config.t0_us
+        f.initialize(t0, m.camera_trajectory([t0], calibration.T_cam_imu).matrix(0), m.camera_velocity([t0], calibration.T_cam_imu)[0])
+        fused.append([f.update(int(t), regs[k], cov) for k, t in enumerate(times)])
+    for a, b in zip(*fused):
+        assert np.array_equal(a.T_world_cam, b.T_world_cam) and np.array_equal(a.velocity_world, b.velocity_world)
+        assert np.array_equal(a.acc_bias, b.acc_bias) and np.array_equal(a.covariance, b.covariance)
+    assert any(marked), "the run never needed extra re-elimination: the helper went untested"
+
+
+def test_a_copy_is_independent_and_continues_identically():
+    noise = gtsam.noiseModel.Isotropic.Sigma(6, 0.1)
+    params = gtsam.ISAM2Params()
+    s = CopyableFixedLagSmoother(3.0, params)
+    graph, values = gtsam.NonlinearFactorGraph(), gtsam.Values()
+    graph.add(gtsam.PriorFactorPose3(X(0), gtsam.Pose3(), noise))
+    values.insert(X(0), gtsam.Pose3())
+    s.update(graph, values, {X(0): 0.0})
+    step = gtsam.Pose3(gtsam.Rot3.Rz(0.1), np.array([0.3, 0.0, 0.05]))
+
+    def add(sm, i):
+        g, v = gtsam.NonlinearFactorGraph(), gtsam.Values()
+        g.add(gtsam.BetweenFactorPose3(X(i - 1), X(i), step, noise))
+        g.add(gtsam.PriorFactorPose3(X(i), gtsam.Pose3(gtsam.Rot3.Rz(0.1 * i), np.array([0.3 * i, 0.01 * i, 0.0])), noise))
+        v.insert(X(i), sm.calculateEstimatePose3(X(i - 1)).compose(step))
+        sm.update(g, v, {X(i): float(i)})
+
+    for i in range(1, 8):
+        add(s, i)
+    c = s.copy()
+    before = c.calculateEstimatePose3(X(7)).matrix()
+    for i in range(8, 12):
+        add(s, i)
+    assert np.array_equal(c.calculateEstimatePose3(X(7)).matrix(), before)  # the original moved on, the copy did not
+    del s
+    d = c.copy()
+    for i in range(8, 12):
+        add(c, i)
+        add(d, i)
+        assert np.array_equal(c.calculateEstimatePose3(X(i)).matrix(), d.calculateEstimatePose3(X(i)).matrix())
+    assert not c.isam.valueExists(X(7))  # lag 3: marginalised

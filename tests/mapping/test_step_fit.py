@@ -1,0 +1,56 @@
+"""Step fits: a straight albedo edge recovered from sparse noisy points; noise does not look like an edge."""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from evpose.mapping.step_fit import fit_step_lines, local_steps, side_contrast
+
+
+def _edge_points(seed, density=400.0, step=0.5, noise=0.03):
+    rng = np.random.default_rng(seed)
+    n = int(4 * density)
+    pts = rng.random((n, 2)) * 2.0
+    inten = np.where(pts[:, 0] > 1.0, 0.2 + step, 0.2) + rng.normal(0.0, noise, n)
+    return pts, inten
+
+
+def test_straight_edge_is_recovered_from_an_offset_tilted_chain():
+    errors = []
+    for seed in range(5):
+        pts, inten = _edge_points(seed)
+        y = np.arange(0.5, 1.5, 0.01)
+        chain = np.stack([1.03 + 0.03 * (y - 1.0), y], axis=1)
+        normals = np.tile([1.0, 0.0], (y.size, 1))
+        spacing = 0.47 / np.sqrt(400.0)
+        p, n, fitted = fit_step_lines(chain, normals, pts, inten, cKDTree(pts), eps=2 * spacing, min_points=18,
+                                      half_across=2.5 * spacing, width=0.5 * spacing)
+        assert fitted.all()
+        assert np.all(n[:, 0] > 0.99)  # still dark -> bright
+        errors.append(np.abs(p[:, 0] - 1.0).max())
+    assert np.median(errors) < 0.01 and max(errors) < 0.03
+
+
+def test_side_contrast_separates_an_edge_from_noise():
+    pts, inten = _edge_points(1)
+    y = np.arange(0.3, 1.7, 0.01)
+    normals = np.tile([1.0, 0.0], (y.size, 1))
+    tree = cKDTree(pts)
+    on_edge = np.stack([np.full(y.size, 1.0), y], axis=1)
+    step, t = side_contrast(on_edge, normals, pts, inten, tree, 0.06, 0.005)
+    assert abs(step - 0.5) < 0.05 and t > 20
+    off_edge = np.stack([np.full(y.size, 1.5), y], axis=1)  # inside the bright half: no edge
+    step, t = side_contrast(off_edge, normals, pts, inten, tree, 0.06, 0.005)
+    assert abs(step) < 0.03 and abs(t) < 6
+
+
+def test_local_steps_drop_where_a_chain_leaves_the_edge():
+    pts, inten = _edge_points(2)
+    y = np.arange(0.2, 1.8, 0.01)
+    x = np.where(y < 1.0, 1.0, 1.6)  # on the edge, then 60 cm into the bright side
+    chain = np.stack([x, y], axis=1)
+    normals = np.tile([1.0, 0.0], (y.size, 1))
+    local = local_steps(chain, normals, pts, inten, cKDTree(pts), 0.06, 0.005, 8)
+    assert np.nanmedian(local[y < 0.9]) > 0.4
+    assert np.nanmedian(local[y > 1.1]) < 0.05
