@@ -457,5 +457,30 @@ def bench_snapshot_restore(ctx) -> dict:
     return out
 
 
+def bench_imu_buffer(ctx) -> dict:
+    """IMU buffering per tracker update (issue 7): ``ImuBuffer.add`` of a 300 Hz step's samples from a 1 kHz IMU plus
+    the ``pieces`` of its span, after 3 s, 1 min and 10 min of buffered samples (it must not grow with the run)."""
+    from evpose.core.imu import ImuSamples
+    from evpose.fusion.preintegration import ImuBuffer
+
+    rng = np.random.default_rng(ctx.seed)
+    out = {"load_average_1min": os.getloadavg()[0]}
+    for label, minutes in (("3s", 0.05), ("1min", 1.0)) + ((() if ctx.quick else (("10min", 10.0),))):
+        n = int(minutes * 60_000)
+        t = np.arange(n + 1100, dtype=np.int64) * 1000
+        imu = ImuSamples.from_arrays(t, rng.normal(size=(t.size, 3)), rng.normal(size=(t.size, 3)))
+        buf = ImuBuffer()
+        buf.add(imu[:n])
+        cpu = []
+        for k in range(300):
+            i0, i1 = n + k * 10 // 3, n + (k + 1) * 10 // 3
+            c0 = time.thread_time()
+            buf.add(imu[i0:i1])
+            buf.pieces(int(t[i0 - 2]), int(t[i1 - 1]) - 300)
+            cpu.append((time.thread_time() - c0) * 1e3)
+        out.update(latency_summary(cpu, f"step_cpu_{label}_"))
+    return out
+
+
 BENCHMARKS = {"backends": bench_backends, "polarity_sim": bench_polarity_sim, "ego_motion_dynamic": bench_ego_motion_dynamic,
-              "ablation": bench_ablation, "snapshot_restore": bench_snapshot_restore}
+              "ablation": bench_ablation, "snapshot_restore": bench_snapshot_restore, "imu_buffer": bench_imu_buffer}

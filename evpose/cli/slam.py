@@ -53,7 +53,7 @@ def main(
     from evpose.slam.config import SlamConfig, SlamMode
     from evpose.slam.config_io import config_to_dict, load_slam_config
     from evpose.slam.inertial import InertialConfiguration
-    from evpose.slam.system import run_slam
+    from evpose.slam.run import run_slam
 
     try:
         slam_mode = SlamMode(mode)

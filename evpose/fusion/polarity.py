@@ -117,6 +117,7 @@ def _geometric_kernel(P, nw, R_cw, t_wc, omega, v_c, fx, fy, f_mean, buf_deg, fl
 
     The numpy version spends ~0.7 ms per tracker update on ~40 small-array operations for 1500 points;
     this loop does the same arithmetic (same formulas, NaN propagation and comparisons) in ~20 us.
+    ``angle`` / ``speed`` / ``buffer`` may be float32: each float64 result is then rounded once, as ``astype`` would.
     """
     for i in range(P.shape[0]):
         d0 = P[i, 0] - t_wc[0]
@@ -156,6 +157,61 @@ def _geometric_kernel(P, nw, R_cw, t_wc, omega, v_c, fx, fy, f_mean, buf_deg, fl
         geometric[i] = (1 if ang > 90.0 else -1) if ok else 0
 
 
+@nb.njit(cache=True)
+def _sign_kernel(geometric, brightness_sign, point_index, use_index, votes, min_votes, overrides, enabled, out):
+    """Per point: the brightness sign (the map's, or the learned one of :meth:`PolarityPredictor.learned_sign` where
+    the map has none or ``overrides``) times the sign-+1 prediction; all 0 when not ``enabled``.
+
+    One pass instead of ~12 numpy operations (lookup, thresholds, ``where``, casts) per tracker update.
+    """
+    n_votes = votes.shape[0]
+    for i in range(geometric.shape[0]):
+        s = brightness_sign[i]
+        if use_index:
+            k = point_index[i]
+            learned = 0
+            if k < n_votes:
+                if k < 0:
+                    k += n_votes  # numpy's negative indexing, as the array lookup of learned_sign does
+                v = votes[k]
+                if abs(v) >= min_votes:
+                    learned = 1 if v > 0 else (-1 if v < 0 else 0)
+            if learned != 0 and (s == 0 or overrides):
+                s = learned
+        out[i] = geometric[i] * s if enabled else 0
+
+
+@nb.njit(cache=True)
+def _votes_needed(point_index, observed, geometric):
+    """1 + the largest point index with a non-zero vote ``observed * geometric`` (0: no vote)."""
+    need = 0
+    for i in range(point_index.shape[0]):
+        if np.int32(observed[i]) * np.int32(geometric[i]) != 0 and point_index[i] + 1 > need:
+            need = point_index[i] + 1
+    return need
+
+
+@nb.njit(cache=True)
+def _add_votes(point_index, observed, geometric, votes):
+    """``votes[point_index] += observed * geometric`` in order (repeated indices accumulate, as ``np.add.at``)."""
+    for i in range(point_index.shape[0]):
+        vote = np.int32(observed[i]) * np.int32(geometric[i])
+        if vote != 0:
+            votes[point_index[i]] += vote
+
+
+@nb.njit(cache=True)
+def _majority_polarity(point, p, out):
+    """Sign of the summed polarities of the events assigned to each point (``point`` < 0: unassigned)."""
+    score = np.zeros(out.shape[0], np.int64)
+    for i in range(point.shape[0]):
+        k = point[i]
+        if k >= 0:
+            score[k] += p[i]
+    for k in range(out.shape[0]):
+        out[k] = 1 if score[k] > 0 else (-1 if score[k] < 0 else 0)
+
+
 class PolarityPredictor:
     """Predicts ON/OFF per visible map point and learns unknown brightness signs online."""
 
@@ -174,27 +230,27 @@ class PolarityPredictor:
         N = P.shape[0]
         T = np.asarray(T_world_cam, np.float64)
         R_cw = np.ascontiguousarray(T[:3, :3].T)
-        angle = np.empty(N)
-        speed = np.empty(N)
-        buffer = np.empty(N)
+        angle = np.empty(N, np.float32)
+        speed = np.empty(N, np.float32)
+        buffer = np.empty(N, np.float32)
         geometric = np.empty(N, np.int8)
         _geometric_kernel(P, np.ascontiguousarray(edge_normal_world, np.float64).reshape(-1, 3), R_cw, np.ascontiguousarray(T[:3, 3]),
                           np.asarray(omega_cam, np.float64).reshape(3), R_cw @ np.asarray(v_world, np.float64).reshape(3),
                           float(K[0, 0]), float(K[1, 1]), float(0.5 * (K[0, 0] + K[1, 1])), float(c.buffer_deg), float(c.flow_sigma_px_s),
                           float(c.max_buffer_deg), float(c.min_image_speed_px_s), float(c.min_gradient_visibility), angle, speed, buffer, geometric)
-        sign = np.asarray(brightness_sign, np.int8).reshape(N).copy()
-        if point_index is not None:
-            point_index = np.asarray(point_index, np.int64).reshape(N)
-            learned = self.learned_sign(point_index)
-            take = (learned != 0) & ((sign == 0) | c.learned_overrides_map)
-            sign = np.where(take, learned, sign).astype(np.int8)
         # The kernel: image direction of the normal and motion field (:func:`image_motion`), speed, angle,
         # adaptive buffer; foreshortening = image length of the unit normal relative to one parallel to the
         # image plane; brightness constancy: opposed gradient and motion (angle > 90 deg) -> ON for a +1 sign.
-        pol = (geometric * sign).astype(np.int8) if c.enabled else np.zeros(N, np.int8)
+        # Then the sign: the map's, or the learned one (see learned_sign) where the map has none or it overrides.
+        if point_index is not None:
+            point_index = np.ascontiguousarray(point_index, np.int64).reshape(N)
+        pol = np.empty(N, np.int8)
+        _sign_kernel(geometric, np.ascontiguousarray(brightness_sign, np.int8).reshape(N),
+                     point_index if point_index is not None else np.zeros(0, np.int64), point_index is not None, self._votes,
+                     int(c.learn_min_votes), bool(c.learned_overrides_map), bool(c.enabled), pol)
         self._last_index = point_index
         self._last_geometric = geometric
-        self.last = PolarityPrediction(pol, angle.astype(np.float32), speed.astype(np.float32), buffer.astype(np.float32), geometric)
+        self.last = PolarityPrediction(pol, angle, speed, buffer, geometric)
         return self.last
 
     def predict(self, points_world, edge_normal_world, brightness_sign, T_world_cam, omega_cam, v_world, K,
@@ -233,17 +289,13 @@ class PolarityPredictor:
             pos = np.clip(pos, 0, max(order.size - 1, 0))
             found = (order.size > 0) & (self._last_index[order[pos]] == idx) if order.size else np.zeros(idx.shape, bool)
             geo = np.where(found, self._last_geometric[order[pos]] if order.size else 0, 0)
-        vote = (obs.astype(np.int32) * geo.astype(np.int32))
-        use = vote != 0
-        if not use.any():
+        geo = np.ascontiguousarray(geo, np.int8)
+        need = int(_votes_needed(idx, obs, geo))
+        if need == 0:
             return
-        need = int(idx[use].max()) + 1
         if need > self._votes.shape[0]:
             self._votes = np.concatenate([self._votes, np.zeros(need - self._votes.shape[0], np.int32)])
-        if idx.size < 2 or bool(np.all(idx[1:] > idx[:-1])):
-            self._votes[idx[use]] += vote[use]  # strictly increasing indices are unique: a plain scatter-add is exact
-        else:
-            np.add.at(self._votes, idx[use], vote[use])
+        _add_votes(idx, obs, geo, self._votes)
 
     def snapshot(self) -> dict:
         return {"votes": self._votes.copy(),
@@ -322,11 +374,15 @@ def classify_events(x, y, p, projected_uv, predicted_polarity, radius_px: float,
 
 def observed_point_polarity(point, p, n_points: int) -> np.ndarray:
     """Majority polarity of the events assigned to each point (from :func:`classify_events`), 0 if none or tied."""
-    point = np.asarray(point, np.int64)
-    p = np.asarray(p, np.int64)
-    m = point >= 0
-    score = np.bincount(point[m], weights=p[m], minlength=n_points)
-    return np.sign(score).astype(np.int8)
+    point = np.ascontiguousarray(point).ravel()
+    p = np.ascontiguousarray(p).ravel()
+    if point.dtype.kind not in "iu" or p.dtype.kind not in "iu":  # not labels and event polarities: weighted counts
+        point, p = point.astype(np.int64), p.astype(np.float64)
+        m = point >= 0
+        return np.sign(np.bincount(point[m], weights=p[m], minlength=n_points)).astype(np.int8)
+    out = np.empty(max(int(n_points), int(point.max()) + 1 if point.size else 0), np.int8)  # bincount's length
+    _majority_polarity(point, p, out)  # integer sums: the same signs as the float bincount, without its copies
+    return out
 
 
 def filter_summary(label: np.ndarray) -> dict:

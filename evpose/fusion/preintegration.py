@@ -46,9 +46,14 @@ class ImuBuffer:
 
     def __init__(self, time_offset_us: int = 0):
         self.time_offset_us = int(time_offset_us)
-        self._chunks: list[ImuSamples] = []
-        self._merged: ImuSamples = ImuSamples.empty()
-        self._dirty = False
+        # Samples live in arrays with spare capacity (doubled when full): appending a step's few samples costs
+        # the same however long the run, where re-concatenating the whole buffer grew with it. Only indices
+        # >= the count are ever written, so the views handed out by ``samples`` (kept by snapshots) never change.
+        self._t = np.zeros(0, np.int64)
+        self._acc = np.zeros((0, 3))
+        self._gyro = np.zeros((0, 3))
+        self._n = 0
+        self._view: ImuSamples = ImuSamples.empty()
         self.version = next(_VERSIONS)
         """Changes whenever the buffered samples change, unique across buffers (keys caches of integrals over them)."""
 
@@ -56,44 +61,54 @@ class ImuBuffer:
         """Append samples given on the IMU clock; samples not newer than the last one kept are ignored (overlapping chunks)."""
         if len(imu) == 0:
             return
+        t = imu.t.astype(np.int64) - self.time_offset_us
+        if not _valid_chunk(t, imu.acc, imu.gyro):  # one pass; _reject names the first bad sample
+            self._reject(imu, t)
+        # t increases, so the samples newer than the last kept one are a suffix.
+        first = 0 if self._n == 0 else int(np.searchsorted(t, self._t[self._n - 1], side="right"))
+        if first >= t.shape[0]:
+            return
+        n = self._n + t.shape[0] - first
+        if n > self._t.shape[0]:
+            cap = max(n, 2 * self._t.shape[0], 64)
+            for name, dtype in (("_t", np.int64), ("_acc", np.float64), ("_gyro", np.float64)):
+                old = getattr(self, name)
+                grown = np.empty((cap,) + old.shape[1:], dtype)
+                grown[: self._n] = old[: self._n]
+                setattr(self, name, grown)
+        self._t[self._n : n] = t[first:]
+        self._acc[self._n : n] = imu.acc[first:]
+        self._gyro[self._n : n] = imu.gyro[first:]
+        self._n = n
+        self._view = ImuSamples(self._t[:n], self._acc[:n], self._gyro[:n])
+        self.version = next(_VERSIONS)
+
+    @staticmethod
+    def _reject(imu: ImuSamples, t: np.ndarray) -> None:
         if not (np.isfinite(imu.acc).all() and np.isfinite(imu.gyro).all()):
             bad = int(np.flatnonzero(~(np.isfinite(imu.acc).all(1) & np.isfinite(imu.gyro).all(1)))[0])
             raise InputError(None, "NaN or infinite value", f"IMU sample {bad}")
-        t = imu.t.astype(np.int64) - self.time_offset_us
-        if np.any(np.diff(t) <= 0):
-            i = int(np.flatnonzero(np.diff(t) <= 0)[0]) + 1
-            raise InputError(None, f"timestamp {int(imu.t[i])} us does not increase", f"IMU sample {i}")
-        last = self.t_last_us
-        keep = t > last if last is not None else np.ones(t.shape, bool)
-        if not keep.any():
-            return
-        self._chunks.append(ImuSamples(t[keep], imu.acc[keep], imu.gyro[keep]))
-        self._dirty = True
-        self.version = next(_VERSIONS)
+        i = int(np.flatnonzero(np.diff(t) <= 0)[0]) + 1
+        raise InputError(None, f"timestamp {int(imu.t[i])} us does not increase", f"IMU sample {i}")
 
     @property
     def samples(self) -> ImuSamples:
-        if self._dirty:
-            parts = ([self._merged] if len(self._merged) else []) + self._chunks
-            self._merged = ImuSamples(*(np.concatenate([getattr(p, c) for p in parts]) for c in ("t", "acc", "gyro")))
-            self._chunks = []
-            self._dirty = False
-        return self._merged
+        return self._view
 
     @property
     def t_last_us(self) -> int | None:
-        if self._chunks:
-            return int(self._chunks[-1].t[-1])
-        return int(self._merged.t[-1]) if len(self._merged) else None
+        return int(self._t[self._n - 1]) if self._n else None
 
     def __len__(self) -> int:
-        return len(self.samples)
+        return self._n
 
     def set_samples(self, samples: ImuSamples) -> None:
         """Replace the buffer with samples already on the camera clock (used by restore)."""
-        self._merged = samples
-        self._chunks = []
-        self._dirty = False
+        # Adopted without a copy and without spare capacity: the next add reallocates, so nothing written
+        # later can reach arrays the caller (e.g. a snapshot shared with another buffer) still holds.
+        self._t, self._acc, self._gyro = samples.t, samples.acc, samples.gyro
+        self._n = len(samples)
+        self._view = samples
         self.version = next(_VERSIONS)
 
     def measurement_at(self, t_us: float) -> tuple[np.ndarray, np.ndarray]:
@@ -118,15 +133,13 @@ class ImuBuffer:
             raise InputError(None, "no IMU samples to integrate", f"span {t0_us}..{t1_us} us")
         i0 = int(np.searchsorted(s.t, t0_us, side="right"))
         i1 = int(np.searchsorted(s.t, t1_us, side="left"))
-        bounds = np.concatenate([[t0_us], s.t[i0:i1], [t1_us]]).astype(np.float64)
-        mids = 0.5 * (bounds[:-1] + bounds[1:])
         # Interpolate on the samples bracketing [t0, t1] only (t[lo] <= t0, t[hi - 1] >= t1): the same
         # brackets, so the same values as over the whole buffer, at a cost that does not grow with it.
         lo, hi = max(i0 - 1, 0), min(i1 + 1, len(s))
-        ts = s.t[lo:hi].astype(np.float64)
-        acc = np.stack([np.interp(mids, ts, s.acc[lo:hi, k]) for k in range(3)], axis=1)
-        gyro = np.stack([np.interp(mids, ts, s.gyro[lo:hi, k]) for k in range(3)], axis=1)
-        return np.diff(bounds) * 1e-6, acc, gyro
+        n = i1 - i0 + 1
+        dts, acc, gyro = np.empty(n), np.empty((n, 3)), np.empty((n, 3))
+        _pieces_kernel(s.t, s.acc, s.gyro, int(t0_us), int(t1_us), i0, i1, lo, hi, dts, acc, gyro)
+        return dts, acc, gyro
 
     def integrate(self, pim, t0_us: int, t1_us: int) -> None:
         """Add the IMU motion of ``[t0, t1]`` (camera clock) to a gtsam preintegration object.
@@ -147,6 +160,71 @@ class ImuBuffer:
         for k in range(dts.shape[0]):
             if dts[k] > 0:
                 pim.integrateMeasurement(acc[k], gyro[k], float(dts[k]))
+
+
+@nb.njit(cache=True)
+def _valid_chunk(t, acc, gyro):
+    """All measurements finite and timestamps strictly increasing (``ImuBuffer.add``'s checks in one pass)."""
+    for i in range(t.shape[0]):
+        for k in range(3):
+            if not (np.isfinite(acc[i, k]) and np.isfinite(gyro[i, k])):
+                return False
+        if i > 0 and t[i] <= t[i - 1]:
+            return False
+    return True
+
+
+@nb.njit(cache=True)
+def _interp(x, xp, fp, k):
+    """``np.interp(x, xp, fp[:, k])`` for one ``x``, step for step as numpy's C loop (binary search for
+    ``xp[j] <= x < xp[j + 1]``, exact ends, the same slope and NaN fallbacks), so the values are bit-identical."""
+    n = xp.shape[0]
+    if n == 1:
+        return fp[0, k]  # numpy: left / right default to the only value, and so does x == xp[0]
+    if x != x:
+        return x
+    if x < xp[0]:
+        return fp[0, k]
+    if x > xp[n - 1]:
+        return fp[n - 1, k]
+    if x == xp[n - 1]:
+        return fp[n - 1, k]
+    a, b = 0, n - 1  # xp[a] <= x < xp[b]
+    while b - a > 1:
+        m = (a + b) >> 1
+        if xp[m] <= x:
+            a = m
+        else:
+            b = m
+    j = a
+    if xp[j] == x:
+        return fp[j, k]
+    slope = (fp[j + 1, k] - fp[j, k]) / (xp[j + 1] - xp[j])
+    r = slope * (x - xp[j]) + fp[j, k]
+    if r != r:
+        r = slope * (x - xp[j + 1]) + fp[j + 1, k]
+        if r != r and fp[j, k] == fp[j + 1, k]:
+            r = fp[j, k]
+    return r
+
+
+@nb.njit(cache=True)
+def _pieces_kernel(t, acc_s, gyro_s, t0, t1, i0, i1, lo, hi, dts, acc, gyro):
+    """:meth:`ImuBuffer.pieces` in one pass: bounds ``[t0, t[i0:i1], t1]`` (as float64), piece durations in s and the
+    samples in ``[lo, hi)`` interpolated at the piece midpoints (the numpy version: ~15 array operations per call)."""
+    ts = t[lo:hi].astype(np.float64)
+    fa = acc_s[lo:hi]
+    fg = gyro_s[lo:hi]
+    n = dts.shape[0]
+    prev = np.float64(t0)
+    for i in range(n):
+        nxt = np.float64(t1) if i == n - 1 else np.float64(t[i0 + i])
+        mid = 0.5 * (prev + nxt)
+        dts[i] = (nxt - prev) * 1e-6
+        for k in range(3):
+            acc[i, k] = _interp(mid, ts, fa, k)
+            gyro[i, k] = _interp(mid, ts, fg, k)
+        prev = nxt
 
 
 @nb.njit(cache=True)

@@ -16,6 +16,7 @@ configurations, ``config.inertial.configuration``: E-I-C1 (a new map when lost),
 from evpose.slam.config import SlamConfig, SlamMode
 from evpose.slam.inertial import InertialConfiguration
 from evpose.slam.step_result import SlamStatus, SlamStepResult
-from evpose.slam.system import EventSlam, SlamRun, run_slam
+from evpose.slam.run import SlamRun, run_slam
+from evpose.slam.system import EventSlam
 
 __all__ = ["EventSlam", "InertialConfiguration", "SlamConfig", "SlamMode", "SlamRun", "SlamStatus", "SlamStepResult", "run_slam"]

@@ -111,10 +111,13 @@ class MciConfig:
     """H2: Sim(2) warp fitted to the feature tracks."""
     use_pose_prior: bool = True
     """H3: SE(3) warp from the IMU / last-pose prior with the average depth of eq. (5)."""
-    keep_hypothesis_survival: float = field(default=0.5, metadata={"min": 0.0, "max": 1.0, "step": 0.05, "unit": "ratio"})
+    keep_hypothesis_survival: float = field(default=0.25, metadata={"min": 0.0, "max": 1.0, "step": 0.05, "unit": "ratio"})
     """When the sharpest hypothesis differs from the previous MCI's and KLT keeps fewer than this share of the tracks on
     it, the previous hypothesis's image is tracked instead and kept if more tracks survive (a warped and an unwarped
-    image of the same events differ in blur and offset, and KLT's forward-backward check fails across them; 0 disables), ratio."""
+    image of the same events differ in blur and offset, and KLT's forward-backward check fails across them; 0 disables).
+    On the simulated indoor scene (seeds 0, 1) 0.25 raised the tracked time from 40 % / 35 % to 49 % / 47 %; on landing
+    (seeds 0-3) three runs were unchanged, one split into two maps. 0.5 tracks longer indoors (60 % / 57 %) but changed
+    landing more, ratio."""
 
 
 @dataclass

@@ -4,6 +4,12 @@ Everything runs in one thread in a fixed order (the paper's implementation uses
 threads and is, by its own README, unstable); OpenCV's RANSAC generator is
 re-seeded before every call, so a run repeats bit for bit.
 
+Associations are KLT tracks; when the sharpest MCI hypothesis differs from the
+previous MCI's and KLT fails on it, the previous hypothesis's image is tracked
+instead (``MciConfig.keep_hypothesis_survival``). Optionally
+(``SlamConfig.search``), untracked local-map points are re-found by projection
+and patch search after each pose estimate (:mod:`evpose.slam.projection_search`).
+
 Event-inertial mode adds: the gyro rotation between MCIs as a prior of pose
 tracking (and, before the IMU initialisation, loosely, of the visual local BA),
 the IMU initialisation on keyframes thinned in time, a full inertial BA right
@@ -22,8 +28,7 @@ from scipy.spatial.transform import Rotation
 from evpose.core.camera import CameraCalibration
 from evpose.core.events import EventArray
 from evpose.core.imu import ImuSamples
-from evpose.core.recording import Recording
-from evpose.core.trajectory import Trajectory, invert_pose
+from evpose.core.trajectory import invert_pose
 from evpose.errors import InputError
 from evpose.slam.atlas import Atlas, Keyframe, MapPoint, SlamMap
 from evpose.slam.bundle_adjustment import local_bundle_adjustment
@@ -505,37 +510,3 @@ class EventSlam:
 def _imu_init_due(m: SlamMap, cfg) -> bool:
     kfs = m.keyframes
     return len(kfs) >= cfg.init_keyframes and (kfs[-1].t_us - kfs[0].t_us) / 1e6 >= cfg.init_min_span_s
-
-
-@dataclass
-class SlamRun:
-    """Everything a run produced."""
-
-    results: list[SlamStepResult]
-    """One per processed MCI."""
-    atlas: Atlas
-    duration_s: float
-    """Span of the recording's events, seconds."""
-    wall_s: float
-    """Wall time of the run, seconds."""
-
-    def trajectories(self) -> list[Trajectory]:
-        return self.atlas.trajectories()
-
-
-def run_slam(recording: Recording, config: SlamConfig, chunk_us: int = 5000, slam: EventSlam | None = None) -> SlamRun:
-    """Run SLAM over a whole recording, feeding events in ``chunk_us`` slices."""
-    if recording.calibration is None:
-        raise InputError(recording.source, "the recording has no camera calibration; SLAM needs one")
-    slam = slam or EventSlam(config, recording.calibration, recording.imu)
-    ev = recording.events
-    t_start = time.perf_counter()
-    if len(ev):
-        t0, t1 = int(ev.t[0]), int(ev.t[-1])
-        edges = np.arange(t0, t1 + chunk_us, chunk_us, dtype=np.int64)
-        idx = np.searchsorted(ev.t, edges, side="left")
-        idx[-1] = len(ev)
-        for a, b in zip(idx[:-1], idx[1:]):
-            if b > a:
-                slam.step(ev[a:b])
-    return SlamRun(slam.results, slam.atlas, ev.duration_us / 1e6, time.perf_counter() - t_start)

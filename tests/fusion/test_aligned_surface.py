@@ -113,3 +113,20 @@ def test_points_whose_patch_shows_no_recent_accepted_event_are_marked_empty():
                                          t_us=60_000, empty_after_eta=3.0)
     assert a.point_has_events.tolist() == [True, False, False, False]
     assert a.last_counts["points_with_events"] == 1
+
+
+def test_compose_after_the_generation_tags_wrap_equals_a_fresh_one():
+    import evpose.fusion.aligned_surface as aligned
+
+    ev = _events([10, 11, 20], [10, 10, 20], [1, -1, -1])
+    s = _surface(ev)
+    pts = _points_at([(10.0, 10.0), (20.0, 20.0)])
+    pol = np.array([1, -1], np.int8)
+    a = AlignedTimeSurface(W, H)
+    a.compose(s, _points_at([(12.0, 11.0), (30.0, 30.0)]), np.eye(4), K, np.array([0, 1], np.int8), 6.0, None, ev)
+    a._gen = aligned._MAX_GENERATION  # the next compose wraps the tags around
+    again = a.compose(s, pts, np.eye(4), K, pol, 3.0, None, ev)
+    fresh = AlignedTimeSurface(W, H).compose(s, pts, np.eye(4), K, pol, 3.0, None, ev)
+    assert np.array_equal(again.last_of(0), fresh.last_of(0)) and np.array_equal(again.accept, fresh.accept)
+    assert again.last_counts == fresh.last_counts
+    assert all(np.array_equal(x, y) for x, y in zip(again.classify(ev, 2.0), fresh.classify(ev, 2.0)))

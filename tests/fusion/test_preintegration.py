@@ -117,3 +117,32 @@ def test_buffer_version_changes_with_its_samples():
     assert buf.version == v1 != v0
     buf.set_samples(imu)
     assert buf.version != v1 and ImuBuffer().version not in (v0, v1, buf.version)
+
+
+def test_buffer_appends_in_place_without_changing_samples_handed_out_or_adopted():
+    rng = np.random.default_rng(7)
+    t = np.cumsum(rng.integers(900, 1100, 300)).astype(np.int64)
+    imu = ImuSamples.from_arrays(t, rng.normal(size=(300, 3)), rng.normal(size=(300, 3)))
+    whole = ImuBuffer()
+    whole.add(imu)
+    buf = ImuBuffer()
+    views = []
+    for i in range(0, 300, 3):
+        buf.add(imu[max(i - 1, 0) : i + 3])  # overlapping chunks: the repeated sample is ignored
+        views.append((len(buf.samples), buf.samples, buf.samples.acc.copy()))
+    assert np.array_equal(buf.samples.t, whole.samples.t) and np.array_equal(buf.samples.acc, whole.samples.acc)
+    assert all(len(v) == n and np.array_equal(v.acc, acc) for n, v, acc in views)  # later appends never wrote into them
+    adopted = views[10][1]  # the first 33 samples
+    before = adopted.acc.copy()
+    other = ImuBuffer()
+    other.set_samples(adopted)
+    other.add(imu[30:60])
+    assert np.array_equal(adopted.acc, before) and len(adopted) == 33
+    assert np.array_equal(other.samples.t, imu.t[:60]) and np.array_equal(other.samples.gyro, imu.gyro[:60])
+
+
+def test_pieces_of_a_single_sample_buffer_hold_it():
+    buf = ImuBuffer()
+    buf.add(ImuSamples.from_arrays(np.array([5000]), [[1.0, 2.0, 3.0]], [[0.1, 0.2, 0.3]]))
+    dts, acc, gyro = buf.pieces(1000, 9000)
+    assert np.array_equal(dts, [0.004, 0.004]) and np.array_equal(acc, [[1.0, 2.0, 3.0]] * 2) and np.array_equal(gyro, [[0.1, 0.2, 0.3]] * 2)

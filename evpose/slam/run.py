@@ -1,0 +1,50 @@
+"""Running SLAM over a whole recording: events fed in fixed slices, everything the run produced."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from evpose.core.recording import Recording
+from evpose.core.trajectory import Trajectory
+from evpose.errors import InputError
+from evpose.slam.atlas import Atlas
+from evpose.slam.config import SlamConfig
+from evpose.slam.step_result import SlamStepResult
+from evpose.slam.system import EventSlam
+
+
+@dataclass
+class SlamRun:
+    """Everything a run produced."""
+
+    results: list[SlamStepResult]
+    """One per processed MCI."""
+    atlas: Atlas
+    duration_s: float
+    """Span of the recording's events, seconds."""
+    wall_s: float
+    """Wall time of the run, seconds."""
+
+    def trajectories(self) -> list[Trajectory]:
+        return self.atlas.trajectories()
+
+
+def run_slam(recording: Recording, config: SlamConfig, chunk_us: int = 5000, slam: EventSlam | None = None) -> SlamRun:
+    """Run SLAM over a whole recording, feeding events in ``chunk_us`` slices."""
+    if recording.calibration is None:
+        raise InputError(recording.source, "the recording has no camera calibration; SLAM needs one")
+    slam = slam or EventSlam(config, recording.calibration, recording.imu)
+    ev = recording.events
+    t_start = time.perf_counter()
+    if len(ev):
+        t0, t1 = int(ev.t[0]), int(ev.t[-1])
+        edges = np.arange(t0, t1 + chunk_us, chunk_us, dtype=np.int64)
+        idx = np.searchsorted(ev.t, edges, side="left")
+        idx[-1] = len(ev)
+        for a, b in zip(idx[:-1], idx[1:]):
+            if b > a:
+                slam.step(ev[a:b])
+    return SlamRun(slam.results, slam.atlas, ev.duration_us / 1e6, time.perf_counter() - t_start)
