@@ -207,15 +207,12 @@ class EventSlam:
 
     def _gyro_flow(self, t0_us: int, t1_us: int, uv: np.ndarray) -> np.ndarray | None:
         """Where the gyro rotation alone moves ``uv`` between two MCIs (the infinite homography ``K R^T K^-1``): KLT's start."""
-        if self.imu is None or not self.cfg.inertial.klt_gyro_prediction:
+        if not self.cfg.inertial.klt_gyro_prediction:
             return None
-        m = self.atlas.active
-        bias = m.inertial.bias_gyro if m is not None and m.imu_initialised and m.inertial is not None else None
-        off = self.calib.time_offset_us
-        dR = gyro_delta_rotation(self.imu, int(t0_us) + off, int(t1_us) + off, bias)
-        if dR is None:
+        dR_cam = self._gyro_camera_delta(t0_us, t1_us)
+        if dR_cam is None:
             return None
-        H = self.K @ camera_delta_rotation(dR, self.calib.T_cam_imu).T @ np.linalg.inv(self.K)
+        H = self.K @ dR_cam.T @ np.linalg.inv(self.K)
         q = np.c_[uv.astype(np.float64), np.ones(len(uv))] @ H.T
         return (q[:, :2] / q[:, 2:3]).astype(np.float32)
 
@@ -325,15 +322,18 @@ class EventSlam:
     # ------------------------------------------------------------- tracking
     def _gyro_rotation(self, t0_us: int, t1_us: int, T_wc0: np.ndarray) -> np.ndarray | None:
         """Camera orientation at ``t1`` predicted from ``T_wc0`` at ``t0`` by the gyro (event-inertial mode), else None."""
+        dR_cam = self._gyro_camera_delta(t0_us, t1_us)
+        return None if dR_cam is None else T_wc0[:3, :3] @ dR_cam
+
+    def _gyro_camera_delta(self, t0_us: int, t1_us: int) -> np.ndarray | None:
+        """Camera rotation from ``t0`` to ``t1`` integrated from the gyro (bias-corrected once the IMU is initialised), else None."""
         if self.imu is None:
             return None
         m = self.atlas.active
         bias = m.inertial.bias_gyro if m is not None and m.imu_initialised and m.inertial is not None else None
         off = self.calib.time_offset_us
         dR = gyro_delta_rotation(self.imu, int(t0_us) + off, int(t1_us) + off, bias)
-        if dR is None:
-            return None
-        return T_wc0[:3, :3] @ camera_delta_rotation(dR, self.calib.T_cam_imu)
+        return None if dR is None else camera_delta_rotation(dR, self.calib.T_cam_imu)
 
     def _keyframe_rotation_priors(self, m: SlamMap) -> dict | None:
         """Gyro rotations between consecutive keyframes of the BA window (event-inertial mode), else None."""

@@ -40,6 +40,25 @@ class VisibleMapConfig:
     low objects: 0.15 kept the far bottom edges of 0.4-0.7 m crates seen from 4 m."""
 
 
+@nb.njit(cache=True, inline="always")
+def _in_view(points, i, R_cw, t_cw, fx, fy, cx, cy, margin, umax, vmax, zmin, zmax):
+    """(inside, u, v, Z) of map point ``i``: depth first, then each image coordinate only if the previous
+    test passed (most points of a superset fail one of them)."""
+    px = points[i, 0]
+    py = points[i, 1]
+    pz = points[i, 2]
+    Z = R_cw[2, 0] * px + R_cw[2, 1] * py + R_cw[2, 2] * pz + t_cw[2]
+    if not (Z > zmin and Z < zmax):
+        return False, 0.0, 0.0, Z
+    X = R_cw[0, 0] * px + R_cw[0, 1] * py + R_cw[0, 2] * pz + t_cw[0]
+    u = fx * X / Z + cx
+    if not (u >= -margin and u <= umax):
+        return False, u, 0.0, Z
+    Y = R_cw[1, 0] * px + R_cw[1, 1] * py + R_cw[1, 2] * pz + t_cw[1]
+    v = fy * Y / Z + cy
+    return (v >= -margin and v <= vmax), u, v, Z
+
+
 @nb.njit(cache=True)
 def _cull_kernel(points, R_cw, t_cw, fx, fy, cx, cy, width, height, margin, zmin, zmax, occlusion, cell, tol, out_idx):
     n = points.shape[0]
@@ -53,21 +72,8 @@ def _cull_kernel(points, R_cw, t_cw, fx, fy, cx, cy, width, height, margin, zmin
     vmax = height - 1 + margin
     m = 0
     for i in range(n):
-        px = points[i, 0]
-        py = points[i, 1]
-        pz = points[i, 2]
-        # Depth first, then each image coordinate only if the previous test passed: most points of a
-        # superset fail one of them. Same expressions as before, so the same points survive.
-        Z = R_cw[2, 0] * px + R_cw[2, 1] * py + R_cw[2, 2] * pz + t_cw[2]
-        if not (Z > zmin and Z < zmax):
-            continue
-        X = R_cw[0, 0] * px + R_cw[0, 1] * py + R_cw[0, 2] * pz + t_cw[0]
-        u = fx * X / Z + cx
-        if not (u >= -margin and u <= umax):
-            continue
-        Y = R_cw[1, 0] * px + R_cw[1, 1] * py + R_cw[1, 2] * pz + t_cw[1]
-        v = fy * Y / Z + cy
-        if not (v >= -margin and v <= vmax):
+        inside, u, v, Z = _in_view(points, i, R_cw, t_cw, fx, fy, cx, cy, margin, umax, vmax, zmin, zmax)
+        if not inside:
             continue
         # floor(a / cell) instead of Python's float ``a // cell`` (an fmod per call, 3x slower overall):
         # equal for a >= 0 (guaranteed here) when cell is a power of two (the default 8 px); for other
@@ -172,19 +178,7 @@ def _block_cull_kernel(points, centres, radii, block, R_cw, t_cw, fx, fy, cx, cy
             if umin_b > umax + 1.0 or umax_b < -margin - 1.0 or vmin_b > vmax + 1.0 or vmax_b < -margin - 1.0:
                 continue
         for i in range(b * block, min((b + 1) * block, n)):
-            px = points[i, 0]
-            py = points[i, 1]
-            pz = points[i, 2]
-            Z = R_cw[2, 0] * px + R_cw[2, 1] * py + R_cw[2, 2] * pz + t_cw[2]
-            if not (Z > zmin and Z < zmax):
-                continue
-            X = R_cw[0, 0] * px + R_cw[0, 1] * py + R_cw[0, 2] * pz + t_cw[0]
-            u = fx * X / Z + cx
-            if not (u >= -margin and u <= umax):
-                continue
-            Y = R_cw[1, 0] * px + R_cw[1, 1] * py + R_cw[1, 2] * pz + t_cw[1]
-            v = fy * Y / Z + cy
-            if not (v >= -margin and v <= vmax):
+            if not _in_view(points, i, R_cw, t_cw, fx, fy, cx, cy, margin, umax, vmax, zmin, zmax)[0]:
                 continue
             out_idx[out] = i
             out += 1
