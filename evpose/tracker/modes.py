@@ -3,16 +3,17 @@
 ================  ====================  ==============================  =================
 mode              pose prediction       field registration reads        output pose
 ================  ====================  ==============================  =================
-``stpe``          constant velocity     combined TDF                    registration
-``stpe+filter``   constant velocity     ``T_align`` (polarity filter)   registration
+``stpe``          Kalman, const. vel.   combined TDF                    registration
+``stpe+filter``   Kalman, const. vel.   ``T_align`` (polarity filter)   registration
 ``full``          IMU fusion backend    ``T_align`` (polarity filter)   fused
 ================  ====================  ==============================  =================
 
 The polarity filter predicts each used map point's polarity from the IMU
 motion (:class:`~evpose.fusion.polarity.MapPolaritySelector`) and builds
 ``T_align`` (:mod:`evpose.fusion.aligned_surface`): per point patch only the
-events of the predicted polarity, nothing outside the patches; points whose
-patch shows no recent event are not registered. ``polarity.event_filter =
+events of the predicted polarity, nothing outside the patches (with
+``polarity.drop_empty_points``, points whose patch shows no recent event are
+not registered; off by default, see its docstring). ``polarity.event_filter =
 False`` keeps the older per-point ON/OFF/combined fields over the whole box.
 
 In ``stpe+filter`` a fusion backend still runs beside the registration, because
