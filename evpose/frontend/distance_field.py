@@ -146,6 +146,21 @@ def _derivatives_kernel(img, r0, c0, curvature, gu, gv, huu, huv, hvv):
 
 
 @nb.njit(cache=True, inline="always")
+def _bilinear_weights(u, v, r1, c1):
+    """(x0, y0, w00, w01, w10, w11): top-left pixel of the 2x2 cell holding (u, v), clamped into a box ending at
+    row ``r1`` / column ``c1``, and the bilinear weights of its four pixels."""
+    x0 = int(u)
+    y0 = int(v)
+    if x0 > c1 - 2:
+        x0 = c1 - 2
+    if y0 > r1 - 2:
+        y0 = r1 - 2
+    a = u - x0
+    b = v - y0
+    return x0, y0, (1.0 - a) * (1.0 - b), a * (1.0 - b), (1.0 - a) * b, a * b
+
+
+@nb.njit(cache=True, inline="always")
 def bilinear_sample(value, gx, gy, box, slot, u, v):
     """(tdf, dtdf/du, dtdf/dv, inside) at sub-pixel (u=column, v=row) of ``slot``.
 
@@ -158,18 +173,7 @@ def bilinear_sample(value, gx, gy, box, slot, u, v):
     c1 = box[3]
     if not (u >= c0 and v >= r0 and u <= c1 - 1.0 and v <= r1 - 1.0) or r1 - r0 < 2 or c1 - c0 < 2:
         return 1.0, 0.0, 0.0, False
-    x0 = int(u)
-    y0 = int(v)
-    if x0 > c1 - 2:
-        x0 = c1 - 2
-    if y0 > r1 - 2:
-        y0 = r1 - 2
-    a = u - x0
-    b = v - y0
-    w00 = (1.0 - a) * (1.0 - b)
-    w01 = a * (1.0 - b)
-    w10 = (1.0 - a) * b
-    w11 = a * b
+    x0, y0, w00, w01, w10, w11 = _bilinear_weights(u, v, r1, c1)
     f = w00 * value[slot, y0, x0] + w01 * value[slot, y0, x0 + 1] + w10 * value[slot, y0 + 1, x0] + w11 * value[slot, y0 + 1, x0 + 1]
     fx = w00 * gx[slot, y0, x0] + w01 * gx[slot, y0, x0 + 1] + w10 * gx[slot, y0 + 1, x0] + w11 * gx[slot, y0 + 1, x0 + 1]
     fy = w00 * gy[slot, y0, x0] + w01 * gy[slot, y0, x0 + 1] + w10 * gy[slot, y0 + 1, x0] + w11 * gy[slot, y0 + 1, x0 + 1]
@@ -179,18 +183,7 @@ def bilinear_sample(value, gx, gy, box, slot, u, v):
 @nb.njit(cache=True, inline="always")
 def bilinear_sample_curvature(hess, box, slot, u, v):
     """(d2/du2, d2/dudv, d2/dv2) of ``slot`` at a sub-pixel point already known to be inside ``box``."""
-    x0 = int(u)
-    y0 = int(v)
-    if x0 > box[3] - 2:
-        x0 = box[3] - 2
-    if y0 > box[1] - 2:
-        y0 = box[1] - 2
-    a = u - x0
-    b = v - y0
-    w00 = (1.0 - a) * (1.0 - b)
-    w01 = a * (1.0 - b)
-    w10 = (1.0 - a) * b
-    w11 = a * b
+    x0, y0, w00, w01, w10, w11 = _bilinear_weights(u, v, box[1], box[3])
     out0 = w00 * hess[0, slot, y0, x0] + w01 * hess[0, slot, y0, x0 + 1] + w10 * hess[0, slot, y0 + 1, x0] + w11 * hess[0, slot, y0 + 1, x0 + 1]
     out1 = w00 * hess[1, slot, y0, x0] + w01 * hess[1, slot, y0, x0 + 1] + w10 * hess[1, slot, y0 + 1, x0] + w11 * hess[1, slot, y0 + 1, x0 + 1]
     out2 = w00 * hess[2, slot, y0, x0] + w01 * hess[2, slot, y0, x0 + 1] + w10 * hess[2, slot, y0 + 1, x0] + w11 * hess[2, slot, y0 + 1, x0 + 1]
@@ -221,18 +214,7 @@ def bilinear_curvature_from_value(value, box, slot, u, v):
     r1 = box[1]
     c0 = box[2]
     c1 = box[3]
-    x0 = int(u)
-    y0 = int(v)
-    if x0 > c1 - 2:
-        x0 = c1 - 2
-    if y0 > r1 - 2:
-        y0 = r1 - 2
-    a = u - x0
-    b = v - y0
-    w00 = (1.0 - a) * (1.0 - b)
-    w01 = a * (1.0 - b)
-    w10 = (1.0 - a) * b
-    w11 = a * b
+    x0, y0, w00, w01, w10, w11 = _bilinear_weights(u, v, r1, c1)
     img = value[slot]
     p00 = _second_differences(img, r0, r1, c0, c1, y0, x0)
     p01 = _second_differences(img, r0, r1, c0, c1, y0, x0 + 1)

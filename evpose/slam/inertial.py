@@ -90,15 +90,14 @@ class Preintegrated:
     """Position delta without gravity (3,), m."""
 
 
-def preintegrate(imu: ImuSamples, t0_us: int, t1_us: int, gyro_bias: np.ndarray | None = None) -> Preintegrated:
-    """Integrate the samples covering ``[t0, t1)`` (sample-and-hold, clipped at both ends)."""
+def preintegrated_measurements(imu: ImuSamples, t0_us: int, t1_us: int, bias, acc_sigma: float, gyro_sigma: float):
+    """gtsam preintegration of the samples covering ``[t0, t1)`` (sample-and-hold, clipped at both ends) with ``bias``."""
     import gtsam
 
     params = gtsam.PreintegrationParams.MakeSharedU(GRAVITY)
-    params.setAccelerometerCovariance(np.eye(3) * 1e-4)
-    params.setGyroscopeCovariance(np.eye(3) * 1e-6)
+    params.setAccelerometerCovariance(np.eye(3) * acc_sigma**2)
+    params.setGyroscopeCovariance(np.eye(3) * gyro_sigma**2)
     params.setIntegrationCovariance(np.eye(3) * 1e-8)
-    bias = gtsam.imuBias.ConstantBias(np.zeros(3), np.zeros(3) if gyro_bias is None else np.asarray(gyro_bias, np.float64))
     pim = gtsam.PreintegratedImuMeasurements(params, bias)
     i0 = max(int(np.searchsorted(imu.t, t0_us, side="right")) - 1, 0)
     i1 = int(np.searchsorted(imu.t, t1_us, side="left"))
@@ -107,6 +106,16 @@ def preintegrate(imu: ImuSamples, t0_us: int, t1_us: int, gyro_bias: np.ndarray 
         b = min(int(imu.t[k + 1]) if k + 1 < len(imu) else t1_us, t1_us)
         if b > a:
             pim.integrateMeasurement(imu.acc[k], imu.gyro[k], (b - a) / 1e6)
+    return pim
+
+
+def preintegrate(imu: ImuSamples, t0_us: int, t1_us: int, gyro_bias: np.ndarray | None = None) -> Preintegrated:
+    """Integrate the samples covering ``[t0, t1)`` (sample-and-hold, clipped at both ends)."""
+    import gtsam
+
+    bias = gtsam.imuBias.ConstantBias(np.zeros(3), np.zeros(3) if gyro_bias is None else np.asarray(gyro_bias, np.float64))
+    # The noise densities shape only the deltas' covariance, which this summary does not return.
+    pim = preintegrated_measurements(imu, t0_us, t1_us, bias, 1e-2, 1e-3)
     return Preintegrated(pim.deltaTij(), pim.deltaRij().matrix(), np.asarray(pim.deltaVij()), np.asarray(pim.deltaPij()))
 
 

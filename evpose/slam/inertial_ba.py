@@ -15,7 +15,7 @@ import numpy as np
 from evpose.core.imu import ImuSamples
 from evpose.core.trajectory import invert_pose
 from evpose.slam.atlas import SlamMap
-from evpose.slam.inertial import GRAVITY
+from evpose.slam.inertial import GRAVITY, preintegrated_measurements  # noqa: F401 - re-exported
 
 
 @dataclass
@@ -28,25 +28,6 @@ class InertialState:
     """Accelerometer bias (3,), m/s^2."""
     bias_gyro: np.ndarray
     """Gyroscope bias (3,), rad/s."""
-
-
-def preintegrated_measurements(imu: ImuSamples, t0_us: int, t1_us: int, bias, acc_sigma: float, gyro_sigma: float):
-    """gtsam preintegration of the samples covering ``[t0, t1)`` (sample-and-hold, clipped at both ends) with ``bias``."""
-    import gtsam
-
-    params = gtsam.PreintegrationParams.MakeSharedU(GRAVITY)
-    params.setAccelerometerCovariance(np.eye(3) * acc_sigma**2)
-    params.setGyroscopeCovariance(np.eye(3) * gyro_sigma**2)
-    params.setIntegrationCovariance(np.eye(3) * 1e-8)
-    pim = gtsam.PreintegratedImuMeasurements(params, bias)
-    i0 = max(int(np.searchsorted(imu.t, t0_us, side="right")) - 1, 0)
-    i1 = int(np.searchsorted(imu.t, t1_us, side="left"))
-    for k in range(i0, max(i1, i0 + 1)):
-        a = max(int(imu.t[k]), t0_us)
-        b = min(int(imu.t[k + 1]) if k + 1 < len(imu) else t1_us, t1_us)
-        if b > a:
-            pim.integrateMeasurement(imu.acc[k], imu.gyro[k], (b - a) / 1e6)
-    return pim
 
 
 def inertial_local_bundle_adjustment(m: SlamMap, state: InertialState, K: np.ndarray, imu: ImuSamples, T_cam_imu: np.ndarray, time_offset_us: int,
