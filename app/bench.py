@@ -56,13 +56,25 @@ def demo_pair(work_dir: Path, seconds: float = 10.0) -> tuple[Path, Path]:
     return rec, cmap
 
 
+def _cache_dir(work_dir: Path, clear: bool = False) -> Path:
+    """The disk cache the benchmark's viewers use (inside ``work_dir``); ``clear`` empties it for a cold start."""
+    import shutil
+
+    d = Path(work_dir) / "viewer_cache"
+    if clear:
+        shutil.rmtree(d, ignore_errors=True)
+    return d
+
+
 def _viewer(rec: Path, cmap: Path, work_dir: Path, prefetch: bool = True):
     """The viewer as ``evpose app`` serves it (run-ahead on unless ``prefetch`` is False), with the pair loaded."""
+    from app.disk_cache import DiskCacheConfig
     from app.player import PlayerConfig
     from app.server import AppConfig, ViewerApp
 
     app = ViewerApp(AppConfig(data=sorted({rec.parent.resolve(), cmap.parent.resolve()}), port=_free_port(),
-                              export_dir=work_dir / "exports", player=PlayerConfig(prefetch=prefetch)))
+                              export_dir=work_dir / "exports", player=PlayerConfig(prefetch=prefetch),
+                              disk_cache=DiskCacheConfig(directory=_cache_dir(work_dir))))
     rec_entry = next(e for e in app.entries if e.path == rec.resolve())
     map_entry = next(e for e in app.entries if e.path == cmap.resolve())
     if not app.select(rec_entry.display, map_entry.display):
@@ -122,25 +134,39 @@ def _play(app, meter: DrawMeter, seconds: float) -> dict:
     """Play at 1x from the start for ``seconds`` of wall time; what the viewer achieved."""
     app.player.seek(app.recording.t_start_us)
     app.player.wait_idle(600)
+    # Media seconds already computed when playing starts (the run-ahead works while the browser opens).
+    ready = app.player.call(lambda e: getattr(e, "ready_steps", getattr(e, "frontier", 0)) * (getattr(e, "step_us", 0) or 0) / 1e6).result(60)
     meter.reset()
     t_media0 = app.last_frame.t_us
     frames0 = app.frames_published
     cpu0, kids0, load0 = *_cpu_s(), os.getloadavg()[0]
     t0 = time.perf_counter()
     app.player.play()
-    time.sleep(seconds)
+    # Until ``seconds`` have passed or playback stopped at the end of the recording (then only until then).
+    time.sleep(0.5)
+    while time.perf_counter() - t0 < seconds and app.player.state.value == "playing":
+        time.sleep(0.05)
+    wall = time.perf_counter() - t0
     app.player.pause()
     app.player.wait_idle(600)
-    wall = time.perf_counter() - t0
     cpu1, kids1 = _cpu_s()
     media = (app.last_frame.t_us - t_media0) / 1e6
-    out = {"wall_s": wall, "media_s": media, "real_time_factor": media / wall,
+    out = {"ready_media_s_at_start": ready, "wall_s": wall, "media_s": media, "real_time_factor": media / wall,
            "ui_frames_per_s": (app.frames_published - frames0) / wall,
            "server_cpu_s": cpu1 - cpu0, "browser_cpu_s": kids1 - kids0, "loadavg_1min": [load0, os.getloadavg()[0]]}
     if meter.wall_ms:
         out.update(draw_wall_median_ms=float(np.median(meter.wall_ms)), draw_wall_p95_ms=float(np.percentile(meter.wall_ms, 95)),
                    draw_cpu_median_ms=float(np.median(meter.cpu_ms)))
     return out
+
+
+def _paused_browser_cpu(app, seconds: float) -> float:
+    """CPU seconds per second the attached browser uses while the viewer is paused (and the run-ahead done)."""
+    app.player.pause()
+    app.player.wait_idle(600)
+    _, kids0 = _cpu_s()
+    time.sleep(seconds)
+    return (_cpu_s()[1] - kids0) / seconds
 
 
 def _wait_run_ahead(app, timeout_s: float = 1800.0) -> float:
@@ -180,6 +206,7 @@ def bench_playback(ctx) -> dict:
 
     seconds = PLAY_SECONDS or (4.0 if ctx.quick else 8.0)
     rec, cmap = demo_pair(Path(ctx.work_dir))
+    _cache_dir(Path(ctx.work_dir), clear=True)
     t_load = time.perf_counter()
     app = _viewer(rec, cmap, Path(ctx.work_dir))
     out: dict = {"recording": str(rec)}
@@ -194,6 +221,18 @@ def bench_playback(ctx) -> dict:
             if cache:
                 out["frame_cache"] = {"frames": cache[0], "mb": cache[1] / 2**20, "every_steps": cache[2]}
             out["warm"] = _play(app, meter, seconds)
+            out["paused_browser_cpu_s_per_s"] = _paused_browser_cpu(app, 3.0)
+            browser.close()
+    finally:
+        app.stop()
+    # A second opening of the same recording, map and configuration: read back from the disk cache.
+    app = _viewer(rec, cmap, Path(ctx.work_dir))
+    try:
+        with sync_playwright() as p:
+            browser = _attach_browser(p, app)
+            # Steps read back (0 if the code under the key changed since the cold run, e.g. a colleague's edit).
+            read = app.player.call(lambda e: getattr(e, "disk_steps", None)).result(60)
+            out["from_disk"] = {"disk_steps_read": read, **_play(app, DrawMeter(app.player), seconds)}
             browser.close()
     finally:
         app.stop()
@@ -211,21 +250,22 @@ def bench_seek(ctx) -> dict:
     rec_path, map_path = demo_pair(Path(ctx.work_dir))
     n = N_SEEKS or (4 if ctx.quick else 10)
     rng = np.random.default_rng(ctx.seed)
+    _cache_dir(Path(ctx.work_dir), clear=True)
     app = _viewer(rec_path, map_path, Path(ctx.work_dir))
     out: dict = {"recording": str(rec_path)}
+
+    def timed_seek(meter, t):
+        meter.drawn.clear()
+        t0 = time.perf_counter()
+        app.player.seek(int(t))
+        meter.drawn.wait(600)
+        app.player.wait_idle(600)
+        return (time.perf_counter() - t0) * 1e3
+
     try:
         rec = app.recording
         span = rec.t_end_us - rec.t_start_us
         out["duration_s"] = span / 1e6
-
-        def timed_seek(meter, t):
-            meter.drawn.clear()
-            t0 = time.perf_counter()
-            app.player.seek(int(t))
-            meter.drawn.wait(600)
-            app.player.wait_idle(600)
-            return (time.perf_counter() - t0) * 1e3
-
         with sync_playwright() as p:
             browser = _attach_browser(p, app)
             meter = DrawMeter(app.player)
@@ -250,10 +290,55 @@ def bench_seek(ctx) -> dict:
             browser.close()
     finally:
         app.stop()
+    # A second opening (same recording, map, configuration): seeks right after loading, answered from the disk cache.
+    app = _viewer(rec_path, map_path, Path(ctx.work_dir))
+    try:
+        with sync_playwright() as p:
+            browser = _attach_browser(p, app)
+            meter = DrawMeter(app.player)
+            read = app.player.call(lambda e: getattr(e, "disk_steps", None)).result(60)
+            load0 = os.getloadavg()[0]
+            targets = rec.t_start_us + (rng.random(n) * span).astype(np.int64)
+            far = timed_seek(meter, rec.t_start_us + int(0.95 * span))
+            lat = [timed_seek(meter, t) for t in targets]
+            frontier = app.player.call(lambda e: getattr(e, "frontier", None)).result(60)
+            out["from_disk"] = {"disk_steps_read": read, "far_seek_ms": far, **latency_summary(lat + [far], prefix="seek_"),
+                                "run_ahead_frontier_after": frontier, "loadavg_1min": [load0, os.getloadavg()[0]]}
+            browser.close()
+    finally:
+        app.stop()
     return out
 
 
-BENCHMARKS = {"playback_realtime": bench_playback, "seek_latency": bench_seek}
+def bench_run_ahead(ctx) -> dict:
+    """CPU per step of the run-ahead alone (no browser): debug products on every step (the old grid) vs on the
+    20 ms grid (the default), and plain stepping; the same steps, alternated, in one run."""
+    from app.browser import load_map, load_recording
+    from app.frame_cache import FrameCacheConfig
+    from app.tracker_engine import TrackerEngine
+
+    rec_path, map_path = demo_pair(Path(ctx.work_dir))
+    rec, cmap = load_recording(rec_path), load_map(map_path)
+    n = 200 if ctx.quick else 600
+    out: dict = {"recording": str(rec_path), "steps": n, "loadavg_1min": [os.getloadavg()[0]]}
+    cpu: dict[str, list[float]] = {"every_step_5ms": [], "grid_20ms": [], "plain": []}
+    for _ in range(2):  # alternate, so a change of machine load hits all alike
+        for name in cpu:
+            every = {"every_step_5ms": 5.0, "grid_20ms": 20.0, "plain": 1e9}[name]
+            eng = TrackerEngine(rec, cmap, cache=FrameCacheConfig(every_ms=every))  # "plain": no grid step after step 0
+            eng.prefetch(1)  # numba caches and the first snapshot outside the timing
+            c0, w0 = time.thread_time(), time.perf_counter()
+            eng.prefetch(n)
+            cpu[name].append((time.thread_time() - c0) * 1e3 / n)
+            out.setdefault(f"{name}_wall_ms_per_step", []).append((time.perf_counter() - w0) * 1e3 / n)
+    for name, v in cpu.items():
+        out[f"{name}_cpu_ms_per_step"] = v
+        out[f"{name}_cpu_real_time_cores"] = min(v) / (eng.step_us / 1e3)
+    out["loadavg_1min"].append(os.getloadavg()[0])
+    return out
+
+
+BENCHMARKS = {"playback_realtime": bench_playback, "seek_latency": bench_seek, "run_ahead_cpu": bench_run_ahead}
 
 
 def main(argv: list[str] | None = None) -> None:

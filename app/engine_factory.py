@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
+from app.disk_cache import DiskCache, DiskCacheConfig, cache_key, source_hash
 from app.engine import EventsOnlyEngine
 from app.frame_cache import FrameCacheConfig
 from app.slam_engine import slam_engine_factory
@@ -15,8 +18,31 @@ MODES = ("tracking", "slam")
 """Viewer modes: EV-Pose tracking against a map, or map-free event SLAM (``evpose.slam``)."""
 
 
-def engine_factory(recording, contour_map, mode: str = "tracking", cache: FrameCacheConfig | None = None):
-    """A config -> Engine function for this recording/map pair, with the reason when tracking is impossible."""
+def disk_entry_maker(disk: DiskCacheConfig | None, recording_path: Path | None, map_path: Path | None):
+    """``(config, every_steps) -> DiskCache`` for this recording/map pair, or None when there is no disk cache."""
+    if disk is None or not disk.enabled or recording_path is None or map_path is None:
+        return None
+    try:
+        sources = source_hash()  # once per opening: the code does not change under a running engine
+    except OSError:
+        return None
+
+    def entry(config, every_steps: int) -> DiskCache | None:
+        try:
+            key, parts = cache_key(recording_path, map_path, config, every_steps, sources)
+        except OSError:  # the files went away since they were opened: nothing to key on
+            return None
+        return DiskCache(disk, key, parts)
+
+    return entry
+
+
+def engine_factory(recording, contour_map, mode: str = "tracking", cache: FrameCacheConfig | None = None,
+                   disk: DiskCacheConfig | None = None, paths: tuple[Path, Path] | None = None):
+    """A config -> Engine function for this recording/map pair, with the reason when tracking is impossible.
+
+    ``disk`` and the pair's file ``paths`` turn on the persistent cache of the tracker's run-ahead.
+    """
     if mode == "slam":
         return slam_engine_factory(recording)
     if contour_map is None:
@@ -27,9 +53,11 @@ def engine_factory(recording, contour_map, mode: str = "tracking", cache: FrameC
         note = f"The tracker is not available in this build ({exc}); showing events only."
         return lambda cfg: EventsOnlyEngine(recording, cfg, explanation=note)
 
+    entry = disk_entry_maker(disk, *(paths or (None, None)))
+
     def make(cfg):
         try:
-            return TrackerEngine(recording, contour_map, cfg, cache=cache)
+            return TrackerEngine(recording, contour_map, cfg, cache=cache, disk=entry)
         except EvposeError as exc:
             # Still show events and time surfaces, and say why tracking cannot run.
             return EventsOnlyEngine(recording, None, explanation=f"Tracking cannot start: {exc}")

@@ -7,25 +7,24 @@ so concurrent tabs cannot corrupt it). Per-tab state is only the 3D camera.
 
 from __future__ import annotations
 
-import socket
+import dataclasses
 import threading
 import time
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 import viser
 
+from app.app_config import AppConfig, cache_inside_data, check_port_free
 from app.browser import DataEntry, DataRoots, EntryKind, guess_map_for, load_cloud, load_map, load_recording
 from app.config_gui import ConfigGui, load_config_file
 from app.engine import Engine
 from app.engine_factory import MODES, NO_MAP_NOTE, engine_factory
 from app.export import export_action, write_config
 from app.frame import Frame
-from app.frame_cache import FrameCacheConfig
-from app.layouts import LAYOUT_DIR, PANELS, Layout, list_layouts, save_layout
+from app.layouts import PANELS, Layout, list_layouts, save_layout
 from app.panels import SLAM_PANELS, OverlayColour, panel_images
-from app.player import Player, PlayerConfig, PlayState, RerunFrom
+from app.player import Player, PlayState, RerunFrom
 from app.plots import PlotsView
 from app.scene import SceneView
 from app.slam_engine import slam_markdown
@@ -33,49 +32,23 @@ from app.status import status_markdown
 from app.teaching import STAGE_PANEL, Stage, teaching_markdown
 from evpose.errors import EvposeError, InputError
 
+__all__ = ["AppConfig", "ViewerApp"]
+
 NO_MAP = "(no map: events only)"
 SLOW_REFRESH_S = 0.25
 """While playing, plots and trajectory polylines refresh at most this often, seconds."""
-
-
-@dataclass
-class AppConfig:
-    """How the viewer is served and where it looks for data."""
-
-    data: list[Path] = field(default_factory=lambda: [Path("demo_data"), Path("maps")])
-    """Folders searched for recordings and maps; nothing outside them can be opened."""
-    host: str = "127.0.0.1"
-    """Interface to listen on (localhost by default)."""
-    port: int = 8080
-    """TCP port."""
-    layout: str = "debug"
-    """Layout from layouts/ applied at start."""
-    export_dir: Path = Path("evpose_exports")
-    """Where exports are written (also offered as browser downloads)."""
-    layout_dir: Path = LAYOUT_DIR
-    """Folder of layout files."""
-    player: PlayerConfig = field(default_factory=PlayerConfig)
-    """Pacing, coalescing and prefetch of the player."""
-    frame_cache: FrameCacheConfig = field(default_factory=FrameCacheConfig)
-    """Which steps the tracker's run-ahead keeps a display frame of, and the memory they may take."""
-
-
-def check_port_free(host: str, port: int) -> None:
-    """Raise a one-line error if the port is taken (viser would silently move to another port)."""
-    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
-        s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
-        try:
-            s.bind((host, port))
-        except OSError as exc:
-            raise InputError(None, f"cannot serve on {host}:{port}: {exc.strerror or exc}; is another viewer running? choose another --port") from None
 
 
 class ViewerApp:
     """The running viewer."""
 
     def __init__(self, cfg: AppConfig):
-        self.cfg = cfg
         check_port_free(cfg.host, cfg.port)
+        self.cache_note = cache_inside_data(cfg)
+        """Why the disk cache is off, if it is (shown under the recording list)."""
+        if self.cache_note:
+            cfg = dataclasses.replace(cfg, disk_cache=dataclasses.replace(cfg.disk_cache, enabled=False))
+        self.cfg = cfg
         self.roots = DataRoots(cfg.data)
         self.server = viser.ViserServer(host=cfg.host, port=cfg.port, label="evpose", verbose=False)
         self.gui = self.server.gui
@@ -207,6 +180,8 @@ class ViewerApp:
         missing = [r for r in self.roots.roots if not r.is_dir()]
         if missing:
             note += "\n\n" + "; ".join(f"`{r}` does not exist" for r in missing)
+        if self.cache_note:
+            note += f"\n\n_{self.cache_note}_"
         if bad:
             note += "\n\n**Unreadable:**\n" + "\n".join(f"- `{e.label}`: {e.error}" for e in bad)
         return note
@@ -263,7 +238,8 @@ class ViewerApp:
                                  f"{s['sensor_size']}; map: {map_entry.label if map_entry else 'none'}"
                                  + ("" if cmap is not None or self.mode == "slam" else f"\n\n_{NO_MAP_NOTE}_") + "\n\n" + self._scan_note())
         self.time_slider.max = max(0.001, (recording.t_end_us - recording.t_start_us) / 1e6)
-        factory = engine_factory(recording, cmap, self.mode, self.cfg.frame_cache)
+        factory = engine_factory(recording, cmap, self.mode, self.cfg.frame_cache, self.cfg.disk_cache,
+                                 (path, map_entry.path) if map_entry is not None else None)
 
         def reset_view(_engine=None):
             # Runs on the player thread (or before it exists) so no frame of the old recording is drawn over it.

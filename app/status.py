@@ -7,16 +7,23 @@ from app.frame import Frame
 
 
 def run_ahead_note(engine: Engine) -> str:
-    """'run-ahead: 4.20 of 10.00 s ready' for engines with a run-ahead (empty otherwise)."""
+    """'run-ahead: 4.20 of 10.00 s ready' for engines with a run-ahead (empty otherwise); says what came from disk."""
     n = getattr(engine, "n_steps", None)
     frontier = getattr(engine, "frontier", None)
     step_us = getattr(engine, "step_us", None)
     if not n or frontier is None or not step_us:
         return ""
+    ready = getattr(engine, "ready_steps", frontier)
     total = n * step_us / 1e6
-    if frontier >= n:
-        return f"run-ahead done: all {total:.2f} s ready (seeks and 1x playback from memory)"
-    return f"run-ahead: {frontier * step_us / 1e6:.2f} of {total:.2f} s ready (beyond it, steps are computed live)"
+    disk = getattr(engine, "disk", None)
+    note = ""
+    if disk is not None and getattr(engine, "disk_steps", 0) > frontier:
+        note = f" ({engine.disk_steps * step_us / 1e6:.2f} s read from the disk cache; exact single steps there need the run-ahead, at {frontier * step_us / 1e6:.2f} s)"
+    if disk is not None and disk.error:
+        note += f" ({disk.error})"
+    if ready >= n:
+        return f"run-ahead done: all {total:.2f} s ready (seeks and 1x playback from memory)" + note
+    return f"run-ahead: {ready * step_us / 1e6:.2f} of {total:.2f} s ready (computing; beyond it, steps are computed live)" + note
 
 
 def status_markdown(frame: Frame, engine: Engine, stats: dict) -> str:

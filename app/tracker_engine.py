@@ -3,19 +3,23 @@
 Two sessions over the same recording and configuration, both deterministic, so
 step ``i`` of either is bit-identical to step ``i`` of a headless run:
 
-- the **run-ahead** session only ever steps forward (plain steps, debug products
-  only on the cache grid), in the player's idle time and between displayed
-  frames. It fills the per-step summaries (plots, trajectory) and the
-  :class:`~app.frame_cache.FrameCache`. It never restores: a restore costs a
-  replay of the whole fusion log (``FactorGraphFusion.restore``), i.e. grows
-  with the step it restores to.
+- the **run-ahead** session only ever steps forward, in the player's idle time
+  and between displayed frames. It steps plain (no debug products) except on
+  the frame grid (``FrameCacheConfig.every_ms``), fills the per-step summaries
+  (plots, trajectory) and the :class:`~app.frame_cache.FrameCache`, and keeps its
+  regular snapshots (``TrackerConfig.snapshot_every``) for the shown session.
 - the **shown** session serves exact requests off the grid (step forward/back,
-  exact seeks): it steps forward when it can and restores its own snapshots only
-  when it must go back.
+  exact seeks): it steps forward when that is cheaper, else restores the nearest
+  snapshot at or before the step, its own or one the run-ahead left behind
+  (restoring copies the state, so one snapshot serves both sessions).
 
 Playback and (grid-snapped) seeks inside the run-ahead's reach are answered from
-the cache, costing a draw; past the run-ahead's frontier the cheapest session
-steps there, at the tracker's own speed, which the player reports truthfully.
+the cache, costing a draw; past the run-ahead's frontier the run-ahead steps
+there, at the tracker's own speed, which the player reports truthfully.
+
+With a :class:`~app.disk_cache.DiskCache`, summaries and kept frames of an
+earlier opening (same recording, map, configuration and code) are read back at
+start, and chunks the run-ahead completes are written out.
 """
 
 from __future__ import annotations
@@ -24,6 +28,7 @@ import time
 
 import numpy as np
 
+from app.disk_cache import DiskCache
 from app.engine import Engine
 from app.frame import Frame, StepSummary
 from app.frame_cache import FrameCache, FrameCacheConfig, compact
@@ -63,7 +68,9 @@ def summary_from_result(result, index: int) -> StepSummary:
 class TrackerEngine(Engine):
     """Shown session + run-ahead session + frame cache; see the module docstring."""
 
-    def __init__(self, recording: Recording, contour_map: ContourMap, config=None, cache: FrameCacheConfig | None = None):
+    def __init__(self, recording: Recording, contour_map: ContourMap, config=None, cache: FrameCacheConfig | None = None,
+                 disk=None):
+        """``disk``: None, or a function ``(config, every_steps) -> DiskCache | None`` giving this configuration's cache entry."""
         from evpose.tracker.config import TrackerConfig
 
         self.recording = recording
@@ -75,6 +82,11 @@ class TrackerEngine(Engine):
         self._ahead = None
         """The run-ahead session (created on the first prefetch); never restored."""
         cc = cache or FrameCacheConfig()
+        self._snapshot_budget = cc.snapshot_budget_mb * 2**20
+        self._snapshot_spacing = max(1, int(round(cc.snapshot_every_ms * 1e3 / self.session.dt_us)))
+        """Steps between two snapshots the run-ahead keeps (doubles whenever they outgrow their budget)."""
+        self._snapshot_bytes = 0
+        """Bytes of arrays in one run-ahead snapshot (measured on the first one past step 0)."""
         every = max(1, int(round(cc.every_ms * 1e3 / self.session.dt_us)))
         self.cache = FrameCache(every, int(cc.budget_mb * 2**20))
         self._summaries: list[StepSummary] = []
@@ -85,6 +97,15 @@ class TrackerEngine(Engine):
         """Running estimate of one tracker step without debug products (the tracker's own ``total`` timing), seconds."""
         self._restore_s_per_step = 0.0
         """Running estimate of a restore per step restored to, seconds (cost model)."""
+        self.disk: DiskCache | None = disk(self.config, every) if disk is not None else None
+        self._disk_steps = 0
+        """Steps whose summaries (and kept frames) came from the disk cache."""
+        if self.disk is not None:
+            summaries, frames = self.disk.load()
+            self._summaries = summaries
+            self._disk_steps = len(summaries)
+            for k in sorted(frames):
+                self.cache.put_packed(k, frames[k], near=0)
 
     def _new_session(self):
         from evpose.tracker.session import TrackingSession
@@ -108,6 +129,16 @@ class TrackerEngine(Engine):
     def frontier(self) -> int:
         """Steps the run-ahead has computed (0 before it starts)."""
         return 0 if self._ahead is None else self._ahead.step_count
+
+    @property
+    def disk_steps(self) -> int:
+        """Steps whose summaries (and kept frames) were read from the disk cache at start."""
+        return self._disk_steps
+
+    @property
+    def ready_steps(self) -> int:
+        """Steps from the start that are known (computed by the run-ahead or read from disk): seeks there answer at once."""
+        return max(self.frontier, self._disk_steps)
 
     @property
     def history(self) -> list[StepSummary]:
@@ -147,7 +178,44 @@ class TrackerEngine(Engine):
         frame = compact(frame_from_result(result, i)) if result.debug is not None else None
         if frame is not None and self.cache.on_grid(i) and self.cache.nbytes < self.cache.budget:
             self.cache.put(frame, near=max(self._shown, 0))
+        if role == "ahead":
+            self._thin_snapshots(s)
+            if self.disk is not None:
+                self._maybe_write_chunk(i)
         return frame
+
+    def _thin_snapshots(self, s) -> None:
+        """Keep a run-ahead snapshot every ``_snapshot_spacing`` steps (the session's own regular ones elsewhere go),
+        within the memory budget: past it, every other one goes."""
+        k = s.step_count
+        if k == 0:
+            return
+        if k % self._snapshot_spacing == 0 and k not in s.snapshot_steps:
+            s.take_snapshot()
+        if k not in s.snapshot_steps:
+            return
+        if not self._snapshot_bytes:
+            self._snapshot_bytes = max(array_nbytes(s.snapshot_at(k)), 1)
+        if k % self._snapshot_spacing:
+            s.drop_snapshot(k)
+            return
+        while len(s.snapshot_steps) * self._snapshot_bytes > self._snapshot_budget and len(s.snapshot_steps) > 2:
+            self._snapshot_spacing *= 2
+            for j in s.snapshot_steps:
+                if j % self._snapshot_spacing:
+                    s.drop_snapshot(j)
+
+    def _maybe_write_chunk(self, i: int) -> None:
+        """Write the disk chunk that step ``i`` (just made by the run-ahead) completes, if it is wanted."""
+        c = self.disk.chunk_steps
+        n = i // c
+        if (i + 1) % c != 0 and i + 1 != self.n_steps:
+            return
+        if not self.disk.want(n) or len(self._summaries) <= i:
+            return
+        lo = n * c
+        frames = {k: e for k in range(lo, i + 1) if (e := self.cache.packed(k)) is not None}
+        self.disk.write_chunk(n, self._summaries[lo : i + 1], frames)
 
     def _learn(self, key: str, seconds: float) -> None:
         if seconds > 0:
@@ -163,9 +231,18 @@ class TrackerEngine(Engine):
                 return None
         return frame
 
-    def _restore_for(self, s, k: int) -> None:
-        """Put session ``s`` at or before step ``k`` through its nearest snapshot (cost grows with the snapshot's step)."""
+    def _base(self, s, k: int) -> int:
+        """Step of the nearest snapshot at or before ``k`` session ``s`` can restore (the shown one may borrow the run-ahead's)."""
         base = max(j for j in s.snapshot_steps if j <= k)
+        if s is self.session and self._ahead is not None:
+            base = max([base] + [j for j in self._ahead.snapshot_steps if j <= k])
+        return base
+
+    def _restore_for(self, s, k: int) -> None:
+        """Put session ``s`` at or before step ``k`` through the nearest snapshot it can restore."""
+        base = self._base(s, k)
+        if base not in s.snapshot_steps:
+            share_snapshot(self._ahead, s, base)
         t0 = time.perf_counter()
         s.restore_snapshot(base)
         if base > 0:
@@ -175,7 +252,7 @@ class TrackerEngine(Engine):
     def _forward_is_cheaper(self, s, k: int) -> bool:
         """Whether session ``s`` (at or before step ``k``) should step forward rather than restore its nearest snapshot."""
         plain = self._step_s["plain"] or 0.01
-        base = max(j for j in s.snapshot_steps if j <= k)
+        base = self._base(s, k)
         restore = base * (self._restore_s_per_step or 0.3 * plain) + (k - base + 1) * plain
         return (k - s.step_count + 1) * plain <= restore
 
@@ -241,12 +318,16 @@ class TrackerEngine(Engine):
         if k0 > last:
             return None
         hi = min(self._shown + max(int(stride), 1), last)
-        hit = self.cache.latest_at_or_before(hi, k0)
+        # The kept frame furthest within the stride; else (a stride shorter than the grid) the next kept one.
+        hit = self.cache.latest_at_or_before(hi, k0) or self.cache.next_at_or_after(hi, min(hi + self.cache.every - 1, last))
         if hit is not None:
             self._shown = hit.index
             return hit
+        # Nothing kept there: compute a grid step (it is then kept), the furthest within the stride or the next one.
         g = hi - hi % self.cache.every
-        return self._produce(g if g >= k0 else hi)
+        if g < k0:
+            g = min(k0 + (-k0) % self.cache.every, last)
+        return self._produce(g)
 
     def prefetch(self, budget_steps: int = 5) -> bool:
         """Run the run-ahead session ``budget_steps`` further; False once it has reached the end.
@@ -256,11 +337,31 @@ class TrackerEngine(Engine):
         if self._ahead is None:
             self._ahead = self._new_session()
         s = self._ahead
+        if s.step_count < self._disk_steps:
+            # Steps read from disk are only recomputed for their snapshots: one at a time, so a command waits one step.
+            budget_steps = 1
         for _ in range(max(int(budget_steps), 1)):
             if s.done:
                 break
             self._advance(s, debug=False)
-            if s.step_count in s.snapshot_steps and s.step_count != 0:
-                # Never restored, so its snapshots would only hold memory (several MB each).
-                s.drop_snapshot(s.step_count)
         return not s.done
+
+
+def array_nbytes(obj) -> int:
+    """Bytes of the numpy arrays in a nested snapshot (dicts, lists, tuples); other objects count as nothing."""
+    if isinstance(obj, np.ndarray):
+        return obj.nbytes
+    if isinstance(obj, dict):
+        return sum(array_nbytes(v) for v in obj.values())
+    if isinstance(obj, (list, tuple)):
+        return sum(array_nbytes(v) for v in obj)
+    return 0
+
+
+def share_snapshot(src, dst, step: int) -> None:
+    """Give session ``dst`` the snapshot ``src`` keeps at ``step`` (same recording and configuration).
+
+    ``Tracker.restore`` copies every array and the fusion smoother out of a
+    snapshot, so both sessions can restore the same one.
+    """
+    dst.adopt_snapshot(step, src.snapshot_at(step))

@@ -8,9 +8,8 @@
   machine inflates much less) for plain iSAM2 updates and for the updates
   that also run the window re-optimisation, ``predict`` and ``imu_rate_poses`` latency, and
   ATE/ARE (RMSE) of raw registrations, factor graph, EKF and IMU-only.
-* ``ablation``: stpe / stpe+filter / full / full with the EKF on the simulated
-  landing (tracking from ground truth): accuracy, latency per module and of the
-  registration front end, share of events the polarity filter removes.
+* ``ablation``, ``registration_wander``, ``aligned_field``: whole tracking runs on
+  the simulated landing, in :mod:`evpose.bench.fusion_tracking`.
 * ``polarity_sim``: the simulator's landing scenario, a contour map built from
   its cloud, ground-truth poses and motion: agreement of the predicted polarity
   with the events near each point (outside the buffer zone), share of events
@@ -25,6 +24,7 @@ import time
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from evpose.bench.fusion_tracking import ABLATION, ablation_run, bench_ablation, bench_aligned_field, bench_registration_wander  # noqa: F401
 from evpose.bench.stats import latency_summary, peak_rss_mb
 
 
@@ -266,111 +266,6 @@ def bench_ego_motion_dynamic(ctx) -> dict:
     return out
 
 
-ABLATION = (("stpe", "stpe", None), ("stpe+filter", "stpe+filter", None), ("stpe+filter_per_point_fields", "stpe+filter", False),
-            ("full", "full", None), ("full_per_point_fields", "full", False), ("full_ekf", "full:ekf", None))
-"""(name, mode[:fusion backend], polarity.event_filter override) of the ablation runs."""
-
-
-def ablation_run(recording, contour_map, mode: str, event_filter: bool | None = None) -> dict:
-    """One tracking run from ground truth: accuracy, losses, per-module latency and the polarity filter's counts.
-
-    ``stpe_latency`` is the registration front end per update (distance field +
-    polarity filter + registration, wall); ``events_removed_share`` is the share
-    of the noise-filtered events entering the SP-TS that ``T_align`` does not show
-    to registration (outside every map point's patch, or of the polarity the
-    patch does not accept), summed over the run.
-    """
-    from evpose.eval.metrics import Alignment, EvalConfig, evaluate
-    from evpose.fusion import FusionBackend
-    from evpose.tracker.config import TrackerConfig, TrackerMode
-    from evpose.tracker.session import TrackingSession
-    from evpose.tracker.step_result import TrackStatus
-
-    name, _, backend = mode.partition(":")
-    cfg = TrackerConfig(mode=TrackerMode(name))
-    if backend:
-        cfg.fusion.backend = FusionBackend(backend)
-    if event_filter is not None:
-        cfg.polarity.event_filter = bool(event_filter)
-    session = TrackingSession(recording, contour_map, cfg)
-    cpu = []
-    while True:
-        c0 = time.thread_time()
-        r = session.step()
-        if r is None:
-            break
-        cpu.append((time.thread_time() - c0) * 1e3)
-    res = session.results
-    out: dict = {"updates": len(res), "lost_updates": sum(r.status is not TrackStatus.OK for r in res)}
-    traj = session.trajectory()
-    if len(traj) >= 3:
-        ev = evaluate(traj, recording.ground_truth, EvalConfig(align=Alignment.NONE))
-        out["ate_rmse_mm"], out["are_rmse_deg"] = ev.ate["rmse"] * 1e3, ev.are["rmse"]
-    warm = res[5:] if len(res) > 10 else res
-    for m in ("distance_field", "polarity_filter", "registration", "fusion", "ego_motion", "culling", "total"):
-        out.update({k: v for k, v in latency_summary([r.timings_ms[m] for r in warm if m in r.timings_ms], f"{m}_").items()
-                    if k.endswith(("median_ms", "p99_ms"))})
-    stpe = [sum(r.timings_ms.get(m, 0.0) for m in ("distance_field", "polarity_filter", "registration")) for r in warm]
-    out.update({k: v for k, v in latency_summary(stpe, "stpe_latency_").items() if k.endswith(("median_ms", "p99_ms", "mean_ms"))})
-    out.update({k: v for k, v in latency_summary(cpu[5:] if len(cpu) > 10 else cpu, "update_cpu_").items() if k.endswith(("median_ms", "p99_ms"))})
-    judged = sum(r.counts.get("events_polarity_judged", 0) for r in res)
-    if judged:
-        out["events_removed_share"] = sum(r.counts.get("events_polarity_removed", 0) for r in res) / judged
-        out["events_outside_patches_share"] = sum(r.counts.get("events_outside_patches", 0) for r in res) / judged
-        out["events_wrong_polarity_share"] = sum(r.counts.get("events_wrong_polarity", 0) for r in res) / judged
-    used = sum(r.counts.get("points_used", 0) for r in res)
-    if "points_single_polarity" in res[-1].counts and used:
-        out["points_single_polarity_share"] = sum(r.counts.get("points_single_polarity", 0) for r in res) / used
-    out["iterations_median"] = float(np.median([r.counts.get("iterations", 0) for r in res]))
-    return out
-
-
-def bench_ablation(ctx) -> dict:
-    """EV-Pose ablation (paper Fig. 19) on the simulated moderate landing from ground truth, all runs in one process:
-    stpe, stpe+filter, full, full with the EKF, and the filter's per-point-field variant (no T_align) for comparison."""
-    from evpose.bench.tracking import landing_case
-
-    res, seconds = ((240, 180), 1.0) if ctx.quick else ((346, 260), 2.0)
-    rec, cmap = landing_case(ctx.work_dir, res, seconds, ctx.seed)
-    out: dict = {"resolution": f"{res[0]}x{res[1]}", "seconds": seconds, "map_points": len(cmap)}
-    for name, mode, event_filter in ABLATION:
-        if ctx.quick and event_filter is not None:
-            continue  # the quick suite keeps to the four modes of the paper's figure
-        out.update({f"{name}_{k}": v for k, v in ablation_run(rec, cmap, mode, event_filter).items()})
-    base = out.get("stpe_stpe_latency_median_ms")
-    if base:
-        out["filter_stpe_latency_change_pct"] = 100.0 * (out["stpe+filter_stpe_latency_median_ms"] - base) / base
-    out.update(_load())
-    return out
-
-
-def _flight_inputs(seconds: float, rate_hz: float, seed: int):
-    """A MEMS-IMU analytic flight and noisy registrations at ``rate_hz`` (2 % gross outliers, a few 50-150 ms losses)."""
-    from evpose.core.camera import CameraCalibration
-    from evpose.fusion.synthetic import AnalyticMotion, AnalyticMotionConfig, default_T_cam_imu
-
-    cal = CameraCalibration(346, 260, 300.0, 300.0, 172.5, 129.5, T_cam_imu=default_T_cam_imu())
-    motion = AnalyticMotion(AnalyticMotionConfig(duration_s=seconds + 0.2, imu_rate_hz=1000.0, acc_bias=(0.08, -0.05, 0.1),
-                                                 gyro_bias=(0.01, -0.02, 0.015), accel_noise_density=2e-3,
-                                                 gyro_noise_density=1.7e-4, seed=seed))
-    t0 = motion.config.t0_us
-    times = t0 + np.round(np.arange(1, int(seconds * rate_hz) + 1) * 1e6 / rate_hz).astype(np.int64)
-    gt = motion.camera_trajectory(times, cal.T_cam_imu)
-    rng = np.random.default_rng(seed + 1)
-    regs: list = []
-    for k in range(len(gt)):
-        T = gt.matrix(k)
-        T[:3, :3] = T[:3, :3] @ Rotation.from_rotvec(rng.normal(0, np.radians(0.3), 3)).as_matrix()
-        T[:3, 3] += T[:3, :3] @ rng.normal(0, 0.005, 3) + (rng.normal(0, 0.1, 3) if rng.random() < 0.02 else 0.0)
-        regs.append(T)
-    for start in rng.integers(100, len(regs) - 50, max(1, len(regs) // 400)):
-        for k in range(int(start), min(len(regs), int(start) + int(rng.integers(10, 30)))):
-            regs[k] = None  # tracking lost: the fusion bridges with the IMU
-    cov = np.diag([np.radians(0.3) ** 2] * 3 + [0.005**2] * 3)
-    first = (int(t0), motion.camera_trajectory([t0], cal.T_cam_imu).matrix(0), motion.camera_velocity([t0], cal.T_cam_imu)[0])
-    return cal, motion.imu(), first, times, regs, cov
-
-
 def _same(a, b) -> bool:
     return (np.array_equal(a.T_world_cam, b.T_world_cam) and np.array_equal(a.velocity_world, b.velocity_world)
             and np.array_equal(a.gyro_bias, b.gyro_bias) and np.array_equal(a.acc_bias, b.acc_bias)
@@ -392,6 +287,7 @@ def bench_snapshot_restore(ctx) -> dict:
 
     from evpose.fusion import FusionConfig
     from evpose.fusion.factor_graph import FactorGraphFusion
+    from evpose.fusion.synthetic import flight_with_registrations
 
     class GtsamSmootherFusion(FactorGraphFusion):
         """The same fusion on gtsam's own (uncopyable) fixed-lag smoother: the reference for estimates and cost."""
@@ -403,7 +299,7 @@ def bench_snapshot_restore(ctx) -> dict:
     seconds, rate_hz = (3.0, 200.0) if ctx.quick else (10.0, 200.0)
     steps = (50, 300, 580) if ctx.quick else (50, 300, 1000, 2000)
     follow = 20
-    cal, imu, first, times, regs, cov = _flight_inputs(seconds + follow / rate_hz, rate_hz, ctx.seed)
+    cal, imu, first, times, regs, cov = flight_with_registrations(seconds + follow / rate_hz, rate_hz, ctx.seed)
     cfg = FusionConfig(registration_covariance_scale=1.0)
 
     def start(cls):
@@ -483,4 +379,5 @@ def bench_imu_buffer(ctx) -> dict:
 
 
 BENCHMARKS = {"backends": bench_backends, "polarity_sim": bench_polarity_sim, "ego_motion_dynamic": bench_ego_motion_dynamic,
-              "ablation": bench_ablation, "snapshot_restore": bench_snapshot_restore, "imu_buffer": bench_imu_buffer}
+              "ablation": bench_ablation, "snapshot_restore": bench_snapshot_restore, "imu_buffer": bench_imu_buffer,
+              "registration_wander": bench_registration_wander, "aligned_field": bench_aligned_field}

@@ -55,6 +55,22 @@ def _synthetic(duration_s: float, seed: int):
     return Recording(events=ev, ground_truth=gt, calibration=cal, metadata={"scenario": "bench-synthetic-points"})
 
 
+def strong_corner_count(mci: np.ndarray, quality: float = 0.05, fast_threshold: int = 8) -> int:
+    """FAST corners of an MCI whose Shi-Tomasi response is at least ``quality`` of the image's best: corners KLT can pin down
+    in both directions (points on straight edges slide along them). A scene-richness figure, not a pipeline stage."""
+    import cv2
+
+    from evpose.slam.event_image import to_uint8
+
+    img8 = to_uint8(mci)
+    kps = cv2.FastFeatureDetector_create(threshold=fast_threshold, nonmaxSuppression=True).detect(img8, None)
+    if not kps:
+        return 0
+    pts = np.array([k.pt for k in kps]).round().astype(int)
+    eig = cv2.cornerMinEigenVal(img8, blockSize=5, ksize=3)
+    return int(np.sum(eig[pts[:, 1], pts[:, 0]] >= quality * float(eig.max())))
+
+
 def bench_event_image(ctx: BenchContext) -> dict:
     """Throughput of the Gaussian event-image splat (bilinear votes + blur) at 346x260."""
     from evpose.slam.event_image import event_image
@@ -113,6 +129,14 @@ def _slam_latencies(rec, ctx: BenchContext, config=None) -> dict:
         m = atlas_metrics(run.trajectories(), rec.ground_truth, correct_scale=config.mode is SlamMode.EVENT, duration_s=run.duration_s)
         out.update({"maps": len(m.maps), "tracked_fraction": m.tracked_fraction, "ate_percent": m.ate_percent,
                     "rpe_trans_per_m": m.rpe_trans_per_m, "rpe_rot_deg_per_m": m.rpe_rot_deg_per_m, "stability_m_s": m.stability})
+        drift = m.to_dict()["scale_drift_percent_max"]
+        if drift is not None:
+            out["scale_drift_percent_max"] = drift  # spread of the 0.5 s segment scales of the worst map
+    # How much a point-feature front end has to hold on to: strong corners per MCI (outside the timings above).
+    corners = [strong_corner_count(r.mci) for r in res if r.mci is not None]
+    if corners:
+        out["strong_corners_median"] = float(np.median(corners))
+        out["mcis_below_min_inliers_share"] = float(np.mean(np.array(corners) < config.tracking.min_inliers))
     out["peak_rss_mb"] = peak_rss_mb()
     return out
 

@@ -20,12 +20,13 @@ def main(
     angle_deg: float = 15.0,
     plane_angle_deg: float = 25.0,
     curvature: float = 0.06,
-    min_region: int = 40,
+    min_region: int = 25,
     plane_distance: float = 0.015,
     cell: float = 0.0,
     spacing: float = 0.01,
     adjacent: float = 0.0,
     no_snap: bool = False,
+    no_robust_normals: bool = False,
     no_albedo_edges: bool = False,
     merge_double: float = 0.0,
     viewpoint: tuple[float, float, float] | None = None,
@@ -47,6 +48,7 @@ def main(
         spacing: Distance between contour points, metres.
         adjacent: A boundary needs another surface within this distance, else it is the scan's rim, metres (0 = auto).
         no_snap: Do not snap contour points onto the intersection line of adjacent planes.
+        no_robust_normals: Grow regions on plain kNN PCA normals (no one-sided refit at creases and parallel layers).
         no_albedo_edges: Do not trace brightness (painted/albedo) edges inside regions from the cloud's colour or intensity.
         merge_double: Merge contour points of different regions closer than this into one (an edge traced from both sides), metres (0 = keep both).
         viewpoint: Where the scan was seen from (x y z, metres); plane normals face it.
@@ -66,7 +68,7 @@ def main(
         voxel_m=voxel, k_neighbours=k, angle_threshold_deg=angle_deg, plane_angle_deg=plane_angle_deg,
         curvature_limit=curvature, min_region_points=min_region, plane_distance_m=plane_distance,
         cell_m=cell, contour_spacing_m=spacing, adjacent_m=adjacent, snap=not no_snap, viewpoint=viewpoint,
-        albedo_edges=not no_albedo_edges, merge_double_m=merge_double,
+        albedo_edges=not no_albedo_edges, merge_double_m=merge_double, robust_normals=not no_robust_normals,
     )
     try:
         cmap = build_contour_map(raw.points, raw.normals, raw.intensity, config, progress=not quiet and sys.stderr.isatty())

@@ -41,6 +41,11 @@ def format_speed_bins(bins: dict) -> str:
     return "\n".join(lines)
 
 
+def _drift(percent: float | None) -> str:
+    """Scale drift over a map's 0.5 s segments; '-' when the map is too short to have two segments."""
+    return f"{'-':>9}" if percent is None else f"{percent:9.1f}"
+
+
 def format_atlas(summary: dict) -> str:
     """The event-SLAM paper's figures (Table I) and one line per map."""
     lines = [
@@ -51,10 +56,10 @@ def format_atlas(summary: dict) -> str:
         f"distance [m]       {summary['distance_m']:.3f}",
         f"stability [m s]    {summary['stability_m_s']:.4f}",
         f"ATE [% of dist.]   {summary['ate_percent']:.3f} (worst map {summary['ate_percent_max']:.3f})",
-        f"{'map':4} {'poses':>6} {'time [s]':>9} {'dist [m]':>9} {'scale':>8} {'ATE [mm]':>9} {'RPE t [mm]':>10} {'RPE r [deg]':>11}",
+        f"{'map':4} {'poses':>6} {'time [s]':>9} {'dist [m]':>9} {'scale':>8} {'ATE [mm]':>9} {'RPE t [mm]':>10} {'RPE r [deg]':>11} {'drift [%]':>9}",
     ]
     for k, m in enumerate(summary["per_map"]):
-        lines.append(f"{k:<4} {m['poses']:>6} {m['tracked_time_s']:9.3f} {m['distance_m']:9.3f} {m['scale']:8.4f} {m['ate_m'] * 1e3:9.3f} {m['rpe_trans_m'] * 1e3:10.3f} {m['rpe_rot_deg']:11.4f}")
+        lines.append(f"{k:<4} {m['poses']:>6} {m['tracked_time_s']:9.3f} {m['distance_m']:9.3f} {m['scale']:8.4f} {m['ate_m'] * 1e3:9.3f} {m['rpe_trans_m'] * 1e3:10.3f} {m['rpe_rot_deg']:11.4f} {_drift(m.get('scale_drift_percent'))}")
     return "\n".join(lines)
 
 

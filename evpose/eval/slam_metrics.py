@@ -10,6 +10,10 @@
   product (m s). The distance uses ground-truth positions at the estimate
   times, because event-only maps have no metric scale of their own.
 - **ATE** of each aligned map, and as a share of its travelled distance.
+- **Scale drift** of each map: the map is cut into segments of ``segment_s``
+  seconds, each is Sim(3)-aligned to ground truth on its own, and the spread of
+  the segment scales (largest over smallest, minus one) says how far the map's
+  scale wandered; a metric map should also have segment scales near 1.
 """
 
 from __future__ import annotations
@@ -39,6 +43,14 @@ class MapMetrics:
     """Mean RPE translation between consecutive estimates, m."""
     rpe_rot_deg: float
     """Mean RPE rotation between consecutive estimates, degrees."""
+    segment_scales: list = field(default_factory=list)
+    """Umeyama scale of each ``segment_s`` piece aligned on its own, metres per map unit (empty if no piece moved)."""
+
+    @property
+    def scale_drift_percent(self) -> float:
+        """Spread of the segment scales, ``100 (max / min - 1)``, percent (NaN with fewer than two segments)."""
+        s = [v for v in self.segment_scales if np.isfinite(v) and v > 0]
+        return 100.0 * (max(s) / min(s) - 1.0) if len(s) >= 2 else float("nan")
 
     @property
     def ate_percent(self) -> float:
@@ -99,8 +111,14 @@ class SlamMetrics:
             "tracked_fraction": self.tracked_fraction,
             "ate_percent": self.ate_percent,
             "ate_percent_max": max((m.ate_percent for m in self.maps), default=float("nan")),
-            "per_map": [vars(m) | {"ate_percent": m.ate_percent} for m in self.maps],
+            # None (JSON null), not NaN, where no map has two segments: summaries compare equal run to run.
+            "scale_drift_percent_max": max((m.scale_drift_percent for m in self.maps if np.isfinite(m.scale_drift_percent)), default=None),
+            "per_map": [vars(m) | {"ate_percent": m.ate_percent, "scale_drift_percent": _finite_or_none(m.scale_drift_percent)} for m in self.maps],
         }
+
+
+def _finite_or_none(v: float) -> float | None:
+    return float(v) if np.isfinite(v) else None
 
 
 def _evo(traj: Trajectory):
@@ -109,8 +127,39 @@ def _evo(traj: Trajectory):
     return PoseTrajectory3D(positions_xyz=traj.position.copy(), orientations_quat_wxyz=traj.quat_xyzw[:, [3, 0, 1, 2]].copy(), timestamps=traj.t / 1e6)
 
 
-def map_metrics(est: Trajectory, gt: Trajectory, correct_scale: bool) -> MapMetrics | None:
-    """Metrics of one map; None if it has fewer than three poses inside the ground truth's span or cannot be aligned."""
+def segment_scales(est_xyz: np.ndarray, ref_xyz: np.ndarray, t_us: np.ndarray, segment_s: float, min_poses: int = 5) -> list[float]:
+    """Umeyama scale (ref per est unit) of consecutive ``segment_s`` pieces of a trajectory, each aligned on its own.
+
+    Pieces with fewer than ``min_poses`` poses, or whose ground truth barely moves
+    (under 1 % of the whole path's extent, where the scale is noise), are skipped.
+    """
+    from evo.core.geometry import GeometryException, umeyama_alignment
+
+    if segment_s <= 0 or len(t_us) < min_poses:
+        return []
+    extent = float(np.linalg.norm(ref_xyz.max(axis=0) - ref_xyz.min(axis=0)))
+    edges = np.arange(t_us[0], t_us[-1] + 1, int(segment_s * 1e6))
+    out = []
+    for a in edges:
+        sel = (t_us >= a) & (t_us < a + int(segment_s * 1e6))
+        if sel.sum() < min_poses:
+            continue
+        e, r = est_xyz[sel], ref_xyz[sel]
+        if np.linalg.norm(r - r.mean(axis=0), axis=1).max() < 0.01 * extent:
+            continue
+        try:
+            _, _, c = umeyama_alignment(e.T.copy(), r.T.copy(), with_scale=True)
+        except GeometryException:
+            continue
+        out.append(float(c))
+    return out
+
+
+def map_metrics(est: Trajectory, gt: Trajectory, correct_scale: bool, segment_s: float = 0.5) -> MapMetrics | None:
+    """Metrics of one map; None if it has fewer than three poses inside the ground truth's span or cannot be aligned.
+
+    ``segment_s`` is the length of the pieces the scale drift is measured on, seconds.
+    """
     from evo.core import metrics
 
     inside = (est.t >= gt.t[0]) & (est.t <= gt.t[-1])
@@ -133,11 +182,13 @@ def map_metrics(est: Trajectory, gt: Trajectory, correct_scale: bool) -> MapMetr
     rpe_r = metrics.RPE(metrics.PoseRelation.rotation_angle_deg, 1.0, metrics.Unit.frames, all_pairs=False)
     rpe_r.process_data((r, e))
     dist = float(np.sum(np.linalg.norm(np.diff(ref.position, axis=0), axis=1)))
+    scales = segment_scales(est.position, ref.position, est.t, segment_s)
     return MapMetrics(
         poses=len(est), tracked_time_s=float((est.t[-1] - est.t[0]) / 1e6), distance_m=dist, scale=float(s),
         ate_m=float(ape.get_statistic(metrics.StatisticsType.rmse)),
         rpe_trans_m=float(rpe_t.get_statistic(metrics.StatisticsType.mean)),
         rpe_rot_deg=float(rpe_r.get_statistic(metrics.StatisticsType.mean)),
+        segment_scales=scales,
     )
 
 

@@ -99,7 +99,7 @@ def _tdf_kernel(last, t_us, lut, shift, r0, c0, out):
 
 
 @nb.njit(cache=True)
-def _derivatives_kernel(img, r0, c0, curvature, gu, gv, huu, huv, hvv):
+def field_derivatives(img, r0, c0, curvature, gu, gv, huu, huv, hvv):
     """Central first differences and (if ``curvature``) second differences of ``img`` (the box) in one pass,
     written at offset (r0, c0); borders replicate, as OpenCV's BORDER_REPLICATE.
 
@@ -193,7 +193,7 @@ def bilinear_sample_curvature(hess, box, slot, u, v):
 @nb.njit(cache=True, inline="always")
 def _second_differences(img, r0, r1, c0, c1, y, x):
     """(d2/du2, d2/dudv, d2/dv2) at pixel (y, x) of one slot's field, borders of the box replicated: the same
-    float32 values :func:`_derivatives_kernel` writes into ``hess`` (same expressions, same rounding)."""
+    float32 values :func:`field_derivatives` writes into ``hess`` (same expressions, same rounding)."""
     ya = y - 1 if y > r0 else r0
     yb = y + 1 if y < r1 - 1 else r1 - 1
     xa = x - 1 if x > c0 else c0
@@ -296,7 +296,7 @@ class TemporalDistanceField:
             img = cv2.GaussianBlur(buf, (k, k), 0, borderType=cv2.BORDER_REPLICATE) if k >= 3 else buf
             self.value[s, r0:r1, c0:c1] = img
             # Central differences (pixels^-1) and, for Newton steps, second differences (pixels^-2).
-            _derivatives_kernel(img, r0, c0, bool(curvature), self.grad_u[s], self.grad_v[s], self.hess[0, s], self.hess[1, s], self.hess[2, s])
+            field_derivatives(img, r0, c0, bool(curvature), self.grad_u[s], self.grad_v[s], self.hess[0, s], self.hess[1, s], self.hess[2, s])
         self.slots_ready = tuple(slots)
         self.box[:] = (r0, r1, c0, c1)
 

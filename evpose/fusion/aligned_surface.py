@@ -30,6 +30,12 @@ with the map's albedo contours added (the map then explains most edges) 15 %
 per-point polarity fields over the whole box (21.0 vs 20.4-21.0 mm ATE); the
 distance field shrinks to one slot (0.44 vs 1.4 ms), paid back by composing
 (~0.8 ms CPU on a loaded machine).
+
+The composed map is kept as a list of patch pixels and the timestamps they show
+(:meth:`AlignedTimeSurface.patch_times`), not as an image: the tracker builds the
+distance field from the list (:mod:`evpose.fusion.aligned_field`, bit for bit the
+field of the image), and :meth:`AlignedTimeSurface.last_of` scatters the image
+only when asked (viewer, tests, the coarse field).
 """
 
 from __future__ import annotations
@@ -109,10 +115,11 @@ def _mark_patches(points, R_cw, t_cw, fx, fy, cx, cy, polarity, radius, box, gen
 
 
 @nb.njit(cache=True)
-def _compose(touched, n, tag, owner, last_on, last_off, last_comb, recent_us, out, has_events):
-    """``out`` at the patch pixels: the last-timestamp map each pixel's accepted polarity selects (everywhere else
-    ``out`` already reads NEVER); ``has_events[k]`` is set when a pixel point ``k`` owns holds an accepted event at
-    or after ``recent_us``."""
+def _select_times(touched, n, tag, owner, last_on, last_off, last_comb, recent_us, times, has_events):
+    """``times[i]``: the last timestamp the accepted polarity of patch pixel ``touched[i]`` selects (every other
+    pixel reads NEVER); ``has_events[k]`` is set when a pixel point ``k`` owns holds an accepted event at or after
+    ``recent_us``. A compact list, not an image: the distance field reads it directly
+    (:mod:`evpose.fusion.aligned_field`), and :meth:`AlignedTimeSurface.last_of` scatters it only when asked."""
     for i in range(n):
         r = touched[i, 0]
         c = touched[i, 1]
@@ -123,34 +130,51 @@ def _compose(touched, n, tag, owner, last_on, last_off, last_comb, recent_us, ou
             t = last_off[r, c]
         else:
             t = last_comb[r, c]
-        out[r, c] = t
+        times[i] = t
         if t >= recent_us:
             has_events[owner[r, c]] = True
 
 
 @nb.njit(cache=True)
-def _count_removed(x, y, p, keep, width, lut, gen, tag, box):
-    """(events judged, events outside every patch, events of the wrong polarity inside a patch)."""
+def _scatter_times(touched, n, times, out):
+    """``out`` at the patch pixels: their selected timestamps (the rest of ``out`` already reads NEVER)."""
+    for i in range(n):
+        out[touched[i, 0], touched[i, 1]] = times[i]
+
+
+@nb.njit(cache=True)
+def _judge_events(x, y, p, keep, width, lut, gen, tag, owner, dist2, box, polarity, r2, out_label, out_point):
+    """One pass over a step's events: the counts of the filter (events judged, outside every patch, of the wrong
+    polarity inside a patch) and, for the kept events in order, the labels and owning points :func:`_classify_owned`
+    gives within ``sqrt(r2)`` (``out_*`` hold one entry per kept event). One pass instead of two over the events
+    (profiled in ``full`` at 346x260: the two passes were about a third of the filter's kernel time)."""
     n = 0
     outside = 0
     wrong = 0
     height = tag.shape[0]
+    m = 0
     for i in range(x.shape[0]):
         if not keep[i]:
             continue
+        out_label[m] = -1
+        out_point[m] = -1
+        m += 1
         j = lut[np.int64(y[i]) * width + np.int64(x[i])]
         if j < 0:
             continue
         n += 1
         r = j // width
         c = j - r * width
-        a = 0
-        if box[0] <= r < box[1] and box[2] <= c < box[3] and r < height and (tag[r, c] >> 2) == gen:
-            a = tag[r, c] & 3
-        if a == 0:
+        if not (box[0] <= r < box[1] and box[2] <= c < box[3] and r < height and (tag[r, c] >> 2) == gen):
             outside += 1
-        elif (a == 1 and p[i] < 0) or (a == 2 and p[i] > 0):
+            continue
+        a = tag[r, c] & 3
+        if (a == 1 and p[i] < 0) or (a == 2 and p[i] > 0):
             wrong += 1
+        k = owner[r, c]
+        if k >= 0 and dist2[r, c] <= r2:
+            out_point[m - 1] = k
+            out_label[m - 1] = 1 if (polarity[k] == 0 or polarity[k] == p[i]) else 0
     return n, outside, wrong
 
 
@@ -199,20 +223,29 @@ class AlignedTimeSurface:
         self._polarity = np.zeros(0, np.int8)
         self.last_point_count = -1
         """Number of points of the last :meth:`compose` (-1 before the first)."""
-        self._last = np.full((self.height, self.width), NEVER_US, np.int64)
-        # Pixels (row, column) the last compose wrote: only they are reset next time. Every array reads "no patch"
-        # everywhere else, which keeps a step's output independent of the steps before it.
+        # Pixels (row, column) of the last compose's patches and the timestamp each selects: all the map holds.
+        # Every array reads "no patch" everywhere else, which keeps a step's output independent of the steps before.
         self._touched = np.empty((self.height * self.width, 2), np.int32)
+        self._times = np.empty(self.height * self.width, np.int64)
         self._n_touched = 0
+        # The composed image, built only when :meth:`last_of` asks (the tracker's distance field reads the list):
+        # ``_written`` lists the pixels it holds timestamps at, to reset them before the next build.
+        self._last = np.full((self.height, self.width), NEVER_US, np.int64)
+        self._written = np.empty((0, 2), np.int32)
+        self._last_fresh = True
+        self.field_cache: dict = {}
+        """Scratch of :func:`~evpose.fusion.aligned_field.fill_distance_field` (decay table, buffer), reused between steps."""
         self.box = np.zeros(4, np.int64)
         self.point_has_events = np.zeros(0, np.bool_)
         """bool (M,) of the last :meth:`compose`: the point's patch shows a recent accepted event."""
         self.config = None
         self.last_counts: dict = {}
+        self._judged = None
+        """(r^2, count, first and last time, labels, points) of the kept events of the last compose, for :meth:`kept_labels`."""
 
     def compose(self, surface, points_world: np.ndarray, T_world_cam: np.ndarray, K: np.ndarray, polarity: np.ndarray,
                 radius_px: float, roi: tuple[int, int, int, int] | None, events=None, keep: np.ndarray | None = None,
-                t_us: int | None = None, empty_after_eta: float = 3.0) -> "AlignedTimeSurface":
+                t_us: int | None = None, empty_after_eta: float = 3.0, classify_radius_px: float | None = None) -> "AlignedTimeSurface":
         """Build ``T_align`` in ``roi`` from ``surface`` for map points (M, 3) with predicted ``polarity`` (M,) at ``T_world_cam``.
 
         ``events`` / ``keep`` (the step's batch and the mask of those stored in
@@ -220,6 +253,8 @@ class AlignedTimeSurface:
         :attr:`point_has_events` marks the points whose own patch pixels hold an
         accepted event younger than ``empty_after_eta`` time-surface constants at
         ``t_us`` (default: the newest event of the batch, or none is recent).
+        The same pass labels the kept events as :meth:`classify` would within
+        ``classify_radius_px`` (default ``radius_px``), so classifying them afterwards costs nothing.
         """
         if t_us is None:
             t_us = int(events.t[-1]) if events is not None and len(events) else int(NEVER_US)
@@ -233,7 +268,6 @@ class AlignedTimeSurface:
         pol = np.ascontiguousarray(polarity, np.int8).reshape(pts.shape[0])
         self._polarity = pol.copy()
         self.last_point_count = int(pol.size)
-        _reset_touched(self._touched, self._n_touched, self._last)
         self._gen += 1
         if self._gen > _MAX_GENERATION:  # tags would repeat: start over from an all-empty map
             self._tag.fill(0)
@@ -243,14 +277,23 @@ class AlignedTimeSurface:
                                             self._touched))
         self.point_has_events = np.zeros(pts.shape[0], np.bool_)
         recent = np.int64(t_us) - np.int64(round(float(empty_after_eta) * float(surface.config.eta_ms) * 1e3))
-        _compose(self._touched, self._n_touched, self._tag, self._owner, surface.last_of(1), surface.last_of(-1),
-                 surface.last_of(0), recent, self._last, self.point_has_events)
+        _select_times(self._touched, self._n_touched, self._tag, self._owner, surface.last_of(1), surface.last_of(-1),
+                      surface.last_of(0), recent, self._times, self.point_has_events)
+        self._last_fresh = False
         counts = {"points_single_polarity": int(np.count_nonzero(pol)), "points_both": int(pol.size - np.count_nonzero(pol)),
                   "points_with_events": int(np.count_nonzero(self.point_has_events))}
+        self._judged = None
         if events is not None and len(events):
             k = np.ones(len(events), np.bool_) if keep is None else np.ascontiguousarray(keep, np.bool_)
-            n, outside, wrong = _count_removed(events.x, events.y, events.p, k, self.width, self._lut, np.uint16(self._gen),
-                                                 self._tag, self.box)
+            n_kept = int(np.count_nonzero(k))
+            label = np.empty(n_kept, np.int8)
+            point = np.empty(n_kept, np.int32)
+            r2 = float(radius_px if classify_radius_px is None else classify_radius_px) ** 2
+            n, outside, wrong = _judge_events(events.x, events.y, events.p, k, self.width, self._lut, np.uint16(self._gen),
+                                              self._tag, self._owner, self._dist2, self.box, pol, r2, label, point)
+            if n_kept:
+                t_kept = events.t[k]
+                self._judged = (r2, n_kept, int(t_kept[0]), int(t_kept[-1]), label, point)
             counts.update(events_polarity_judged=int(n), events_polarity_removed=int(outside + wrong),
                           events_outside_patches=int(outside), events_wrong_polarity=int(wrong))
         else:
@@ -270,6 +313,16 @@ class AlignedTimeSurface:
                             self._polarity, float(radius_px) ** 2, label, point)
         return label, point
 
+    def kept_labels(self, events, radius_px: float) -> tuple[np.ndarray, np.ndarray] | None:
+        """:meth:`classify` of ``events`` when they are the kept events of the last :meth:`compose` (given its
+        ``keep``) and ``radius_px`` its ``classify_radius_px``: labelled in compose's pass, no second one. None when
+        they are not (same count and first/last times are checked)."""
+        j = self._judged
+        n = len(events)
+        if j is None or n != j[1] or float(radius_px) ** 2 != j[0] or int(events.t[0]) != j[2] or int(events.t[-1]) != j[3]:
+            return None
+        return j[4].copy(), j[5].copy()
+
     @property
     def accept(self) -> np.ndarray:
         """uint8 (H, W): polarity each pixel's patch accepts in the last :meth:`compose` (1 ON, 2 OFF, 3 both, 0 in
@@ -281,4 +334,15 @@ class AlignedTimeSurface:
         """int64 (H, W) composed last-timestamp map (``T_align`` has one polarity slot: 0)."""
         if int(polarity) != 0:
             raise ValueError("the aligned time surface has only the combined slot (0)")
+        if not self._last_fresh:
+            _reset_touched(self._written, self._written.shape[0], self._last)
+            _scatter_times(self._touched, self._n_touched, self._times, self._last)
+            self._written = self._touched[:self._n_touched].copy()
+            self._last_fresh = True
         return self._last
+
+    def patch_times(self) -> tuple[np.ndarray, np.ndarray]:
+        """(pixels int32 (n, 2) as (row, column), timestamps int64 (n,)): the patch pixels of the last :meth:`compose`
+        and what ``T_align`` shows there (views, valid until the next compose); every other pixel reads NEVER."""
+        n = self._n_touched
+        return self._touched[:n], self._times[:n]

@@ -62,7 +62,12 @@ class FusionConfig:
     each carries only a fraction of the information its own covariance claims; scaling by about the number of
     updates that share events lets the IMU smooth the wander. Measured (full mode, ATE mm for 1 / 30 / 300):
     landing 346x260 18.0 / 14.6 / 11.9, 240x180 28.3 / 23.6 / 22.2; fast landing 240x180 22.5 / 24.7 / 30.8
-    (rotation better at every scale). With white registration noise (bench ``fusion.backends``) 1 is optimal, ratio."""
+    (rotation better at every scale). With white registration noise (bench ``fusion.backends``) 1 is optimal.
+    Statistically (bench ``fusion.registration_wander``): the mean of N registrations has the variance of
+    N / tau_int independent ones, tau_int the errors' integrated autocorrelation time (50-63 updates on the landing,
+    31-62 on the bundled demos) while the covariance is about 1.5-2x conservative (NEES median 2.4-3.6 against
+    5.35), so tau_int / 2 ~ 30 is the consistent scale. Larger scales help the 2 s benchmark (300: 13.3 mm, 1000:
+    12.0 mm at 346x260, replayed) but not the 4 s demo landing (25.1 / 54.2 / 74.1 mm at 30 / 300 / 1000), ratio."""
     registration_min_sigma: float = field(default=1.0e-4, metadata={"min": 0.0, "max": 0.1, "step": 1e-5, "unit": "rad|m"})
     """Floor added in quadrature to the registration covariance diagonal so an over-confident registration cannot freeze the filter, rad or m."""
     constant_velocity_sigma: float = field(default=2.0, metadata={"min": 0.01, "max": 100.0, "step": 0.01, "unit": "m/s/sqrt(s)"})

@@ -178,6 +178,15 @@ class FactorGraphFusion:
         """Camera poses at IMU sample times in ``[t0, t1)``, each propagated from the state before it."""
         return imu_rate_trajectory(self.history, self.buffer, self.params, self.extrinsic, int(t0_us), int(t1_us))
 
+    def window_poses(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(t_us (N,), T_world_cam (N, 4, 4))`` of the states in the window, oldest first: the smoother's current
+        (smoothed) estimates, which for older states include the registrations that came after them."""
+        n = min(self.config.window_states, len(self.history), self.index + 1)
+        t = np.array([h[0] for h in self.history[len(self.history) - n :]], np.int64)
+        poses = [self.extrinsic.cam_pose(self.smoother.calculateEstimatePose3(self._keys(self.index - n + 1 + i)[0]).matrix())
+                 for i in range(n)]
+        return t, np.array(poses).reshape(n, 4, 4)
+
     def snapshot(self) -> dict:
         """The whole state, independent of this object: a copy of the smoother (its iSAM2 Bayes tree, values and
         factors over the window) plus the bookkeeping. Costs the same at any step (the window is bounded)."""

@@ -23,6 +23,9 @@ class FusionMotionPredictor:
             fusion.add_imu(imu)
         self.initial_velocity_world = initial_velocity_world
         self.last: FusedState | None = None
+        self.input_log: list | None = None
+        """When a list, every :meth:`report` appends ``(t_us, T_world_cam or None, covariance or None)`` to it: the
+        fusion's inputs, for offline studies (:mod:`evpose.fusion.replay`). Not part of the snapshot state."""
 
     def reset(self, t_us: int, T_world_cam: np.ndarray) -> None:
         self.last = self.fusion.initialize(int(t_us), T_world_cam, self.initial_velocity_world)
@@ -35,6 +38,9 @@ class FusionMotionPredictor:
 
     def report(self, t_us: int, T_world_cam: np.ndarray | None, covariance_6x6: np.ndarray | None) -> FusedState:
         """Fuse one step's registration (``None`` = failed) and return the fused state."""
+        if self.input_log is not None:
+            self.input_log.append((int(t_us), None if T_world_cam is None else np.array(T_world_cam, np.float64),
+                                   None if covariance_6x6 is None else np.array(covariance_6x6, np.float64)))
         self.last = self.fusion.update(int(t_us), T_world_cam, covariance_6x6)
         return self.last
 

@@ -435,7 +435,7 @@ class MapPolaritySelector:
         if self._aligned is None or (self._aligned.width, self._aligned.height) != (surface.width, surface.height):
             self._aligned = AlignedTimeSurface(surface.width, surface.height, self.calibration)
         out = self._aligned.compose(surface, points_world, T_world_cam, self.K, polarity, c.align_patch_radius_px, roi, events, keep,
-                                    t_us, c.empty_after_eta)
+                                    t_us, c.empty_after_eta, c.patch_radius_px)
         self._aligned_fresh = True
         self.last_counts.update(out.last_counts)
         return out
@@ -471,7 +471,8 @@ class MapPolaritySelector:
         if self._aligned_fresh and self._aligned is not None and self._aligned.last_point_count == idx.size:
             # This step's T_align grid already knows each pixel's nearest point (at the predicted pose, within
             # ~1 px of the registered one): label from it instead of building another nearest-point grid.
-            label, point = self._aligned.classify(events, r)
+            judged = self._aligned.kept_labels(events, r)  # usually labelled in compose's counting pass already
+            label, point = judged if judged is not None else self._aligned.classify(events, r)
         else:
             T = np.asarray(T_world_cam, np.float64)
             X = (self.map.points[idx] - T[:3, 3]) @ T[:3, :3]

@@ -135,3 +135,29 @@ def default_T_cam_imu() -> np.ndarray:
     T_imu_cam[:3, :3] = R_imu_cam
     T_imu_cam[:3, 3] = [0.05, 0.01, -0.02]
     return np.linalg.inv(T_imu_cam)
+
+
+def flight_with_registrations(seconds: float, rate_hz: float, seed: int):
+    """A MEMS-IMU analytic flight and noisy registrations at ``rate_hz`` (2 % gross outliers, a few 50-150 ms losses)."""
+    from evpose.core.camera import CameraCalibration
+
+    cal = CameraCalibration(346, 260, 300.0, 300.0, 172.5, 129.5, T_cam_imu=default_T_cam_imu())
+    motion = AnalyticMotion(AnalyticMotionConfig(duration_s=seconds + 0.2, imu_rate_hz=1000.0, acc_bias=(0.08, -0.05, 0.1),
+                                                 gyro_bias=(0.01, -0.02, 0.015), accel_noise_density=2e-3,
+                                                 gyro_noise_density=1.7e-4, seed=seed))
+    t0 = motion.config.t0_us
+    times = t0 + np.round(np.arange(1, int(seconds * rate_hz) + 1) * 1e6 / rate_hz).astype(np.int64)
+    gt = motion.camera_trajectory(times, cal.T_cam_imu)
+    rng = np.random.default_rng(seed + 1)
+    regs: list = []
+    for k in range(len(gt)):
+        T = gt.matrix(k)
+        T[:3, :3] = T[:3, :3] @ Rotation.from_rotvec(rng.normal(0, np.radians(0.3), 3)).as_matrix()
+        T[:3, 3] += T[:3, :3] @ rng.normal(0, 0.005, 3) + (rng.normal(0, 0.1, 3) if rng.random() < 0.02 else 0.0)
+        regs.append(T)
+    for start in rng.integers(100, len(regs) - 50, max(1, len(regs) // 400)):
+        for k in range(int(start), min(len(regs), int(start) + int(rng.integers(10, 30)))):
+            regs[k] = None  # tracking lost: the fusion bridges with the IMU
+    cov = np.diag([np.radians(0.3) ** 2] * 3 + [0.005**2] * 3)
+    first = (int(t0), motion.camera_trajectory([t0], cal.T_cam_imu).matrix(0), motion.camera_velocity([t0], cal.T_cam_imu)[0])
+    return cal, motion.imu(), first, times, regs, cov

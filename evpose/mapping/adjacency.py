@@ -47,6 +47,10 @@ def snap_to_intersections(
     other = (nb_lab >= 0) & (nb_lab != region[:, None])
     if reliable is not None:
         other &= reliable[np.maximum(nb_lab, 0)]
+    # Only a plane that meets this one at an angle defines a crease: a parallel surface close
+    # by (a wall 5 cm behind a shelf's back) must not hide the floor the back stands on.
+    cos_nb = np.abs(np.einsum("mkd,md->mk", plane_n[np.maximum(nb_lab, 0)], plane_n[region]))
+    other &= cos_nb < np.cos(min_angle_rad)
     has = other.any(axis=1)
     first = np.argmax(other, axis=1)  # nearest qualifying neighbour (query results are sorted)
     s = np.where(has, nb_lab[np.arange(m), first], -1)

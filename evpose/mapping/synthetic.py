@@ -185,3 +185,38 @@ def painted_plane(
     c = [np.array([x0, y0, 0.0]), np.array([x0 + w, y0, 0.0]), np.array([x0 + w, y0 + h, 0.0]), np.array([x0, y0 + h, 0.0])]
     edges = np.array([(c[i], c[(i + 1) % 4]) for i in range(4)], dtype=np.float64)
     return SyntheticScan(p, inten, edges)
+
+
+def cabinet_before_wall(
+    gap_m: float = 0.1,
+    size: tuple[float, float, float] = (0.6, 1.2, 1.2),
+    density: float = 100.0,
+    noise_m: float = 0.005,
+    seed: int = 0,
+) -> SyntheticScan:
+    """A cabinet (box, all five faces sampled, its back too) standing ``gap_m`` m in front of a wall, on a floor.
+
+    The room-scan case: a simulator (or a scan merged from many stations) samples the
+    cabinet's back face in the narrow gap, so a point's neighbours mix two parallel layers a
+    few centimetres apart. Floor 3 x 3 m (x in [0, 3], y in [-1.5, 1.5]), wall 3 x 2 m in the
+    plane x = 0; the cabinet's back face is at x = ``gap_m``. True edges: the cabinet's 12
+    edges and the wall-floor line. Range noise along the surface normals, Gaussian.
+    """
+    rng = np.random.default_rng(seed)
+    sx, sy, sz = size
+    floor = _rect(rng, np.array([0.0, -1.5, 0.0]), np.array([3.0, 0, 0]), np.array([0, 3.0, 0]), density)
+    o = np.array([gap_m, -sy / 2, 0.0])
+    ex, ey, ez = np.array([sx, 0, 0]), np.array([0, sy, 0]), np.array([0, 0, sz])
+    inside = (floor[:, 0] > gap_m) & (floor[:, 0] < gap_m + sx) & (np.abs(floor[:, 1]) < sy / 2)
+    floor = floor[~inside]
+    wall = _rect(rng, np.array([0.0, -1.5, 0.0]), np.array([0, 3.0, 0]), np.array([0, 0, 2.0]), density)
+    faces = [(o + ez, ex, ey, np.array([0, 0, 1.0])), (o, ey, ez, np.array([1.0, 0, 0])),
+             (o + ex, ey, ez, np.array([1.0, 0, 0])), (o, ex, ez, np.array([0, 1.0, 0])),
+             (o + ey, ex, ez, np.array([0, 1.0, 0]))]
+    parts = [(floor, np.array([0, 0, 1.0]), 0.4), (wall, np.array([1.0, 0, 0]), 0.7)]
+    parts += [(_rect(rng, origin, u, v, density), n, 0.3) for origin, u, v, n in faces]
+    pts = np.concatenate([p + n * rng.normal(0.0, noise_m, (p.shape[0], 1)) for p, n, _ in parts])
+    inten = np.concatenate([np.full(p.shape[0], a) for p, _, a in parts]) + rng.normal(0.0, 0.02, pts.shape[0])
+    box = Box((gap_m + sx / 2, 0.0), size)
+    edges = np.concatenate([_box_edges(box), [[[0.0, -1.5, 0.0], [0.0, 1.5, 0.0]]]])
+    return SyntheticScan(pts, np.clip(inten, 0, 1), edges)

@@ -42,3 +42,37 @@ def front_layer(points, labels, indices, centroids, plane_normals, depth, radius
                 out[i] = False
                 break
     return out
+
+
+def mid_layer_depth(edge_points, edge_region, points, labels, visible, tree, plane_normals, radius, layer_m,
+                    min_count=3):
+    """Edge points moved along their region's plane normal to half-way between two layers, where there are two.
+
+    A brightness edge of a panel a couple of centimetres proud of a wall (a picture, a door)
+    is traced in the wall's fitted plane, near the back layer, although it is the rim of a
+    step: the panel's front face on one side, the wall on the other. Where the region's
+    points within ``radius`` m of an edge point hold both hidden points (behind the front
+    layer, :func:`front_layer`) and visible points at least ``layer_m`` in front of their
+    median (``min_count`` of each), the point is put at the mid-depth of the two layers -
+    within half the step height of both rims. Elsewhere it stays. ``plane_normals`` (R, 3)
+    face the viewer. Returns the new (M, 3) points.
+    """
+    out = np.array(edge_points, np.float64, copy=True)
+    if out.shape[0] == 0:
+        return out
+    for i, near in enumerate(tree.query_ball_point(out, radius)):
+        near = np.asarray(near, np.int64)
+        r = edge_region[i]
+        near = near[labels[near] == r]
+        if near.size < 2 * min_count:
+            continue
+        off = (points[near] - out[i]) @ plane_normals[r]
+        hid = ~visible[near]
+        if hid.sum() < min_count:
+            continue
+        back = float(np.median(off[hid]))
+        front_sel = (~hid) & (off > back + layer_m)
+        if front_sel.sum() < min_count:
+            continue
+        out[i] += 0.5 * (float(np.median(off[front_sel])) + back) * plane_normals[r]
+    return out

@@ -143,6 +143,16 @@ class TrackingSession:
         if step != 0:
             self._snapshots.pop(int(step), None)
 
+    def snapshot_at(self, step: int):
+        """The snapshot kept at ``step`` (must be in :attr:`snapshot_steps`): an opaque object for
+        :meth:`adopt_snapshot` of another session of the same recording, map and configuration."""
+        return self._snapshots[int(step)]
+
+    def adopt_snapshot(self, step: int, snapshot) -> None:
+        """Keep ``snapshot`` (from :meth:`snapshot_at` of a session of the same recording, map and configuration)
+        as this session's snapshot at ``step``. Restoring copies its state out, so both sessions may use it."""
+        self._snapshots[int(step)] = snapshot
+
     def restore_snapshot(self, step: int) -> None:
         """Put the engine in the state of the snapshot at ``step`` (must be in :attr:`snapshot_steps`).
 

@@ -11,8 +11,9 @@ Plug-in points for fusion (issue 7): ``predictor`` (any :class:`MotionPredictor`
 e.g. IMU-driven) and ``polarity_selector`` (per used map point +1 / -1 / 0 for
 the TDF it is evaluated on). ``stpe`` mode uses a constant-velocity Kalman filter
 (:mod:`evpose.tracker.motion_filter`: each registration is fused with its
-covariance instead of copied into the track; ``motion_model`` picks it) and the
-combined-polarity TDF.
+covariance instead of copied into the track; ``motion_model`` picks it; its
+predicted covariance is also the registration's pose prior, scaled by
+``motion_filter.prior_residual_sigma``) and the combined-polarity TDF.
 """
 
 from __future__ import annotations
@@ -31,6 +32,8 @@ from evpose.errors import InputError
 from evpose.frontend.distance_field import TemporalDistanceField
 from evpose.frontend.noise_filter import ConsistencyNoiseFilter
 from evpose.frontend.time_surface import SeparatedTimeSurface
+from evpose.fusion import aligned_field
+from evpose.fusion.aligned_surface import AlignedTimeSurface
 from evpose.tracker.config import MotionModel, TrackerConfig
 from evpose.tracker.motion_filter import ConstantVelocityKalman
 from evpose.tracker.predictor import ConstantPosePredictor, ConstantVelocityPredictor, MotionPredictor
@@ -246,7 +249,10 @@ class Tracker:
         pols = (0,) if field_polarity is None else tuple(sorted({int(p) for p in np.unique(field_polarity)}))
         # Registration takes the curvature from the field's values (bit for bit the same): no curvature images.
         curv = False
-        self.distance_field.compute(surface, until, pols, roi, curv)
+        if isinstance(surface, AlignedTimeSurface):  # issue 7: T_align's field from its patch pixels, same values
+            aligned_field.fill_distance_field(surface, self.distance_field, until, roi, curv)
+        else:
+            self.distance_field.compute(surface, until, pols, roi, curv)
         levels = [self.distance_field]
         if self.coarse_field is not None:
             self.coarse_field.compute(surface, until, pols, self._field_box(pts, predicted, True), curv)
@@ -271,7 +277,7 @@ class Tracker:
                 # (all-zero information = no prior), unless the filter's own covariance is asked to act as the prior.
                 prior_info = self.predictor.prior_information(until) if self.config.motion_filter.prior_in_registration else _NO_PRIOR
             reg = register_to_map(levels, pts, predicted, self.K, self.config.registration, field_polarity, twist_per_s=twist,
-                                  prior_information=prior_info)
+                                  prior_information=prior_info, prior_residual_sigma=self.config.motion_filter.prior_residual_sigma)
             reason = reg.reason
         timings["registration"] = _ms(t0)
 

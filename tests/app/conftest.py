@@ -2,9 +2,23 @@
 
 from __future__ import annotations
 
+import os
+
 import pytest
 
 from app_scenes import map_scene, sweeping_bar_recording
+
+
+@pytest.fixture(autouse=True, scope="session")
+def _private_viewer_cache(tmp_path_factory):
+    """Viewers made by tests (module-scoped ones too) keep their disk cache in a temporary folder, never ~/.cache."""
+    old = os.environ.get("XDG_CACHE_HOME")
+    os.environ["XDG_CACHE_HOME"] = str(tmp_path_factory.mktemp("xdg_cache"))
+    yield
+    if old is None:
+        os.environ.pop("XDG_CACHE_HOME", None)
+    else:
+        os.environ["XDG_CACHE_HOME"] = old
 
 
 @pytest.fixture

@@ -114,3 +114,15 @@ def test_empty_data_folders_still_serve(tmp_path):
         assert "does not exist" in app.rec_info.content
     finally:
         app.stop()
+
+
+def test_a_disk_cache_inside_a_data_folder_is_turned_off_and_the_reason_shown(tmp_path):
+    from app.disk_cache import DiskCacheConfig
+
+    app = ViewerApp(AppConfig(data=[tmp_path], port=free_port(), export_dir=tmp_path.parent / "exports_cache_note",
+                              disk_cache=DiskCacheConfig(directory=tmp_path / "cache")))
+    try:
+        assert app.cfg.disk_cache.enabled is False and "inside the data folder" in app.rec_info.content
+    finally:
+        app.stop()
+    assert not (tmp_path / "cache").exists()

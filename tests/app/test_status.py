@@ -23,3 +23,14 @@ def test_events_only_status_has_no_run_ahead_note(bar_recording):
     f = Frame(3, 15_000, z, z, z, EventArray.empty(), EventArray.empty())
     text = status_markdown(f, eng, {"state": "paused", "speed": 1.0, "real_time_factor": 0.5})
     assert "step 3" in text and "real-time factor 0.50" in text and "run-ahead" not in text
+
+
+def test_run_ahead_note_says_what_came_from_the_disk_cache_and_why_it_stopped_writing():
+    disk = SimpleNamespace(error="")
+    eng = SimpleNamespace(n_steps=2000, frontier=100, step_us=5000, ready_steps=2000, disk_steps=2000, disk=disk)
+    note = run_ahead_note(eng)
+    assert note.startswith("run-ahead done: all 10.00 s ready") and "10.00 s read from the disk cache" in note and "at 0.50 s" in note
+    disk.error = "disk cache off: no space left"
+    eng.ready_steps = eng.disk_steps = 400
+    note = run_ahead_note(eng)
+    assert note.startswith("run-ahead: 2.00 of 10.00 s ready (computing") and "no space left" in note

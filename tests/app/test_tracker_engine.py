@@ -64,8 +64,8 @@ def test_prefetch_leaves_the_shown_step_unchanged_and_keeps_grid_frames(squares_
     assert all(k in eng.cache for k in range(0, len(results), every))
     for k in (0, every * 3, (len(results) - 1) // every * every):
         _same_frame(eng.cache.get(k), results[k])
-    # It never restores, so it keeps no snapshot but the first.
-    assert eng._ahead.snapshot_steps == [0]
+    # It keeps a snapshot every 100 ms (for the shown session) and has never restored one.
+    assert eng._ahead.snapshot_steps == list(range(0, eng.n_steps + 1, 20))
 
 
 def test_seek_near_lands_on_the_kept_frame_at_or_before_the_target(squares_scene):
@@ -131,7 +131,7 @@ def test_a_tiny_budget_keeps_the_frames_nearest_the_shown_step(squares_scene):
 def test_a_jump_past_the_run_ahead_is_made_by_the_run_ahead_and_kept(squares_scene):
     rec, cmap = squares_scene
     results = _headless(rec, cmap)
-    eng = TrackerEngine(rec, cmap)  # every step kept
+    eng = TrackerEngine(rec, cmap, cache=FrameCacheConfig(every_ms=5.0))  # every step kept
     eng.step()
     eng.prefetch(5)
     f = eng.seek(results[70].t_us)
@@ -149,3 +149,75 @@ def test_the_run_ahead_started_late_does_not_hold_back_the_shown_session(squares
     eng.prefetch(3)  # the run-ahead starts at step 0, far behind
     f = eng.step()
     assert f.index == 41 and np.array_equal(f.pose, results[41].pose) and eng.frontier == 3
+
+
+def test_the_run_ahead_computes_debug_products_only_on_the_frame_grid(squares_scene):
+    rec, cmap = squares_scene
+    eng = TrackerEngine(rec, cmap)  # default grid: 20 ms, every 4th step at 200 Hz
+    assert eng.cache.every == 4
+    ahead = eng._new_session()
+    debug_steps = []
+    step = ahead.step
+
+    def spy(debug=False):
+        if debug:
+            debug_steps.append(ahead.step_count)
+        return step(debug=debug)
+
+    ahead.step = spy
+    eng._ahead = ahead
+    while eng.prefetch(50):
+        pass
+    assert debug_steps == list(range(0, eng.n_steps, 4))
+    assert sorted(eng.cache._frames) == debug_steps and len(eng._summaries) == eng.n_steps
+
+
+def test_exact_steps_off_the_grid_restore_a_snapshot_the_run_ahead_left(squares_scene):
+    rec, cmap = squares_scene
+    results = _headless(rec, cmap)
+    eng = TrackerEngine(rec, cmap, cache=FrameCacheConfig(every_ms=25.0))
+    eng.step()
+    while eng.prefetch(50):
+        pass
+    assert 40 in eng._ahead.snapshot_steps and 40 not in eng.session.snapshot_steps
+    f = eng.seek_step(57)  # off the grid: replayed from the run-ahead's snapshot at 40, not from step 1
+    assert f.index == 57 and eng.session.step_count == 58 and 40 in eng.session.snapshot_steps
+    _same_frame(f, _headless(rec, cmap, debug_at=(57,))[57])
+    f = eng.seek_step(56)  # and back: the same snapshot again
+    assert f.index == 56 and np.array_equal(f.pose, results[56].pose) and eng.session.step_count == 57
+    f = eng.step()
+    assert f.index == 57 and np.array_equal(f.pose, results[57].pose)
+
+
+def test_a_stride_shorter_than_the_grid_plays_the_next_kept_frame(squares_scene):
+    rec, cmap = squares_scene
+    results = _headless(rec, cmap)
+    eng = TrackerEngine(rec, cmap, cache=FrameCacheConfig(every_ms=25.0))  # every 5 steps
+    eng.step()
+    while eng.prefetch(50):
+        pass
+    shown = [eng.play_step(2).index for _ in range(4)]
+    assert shown == [5, 10, 15, 20]
+    assert all(np.array_equal(eng.history[k].pose, results[k].pose) for k in range(21))
+    eng2 = TrackerEngine(rec, cmap, cache=FrameCacheConfig(every_ms=25.0))  # no run-ahead: grid steps are computed
+    eng2.step()
+    assert [eng2.play_step(2).index for _ in range(2)] == [5, 10] and 5 in eng2.cache
+
+
+def test_the_run_ahead_thins_its_snapshots_to_their_budget_and_steps_stay_exact(squares_scene):
+    rec, cmap = squares_scene
+    results = _headless(rec, cmap)
+    probe = TrackerEngine(rec, cmap, cache=FrameCacheConfig(snapshot_every_ms=50.0))
+    probe.prefetch(10)
+    one = probe._snapshot_bytes
+    assert one > 0
+    eng = TrackerEngine(rec, cmap, cache=FrameCacheConfig(every_ms=25.0, snapshot_every_ms=50.0, snapshot_budget_mb=3.5 * one / 2**20))
+    eng.step()
+    while eng.prefetch(50):
+        pass
+    kept = eng._ahead.snapshot_steps
+    assert len(kept) * one <= 3.5 * one and kept[0] == 0
+    assert eng._snapshot_spacing > 10 and all(k % eng._snapshot_spacing == 0 for k in kept)
+    for k in (kept[-1] + 3, 13):
+        f = eng.seek_step(k)
+        assert f.index == k and np.array_equal(f.pose, results[k].pose)

@@ -90,3 +90,40 @@ def test_track_in_a_fused_mode_without_imu_is_a_one_line_error(files, tmp_path, 
     err = capsys.readouterr().err.strip()
     assert code == 2 and "needs IMU data" in err and len(err.splitlines()) == 1
     assert not (tmp_path / "e.txt").exists()
+
+
+@pytest.fixture(scope="module")
+def landing_files(sim_landing_small, tmp_path_factory):
+    """0.3 s of the small simulated landing (with IMU) and a map sampled along its true edges."""
+    import dataclasses
+
+    from evpose.bench.registration_bias import true_edge_points
+    from evpose.core.contour_map import ContourMap
+
+    rec = sim_landing_small.recording
+    rec = dataclasses.replace(rec, events=rec.events.time_window(int(rec.events.t[0]), int(rec.events.t[0]) + 300_000))
+    d = tmp_path_factory.mktemp("track_full")
+    write_recording_h5(d / "rec.h5", rec)
+    write_contour_map(d / "map.ply", ContourMap.from_points(true_edge_points(sim_landing_small.edges, step_m=0.02)))
+    return d, rec
+
+
+def test_smoothed_trajectory_is_written_beside_the_real_time_one(landing_files, tmp_path):
+    d, rec = landing_files
+    code = run(["track", str(d / "rec.h5"), "--map", str(d / "map.ply"), "--out", str(tmp_path / "e.txt"), "--mode", "full",
+                "--smoothed", str(tmp_path / "s.txt"), "--no-progress"])
+    assert code == 0
+    online, smooth = read_tum(tmp_path / "e.txt"), read_tum(tmp_path / "s.txt")
+    assert len(online) > 20 and np.array_equal(online.t, smooth.t)
+    assert not np.array_equal(online.position, smooth.position)  # re-estimated with later registrations
+    gt = rec.ground_truth.interpolate(smooth.t)
+    assert np.max(np.linalg.norm(smooth.position - gt.position, axis=1)) < 0.05
+
+
+def test_smoothed_needs_the_factor_graph(landing_files, tmp_path, capsys):
+    d, _ = landing_files
+    code = run(["track", str(d / "rec.h5"), "--map", str(d / "map.ply"), "--out", str(tmp_path / "e.txt"), "--mode", "stpe",
+                "--smoothed", str(tmp_path / "s.txt"), "--no-progress"])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and "--smoothed needs --mode full" in err and len(err.splitlines()) == 1
+    assert not (tmp_path / "s.txt").exists()

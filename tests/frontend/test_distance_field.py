@@ -137,13 +137,13 @@ def test_blurred_minimum_trails_a_moving_edge_more_with_a_wider_blur():
 
 
 def test_derivative_kernel_matches_replicated_border_differences_on_any_box_shape():
-    from evpose.frontend.distance_field import _derivatives_kernel
+    from evpose.frontend.distance_field import field_derivatives
 
     rng = np.random.default_rng(3)
     for h, w in [(2, 2), (2, 7), (9, 3), (17, 31)]:
         img = rng.random((h, w)).astype(np.float32)
         outs = [np.full((h + 4, w + 6), 7.0, np.float32) for _ in range(5)]
-        _derivatives_kernel(img, 1, 2, True, *outs)
+        field_derivatives(img, 1, 2, True, *outs)
         p = np.pad(img, 1, mode="edge")
         c, lf, rt, up, dn = p[1:-1, 1:-1], p[1:-1, :-2], p[1:-1, 2:], p[:-2, 1:-1], p[2:, 1:-1]
         d = np.float64

@@ -130,3 +130,62 @@ def test_compose_after_the_generation_tags_wrap_equals_a_fresh_one():
     assert np.array_equal(again.last_of(0), fresh.last_of(0)) and np.array_equal(again.accept, fresh.accept)
     assert again.last_counts == fresh.last_counts
     assert all(np.array_equal(x, y) for x, y in zip(again.classify(ev, 2.0), fresh.classify(ev, 2.0)))
+
+
+def _nearest_point_reference(uv, pol, radius, box):
+    """Brute force over every pixel of the box: polarity flags of all nearest points within ``radius`` (float32
+    squared distances, as the kernel rounds them), the smallest index of them, its squared distance."""
+    flag = np.zeros((H, W), np.uint8)
+    owner = np.full((H, W), -1, np.int64)
+    best = np.full((H, W), np.inf, np.float32)
+    bits = np.where(pol > 0, 1, np.where(pol < 0, 2, 3)).astype(np.uint8)
+    r0, r1, c0, c1 = box
+    rad = int(np.ceil(radius))
+    for yy in range(r0, r1):
+        for xx in range(c0, c1):
+            for k in range(len(uv)):
+                u, v = uv[k]
+                if abs(xx - np.floor(u + 0.5)) > rad or abs(yy - np.floor(v + 0.5)) > rad:
+                    continue  # outside the point's square window, as the kernel scans it
+                d = np.float32((xx - u) ** 2 + (yy - v) ** 2)
+                if d > radius * radius:
+                    continue
+                if d < best[yy, xx]:
+                    best[yy, xx], owner[yy, xx], flag[yy, xx] = d, k, bits[k]
+                elif d == best[yy, xx]:
+                    flag[yy, xx] |= bits[k]
+    return flag, owner, best
+
+
+def test_patches_match_a_brute_force_nearest_point_rule_with_ties():
+    # Points on half-pixel and integer positions create equidistant pixels, of both polarities.
+    rng = np.random.default_rng(5)
+    uv = np.r_[np.stack([rng.integers(0, W * 2, 60) / 2.0, rng.integers(0, H * 2, 60) / 2.0], 1), [[-2.0, 15.5], [30.0, 47.5]]]
+    pol = rng.integers(-1, 2, len(uv)).astype(np.int8)
+    box = (3, 45, 2, 60)
+    a = AlignedTimeSurface(W, H)
+    for _ in range(2):  # reused instance: the second compose must not see the first's patches
+        a.compose(_surface(_events([1], [1], [1])), _points_at(uv), np.eye(4), K, pol, 3.0, box)
+    flag, owner, _ = _nearest_point_reference(uv, pol, 3.0, box)
+    assert np.array_equal(a.accept, flag)
+    ev = _events(np.repeat(np.arange(W), H), np.tile(np.arange(H), W), np.ones(W * H, np.int8))
+    _, point = a.classify(ev, 3.0)
+    assert np.array_equal(point, owner[ev.y, ev.x])
+    assert np.count_nonzero(flag == 3) > 0 and len(np.unique(flag)) == 4  # ties and all polarities occurred
+
+
+def test_kept_events_are_labelled_in_the_compose_pass_exactly_as_classify_labels_them():
+    rng = np.random.default_rng(5)
+    uv = np.stack([rng.uniform(5, W - 5, 30), rng.uniform(5, H - 5, 30)], 1)
+    pol = rng.integers(-1, 2, 30).astype(np.int8)
+    ev = _events(rng.integers(0, W, 400), rng.integers(0, H, 400), rng.choice([-1, 1], 400))
+    keep = rng.random(400) < 0.7
+    a = AlignedTimeSurface(W, H).compose(_surface(ev), _points_at(uv), np.eye(4), K, pol, 4.0, (4, 40, 6, 60), ev, keep,
+                                         classify_radius_px=2.0)
+    kept = ev[keep]
+    judged = a.kept_labels(kept, 2.0)
+    assert judged is not None
+    assert all(np.array_equal(x, y) for x, y in zip(judged, a.classify(kept, 2.0)))
+    assert (judged[0] >= 0).any() and (judged[0] == 0).any() and (judged[0] == -1).any()
+    # Other events or another radius are not the compose pass's: classify them afresh.
+    assert a.kept_labels(ev, 2.0) is None and a.kept_labels(kept, 3.0) is None

@@ -29,6 +29,22 @@ def test_parallel_neighbour_is_not_a_crease():
     assert adj[0] == -1 and np.allclose(out[0], [0.98, 0.5, 0.5])
 
 
+def test_parallel_surface_closer_than_the_crease_does_not_hide_it():
+    # Region 0: a shelf's back face y = 2.95 (contour point 3 cm above its bottom rim); region 2:
+    # the wall y = 3.0, 5 cm behind (nearer in the cloud); region 1: the floor z = 0 below.
+    xx, zz = np.meshgrid(np.linspace(0, 1, 21), np.linspace(0.0, 0.5, 11))
+    wall = np.column_stack([xx.ravel(), np.full(xx.size, 3.0), zz.ravel()])
+    xf, yf = np.meshgrid(np.linspace(0, 1, 21), np.linspace(2.0, 2.9, 10))
+    floor = np.column_stack([xf.ravel(), yf.ravel(), np.zeros(xf.size)])
+    cloud = np.vstack([wall, floor])
+    labels = np.concatenate([np.full(wall.shape[0], 2), np.ones(floor.shape[0])]).astype(np.int32)
+    c = np.array([[0.5, 2.95, 0.5], [0.5, 2.5, 0.0], [0.5, 3.0, 0.25]])
+    n = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0]])
+    out, adj = snap_to_intersections(np.array([[0.5, 2.95, 0.03]]), np.array([0]), labels, cKDTree(cloud), c, n,
+                                     0.2, np.radians(30), 0.1, k=40)
+    assert adj[0] == 1 and np.allclose(out[0], [0.5, 2.95, 0.0])
+
+
 def test_step_face_points_pull_the_contour_onto_the_face():
     # A 15 cm step: the face at x = 1.5 has unassigned points between z = 0 and 0.15.
     rng = np.random.default_rng(0)

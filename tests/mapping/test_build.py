@@ -7,7 +7,7 @@ import pytest
 
 from evpose.mapping import MapBuildConfig, MapBuildError, build_contour_map
 from evpose.mapping.edge_metrics import contour_precision_recall, point_segment_distances
-from evpose.mapping.synthetic import Box, boxes_on_ground, wall_with_window
+from evpose.mapping.synthetic import Box, boxes_on_ground, cabinet_before_wall, wall_with_window
 
 
 def test_boxes_on_ground_meet_precision_and_recall_targets(boxes_scan, boxes_map):
@@ -74,6 +74,23 @@ def test_map_without_intensity_has_unknown_brightness(boxes_scan):
     small = boxes_on_ground((Box((0.0, 0.0), (0.8, 0.8, 0.4)),), half_extent=1.2, seed=5)
     cmap = build_contour_map(small.points)
     assert len(cmap) > 0 and np.all(cmap.brightness_sign == 0)
+
+
+def test_cabinet_a_few_cm_before_a_wall_keeps_its_back_edges_apart_from_the_wall():
+    # The cabinet's back face 6 cm in front of the wall, both sampled (400 points/m^2, 5 mm
+    # noise). Plain PCA normals and a 4.5 cm growth offset (the builder before one-sided
+    # normals) merge the two layers; measured over seeds 0-3: precision 0.75 -> 0.89,
+    # recall 0.66 -> 0.96.
+    new, old = [], []
+    for seed in (0, 1):
+        scan = cabinet_before_wall(gap_m=0.06, density=400.0, seed=seed)
+        for out, cfg in ((new, MapBuildConfig()), (old, MapBuildConfig(robust_normals=False, grow_offset_m=0.045))):
+            cmap = build_contour_map(scan.points, intensity=scan.intensity, config=cfg)
+            m = contour_precision_recall(cmap.points, scan.edges, cloud=scan.points)
+            out.append((m["precision"], m["recall"]))
+    precision, recall = np.mean(new, axis=0)
+    assert precision >= 0.85 and recall >= 0.9
+    assert recall > np.mean(old, axis=0)[1] + 0.15
 
 
 def test_build_is_bit_identical_for_the_same_input():

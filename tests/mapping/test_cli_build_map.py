@@ -110,3 +110,20 @@ def test_build_map_traces_a_painted_panel_unless_told_not_to(tmp_path):
     assert len(cmap) > 200 and np.all(cmap.brightness_sign == 1)
     # Without brightness edges a lone plane has no contour: a one-line error, exit code 2.
     assert run(["build-map", str(cloud), "--out", str(tmp_path / "none.ply"), "--quiet", "--no-albedo-edges"]) == 2
+
+
+def test_build_map_defaults_are_the_library_defaults():
+    # The CLI spells its defaults out for tyro; they must stay those of MapBuildConfig.
+    import inspect
+
+    from evpose.cli.build_map import main
+    from evpose.mapping import MapBuildConfig
+
+    params = inspect.signature(main).parameters
+    cfg = MapBuildConfig()
+    pairs = {"k": cfg.k_neighbours, "angle_deg": cfg.angle_threshold_deg, "plane_angle_deg": cfg.plane_angle_deg,
+             "curvature": cfg.curvature_limit, "min_region": cfg.min_region_points,
+             "plane_distance": cfg.plane_distance_m, "no_robust_normals": not cfg.robust_normals,
+             "no_snap": not cfg.snap, "no_albedo_edges": not cfg.albedo_edges}
+    for name, value in pairs.items():
+        assert params[name].default == value, name

@@ -52,3 +52,25 @@ def test_short_maps_are_ignored_and_missing_ground_truth_is_an_input_error():
     assert atlas_metrics([gt[:2]], gt, correct_scale=True).maps == []
     with pytest.raises(InputError):
         atlas_metrics([gt], gt[:1], correct_scale=True)
+
+
+def test_scale_drift_is_zero_for_a_uniformly_scaled_map_and_measures_a_scale_change():
+    gt = _gt()
+    uniform = atlas_metrics([_scaled_piece(gt, 0, 2_000_001, 0.25, [1, 2, 3])], gt, correct_scale=True).maps[0]
+    assert uniform.segment_scales == pytest.approx([4.0] * 4, rel=1e-6)
+    assert uniform.scale_drift_percent == pytest.approx(0.0, abs=1e-6)
+    # The map's second second is drawn 1.5x larger than its first (scale drift of a monocular map).
+    t, p = gt.t, gt.position.copy()
+    late = t >= 1_000_000
+    p[late] = p[late][0] + 1.5 * (p[late] - p[late][0]) + (p[late][0] - p[~late][-1]) * 0.5
+    drifting = Trajectory.from_arrays(t, p, gt.quat_xyzw)
+    m = atlas_metrics([drifting], gt, correct_scale=True, duration_s=2.0)
+    assert m.maps[0].scale_drift_percent == pytest.approx(50.0, rel=0.02)
+    assert m.to_dict()["scale_drift_percent_max"] == pytest.approx(50.0, rel=0.02)
+
+
+def test_scale_drift_of_a_map_shorter_than_two_segments_is_null_so_summaries_compare_equal():
+    gt = _gt()
+    short = atlas_metrics([_scaled_piece(gt, 0, 400_000, 2.0, [0, 0, 0])], gt, correct_scale=True).to_dict()
+    assert short["scale_drift_percent_max"] is None and short["per_map"][0]["scale_drift_percent"] is None
+    assert short == atlas_metrics([_scaled_piece(gt, 0, 400_000, 2.0, [0, 0, 0])], gt, correct_scale=True).to_dict()

@@ -175,6 +175,32 @@ def test_a_strong_prior_information_holds_the_pose_and_the_covariance_is_the_eve
     assert np.all(ratio > 0.2) and np.all(ratio < 5.0), ratio
 
 
+def test_inlier_residual_variance_gives_a_smaller_covariance_of_the_same_shape(scene):
+    field, pts, T_gt, cal, coarse = scene
+    cfg = RegistrationConfig(prior_translation_m=0.0, prior_rotation_deg=0.0)
+    everyone = register_to_map(field, pts, T_gt, cal.K, cfg)
+    cfg.residual_variance = reg.ResidualVariance.INLIERS
+    inliers = register_to_map(field, pts, T_gt, cal.K, cfg)
+    assert np.array_equal(everyone.T_world_cam, inliers.T_world_cam)  # only the covariance's scale changes
+    assert np.any(everyone.residuals > cfg.inlier_threshold)  # points that did not fire count only in "all"
+    ratio = inliers.covariance / everyone.covariance
+    assert np.allclose(ratio, ratio[0, 0]) and 0.0 < ratio[0, 0] < 1.0
+
+
+def test_prior_residual_sigma_argument_scales_the_prior_information(scene):
+    field, pts, T_gt, cal, coarse = scene
+    T0 = (gtsam.Pose3(T_gt) * gtsam.Pose3.Expmap(np.array([0.0, 0.01, 0, 0.02, 0.0, 0]))).matrix()
+    info = np.eye(6) * 1e4
+    cfg = RegistrationConfig(prior_residual_sigma=0.2)
+    same = register_to_map(field, pts, T0, cal.K, cfg, prior_information=info, prior_residual_sigma=0.2)
+    default = register_to_map(field, pts, T0, cal.K, cfg, prior_information=info)
+    assert np.array_equal(same.T_world_cam, default.T_world_cam)
+    # A larger sigma makes the same information a stiffer prior: the pose stays nearer its start.
+    loose = register_to_map(field, pts, T0, cal.K, cfg, prior_information=info, prior_residual_sigma=0.05)
+    stiff = register_to_map(field, pts, T0, cal.K, cfg, prior_information=info, prior_residual_sigma=2.0)
+    assert pose_error(stiff.T_world_cam, T0)[0] < pose_error(loose.T_world_cam, T0)[0]
+
+
 def test_damped_step_solves_the_levenberg_marquardt_system():
     rng = np.random.default_rng(0)
     M = rng.normal(size=(6, 6))

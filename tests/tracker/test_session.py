@@ -87,3 +87,16 @@ def test_forward_seek_over_known_results_jumps_by_snapshot_and_equals_an_uninter
     assert all(np.array_equal(a.pose, b.pose) and a.t_us == b.t_us for a, b in zip(s.results, ref))
     s.run()
     assert len(s.results) == len(ref) and all(np.array_equal(a.pose, b.pose) for a, b in zip(s.results, ref))
+
+
+def test_a_snapshot_handed_to_another_session_replays_the_same_steps(scene):
+    rec, cmap = scene
+    a, b = TrackingSession(rec, cmap, STPE), TrackingSession(rec, cmap, STPE)
+    for _ in range(6):
+        a.step()
+    step = a.take_snapshot()
+    b.adopt_snapshot(step, a.snapshot_at(step))
+    b.restore_snapshot(step)
+    for _ in range(4):
+        ra, rb = a.step(), b.step()
+        assert np.array_equal(ra.pose, rb.pose) and ra.status is rb.status

@@ -1,0 +1,209 @@
+"""Fusion benchmarks that run the whole tracker on the simulated moderate landing (from ground truth).
+
+* ``ablation``: stpe / stpe+filter / full / full with the EKF (paper Fig. 19):
+  accuracy (and the factor graph's offline smoothed trajectory), latency per
+  module and of the registration front end, share of events the polarity filter removes.
+* ``registration_wander``: why ``full`` stays near 16-18 mm: the registrations'
+  errors and, on the same recorded inputs, online / smoothed / EKF / dead-reckoning estimates.
+* ``aligned_field``: ``T_align``'s distance field from its patch list against the
+  image path, alternating in one process, outputs hashed.
+
+Registered under the ``fusion`` area by :mod:`evpose.bench.fusion`.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+
+import numpy as np
+
+from evpose.bench.stats import latency_summary
+
+
+def _load() -> dict:
+    la = os.getloadavg()
+    return {"load_avg_1min": float(la[0]), "cpus": os.cpu_count() or 0}
+
+
+ABLATION = (("stpe", "stpe", None), ("stpe+filter", "stpe+filter", None), ("stpe+filter_per_point_fields", "stpe+filter", False),
+            ("full", "full", None), ("full_per_point_fields", "full", False), ("full_ekf", "full:ekf", None))
+"""(name, mode[:fusion backend], polarity.event_filter override) of the ablation runs."""
+
+
+def ablation_run(recording, contour_map, mode: str, event_filter: bool | None = None) -> dict:
+    """One tracking run from ground truth: accuracy, losses, per-module latency and the polarity filter's counts.
+
+    ``stpe_latency`` is the registration front end per update (distance field +
+    polarity filter + registration, wall); ``events_removed_share`` is the share
+    of the noise-filtered events entering the SP-TS that ``T_align`` does not show
+    to registration (outside every map point's patch, or of the polarity the
+    patch does not accept), summed over the run.
+    """
+    from evpose.eval.metrics import Alignment, EvalConfig, evaluate
+    from evpose.fusion import FusionBackend
+    from evpose.tracker.config import TrackerConfig, TrackerMode
+    from evpose.tracker.session import TrackingSession
+    from evpose.tracker.step_result import TrackStatus
+
+    name, _, backend = mode.partition(":")
+    cfg = TrackerConfig(mode=TrackerMode(name))
+    if backend:
+        cfg.fusion.backend = FusionBackend(backend)
+    if event_filter is not None:
+        cfg.polarity.event_filter = bool(event_filter)
+    session = TrackingSession(recording, contour_map, cfg)
+    motion = session.tracker.components.motion
+    smooth = name == "full" and cfg.fusion.backend is FusionBackend.FACTOR_GRAPH
+    if smooth:  # record the fusion's inputs for the smoothed trajectory (after the run, off the latency figures)
+        from evpose.fusion.replay import FusionInputs, smoothed_trajectory
+
+        inputs = FusionInputs(int(motion.last.t_us), motion.last.T_world_cam.copy(), motion.initial_velocity_world)
+        motion.input_log = inputs.reports
+    cpu = []
+    while True:
+        c0 = time.thread_time()
+        r = session.step()
+        if r is None:
+            break
+        cpu.append((time.thread_time() - c0) * 1e3)
+    res = session.results
+    out: dict = {"updates": len(res), "lost_updates": sum(r.status is not TrackStatus.OK for r in res)}
+    traj = session.trajectory()
+    if len(traj) >= 3:
+        ev = evaluate(traj, recording.ground_truth, EvalConfig(align=Alignment.NONE))
+        out["ate_rmse_mm"], out["are_rmse_deg"] = ev.ate["rmse"] * 1e3, ev.are["rmse"]
+        if smooth:  # what only the graph can give: the trajectory smoothed over 400 states (2 s at 200 Hz), offline
+            ev = evaluate(smoothed_trajectory(cfg.fusion, recording.calibration, recording.imu, inputs), recording.ground_truth,
+                          EvalConfig(align=Alignment.NONE))
+            out["smoothed_ate_rmse_mm"], out["smoothed_are_rmse_deg"] = ev.ate["rmse"] * 1e3, ev.are["rmse"]
+    warm = res[5:] if len(res) > 10 else res
+    for m in ("distance_field", "polarity_filter", "registration", "fusion", "ego_motion", "culling", "total"):
+        out.update({k: v for k, v in latency_summary([r.timings_ms[m] for r in warm if m in r.timings_ms], f"{m}_").items()
+                    if k.endswith(("median_ms", "p99_ms"))})
+    stpe = [sum(r.timings_ms.get(m, 0.0) for m in ("distance_field", "polarity_filter", "registration")) for r in warm]
+    out.update({k: v for k, v in latency_summary(stpe, "stpe_latency_").items() if k.endswith(("median_ms", "p99_ms", "mean_ms"))})
+    out.update({k: v for k, v in latency_summary(cpu[5:] if len(cpu) > 10 else cpu, "update_cpu_").items() if k.endswith(("median_ms", "p99_ms"))})
+    judged = sum(r.counts.get("events_polarity_judged", 0) for r in res)
+    if judged:
+        out["events_removed_share"] = sum(r.counts.get("events_polarity_removed", 0) for r in res) / judged
+        out["events_outside_patches_share"] = sum(r.counts.get("events_outside_patches", 0) for r in res) / judged
+        out["events_wrong_polarity_share"] = sum(r.counts.get("events_wrong_polarity", 0) for r in res) / judged
+    used = sum(r.counts.get("points_used", 0) for r in res)
+    if "points_single_polarity" in res[-1].counts and used:
+        out["points_single_polarity_share"] = sum(r.counts.get("points_single_polarity", 0) for r in res) / used
+    out["iterations_median"] = float(np.median([r.counts.get("iterations", 0) for r in res]))
+    return out
+
+
+def bench_ablation(ctx) -> dict:
+    """EV-Pose ablation (paper Fig. 19) on the simulated moderate landing from ground truth, all runs in one process:
+    stpe, stpe+filter, full, full with the EKF, and the filter's per-point-field variant (no T_align) for comparison."""
+    from evpose.bench.tracking import landing_case
+
+    res, seconds = ((240, 180), 1.0) if ctx.quick else ((346, 260), 2.0)
+    rec, cmap = landing_case(ctx.work_dir, res, seconds, ctx.seed)
+    out: dict = {"resolution": f"{res[0]}x{res[1]}", "seconds": seconds, "map_points": len(cmap)}
+    for name, mode, event_filter in ABLATION:
+        if ctx.quick and event_filter is not None:
+            continue  # the quick suite keeps to the four modes of the paper's figure
+        out.update({f"{name}_{k}": v for k, v in ablation_run(rec, cmap, mode, event_filter).items()})
+    base = out.get("stpe_stpe_latency_median_ms")
+    if base:
+        out["filter_stpe_latency_change_pct"] = 100.0 * (out["stpe+filter_stpe_latency_median_ms"] - base) / base
+    out.update(_load())
+    return out
+
+
+def bench_registration_wander(ctx) -> dict:
+    """Why ``full`` stays near 16-18 mm (issue 7): the registrations' errors on the simulated moderate landing
+    (:func:`~evpose.fusion.registration_errors.analyse_registration_errors`: calibration, time correlation,
+    tilt/shift coupling), and on the same recorded inputs the online, fixed-lag and batch smoothed estimates, the
+    EKF, and IMU dead reckoning with the simulator's true biases (:func:`~evpose.fusion.replay.fusion_error_study`)."""
+    from evpose.bench.tracking import landing_case
+    from evpose.fusion.registration_errors import analyse_registration_errors, ate_are, pose_error_vectors
+    from evpose.fusion.replay import FusionInputs, fusion_error_study
+    from evpose.sim import SimulationConfig
+    from evpose.sim.cache import load_or_simulate
+    from evpose.tracker.config import TrackerConfig, TrackerMode
+    from evpose.tracker.session import TrackingSession
+
+    res, seconds = ((240, 180), 1.0) if ctx.quick else ((346, 260), 2.0)
+    rec, cmap = landing_case(ctx.work_dir, res, seconds, ctx.seed)
+    session = TrackingSession(rec, cmap, TrackerConfig(mode=TrackerMode.FULL))
+    motion = session.tracker.components.motion
+    inputs = FusionInputs(int(motion.last.t_us), motion.last.T_world_cam.copy(), motion.initial_velocity_world)
+    motion.input_log = inputs.reports
+    session.run()
+    regs = [(t, T, c) for t, T, c in inputs.reports if T is not None and c is not None]
+    errors = pose_error_vectors(np.array([r[0] for r in regs], np.int64), np.array([r[1] for r in regs]), rec.ground_truth)
+    out: dict = {"resolution": f"{res[0]}x{res[1]}", "seconds": seconds, **_load()}
+    out.update(analyse_registration_errors(errors, np.array([r[2] for r in regs])))
+    traj = session.trajectory()
+    out["full_online_ate_mm"], out["full_online_are_deg"] = ate_are(traj.t, traj.matrices(), rec.ground_truth)
+    truth = load_or_simulate(SimulationConfig(scenario="landing", seconds=seconds, resolution=res, seed=ctx.seed),
+                             ctx.work_dir / "tracking" / "sim").imu_truth
+    i0 = int(np.searchsorted(truth.samples.t, inputs.t0_us))
+    out.update(fusion_error_study(rec.calibration, rec.imu, inputs, rec.ground_truth, (truth.acc_bias[i0], truth.gyro_bias[i0])))
+    return out
+
+
+def _run_hashed(recording, contour_map, mode: str) -> tuple[str, list[float], dict]:
+    """One run from ground truth: sha256 of every update's outputs, per-update CPU (ms) and per-module wall (ms)."""
+    import hashlib
+
+    from evpose.tracker.config import TrackerConfig, TrackerMode
+    from evpose.tracker.session import TrackingSession
+
+    session = TrackingSession(recording, contour_map, TrackerConfig(mode=TrackerMode(mode)))
+    h, cpu, modules = hashlib.sha256(), [], {}
+    while True:
+        c0 = time.thread_time()
+        r = session.step()
+        if r is None:
+            break
+        cpu.append((time.thread_time() - c0) * 1e3)
+        for a in (r.pose, r.covariance, r.registration_pose, r.velocity):
+            h.update(b"-" if a is None else np.ascontiguousarray(a).tobytes())
+        h.update(f"{r.status}{sorted(r.counts.items())}".encode())
+        for k, v in r.timings_ms.items():
+            modules.setdefault(k, []).append(v)
+    return h.hexdigest(), cpu[5:], {k: v[5:] for k, v in modules.items()}
+
+
+def bench_aligned_field(ctx) -> dict:
+    """``T_align``'s distance field from its patch list (:mod:`evpose.fusion.aligned_field`) against ``compute`` over
+    the composed image (the previous path) in ``full`` and ``stpe+filter`` on the simulated landing: the runs
+    alternate old/new in one process (the machine is shared), every update's outputs are hashed (they must agree),
+    and per-update CPU and per-module wall medians / p99 are reported per path."""
+    from evpose.bench.tracking import landing_case
+    from evpose.fusion import aligned_field
+
+    res, seconds, rounds = ((240, 180), 1.0, 1) if ctx.quick else ((346, 260), 2.0, 2)
+    rec, cmap = landing_case(ctx.work_dir, res, seconds, ctx.seed)
+    fill = aligned_field.fill_distance_field
+
+    def image_path(aligned, field, t_us, roi=None, curvature=False):
+        field.compute(aligned, t_us, (0,), roi, curvature)
+
+    out: dict = {"resolution": f"{res[0]}x{res[1]}", "seconds": seconds, "rounds": rounds}
+    for mode in ("full", "stpe+filter"):
+        pooled: dict = {"image": ([], {}, set()), "patch_list": ([], {}, set())}
+        for i in range(rounds):
+            for path in (("image", "patch_list") if i % 2 == 0 else ("patch_list", "image")):
+                aligned_field.fill_distance_field = fill if path == "patch_list" else image_path
+                try:
+                    digest, cpu, modules = _run_hashed(rec, cmap, mode)
+                finally:
+                    aligned_field.fill_distance_field = fill
+                pooled[path][0].extend(cpu)
+                for k, v in modules.items():
+                    pooled[path][1].setdefault(k, []).extend(v)
+                pooled[path][2].add(digest)
+        for path, (cpu, modules, digests) in pooled.items():
+            out.update({f"{mode}_{path}_{k}": v for k, v in latency_summary(cpu, "update_cpu_").items() if k.endswith(("median_ms", "p99_ms"))})
+            for m in ("polarity_filter", "distance_field", "registration"):
+                out.update({f"{mode}_{path}_{k}": v for k, v in latency_summary(modules[m], f"{m}_").items() if k.endswith(("median_ms", "p99_ms"))})
+        out[f"{mode}_outputs_bit_identical"] = len(pooled["image"][2] | pooled["patch_list"][2]) == 1
+    out.update(_load())
+    return out

@@ -1,0 +1,20 @@
+"""Tests of the scene-richness figure of evpose/bench/slam.py (kept with the SLAM tests, whose area owns the module)."""
+
+import cv2
+import numpy as np
+
+from evpose.bench.slam import strong_corner_count
+
+
+def _blurred(draw) -> np.ndarray:
+    img = np.zeros((100, 120), np.float32)
+    draw(img)
+    return cv2.GaussianBlur(img, (5, 5), 1.0)
+
+
+def test_strong_corners_count_box_corners_but_not_points_along_a_straight_edge():
+    box = _blurred(lambda im: cv2.rectangle(im, (30, 30), (80, 70), 5.0, 2))
+    line = _blurred(lambda im: cv2.line(im, (5, 50), (115, 50), 5.0, 1))
+    assert strong_corner_count(box) >= 4  # inner and outer corners of the outline
+    assert strong_corner_count(line) <= 2  # only the two ends: the rest of the edge is ambiguous along itself
+    assert strong_corner_count(np.zeros((20, 20), np.float32)) == 0
