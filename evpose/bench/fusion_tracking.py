@@ -21,6 +21,16 @@ import numpy as np
 from evpose.bench.stats import latency_summary
 
 
+def _timed_steps(session):
+    """Step ``session`` to its end, yielding (step result, this thread's CPU time of the step in ms)."""
+    while True:
+        c0 = time.thread_time()
+        r = session.step()
+        if r is None:
+            return
+        yield r, (time.thread_time() - c0) * 1e3
+
+
 def _load() -> dict:
     la = os.getloadavg()
     return {"load_avg_1min": float(la[0]), "cpus": os.cpu_count() or 0}
@@ -60,13 +70,7 @@ def ablation_run(recording, contour_map, mode: str, event_filter: bool | None = 
 
         inputs = FusionInputs(int(motion.last.t_us), motion.last.T_world_cam.copy(), motion.initial_velocity_world)
         motion.input_log = inputs.reports
-    cpu = []
-    while True:
-        c0 = time.thread_time()
-        r = session.step()
-        if r is None:
-            break
-        cpu.append((time.thread_time() - c0) * 1e3)
+    cpu = [ms for _, ms in _timed_steps(session)]
     res = session.results
     out: dict = {"updates": len(res), "lost_updates": sum(r.status is not TrackStatus.OK for r in res)}
     traj = session.trajectory()
@@ -157,12 +161,8 @@ def _run_hashed(recording, contour_map, mode: str) -> tuple[str, list[float], di
 
     session = TrackingSession(recording, contour_map, TrackerConfig(mode=TrackerMode(mode)))
     h, cpu, modules = hashlib.sha256(), [], {}
-    while True:
-        c0 = time.thread_time()
-        r = session.step()
-        if r is None:
-            break
-        cpu.append((time.thread_time() - c0) * 1e3)
+    for r, ms in _timed_steps(session):
+        cpu.append(ms)
         for a in (r.pose, r.covariance, r.registration_pose, r.velocity):
             h.update(b"-" if a is None else np.ascontiguousarray(a).tobytes())
         h.update(f"{r.status}{sorted(r.counts.items())}".encode())

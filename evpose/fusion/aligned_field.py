@@ -70,9 +70,13 @@ def fill_distance_field(aligned: AlignedTimeSurface, field: TemporalDistanceFiel
     k = int(field.config.blur_px)
     if k >= 2 and k % 2 == 0:
         k += 1
-    buf = cache.get("buf")
-    if buf is None or buf.shape != (r1 - r0, c1 - c0):
-        buf = cache["buf"] = np.empty((r1 - r0, c1 - c0), np.float32)
+    # The box changes every step: views of two whole-image scratch rows (the TDF, and the blur of a box that is not
+    # full-width), not two new arrays per step; _sparse_tdf overwrites all of ``buf``, the blur all of its output.
+    flat = cache.get("flat")
+    if flat is None or flat.shape[1] < field.height * field.width:
+        flat = cache["flat"] = np.empty((2, field.height * field.width), np.float32)
+    size = (r1 - r0) * (c1 - c0)
+    buf = flat[0, :size].reshape(r1 - r0, c1 - c0)
     touched, times = aligned.patch_times()
     _sparse_tdf(touched, times, times.shape[0], np.int64(t_us), cache["lut"], int(cache["shift"]), r0, r1, c0, c1, buf)
     target = field.value[0, r0:r1, c0:c1]
@@ -82,7 +86,8 @@ def fill_distance_field(aligned: AlignedTimeSurface, field: TemporalDistanceFiel
         if not np.shares_memory(img, field.value):
             target[...] = img
     else:
-        img = cv2.GaussianBlur(buf, (k, k), 0, borderType=cv2.BORDER_REPLICATE) if k >= 3 else buf
+        img = cv2.GaussianBlur(buf, (k, k), 0, dst=flat[1, :size].reshape(r1 - r0, c1 - c0),
+                               borderType=cv2.BORDER_REPLICATE) if k >= 3 else buf
         target[...] = img
     field_derivatives(img, r0, c0, bool(curvature), field.grad_u[0], field.grad_v[0], field.hess[0, 0], field.hess[1, 0], field.hess[2, 0])
     field.slots_ready = (0,)

@@ -291,9 +291,9 @@ class AlignedTimeSurface:
             r2 = float(radius_px if classify_radius_px is None else classify_radius_px) ** 2
             n, outside, wrong = _judge_events(events.x, events.y, events.p, k, self.width, self._lut, np.uint16(self._gen),
                                               self._tag, self._owner, self._dist2, self.box, pol, r2, label, point)
-            if n_kept:
-                t_kept = events.t[k]
-                self._judged = (r2, n_kept, int(t_kept[0]), int(t_kept[-1]), label, point)
+            if n_kept:  # first / last kept times by index: no copy of every kept timestamp
+                first, last = int(np.argmax(k)), k.shape[0] - 1 - int(np.argmax(k[::-1]))
+                self._judged = (r2, n_kept, int(events.t[first]), int(events.t[last]), label, point)
             counts.update(events_polarity_judged=int(n), events_polarity_removed=int(outside + wrong),
                           events_outside_patches=int(outside), events_wrong_polarity=int(wrong))
         else:

@@ -28,6 +28,9 @@ from dataclasses import dataclass, field
 import numba as nb
 import numpy as np
 
+# The per-event labelling moved to its own module; re-exported here, where it was (imports and docs name it here).
+from evpose.fusion.event_labels import classify_events, filter_summary, observed_point_polarity  # noqa: F401
+
 
 @dataclass
 class PolarityFilterConfig:
@@ -114,24 +117,28 @@ _DEG = 180.0 / np.pi  # np.degrees' factor
 
 
 @nb.njit(cache=True, error_model="numpy")  # 0/0 -> NaN as in numpy (no motion: undefined angle)
-def _geometric_kernel(P, nw, R_cw, t_wc, omega, v_c, fx, fy, f_mean, buf_deg, flow_sigma, max_buf, min_speed, min_vis,
+def _geometric_kernel(P, nw, rows, R_cw, t_wc, omega, v_c, fx, fy, f_mean, buf_deg, flow_sigma, max_buf, min_speed, min_vis,
                       angle, speed, buffer, geometric):
     """Per point: :func:`image_motion` and the sign-+1 prediction of :meth:`PolarityPredictor.predict_full` in one pass.
 
     The numpy version spends ~0.7 ms per tracker update on ~40 small-array operations for 1500 points;
     this loop does the same arithmetic (same formulas, NaN propagation and comparisons) in ~20 us.
     ``angle`` / ``speed`` / ``buffer`` may be float32: each float64 result is then rounded once, as ``astype`` would.
+    Output ``i`` is point ``rows[i]`` of ``P`` / ``nw`` (the map's arrays are read in place, no gathered copies);
+    float32 normals are widened exactly, so the arithmetic is that of their float64 copy.
     """
-    for i in range(P.shape[0]):
-        d0 = P[i, 0] - t_wc[0]
-        d1 = P[i, 1] - t_wc[1]
-        d2 = P[i, 2] - t_wc[2]
+    for i in range(rows.shape[0]):
+        j = rows[i]
+        d0 = P[j, 0] - t_wc[0]
+        d1 = P[j, 1] - t_wc[1]
+        d2 = P[j, 2] - t_wc[2]
         X0 = d0 * R_cw[0, 0] + d1 * R_cw[0, 1] + d2 * R_cw[0, 2]
         X1 = d0 * R_cw[1, 0] + d1 * R_cw[1, 1] + d2 * R_cw[1, 2]
         Z = d0 * R_cw[2, 0] + d1 * R_cw[2, 1] + d2 * R_cw[2, 2]
-        n0 = nw[i, 0] * R_cw[0, 0] + nw[i, 1] * R_cw[0, 1] + nw[i, 2] * R_cw[0, 2]
-        n1 = nw[i, 0] * R_cw[1, 0] + nw[i, 1] * R_cw[1, 1] + nw[i, 2] * R_cw[1, 2]
-        n2 = nw[i, 0] * R_cw[2, 0] + nw[i, 1] * R_cw[2, 1] + nw[i, 2] * R_cw[2, 2]
+        w0, w1, w2 = np.float64(nw[j, 0]), np.float64(nw[j, 1]), np.float64(nw[j, 2])
+        n0 = w0 * R_cw[0, 0] + w1 * R_cw[0, 1] + w2 * R_cw[0, 2]
+        n1 = w0 * R_cw[1, 0] + w1 * R_cw[1, 1] + w2 * R_cw[1, 2]
+        n2 = w0 * R_cw[2, 0] + w1 * R_cw[2, 1] + w2 * R_cw[2, 2]
         # Xdot = -omega x X - v_c
         m0 = -(omega[1] * Z - omega[2] * X1) - v_c[0]
         m1 = -(omega[2] * X0 - omega[0] * Z) - v_c[1]
@@ -161,7 +168,7 @@ def _geometric_kernel(P, nw, R_cw, t_wc, omega, v_c, fx, fy, f_mean, buf_deg, fl
 
 
 @nb.njit(cache=True)
-def _sign_kernel(geometric, brightness_sign, point_index, use_index, votes, min_votes, overrides, enabled, out):
+def _sign_kernel(geometric, brightness_sign, rows, point_index, use_index, votes, min_votes, overrides, enabled, out):
     """Per point: the brightness sign (the map's, or the learned one of :meth:`PolarityPredictor.learned_sign` where
     the map has none or ``overrides``) times the sign-+1 prediction; all 0 when not ``enabled``.
 
@@ -169,7 +176,7 @@ def _sign_kernel(geometric, brightness_sign, point_index, use_index, votes, min_
     """
     n_votes = votes.shape[0]
     for i in range(geometric.shape[0]):
-        s = brightness_sign[i]
+        s = brightness_sign[rows[i]]  # the map's sign of output point i (``rows`` as in _geometric_kernel)
         if use_index:
             k = point_index[i]
             learned = 0
@@ -203,18 +210,6 @@ def _add_votes(point_index, observed, geometric, votes):
             votes[point_index[i]] += vote
 
 
-@nb.njit(cache=True)
-def _majority_polarity(point, p, out):
-    """Sign of the summed polarities of the events assigned to each point (``point`` < 0: unassigned)."""
-    score = np.zeros(out.shape[0], np.int64)
-    for i in range(point.shape[0]):
-        k = point[i]
-        if k >= 0:
-            score[k] += p[i]
-    for k in range(out.shape[0]):
-        out[k] = 1 if score[k] > 0 else (-1 if score[k] < 0 else 0)
-
-
 class PolarityPredictor:
     """Predicts ON/OFF per visible map point and learns unknown brightness signs online."""
 
@@ -227,17 +222,35 @@ class PolarityPredictor:
 
     # ------------------------------------------------------------ prediction
     def predict_full(self, points_world, edge_normal_world, brightness_sign, T_world_cam, omega_cam, v_world, K,
-                     point_index: np.ndarray | None = None) -> PolarityPrediction:
+                     point_index: np.ndarray | None = None, rows: np.ndarray | None = None) -> PolarityPrediction:
+        """As :meth:`predict`, with the per-point geometry. ``rows`` (optional) predicts only those rows of the three
+        per-point arrays (e.g. the whole map's arrays and the visible indices: no gathered copies per step)."""
         c = self.config
         P = np.ascontiguousarray(points_world, np.float64).reshape(-1, 3)
-        N = P.shape[0]
+        if rows is None:
+            rows = np.arange(P.shape[0], dtype=np.int64)
+            normals = np.ascontiguousarray(edge_normal_world, np.float64).reshape(-1, 3)
+            signs = np.ascontiguousarray(brightness_sign, np.int8).reshape(P.shape[0])
+        else:
+            rows = np.ascontiguousarray(rows, np.int64).reshape(-1)
+            normals = np.asarray(edge_normal_world)
+            if normals.dtype not in (np.float32, np.float64) or not normals.flags.c_contiguous:
+                normals = np.ascontiguousarray(normals, np.float64)
+            normals = normals.reshape(-1, 3)
+            n_all = P.shape[0]
+            if normals.shape[0] != n_all or np.size(brightness_sign) != n_all:
+                raise ValueError("points, normals and brightness signs differ in length")
+            if rows.size and (int(rows.min()) < -n_all or int(rows.max()) >= n_all):
+                raise IndexError(f"point rows out of range for {n_all} points")  # the kernels do not check bounds
+            signs = np.ascontiguousarray(brightness_sign, np.int8).reshape(n_all)
+        N = rows.shape[0]
         T = np.asarray(T_world_cam, np.float64)
         R_cw = np.ascontiguousarray(T[:3, :3].T)
         angle = np.empty(N, np.float32)
         speed = np.empty(N, np.float32)
         buffer = np.empty(N, np.float32)
         geometric = np.empty(N, np.int8)
-        _geometric_kernel(P, np.ascontiguousarray(edge_normal_world, np.float64).reshape(-1, 3), R_cw, np.ascontiguousarray(T[:3, 3]),
+        _geometric_kernel(P, normals, rows, R_cw, np.ascontiguousarray(T[:3, 3]),
                           np.asarray(omega_cam, np.float64).reshape(3), R_cw @ np.asarray(v_world, np.float64).reshape(3),
                           float(K[0, 0]), float(K[1, 1]), float(0.5 * (K[0, 0] + K[1, 1])), float(c.buffer_deg), float(c.flow_sigma_px_s),
                           float(c.max_buffer_deg), float(c.min_image_speed_px_s), float(c.min_gradient_visibility), angle, speed, buffer, geometric)
@@ -248,7 +261,7 @@ class PolarityPredictor:
         if point_index is not None:
             point_index = np.ascontiguousarray(point_index, np.int64).reshape(N)
         pol = np.empty(N, np.int8)
-        _sign_kernel(geometric, np.ascontiguousarray(brightness_sign, np.int8).reshape(N),
+        _sign_kernel(geometric, signs, rows,
                      point_index if point_index is not None else np.zeros(0, np.int64), point_index is not None, self._votes,
                      int(c.learn_min_votes), bool(c.learned_overrides_map), bool(c.enabled), pol)
         self._last_index = point_index
@@ -311,92 +324,6 @@ class PolarityPredictor:
         self._last_geometric = None if snap["last_geometric"] is None else snap["last_geometric"].copy()
 
 
-# ------------------------------------------------------------------ events
-@nb.njit(cache=True)
-def _nearest_point_grid(uv, radius, width, height):
-    idx = np.full((height, width), -1, np.int32)
-    dist = np.full((height, width), np.inf)
-    r = int(np.ceil(radius))
-    r2 = radius * radius
-    for k in range(uv.shape[0]):
-        u = uv[k, 0]
-        v = uv[k, 1]
-        if not (np.isfinite(u) and np.isfinite(v)):
-            continue
-        cu = int(np.floor(u + 0.5))
-        cv = int(np.floor(v + 0.5))
-        for yy in range(cv - r, cv + r + 1):
-            if yy < 0 or yy >= height:
-                continue
-            for xx in range(cu - r, cu + r + 1):
-                if xx < 0 or xx >= width:
-                    continue
-                d = (xx - u) * (xx - u) + (yy - v) * (yy - v)
-                if d <= r2 and d < dist[yy, xx]:
-                    dist[yy, xx] = d
-                    idx[yy, xx] = k
-    return idx
-
-
-@nb.njit(cache=True)
-def _classify(ex, ey, ep, grid, predicted, out_label, out_point):
-    h, w = grid.shape
-    for i in range(ex.shape[0]):
-        x = int(np.floor(ex[i] + 0.5))
-        y = int(np.floor(ey[i] + 0.5))
-        k = -1
-        if 0 <= x < w and 0 <= y < h:
-            k = grid[y, x]
-        out_point[i] = k
-        if k < 0:
-            out_label[i] = -1
-        elif predicted[k] == 0 or predicted[k] == ep[i]:
-            out_label[i] = 1
-        else:
-            out_label[i] = 0
-
-
-def classify_events(x, y, p, projected_uv, predicted_polarity, radius_px: float, width: int, height: int):
-    """Label events by the predicted polarity of the nearest projected map point within ``radius_px``.
-
-    ``x``/``y`` must be in the same (ideal pinhole) pixel frame as ``projected_uv``.
-    Returns ``(label int8 (E,), point int32 (E,))``: label 1 = kept (polarity
-    matches or buffer zone), 0 = removed by the polarity filter, -1 = in no
-    point's patch (unused by registration); point = index into ``projected_uv`` or -1.
-    """
-    uv = np.ascontiguousarray(projected_uv, np.float64).reshape(-1, 2)
-    grid = _nearest_point_grid(uv, float(radius_px), int(width), int(height))
-    ex = np.ascontiguousarray(x, np.float64)
-    ey = np.ascontiguousarray(y, np.float64)
-    ep = np.ascontiguousarray(p, np.int8)
-    label = np.empty(ex.shape[0], np.int8)
-    point = np.empty(ex.shape[0], np.int32)
-    _classify(ex, ey, ep, grid, np.ascontiguousarray(predicted_polarity, np.int8), label, point)
-    return label, point
-
-
-def observed_point_polarity(point, p, n_points: int) -> np.ndarray:
-    """Majority polarity of the events assigned to each point (from :func:`classify_events`), 0 if none or tied."""
-    point = np.ascontiguousarray(point).ravel()
-    p = np.ascontiguousarray(p).ravel()
-    if point.dtype.kind not in "iu" or p.dtype.kind not in "iu":  # not labels and event polarities: weighted counts
-        point, p = point.astype(np.int64), p.astype(np.float64)
-        m = point >= 0
-        return np.sign(np.bincount(point[m], weights=p[m], minlength=n_points)).astype(np.int8)
-    out = np.empty(max(int(n_points), int(point.max()) + 1 if point.size else 0), np.int8)  # bincount's length
-    _majority_polarity(point, p, out)  # integer sums: the same signs as the float bincount, without its copies
-    return out
-
-
-def filter_summary(label: np.ndarray) -> dict:
-    """Share of events the polarity filter removed: of those in point patches, and of all."""
-    n = int(label.size)
-    inside = int(np.count_nonzero(label >= 0))
-    removed = int(np.count_nonzero(label == 0))
-    return {"events": n, "events_in_patches": inside, "events_removed": removed,
-            "removed_share_of_patches": removed / inside if inside else 0.0, "removed_share_of_all": removed / n if n else 0.0}
-
-
 class MapPolaritySelector:
     """Adapter to the tracker's ``polarity_selector`` hook: ``(T_world_cam, t_us, map_indices) -> int8``.
 
@@ -453,10 +380,11 @@ class MapPolaritySelector:
         state = self.motion.predict(int(t_us))
         omega = np.zeros(3) if state.omega_cam is None else state.omega_cam
         m = self.map
-        pol = self.predictor.predict(m.points[idx], m.edge_normal[idx], m.brightness_sign[idx], T_world_cam, omega,
-                                     state.velocity_world, self.K, idx)
-        self.last_counts = {"points": int(idx.size), "points_single_polarity": int(np.count_nonzero(pol)),
-                            "points_both": int(np.count_nonzero(pol == 0))}
+        # The map's arrays with the indices (read in place by the kernels): the same values as gathering them first.
+        pol = self.predictor.predict_full(m.points, m.edge_normal, m.brightness_sign, T_world_cam, omega,
+                                          state.velocity_world, self.K, idx, rows=idx).polarity
+        single = int(np.count_nonzero(pol))
+        self.last_counts = {"points": int(idx.size), "points_single_polarity": single, "points_both": int(pol.size) - single}
         return pol
 
     def observe(self, events, T_world_cam: np.ndarray, map_indices: np.ndarray, polarity: np.ndarray,

@@ -27,6 +27,8 @@ class NavPropagator:
         self._cache_pim = None
         self._cache_state_key = None
         self._cache_state: FusedState | None = None
+        self._cache_nav_key = None
+        self._cache_nav = None
 
     def anchor(self, t_us: int, nav, bias) -> None:
         """Restart propagation from a new estimated state."""
@@ -37,6 +39,8 @@ class NavPropagator:
         self._cache_pim = None
         self._cache_state_key = None
         self._cache_state = None
+        self._cache_nav_key = None
+        self._cache_nav = None
 
     def preintegration_to(self, t_us: int):
         """A fresh preintegration from the anchor to ``t_us``.
@@ -62,7 +66,13 @@ class NavPropagator:
     def predict_nav(self, t_us: int):
         if t_us <= self.t_us:
             return self.nav
-        return self.preintegration_to(t_us).predict(self.nav, self.bias)
+        # The motion prediction and the new graph state's initial value ask for the same NavState each update:
+        # like the integral, a pure function of the anchor, the buffer and t (NavState is an immutable value).
+        key = (self.buffer.version, int(t_us))
+        if self._cache_nav_key != key:
+            self._cache_nav = self.preintegration_to(t_us).predict(self.nav, self.bias)
+            self._cache_nav_key = key
+        return self._cache_nav
 
     def fused_state(self, t_us: int, nav, bias, covariance_imu=None, degraded: bool = False) -> FusedState:
         """Camera-frame FusedState from an IMU-body NavState."""

@@ -183,12 +183,19 @@ def _propagate_world(P, Rs_t, Rt, dt, qa, ql):
         for j in range(3):
             out[3 + i, 9 + j] += Rt[i, j] * ql * dt**2 / 2.0
             out[9 + j, 3 + i] += Rt[i, j] * ql * dt**2 / 2.0
-    for i in range(12):
+    _symmetrise(out)
+    return out
+
+
+@nb.njit(cache=True)
+def _symmetrise(out):
+    """Replace both off-diagonal halves of the square ``out`` by their mean, in place (rounding keeps P symmetric)."""
+    n = out.shape[0]
+    for i in range(n):
         for j in range(i):
             a = 0.5 * (out[i, j] + out[j, i])
             out[i, j] = a
             out[j, i] = a
-    return out
 
 
 @nb.njit(cache=True)
@@ -202,11 +209,7 @@ def _joseph_update(P, K, R):
     AP = A @ P
     KR = K @ R
     out = AP @ A.T + KR @ K.T
-    for i in range(12):
-        for j in range(i):
-            a = 0.5 * (out[i, j] + out[j, i])
-            out[i, j] = a
-            out[j, i] = a
+    _symmetrise(out)
     return out
 
 

@@ -80,3 +80,18 @@ def test_composed_image_is_rebuilt_only_from_the_last_compose():
     assert np.array_equal(a.last_of(0), fresh.last_of(0)) and not np.array_equal(first, fresh.last_of(0))
     pixels, times = a.patch_times()
     assert np.array_equal(a.last_of(0)[pixels[:, 0], pixels[:, 1]], times)
+
+
+def test_field_stays_exact_when_the_box_changes_size_between_steps_on_one_field():
+    """The scratch rows are reused at every box size (growing, shrinking, full-width or not), as the tracker's box moves."""
+    rng = np.random.default_rng(11)
+    a = AlignedTimeSurface(W, H)
+    fast = TemporalDistanceField(DistanceFieldConfig(blur_px=5), W, H)
+    for step, roi in enumerate([(5, 40, 3, 60), (0, H, 0, W), (10, 20, 20, 30), (2, 46, 0, W), (0, H, 1, W - 1), (5, 40, 3, 60)]):
+        s, ev, pts, pol = _random_step(rng, 1_000_000 + step * 5000)
+        t_us = int(ev.t[-1]) + 700
+        a.compose(s, pts, np.eye(4), K, pol, 4.0, roi, ev)
+        fill_distance_field(a, fast, t_us, roi, curvature=True)
+        ref = TemporalDistanceField(DistanceFieldConfig(blur_px=5), W, H)
+        ref.compute(a, t_us, (0,), roi, curvature=True)
+        assert _same_field(fast, ref), roi

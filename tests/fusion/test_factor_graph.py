@@ -270,3 +270,35 @@ def test_snapshot_of_an_uninitialised_fusion_restores_to_uninitialised(calibrati
     assert not g.initialized
     with pytest.raises(RuntimeError):
         g.update(m.config.t0_us + 10_000, np.eye(4))
+
+
+def test_registration_covariance_falls_back_to_the_default_sigmas_only_when_the_given_one_is_unusable():
+    from evpose.fusion.factor_graph import registration_covariance
+
+    c = FusionConfig(registration_covariance_scale=4.0)
+    floor = np.eye(6) * c.registration_min_sigma**2
+    default = np.diag([c.registration_default_sigma_rot**2] * 3 + [c.registration_default_sigma_trans**2] * 3) + floor
+    good = np.diag([1e-6, 2e-6, 3e-6, 1e-4, 2e-4, 3e-4])
+    np.testing.assert_array_equal(registration_covariance(c, good), good * 4.0 + floor)
+    for bad in (None, np.full((6, 6), np.nan), -good):
+        np.testing.assert_array_equal(registration_covariance(c, bad), default)
+
+
+def test_cached_imu_prediction_equals_a_fresh_one_and_follows_new_imu_samples(calibration):
+    """The NavState the motion prediction computed is reused for the new state's initial value at the same time, and
+    recomputed once the buffer or the anchor changes."""
+    m = _noisy_motion(0.3)
+    full = m.imu()
+    f = FactorGraphFusion(FusionConfig(**WHITE), calibration)
+    f.add_imu(full.time_window(0, m.config.t0_us + 100_000))
+    t0 = m.config.t0_us
+    f.initialize(t0, m.camera_trajectory([t0], calibration.T_cam_imu).matrix(0), m.camera_velocity([t0], calibration.T_cam_imu)[0])
+    p = f.propagator
+    t = t0 + 150_000  # beyond the buffered IMU: the last measurement is held
+    held = p.predict_nav(t)
+    assert p.predict_nav(t) is held
+    fresh = p.preintegration_to(t).predict(p.nav, p.bias)
+    np.testing.assert_array_equal(held.pose().matrix(), fresh.pose().matrix())
+    f.add_imu(full.time_window(t0 + 100_000, t0 + 300_000))  # new samples: the same time now integrates them
+    updated = p.predict_nav(t)
+    assert updated is not held and not np.array_equal(updated.pose().matrix(), held.pose().matrix())

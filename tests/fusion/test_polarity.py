@@ -223,3 +223,31 @@ def test_fused_prediction_kernel_matches_the_image_motion_formulas():
         assert np.all(pred.geometric[~reliable] == 0)
         if not omega.any():
             assert np.all(pred.polarity == 0)  # no motion: no prediction
+
+
+def test_predict_full_on_rows_of_the_map_equals_predicting_the_gathered_points_bit_for_bit():
+    """``rows`` reads the map's arrays in place (float32 normals widened in the kernel): the same prediction, geometry
+    and learned-sign lookup as on the gathered float64 copies, and rows out of range are refused."""
+    import pytest
+
+    rng = np.random.default_rng(7)
+    n_map = 600
+    P = rng.normal(size=(n_map, 3)) * 2 + [0, 0, 4]
+    nrm = rng.normal(size=(n_map, 3))
+    nrm = (nrm / np.linalg.norm(nrm, axis=1, keepdims=True)).astype(np.float32)
+    sign = rng.choice(np.array([-1, 0, 1], np.int8), n_map)
+    T = np.eye(4)
+    T[:3, :3] = Rotation.from_rotvec([0.05, -0.1, 0.02]).as_matrix()
+    rows = rng.choice(n_map, 250, replace=False).astype(np.int64)
+    omega, v = np.array([0.3, -0.2, 0.5]), np.array([0.4, 0.1, -0.2])
+    gathered, in_place = PolarityPredictor(), PolarityPredictor()
+    votes = rng.integers(-5, 6, n_map).astype(np.int32)
+    for p in (gathered, in_place):  # some learned signs, so the vote lookup by point index is exercised too
+        p._votes = votes.copy()
+    a = gathered.predict_full(P[rows], nrm[rows], sign[rows], T, omega, v, K, rows)
+    b = in_place.predict_full(P, nrm, sign, T, omega, v, K, rows, rows=rows)
+    for name in ("polarity", "angle_deg", "speed_px_s", "buffer_deg", "geometric"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name), err_msg=name)
+    assert np.count_nonzero(a.polarity) > 50
+    with pytest.raises(IndexError):
+        in_place.predict_full(P, nrm, sign, T, omega, v, K, rows=np.array([0, n_map]))

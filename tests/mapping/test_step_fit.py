@@ -54,3 +54,27 @@ def test_local_steps_drop_where_a_chain_leaves_the_edge():
     local = local_steps(chain, normals, pts, inten, cKDTree(pts), 0.06, 0.005, 8)
     assert np.nanmedian(local[y < 0.9]) > 0.4
     assert np.nanmedian(local[y > 1.1]) < 0.05
+
+
+
+def test_sparse_edge_line_uses_the_points_near_the_ends_of_its_run():
+    # A sparse scan (10 cm rows): along most of the run the nearest dark and bright points are
+    # 14 cm apart (gap middle 2 cm off the edge); only near the run's two ends do a dark and a
+    # bright point sit 1 cm either side of it. Those pin the line - a band trimmed at the
+    # run's ends would miss them and leave the edge centimetres off.
+    rows = np.arange(0.4, 1.6001, 0.1)
+    dark = [(x, y) for y in rows for x in (0.95, 0.85, 0.75)]
+    bright = [(x, y) for y in rows for x in (1.09, 1.19, 1.29)]
+    for y in (0.42, 1.58):
+        dark.append((0.99, y))
+        bright.append((1.01, y))
+    pts = np.array(dark + bright, np.float64)
+    inten = np.r_[np.full(len(dark), 0.2), np.full(len(bright), 0.65)]
+    y = np.arange(0.4, 1.6001, 0.01)
+    chain = np.stack([np.full(y.size, 1.02), y], axis=1)
+    normals = np.tile([1.0, 0.0], (y.size, 1))
+    spacing = 0.047  # the whole cloud's spacing: this region is sparser than most of the scan
+    p, n, fitted = fit_step_lines(chain, normals, pts, inten, cKDTree(pts), eps=2 * spacing, min_points=18,
+                                  half_across=2.5 * spacing, width=0.5 * spacing)
+    assert fitted.all() and np.all(n[:, 0] > 0.99)
+    assert np.abs(p[:, 0] - 1.0).max() < 0.01
