@@ -16,132 +16,17 @@ iteration.
 
 from __future__ import annotations
 
-import enum
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import gtsam
 import numba as nb
 import numpy as np
 
 from evpose.frontend.distance_field import TemporalDistanceField, bilinear_curvature_from_value, bilinear_sample, polarity_slots
-
-
-class RobustLoss(str, enum.Enum):
-    """Robust loss ``rho`` on the TDF residual."""
-
-    L2 = "l2"
-    HUBER = "huber"
-    CAUCHY = "cauchy"
-    TUKEY = "tukey"
-
+from evpose.tracker.registration_config import RegistrationConfig, ResidualVariance, RobustLoss  # noqa: F401 (re-exported)
 
 _LOSS_ID = {RobustLoss.L2: 0, RobustLoss.HUBER: 1, RobustLoss.CAUCHY: 2, RobustLoss.TUKEY: 3}
-
-
-class ResidualVariance(str, enum.Enum):
-    """Which points' residuals give the ``sigma^2`` of the covariance ``(J^T W J)^-1 sigma^2``."""
-
-    INLIERS = "inliers"
-    """The weighted squared residuals of the inliers over (inliers - 6).
-
-    Closer to the truth on the bundled demo (registrations from ground truth: std 14-30 mm
-    against errors of 2-20 mm; "all": 30-100 mm), but on the simulated landing the
-    errors are map biases that persist from update to update, and a filter that
-    believes the registrations more follows them: ``stpe`` 97.8 / 80.3 mm against
-    70.7 / 84.0 mm at 346x260 / 240x180 (world-frame velocity, no registration prior)."""
-    ALL = "all"
-    """Those of every point inside the image over (inliers - 6), as before: the 60-80 % of points whose edge
-    did not fire (TDF ~1, no gradient, no curvature) add ~w each: the reported standard deviations about double."""
-
-
-@dataclass
-class RegistrationConfig:
-    """Registration settings."""
-
-    max_points: int = field(default=1000, metadata={"min": 50, "max": 20000, "step": 50, "unit": "points"})
-    """Visible points used per step; more are subsampled with a fixed stride (deterministic), points.
-
-    Accuracy on the simulated landing is limited by biases, not by the number of
-    points: ``stpe`` ATE 54 / 56 / 57 mm with 800 / 1500 / 3000 points at 346x260
-    (83 / 74 / 70 mm at 240x180), so 1000 keeps registration time down."""
-    second_order: bool = True
-    """Newton steps using the TDF's curvature (points on the TDF minimum still constrain the pose) instead of Gauss-Newton.
-
-    Gauss-Newton converges poorly from a few cm / degrees away (flat TDF regions), so
-    it stays nearer its start: on the simulated landing that acts as a regulariser
-    of the weakly observed tilt-vs-sideways direction, not as a better minimum."""
-    max_iterations: int = field(default=10, metadata={"min": 1, "max": 100, "step": 1, "unit": "iterations"})
-    """Levenberg-Marquardt iterations per step, at most."""
-    robust_loss: RobustLoss = RobustLoss.HUBER
-    """Robust loss on the residual."""
-    robust_scale: float = field(default=0.3, metadata={"min": 0.01, "max": 2.0, "step": 0.01, "unit": "TDF"})
-    """Scale of the robust loss, in TDF units (the TDF runs from 0 on an edge to 1 far from events)."""
-    inlier_threshold: float = field(default=0.7, metadata={"min": 0.05, "max": 1.0, "step": 0.01, "unit": "TDF"})
-    """A point is an inlier if its final TDF value is below this, TDF units."""
-    lm_lambda: float = field(default=0.01, metadata={"min": 0.0, "max": 10.0, "step": 1e-4, "unit": "ratio"})
-    """Initial Levenberg-Marquardt damping, relative to the Hessian diagonal."""
-    lm_lambda_min: float = field(default=0.001, metadata={"min": 0.0, "max": 10.0, "step": 1e-3, "unit": "ratio"})
-    """Smallest damping: the TDF minimum is not zero, so undamped Gauss-Newton steps overshoot, relative."""
-    convergence_rotation_rad: float = field(default=1e-5, metadata={"min": 1e-8, "max": 1e-2, "step": 1e-6, "unit": "rad"})
-    """Stop when an accepted step rotates less than this, radians (and translates less than below)."""
-    convergence_translation_m: float = field(default=1e-5, metadata={"min": 1e-8, "max": 1e-2, "step": 1e-6, "unit": "m"})
-    """Stop when an accepted step translates less than this, metres."""
-    convergence_cost_ratio: float = field(default=1e-3, metadata={"min": 0.0, "max": 0.1, "step": 1e-5, "unit": "ratio"})
-    """Also stop when an accepted step lowers the mean cost by less than this fraction.
-
-    On the simulated landing (2 s, built map) 1e-3 instead of 1e-4 halves the
-    iterations (median 5 -> 2) and registration CPU, with ATE unchanged within run
-    to run noise in ``stpe`` (56 / 74 -> 54 / 80 mm at 346x260 / 240x180) and
-    ``full`` (31.5 / 38.4 -> 30.7 / 38.6 mm, same-window runs).
-
-    0 leaves only the step-size test above. Tried with thresholds of 0.1 / 0.5 / 2 mm
-    and 0.006 / 0.03 / 0.11 deg (built map, 2 s): with Tukey (scale 0.7) ``stpe`` lost
-    119-350 of 393 updates at 346x260 or 240x180 (ATE 0.1-0.8 m) and ``full`` got
-    35-81 mm against Huber's 19.5 / 22.9 mm; with Huber, ``stpe`` ATE 115-129 / 89-100
-    mm against 140 / 108 mm for this test but ``full`` 19.5-20.3 / 23.8-25.3 mm and
-    up to 10 iterations per update, so the cost test stays the default."""
-    prior_translation_m: float = field(default=0.01, metadata={"min": 0.0, "max": 1.0, "step": 0.001, "unit": "m"})
-    """Std of a Gaussian prior pulling the pose towards the prediction, translation, metres (0 = no prior).
-
-    Directions the visible map barely constrains (tilt vs. sideways shift over flat
-    ground) then follow the motion model instead of drifting with small biases.
-    Too tight a prior makes the track follow the constant-velocity model: on the
-    simulated landing (lag compensated, 346x260 / 240x180) 1 mm / 0.02 deg gave
-    83 / 89 mm ATE, 2 mm / 0.05 deg 35 / 54 mm, 5 mm / 0.1 deg 18 / 31 mm,
-    10 mm / 0.2 deg 18 / 26 mm, none 105 / 28 mm."""
-    prior_rotation_deg: float = field(default=0.2, metadata={"min": 0.0, "max": 10.0, "step": 0.01, "unit": "deg"})
-    """Std of the same prior, rotation, degrees (0 = no prior)."""
-    prior_residual_sigma: float = field(default=0.2, metadata={"min": 0.01, "max": 1.0, "step": 0.01, "unit": "TDF"})
-    """Typical TDF residual of one point, which converts the prior stds into the cost's units, TDF units."""
-    residual_variance: ResidualVariance = ResidualVariance.ALL
-    """Residuals that set the covariance's scale (see :class:`ResidualVariance`)."""
-    min_points: int = field(default=30, metadata={"min": 6, "max": 1000, "step": 1, "unit": "points"})
-    """Fewer points projecting into the image than this means the track is lost, points."""
-    min_inlier_ratio: float = field(default=0.1, metadata={"min": 0.0, "max": 1.0, "step": 0.01, "unit": "ratio"})
-    """Fewer inliers than this share of the points used means the track is lost.
-
-    Contours parallel to the image motion fire no events, so even at the true pose
-    only 12-20 % of the visible points of the simulated landing read TDF < 0.7;
-    0.15 declared 5-25 % of its (accurate) updates lost. On the bundled 4 s demo
-    (``demo_data/landing.h5``, 7.8 m up) registrations started at ground truth
-    land within 20 mm / 0.2 deg of it at 0.2-0.3 s with only 56-69 inliers of 810
-    points (7-8 %), and 0.1 declares them lost (``stpe`` loses the track at
-    0.22 s). 0.05 keeps ``stpe`` on it until 1.96 s (0.07: 0.25 s; 0.03: 1.99 s),
-    but after that it reports 50-160 "OK" poses 5-7 m off (a wrong lock with
-    > 5 % inliers): a confidently wrong track is worse than a lost one, so 0.1
-    stays. ``full`` at 240x180 (pinned map): 20.0 mm, 0 lost with 0.05 against
-    20.1 mm, 3 lost."""
-    max_condition: float = field(default=1e8, metadata={"min": 1e3, "max": 1e14, "step": 1e3, "unit": "ratio"})
-    """Largest acceptable condition number of the (scaled) Hessian; above it the geometry is degenerate."""
-    field_lag_ms: float = field(default=4.5, metadata={"min": 0.0, "max": 50.0, "step": 0.1, "unit": "ms"})
-    """How far the TDF's minimum trails the edges it shows, milliseconds; used when a motion twist is given.
-
-    The newest events of a moving edge sit on the pixels it crossed last, and the
-    time-surface trail behind them pulls the (blurred) minimum further back, so the
-    field shows the map as seen ``field_lag_ms`` before the query time (measured
-    4-5 ms with ``eta`` 10 ms and a 5 px blur on the simulated landing). The pose is
-    registered at that time and moved forward by the motion twist."""
 
 
 @dataclass
