@@ -34,3 +34,18 @@ def pose_errors(T_est, T_gt):
     dt = np.linalg.norm(T_est[:3, 3] - T_gt[:3, 3])
     dr = np.linalg.norm(Rotation.from_matrix(T_est[:3, :3].T @ T_gt[:3, :3]).as_rotvec())
     return dt, dr
+
+
+ALIGNED_W, ALIGNED_H = 64, 48
+"""Sensor of the small aligned-surface scenes (T_align tests), pixels."""
+ALIGNED_K = np.array([[50.0, 0, 32.0], [0, 50.0, 24.0], [0, 0, 1]])
+ALIGNED_DEPTH = 2.0
+"""Depth of every map point of those scenes (camera at the origin looking along +z), metres."""
+
+
+def points_at(uv) -> np.ndarray:
+    """World points at ``ALIGNED_DEPTH`` that project to pixel positions ``uv`` through ``ALIGNED_K``."""
+    uv = np.asarray(uv, np.float64).reshape(-1, 2)
+    K, d = ALIGNED_K, ALIGNED_DEPTH
+    return np.c_[(uv[:, 0] - K[0, 2]) / K[0, 0] * d, (uv[:, 1] - K[1, 2]) / K[1, 1] * d, np.full(len(uv), d)]
+

@@ -9,15 +9,7 @@ from evpose.frontend.time_surface import SeparatedTimeSurface, TimeSurfaceConfig
 from evpose.fusion.aligned_surface import AlignedTimeSurface
 from evpose.fusion.polarity import classify_events
 
-W, H = 64, 48
-K = np.array([[50.0, 0, 32.0], [0, 50.0, 24.0], [0, 0, 1]])
-DEPTH = 2.0
-
-
-def _points_at(uv):
-    """World points (camera at the origin looking along +z) that project to pixel positions ``uv``."""
-    uv = np.asarray(uv, np.float64).reshape(-1, 2)
-    return np.c_[(uv[:, 0] - K[0, 2]) / K[0, 0] * DEPTH, (uv[:, 1] - K[1, 2]) / K[1, 1] * DEPTH, np.full(len(uv), DEPTH)]
+from fusion_helpers import ALIGNED_H as H, ALIGNED_K as K, ALIGNED_W as W, points_at as _points_at
 
 
 def _events(xs, ys, ps, t0=1000):
