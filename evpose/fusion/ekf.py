@@ -43,7 +43,7 @@ class _Nominal:
         self.t_us, self.R, self.p, self.v, self.ba, self.bg, self.P = int(t_us), R, p, v, ba, bg, P
 
     def copy(self) -> "_Nominal":
-        return _Nominal(self.t_us, self.R.copy(), self.p.copy(), self.v.copy(), self.ba.copy(), self.bg.copy(), self.P.copy())
+        return _Nominal(self.t_us, np.copy(self.R), np.copy(self.p), np.copy(self.v), np.copy(self.ba), np.copy(self.bg), np.copy(self.P))
 
 
 class ErrorStateEkf:

@@ -314,14 +314,14 @@ class PolarityPredictor:
         _add_votes(idx, obs, geo, self._votes)
 
     def snapshot(self) -> dict:
-        return {"votes": self._votes.copy(),
-                "last_index": None if self._last_index is None else self._last_index.copy(),
-                "last_geometric": None if self._last_geometric is None else self._last_geometric.copy()}
+        return {"votes": np.copy(self._votes),
+                "last_index": None if self._last_index is None else np.copy(self._last_index),
+                "last_geometric": None if self._last_geometric is None else np.copy(self._last_geometric)}
 
     def restore(self, snap: dict) -> None:
-        self._votes = snap["votes"].copy()
-        self._last_index = None if snap["last_index"] is None else snap["last_index"].copy()
-        self._last_geometric = None if snap["last_geometric"] is None else snap["last_geometric"].copy()
+        self._votes = np.copy(snap["votes"])
+        self._last_index = None if snap["last_index"] is None else np.copy(snap["last_index"])
+        self._last_geometric = None if snap["last_geometric"] is None else np.copy(snap["last_geometric"])
 
 
 class MapPolaritySelector:

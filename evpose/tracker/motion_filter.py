@@ -436,16 +436,16 @@ class ConstantVelocityKalman:
         self.noise_scale = target if target >= self.noise_scale else target + (self.noise_scale - target) * (1.0 - b)
 
     def snapshot(self) -> dict:
-        return {"t": self._t, "T": None if self._T is None else self._T.copy(), "xi": self._xi.copy(), "P": self._P.copy(),
+        return {"t": self._t, "T": None if self._T is None else np.copy(self._T), "xi": np.copy(self._xi), "P": np.copy(self._P),
                 "innovation": self.last_innovation_sigma, "fused": self.last_fused, "rejected": self._rejected,
-                "innovation_mean": self._innovation_mean.copy(), "innovation_power": self._innovation_power,
+                "innovation_mean": np.copy(self._innovation_mean), "innovation_power": self._innovation_power,
                 "noise_scale": self.noise_scale}
 
     def restore(self, state: dict) -> None:
         self._t = state["t"]
-        self._T = None if state["T"] is None else state["T"].copy()
-        self._xi = state["xi"].copy()
-        self._P = state["P"].copy()
+        self._T = None if state["T"] is None else np.copy(state["T"])
+        self._xi = np.copy(state["xi"])
+        self._P = np.copy(state["P"])
         self.last_innovation_sigma = state["innovation"]
         self.last_fused = state["fused"]
         self._rejected = state["rejected"]

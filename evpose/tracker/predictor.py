@@ -46,11 +46,11 @@ class ConstantPosePredictor:
         self.reset(t_us, T_world_cam)
 
     def snapshot(self) -> dict:
-        return {"t": self._t, "T": None if self._T is None else self._T.copy()}
+        return {"t": self._t, "T": None if self._T is None else np.copy(self._T)}
 
     def restore(self, state: dict) -> None:
         self._t = state["t"]
-        self._T = None if state["T"] is None else state["T"].copy()
+        self._T = None if state["T"] is None else np.copy(state["T"])
 
 
 class ConstantVelocityPredictor:
@@ -130,7 +130,7 @@ class ConstantVelocityPredictor:
         return gtsam.Pose3(T1).compose(gtsam.Pose3.Expmap(a + b * dt)).matrix()
 
     def snapshot(self) -> dict:
-        return {"hist": [(t, T.copy()) for t, T in self._hist]}
+        return {"hist": [(t, np.copy(T)) for t, T in self._hist]}
 
     def restore(self, state: dict) -> None:
-        self._hist = [(t, T.copy()) for t, T in state["hist"]]
+        self._hist = [(t, np.copy(T)) for t, T in state["hist"]]

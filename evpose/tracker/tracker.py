@@ -142,7 +142,12 @@ class Tracker:
         return self.visible_count(T)
 
     def snapshot(self) -> dict:
-        """Deep copy of the full engine state."""
+        """Deep copy of the full engine state.
+
+        Arrays are copied with ``np.copy`` (keeps the memory layout): gtsam hands out column-major matrices, and a
+        C-ordered copy takes another BLAS path in later products, so a restored run would drift from the
+        uninterrupted one at the rounding level (seen with numpy 2.4).
+        """
         return {
             "noise_filter": self.noise_filter.snapshot(),
             "time_surface": self.time_surface.snapshot(),
@@ -150,10 +155,10 @@ class Tracker:
             "motion": self._side_motion().snapshot() if self._side_motion() is not None else None,
             "selector": self.polarity_selector.snapshot() if hasattr(self.polarity_selector, "snapshot") else None,
             "visible_map": self.visible_map.snapshot(),
-            "pose": None if self._pose is None else self._pose.copy(),
+            "pose": None if self._pose is None else np.copy(self._pose),
             "t_us": self._t_us,
             "steps": self._steps,
-            "ego_history": tuple(a.copy() for a in self._ego_history),
+            "ego_history": tuple(np.copy(a) for a in self._ego_history),
         }
 
     def restore(self, state: dict) -> None:
@@ -165,10 +170,10 @@ class Tracker:
         if state.get("selector") is not None:
             self.polarity_selector.restore(state["selector"])
         self.visible_map.restore(state["visible_map"])
-        self._pose = None if state["pose"] is None else state["pose"].copy()
+        self._pose = None if state["pose"] is None else np.copy(state["pose"])
         self._t_us = state["t_us"]
         self._steps = state["steps"]
-        self._ego_history = tuple(a.copy() for a in state["ego_history"])
+        self._ego_history = tuple(np.copy(a) for a in state["ego_history"])
 
     def _side_motion(self):
         """The fusion backend when it runs beside (not as) the predictor, as in ``stpe+filter``."""

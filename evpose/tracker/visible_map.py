@@ -273,10 +273,10 @@ class VisibleMap:
         return sup[visible_points(self._sup_points, T, self.K, self.width, self.height, config)]
 
     def snapshot(self) -> dict:
-        return {"cache": None if self._cache is None else (self._cache[0].copy(), self._cache[1].copy(), self._cache[2])}
+        return {"cache": None if self._cache is None else (np.copy(self._cache[0]), np.copy(self._cache[1]), self._cache[2])}
 
     def restore(self, state: dict) -> None:
         c = state["cache"]
-        self._cache = None if c is None else (c[0].copy(), c[1].copy(), c[2])
+        self._cache = None if c is None else (np.copy(c[0]), np.copy(c[1]), c[2])
         if c is not None:
             self._sup_points = np.ascontiguousarray(self.points[c[1]])
