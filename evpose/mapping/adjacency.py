@@ -23,6 +23,8 @@ def snap_to_intersections(
     max_shift: float,
     reliable: np.ndarray | None = None,
     k: int = 16,
+    outward: np.ndarray | None = None,
+    across_tol: float = 0.0,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Project contour points onto the intersection line of their plane and the nearest other region's plane.
 
@@ -32,6 +34,13 @@ def snap_to_intersections(
     ``reliable`` (R,) bool: regions whose plane is trustworthy as a snap target (a narrow
     strip such as the 15 cm side of a low step has a poorly constrained tilt, and its
     intersection line would be wrong); None = all.
+    ``outward`` (M, 3) unit in-plane outward normals of the contour points: then, of the
+    candidate creases whose move is across the edge (tangential part under ``across_tol`` m),
+    the innermost one is taken rather than the nearest cloud point's. Behind a sofa 10 cm in
+    front of a wall, the top's rim has the sofa's back and the wall within reach, both
+    across its edge; the rim is where the region ends, so the first surface met going
+    outward - the back - is the one it meets. Points without such a candidate keep the
+    nearest-point rule.
     Returns the new points and the adjacent region per point (-1 where none).
     """
     m = points.shape[0]
@@ -53,6 +62,8 @@ def snap_to_intersections(
     other &= cos_nb < np.cos(min_angle_rad)
     has = other.any(axis=1)
     first = np.argmax(other, axis=1)  # nearest qualifying neighbour (query results are sorted)
+    if outward is not None and has.any():
+        first = _innermost_across(points, region, nb_lab, other, first, plane_c, plane_n, outward, across_tol)
     s = np.where(has, nb_lab[np.arange(m), first], -1)
     r = region
     ok = s >= 0
@@ -78,6 +89,37 @@ def snap_to_intersections(
     out[ok] = x[ok]
     adjacent[ok] = s[ok]
     return out, adjacent
+
+
+def _crease_points(points, nr, hr, ns, hs):
+    """Closest point to ``points`` on the intersection of planes (nr, hr) and (ns, hs); NaN where parallel."""
+    g12 = np.einsum("...d,...d->...", nr, ns)
+    det = 1.0 - g12 * g12
+    det = np.where(det > 1e-9, det, np.nan)
+    rr = np.einsum("...d,...d->...", nr, points) - hr
+    rs = np.einsum("...d,...d->...", ns, points) - hs
+    lam_r = (rr - g12 * rs) / det
+    lam_s = (rs - g12 * rr) / det
+    return points - lam_r[..., None] * nr - lam_s[..., None] * ns
+
+
+def _innermost_across(points, region, nb_lab, other, first, plane_c, plane_n, outward, across_tol):
+    """Per point, the neighbour column whose region's crease is reached by a move across the edge and lies innermost."""
+    m, k = nb_lab.shape
+    cand = np.maximum(nb_lab, 0)
+    nr = np.broadcast_to(plane_n[region][:, None, :], (m, k, 3))
+    hr = np.einsum("md,md->m", plane_n[region], plane_c[region])[:, None]
+    ns = plane_n[cand]
+    hs = np.einsum("mkd,mkd->mk", ns, plane_c[cand])
+    p = np.broadcast_to(points[:, None, :], (m, k, 3))
+    with np.errstate(invalid="ignore"):
+        move = _crease_points(p, nr, hr, ns, hs) - p
+        along = np.einsum("mkd,md->mk", move, outward)
+        tangential = np.linalg.norm(move - along[..., None] * outward[:, None, :], axis=2)
+        ok = other & np.isfinite(along) & (tangential <= across_tol)
+    along = np.where(ok, along, np.inf)
+    best = np.argmin(along, axis=1)
+    return np.where(ok.any(axis=1), best, first)
 
 
 def orient_plane_normals(

@@ -1,9 +1,24 @@
 """Precision and recall of contour points against true edge segments.
 
 * precision: fraction of contour points within ``tolerance_m`` of some true edge;
-* recall: of the true edge length *visible in the scan* (edge samples with a raw cloud
-  point within ``visible_radius_m``; all of it if no cloud is given), the fraction that
-  has a contour point within ``tolerance_m``.
+* recall: of the true edge length *visible in the scan*, the fraction that has a contour
+  point within ``tolerance_m``.
+
+"Visible in the scan" has two definitions:
+
+* without ``faces`` (the old one): an edge sample with *any* raw cloud point within
+  ``visible_radius_m`` (all of the edge if no cloud is given). Any surface counts - the
+  wall 5 cm behind a shelf's back edge makes that edge "visible" where the shelf itself
+  was not sampled, and a sample whose own surfaces were scanned 6 cm away does not.
+* with ``faces`` (:func:`edge_faces`, the faithful one): an edge is where two surfaces
+  meet, and the scan shows it where it samples *both* of them near it: an edge sample is
+  visible when, for each of its two faces, a cloud point lies within ``visible_radius_m``
+  of it and within ``face_tolerance_m`` (~3x range noise) of that face's plane. The plane
+  counts on either side of the edge: a box resting on the ground has no scanned bottom
+  face, but its bottom face's plane beyond the edge is the ground the crease is formed
+  with. Segments without faces (painted edges, all-zero rows) keep the old rule. The
+  radius should be about the scan's point spacing (``1/sqrt(density)``): a face is
+  "sampled near" the edge when a point of it is no farther than a typical gap.
 """
 
 from __future__ import annotations
@@ -57,6 +72,73 @@ def sample_segments(segments: np.ndarray, step_m: float) -> tuple[np.ndarray, np
     return np.concatenate(pts), np.concatenate(w)
 
 
+def edge_faces(segments: np.ndarray, decimals: int = 6) -> np.ndarray:
+    """The two faces meeting at each edge of a polyhedral edge set, from the edges sharing its ends.
+
+    ``segments`` (M, 2, 3), e.g. boxes' 12 edges each. Returns (M, 2, 2, 3): per segment and
+    face, (unit direction into the face perpendicular to the edge, unit face normal). At a
+    box corner the two other edges give the two faces' directions. Rows stay zero where an
+    end does not have exactly two other, non-collinear edges (a polyline of painted edges,
+    a vertex shared by several boxes) - those segments keep the plain visibility rule.
+    Endpoints are matched after rounding to ``decimals``.
+    """
+    seg = np.asarray(segments, np.float64).reshape(-1, 2, 3)
+    at: dict[tuple, list[int]] = {}
+    for j in range(seg.shape[0]):
+        for e in range(2):
+            at.setdefault(tuple(np.round(seg[j, e], decimals)), []).append(j)
+    out = np.zeros((seg.shape[0], 2, 2, 3))
+    for j in range(seg.shape[0]):
+        e_dir = seg[j, 1] - seg[j, 0]
+        length = float(np.linalg.norm(e_dir))
+        if length == 0.0:
+            continue
+        e_dir /= length
+        for end in range(2):
+            a = seg[j, end]
+            dirs = []
+            for k in at[tuple(np.round(a, decimals))]:
+                if k == j:
+                    continue
+                other = seg[k, 1] if np.allclose(seg[k, 0], a, atol=10.0 ** -decimals) else seg[k, 0]
+                d = other - a
+                d -= (d @ e_dir) * e_dir
+                nd = float(np.linalg.norm(d))
+                if nd > 1e-9:
+                    dirs.append(d / nd)
+            if len(dirs) == 2 and abs(float(dirs[0] @ dirs[1])) < 0.999:
+                for f, d in enumerate(dirs):
+                    out[j, f, 0] = d
+                    out[j, f, 1] = np.cross(e_dir, d)
+                break
+    return out
+
+
+def _face_visible(samples: np.ndarray, sample_seg: np.ndarray, faces: np.ndarray, cloud: np.ndarray, tree,
+                  radius: float, face_tol: float) -> np.ndarray:
+    """Per edge sample: True where each of its segment's two faces has a cloud point within ``radius`` on its plane."""
+    near = tree.query_ball_point(samples, radius)
+    counts = np.fromiter((len(x) for x in near), np.int64, samples.shape[0])
+    owner = np.repeat(np.arange(samples.shape[0]), counts)
+    idx = np.fromiter((i for x in near for i in x), np.int64, int(counts.sum()))
+    rel = cloud[idx] - samples[owner]
+    ok = np.ones(samples.shape[0], bool)
+    for f in range(2):
+        normal = faces[sample_seg[owner], f, 1]
+        on = np.abs(np.einsum("ij,ij->i", rel, normal)) <= face_tol
+        has = np.zeros(samples.shape[0], bool)
+        has[owner[on]] = True
+        ok &= has
+    return ok
+
+
+def _sample_segments_owned(segments: np.ndarray, step_m: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`sample_segments` plus the index of the segment each sample lies on."""
+    counts = [max(1, int(np.ceil(float(np.linalg.norm(b - a)) / step_m))) if np.any(b != a) else 0 for a, b in segments]
+    pts, w = sample_segments(segments, step_m)
+    return pts, w, np.repeat(np.arange(len(counts)), counts).astype(np.int64)
+
+
 def contour_precision_recall(
     contour_points: np.ndarray,
     edge_segments: np.ndarray,
@@ -64,11 +146,15 @@ def contour_precision_recall(
     cloud: np.ndarray | None = None,
     visible_radius_m: float = 0.05,
     sample_step_m: float = 0.005,
+    faces: np.ndarray | None = None,
+    face_tolerance_m: float = 0.015,
 ) -> dict:
     """Precision/recall of ``contour_points`` (N, 3) against ``edge_segments`` (M, 2, 3), metres.
 
     ``cloud`` (K, 3): the raw scan; an edge sample counts as visible if a cloud point lies
-    within ``visible_radius_m``. Returns ``precision``, ``recall`` (fractions),
+    within ``visible_radius_m`` - or, with ``faces`` (M, 2, 2, 3) from :func:`edge_faces`,
+    if both of its faces have a cloud point within ``visible_radius_m`` and
+    ``face_tolerance_m`` of their planes (module docstring). Returns ``precision``, ``recall`` (fractions),
     ``n_points``, ``median_distance_m``, ``p95_distance_m``, ``edge_length_m``,
     ``visible_length_m``, ``covered_length_m``.
     """
@@ -77,10 +163,17 @@ def contour_precision_recall(
     cp = np.ascontiguousarray(contour_points, dtype=np.float64).reshape(-1, 3)
     seg = np.ascontiguousarray(edge_segments, dtype=np.float64).reshape(-1, 2, 3)
     dist = point_segment_distances(cp, seg) if cp.shape[0] and seg.shape[0] else np.full(cp.shape[0], np.inf)
-    samples, weight = sample_segments(seg, sample_step_m)
+    samples, weight, sample_seg = _sample_segments_owned(seg, sample_step_m)
     if cloud is not None and samples.shape[0]:
-        d_cloud, _ = cKDTree(np.asarray(cloud, np.float64)).query(samples, k=1, distance_upper_bound=visible_radius_m)
+        cl = np.asarray(cloud, np.float64)
+        tree = cKDTree(cl)
+        d_cloud, _ = tree.query(samples, k=1, distance_upper_bound=visible_radius_m)
         visible = np.isfinite(d_cloud)
+        if faces is not None:
+            fc = np.asarray(faces, np.float64).reshape(seg.shape[0], 2, 2, 3)
+            has_faces = np.abs(fc).sum(axis=(1, 2, 3))[sample_seg] > 0
+            by_face = _face_visible(samples, sample_seg, fc, cl, tree, visible_radius_m, face_tolerance_m)
+            visible = np.where(has_faces, by_face, visible)
     else:
         visible = np.ones(samples.shape[0], bool)
     if cp.shape[0] and samples.shape[0]:

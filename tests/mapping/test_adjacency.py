@@ -69,3 +69,24 @@ def test_plane_normals_face_up_and_walls_face_the_ground_in_front_of_them():
     centroids = np.array([ground.mean(axis=0), wall.mean(axis=0)])
     out = orient_plane_normals(normals, centroids, pts, labels, None, None, reach=0.5)
     assert np.allclose(out[0], [0, 0, 1]) and np.allclose(out[1], [0, -1, 0])
+
+
+def test_rim_in_front_of_a_wall_snaps_to_the_innermost_crease_across_it():
+    # Region 0: a sofa's top z = 0.8 ending at y = -2.9; region 1: its back face y = -2.9;
+    # region 2: the wall y = -3.0, 10 cm behind. The top's contour point overshoots to
+    # y = -2.96, nearer the wall's points than the back's: the nearest-point rule picks the
+    # wall; with the outward normal the first crease met going outward - the back - wins.
+    xx, zz = np.meshgrid(np.linspace(0, 1, 21), np.linspace(0.0, 1.5, 31))
+    wall = np.column_stack([xx.ravel(), np.full(xx.size, -3.0), zz.ravel()])
+    xb, zb = np.meshgrid(np.linspace(0, 1, 21), np.linspace(0.0, 0.7, 8))
+    back = np.column_stack([xb.ravel(), np.full(xb.size, -2.9), zb.ravel()])
+    cloud = np.vstack([wall, back])
+    labels = np.concatenate([np.full(wall.shape[0], 2), np.ones(back.shape[0])]).astype(np.int32)
+    c = np.array([[0.5, -2.45, 0.8], [0.5, -2.9, 0.35], [0.5, -3.0, 0.75]])
+    n = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [0.0, 1.0, 0.0]])
+    pts = np.array([[0.5, -2.96, 0.8]])
+    args = (pts, np.array([0]), labels, cKDTree(cloud), c, n, 0.15, np.radians(30), 0.15)
+    nearest, adj_nearest = snap_to_intersections(*args)
+    inner, adj_inner = snap_to_intersections(*args, outward=np.array([[0.0, -1.0, 0.0]]), across_tol=0.02)
+    assert adj_nearest[0] == 2 and np.allclose(nearest[0], [0.5, -3.0, 0.8])
+    assert adj_inner[0] == 1 and np.allclose(inner[0], [0.5, -2.9, 0.8])
