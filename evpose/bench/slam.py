@@ -166,16 +166,17 @@ def bench_projection_search_ab(ctx: BenchContext) -> dict:
     return out
 
 
-def _scenario_recording(ctx: BenchContext, scenario: str):
-    """The simulator's ``scenario``, 3 s at 346x260, cached in ``ctx.work_dir``; None when the simulator is absent."""
+def _scenario_recording(ctx: BenchContext, scenario: str, seed: int | None = None):
+    """The simulator's ``scenario``, 3 s at 346x260 (``seed``, default ``ctx.seed``), cached in ``ctx.work_dir``; None when the simulator is absent."""
     try:
         from evpose.sim import SimulationConfig, simulate
     except ImportError:
         return None
-    cache = ctx.work_dir / f"slam_{scenario}_3s_seed{ctx.seed}.pkl"
+    seed = ctx.seed if seed is None else int(seed)
+    cache = ctx.work_dir / f"slam_{scenario}_3s_seed{seed}.pkl"
     if cache.exists():
         return pickle.loads(cache.read_bytes())
-    rec = simulate(SimulationConfig(scenario=scenario, seconds=3.0, resolution=(346, 260), seed=ctx.seed)).recording
+    rec = simulate(SimulationConfig(scenario=scenario, seconds=3.0, resolution=(346, 260), seed=seed)).recording
     ctx.work_dir.mkdir(parents=True, exist_ok=True)
     cache.write_bytes(pickle.dumps(rec))
     return rec
@@ -204,12 +205,53 @@ def _scenario_bench(scenario: str, inertial: str | None):
 
 bench_scenario = _scenario_bench("landing", None)
 
+LANDING_SEEDS = 8
+"""Simulator seeds of the event-only landing spread benchmark."""
+
+
+def bench_landing_seed_spread(ctx: BenchContext) -> dict:
+    """Event-only SLAM on the ``landing`` scenario over ``LANDING_SEEDS`` simulator seeds (3 s at 346x260 each, full suite
+    only, recordings cached): the spread of the scale-aligned ATE (% of distance), tracked share and maps. One recording
+    says little: the outcome of a run swings with the seed (issue 9's target is ATE <= 2 % on every seed)."""
+    if ctx.quick:
+        return {"skipped": "full suite only (simulating takes minutes)"}
+    import os
+
+    import cv2
+
+    from evpose.eval.slam_metrics import atlas_metrics, spread_summary
+    from evpose.slam import SlamConfig, run_slam
+
+    cv2.setNumThreads(1)
+    load_before = os.getloadavg()[0]
+    ate, tracked, maps, cpu, rows = [], [], [], [], []
+    for seed in range(ctx.seed, ctx.seed + LANDING_SEEDS):
+        rec = _scenario_recording(ctx, "landing", seed)
+        if rec is None:
+            return {"skipped": "evpose.sim not available"}
+        run = run_slam(rec, SlamConfig())
+        m = atlas_metrics(run.trajectories(), rec.ground_truth, correct_scale=True, duration_s=run.duration_s)
+        ate.append(m.ate_percent)
+        tracked.append(m.tracked_fraction)
+        maps.append(len(m.maps))
+        cpu.extend(r.timings_ms["mci_cpu"] + r.timings_ms["tracking_cpu"] for r in run.results)
+        rows.append(f"s{seed} {m.ate_percent:.2f}% {len(m.maps)}m {100 * m.tracked_fraction:.0f}%")
+    out = {f"ate_percent_{k}": v for k, v in spread_summary(ate, 2.0).items()}
+    out["tracked_fraction_min"] = float(min(tracked))
+    out["maps_max"] = int(max(maps))
+    out["per_mci_cpu_median_ms"] = float(np.median(cpu)) if cpu else float("nan")
+    out["per_seed"] = "; ".join(rows)
+    out["load_average_1min"] = float(max(load_before, os.getloadavg()[0]))
+    return out
+
+
 BENCHMARKS = {
     "event_image": bench_event_image,
     "pipeline_synthetic": bench_pipeline_synthetic,
     "projection_search_ab": bench_projection_search_ab,
     "scenario_landing": bench_scenario,
     "scenario_landing_c2": _scenario_bench("landing", "c2"),
+    "landing_seed_spread": bench_landing_seed_spread,
     "scenario_indoor": _scenario_bench("indoor", None),
     "scenario_indoor_c2": _scenario_bench("indoor", "c2"),
 }

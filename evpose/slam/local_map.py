@@ -54,8 +54,13 @@ def triangulate_new_points(m: SlamMap, K: np.ndarray, kf: Keyframe, track_to_poi
             if tid in old.obs:
                 by_kf.setdefault(old.id, []).append(tid)
                 break
+    z_med = _median_depth(m, kf, track_to_point) if cfg.min_pair_parallax_deg > 0 else None
     for old_id, tids in sorted(by_kf.items()):
         old = m.keyframe(old_id)
+        if z_med is not None and np.degrees(np.linalg.norm(kf.T_wc[:3, 3] - old.T_wc[:3, 3]) / z_med) < cfg.min_pair_parallax_deg:
+            # Too short a baseline for the scene depth: every track's parallax is near the per-point threshold, and the
+            # ones whose noise pushes them over it come out too near. Wait for a later keyframe with a wider baseline.
+            continue
         uv1 = np.array([old.obs[t] for t in tids])
         uv2 = np.array([kf.obs[t] for t in tids])
         X = triangulate(K, invert_pose(old.T_wc), invert_pose(kf.T_wc), uv1, uv2)
@@ -66,6 +71,17 @@ def triangulate_new_points(m: SlamMap, K: np.ndarray, kf: Keyframe, track_to_poi
             track_to_point[tid] = next_point_id
             next_point_id += 1
     return next_point_id
+
+
+def _median_depth(m: SlamMap, kf: Keyframe, track_to_point: dict[int, int]) -> float | None:
+    """Median depth in ``kf`` of the map points it observes, map units (None without any in front)."""
+    X = [m.points[track_to_point[t]].xyz for t in kf.obs if track_to_point.get(t) in m.points]
+    if not X:
+        return None
+    T_cw = invert_pose(kf.T_wc)
+    z = np.asarray(X) @ T_cw[2, :3] + T_cw[2, 3]
+    z = z[z > 0]
+    return float(np.median(z)) if z.size else None
 
 
 def cull_points(m: SlamMap, K: np.ndarray, track_to_point: dict[int, int], cfg: TrackingConfig) -> int:

@@ -74,3 +74,11 @@ def test_scale_drift_of_a_map_shorter_than_two_segments_is_null_so_summaries_com
     short = atlas_metrics([_scaled_piece(gt, 0, 400_000, 2.0, [0, 0, 0])], gt, correct_scale=True).to_dict()
     assert short["scale_drift_percent_max"] is None and short["per_map"][0]["scale_drift_percent"] is None
     assert short == atlas_metrics([_scaled_piece(gt, 0, 400_000, 2.0, [0, 0, 0])], gt, correct_scale=True).to_dict()
+
+
+def test_spread_summary_reports_mean_median_extremes_and_runs_within_target():
+    from evpose.eval.slam_metrics import spread_summary
+
+    s = spread_summary([1.5, 4.0, 2.0, float("nan"), 10.5], target=2.0)
+    assert s == {"runs": 4, "mean": 4.5, "median": 3.0, "best": 1.5, "worst": 10.5, "within_target": 2}
+    assert spread_summary([], target=2.0)["runs"] == 0

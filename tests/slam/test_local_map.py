@@ -1,0 +1,71 @@
+"""Keyframe decision of the local mapping (evpose/slam/local_map.py)."""
+
+import numpy as np
+
+from evpose.slam.atlas import Keyframe, MapPoint, SlamMap
+from evpose.slam.config import TrackingConfig
+from evpose.slam.local_map import need_keyframe
+
+
+def _map_with_last_keyframe_seeing(n_points: int) -> tuple[SlamMap, np.ndarray, np.ndarray]:
+    """A map whose last keyframe observes ``n_points`` point tracks; the current tracks sit where the keyframe saw them."""
+    m = SlamMap(0)
+    uv = np.c_[np.linspace(20, 200, n_points), np.linspace(20, 160, n_points)]
+    m.keyframes.append(Keyframe(0, 0, np.eye(4), {t: uv[t].copy() for t in range(n_points)}))
+    for t in range(n_points):
+        m.points[t] = MapPoint(t, np.array([0.0, 0.0, 5.0]), {0: uv[t].copy()}, track_id=t)
+    return m, np.arange(n_points, dtype=np.int64), uv
+
+
+def test_need_keyframe_when_tracked_points_fall_below_the_ratio_of_the_last_keyframe():
+    m, ids, uv = _map_with_last_keyframe_seeing(20)
+    # No key-point motion: only the tracked share decides (12 of 20 = 60 %).
+    assert need_keyframe(m, ids, uv, 12, TrackingConfig(keyframe_tracked_ratio=0.7))
+    assert not need_keyframe(m, ids, uv, 12, TrackingConfig(keyframe_tracked_ratio=0.5))
+
+
+def test_need_keyframe_when_key_points_moved_far_from_the_last_keyframe():
+    m, ids, uv = _map_with_last_keyframe_seeing(20)
+    cfg = TrackingConfig(keyframe_tracked_ratio=0.5, keyframe_displacement_px=20.0)
+    assert not need_keyframe(m, ids, uv + 10.0, 20, cfg)  # 14 px
+    assert need_keyframe(m, ids, uv + 15.0, 20, cfg)  # 21 px
+
+
+def _two_keyframes(baseline: float, seed: int = 0):
+    """Keyframe 0 at the origin and keyframe 1 moved sideways by ``baseline``, both looking at points 5 m ahead: 30 map points
+    both see (tracks 0-29) and 30 tracks without a point yet (100-129), observed without noise."""
+    from evpose.core.trajectory import invert_pose
+    from evpose.slam.geometry import project
+
+    K = np.array([[200.0, 0, 120], [0, 200.0, 90], [0, 0, 1]])
+    rng = np.random.default_rng(seed)
+    X = np.c_[rng.uniform(-2, 2, 60), rng.uniform(-1.5, 1.5, 60), rng.uniform(4.5, 5.5, 60)]
+    T1 = np.eye(4)
+    T1[0, 3] = baseline
+    uv0, _ = project(K, np.eye(4), X)
+    uv1, _ = project(K, invert_pose(T1), X)
+    tids = list(range(30)) + list(range(100, 130))
+    m = SlamMap(0)
+    m.keyframes = [Keyframe(0, 0, np.eye(4), {t: uv0[i] for i, t in enumerate(tids)}),
+                   Keyframe(1, 100_000, T1, {t: uv1[i] for i, t in enumerate(tids)})]
+    track_to_point = {}
+    for i in range(30):
+        m.points[i] = MapPoint(i, X[i].copy(), {0: uv0[i], 1: uv1[i]}, track_id=i)
+        track_to_point[i] = i
+    return m, K, track_to_point
+
+
+def test_a_keyframe_pair_with_too_short_a_baseline_for_the_scene_depth_triangulates_nothing():
+    from evpose.slam.local_map import triangulate_new_points
+
+    # 0.13 m at 5 m: 1.5 deg, above the per-point parallax threshold of 1 deg and below the pair threshold of 2 deg.
+    m, K, t2p = _two_keyframes(0.13)
+    cfg = TrackingConfig(min_triangulation_deg=1.0, min_pair_parallax_deg=2.0)
+    assert triangulate_new_points(m, K, m.keyframes[1], t2p, cfg, 1000) == 1000 and len(m.points) == 30
+    m, K, t2p = _two_keyframes(0.13)
+    assert triangulate_new_points(m, K, m.keyframes[1], t2p, TrackingConfig(min_triangulation_deg=1.0, min_pair_parallax_deg=0.0), 1000) > 1000
+    # A wide enough pair (0.3 m: 3.4 deg) triangulates the new tracks where they are.
+    m, K, t2p = _two_keyframes(0.3)
+    nxt = triangulate_new_points(m, K, m.keyframes[1], t2p, cfg, 1000)
+    assert nxt - 1000 >= 25
+    assert all(t2p[t] >= 1000 for t in range(100, 130) if t in t2p)
