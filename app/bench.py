@@ -170,10 +170,12 @@ def _paused_browser_cpu(app, seconds: float) -> float:
 
 
 def _wait_run_ahead(app, timeout_s: float = 1800.0) -> float:
-    """Block until the run-ahead has reached the end of the recording; seconds waited."""
+    """Block until the run-ahead has reached the end of the recording and filled in the frames far seeks
+    skipped; seconds waited."""
     t0 = time.perf_counter()
     while time.perf_counter() - t0 < timeout_s:
-        done = app.player.call(lambda e: getattr(e, "frontier", 0) >= getattr(e, "n_steps", 0)).result(600)
+        done = app.player.call(lambda e: getattr(e, "frontier", 0) >= getattr(e, "n_steps", 0)
+                               and not getattr(e, "backfill_left", 0)).result(600)
         if done:
             break
         time.sleep(0.25)
@@ -338,7 +340,85 @@ def bench_run_ahead(ctx) -> dict:
     return out
 
 
-BENCHMARKS = {"playback_realtime": bench_playback, "seek_latency": bench_seek, "run_ahead_cpu": bench_run_ahead}
+def _far_seek_once(rec, cmap, t_us: int, catch_up: bool) -> dict:
+    """A fresh engine as the viewer opens it (first step shown, a few run-ahead steps), then one far seek."""
+    from app.tracker_engine import TrackerEngine
+
+    eng = TrackerEngine(rec, cmap)
+    eng.seek(rec.t_start_us)
+    eng.prefetch(5)
+    load0 = os.getloadavg()[0]
+    w0, c0 = time.perf_counter(), time.thread_time()
+    slices = 0
+    if catch_up:
+        while not eng.catch_up(t_us, 25):
+            slices += 1
+    frame = eng.seek_near(t_us)
+    out = {"wall_s": time.perf_counter() - w0, "cpu_s": time.thread_time() - c0, "index": frame.index,
+           "steps": frame.index, "slices": slices + 1 if catch_up else 0, "kept_frames": len(eng.cache),
+           "loadavg_1min": [load0, os.getloadavg()[0]]}
+    # A later seek half-way back: from a kept frame (old path) or a snapshot and a few steps (catch-up path).
+    t0 = time.perf_counter()
+    eng.seek_near(rec.t_start_us + (t_us - rec.t_start_us) // 2 + 7_000)
+    out["then_mid_seek_ms"] = (time.perf_counter() - t0) * 1e3
+    return out
+
+
+def _far_seek_player(rec, cmap, t_us: int) -> dict:
+    """The same seek through the player (run-ahead on, as ``evpose app`` runs it): when the status line first
+    says how far it is, and when the frame is drawn."""
+    from app.player import Player
+    from app.tracker_engine import TrackerEngine
+
+    drawn, first_progress = threading.Event(), []
+    p = Player(lambda cfg: TrackerEngine(rec, cmap, cfg), lambda f, e: drawn.set(),
+               on_progress=lambda e: first_progress or first_progress.append(time.perf_counter()))
+    try:
+        p.seek(rec.t_start_us)
+        p.wait_idle(600)
+        p.call(lambda e: e.prefetch(5)).result(600)
+        drawn.clear()
+        load0 = os.getloadavg()[0]
+        first_progress.clear()
+        t0 = time.perf_counter()
+        p.seek(t_us)
+        # Commands sent while it computes wait at most one slice: time a few (they do nothing).
+        time.sleep(1.0)
+        waits = []
+        for _ in range(5):
+            c0 = time.perf_counter()
+            p.call(lambda e: None).result(600)
+            waits.append((time.perf_counter() - c0) * 1e3)
+            time.sleep(0.2)
+        drawn.wait(600)
+        wall = time.perf_counter() - t0
+        p.wait_idle(600)
+        return {"first_status_update_s": (first_progress[0] - t0) if first_progress else None, "frame_drawn_s": wall,
+                "command_wait_while_computing_ms": waits, "catch_up": p.last_catch_up,
+                "loadavg_1min": [load0, os.getloadavg()[0]]}
+    finally:
+        p.stop()
+
+
+def bench_far_seek(ctx) -> dict:
+    """A seek to 95 % of the recording right after opening it (nothing computed there yet), on the engine alone:
+    the old path (the run-ahead steps there keeping every grid frame) and the catch-up (plain steps, then the
+    target step), alternated in one run; then through the player, which shows progress while it computes."""
+    from app.browser import load_map, load_recording
+
+    rec_path, map_path = demo_pair(Path(ctx.work_dir))
+    rec, cmap = load_recording(rec_path), load_map(map_path)
+    t = rec.t_start_us + int(0.95 * (rec.t_end_us - rec.t_start_us))
+    out: dict = {"recording": str(rec_path), "target_s": (t - rec.t_start_us) / 1e6}
+    for _ in range(1 if ctx.quick else 2):
+        for name, catch_up in (("grid_stepping", False), ("catch_up", True)):
+            out.setdefault(name, []).append(_far_seek_once(rec, cmap, t, catch_up))
+    out["player"] = _far_seek_player(rec, cmap, t)
+    return out
+
+
+BENCHMARKS = {"playback_realtime": bench_playback, "seek_latency": bench_seek, "run_ahead_cpu": bench_run_ahead,
+              "far_seek": bench_far_seek}
 
 
 def main(argv: list[str] | None = None) -> None:

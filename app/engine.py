@@ -72,6 +72,20 @@ class Engine(ABC):
         """A seek that may land a few steps before ``t_us`` when that answers faster (default: exact)."""
         return self.seek(t_us)
 
+    def catch_up_steps(self, t_us: int, exact: bool = False) -> int:
+        """Steps to compute before a seek to ``t_us`` answers (``exact``: :meth:`seek`, else :meth:`seek_near`);
+        0 when it answers at once, or when the engine cannot say (its seeks are then made in one go)."""
+        return 0
+
+    def catch_up(self, t_us: int, budget_steps: int, exact: bool = False) -> bool:
+        """Compute at most ``budget_steps`` of those steps, the cheapest way (no display products on the way);
+        True once none are left. The player calls it in slices so commands are heard in between."""
+        return True
+
+    def catch_up_progress(self, t_us: int, exact: bool = False) -> tuple[float, float]:
+        """(media seconds reached, media seconds of the target) of a catch-up towards ``t_us``, from the start."""
+        return ((self.current_t_us - self.t_start_us) / 1e6, (int(t_us) - self.t_start_us) / 1e6)
+
     def trajectory(self) -> Trajectory:
         """Estimated poses of the steps so far (steps without a pose are left out)."""
         rows = [(s.t_us, s.pose) for s in self.history if s.pose is not None]

@@ -35,6 +35,10 @@ class SlamView:
     """``T_world_cam`` of the active map's keyframes, (K, 4, 4) map units."""
     mci_t_us: int | None = None
     """Time of the MCI shown (a step without a new MCI shows the last one), us."""
+    atlas: list = field(default_factory=list)
+    """Every map of the atlas so far with its alignment to the ground truth (``app.slam_alignment.AtlasMapView``)."""
+    has_ground_truth: bool = False
+    """The recording has ground truth, so the maps can be shown aligned to it."""
 
 
 @dataclass

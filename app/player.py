@@ -10,6 +10,13 @@ engine with a run-ahead reads it back, otherwise it computes it; every step is
 still computed, by the run-ahead or live, so the state shown is always the
 headless run's. When frames must be computed, the stride shrinks to keep the
 frame rate up and the real-time factor shown says the speed achieved.
+
+A seek past what the engine has computed (tracking is causal: the state at t
+needs every step before it) is a *catch-up*: the engine computes the steps
+plainly, a slice at a time (``Engine.catch_up``), the status line says how far
+it is, commands are heard between slices (a new seek replaces the target;
+pause, a step or a new recording cancels it), and only the target's frame is
+drawn.
 """
 
 from __future__ import annotations
@@ -22,6 +29,7 @@ from concurrent.futures import Future
 from dataclasses import dataclass, field
 from typing import Callable
 
+from app.catch_up import CatchUp
 from app.engine import Engine
 from app.frame import Frame
 
@@ -63,6 +71,12 @@ class PlayerConfig:
     """While playing, spend the wait for the next frame's display time running ahead too (one step at a time)."""
     snap_seeks: bool = True
     """Seeks may land up to one frame-cache interval (``FrameCacheConfig.every_ms``) before the asked time when that frame is ready."""
+    catch_up_steps: int = field(default=25, metadata={"min": 1, "max": 1000, "step": 1, "unit": "steps"})
+    """A seek whose target needs more steps computed than this is made in slices of this many (a catch-up):
+    commands are heard in between (a new seek replaces the target, pause or a step cancels it) and the status
+    line shows the progress, steps."""
+    progress_every_s: float = field(default=0.5, metadata={"min": 0.1, "max": 5.0, "step": 0.1, "unit": "s"})
+    """Time between two status-line updates while the engine works with nothing new shown, seconds."""
 
 
 EngineFactory = Callable[[object], Engine]
@@ -107,6 +121,10 @@ class Player:
         self._play_stats = [0.0, 0]  # wall seconds and media microseconds spent playing
         self._last_advance_wall: float | None = None
         self._prefetching = self.pc.prefetch
+        self._catch_up: CatchUp | None = None
+        """The seek being computed in slices, if any."""
+        self.last_catch_up: dict = {}
+        """The last catch-up: target, steps, wall and thread CPU seconds, and whether it finished or was cancelled."""
         self._thread = threading.Thread(target=self._run, name="evpose-player", daemon=True)
         self._running = True
         self._thread.start()
@@ -153,9 +171,20 @@ class Player:
         self._queue.put(("call", fn, fut))
         return fut
 
+    def cancel_seek(self) -> None:
+        """Stop computing towards a far seek target (the frame shown stays)."""
+        self._queue.put(("cancel",))
+
     def wait_idle(self, timeout: float = 30.0) -> bool:
-        """Block until all queued commands and pending changes are done (tests, exports)."""
-        return self.call(lambda e: None).result(timeout) is None and self._wait_pending(timeout)
+        """Block until all queued commands, pending changes and seeks being computed are done (tests, exports)."""
+        end = time.monotonic() + timeout
+        if not (self.call(lambda e: None).result(timeout) is None and self._wait_pending(timeout)):
+            return False
+        while self.call(lambda e: self._catch_up is not None).result(max(end - time.monotonic(), 0.1)):
+            if time.monotonic() > end:
+                return False
+            time.sleep(0.02)
+        return True
 
     def _wait_pending(self, timeout: float) -> bool:
         end = time.monotonic() + timeout
@@ -181,6 +210,7 @@ class Player:
             "t_us": f.t_us if f else None, "index": f.index if f else None,
             "real_time_factor": (media / 1e6) / wall if wall > 0 else 0.0,
             "config_applies": self.config_applies, "last_seek_ms": self.last_seek_ms,
+            "catching_up": c.progress if (c := self._catch_up) is not None else None,
         }
 
     # ----- worker thread -----
@@ -216,10 +246,70 @@ class Player:
         self.last_seek_ms = (time.perf_counter() - t0) * 1e3
         return frame
 
+    def _seek(self, t_us: int, exact: bool = False) -> None:
+        """Show the step at ``t_us``: at once when little is left to compute, else start a catch-up (sliced)."""
+        exact = exact or not self.pc.snap_seeks
+        self._catch_up = None
+        if self.engine.catch_up_steps(t_us, exact) <= self.pc.catch_up_steps:
+            self._publish(self._timed_seek(t_us, exact))
+            self._reanchor()
+            return
+        self._catch_up = CatchUp(int(t_us), exact, self.engine.catch_up_steps(t_us, exact))
+        self._catch_up.progress = self.engine.catch_up_progress(t_us, exact)
+        self._last_progress = 0.0
+
+    def _end_catch_up(self, reason: str) -> None:
+        c, self._catch_up = self._catch_up, None
+        if c is not None:
+            self.last_catch_up = c.report(reason)
+
+    def _catch_up_slice(self) -> None:
+        """One slice of the catch-up; the seek's frame once it is reached."""
+        c = self._catch_up
+        c0 = time.thread_time()
+        try:
+            done = self.engine.catch_up(c.t_us, self.pc.catch_up_steps, c.exact)
+        except Exception as exc:
+            self._end_catch_up("failed")
+            self.state = PlayState.PAUSED
+            self._on_error(f"seek failed: {exc}")
+            return
+        c.cpu_s += time.thread_time() - c0
+        c.progress = self.engine.catch_up_progress(c.t_us, c.exact)
+        if done:
+            c1 = time.thread_time()
+            frame = self._timed_seek(c.t_us, c.exact)
+            c.cpu_s += time.thread_time() - c1
+            self._end_catch_up("done")
+            self.last_seek_ms = self.last_catch_up["wall_s"] * 1e3
+            self._prefetching = self.pc.prefetch
+            self._publish(frame)
+            self._last_advance_wall = None
+            self._reanchor()
+            return
+        now = time.monotonic()
+        if now - self._last_progress >= self.pc.progress_every_s:
+            self._last_progress = now
+            self._progress()
+
+    def _progress(self) -> None:
+        try:
+            self._on_progress(self.engine)
+        except Exception as exc:  # a status-line bug must not stop the computation
+            self._on_error(f"progress display failed: {exc!r}")
+
     def _handle(self, cmd: tuple) -> None:
         kind = cmd[0]
         if kind in ("seek", "load"):
             self._ready = None
+        if self._catch_up is not None and kind in ("seek", "load", "step", "pause", "cancel") or (
+                kind == "toggle" and self._catch_up is not None and self.state == PlayState.PLAYING):
+            # A new seek replaces the target; a step, pause or new recording gives it up (what was computed stays).
+            self._end_catch_up("replaced" if kind == "seek" else "cancelled")
+            if kind != "seek":
+                self._progress()
+            if kind == "cancel":
+                self._publish(self.last_frame)  # every tab's time slider back to the step shown
         if kind == "play" or (kind == "toggle" and self.state == PlayState.PAUSED):
             if self.last_frame is None or self.engine.current_t_us >= self.engine.t_end_us:
                 self._publish(self._timed_seek(self.engine.t_start_us) if self.last_frame else self.engine.step())
@@ -251,9 +341,8 @@ class Player:
             self._ready = None
             self._publish(frame if frame is not None else self.last_frame)
         elif kind == "seek":
-            self._publish(self._timed_seek(cmd[1]))
+            self._seek(cmd[1])
             self._last_advance_wall = None
-            self._reanchor()
         elif kind == "speed":
             self.speed = cmd[1]
             self._reanchor()
@@ -288,19 +377,21 @@ class Player:
         self._prefetching = self.pc.prefetch
         self.config_applies += 1
         self._on_engine(engine)
+        self._end_catch_up("replaced")
         if rerun == RerunFrom.START or t_now is None:
-            frame = self.engine.step()
+            self._publish(self.engine.step())
+            self._reanchor()
         else:
-            frame = self._timed_seek(t_now, exact=True)
-        self._publish(frame)
-        self._reanchor()
+            self._seek(t_now, exact=True)
 
     def _timeout(self) -> float | None:
         waits = []
         with self._lock:
             if self._pending is not None:
                 waits.append(self._pending_deadline - time.monotonic())
-        if self.state == PlayState.PLAYING:
+        if self._catch_up is not None:
+            waits.append(0.0)
+        elif self.state == PlayState.PLAYING:
             if self._ready is None or (self._prefetching and self.pc.prefetch_while_playing):
                 waits.append(0.0)
             else:
@@ -333,7 +424,9 @@ class Player:
             if due_config:
                 self._apply_pending()
                 continue
-            if self.state == PlayState.PLAYING:
+            if self._catch_up is not None:
+                self._catch_up_slice()
+            elif self.state == PlayState.PLAYING:
                 self._advance()
             elif self._prefetching:
                 self._prefetch_slice(self.pc.prefetch_steps)
@@ -359,10 +452,7 @@ class Player:
         now = time.monotonic()
         if self.state == PlayState.PAUSED and (now - self._last_progress >= 1.0 or not self._prefetching):
             self._last_progress = now
-            try:
-                self._on_progress(self.engine)
-            except Exception as exc:  # a status-line bug must not stop the run-ahead
-                self._on_error(f"progress display failed: {exc!r}")
+            self._progress()
 
     def _advance(self) -> None:
         if self._ready is None:

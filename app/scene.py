@@ -25,6 +25,9 @@ MAX_CLOUD_POINTS = 40_000
 """The raw cloud is thinned to about this many points for display."""
 FRUSTUM_IMAGE_WIDTH = 176
 """The TDF shown inside the camera frustum is shrunk to at most this width (it is drawn small), pixels."""
+SLAM_ACTIVE = np.array([20, 160, 220], np.uint8)
+SLAM_OLD = np.array([150, 150, 190], np.uint8)
+"""Points of the active SLAM map, and of the maps tracking lost earlier."""
 TRAJECTORY_CHUNK = 256
 """Trajectory polylines are sent in chunks of this many steps; only the newest chunk changes as the run grows."""
 
@@ -42,6 +45,8 @@ class SceneToggles:
     frustum: bool = True
     follow: bool = False
     """Move every browser's camera with the tracked camera."""
+    slam_aligned: bool = True
+    """SLAM mode: draw each atlas map Sim(3)-aligned to the ground truth (when the recording has one), else in its own frame."""
 
 
 def map_colours(n: int, frame: Frame | None, base: np.ndarray | None = None) -> np.ndarray:
@@ -107,6 +112,8 @@ class SceneView:
         self._grey: np.ndarray | None = None
         self._drawn_chunks: dict[str, list[tuple[int, object]]] = {}
         """Per trajectory: for each chunk sent, (points in it, the summary of its last point) to tell whether it changed."""
+        self._slam_drawn: dict[int, object] = {}
+        """SLAM map id -> the view (and whether aligned) last drawn for it: maps no longer active are not resent."""
         server.scene.set_up_direction("+z")
         server.scene.world_axes.visible = False
 
@@ -119,6 +126,7 @@ class SceneView:
             h.remove()
         self._nodes.clear()
         self._drawn_chunks.clear()
+        self._slam_drawn.clear()
 
     def load(self, contour_map: ContourMap | None, cloud: tuple[np.ndarray, np.ndarray | None] | None,
              ground_truth: Trajectory | None, calibration: CameraCalibration | None) -> None:
@@ -186,31 +194,65 @@ class SceneView:
         scene = self.server.scene
         if "map" in self._nodes and self.contour_map is not None:
             self._nodes["map"].colors = map_colours(len(self.contour_map), frame, self._grey)
-        if history is not None:
-            self._trajectories(history)
         if frame.slam is not None:
+            # Per-step SLAM poses hop between the maps' frames: each map's own trajectory is drawn instead.
             self._slam(frame)
+            if history is not None:
+                self._trajectories([])
+        elif history is not None:
+            self._trajectories(history)
         self._camera(frame)
 
     def _slam(self, frame: Frame) -> None:
-        """SLAM mode: the growing map of the active atlas map and its keyframes (in that map's own frame and scale)."""
-        scene = self.server.scene
+        """SLAM mode: every map of the atlas (points, keyframes, trajectory), aligned to the ground truth when the
+        toggle is on and an alignment exists, else in the map's own frame and scale."""
         v = frame.slam
-        if v.map_points is not None and len(v.map_points):
-            pts = np.asarray(v.map_points, np.float32)
-            # Event-only maps have an arbitrary scale: size the points to the map itself.
-            extent = float(max(np.ptp(pts, axis=0).max(), 1e-3))
-            self._set("slam_map", scene.add_point_cloud("/slam/map_points", pts, np.tile(np.array([[20, 160, 220]], np.uint8), (len(pts), 1)),
-                                                         point_size=0.008 * extent, point_shape="circle"))
-            if v.keyframe_poses is not None and len(v.keyframe_poses):
-                P = v.keyframe_poses
-                self._set("slam_kf", scene.add_batched_axes(
-                    "/slam/keyframes", batched_wxyzs=np.stack([_wxyz(T) for T in P]), batched_positions=P[:, :3, 3].astype(np.float32),
-                    axes_length=0.04 * extent, axes_radius=0.003 * extent))
-        elif "slam_map" in self._nodes and v.map_id < 0:
-            for name in ("slam_map", "slam_kf"):
-                if name in self._nodes:
-                    self._nodes.pop(name).remove()
+        views = v.atlas
+        drawn = set()
+        for view in views:
+            sim = view.alignment if self.toggles.slam_aligned else None
+            drawn.add(view.map_id)
+            last = self._slam_drawn.get(view.map_id)
+            if not view.active and last is not None and last[0] is view and last[1] == (sim is not None):
+                continue  # a map no longer active (the aligner's same view) looks as when it was last sent
+            self._slam_map(view, sim)
+            self._slam_drawn[view.map_id] = (view, sim is not None)
+        for map_id in [k for k in self._slam_drawn if k not in drawn]:  # maps not made yet after a seek back
+            for part in ("slam_map", "slam_kf", "slam_traj"):
+                node = self._nodes.pop(f"{part}/{map_id}", None)
+                if node is not None:
+                    node.remove()
+            del self._slam_drawn[map_id]
+
+    def _slam_map(self, view, sim) -> None:
+        scene = self.server.scene
+        pts = sim.points(view.points) if sim is not None else np.asarray(view.points, np.float64)
+        kfs = sim.poses(view.keyframe_poses) if sim is not None else view.keyframe_poses
+        traj = sim.points(view.trajectory) if sim is not None else view.trajectory
+        # Aligned maps share the ground truth's scale; raw event-only maps have their own, so they size themselves.
+        own = np.concatenate([pts.reshape(-1, 3), traj.reshape(-1, 3)])
+        extent = self.scale if sim is not None else float(max(np.ptp(own, axis=0).max(), 1e-3)) if len(own) else 1.0
+        colour = SLAM_ACTIVE if view.active else SLAM_OLD
+        i = view.map_id
+        if len(pts):
+            self._set(f"slam_map/{i}", scene.add_point_cloud(f"/slam/map_{i}/points", pts.astype(np.float32), np.tile(colour, (len(pts), 1)),
+                                                              point_size=0.008 * extent, point_shape="circle"))
+        if len(kfs):
+            self._set(f"slam_kf/{i}", scene.add_batched_axes(
+                f"/slam/map_{i}/keyframes", batched_wxyzs=np.stack([_wxyz(T) for T in kfs]), batched_positions=kfs[:, :3, 3].astype(np.float32),
+                axes_length=0.04 * extent, axes_radius=0.003 * extent))
+        if len(traj) > 1:
+            self._set(f"slam_traj/{i}", scene.add_line_segments(
+                f"/slam/map_{i}/trajectory", polyline_segments(traj), (230, 120, 20) if view.active else (200, 160, 110),
+                thickness=2.5 if view.active else 1.5, thickness_units="screen"))
+
+    def slam_pose(self, frame: Frame) -> np.ndarray | None:
+        """The frame's camera pose where the 3D view draws the active map (aligned or raw)."""
+        pose = frame.pose
+        if pose is None or frame.slam is None or not self.toggles.slam_aligned:
+            return pose
+        active = next((m for m in frame.slam.atlas if m.active and m.map_id == frame.slam.map_id), None)
+        return active.alignment.poses(pose) if active is not None and active.alignment is not None else pose
 
     def _trajectories(self, history: list[StepSummary]) -> None:
         t = self.toggles
@@ -249,7 +291,7 @@ class SceneView:
             self._set("imu", scene.add_batched_axes(
                 "/imu_poses", batched_wxyzs=np.stack([_wxyz(T) for T in P]), batched_positions=P[:, :3, 3].astype(np.float32),
                 axes_length=0.02 * self.scale, axes_radius=0.002 * self.scale, visible=t.imu_poses))
-        pose = frame.pose if frame.pose is not None else frame.registration_pose
+        pose = self.slam_pose(frame) if frame.slam is not None else frame.pose if frame.pose is not None else frame.registration_pose
         if pose is None and self.ground_truth is not None and len(self.ground_truth):
             # Events-only view: show where the camera truly was, so the images have a place in 3D.
             pose = self.ground_truth.interpolate(frame.t_us).matrix(0)

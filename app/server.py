@@ -35,6 +35,8 @@ from evpose.errors import EvposeError, InputError
 __all__ = ["AppConfig", "ViewerApp"]
 
 NO_MAP = "(no map: events only)"
+TOGGLE_HINTS = {"slam_aligned": "SLAM mode: place each map on the ground truth (Sim(3), evo's Umeyama); untick for the maps' own frames"}
+"""Hover text of the 3D view's checkboxes that need more than their name."""
 SLOW_REFRESH_S = 0.25
 """While playing, plots and trajectory polylines refresh at most this often, seconds."""
 
@@ -95,11 +97,13 @@ class ViewerApp:
             self.status = g.add_markdown("_no recording loaded_")
         with g.add_folder("3D view", expand_by_default=False):
             self.toggle_boxes = {}
-            for name in ("contour_map", "raw_cloud", "ground_truth", "registration", "fused", "imu_poses", "frustum", "follow"):
-                self.toggle_boxes[name] = g.add_checkbox(name.replace("_", " "), getattr(self.scene.toggles, name))
+            for name in ("contour_map", "raw_cloud", "ground_truth", "registration", "fused", "imu_poses", "frustum", "follow", "slam_aligned"):
+                self.toggle_boxes[name] = g.add_checkbox(name.replace("_", " "), getattr(self.scene.toggles, name), hint=TOGGLE_HINTS.get(name))
             self.overlay_dropdown = g.add_dropdown("TDF points coloured by", [o.value for o in OverlayColour], initial_value=self.overlay.value)
         with g.add_folder("Layout", expand_by_default=False):
             self.layout_dropdown = g.add_dropdown("layout", ["debug"])
+            self.panel_boxes = {name: g.add_checkbox(f"show {name}", True, hint=f"Show the {name} panel (saved with the layout)")
+                                for name in PANELS}
             self.layout_name = g.add_text("save as", "my_layout")
             self.layout_save = g.add_button("save current layout")
         with g.add_folder("Export", expand_by_default=False):
@@ -122,6 +126,8 @@ class ViewerApp:
         self.overlay_dropdown.on_update(lambda e: self._set_overlay(self.overlay_dropdown.value))
         self.layout_dropdown.on_update(lambda e: e.client is not None and self.apply_layout_name(self.layout_dropdown.value))
         self.layout_save.on_click(lambda e: self.save_current_layout(self.layout_name.value, e.client))
+        for name, box in self.panel_boxes.items():
+            box.on_update(lambda e, name=name, box=box: e.client is not None and self.set_panel_visible(name, box.value))
         self.export_buttons.on_click(lambda e: self.export(e.target.value, e.client))
 
     def _build_panels(self) -> None:
@@ -291,7 +297,7 @@ class ViewerApp:
                 self._last_slow = now
                 self.plots.update(history, self.recording.ground_truth if self.recording is not None else None)
             if frame.slam is not None:
-                self.slam_info.content = slam_markdown(frame)
+                self.slam_info.content = slam_markdown(frame, self.scene.toggles.slam_aligned)
             if show_teaching and STAGE_PANEL[self.stage] in imgs:
                 self.teaching_text.content = teaching_markdown(self.stage, frame)
                 self.teaching_image.image = imgs[STAGE_PANEL[self.stage]]
@@ -360,6 +366,8 @@ class ViewerApp:
         if self.layout is not None:
             setattr(self.layout.scene, name, bool(value))
         self.scene.apply_toggles()
+        if name == "slam_aligned":
+            self._redraw()  # the SLAM maps move between the ground truth's frame and their own
 
     def _set_overlay(self, value: str) -> None:
         self.overlay = OverlayColour(value)
@@ -401,7 +409,19 @@ class ViewerApp:
         self.apply_layout(layout)
         return True
 
+    def set_panel_visible(self, name: str, visible: bool) -> None:
+        """Show or hide a panel at run time; the current layout remembers it (and a saved layout records it)."""
+        if self.layout is None:
+            return
+        self.layout.panels[name] = dataclasses.replace(self.layout.panels[name], visible=bool(visible))
+        self.panels[name].visible = bool(visible)
+        self.panel_boxes[name].value = bool(visible)
+        if visible:
+            self._redraw()  # images of hidden panels were neither drawn nor sent
+
     def apply_layout(self, layout: Layout) -> None:
+        # A copy: run-time changes (panels shown, 3D toggles) must not alter the loaded file's Layout.
+        layout = Layout.from_dict(layout.to_dict())
         self.layout = layout
         self.gui.configure_theme(dark_mode=layout.dark_mode, show_share_button=False, control_width="medium")
         # Absolute placements first, so panels stacked on others find their anchor placed.
@@ -409,6 +429,7 @@ class ViewerApp:
         for name in order:
             place, panel = layout.panels[name], self.panels[name]
             panel.visible = place.visible
+            self.panel_boxes[name].value = place.visible
             if place.dock == "left":
                 panel.dock_left()
             elif place.dock == "right":
@@ -430,13 +451,16 @@ class ViewerApp:
     def save_current_layout(self, name: str, client=None) -> Path | None:
         try:
             base = self.layout or Layout(name)
-            layout = Layout(name, base.description, base.dark_mode, dict(base.panels), type(self.scene.toggles)(**vars(self.scene.toggles)))
+            # As shown now: panels as placed and shown at run time, the 3D toggles as ticked.
+            layout = Layout(name, base.description, base.dark_mode, {k: dataclasses.replace(v) for k, v in base.panels.items()},
+                            type(self.scene.toggles)(**vars(self.scene.toggles)))
             path = save_layout(layout, self.cfg.layout_dir)
         except EvposeError as exc:
             self._notify("layout", str(exc), "red")
             return None
         self.layout_dropdown.options = sorted(k for k, v in self.available_layouts().items() if isinstance(v, Layout))
         self.layout_dropdown.value = name
+        self.layout = Layout.from_dict(layout.to_dict())  # what is shown is now this layout
         return path
 
     # ------------------------------------------------------------------ export

@@ -16,6 +16,7 @@ import numpy as np
 
 from app.engine import Engine, EventsOnlyEngine
 from app.frame import Frame, SlamView, StepSummary
+from app.slam_alignment import AtlasAligner, alignment_note
 from evpose.core.events import EventArray
 from evpose.core.trajectory import Trajectory
 from evpose.core.recording import Recording
@@ -34,8 +35,9 @@ class SlamViewConfig:
     slam: SlamConfig = field(default_factory=SlamConfig)
 
 
-def slam_view(result: SlamStepResult, slam: EventSlam) -> SlamView:
-    """The step's SLAM products; on a step without an MCI, those of the last MCI (so the panels do not blink)."""
+def slam_view(result: SlamStepResult, slam: EventSlam, aligner: AtlasAligner | None = None) -> SlamView:
+    """The step's SLAM products; on a step without an MCI, those of the last MCI (so the panels do not blink).
+    With an ``aligner``, every map of the atlas and its alignment to the ground truth too."""
     shown = result if result.mci is not None or not slam.results else slam.results[-1]
     m = slam.atlas.active
     kfs = np.stack([k.T_wc for k in m.keyframes]) if m is not None and m.keyframes else None
@@ -45,6 +47,8 @@ def slam_view(result: SlamStepResult, slam: EventSlam) -> SlamView:
         tiny_frame=result.tiny_frame, mci=shown.mci, hypothesis=shown.hypothesis, hypothesis_scores=dict(shown.hypothesis_scores),
         features=shown.features, feature_has_point=shown.feature_has_point, keyframe=result.keyframe, map_id=result.map_id,
         map_points=pts, keyframe_poses=kfs, mci_t_us=int(shown.t_us) if shown.mci is not None else None,
+        atlas=aligner.views(slam.atlas) if aligner is not None else [],
+        has_ground_truth=aligner is not None and aligner.ground_truth is not None and len(aligner.ground_truth) > 1,
     )
 
 
@@ -54,13 +58,18 @@ class SlamEngine(Engine):
     def __init__(self, recording: Recording, config: SlamViewConfig | None = None, explanation: str = ""):
         self.recording = recording
         self.config = config if isinstance(config, SlamViewConfig) else SlamViewConfig()
+        gt = recording.ground_truth
         self.explanation = explanation or ("SLAM mode: no prior map; poses and map are in the active map's own frame"
-                                           + (" and scale (event-only: arbitrary scale)." if self.config.slam.mode.value == "event" else "."))
+                                           + (" and scale (event-only: arbitrary scale)." if self.config.slam.mode.value == "event" else ".")
+                                           + (" The 3D view places each map on the ground truth (Umeyama alignment, for display"
+                                              " only; 3D view > slam aligned)." if gt is not None and len(gt) > 1 else ""))
         # Raises InputError without calibration, or in event-inertial mode without IMU: the factory shows why.
         self.slam = EventSlam(self.config.slam, recording.calibration, recording.imu)
         self.width, self.height = self.slam.width, self.slam.height
         self._known: dict[int, StepSummary] = {}
         self._snapshots: dict[int, dict] = {0: self.slam.snapshot()}
+        self._aligner = AtlasAligner(recording.ground_truth)
+        """Display alignment of the atlas maps to the ground truth (never fed back into SLAM)."""
         self.step_count = 0
         """Steps applied to ``self.slam`` so far."""
 
@@ -110,7 +119,8 @@ class SlamEngine(Engine):
         empty = np.zeros(shape, np.float32)
         return Frame(index=k, t_us=s.t_us, ts_positive=tiny, ts_negative=empty, tdf=result.mci if result.mci is not None else empty,
                      events_kept=window, events_removed=EventArray.empty(), pose=result.pose, status=s.status,
-                     reason=result.reason, timings_ms=dict(s.timings_ms), counts=dict(s.counts), slam=slam_view(result, self.slam))
+                     reason=result.reason, timings_ms=dict(s.timings_ms), counts=dict(s.counts),
+                     slam=slam_view(result, self.slam, self._aligner))
 
     def _goto(self, k: int) -> None:
         """Put SLAM in the state after ``k`` steps: restore the best snapshot at or before k, replay the rest."""
@@ -121,14 +131,42 @@ class SlamEngine(Engine):
         while self.step_count < k and self._advance() is not None:
             pass
 
+    def _index_at(self, t_us: int) -> int:
+        return int(np.clip((int(t_us) - self.t_start_us) // int(self.config.step_us) - 1, 0, self.n_steps - 1))
+
+    def _start_for(self, k: int) -> int:
+        """Step SLAM would replay from to reach ``k``: where it is, or the best snapshot at or before ``k``."""
+        base = max(j for j in self._snapshots if j <= k)
+        return self.step_count if base <= self.step_count <= k else base
+
+    def catch_up_steps(self, t_us: int, exact: bool = False) -> int:
+        k = self._index_at(t_us)
+        return k - self._start_for(k)
+
+    def catch_up(self, t_us: int, budget_steps: int, exact: bool = False) -> bool:
+        """Replay towards the seek's step without making its images (snapshots are kept on the way)."""
+        k = self._index_at(t_us)
+        start = self._start_for(k)
+        if start != self.step_count:
+            self.slam.restore(self._snapshots[start])
+            self.step_count = start
+        for _ in range(max(int(budget_steps), 1)):
+            if self.step_count >= k or self._advance() is None:
+                break
+        return self.step_count >= k
+
+    def catch_up_progress(self, t_us: int, exact: bool = False) -> tuple[float, float]:
+        k = self._index_at(t_us)
+        w = int(self.config.step_us)
+        return self._start_for(k) * w / 1e6, (k + 1) * w / 1e6
+
     def seek_step(self, index: int) -> Frame | None:
         k = int(np.clip(index, 0, self.n_steps - 1))
         self._goto(k)
         return self.step()
 
     def seek(self, t_us: int) -> Frame | None:
-        w = int(self.config.step_us)
-        return self.seek_step((int(t_us) - self.t_start_us) // w - 1)
+        return self.seek_step(self._index_at(t_us))
 
     def trajectory(self) -> Trajectory:
         """The active map's poses so far, refined by its bundle adjustments (as ``evpose slam`` writes them).
@@ -151,8 +189,9 @@ def slam_engine_factory(recording):
     return make
 
 
-def slam_markdown(frame: Frame) -> str:
-    """The SLAM step in words: selected MCI hypothesis and every hypothesis' score, tracks, keyframe, map size."""
+def slam_markdown(frame: Frame, aligned: bool = True) -> str:
+    """The SLAM step in words: selected MCI hypothesis and every hypothesis' score, tracks, keyframe, map size,
+    and how the 3D view places the maps (``aligned``: on the ground truth, when there is one)."""
     v = frame.slam
     scores = ", ".join(f"{'**' + k + '**' if k == v.hypothesis else k} {s:.4f}" for k, s in sorted(v.hypothesis_scores.items()))
     n_feat = 0 if v.features is None else len(v.features)
@@ -161,4 +200,5 @@ def slam_markdown(frame: Frame) -> str:
     n_kf = 0 if v.keyframe_poses is None else len(v.keyframe_poses)
     return (f"map {v.map_id}: {n_pts} points, {n_kf} keyframes{' (keyframe inserted)' if v.keyframe else ''}\n\n"
             f"MCI{'' if v.mci_t_us is None else f' at {v.mci_t_us / 1e6:.3f} s'} hypothesis scores (mean local STD): {scores or 'no MCI yet'}\n\n"
-            f"tracked features: {n_feat} ({with_pt} with a map point; green with, yellow without)")
+            f"tracked features: {n_feat} ({with_pt} with a map point; green with, yellow without)"
+            + (f"\n\n{note}" if (note := alignment_note(v.atlas, aligned, v.has_ground_truth)) else ""))

@@ -21,6 +21,12 @@ def run_ahead_note(engine: Engine) -> str:
         note = f" ({engine.disk_steps * step_us / 1e6:.2f} s read from the disk cache; exact single steps there need the run-ahead, at {frontier * step_us / 1e6:.2f} s)"
     if disk is not None and disk.error:
         note += f" ({disk.error})"
+    left = getattr(engine, "backfill_left", 0)
+    if left and ready >= n:
+        return (f"run-ahead: all {total:.2f} s computed; filling in {left} frames a far seek skipped "
+                "(seeks there replay from a snapshot meanwhile)" + note)
+    if left:
+        note += f" ({left} frames a far seek skipped are filled in afterwards)"
     if ready >= n:
         return f"run-ahead done: all {total:.2f} s ready (seeks and 1x playback from memory)" + note
     return f"run-ahead: {ready * step_us / 1e6:.2f} of {total:.2f} s ready (computing; beyond it, steps are computed live)" + note
@@ -32,5 +38,9 @@ def status_markdown(frame: Frame, engine: Engine, stats: dict) -> str:
             + (f" ({frame.reason})" if frame.reason and frame.status != "events only" else "")
             + f"\n\n{stats.get('state', '')} at {stats.get('speed', 1):.1f}x, "
             f"real-time factor {stats.get('real_time_factor', 0):.2f}")
+    catching = stats.get("catching_up")
+    if catching is not None:
+        text += (f"\n\n**computing {catching[0]:.1f} / {catching[1]:.1f} s** to reach the seek (tracking is causal: "
+                 "every step before it is needed; no images on the way). Seek elsewhere or pause to cancel.")
     note = run_ahead_note(engine)
     return text + (f"\n\n{note}" if note else "")

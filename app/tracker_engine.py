@@ -17,6 +17,14 @@ Playback and (grid-snapped) seeks inside the run-ahead's reach are answered from
 the cache, costing a draw; past the run-ahead's frontier the run-ahead steps
 there, at the tracker's own speed, which the player reports truthfully.
 
+A seek far past the frontier is a *catch-up* when the player drives it
+(:meth:`TrackerEngine.catch_up`, in slices): the run-ahead steps there plainly,
+without the grid's debug products and kept frames (about a third of its cost),
+keeping only its snapshots and the summaries; the target step is then computed
+with its debug products. The grid frames it passed are filled in once the
+run-ahead is done (:meth:`TrackerEngine._backfill`); seeks there meanwhile
+restore a snapshot and replay a few steps.
+
 With a :class:`~app.disk_cache.DiskCache`, summaries and kept frames of an
 earlier opening (same recording, map, configuration and code) are read back at
 start, and chunks the run-ahead completes are written out.
@@ -100,6 +108,8 @@ class TrackerEngine(Engine):
         self.disk: DiskCache | None = disk(self.config, every) if disk is not None else None
         self._disk_steps = 0
         """Steps whose summaries (and kept frames) came from the disk cache."""
+        self._unkept: set[int] = set()
+        """Grid steps a catch-up passed without keeping their frame; :meth:`prefetch` fills them in later."""
         if self.disk is not None:
             summaries, frames = self.disk.load()
             self._summaries = summaries
@@ -141,6 +151,11 @@ class TrackerEngine(Engine):
         return max(self.frontier, self._disk_steps)
 
     @property
+    def backfill_left(self) -> int:
+        """Kept frames a catch-up skipped that are still to be filled in (after the run-ahead is done)."""
+        return len(self._unkept)
+
+    @property
     def history(self) -> list[StepSummary]:
         return self._summaries[: self._shown + 1]
 
@@ -158,15 +173,20 @@ class TrackerEngine(Engine):
     def _role(self, s) -> str:
         return "ahead" if s is self._ahead else "shown"
 
-    def _advance(self, s, debug: bool):
+    def _advance(self, s, debug: bool, fill: bool = True):
         """One step of session ``s``; records its summary and its display frame when on the grid.
 
-        Only the run-ahead computes debug products to fill the grid; the shown session, which fills gaps
-        behind it, computes them for the step asked for.
+        Only the run-ahead computes debug products to fill the grid (unless ``fill`` is False: a catch-up,
+        which notes the grid steps it passes); the shown session, which fills gaps behind it, computes them
+        for the step asked for.
         """
         i = s.step_count
         role = self._role(s)
-        grid = (role == "ahead" and self.cache.on_grid(i) and i not in self.cache and self.cache.nbytes < self.cache.budget)
+        on_grid = self.cache.on_grid(i) and i not in self.cache
+        wanted = role == "ahead" and on_grid and self.cache.nbytes < self.cache.budget
+        grid = fill and wanted
+        if wanted and not fill and not debug:
+            self._unkept.add(i)  # a frame the run-ahead would have kept: filled in later
         result = s.step(debug=debug or grid)
         if result is None:
             return None
@@ -178,6 +198,7 @@ class TrackerEngine(Engine):
         frame = compact(frame_from_result(result, i)) if result.debug is not None else None
         if frame is not None and self.cache.on_grid(i) and self.cache.nbytes < self.cache.budget:
             self.cache.put(frame, near=max(self._shown, 0))
+            self._unkept.discard(i)
         if role == "ahead":
             self._thin_snapshots(s)
             if self.disk is not None:
@@ -208,14 +229,18 @@ class TrackerEngine(Engine):
     def _maybe_write_chunk(self, i: int) -> None:
         """Write the disk chunk that step ``i`` (just made by the run-ahead) completes, if it is wanted."""
         c = self.disk.chunk_steps
-        n = i // c
-        if (i + 1) % c != 0 and i + 1 != self.n_steps:
+        if (i + 1) % c == 0 or i + 1 == self.n_steps:
+            self._write_chunk_if_ready(i // c)
+
+    def _write_chunk_if_ready(self, n: int) -> None:
+        """Write disk chunk ``n`` if it is wanted, all its steps are known and it has all its grid frames
+        (a chunk a catch-up passed waits for :meth:`_backfill`)."""
+        c = self.disk.chunk_steps
+        lo, hi = n * c, min((n + 1) * c, self.n_steps) - 1
+        if not self.disk.want(n) or len(self._summaries) <= hi or any(lo <= j <= hi for j in self._unkept):
             return
-        if not self.disk.want(n) or len(self._summaries) <= i:
-            return
-        lo = n * c
-        frames = {k: e for k in range(lo, i + 1) if (e := self.cache.packed(k)) is not None}
-        self.disk.write_chunk(n, self._summaries[lo : i + 1], frames)
+        frames = {k: e for k in range(lo, hi + 1) if (e := self.cache.packed(k)) is not None}
+        self.disk.write_chunk(n, self._summaries[lo : hi + 1], frames)
 
     def _learn(self, key: str, seconds: float) -> None:
         if seconds > 0:
@@ -311,6 +336,53 @@ class TrackerEngine(Engine):
             return hit
         return self._produce(g)
 
+    # ------------------------------------------------------------------ catch-up (seeks past what is computed)
+    def _target(self, t_us: int, exact: bool) -> int:
+        """Step a seek to ``t_us`` lands on: exactly its step, or (``seek_near``) the grid step at or before it."""
+        k = self._index_at(t_us)
+        return k if exact else k - k % self.cache.every
+
+    def _start_for(self, k: int):
+        """The session that reaches step ``k`` soonest by stepping forward, and the step it would start from
+        (its position, or a snapshot it can restore). The run-ahead unless the shown session is more than a
+        snapshot interval nearer: what the run-ahead computes is kept (snapshots, summaries), the other's is not."""
+        ahead, s = self._ahead, self.session
+        best = (ahead, ahead.step_count) if ahead is not None and ahead.step_count <= k else (None, -1)
+        start = max(s.step_count if s.step_count <= k else -1, self._base(s, k))
+        margin = self._snapshot_spacing if best[0] is not None else 0
+        return (s, start) if start > best[1] + margin else best
+
+    def catch_up_steps(self, t_us: int, exact: bool = False) -> int:
+        k = self._target(t_us, exact)
+        if k in self.cache:
+            return 0
+        return max(0, k - self._start_for(k)[1])
+
+    def catch_up(self, t_us: int, budget_steps: int, exact: bool = False) -> bool:
+        """Step towards the seek target plainly: no debug products, no kept frames, no per-step display; only
+        the run-ahead's snapshots and the summaries. The seek itself then computes the target step with its
+        debug products, so what is shown equals a headless run. The grid frames passed are filled in later
+        (:meth:`_backfill`). True once the seek answers with at most that one step."""
+        k = self._target(t_us, exact)
+        if k in self.cache:
+            return True
+        if self._ahead is None:
+            self._ahead = self._new_session()
+        s, start = self._start_for(k)
+        if s.step_count != start:
+            self._restore_for(s, k)
+        for _ in range(max(int(budget_steps), 1)):
+            if s.step_count >= k or s.done:
+                break
+            self._advance(s, debug=False, fill=False)
+        return s.step_count >= k or s.done
+
+    def catch_up_progress(self, t_us: int, exact: bool = False) -> tuple[float, float]:
+        k = self._target(t_us, exact)
+        s = self.session
+        reached = s.t0_us + max(self._start_for(k)[1], 0) * s.dt_us
+        return (reached - self.t_start_us) / 1e6, (s.t0_us + (k + 1) * s.dt_us - self.t_start_us) / 1e6
+
     def play_step(self, stride: int) -> Frame | None:
         """The next frame for playback, at most ``stride`` steps after the shown one (kept frames first)."""
         k0 = self._shown + 1
@@ -337,6 +409,8 @@ class TrackerEngine(Engine):
         if self._ahead is None:
             self._ahead = self._new_session()
         s = self._ahead
+        if s.done:
+            return self._backfill(budget_steps)
         if s.step_count < self._disk_steps:
             # Steps read from disk are only recomputed for their snapshots: one at a time, so a command waits one step.
             budget_steps = 1
@@ -344,7 +418,31 @@ class TrackerEngine(Engine):
             if s.done:
                 break
             self._advance(s, debug=False)
-        return not s.done
+        return not s.done or bool(self._unkept)
+
+    def _backfill(self, budget_steps: int) -> bool:
+        """Once the run-ahead is done: the shown session recomputes the grid frames a catch-up skipped (from the
+        snapshot before the first), at most ``budget_steps`` steps; False when none are left.
+
+        Seeks there were already exact and quick (a restore and a few steps); this is for smooth playback
+        through the gap and for the disk cache, whose chunks wait for their frames."""
+        if not self._unkept:
+            return False
+        k = min(self._unkept)
+        s = self.session
+        if s.step_count > k or self._base(s, k) > s.step_count:
+            self._restore_for(s, k)
+        for _ in range(max(int(budget_steps), 1)):
+            i = s.step_count
+            if not self._unkept or s.done:
+                break
+            self._advance(s, debug=i in self._unkept)
+            self._unkept.discard(i)  # kept, or dropped by the frame budget at once: either way done
+            if self.disk is not None:
+                self._write_chunk_if_ready(i // self.disk.chunk_steps)
+            if self._unkept and min(self._unkept) - s.step_count > self._snapshot_spacing:
+                break  # the next one is nearer a snapshot: restore there next slice
+        return bool(self._unkept)
 
 
 def array_nbytes(obj) -> int:

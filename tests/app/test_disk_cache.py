@@ -145,3 +145,19 @@ def test_the_key_covers_every_module_a_cached_step_can_depend_on():
             covered = any(k in keyed for k in ("/".join(parts) + ".py", "/".join(parts) + "/__init__.py")) or any(
                 mod.replace(".", "/").startswith(src) for src in KEYED_SOURCES if not src.endswith(".py"))
             assert covered, f"{f.relative_to(ROOT)} imports {mod}, which the disk cache key does not hash"
+
+
+def test_chunks_a_catch_up_passed_are_written_once_their_frames_are_filled_in(squares_scene, tmp_path, pair_files):
+    rec, cmap = squares_scene
+    conf = DiskCacheConfig(directory=tmp_path / "cache", chunk_steps=20)
+    first = TrackerEngine(rec, cmap, cache=FrameCacheConfig(every_ms=25.0), disk=_maker(conf, pair_files))
+    first.step()
+    t = first.session.t0_us + 71 * first.session.dt_us
+    while not first.catch_up(t, 50):
+        pass
+    first.seek_near(t)
+    assert sorted(first.disk.written) == []  # chunks 0..2 lack the grid frames the catch-up skipped
+    _run_ahead(first)
+    assert sorted(first.disk.written) == list(range((first.n_steps + 19) // 20))
+    second = TrackerEngine(rec, cmap, cache=FrameCacheConfig(every_ms=25.0), disk=_maker(conf, pair_files))
+    assert second.ready_steps == first.n_steps and sorted(second.cache._frames) == list(range(0, first.n_steps, 5))

@@ -5,6 +5,7 @@ import threading
 import time
 
 import numpy as np
+import pytest
 
 from app.engine import EventsOnlyEngine, EventsViewConfig
 from app.player import Player, PlayerConfig, PlayState, RerunFrom
@@ -179,5 +180,95 @@ def test_tracker_playback_from_the_run_ahead_shows_exact_strided_frames(squares_
         p.step_back()
         p.wait_idle()
         assert frames[-1].index == played[-1].index - 1 and np.array_equal(frames[-1].pose, results[frames[-1].index].pose)
+    finally:
+        p.stop()
+
+
+class _GatedEngine:
+    """Makes a TrackerEngine class whose catch-up slices wait for ``gate`` (the test decides when a slice ends)."""
+
+    @staticmethod
+    def make(rec, cmap):
+        from app.tracker_engine import TrackerEngine
+
+        gate = threading.Event()
+        gate.set()
+
+        class Gated(TrackerEngine):
+            def catch_up(self, t_us, budget_steps, exact=False):
+                assert gate.wait(30)
+                return super().catch_up(t_us, budget_steps, exact)
+
+        return Gated, gate
+
+
+def _tracker_player(rec, cmap, engine_cls=None, **pc):
+    from app.tracker_engine import TrackerEngine
+
+    cls = engine_cls or TrackerEngine
+    frames, progress = [], []
+    p = Player(lambda cfg: cls(rec, cmap, cfg), lambda f, e: frames.append(f),
+               player_config=PlayerConfig(prefetch=False, **pc))
+    p._on_progress = lambda e: progress.append(p.stats()["catching_up"])
+    return p, frames, progress
+
+
+def test_a_far_seek_is_computed_in_slices_with_progress_and_shows_the_headless_step(squares_scene):
+    from evpose.tracker.session import TrackingSession
+
+    rec, cmap = squares_scene
+    results = TrackingSession(rec, cmap).run()
+    p, frames, progress = _tracker_player(rec, cmap, catch_up_steps=5, progress_every_s=0.0)
+    try:
+        p.step_forward()
+        p.wait_idle()
+        p.seek(results[83].t_us)
+        assert p.wait_idle(60)
+        # Only the seek's frame is drawn (the grid step at or before it); the status line heard of each slice.
+        assert [f.index for f in frames] == [0, 80] and np.array_equal(frames[-1].pose, results[80].pose)
+        assert len(progress) >= 10 and all(a <= b for (a, _), (b, _) in zip(progress, progress[1:]))
+        assert progress[-1][1] == pytest.approx((results[80].t_us - rec.t_start_us) / 1e6)
+        assert p.last_catch_up["outcome"] == "done" and p.last_catch_up["steps"] == 79
+        assert p.stats()["catching_up"] is None and p.last_seek_ms > 0
+        hist = p.call(lambda e: e.history).result(10)
+        assert all(np.array_equal(h.pose, r.pose) for h, r in zip(hist, results)) and len(hist) == 81
+    finally:
+        p.stop()
+
+
+def test_a_new_seek_replaces_a_catch_up_and_pause_cancels_one(squares_scene):
+    from evpose.tracker.session import TrackingSession
+
+    rec, cmap = squares_scene
+    results = TrackingSession(rec, cmap).run()
+    cls, gate = _GatedEngine.make(rec, cmap)
+    p, frames, _ = _tracker_player(rec, cmap, cls, catch_up_steps=5)
+    try:
+        p.step_forward()
+        p.wait_idle()
+        gate.clear()
+        p.seek(results[60].t_us)
+        p.seek(results[90].t_us)  # heard after the slice the worker waits in (or before it starts)
+        gate.set()
+        assert p.wait_idle(60)
+        # Only the second target is shown (the grid step at or before it: every 4th step is kept).
+        assert [f.index for f in frames] == [0, 88] and np.array_equal(frames[-1].pose, results[88].pose)
+        # A seek back inside what was computed answers at once; a far one cancelled by pause shows nothing new.
+        p.seek(results[40].t_us)
+        p.wait_idle(60)
+        assert frames[-1].index == 40 and np.array_equal(frames[-1].pose, results[40].pose)
+    finally:
+        p.stop()
+    p, frames, _ = _tracker_player(rec, cmap, cls, catch_up_steps=5)
+    try:
+        p.step_forward()
+        p.wait_idle()
+        gate.clear()
+        p.seek(results[90].t_us)
+        p.pause()
+        gate.set()
+        assert p.wait_idle(60)
+        assert p.last_catch_up["outcome"] == "cancelled" and frames[-1].index == 0
+        assert p.call(lambda e: e.frontier).result(10) < 90
     finally:
         p.stop()

@@ -126,3 +126,35 @@ def test_a_disk_cache_inside_a_data_folder_is_turned_off_and_the_reason_shown(tm
     finally:
         app.stop()
     assert not (tmp_path / "cache").exists()
+
+
+def test_saving_the_layout_records_what_is_shown_at_run_time_and_loading_restores_it(tmp_path):
+    from app.layouts import LAYOUT_DIR, load_layout
+
+    layouts = tmp_path / "layouts"
+    layouts.mkdir()
+    for f in LAYOUT_DIR.glob("*.json"):
+        (layouts / f.name).write_text(f.read_text())
+    (tmp_path / "data").mkdir()
+    app = ViewerApp(AppConfig(data=[tmp_path / "data"], port=free_port(), layout_dir=layouts, export_dir=tmp_path / "exports"))
+    try:
+        debug = load_layout(layouts / "debug.json")
+        assert app.apply_layout_name("debug") and app.panels["plots"].visible
+        app.set_panel_visible("plots", False)
+        app.set_panel_visible("teaching", True)
+        app._set_toggle("raw_cloud", True)
+        app._set_toggle("slam_aligned", False)
+        assert not app.panels["plots"].visible and not app.panel_boxes["plots"].value
+        assert load_layout(layouts / "debug.json").to_dict() == debug.to_dict()  # the preset file is untouched
+        path = app.save_current_layout("mine")
+        saved = load_layout(path)
+        assert not saved.panels["plots"].visible and saved.panels["teaching"].visible
+        assert {k: (v.dock, v.width) for k, v in saved.panels.items()} == {k: (v.dock, v.width) for k, v in debug.panels.items()}
+        assert saved.scene.raw_cloud and not saved.scene.slam_aligned and app.layout.name == "mine"
+        assert app.apply_layout_name("teaching") and app.layout.name == "teaching"
+        assert app.apply_layout_name("mine")
+        assert not app.panels["plots"].visible and app.panels["teaching"].visible and not app.panel_boxes["plots"].value
+        assert app.scene.toggles.raw_cloud and app.toggle_boxes["raw_cloud"].value and not app.scene.toggles.slam_aligned
+        assert app.layout.to_dict() == saved.to_dict()
+    finally:
+        app.stop()

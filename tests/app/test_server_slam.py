@@ -52,9 +52,28 @@ def test_mode_dropdown_switches_to_slam_and_shows_mci_scores_and_map(viewer):
     assert re.search(r"MCI at [\d.]+ s hypothesis scores \(mean local STD\): .*H\d\** \d", viewer.slam_info.content), viewer.slam_info.content
     assert not viewer.slam_info.content.startswith("map 0: 0 points")
     assert viewer.image_handles["MCI + tracked features"].image.shape[2] == 3
-    assert "slam_map" in viewer.scene._nodes  # the growing map is drawn
+    assert any(k.startswith("slam_map/") for k in viewer.scene._nodes)  # the growing map is drawn
     path = viewer.export("trajectory")
     assert path is not None and len([ln for ln in path.read_text().splitlines() if not ln.startswith("#")]) >= 2
+
+
+def test_slam_maps_are_shown_on_the_ground_truth_and_the_toggle_shows_them_raw(viewer):
+    viewer.set_mode("slam")
+    for _ in range(80):
+        viewer.player.step_forward()
+    viewer.player.wait_idle()
+    f = viewer.last_frame
+    view = f.slam.atlas[-1]
+    assert view.alignment is not None and "aligned to the **ground truth**" in viewer.slam_info.content
+    node = viewer.scene._nodes[f"slam_map/{view.map_id}"]
+    assert np.allclose(node.points, view.alignment.points(view.points), rtol=2e-3, atol=2e-3)
+    viewer.toggle_boxes["slam_aligned"].value = False  # as a click does: the callback redraws on the player thread
+    viewer._set_toggle("slam_aligned", False)
+    viewer.player.wait_idle()
+    node = viewer.scene._nodes[f"slam_map/{view.map_id}"]
+    assert np.allclose(node.points, view.points, rtol=2e-3, atol=2e-3) and "own frame" in viewer.slam_info.content
+    viewer._set_toggle("slam_aligned", True)
+    viewer.player.wait_idle()
 
 
 def test_back_to_tracking_mode_without_a_map_is_the_events_view(viewer):

@@ -66,6 +66,24 @@ def test_slam_engine_seek_lands_on_the_uninterrupted_state(moving, all_frames):
             assert np.array_equal(f.slam.mci, frames[k].slam.mci) and f.slam.hypothesis_scores == frames[k].slam.hypothesis_scores
 
 
+def test_slam_far_seeks_catch_up_in_slices_to_the_uninterrupted_state(moving, all_frames):
+    _, frames = all_frames
+    other = SlamEngine(moving, SlamViewConfig(snapshot_every=7))
+    other.step()
+    k = len(frames) - 2
+    t = frames[k].t_us
+    assert other.catch_up_steps(t) == k - 1 and other.catch_up_progress(t)[1] == pytest.approx((t - moving.t_start_us) / 1e6)
+    slices = 1
+    while not other.catch_up(t, 10):
+        slices += 1
+    assert slices == -(-(k - 1) // 10) and other.step_count == k and other.catch_up_steps(t) == 0
+    f = other.seek(t)
+    assert f.index == k and f.status == frames[k].status and len(other.history) == k + 1
+    assert (f.pose is None) == (frames[k].pose is None) and (f.pose is None or np.array_equal(f.pose, frames[k].pose))
+    # Back to an earlier step: from the snapshot before it, at most ``snapshot_every`` steps.
+    assert other.catch_up_steps(frames[30].t_us) == 30 - 28
+
+
 def test_slam_panels_show_tiny_frame_mci_with_features_and_events(all_frames):
     _, frames = all_frames
     f = next(f for f in frames if f.slam.mci is not None and f.slam.features is not None and len(f.slam.features))

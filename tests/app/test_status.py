@@ -34,3 +34,21 @@ def test_run_ahead_note_says_what_came_from_the_disk_cache_and_why_it_stopped_wr
     eng.ready_steps = eng.disk_steps = 400
     note = run_ahead_note(eng)
     assert note.startswith("run-ahead: 2.00 of 10.00 s ready (computing") and "no space left" in note
+
+
+def test_a_far_seek_being_computed_shows_its_progress(bar_recording):
+    eng = EventsOnlyEngine(bar_recording)
+    z = np.zeros((2, 2), np.float32)
+    f = Frame(3, 15_000, z, z, z, EventArray.empty(), EventArray.empty())
+    text = status_markdown(f, eng, {"state": "paused", "speed": 1.0, "catching_up": (4.2, 9.0)})
+    assert "computing 4.2 / 9.0 s" in text and "cancel" in text
+    assert "computing" not in status_markdown(f, eng, {"state": "paused", "catching_up": None})
+
+
+def test_run_ahead_note_says_frames_a_far_seek_skipped_are_being_filled_in():
+    eng = SimpleNamespace(n_steps=2000, frontier=2000, step_us=5000, backfill_left=470)
+    assert "filling in 470 frames a far seek skipped" in run_ahead_note(eng)
+    eng.frontier = 1950
+    assert run_ahead_note(eng).startswith("run-ahead: ") and "470 frames" in run_ahead_note(eng)
+    eng.frontier, eng.backfill_left = 2000, 0
+    assert "done" in run_ahead_note(eng)

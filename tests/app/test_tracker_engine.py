@@ -221,3 +221,78 @@ def test_the_run_ahead_thins_its_snapshots_to_their_budget_and_steps_stay_exact(
     for k in (kept[-1] + 3, 13):
         f = eng.seek_step(k)
         assert f.index == k and np.array_equal(f.pose, results[k].pose)
+
+
+def _spy_debug(eng):
+    """The run-ahead of ``eng`` (made now), recording the step counts at which it computed debug products."""
+    ahead = eng._new_session()
+    debug_steps = []
+    step = ahead.step
+
+    def spy(debug=False):
+        if debug:
+            debug_steps.append(ahead.step_count)
+        return step(debug=debug)
+
+    ahead.step = spy
+    eng._ahead = ahead
+    return debug_steps
+
+
+def test_a_catch_up_steps_plainly_to_a_far_seek_and_shows_the_headless_step(squares_scene):
+    rec, cmap = squares_scene
+    results = _headless(rec, cmap, debug_at=(80,))
+    eng = TrackerEngine(rec, cmap, cache=FrameCacheConfig(every_ms=25.0))  # every 5 steps
+    debug_steps = _spy_debug(eng)
+    eng.step()
+    eng.prefetch(3)
+    t = results[83].t_us
+    assert eng.frontier == 4 and eng.catch_up_steps(t) == 76 and eng.catch_up_steps(t, exact=True) == 79
+    assert eng.catch_up_progress(t)[1] == (results[80].t_us - rec.t_start_us) / 1e6
+    slices = 1
+    while not eng.catch_up(t, 7):
+        slices += 1
+    assert slices == 11 and eng.frontier == 80 and eng.catch_up_steps(t) == 0
+    # No debug products, no kept frames on the way; only the run-ahead's snapshots and the summaries.
+    assert debug_steps == [0] and sorted(eng.cache._frames) == [0]
+    assert sorted(eng._unkept) == list(range(5, 80, 5)) and eng._ahead.snapshot_steps == list(range(0, 81, 20))
+    f = eng.seek_near(t)
+    assert f.index == 80 and debug_steps == [0, 80]
+    _same_frame(f, results[80])
+    assert [s.index for s in eng.history] == list(range(81))
+    assert all(np.array_equal(h.pose, r.pose) and h.status == r.status.value for h, r in zip(eng.history, results))
+
+
+def test_an_exact_catch_up_lands_on_the_step_off_the_grid(squares_scene):
+    rec, cmap = squares_scene
+    results = _headless(rec, cmap, debug_at=(83,))
+    eng = TrackerEngine(rec, cmap, cache=FrameCacheConfig(every_ms=25.0))
+    eng.step()
+    while not eng.catch_up(results[83].t_us, 50, exact=True):
+        pass
+    assert eng.frontier == 83
+    f = eng.seek(results[83].t_us)
+    assert f.index == 83
+    _same_frame(f, results[83])
+
+
+def test_the_grid_frames_a_catch_up_skipped_are_filled_in_after_the_run_ahead(squares_scene):
+    rec, cmap = squares_scene
+    results = _headless(rec, cmap, debug_at=range(0, 1000, 5))
+    eng = TrackerEngine(rec, cmap, cache=FrameCacheConfig(every_ms=25.0))
+    eng.step()
+    while not eng.catch_up(results[62].t_us, 50):
+        pass
+    eng.seek_near(results[62].t_us)
+    assert eng._unkept and 30 not in eng.cache
+    # Seeks into the gap are exact before it is filled (a restore of the run-ahead's snapshot and a few steps).
+    f = eng.seek_near(results[33].t_us)
+    assert f.index == 30
+    _same_frame(f, results[30])
+    while eng.prefetch(7):
+        pass
+    assert not eng._unkept and eng.frontier == eng.n_steps
+    assert sorted(eng.cache._frames) == list(range(0, eng.n_steps, 5))
+    for k in (5, 25, 55):
+        _same_frame(eng.cache.get(k), results[k])
+    assert eng.shown_index == 30
