@@ -35,8 +35,9 @@ def _mapping_key() -> str:
     return h.hexdigest()[:16]
 
 
-def landing_case(work_dir: Path, resolution: tuple[int, int], seconds: float, seed: int = 0):
-    """(Recording, ContourMap) of the moderate landing scenario, simulated and mapped once, then read from the cache.
+def landing_case(work_dir: Path, resolution: tuple[int, int], seconds: float, seed: int = 0, scenario: str = "landing"):
+    """(Recording, ContourMap) of the moderate landing scenario (or another simulator ``scenario``), simulated and
+    mapped once, then read from the cache.
 
     The simulation is cached by :func:`evpose.sim.cache.load_or_simulate`, keyed by
     the configuration *and* the simulator's source; the map next to it, keyed also
@@ -48,9 +49,9 @@ def landing_case(work_dir: Path, resolution: tuple[int, int], seconds: float, se
     from evpose.sim.cache import load_or_simulate, simulation_key
 
     w, h = resolution
-    config = SimulationConfig(scenario="landing", seconds=seconds, resolution=(w, h), seed=seed)
+    config = SimulationConfig(scenario=scenario, seconds=seconds, resolution=(w, h), seed=seed)
     cache = Path(work_dir) / "tracking" / "sim"
-    map_path = cache / f"landing_map-{simulation_key(config)}-{_mapping_key()}.ply"
+    map_path = cache / f"{scenario}_map-{simulation_key(config)}-{_mapping_key()}.ply"
     result = load_or_simulate(config, cache)
     if not map_path.is_file():
         from evpose.mapping import build_contour_map
