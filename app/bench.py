@@ -92,6 +92,8 @@ class DrawMeter:
         self.wall_ms: list[float] = []
         self.cpu_ms: list[float] = []
         self.drawn = threading.Event()
+        self.preview_at: float | None = None
+        """``time.perf_counter`` when the last seek preview (``Frame.preview``) was drawn."""
         player._on_frame = self
 
     def __call__(self, frame, engine) -> None:
@@ -99,6 +101,9 @@ class DrawMeter:
         self.inner(frame, engine)
         self.wall_ms.append((time.perf_counter() - t0) * 1e3)
         self.cpu_ms.append((time.thread_time() - c0) * 1e3)
+        if frame.preview:
+            self.preview_at = time.perf_counter()
+            return
         self.drawn.set()
 
     def reset(self) -> None:
@@ -256,12 +261,18 @@ def bench_seek(ctx) -> dict:
     app = _viewer(rec_path, map_path, Path(ctx.work_dir))
     out: dict = {"recording": str(rec_path)}
 
+    previews: list[float] = []
+
     def timed_seek(meter, t):
+        """Command -> the seek's frame drawn, ms; a far seek's preview drawn before it goes to ``previews``."""
         meter.drawn.clear()
+        meter.preview_at = None
         t0 = time.perf_counter()
         app.player.seek(int(t))
         meter.drawn.wait(600)
         app.player.wait_idle(600)
+        if meter.preview_at is not None:
+            previews.append((meter.preview_at - t0) * 1e3)
         return (time.perf_counter() - t0) * 1e3
 
     try:
@@ -276,10 +287,14 @@ def bench_seek(ctx) -> dict:
                     out["run_ahead_wait_s"] = _wait_run_ahead(app)
                 load0 = os.getloadavg()[0]
                 targets = rec.t_start_us + (rng.random(n) * span).astype(np.int64)
+                previews.clear()
                 far = timed_seek(meter, rec.t_start_us + int(0.95 * span))
+                far_preview = previews[0] if previews else None
                 lat = [timed_seek(meter, t) for t in targets]
                 frontier = app.player.call(lambda e: getattr(e, "frontier", None)).result(60)
-                out[phase] = {"far_seek_ms": far, **latency_summary(lat + [far], prefix="seek_"),
+                out[phase] = {"far_seek_ms": far, "far_seek_preview_ms": far_preview, "previews": len(previews),
+                              **({"preview_max_ms": max(previews)} if previews else {}),
+                              **latency_summary(lat + [far], prefix="seek_"),
                               "frontier_after": frontier, "loadavg_1min": [load0, os.getloadavg()[0]]}
             # Exact seeks (not snapped to the frame grid) on the engine alone: what a step off the grid costs.
             targets = rec.t_start_us + (rng.random(max(n // 2, 2)) * span).astype(np.int64) + 1000
@@ -370,8 +385,15 @@ def _far_seek_player(rec, cmap, t_us: int) -> dict:
     from app.player import Player
     from app.tracker_engine import TrackerEngine
 
-    drawn, first_progress = threading.Event(), []
-    p = Player(lambda cfg: TrackerEngine(rec, cmap, cfg), lambda f, e: drawn.set(),
+    drawn, first_progress, previews = threading.Event(), [], []
+
+    def on_frame(f, e):
+        if f.preview:
+            previews.append(time.perf_counter())
+        else:
+            drawn.set()
+
+    p = Player(lambda cfg: TrackerEngine(rec, cmap, cfg), on_frame,
                on_progress=lambda e: first_progress or first_progress.append(time.perf_counter()))
     try:
         p.seek(rec.t_start_us)
@@ -393,7 +415,8 @@ def _far_seek_player(rec, cmap, t_us: int) -> dict:
         drawn.wait(600)
         wall = time.perf_counter() - t0
         p.wait_idle(600)
-        return {"first_status_update_s": (first_progress[0] - t0) if first_progress else None, "frame_drawn_s": wall,
+        return {"first_status_update_s": (first_progress[0] - t0) if first_progress else None,
+                "preview_drawn_s": (previews[0] - t0) if previews else None, "frame_drawn_s": wall,
                 "command_wait_while_computing_ms": waits, "catch_up": p.last_catch_up,
                 "loadavg_1min": [load0, os.getloadavg()[0]]}
     finally:

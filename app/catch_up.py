@@ -28,7 +28,9 @@ class CatchUp:
     """Thread CPU spent on it so far, seconds."""
     wall0: float = field(default_factory=time.perf_counter)
     """When it was asked for (``time.perf_counter``), seconds."""
+    preview_s: float | None = None
+    """Seconds from the ask until the preview (``Engine.preview``) was drawn; None without one."""
 
     def report(self, outcome: str) -> dict:
         return {"t_us": self.t_us, "steps": self.steps, "wall_s": time.perf_counter() - self.wall0,
-                "cpu_s": self.cpu_s, "outcome": outcome}
+                "cpu_s": self.cpu_s, "preview_s": self.preview_s, "outcome": outcome}

@@ -82,6 +82,11 @@ class Engine(ABC):
         True once none are left. The player calls it in slices so commands are heard in between."""
         return True
 
+    def preview(self, t_us: int, exact: bool = False) -> Frame | None:
+        """What can be shown of the step a seek to ``t_us`` lands on before it is computed (``Frame.preview``),
+        cheaply; None when the engine has nothing such (the player then shows the progress alone)."""
+        return None
+
     def catch_up_progress(self, t_us: int, exact: bool = False) -> tuple[float, float]:
         """(media seconds reached, media seconds of the target) of a catch-up towards ``t_us``, from the start."""
         return ((self.current_t_us - self.t_start_us) / 1e6, (int(t_us) - self.t_start_us) / 1e6)

@@ -87,6 +87,9 @@ class Frame:
     """events_in, events_kept, points_visible, points_used, inliers ..."""
     slam: SlamView | None = None
     """SLAM products when the SLAM engine made this frame."""
+    preview: bool = False
+    """Only the front end's images at this step, shown while the pose (causal: it needs every step before) is being
+    computed (``Engine.preview``); never kept, never in the history."""
 
 
 @dataclass

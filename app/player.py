@@ -21,62 +21,18 @@ drawn.
 
 from __future__ import annotations
 
-import enum
 import queue
 import threading
 import time
 from concurrent.futures import Future
-from dataclasses import dataclass, field
 from typing import Callable
 
 from app.catch_up import CatchUp
 from app.engine import Engine
 from app.frame import Frame
+from app.player_config import PlayerConfig, PlayState, RerunFrom
 
-
-class PlayState(str, enum.Enum):
-    """Whether the worker advances the engine on its own."""
-
-    PAUSED = "paused"
-    PLAYING = "playing"
-
-
-class RerunFrom(str, enum.Enum):
-    """Where a configuration change restarts the computation."""
-
-    CURRENT = "current step"
-    """Recompute up to the current time with the new configuration (what a headless run with it shows there)."""
-    START = "start"
-    """Go back to the first step."""
-
-
-@dataclass
-class PlayerConfig:
-    """Pacing and coalescing of the player."""
-
-    max_ui_fps: float = field(default=20.0, metadata={"min": 1.0, "max": 60.0, "step": 1.0, "unit": "Hz"})
-    """Most frames a second pushed to the browser while playing, Hz."""
-    coalesce_s: float = field(default=0.3, metadata={"min": 0.0, "max": 2.0, "step": 0.05, "unit": "s"})
-    """Quiet time after the last parameter change before the engine is rebuilt, seconds."""
-    max_lag_s: float = field(default=0.5, metadata={"min": 0.1, "max": 5.0, "step": 0.1, "unit": "s"})
-    """Lag behind the wall clock after which pacing restarts from now instead of rushing, seconds."""
-    draw_share_factor: float = field(default=3.0, metadata={"min": 0.0, "max": 20.0, "step": 0.5, "unit": "ratio"})
-    """While playing, frames are at least this many draw durations apart, so drawing cannot starve the engine, ratio."""
-    prefetch: bool = True
-    """Run ahead in idle time (in slices): the engine computes later steps and keeps their frames, so playback
-    and seeks inside that reach are read back instead of computed."""
-    prefetch_steps: int = field(default=5, metadata={"min": 1, "max": 500, "step": 1, "unit": "steps"})
-    """Steps per prefetch slice (a command waits at most one slice), steps."""
-    prefetch_while_playing: bool = True
-    """While playing, spend the wait for the next frame's display time running ahead too (one step at a time)."""
-    snap_seeks: bool = True
-    """Seeks may land up to one frame-cache interval (``FrameCacheConfig.every_ms``) before the asked time when that frame is ready."""
-    catch_up_steps: int = field(default=25, metadata={"min": 1, "max": 1000, "step": 1, "unit": "steps"})
-    """A seek whose target needs more steps computed than this is made in slices of this many (a catch-up):
-    commands are heard in between (a new seek replaces the target, pause or a step cancels it) and the status
-    line shows the progress, steps."""
-    progress_every_s: float = field(default=0.5, metadata={"min": 0.1, "max": 5.0, "step": 0.1, "unit": "s"})
-    """Time between two status-line updates while the engine works with nothing new shown, seconds."""
+__all__ = ["Player", "PlayerConfig", "PlayState", "RerunFrom"]
 
 
 EngineFactory = Callable[[object], Engine]
@@ -217,7 +173,9 @@ class Player:
     def _publish(self, frame: Frame | None, force: bool = True) -> None:
         if frame is None:
             return
-        self.last_frame = frame
+        if not frame.preview:
+            # A preview is drawn but the engine is not there yet: steps, pause and cancels go on from the last real frame.
+            self.last_frame = frame
         now = time.monotonic()
         # While playing, drawing may take at most ~1/(1+draw_share_factor) of the time: slow draws lower the frame rate.
         interval = max(1.0 / self.pc.max_ui_fps, self.pc.draw_share_factor * self._draw_s)
@@ -257,6 +215,15 @@ class Player:
         self._catch_up = CatchUp(int(t_us), exact, self.engine.catch_up_steps(t_us, exact))
         self._catch_up.progress = self.engine.catch_up_progress(t_us, exact)
         self._last_progress = 0.0
+        if self.pc.preview_seeks:
+            try:
+                preview = self.engine.preview(t_us, exact)
+            except Exception as exc:  # the catch-up goes on without it
+                preview = None
+                self._on_error(f"seek preview failed: {exc!r}")
+            if preview is not None:
+                self._publish(preview)
+                self._catch_up.preview_s = time.perf_counter() - self._catch_up.wall0
 
     def _end_catch_up(self, reason: str) -> None:
         c, self._catch_up = self._catch_up, None

@@ -40,7 +40,9 @@ def status_markdown(frame: Frame, engine: Engine, stats: dict) -> str:
             f"real-time factor {stats.get('real_time_factor', 0):.2f}")
     catching = stats.get("catching_up")
     if catching is not None:
+        shown = ("the images are already the target's time surfaces; its pose and map overlay follow" if frame.preview
+                 else "no images on the way")
         text += (f"\n\n**computing {catching[0]:.1f} / {catching[1]:.1f} s** to reach the seek (tracking is causal: "
-                 "every step before it is needed; no images on the way). Seek elsewhere or pause to cancel.")
+                 f"every step before it is needed; {shown}). Seek elsewhere or pause to cancel.")
     note = run_ahead_note(engine)
     return text + (f"\n\n{note}" if note else "")

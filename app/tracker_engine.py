@@ -377,6 +377,24 @@ class TrackerEngine(Engine):
             self._advance(s, debug=False, fill=False)
         return s.step_count >= k or s.done
 
+    def preview(self, t_us: int, exact: bool = False) -> Frame | None:
+        """The target step's SP-TS images, noise-filter split and a whole-image TDF, rebuilt from the last second or
+        so of events (:func:`evpose.tracker.front_end_view.front_end_at`; equal to the tracker's, tested): a few
+        milliseconds however far the step is. No pose: that needs every step before it."""
+        from evpose.tracker.front_end_view import front_end_at
+
+        k = self._target(t_us, exact)
+        t0 = time.perf_counter()
+        v = front_end_at(self.session, k)
+        ms = (time.perf_counter() - t0) * 1e3
+        note = ("the time surfaces are the tracker's own at this step" if v.exact else
+                "time surfaces without the ego-motion filter (it needs the pose)")
+        return Frame(index=k, t_us=v.t_us, ts_positive=v.ts_positive, ts_negative=v.ts_negative, tdf=v.tdf,
+                     events_kept=v.events_kept, events_removed=v.events_removed, status="computing",
+                     reason=f"pose being computed (tracking is causal); {note}, the TDF covers the whole image",
+                     timings_ms={"preview": ms}, counts={"events_in": len(v.events_kept) + len(v.events_removed),
+                                                         "events_kept": len(v.events_kept)}, preview=True)
+
     def catch_up_progress(self, t_us: int, exact: bool = False) -> tuple[float, float]:
         k = self._target(t_us, exact)
         s = self.session

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from app.engine import EventsOnlyEngine, EventsViewConfig
+from app.frame_cache import quantize
 from app.player import Player, PlayerConfig, PlayState, RerunFrom
 
 
@@ -224,8 +225,13 @@ def test_a_far_seek_is_computed_in_slices_with_progress_and_shows_the_headless_s
         p.wait_idle()
         p.seek(results[83].t_us)
         assert p.wait_idle(60)
-        # Only the seek's frame is drawn (the grid step at or before it); the status line heard of each slice.
-        assert [f.index for f in frames] == [0, 80] and np.array_equal(frames[-1].pose, results[80].pose)
+        # At once a preview of the target (its time surfaces, no pose), then only the seek's frame (the grid step at
+        # or before it); the status line heard of each slice.
+        assert [(f.index, f.preview) for f in frames] == [(0, False), (80, True), (80, False)]
+        assert np.array_equal(frames[-1].pose, results[80].pose) and frames[1].pose is None
+        assert np.array_equal(quantize(frames[1].ts_positive), quantize(frames[-1].ts_positive))
+        assert np.array_equal(quantize(frames[1].ts_negative), quantize(frames[-1].ts_negative))
+        assert p.last_catch_up["preview_s"] is not None
         assert len(progress) >= 10 and all(a <= b for (a, _), (b, _) in zip(progress, progress[1:]))
         assert progress[-1][1] == pytest.approx((results[80].t_us - rec.t_start_us) / 1e6)
         assert p.last_catch_up["outcome"] == "done" and p.last_catch_up["steps"] == 79
@@ -251,8 +257,9 @@ def test_a_new_seek_replaces_a_catch_up_and_pause_cancels_one(squares_scene):
         p.seek(results[90].t_us)  # heard after the slice the worker waits in (or before it starts)
         gate.set()
         assert p.wait_idle(60)
-        # Only the second target is shown (the grid step at or before it: every 4th step is kept).
-        assert [f.index for f in frames] == [0, 88] and np.array_equal(frames[-1].pose, results[88].pose)
+        # Only the second target is shown (the grid step at or before it: every 4th step is kept), after previews.
+        assert [f.index for f in frames if not f.preview] == [0, 88] and np.array_equal(frames[-1].pose, results[88].pose)
+        assert [f.index for f in frames if f.preview][-1] == 88
         # A seek back inside what was computed answers at once; a far one cancelled by pause shows nothing new.
         p.seek(results[40].t_us)
         p.wait_idle(60)
@@ -268,7 +275,9 @@ def test_a_new_seek_replaces_a_catch_up_and_pause_cancels_one(squares_scene):
         p.pause()
         gate.set()
         assert p.wait_idle(60)
-        assert p.last_catch_up["outcome"] == "cancelled" and frames[-1].index == 0
+        # The preview of 90 was drawn; pause puts every tab back on the step the engine is at.
+        assert [(f.index, f.preview) for f in frames][:2] == [(0, False), (88, True)]
+        assert p.last_catch_up["outcome"] == "cancelled" and frames[-1].index == 0 and not frames[-1].preview
         assert p.call(lambda e: e.frontier).result(10) < 90
     finally:
         p.stop()

@@ -1,0 +1,54 @@
+"""The player's choices and settings: play state, where a configuration change re-runs from, pacing and coalescing."""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass, field
+
+
+class PlayState(str, enum.Enum):
+    """Whether the worker advances the engine on its own."""
+
+    PAUSED = "paused"
+    PLAYING = "playing"
+
+
+class RerunFrom(str, enum.Enum):
+    """Where a configuration change restarts the computation."""
+
+    CURRENT = "current step"
+    """Recompute up to the current time with the new configuration (what a headless run with it shows there)."""
+    START = "start"
+    """Go back to the first step."""
+
+
+@dataclass
+class PlayerConfig:
+    """Pacing and coalescing of the player."""
+
+    max_ui_fps: float = field(default=20.0, metadata={"min": 1.0, "max": 60.0, "step": 1.0, "unit": "Hz"})
+    """Most frames a second pushed to the browser while playing, Hz."""
+    coalesce_s: float = field(default=0.3, metadata={"min": 0.0, "max": 2.0, "step": 0.05, "unit": "s"})
+    """Quiet time after the last parameter change before the engine is rebuilt, seconds."""
+    max_lag_s: float = field(default=0.5, metadata={"min": 0.1, "max": 5.0, "step": 0.1, "unit": "s"})
+    """Lag behind the wall clock after which pacing restarts from now instead of rushing, seconds."""
+    draw_share_factor: float = field(default=3.0, metadata={"min": 0.0, "max": 20.0, "step": 0.5, "unit": "ratio"})
+    """While playing, frames are at least this many draw durations apart, so drawing cannot starve the engine, ratio."""
+    prefetch: bool = True
+    """Run ahead in idle time (in slices): the engine computes later steps and keeps their frames, so playback
+    and seeks inside that reach are read back instead of computed."""
+    prefetch_steps: int = field(default=5, metadata={"min": 1, "max": 500, "step": 1, "unit": "steps"})
+    """Steps per prefetch slice (a command waits at most one slice), steps."""
+    prefetch_while_playing: bool = True
+    """While playing, spend the wait for the next frame's display time running ahead too (one step at a time)."""
+    snap_seeks: bool = True
+    """Seeks may land up to one frame-cache interval (``FrameCacheConfig.every_ms``) before the asked time when that frame is ready."""
+    catch_up_steps: int = field(default=25, metadata={"min": 1, "max": 1000, "step": 1, "unit": "steps"})
+    """A seek whose target needs more steps computed than this is made in slices of this many (a catch-up):
+    commands are heard in between (a new seek replaces the target, pause or a step cancels it) and the status
+    line shows the progress, steps."""
+    preview_seeks: bool = True
+    """While a far seek is computed, show at once what needs no pose: the target step's time surfaces and events
+    (``Engine.preview``)."""
+    progress_every_s: float = field(default=0.5, metadata={"min": 0.1, "max": 5.0, "step": 0.1, "unit": "s"})
+    """Time between two status-line updates while the engine works with nothing new shown, seconds."""
