@@ -78,6 +78,7 @@ def main(
     width: int | None = None,
     height: int | None = None,
     progress: bool = True,
+    acquire_s: float = 1.0,
 ) -> int:
     """Track the pose of the event camera of RECORDING against the contour map MAP; write a TUM trajectory.
 
@@ -98,6 +99,8 @@ def main(
         width: Sensor width, for formats that do not state it.
         height: Sensor height, for formats that do not state it.
         progress: Show a progress bar on the terminal.
+        acquire_s: If no update registers against the map within this many seconds of the start, stop with an error
+            (a wrong map, or one in another frame; the fused modes would otherwise write IMU dead reckoning); 0 = never.
 
     Exit code 0 if every update tracked, 1 if the track was lost in some update
     (those updates are left out of the trajectory and reported on stderr).
@@ -140,10 +143,17 @@ def main(
     inputs = _record_fusion_inputs(session, cfg) if smoothed is not None else None
 
     lost = []
+    acquire_until = session.t0_us + int(round(max(float(acquire_s), 0.0) * 1e6))
+    registered = [acquire_s <= 0]
     with tqdm(total=session.total_steps, unit="upd", disable=not progress or None, file=sys.stderr, dynamic_ncols=True) as bar:
         def tick(r):
             if r.status is TrackStatus.LOST:
                 lost.append(r)
+            registered[0] = registered[0] or bool(r.counts.get("registered", 1))
+            if not registered[0] and (r.t_us >= acquire_until or session.done):
+                raise InputError(map, f"no update registered against this map in the first {(r.t_us - session.t0_us) / 1e6:.2f} s"
+                                 f" of {recording.name} ({r.reason}): is it this recording's map, in its frame?",
+                                 f"updates 1-{len(session.results)}")
             bar.update(1)
 
         session.run(progress=tick)

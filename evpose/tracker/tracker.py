@@ -328,6 +328,7 @@ class Tracker:
             counts.setdefault("events_polarity_removed", int(np.count_nonzero(labels == 0)))  # T_align's count if it ran
             counts["points_single_polarity"] = int(np.count_nonzero(polarity))
             timings["polarity_filter"] = timings.get("polarity_filter", 0.0) + _ms(t0)
+        counts["registered"] = int(ok)
         if reg is not None:
             counts.update(inliers=reg.inliers, iterations=reg.iterations, points_in_image=reg.points_used)
         else:

@@ -84,6 +84,27 @@ def test_track_with_a_map_in_another_frame_fails_with_one_line(files, tmp_path, 
     assert code == 2 and "same frame" in err and len(err.splitlines()) == 1
 
 
+def test_track_with_a_map_that_never_registers_fails_with_one_line_and_writes_nothing(files, tmp_path, capsys):
+    d, rec = files
+    import dataclasses
+
+    from evpose.io.map_ply import read_contour_map
+
+    cmap = read_contour_map(d / "map.ply")
+    # In view of the start pose, but on bare ground with no edge: a wrong map, not one in another frame.
+    n = 300
+    patch = np.c_[np.random.default_rng(0).uniform(-0.04, 0.04, (n, 2)) + [0.0, -0.55], np.zeros(n)]
+    wrong = dataclasses.replace(cmap, points=patch, **{k: getattr(cmap, k)[:n] for k in
+                                                       ("edge_normal", "plane_normal", "region_id", "curvature", "brightness_sign")})
+    write_contour_map(tmp_path / "wrong.ply", wrong)
+    out = tmp_path / "e.txt"
+    code = run(["track", str(d / "rec.h5"), "--map", str(tmp_path / "wrong.ply"), "--out", str(out), "--mode", "stpe",
+                "--acquire-s", "0.05", "--no-progress"])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1 and "wrong.ply: updates 1-" in err and "no update registered" in err
+    assert not out.exists()
+
+
 def test_track_in_a_fused_mode_without_imu_is_a_one_line_error(files, tmp_path, capsys):
     d, _ = files
     code = run(["track", str(d / "rec.h5"), "--map", str(d / "map.ply"), "--out", str(tmp_path / "e.txt"), "--mode", "full", "--no-progress"])
