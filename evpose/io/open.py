@@ -135,13 +135,17 @@ def open_stream(path: str | Path, width: int | None = None, height: int | None =
 
 
 def open_recording(path: str | Path, width: int | None = None, height: int | None = None, **options) -> Recording:
-    """Read any supported recording fully into memory (see :func:`detect_format`)."""
+    """Read any supported recording fully into memory (see :func:`detect_format`), checked: unsorted timestamps,
+    pixels outside the sensor, polarities other than +1/-1 and NaNs in the IMU or ground truth raise
+    :class:`InputError` naming the file and the first bad record, whatever command reads it."""
     path = Path(path)
     if detect_format(path) is SourceFormat.EVPOSE_H5:
         from evpose.io.h5 import read_recording_h5
 
-        return read_recording_h5(path)
-    stream = open_stream(path, width, height, **options)
-    rec = stream.context
-    rec.events = EventArray.concatenate(list(stream.batches(None)))
+        rec = read_recording_h5(path)
+    else:
+        stream = open_stream(path, width, height, **options)
+        rec = stream.context
+        rec.events = EventArray.concatenate(list(stream.batches(None)))
+    rec.validate()
     return rec

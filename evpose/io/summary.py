@@ -12,7 +12,7 @@ from evpose.errors import InputError
 
 def summarize_recording(path: str | Path, width: int | None = None, height: int | None = None, progress: bool | None = None, **options) -> dict:
     """The keys of :meth:`Recording.summary`, streaming the events (evpose HDF5 reads only its index and polarity)."""
-    from evpose.io.open import SourceFormat, detect_format, open_stream
+    from evpose.io.open import SourceFormat, check_events, detect_format, open_stream
 
     path = Path(path)
     fmt = detect_format(path)
@@ -23,7 +23,12 @@ def summarize_recording(path: str | Path, width: int | None = None, height: int 
             rec = r.to_recording(0, 0)
             rec.imu, rec.ground_truth = r.imu, r.ground_truth
             n, t0, t1 = r.n_events, r.t_start_us, r.t_end_us
-            pos = sum(int(np.count_nonzero(b.p > 0)) for b in r.iter_chunks())
+            pos, offset, last, size = 0, 0, None, rec.sensor_size
+            for b in r.iter_chunks():
+                # The same checks as every reader's (``open_recording``): info must not describe a broken file as fine.
+                check_events(b, offset, last, size, path)
+                offset, last = offset + len(b), (int(b.t[-1]) if len(b) else last)
+                pos += int(np.count_nonzero(b.p > 0))
     else:
         import sys
 
@@ -42,8 +47,11 @@ def summarize_recording(path: str | Path, width: int | None = None, height: int 
                 t1 = int(b.t[-1])
                 n += len(b)
                 pos += int(np.count_nonzero(b.p > 0))
-        if n == 0:
-            raise InputError(path, "contains no events")
+    if n == 0:
+        raise InputError(path, "contains no events")
+    for stream_ in (rec.imu, rec.ground_truth):
+        if stream_ is not None:
+            stream_.validate(source=str(path))
     out = rec.summary()
     dur = (t1 - t0) / 1e6 if n else 0.0
     out.update(

@@ -55,3 +55,32 @@ def test_sensor_size_needs_both_sides_and_positive_values(tmp_path):
         open_recording(tmp_path / "ecd", width=240)
     with pytest.raises(ConfigError, match="1..65536"):
         open_recording(tmp_path / "ecd", width=0, height=10)
+
+
+def _corrupt(path, name, index, value):
+    import h5py
+    import hdf5plugin  # noqa: F401 - the datasets are compressed with its filters
+
+    with h5py.File(path, "r+") as f:
+        a = f[name][...]
+        a[index] = value
+        f[name][...] = a
+
+
+@pytest.mark.parametrize("dataset, index, value, record, message", [
+    ("events/t", 101, 0, "event 101", "earlier than the previous"),
+    ("events/x", 7, 300, "event 7", "outside the sensor width"),
+    ("events/p", 9, 3, "event 9", "is not +1/-1"),
+    ("imu/acc", (12, 1), float("nan"), "IMU sample 12", "NaN"),
+    ("ground_truth/position", (4, 0), float("inf"), "pose 4", "NaN or infinite"),
+])
+def test_every_reader_rejects_bad_records_naming_file_and_record(tmp_path, dataset, index, value, record, message):
+    from evpose.io.summary import summarize_recording
+
+    path = tmp_path / "rec.h5"
+    write_recording_h5(path, make_recording(n=2_000))
+    _corrupt(path, dataset, index, value)
+    for read in (open_recording, summarize_recording):  # evpose track/slam/app, and evpose info
+        with pytest.raises(InputError) as exc:
+            read(path)
+        assert str(exc.value).startswith(f"{path}: {record}: ") and message in str(exc.value)
