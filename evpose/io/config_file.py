@@ -10,6 +10,7 @@ from __future__ import annotations
 import dataclasses
 import enum
 import json
+import math
 import typing
 from pathlib import Path
 
@@ -40,6 +41,7 @@ def config_from_dict(cls, data: dict, source: str | None = None, prefix: str = "
     if unknown:
         raise InputError(source, f"unknown setting (known: {', '.join(sorted(names))})", prefix + str(unknown[0]))
     kwargs = {}
+    fields = {f.name: f for f in dataclasses.fields(cls)}
     for name, raw in data.items():
         typ = hints[name]
         key = prefix + name
@@ -63,9 +65,22 @@ def config_from_dict(cls, data: dict, source: str | None = None, prefix: str = "
                 kwargs[name] = float(raw)
             else:
                 kwargs[name] = raw
+            if typ in (int, float):
+                _check_range(kwargs[name], fields[name].metadata)
         except (TypeError, ValueError) as exc:
             raise InputError(source, str(exc), key) from None
     return cls(**kwargs)
+
+
+def _check_range(value, meta) -> None:
+    """A number must be finite and inside the field's declared ``min``..``max`` (the range the viewer's slider
+    offers): a negative window or a NaN decay would otherwise run and quietly produce nonsense."""
+    if not math.isfinite(value):
+        raise ValueError(f"expected a finite number, got {value!r}")
+    lo, hi = meta.get("min"), meta.get("max")
+    unit = f" {meta['unit']}" if meta.get("unit") else ""
+    if (lo is not None and value < lo) or (hi is not None and value > hi):
+        raise ValueError(f"{value!r} is outside the allowed range {lo}..{hi}{unit}")
 
 
 def read_config(cls, path: str | Path):

@@ -42,6 +42,29 @@ def test_bad_value_is_an_input_error(tmp_path):
         load_config(tmp_path / "broken.yaml")
 
 
+@pytest.mark.parametrize("text, message", [
+    ("noise_filter:\n  window_us: -5\n", r"noise_filter.window_us: -5 is outside the allowed range 100..100000 us"),
+    ("time_surface:\n  eta_ms: .nan\n", r"time_surface.eta_ms: expected a finite number"),
+    ("rate_hz: 1.0e+9\n", r"rate_hz: 1000000000.0 is outside the allowed range"),
+])
+def test_numbers_outside_their_declared_range_are_input_errors(tmp_path, text, message):
+    (tmp_path / "c.yaml").write_text(text)
+    with pytest.raises(InputError, match=message):
+        load_config(tmp_path / "c.yaml")
+
+
+def test_every_default_lies_inside_its_declared_range():
+    def walk(cfg):
+        for f in dataclasses.fields(cfg):
+            v = getattr(cfg, f.name)
+            if dataclasses.is_dataclass(v):
+                yield from walk(v)
+            elif "min" in f.metadata and not isinstance(v, bool):
+                yield f.name, f.metadata["min"] <= v <= f.metadata["max"]
+    checked = dict(walk(TrackerConfig()))
+    assert checked and all(checked.values()), [k for k, ok in checked.items() if not ok]
+
+
 def test_every_numeric_field_has_slider_metadata_and_a_docstring_unit():
     def leaves(cls):
         hints = typing.get_type_hints(cls)
