@@ -155,17 +155,7 @@ def test_the_run_ahead_computes_debug_products_only_on_the_frame_grid(squares_sc
     rec, cmap = squares_scene
     eng = TrackerEngine(rec, cmap)  # default grid: 20 ms, every 4th step at 200 Hz
     assert eng.cache.every == 4
-    ahead = eng._new_session()
-    debug_steps = []
-    step = ahead.step
-
-    def spy(debug=False):
-        if debug:
-            debug_steps.append(ahead.step_count)
-        return step(debug=debug)
-
-    ahead.step = spy
-    eng._ahead = ahead
+    debug_steps = _spy_debug(eng)
     while eng.prefetch(50):
         pass
     assert debug_steps == list(range(0, eng.n_steps, 4))
