@@ -99,6 +99,8 @@ def albedo_contours(
     fit2d: np.ndarray | None = None,
     fit_intensity: np.ndarray | None = None,
     min_t: float = 6.0,
+    axis_angle: float | None = None,
+    axis_snap_deg: float = 0.0,
 ) -> AlbedoContour:
     """Brightness-edge contour of one region (see the module docstring).
 
@@ -112,7 +114,8 @@ def albedo_contours(
     detection points themselves - all of a region's points, where detection used the front
     layer only: hiding the layer behind thins the bright side next to a proud object and
     would bias the fitted step outward, whereas a least-squares step between the
-    mixture's mean and the plain side's is unbiased.
+    mixture's mean and the plain side's is unbiased. ``axis_angle``/``axis_snap_deg``: straight
+    runs nearly square to the region's outline are fitted square to it (:func:`step_fit.fit_step_lines`).
     """
     if fit2d is None:
         fit2d, fit_intensity = own2d, intensity
@@ -219,7 +222,8 @@ def albedo_contours(
         for _ in range(2):
             p, nrm, _ = fit_step_lines(p, nrm, fit2d, fit_intensity, own_tree, eps=2.0 * spacing,
                                        min_points=max(8, int(round(4 * spacing / contour_spacing))),
-                                       half_across=half_across, width=0.5 * spacing)
+                                       half_across=half_across, width=0.5 * spacing,
+                                       axis_angle=axis_angle, axis_snap_deg=axis_snap_deg)
         # Keep only the stretches that still separate two brightness levels (a chain can run
         # from a real edge into a patch of noise or of two mixed layers).
         # (A window of ~15 point spacings along the chain holds ~8 points on either side.)
@@ -254,6 +258,8 @@ def region_albedo_edges(
     min_length: float,
     contour_spacing: float,
     min_t: float = 6.0,
+    axis_angles: np.ndarray | None = None,
+    axis_snap_deg: float = 0.0,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Brightness-edge contour points of every region, in the world.
 
@@ -261,7 +267,9 @@ def region_albedo_edges(
     front layer (:func:`evpose.mapping.visibility.front_layer`), the only ones whose
     intensity the detection uses; ``centroids``/``axes`` the regions' planes; ``intensity``
     (N,) in [0, 1] (colours, albedo) or any other unit, then scaled to [0, 1] over the whole
-    cloud (so the thresholds mean the same for every region). Returns points (M, 3), unit
+    cloud (so the thresholds mean the same for every region). ``axis_angles`` (R,): each
+    region's outline direction in its plane coordinates, radians (NaN: none), to which
+    straight edges within ``axis_snap_deg`` are squared. Returns points (M, 3), unit
     edge normals (M, 3) pointing dark -> bright, region ids (M,) int32.
     """
     lo_i, hi_i = float(np.min(intensity)), float(np.max(intensity))
@@ -282,7 +290,9 @@ def region_albedo_edges(
             rel = points[all_idx] - c
             all2d = np.stack([rel @ ax[0], rel @ ax[1]], axis=1)
             ac = albedo_contours(own2d, vals, spacing, sigma, high, low, min_length, contour_spacing,
-                                 all2d, inten[all_idx], min_t)
+                                 all2d, inten[all_idx], min_t,
+                                 None if axis_angles is None or not np.isfinite(axis_angles[r]) else float(axis_angles[r]),
+                                 axis_snap_deg)
             if ac.points2d.shape[0] == 0:
                 continue
             out_p.append(c + ac.points2d[:, :1] * ax[0] + ac.points2d[:, 1:] * ax[1])

@@ -76,8 +76,3 @@ def grow_leftover_regions(points: np.ndarray, labels: np.ndarray, regions, indic
     out[left] = remap[np.where(lab >= 0, lab, reg.sizes.size)]
     return out
 
-
-def default_min_width(spacing: float) -> float:
-    """Smallest minor-axis spread of a leftover region: 1.5 point spacings, metres (a strip is ~1 spacing wide)."""
-    return 1.5 * spacing
-

@@ -135,7 +135,8 @@ def _margin_line(rel: np.ndarray, vals: np.ndarray, n: np.ndarray, off: float, m
 
 def fit_step_lines(p: np.ndarray, normals: np.ndarray, fit2d: np.ndarray, fit_intensity: np.ndarray, tree,
                    eps: float, min_points: int, half_across: float, width: float,
-                   min_band_points: int = 8, max_tilt_deg: float = 12.0, n_tilts: int = 25) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                   min_band_points: int = 8, max_tilt_deg: float = 12.0, n_tilts: int = 25,
+                   axis_angle: float | None = None, axis_snap_deg: float = 0.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Replace straight runs of an open edge chain by the step line fitted to all raw points along them.
 
     Per-point step fits on a sparse, mixed scan scatter by centimetres; a straight painted
@@ -147,6 +148,12 @@ def fit_step_lines(p: np.ndarray, normals: np.ndarray, fit2d: np.ndarray, fit_in
     least squared residual win. Points of the run are projected onto that line and take its normal (still dark ->
     bright). Runs with fewer than ``min_band_points`` points in their band, or where the step
     does not rise along the normal, are left as they are.
+    ``axis_angle`` (radians, modulo 90 degrees): the direction of the region's own outline
+    (:func:`dominant_axis`); a run whose normal lies within ``axis_snap_deg`` of it or of its
+    perpendicular is fitted at exactly that direction, only its offset free. On a 10 cm
+    scan a line's tilt rests on the few points nearest its ends and comes out several
+    degrees off (centimetres at a panel's corners), while a door, picture or painted
+    marker is nearly always square to the wall or pad it lies on.
     Returns the points, their normals and a mask (M,) of the points on a fitted line.
     """
     from evpose.mapping.contours import _dp_indices
@@ -172,6 +179,11 @@ def fit_step_lines(p: np.ndarray, normals: np.ndarray, fit2d: np.ndarray, fit_in
         n0 = np.array([-direction[1], direction[0]])
         if n0 @ normals[a:b].sum(axis=0) < 0:
             n0 = -n0
+        run_tilts, fine_turns, margin_turn = tilts, np.radians(np.arange(-1.5, 1.5001, 0.1)), 8.0
+        if axis_angle is not None and axis_snap_deg > 0:
+            to_axis = (axis_angle - math.atan2(n0[1], n0[0]) + 0.25 * math.pi) % (0.5 * math.pi) - 0.25 * math.pi
+            if abs(to_axis) <= math.radians(axis_snap_deg):
+                run_tilts, fine_turns, margin_turn = np.array([to_axis]), np.zeros(1), 0.0
         t_run = (run - c) @ direction
         t_lo, t_hi = float(t_run.min()), float(t_run.max())
         # The band spans the run's own extent, untrimmed. The traced chain already stops short
@@ -191,11 +203,11 @@ def fit_step_lines(p: np.ndarray, normals: np.ndarray, fit2d: np.ndarray, fit_in
         # Coarse: a blurred step of the point spacing over all tilts; fine: a sharp step around
         # the best, which puts the line in the middle of the gap between the two sides' points.
         best = (np.inf, 0.0, 0.0, n0, 0.0)
-        stages = ((tilts, np.arange(-half_across, half_across + 1e-9, 0.1 * width), width), None)
+        stages = ((run_tilts, np.arange(-half_across, half_across + 1e-9, 0.1 * width), width), None)
         for stage in stages:
             if stage is None:
                 fine = 0.25 * width
-                stage = (best[4] + np.radians(np.arange(-1.5, 1.5001, 0.1)),
+                stage = (best[4] + fine_turns,
                          best[1] + np.arange(-width, width + 1e-9, 0.1 * fine), fine)
             grid, offsets, w_step = stage
             best = (np.inf, best[1], best[2], best[3], best[4], 0.0)
@@ -208,7 +220,7 @@ def fit_step_lines(p: np.ndarray, normals: np.ndarray, fit2d: np.ndarray, fit_in
         sse, off, step, n, _, lo = best
         if not (np.isfinite(sse) and step > 0):
             continue
-        line = _margin_line(rel, vals, n, off, lo + 0.5 * step)
+        line = _margin_line(rel, vals, n, off, lo + 0.5 * step, max_turn_deg=margin_turn)
         if line is not None:
             n, off = line
         d = np.array([n[1], -n[0]])
@@ -217,6 +229,22 @@ def fit_step_lines(p: np.ndarray, normals: np.ndarray, fit2d: np.ndarray, fit_in
         out_n[a:b] = n
         fitted[a:b] = True
     return out_p, out_n, fitted
+
+
+def dominant_axis(normals2d: np.ndarray, min_coherence: float = 0.5) -> float | None:
+    """The direction (radians, modulo 90 degrees) most of these 2D normals share up to quarter turns, or None.
+
+    The mean of ``exp(4i theta)`` over the normals: a rectangular outline's four sides add
+    up, a round one's cancel. None when its length is under ``min_coherence`` (no square
+    outline) or there are no normals.
+    """
+    nrm = np.asarray(normals2d, np.float64).reshape(-1, 2)
+    if nrm.shape[0] == 0:
+        return None
+    z = np.exp(4j * np.arctan2(nrm[:, 1], nrm[:, 0])).mean()
+    if abs(z) < min_coherence:
+        return None
+    return float(np.angle(z)) / 4.0
 
 
 def side_contrast(p: np.ndarray, normals: np.ndarray, fit2d: np.ndarray, fit_intensity: np.ndarray, tree,
