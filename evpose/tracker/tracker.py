@@ -18,6 +18,8 @@ predicted covariance is also the registration's pose prior, scaled by
 
 from __future__ import annotations
 
+import dataclasses
+
 import time
 from typing import Callable
 
@@ -48,6 +50,8 @@ PolaritySelector = Callable[[np.ndarray, int, np.ndarray], "np.ndarray | None"]
 
 _NO_PRIOR = np.zeros((6, 6))
 """Information matrix of "no prior" for :func:`register_to_map`."""
+ACQUIRE_UPDATES = 5
+"""Registrations in a row that must pass the strict inlier test before the fused modes' looser one applies."""
 
 
 def _ms(t0: float) -> float:
@@ -90,6 +94,14 @@ class Tracker:
         self.coarse_field = TemporalDistanceField(config.distance_field.level(coarse), w, h) if coarse > 0 else None
         """Optional coarser field registered first (coarse-to-fine), None when ``coarse_blur_px`` is 0."""
         self.components = components if components is not None else MotionComponents()
+        rc = config.registration
+        self._registration = (dataclasses.replace(rc, min_inlier_ratio=rc.fused_min_inlier_ratio)
+                              if self.components.drives_pose else rc)
+        """The registration settings this tracker's mode uses (the fused modes' own inlier test)."""
+        self._acquired = self._registration is rc
+        """The fused modes' looser inlier test applies only once the map is acquired: ``ACQUIRE_UPDATES``
+        registrations in a row passed the strict one (a wrong map passes the loose test now and then)."""
+        self._strict_streak = 0
         if predictor is None and self.components.drives_pose:
             predictor = self.components.motion
         if polarity_selector is None:
@@ -159,6 +171,7 @@ class Tracker:
             "t_us": self._t_us,
             "steps": self._steps,
             "ego_history": tuple(np.copy(a) for a in self._ego_history),
+            "acquisition": (self._acquired, self._strict_streak),
         }
 
     def restore(self, state: dict) -> None:
@@ -174,6 +187,18 @@ class Tracker:
         self._t_us = state["t_us"]
         self._steps = state["steps"]
         self._ego_history = tuple(np.copy(a) for a in state["ego_history"])
+        self._acquired, self._strict_streak = state["acquisition"]
+
+    def _acquisition_test(self, reg) -> str:
+        """Before the map is acquired, a registration must pass the strict inlier test; '' when it does."""
+        need = float(self.config.registration.min_inlier_ratio) * reg.points_used
+        if reg.inliers >= need:
+            self._strict_streak += 1
+            self._acquired = self._strict_streak >= ACQUIRE_UPDATES
+            return ""
+        self._strict_streak = 0
+        return (f"acquiring the map: only {reg.inliers} of {reg.points_used} map points lie on recent events "
+                f"(need {int(np.ceil(need))} until {ACQUIRE_UPDATES} updates in a row have them)")
 
     def _side_motion(self):
         """The fusion backend when it runs beside (not as) the predictor, as in ``stpe+filter``."""
@@ -281,12 +306,14 @@ class Tracker:
                 # The filter fuses the prediction itself; the registration's isotropic prior would count it twice
                 # (all-zero information = no prior), unless the filter's own covariance is asked to act as the prior.
                 prior_info = self.predictor.prior_information(until) if self.config.motion_filter.prior_in_registration else _NO_PRIOR
-            reg = register_to_map(levels, pts, predicted, self.K, self.config.registration, field_polarity, twist_per_s=twist,
+            reg = register_to_map(levels, pts, predicted, self.K, self._registration, field_polarity, twist_per_s=twist,
                                   prior_information=prior_info, prior_residual_sigma=self.config.motion_filter.prior_residual_sigma)
             reason = reg.reason
+            if not self._acquired and reg.success:
+                reason = self._acquisition_test(reg)
         timings["registration"] = _ms(t0)
 
-        ok = reg is not None and reg.success
+        ok = reg is not None and reg.success and not reason
         fused = None
         covariance = None if not ok else reg.covariance
         if motion is not None:

@@ -165,3 +165,20 @@ def test_full_mode_with_ego_motion_history_seek_back_replays_bit_identically(lan
     s.seek(s.results[23].t_us)
     s.run()
     assert all(np.array_equal(a.pose, p) and a.counts["events_ego_removed"] == c for a, (p, c) in zip(s.results, ref))
+
+
+def test_full_mode_takes_the_looser_inlier_test_only_once_the_map_is_acquired(landing):
+    from evpose.tracker.tracker import ACQUIRE_UPDATES
+
+    rec, cmap = landing
+    cfg = TrackerConfig(mode=TrackerMode.FULL)
+    cfg.registration.min_inlier_ratio, cfg.registration.fused_min_inlier_ratio = 0.99, 0.0
+    never = TrackingSession(rec, cmap, cfg)
+    never.run()
+    # The loose test alone would pass every registration; without the strict one first, none is fused.
+    assert all(r.counts["registered"] == 0 and r.reason.startswith("acquiring the map") for r in never.results)
+    assert all(r.status is TrackStatus.DEGRADED for r in never.results) and not never.tracker._acquired
+    ok = TrackingSession(rec, cmap, TrackerConfig(mode=TrackerMode.FULL))
+    for _ in range(ACQUIRE_UPDATES):
+        ok.step()
+    assert ok.tracker._acquired and all(r.counts["registered"] for r in ok.results)
