@@ -464,7 +464,10 @@ class EventSlam:
                                              ic.acc_bias_sigma, ic.gyro_bias_sigma)
         else:
             local_bundle_adjustment(m, self.K, tc.local_window, tc.ba_iterations, tc.ba_huber_px, n_fixed=1,
-                                    rotation_priors=self._keyframe_rotation_priors(m), rotation_sigma_rad=np.radians(max(ic.gyro_prior_uninit_deg, 1e-6)))
+                                    rotation_priors=self._keyframe_rotation_priors(m), rotation_sigma_rad=np.radians(max(ic.gyro_prior_uninit_deg, 1e-6)),
+                                    # Event-inertial maps get their scale from the IMU initialisation; anchoring the visual
+                                    # scale before it made E-I-C2 worse (TrackingConfig.ba_scale_anchor).
+                                    scale_anchor=tc.ba_scale_anchor if self.imu is None else 0.0)
         cull_points(m, self.K, fe.track_to_point, tc)
         # BA moved the newest keyframe: the trajectory's last pose follows it.
         m.add_pose(t_us, m.keyframes[-1].T_wc)

@@ -51,3 +51,24 @@ def test_local_bundle_adjustment_with_zero_iterations_leaves_the_map_alone():
     pts = m.point_array().copy()
     local_bundle_adjustment(m, K, window=4, iterations=0, huber_px=2.0)
     assert np.array_equal(pts, m.point_array())
+
+
+def test_scale_anchor_holds_the_baseline_of_the_two_oldest_keyframes():
+    # One fixed keyframe leaves the monocular scale free; the anchor keeps the window's first baseline where it was.
+    m, _, _ = _map(seed=1, n_kf=5, pose_noise=0.02)
+    for p in m.points.values():
+        p.xyz = 0.7 * p.xyz  # points at the wrong scale pull the free keyframes towards a shrunk map
+    d0 = np.linalg.norm(m.keyframes[1].T_wc[:3, 3] - m.keyframes[0].T_wc[:3, 3])
+    rep = local_bundle_adjustment(m, K, window=5, iterations=20, huber_px=2.0, n_fixed=1, scale_anchor=0.01)
+    d1 = np.linalg.norm(m.keyframes[1].T_wc[:3, 3] - m.keyframes[0].T_wc[:3, 3])
+    assert abs(d1 / d0 - 1.0) < 0.03
+    assert rep.final_error < 0.1 * rep.initial_error
+
+
+def test_scale_anchor_is_deterministic():
+    a, _, _ = _map(seed=2, n_kf=5)
+    b, _, _ = _map(seed=2, n_kf=5)
+    for m in (a, b):
+        local_bundle_adjustment(m, K, window=5, iterations=10, huber_px=2.0, n_fixed=1, scale_anchor=0.02)
+    assert np.array_equal(a.point_array(), b.point_array())
+    assert all(np.array_equal(x.T_wc, y.T_wc) for x, y in zip(a.keyframes, b.keyframes))
