@@ -5,6 +5,7 @@
   module and of the registration front end, share of events the polarity filter removes.
 * ``ablation_texture``: the same on the textured landing (full suite), where the
   map explains few of the events, as in the paper's real scenes.
+* ``ablation_seeds``: the four modes over several simulator seeds at both resolutions (means and per seed).
 * ``realtime_300hz``: ``full`` at 300 updates/s, whole session against the
   recording's duration (issue 7: sustains 300 Hz faster than real time).
 * ``registration_wander``: why ``full`` stays near 16-18 mm: the registrations'
@@ -138,6 +139,35 @@ def bench_ablation_texture(ctx) -> dict:
         return {"skipped": "full suite only (rendering the texture takes minutes)"}
     rec, cmap = landing_case(ctx.work_dir, (346, 260), 2.0, ctx.seed, scenario="landing_texture")
     return _ablation_table(rec, cmap, "346x260", 2.0, with_variants=False)
+
+
+ABLATION_SEEDS = 4
+"""Simulator seeds of ``ablation_seeds`` (one seed's figures move by several mm with the scene's noise)."""
+
+
+def bench_ablation_seeds(ctx) -> dict:
+    """The four modes of the paper's ablation over ``ABLATION_SEEDS`` simulated 2 s landings at 346x260 and 240x180
+    (full suite only): ATE/ARE (RMSE) per seed and their means, the factor graph's smoothed ATE, updates not OK."""
+    from evpose.bench.tracking import landing_case
+
+    if ctx.quick:
+        return {"skipped": "full suite only (simulating 8 recordings takes minutes)"}
+    out: dict = {}
+    for res in ((346, 260), (240, 180)):
+        tag = f"{res[0]}x{res[1]}"
+        runs = [ablation_run(*landing_case(ctx.work_dir, res, 2.0, seed), mode) for seed in range(ctx.seed, ctx.seed + ABLATION_SEEDS)
+                for _, mode, event_filter in ABLATION if event_filter is None]
+        names = [name for name, _, event_filter in ABLATION if event_filter is None]
+        for j, name in enumerate(names):
+            per = runs[j::len(names)]
+            for key in ("ate_rmse_mm", "are_rmse_deg", "smoothed_ate_rmse_mm"):
+                vals = [r[key] for r in per if key in r]
+                if vals:
+                    out[f"{tag}_{name}_{key}_per_seed"] = [round(v, 4) for v in vals]
+                    out[f"{tag}_{name}_{key}_mean"] = float(np.mean(vals))
+            out[f"{tag}_{name}_not_ok_updates"] = sum(r["lost_updates"] for r in per)
+    out.update(_load())
+    return out
 
 
 def bench_realtime_300hz(ctx) -> dict:
