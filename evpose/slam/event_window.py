@@ -255,3 +255,13 @@ class EventWindowSelector:
         self._reset(keep_overlap=True)
         self.last_event = WindowEvent.DISPATCHED
         return rw
+
+
+# Why no MCI came out of a step, in plain words (the SLAM step's reason while waiting).
+WINDOW_REASONS = {
+    WindowEvent.WAITING: "collecting events",
+    WindowEvent.LOW_RATE: "event rate below th_e (camera still or too slow)",
+    WindowEvent.NO_TEXTURE: "too few features in the tiny frames (no texture)",
+    WindowEvent.TRACKING: "tracking features in tiny frames",
+    WindowEvent.DISPATCHED: "",
+}

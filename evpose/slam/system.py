@@ -32,10 +32,11 @@ from evpose.core.trajectory import invert_pose
 from evpose.errors import InputError
 from evpose.slam.atlas import Atlas, Keyframe, MapPoint, SlamMap
 from evpose.slam.bundle_adjustment import local_bundle_adjustment
+from evpose.slam.coasting import camera_frame_velocity, coast_pose, constant_velocity_pose, drop_contradicted
 from evpose.slam.config import SlamConfig, SlamMode
-from evpose.slam.event_window import EventWindowSelector, ReconstructionWindow, WindowEvent
+from evpose.slam.event_window import WINDOW_REASONS, EventWindowSelector, ReconstructionWindow
 from evpose.slam.features import detect_features, track_features
-from evpose.slam.inertial import InertialConfiguration, initialize_imu
+from evpose.slam.inertial import InertialConfiguration, imu_init_due, initialize_imu
 from evpose.slam.inertial_bridge import predict_camera_pose
 from evpose.slam.inertial_ba import InertialState, inertial_local_bundle_adjustment
 from evpose.slam.initialization import initialize_two_view
@@ -49,13 +50,6 @@ from evpose.slam.gyro_prior import (camera_delta_rotation, gyro_delta_rotation, 
                                     refine_pose_with_rotation_prior)
 from evpose.slam.tracking import PoseEstimate, estimate_pose
 
-_WINDOW_REASONS = {
-    WindowEvent.WAITING: "collecting events",
-    WindowEvent.LOW_RATE: "event rate below th_e (camera still or too slow)",
-    WindowEvent.NO_TEXTURE: "too few features in the tiny frames (no texture)",
-    WindowEvent.TRACKING: "tracking features in tiny frames",
-    WindowEvent.DISPATCHED: "",
-}
 
 
 @dataclass
@@ -84,6 +78,10 @@ class EventSlam:
         if config.mode is SlamMode.EVENT_INERTIAL and (imu is None or len(imu) < 2):
             raise InputError(None, "event-inertial mode needs IMU samples; the recording has none")
         self.cfg = config
+        self._tc_uninit = config.tracking
+        """Tracking settings of maps the IMU initialisation has not reached (event-inertial: fewer inliers suffice)."""
+        if config.mode is SlamMode.EVENT_INERTIAL and config.inertial.min_inliers > 0:
+            self._tc_uninit = replace(config.tracking, min_inliers=config.inertial.min_inliers)
         self.calib = calibration
         self.imu = imu if config.mode is SlamMode.EVENT_INERTIAL else None
         self.K = calibration.K
@@ -127,7 +125,7 @@ class EventSlam:
             self.results.append(last)
         if last is None:
             m = self.atlas.active
-            reason = _WINDOW_REASONS[self.window.last_event]
+            reason = WINDOW_REASONS[self.window.last_event]
             last = SlamStepResult(self._last_t, SlamStatus.WAITING, reason, map_id=m.id if m else -1, tiny_frame=self.window.last_tiny_image, n_events_window=self.window.n_events)
         else:
             last.mcis = len(windows)
@@ -297,7 +295,7 @@ class EventSlam:
 
     def _try_imu_init(self, m: SlamMap) -> None:
         """Scale the map to metres and align it with gravity once enough keyframes span enough time."""
-        if not _imu_init_due(m, self.cfg.inertial):
+        if not imu_init_due([k.t_us for k in m.keyframes], self.cfg.inertial):
             return
         kfs = m.keyframes
         res = initialize_imu([k.t_us for k in kfs], [k.T_wc for k in kfs], self.imu, self.calib.T_cam_imu, self.calib.time_offset_us, self.cfg.inertial)
@@ -344,7 +342,7 @@ class EventSlam:
 
     def _refine_with_gyro(self, est, Xw: np.ndarray, uv: np.ndarray, R_wc_prior: np.ndarray, sigma_deg: float):
         """Re-solve the pose with the gyro rotation as a prior (planar scenes confuse tilt with shift; the gyro does not)."""
-        tc = self.cfg.tracking
+        tc = self._pose_tc(self.atlas.active)
         inl = est.inliers
         T_cw = refine_pose_with_rotation_prior(self.K, Xw[inl], uv[inl], invert_pose(est.T_wc), R_wc_prior.T,
                                                np.radians(sigma_deg), huber_px=tc.ba_huber_px)
@@ -354,6 +352,9 @@ class EventSlam:
         if inliers.sum() < max(tc.min_inliers, tc.min_inlier_ratio * len(Xw)):
             return est  # the prior disagrees with the images (a wrong bias or a bad time offset): keep the visual pose
         return PoseEstimate(True, invert_pose(T_cw), inliers, rms_px=float(np.sqrt(np.mean(err[inliers] ** 2))))
+
+    def _pose_tc(self, m: SlamMap):
+        return self.cfg.tracking if m is None or m.imu_initialised else self._tc_uninit
 
     def _lose(self, reason: str) -> tuple[SlamStatus, str, None, bool]:
         m = self.atlas.active
@@ -367,19 +368,9 @@ class EventSlam:
         return SlamStatus.LOST, f"tracking lost: {reason}", None, False
 
     def _track_map(self, mci: MciResult) -> tuple[SlamStatus, str, np.ndarray | None, bool]:
-        m, fe, tc = self.atlas.active, self.fe, self.cfg.tracking
-        guess = m.traj_T[-1]
-        if len(m.traj_t) >= 2:
-            # Constant-velocity prediction, scaled to this MCI's time step.
-            D = invert_pose(m.traj_T[-2]) @ m.traj_T[-1]
-            dt_prev = max(m.traj_t[-1] - m.traj_t[-2], 1)
-            a = (mci.t_us - m.traj_t[-1]) / dt_prev
-            if 0 < a < 4:
-                Dr = Rotation.from_matrix(D[:3, :3]).as_rotvec() * a
-                Da = np.eye(4)
-                Da[:3, :3] = Rotation.from_rotvec(Dr).as_matrix()
-                Da[:3, 3] = D[:3, 3] * a
-                guess = m.traj_T[-1] @ Da
+        m, fe = self.atlas.active, self.fe
+        tc = self._pose_tc(m)
+        guess = constant_velocity_pose(m, mci.t_us)
         R_prior = self._gyro_rotation(m.traj_t[-1], mci.t_us, m.traj_T[-1])
         if R_prior is not None:
             guess = guess.copy()
@@ -393,10 +384,10 @@ class EventSlam:
             n_refound = self._refind(m, mci, guess, self.cfg.search.radius_px)
             sel = [i for i, t in enumerate(fe.ids.tolist()) if fe.track_to_point.get(t) in m.points]
         if len(sel) < tc.min_inliers:
-            return self._bridge_or_lose(mci, f"{len(sel)} tracked map points < {tc.min_inliers}")
+            return self._bridge_or_lose(mci, f"{len(sel)} tracked map points < {tc.min_inliers}", R_prior)
         est, sel = self._estimate(m, mci, sel, guess, R_prior)
         if not est.ok:
-            return self._bridge_or_lose(mci, est.reason)
+            return self._bridge_or_lose(mci, est.reason, R_prior)
         more = self._refind(m, mci, est.T_wc, self.cfg.search.refine_radius_px)
         if more:
             # Second pass with the estimated pose (ORB-SLAM's local-map search): re-solve with the new associations.
@@ -422,7 +413,7 @@ class EventSlam:
         fe = self.fe
         Xw = np.stack([m.points[fe.track_to_point[int(fe.ids[i])]].xyz for i in sel])
         uv = fe.uv[sel].astype(np.float64)
-        est = estimate_pose(self.K, Xw, uv, guess, self.cfg.tracking, self.cfg.seed)
+        est = estimate_pose(self.K, Xw, uv, guess, self._pose_tc(m), self.cfg.seed)
         sigma_deg = self.cfg.inertial.gyro_prior_deg if m.imu_initialised else self.cfg.inertial.gyro_prior_uninit_deg
         if est.ok and R_prior is not None and sigma_deg > 0:
             est = self._refine_with_gyro(est, Xw, uv, R_prior, sigma_deg)
@@ -450,7 +441,7 @@ class EventSlam:
         fe.uv = np.concatenate([fe.uv, uv.astype(np.float32)])
         return len(pids)
 
-    def _new_keyframe(self, m: SlamMap, t_us: int, T_wc: np.ndarray, img8: np.ndarray | None = None) -> np.ndarray:
+    def _new_keyframe(self, m: SlamMap, t_us: int, T_wc: np.ndarray, img8: np.ndarray | None = None, adjust: bool = True) -> np.ndarray:
         """Insert a keyframe, triangulate, run local (inertial) BA, cull, try the IMU initialisation; returns the adjusted pose."""
         fe, tc = self.fe, self.cfg.tracking
         kf = insert_keyframe(m, t_us, T_wc, fe.ids, fe.uv.astype(np.float64), fe.track_to_point)
@@ -458,7 +449,9 @@ class EventSlam:
         if img8 is not None:
             store_patches(m, kf.id, img8, self.cfg.search.patch_px)
         ic = self.cfg.inertial
-        if m.imu_initialised and ic.inertial_ba:
+        if not adjust:
+            pass
+        elif m.imu_initialised and ic.inertial_ba:
             inertial_local_bundle_adjustment(m, m.inertial, self.K, self.imu, self.calib.T_cam_imu, self.calib.time_offset_us,
                                              tc.local_window, tc.ba_iterations, tc.ba_huber_px, ic.acc_noise, ic.gyro_noise,
                                              ic.acc_bias_sigma, ic.gyro_bias_sigma)
@@ -487,29 +480,27 @@ class EventSlam:
         pred = predict_camera_pose(m.keyframes[-1], m.inertial, self.imu, self.calib.T_cam_imu, self.calib.time_offset_us, t_us, ic.acc_noise, ic.gyro_noise)
         return None if pred is None else pred[0]
 
-    def _bridge_or_lose(self, mci: MciResult, reason: str) -> tuple[SlamStatus, str, np.ndarray | None, bool]:
-        """E-I-C2/C3 on a metric map: keep the map, take the pose from the IMU and make a keyframe so new points get triangulated."""
+    def _bridge_or_lose(self, mci: MciResult, reason: str, R_prior: np.ndarray | None = None) -> tuple[SlamStatus, str, np.ndarray | None, bool]:
+        """E-I-C2/C3: keep the map through a visual failure, the pose predicted without the images (``SlamStatus.INERTIAL``).
+
+        A metric map is propagated by the preintegrated IMU; a map the IMU initialisation has not reached yet coasts on
+        the gyro rotation and its recent camera-frame velocity (``InertialConfig.coast_s``). A keyframe at the predicted
+        pose lets new points be triangulated, so the map can be re-localised on the next MCIs.
+        """
         m, fe, ic, tc = self.atlas.active, self.fe, self.cfg.inertial, self.cfg.tracking
-        if ic.configuration is InertialConfiguration.C1 or (mci.t_us - self._last_visual_t) / 1e6 > ic.max_bridge_s:
+        gap_s = (mci.t_us - self._last_visual_t) / 1e6
+        if self.imu is None or ic.configuration is InertialConfiguration.C1 or gap_s > ic.max_bridge_s:
             return self._lose(reason)
-        T_wc = self._imu_prediction(mci.t_us)
+        if m.imu_initialised:
+            T_wc, how = self._imu_prediction(mci.t_us), "propagated by the IMU"
+        else:
+            v = camera_frame_velocity(m, int(ic.coast_velocity_span_s * 1e6))
+            if gap_s > ic.coast_s or R_prior is None or v is None:
+                return self._lose(reason)
+            T_wc, how = coast_pose(m, mci.t_us, R_prior, v), "coasted on the gyro and the last velocity (IMU not initialised)"
         if T_wc is None:
             return self._lose(reason)
-        # Associations that disagree with the IMU pose are the ones that failed (tracks jumped to other features).
-        tids = [t for t in fe.ids.tolist() if fe.track_to_point.get(t) in m.points]
-        if tids:
-            Xw = np.stack([m.points[fe.track_to_point[t]].xyz for t in tids])
-            uv = np.stack([fe.uv[i] for i, t in enumerate(fe.ids.tolist()) if t in set(tids)]).astype(np.float64)
-            proj, z = project(self.K, invert_pose(T_wc), Xw)
-            bad = ~(z > 0) | ~(np.linalg.norm(proj - uv, axis=1) < 2.0 * tc.reprojection_threshold_px)
-            for t, b in zip(tids, bad):
-                if b:
-                    fe.track_to_point.pop(t, None)
+        drop_contradicted(m, self.K, T_wc, fe.ids, fe.uv, fe.track_to_point, 2.0 * tc.reprojection_threshold_px)
         m.add_pose(mci.t_us, T_wc)
-        T_wc = self._new_keyframe(m, mci.t_us, T_wc, mci.image8)
-        return SlamStatus.INERTIAL, f"visual tracking failed ({reason}); pose propagated by the IMU, map {m.id} kept", T_wc.copy(), True
-
-
-def _imu_init_due(m: SlamMap, cfg) -> bool:
-    kfs = m.keyframes
-    return len(kfs) >= cfg.init_keyframes and (kfs[-1].t_us - kfs[0].t_us) / 1e6 >= cfg.init_min_span_s
+        T_wc = self._new_keyframe(m, mci.t_us, T_wc, mci.image8, adjust=m.imu_initialised or ic.coast_ba)
+        return SlamStatus.INERTIAL, f"visual tracking failed ({reason}); pose {how}, map {m.id} kept", T_wc.copy(), True
