@@ -37,6 +37,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from evpose.mapping.edge_chains import _trace_chains
+from evpose.mapping.panel_rims import join_panel_rims
 from evpose.mapping.step_fit import fit_step_lines, local_steps, side_contrast, step_fit_points
 
 
@@ -101,6 +102,9 @@ def albedo_contours(
     min_t: float = 6.0,
     axis_angle: float | None = None,
     axis_snap_deg: float = 0.0,
+    fit_layer: np.ndarray | None = None,
+    panel_snap_deg: float = 0.0,
+    panel_gap: float = 0.0,
 ) -> AlbedoContour:
     """Brightness-edge contour of one region (see the module docstring).
 
@@ -116,6 +120,11 @@ def albedo_contours(
     would bias the fitted step outward, whereas a least-squares step between the
     mixture's mean and the plain side's is unbiased. ``axis_angle``/``axis_snap_deg``: straight
     runs nearly square to the region's outline are fitted square to it (:func:`step_fit.fit_step_lines`).
+    ``fit_layer`` (per fit point: +1 front layer, -1 hidden behind it, 0 plain): runs along a
+    proud panel's rim are placed by where the panel's points end, and squared to the outline
+    within ``panel_snap_deg`` (:func:`step_fit.fit_step_lines`), the pieces of one rim placed
+    together and continued across gaps up to ``panel_gap`` m to their corners
+    (:func:`panel_rims.join_panel_rims`).
     """
     if fit2d is None:
         fit2d, fit_intensity = own2d, intensity
@@ -223,7 +232,8 @@ def albedo_contours(
             p, nrm, _ = fit_step_lines(p, nrm, fit2d, fit_intensity, own_tree, eps=2.0 * spacing,
                                        min_points=max(8, int(round(4 * spacing / contour_spacing))),
                                        half_across=half_across, width=0.5 * spacing,
-                                       axis_angle=axis_angle, axis_snap_deg=axis_snap_deg)
+                                       axis_angle=axis_angle, axis_snap_deg=axis_snap_deg, fit_layer=fit_layer,
+                                       panel_snap_deg=panel_snap_deg)
         # Keep only the stretches that still separate two brightness levels (a chain can run
         # from a real edge into a patch of noise or of two mixed layers).
         # (A window of ~15 point spacings along the chain holds ~8 points on either side.)
@@ -241,7 +251,12 @@ def albedo_contours(
         con_out.append(np.full(p.shape[0], step_all))
     if not pts_out:
         return empty
-    return AlbedoContour(np.concatenate(pts_out), np.concatenate(nrm_out), np.concatenate(con_out))
+    p, nrm, con = np.concatenate(pts_out), np.concatenate(nrm_out), np.concatenate(con_out)
+    if fit_layer is not None:
+        p, nrm = join_panel_rims(p, nrm, fit2d, fit_intensity, fit_layer, own_tree, half_across,
+                                 max_gap=panel_gap, spacing=contour_spacing)
+        con = np.concatenate([con, np.full(p.shape[0] - con.size, float(np.median(con)))])
+    return AlbedoContour(p, nrm, con)
 
 
 def region_albedo_edges(
@@ -260,6 +275,10 @@ def region_albedo_edges(
     min_t: float = 6.0,
     axis_angles: np.ndarray | None = None,
     axis_snap_deg: float = 0.0,
+    plane_normals: np.ndarray | None = None,
+    layer_m: float = 0.0,
+    panel_snap_deg: float = 0.0,
+    panel_gap: float = 0.0,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Brightness-edge contour points of every region, in the world.
 
@@ -269,7 +288,12 @@ def region_albedo_edges(
     (N,) in [0, 1] (colours, albedo) or any other unit, then scaled to [0, 1] over the whole
     cloud (so the thresholds mean the same for every region). ``axis_angles`` (R,): each
     region's outline direction in its plane coordinates, radians (NaN: none), to which
-    straight edges within ``axis_snap_deg`` are squared. Returns points (M, 3), unit
+    straight edges within ``axis_snap_deg`` are squared. ``plane_normals`` (R, 3, facing the
+    viewer) and ``layer_m`` > 0: points more than ``layer_m`` in front of their region's plane are
+    its front layer, and edges along the rim of such a layer are placed by where its points
+    end and squared to the outline within ``panel_snap_deg`` (:func:`step_fit.fit_step_lines`),
+    and continued across gaps up to ``panel_gap`` m to their corners (:func:`panel_rims.join_panel_rims`);
+    None or 0: off. Returns points (M, 3), unit
     edge normals (M, 3) pointing dark -> bright, region ids (M,) int32.
     """
     lo_i, hi_i = float(np.min(intensity)), float(np.max(intensity))
@@ -289,10 +313,15 @@ def region_albedo_edges(
             own2d = np.stack([rel @ ax[0], rel @ ax[1]], axis=1)
             rel = points[all_idx] - c
             all2d = np.stack([rel @ ax[0], rel @ ax[1]], axis=1)
+            layer = None
+            if plane_normals is not None and layer_m > 0:
+                # Offsets from the region's plane, which the wall's many points pin: a panel's
+                # front stands out by its thickness, a plain plane's noise rarely by layer_m.
+                layer = np.where(rel @ plane_normals[r] > layer_m, 1, np.where(visible[all_idx], 0, -1)).astype(np.int8)
             ac = albedo_contours(own2d, vals, spacing, sigma, high, low, min_length, contour_spacing,
                                  all2d, inten[all_idx], min_t,
                                  None if axis_angles is None or not np.isfinite(axis_angles[r]) else float(axis_angles[r]),
-                                 axis_snap_deg)
+                                 axis_snap_deg, layer, panel_snap_deg, panel_gap)
             if ac.points2d.shape[0] == 0:
                 continue
             out_p.append(c + ac.points2d[:, :1] * ax[0] + ac.points2d[:, 1:] * ax[1])

@@ -11,6 +11,8 @@ import math
 import numba
 import numpy as np
 
+from evpose.mapping.panel_rims import panel_edge_shift, panel_side
+
 
 @numba.njit(cache=True)
 def step_fit_points(pts, normals, tangents, own, inten, nb_idx, nb_count, half_across, half_along, min_side):
@@ -136,7 +138,8 @@ def _margin_line(rel: np.ndarray, vals: np.ndarray, n: np.ndarray, off: float, m
 def fit_step_lines(p: np.ndarray, normals: np.ndarray, fit2d: np.ndarray, fit_intensity: np.ndarray, tree,
                    eps: float, min_points: int, half_across: float, width: float,
                    min_band_points: int = 8, max_tilt_deg: float = 12.0, n_tilts: int = 25,
-                   axis_angle: float | None = None, axis_snap_deg: float = 0.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                   axis_angle: float | None = None, axis_snap_deg: float = 0.0,
+                   fit_layer: np.ndarray | None = None, panel_snap_deg: float = 0.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Replace straight runs of an open edge chain by the step line fitted to all raw points along them.
 
     Per-point step fits on a sparse, mixed scan scatter by centimetres; a straight painted
@@ -154,6 +157,11 @@ def fit_step_lines(p: np.ndarray, normals: np.ndarray, fit2d: np.ndarray, fit_in
     scan a line's tilt rests on the few points nearest its ends and comes out several
     degrees off (centimetres at a panel's corners), while a door, picture or painted
     marker is nearly always square to the wall or pad it lies on.
+    ``fit_layer`` (N,) int8 per fit point: +1 in front of its region's plane, -1 hidden behind
+    such a front, 0 plain; with it, a run along a proud panel's rim is placed by where the
+    panel's own points end (:func:`panel_rims.panel_edge_shift`), not by the step fit, and squared to
+    ``axis_angle`` within ``panel_snap_deg`` (a door or picture is square to its wall; a
+    painted marker, on one layer, keeps ``axis_snap_deg``). None: off.
     Returns the points, their normals and a mask (M,) of the points on a fitted line.
     """
     from evpose.mapping.contours import _dp_indices
@@ -179,11 +187,6 @@ def fit_step_lines(p: np.ndarray, normals: np.ndarray, fit2d: np.ndarray, fit_in
         n0 = np.array([-direction[1], direction[0]])
         if n0 @ normals[a:b].sum(axis=0) < 0:
             n0 = -n0
-        run_tilts, fine_turns, margin_turn = tilts, np.radians(np.arange(-1.5, 1.5001, 0.1)), 8.0
-        if axis_angle is not None and axis_snap_deg > 0:
-            to_axis = (axis_angle - math.atan2(n0[1], n0[0]) + 0.25 * math.pi) % (0.5 * math.pi) - 0.25 * math.pi
-            if abs(to_axis) <= math.radians(axis_snap_deg):
-                run_tilts, fine_turns, margin_turn = np.array([to_axis]), np.zeros(1), 0.0
         t_run = (run - c) @ direction
         t_lo, t_hi = float(t_run.min()), float(t_run.max())
         # The band spans the run's own extent, untrimmed. The traced chain already stops short
@@ -198,8 +201,18 @@ def fit_step_lines(p: np.ndarray, normals: np.ndarray, fit2d: np.ndarray, fit_in
         t_rel = rel @ direction
         band = (t_rel >= t_lo) & (t_rel <= t_hi) & (np.abs(rel @ n0) <= half_across)
         rel, vals = rel[band], fit_intensity[cand[band]]
+        lay = None if fit_layer is None else fit_layer[cand[band]]
         if vals.size < min_band_points:
             continue
+        # Decided before the tilt search, about the run's own line: only a panel's rim is squared.
+        snap_deg = axis_snap_deg
+        if lay is not None and panel_snap_deg > axis_snap_deg and panel_side(rel @ n0, lay) != 0.0:
+            snap_deg = panel_snap_deg
+        run_tilts, fine_turns, margin_turn = tilts, np.radians(np.arange(-1.5, 1.5001, 0.1)), 8.0
+        if axis_angle is not None and snap_deg > 0:
+            to_axis = (axis_angle - math.atan2(n0[1], n0[0]) + 0.25 * math.pi) % (0.5 * math.pi) - 0.25 * math.pi
+            if abs(to_axis) <= math.radians(snap_deg):
+                run_tilts, fine_turns, margin_turn = np.array([to_axis]), np.zeros(1), 0.0
         # Coarse: a blurred step of the point spacing over all tilts; fine: a sharp step around
         # the best, which puts the line in the middle of the gap between the two sides' points.
         best = (np.inf, 0.0, 0.0, n0, 0.0)
@@ -220,9 +233,14 @@ def fit_step_lines(p: np.ndarray, normals: np.ndarray, fit2d: np.ndarray, fit_in
         sse, off, step, n, _, lo = best
         if not (np.isfinite(sse) and step > 0):
             continue
-        line = _margin_line(rel, vals, n, off, lo + 0.5 * step, max_turn_deg=margin_turn)
-        if line is not None:
-            n, off = line
+        shift = None if lay is None else panel_edge_shift(rel @ n - off, vals, lay, -half_across - off,
+                                                            half_across - off, lo + 0.5 * step)
+        if shift is not None:
+            off += shift
+        else:
+            line = _margin_line(rel, vals, n, off, lo + 0.5 * step, max_turn_deg=margin_turn)
+            if line is not None:
+                n, off = line
         d = np.array([n[1], -n[0]])
         base = c + off * n
         out_p[a:b] = base + ((run - base) @ d)[:, None] * d

@@ -90,3 +90,21 @@ def test_rim_in_front_of_a_wall_snaps_to_the_innermost_crease_across_it():
     inner, adj_inner = snap_to_intersections(*args, outward=np.array([[0.0, -1.0, 0.0]]), across_tol=0.02)
     assert adj_nearest[0] == 2 and np.allclose(nearest[0], [0.5, -3.0, 0.8])
     assert adj_inner[0] == 1 and np.allclose(inner[0], [0.5, -2.9, 0.8])
+
+
+def test_crease_axes_give_a_wall_the_direction_of_its_creases():
+    from evpose.mapping.adjacency import crease_axes
+
+    # Region 0: a wall y = 0 with in-plane axes turned 20 deg from x/z; regions 1 (floor) and 2 (side wall).
+    normals = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])
+    t = np.radians(20.0)
+    e0 = np.array([np.cos(t), 0.0, np.sin(t)])
+    axes = np.zeros((3, 2, 3))
+    axes[0] = [e0, np.cross(normals[0], e0)]
+    region = np.zeros(60, np.int32)
+    crease = np.r_[np.full(40, 1), np.full(20, 2)].astype(np.int32)
+    out = crease_axes(region, crease, normals, axes)
+    # The floor crease runs along x: +20 deg from the wall's first axis (modulo 90).
+    assert abs((np.degrees(out[0]) - 20.0 + 45.0) % 90.0 - 45.0) < 1e-6
+    assert np.isnan(out[1]) and np.isnan(out[2])  # no contour points of their own
+    assert np.isnan(crease_axes(region, np.full(60, -1, np.int32), normals, axes)[0])

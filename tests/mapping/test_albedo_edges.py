@@ -68,7 +68,8 @@ def test_bright_panel_on_a_dark_plane_flips_the_normals():
 def test_panel_proud_of_the_plane_with_the_plane_sampled_behind_it_is_mostly_found():
     # A picture 2 cm in front of a wall, the wall's points behind it still in the cloud (as
     # the simulator samples every surface). Harder than paint: the two layers' intensities
-    # mix; measured over seeds 0-5 precision 0.66-0.87, recall 0.63-0.86.
+    # mix; measured over seeds 0-5 precision 0.68-0.91, recall 0.72-0.99 (0.54-0.91 / 0.48-0.92
+    # before rims were placed by the panel's points, evpose.mapping.panel_rims).
     scores = []
     for seed in (0, 1, 3):
         scan = _painted(panel_offset_m=0.02, seed=seed)
@@ -76,7 +77,7 @@ def test_panel_proud_of_the_plane_with_the_plane_sampled_behind_it_is_mostly_fou
         m = contour_precision_recall(cmap.points, scan.edges, cloud=scan.points)
         scores.append((m["precision"], m["recall"]))
     precision, recall = np.mean(scores, axis=0)
-    assert precision >= 0.75 and recall >= 0.75
+    assert precision >= 0.8 and recall >= 0.8
 
 
 @pytest.mark.parametrize("density,noise", [(100.0, 0.1), (900.0, 0.03), (900.0, 0.1), (2500.0, 0.1)])
@@ -115,3 +116,11 @@ def test_brightness_edges_are_deterministic():
     assert len(a) > 0
     for field in ("points", "edge_normal", "plane_normal", "region_id", "curvature", "brightness_sign"):
         assert np.array_equal(getattr(a, field), getattr(b, field))
+
+
+def test_panel_rims_leave_a_painted_single_layer_untouched():
+    scan = _painted(density=400.0, seed=2)
+    on = build_contour_map(scan.points, intensity=scan.intensity)
+    off = build_contour_map(scan.points, intensity=scan.intensity,
+                            config=MapBuildConfig(albedo_panel_rims=False, albedo_panel_snap_deg=0.0, albedo_panel_gap_m=0.0))
+    assert np.array_equal(on.points, off.points) and np.array_equal(on.edge_normal, off.edge_normal)
