@@ -30,6 +30,7 @@ def main(
     no_albedo_edges: bool = False,
     merge_double: float = 0.0,
     viewpoint: tuple[float, float, float] | None = None,
+    config: Path | None = None,
     quiet: bool = False,
 ) -> int:
     """Build a contour map (PLY with edge normals, plane normals, regions, curvature, brightness signs) from a raw .ply/.pcd cloud.
@@ -52,6 +53,8 @@ def main(
         no_albedo_edges: Do not trace brightness (painted/albedo) edges inside regions from the cloud's colour or intensity.
         merge_double: Merge contour points of different regions closer than this into one (an edge traced from both sides), metres (0 = keep both).
         viewpoint: Where the scan was seen from (x y z, metres); plane normals face it.
+        config: Every builder setting (``evpose.mapping.build.MapBuildConfig``) as YAML/JSON; the flags above
+            override it where they differ from their defaults.
         quiet: No progress bar or summary.
     """
     from evpose.io.map_ply import write_contour_map
@@ -64,14 +67,24 @@ def main(
         raise InputError(out, "the contour map is written as PLY; use a .ply output name")
     t0 = time.perf_counter()
     raw = load_cloud(cloud)
-    config = MapBuildConfig(
+    flags = dict(
         voxel_m=voxel, k_neighbours=k, angle_threshold_deg=angle_deg, plane_angle_deg=plane_angle_deg,
         curvature_limit=curvature, min_region_points=min_region, plane_distance_m=plane_distance,
         cell_m=cell, contour_spacing_m=spacing, adjacent_m=adjacent, snap=not no_snap, viewpoint=viewpoint,
         albedo_edges=not no_albedo_edges, merge_double_m=merge_double, robust_normals=not no_robust_normals,
     )
+    if config is None:
+        cfg = MapBuildConfig(**flags)
+    else:
+        from evpose.io.config_file import read_config
+
+        import dataclasses
+
+        defaults = MapBuildConfig()
+        cfg = dataclasses.replace(read_config(MapBuildConfig, config),
+                                  **{name: v for name, v in flags.items() if v != getattr(defaults, name)})
     try:
-        cmap = build_contour_map(raw.points, raw.normals, raw.intensity, config, progress=not quiet and sys.stderr.isatty())
+        cmap = build_contour_map(raw.points, raw.normals, raw.intensity, cfg, progress=not quiet and sys.stderr.isatty())
     except MapBuildError as exc:
         raise InputError(cloud, exc.problem, exc.record) from None
     write_contour_map(out, cmap, comment=f"evpose contour map from {cloud.name}")

@@ -127,3 +127,19 @@ def test_build_map_defaults_are_the_library_defaults():
              "no_snap": not cfg.snap, "no_albedo_edges": not cfg.albedo_edges}
     for name, value in pairs.items():
         assert params[name].default == value, name
+
+
+def test_build_map_reads_every_setting_from_a_config_file_and_flags_override_it(tmp_path, small_scan, capsys):
+    cloud = tmp_path / "scan_cloud.ply"
+    _write_ply_with_colours(cloud, small_scan)
+    (tmp_path / "coarse.yaml").write_text("contour_spacing_m: 0.04\nleftover_regions: false\n")
+    base, coarse, flagged = tmp_path / "a.ply", tmp_path / "b.ply", tmp_path / "c.ply"
+    assert run(["build-map", str(cloud), "--out", str(base), "--quiet"]) == 0
+    assert run(["build-map", str(cloud), "--out", str(coarse), "--config", str(tmp_path / "coarse.yaml"), "--quiet"]) == 0
+    assert run(["build-map", str(cloud), "--out", str(flagged), "--config", str(tmp_path / "coarse.yaml"), "--spacing", "0.02",
+                "--quiet"]) == 0
+    n = [len(read_contour_map(p)) for p in (base, coarse, flagged)]
+    assert n[1] < n[2] < n[0]  # 4 cm spacing from the file, the flag's 2 cm over it, the default 1 cm
+    (tmp_path / "bad.yaml").write_text("contour_spacing: 0.04\n")
+    assert run(["build-map", str(cloud), "--out", str(tmp_path / "d.ply"), "--config", str(tmp_path / "bad.yaml")]) == 2
+    assert "bad.yaml: contour_spacing: unknown setting" in capsys.readouterr().err
