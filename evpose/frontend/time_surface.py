@@ -32,7 +32,8 @@ class TimeSurfaceConfig:
 
 @nb.njit(cache=True)
 def _update_kernel(t, x, y, p, keep, width, lut, last_flat, combined_flat):
-    """Stamp each kept event into its polarity's map and the combined map; ``lut``: sensor -> ideal pixel (-1 = outside).
+    """Stamp each kept event into its polarity's map and the combined map; ``lut``: sensor -> ideal pixel (-1 = outside),
+    empty for the identity (see :func:`kernel_lut`).
 
     Taking the mask here (instead of indexing the batch first) saves a copy of every column per step.
     """
@@ -41,7 +42,7 @@ def _update_kernel(t, x, y, p, keep, width, lut, last_flat, combined_flat):
     for i in range(t.shape[0]):
         if not keep[i]:
             continue
-        j = lut[np.int64(y[i]) * width + np.int64(x[i])]
+        j = lut[np.int64(y[i]) * width + np.int64(x[i])] if lut.shape[0] else np.int64(y[i]) * width + np.int64(x[i])
         if j < 0:
             continue
         off = 0 if p[i] > 0 else plane
@@ -75,6 +76,15 @@ def ideal_pixel_lut(width: int, height: int, calibration: CameraCalibration | No
     return np.where(inside, row * width + col, -1).astype(np.int32).ravel()
 
 
+_IDENTITY_LUT = np.zeros(0, np.int32)
+
+
+def kernel_lut(lut: np.ndarray) -> np.ndarray:
+    """``lut`` as the per-event kernels take it: empty when it is the identity (no distortion), so they compute the
+    pixel index instead of reading the table, a cache miss per event on a 0.36 MB table at 346x260."""
+    return _IDENTITY_LUT if np.array_equal(lut, np.arange(lut.shape[0], dtype=lut.dtype)) else lut
+
+
 class SeparatedTimeSurface:
     """Per-polarity last-timestamp maps over the ideal-pinhole image, with decayed images on demand."""
 
@@ -83,6 +93,7 @@ class SeparatedTimeSurface:
         self.width = int(width)
         self.height = int(height)
         self._lut = ideal_pixel_lut(self.width, self.height, calibration)
+        self._kernel_lut = kernel_lut(self._lut)
         self._last = np.full((2, self.height, self.width), NEVER_US, dtype=np.int64)
         # The newest stamp of either polarity, kept alongside so the combined field needs no per-pixel max.
         self._combined = np.full((self.height, self.width), NEVER_US, dtype=np.int64)
@@ -104,7 +115,7 @@ class SeparatedTimeSurface:
         comb = self._combined.reshape(-1)
         if keep is None:
             keep = np.ones(len(events), dtype=np.bool_)
-        return int(_update_kernel(events.t, events.x, events.y, events.p, keep, self.width, self._lut, flat, comb))
+        return int(_update_kernel(events.t, events.x, events.y, events.p, keep, self.width, self._kernel_lut, flat, comb))
 
     def combined_last(self) -> np.ndarray:
         """int64 (H, W): the newest timestamp of either polarity (the combined surface's source; a view)."""

@@ -44,7 +44,7 @@ import numba as nb
 import numpy as np
 
 from evpose.frontend.noise_filter import NEVER_US
-from evpose.frontend.time_surface import ideal_pixel_lut
+from evpose.frontend.time_surface import ideal_pixel_lut, kernel_lut
 
 ACCEPT_ON = np.uint8(1)
 ACCEPT_OFF = np.uint8(2)
@@ -159,7 +159,7 @@ def _judge_events(x, y, p, keep, width, lut, gen, tag, owner, dist2, box, polari
         out_label[m] = -1
         out_point[m] = -1
         m += 1
-        j = lut[np.int64(y[i]) * width + np.int64(x[i])]
+        j = lut[np.int64(y[i]) * width + np.int64(x[i])] if lut.shape[0] else np.int64(y[i]) * width + np.int64(x[i])
         if j < 0:
             continue
         n += 1
@@ -185,7 +185,7 @@ def _classify_owned(x, y, p, width, lut, gen, tag, owner, dist2, box, polarity, 
     for i in range(x.shape[0]):
         out_label[i] = -1
         out_point[i] = -1
-        j = lut[np.int64(y[i]) * width + np.int64(x[i])]
+        j = lut[np.int64(y[i]) * width + np.int64(x[i])] if lut.shape[0] else np.int64(y[i]) * width + np.int64(x[i])
         if j < 0:
             continue
         r = j // width
@@ -213,7 +213,7 @@ class AlignedTimeSurface:
     def __init__(self, width: int, height: int, calibration=None):
         self.width = int(width)
         self.height = int(height)
-        self._lut = ideal_pixel_lut(self.width, self.height, calibration)
+        self._lut = kernel_lut(ideal_pixel_lut(self.width, self.height, calibration))  # empty: the identity
         # Per pixel ``generation * 4 + accepted polarity``: a pixel is in a patch of the last compose only when
         # tagged with its generation, so nothing but the composed map needs a reset between steps.
         self._tag = np.zeros((self.height, self.width), np.uint16)

@@ -55,7 +55,21 @@ def registration_covariance(config: FusionConfig, covariance_6x6: np.ndarray | N
     if cov is None:  # built only when used (every update pays for this function)
         sr, st = config.registration_default_sigma_rot, config.registration_default_sigma_trans
         cov = np.diag([sr * sr] * 3 + [st * st] * 3)
-    return cov + np.eye(6) * config.registration_min_sigma**2
+    return cov + _covariance_floor(config.registration_min_sigma)
+
+
+_FLOORS: dict[float, np.ndarray] = {}
+
+
+def _covariance_floor(sigma: float) -> np.ndarray:
+    """``np.eye(6) * sigma**2``, built once per value (the config may change between updates; a few us per update)."""
+    floor = _FLOORS.get(sigma)
+    if floor is None:
+        if len(_FLOORS) > 16:
+            _FLOORS.clear()
+        floor = _FLOORS[sigma] = np.eye(6) * sigma**2
+        floor.setflags(write=False)
+    return floor
 
 
 def usable_pose(T: np.ndarray | None) -> np.ndarray | None:
@@ -66,6 +80,9 @@ def usable_pose(T: np.ndarray | None) -> np.ndarray | None:
     return T if np.isfinite(T).all() else None
 
 
+_ESTIMATORS: dict = {}
+
+
 def robust_noise(config: FusionConfig, cov: np.ndarray, robust: bool = True):
     import gtsam
 
@@ -73,10 +90,15 @@ def robust_noise(config: FusionConfig, cov: np.ndarray, robust: bool = True):
     if not robust or config.registration_loss is RobustLoss.NONE:
         return base
     k = config.registration_loss_scale
-    if config.registration_loss is RobustLoss.HUBER:
-        est = gtsam.noiseModel.mEstimator.Huber.Create(k)
-    else:
-        est = gtsam.noiseModel.mEstimator.Cauchy.Create(k)
+    # An m-estimator is an immutable parameter object: one per (loss, scale) serves every factor.
+    key = (config.registration_loss, float(k))
+    est = _ESTIMATORS.get(key)
+    if est is None:
+        if config.registration_loss is RobustLoss.HUBER:
+            est = gtsam.noiseModel.mEstimator.Huber.Create(k)
+        else:
+            est = gtsam.noiseModel.mEstimator.Cauchy.Create(k)
+        _ESTIMATORS[key] = est
     return gtsam.noiseModel.Robust.Create(est, base)
 
 
@@ -94,6 +116,8 @@ class FactorGraphFusion:
         self.params = make_preintegration_params(self.config)
         self.buffer = ImuBuffer(self.time_offset_us)
         self._gtsam = gtsam
+        self._cv_noise = None
+        """(sigma, noise model) of the last constant-velocity factor (see :meth:`_velocity_noise`)."""
         self._reset()
 
     # ------------------------------------------------------------------ state
@@ -235,7 +259,7 @@ class FactorGraphFusion:
         if not degraded:
             cov = self.extrinsic.imu_covariance(registration_covariance(c, cov_cam))
             graph.add(gtsam.PriorFactorPose3(xj, gtsam.Pose3(self.extrinsic.imu_pose(T_meas_cam)), robust_noise(c, cov, robust=not reacquire)))
-        graph.add(gtsam.BetweenFactorVector(vi, vj, np.zeros(3), gtsam.noiseModel.Isotropic.Sigma(3, c.constant_velocity_sigma * np.sqrt(dt))))
+        graph.add(gtsam.BetweenFactorVector(vi, vj, np.zeros(3), self._velocity_noise(c.constant_velocity_sigma * np.sqrt(dt))))
         values = gtsam.Values()
         # Named value arguments select gtsam's insert overload at once: by position pybind11 tries its 45 overloads
         # in order, and the bias is the 44th (~25-40 us per update, the same stored value either way).
@@ -251,6 +275,14 @@ class FactorGraphFusion:
             self._joint_optimisation()
         self.degraded = degraded
         return self._finish_state(t_us, degraded=degraded)
+
+    def _velocity_noise(self, sigma: float):
+        """The constant-velocity factor's isotropic noise model; the step (so sigma) rarely changes between updates,
+        and a gtsam noise model is immutable, so the last one is reused."""
+        last = self._cv_noise
+        if last is None or last[0] != sigma:
+            last = self._cv_noise = (sigma, self._gtsam.noiseModel.Isotropic.Sigma(3, sigma))
+        return last[1]
 
     def _joint_optimisation(self) -> None:
         """Re-optimise the whole window: extra relinearising iSAM2 iterations with no new factors."""

@@ -116,6 +116,12 @@ class ImuBuffer:
         s = self.samples
         if len(s) == 0:
             return np.zeros(3), np.zeros(3)
+        if isinstance(t_us, (int, np.integer)):
+            # Every update asks twice (prediction and new state): one compiled call for the numpy lines below,
+            # the same operations on the same values (integer time difference, then one float division).
+            acc, gyro = np.empty(3), np.empty(3)
+            _measurement_kernel(s.t, s.acc, s.gyro, np.int64(t_us), acc, gyro)
+            return acc, gyro
         i = int(np.searchsorted(s.t, t_us, side="right"))
         if i <= 0:
             return s.acc[0].copy(), s.gyro[0].copy()
@@ -160,6 +166,23 @@ class ImuBuffer:
         for k in range(dts.shape[0]):
             if dts[k] > 0:
                 pim.integrateMeasurement(acc[k], gyro[k], float(dts[k]))
+
+
+@nb.njit(cache=True)
+def _measurement_kernel(t, acc_s, gyro_s, t_us, acc, gyro):
+    """:meth:`ImuBuffer.measurement_at` at an integer time into ``acc`` / ``gyro`` (3,)."""
+    n = t.shape[0]
+    i = np.searchsorted(t, t_us, side="right")
+    if i <= 0 or i >= n:
+        j = 0 if i <= 0 else n - 1
+        for k in range(3):
+            acc[k] = acc_s[j, k]
+            gyro[k] = gyro_s[j, k]
+        return
+    a = np.float64(t_us - t[i - 1]) / np.float64(t[i] - t[i - 1])
+    for k in range(3):
+        acc[k] = (1 - a) * acc_s[i - 1, k] + a * acc_s[i, k]
+        gyro[k] = (1 - a) * gyro_s[i - 1, k] + a * gyro_s[i, k]
 
 
 @nb.njit(cache=True)

@@ -16,6 +16,7 @@ iteration.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -244,6 +245,28 @@ def _prior_terms(pose: gtsam.Pose3, prior):
     return 0.5 * float(e @ info @ e), info @ e, info
 
 
+_ISOTROPIC: dict[tuple, np.ndarray] = {}
+
+
+def _isotropic_information(rotation_deg: float, translation_m: float, residual_sigma: float) -> np.ndarray:
+    """Information of the config's isotropic pose prior (read-only), built once per setting: every update needs it."""
+    key = (rotation_deg, translation_m, residual_sigma)
+    info = _ISOTROPIC.get(key)
+    if info is None:
+        if len(_ISOTROPIC) > 16:
+            _ISOTROPIC.clear()
+        s_r = np.radians(rotation_deg)
+        s_t = translation_m
+        info = _ISOTROPIC[key] = np.diag([1 / s_r**2] * 3 + [1 / s_t**2] * 3) * residual_sigma**2
+        info.setflags(write=False)
+    return info
+
+
+def _norm3(v: np.ndarray) -> float:
+    """``np.linalg.norm`` of a 3-vector by its own recipe (``sqrt(v.dot(v))``), without its dispatch (two per LM step)."""
+    return math.sqrt(v.dot(v))
+
+
 def _levenberg_marquardt(pts, slots, fld, pose, K, config, loss, k, thr, prior=None):
     """Robust LM on one field; returns (pose, cost, inside, inliers, [sum w r^2, its inlier part], H, residuals, weights, uv,
     iterations)."""
@@ -282,7 +305,7 @@ def _levenberg_marquardt(pts, slots, fld, pose, K, config, loss, k, thr, prior=N
             pc, pg = c_pc, c_pg
             cur, trial = trial, cur
             lam = max(lam * 0.3, min_lam)
-            small = np.linalg.norm(delta[:3]) < config.convergence_rotation_rad and np.linalg.norm(delta[3:]) < config.convergence_translation_m
+            small = _norm3(delta[:3]) < config.convergence_rotation_rad and _norm3(delta[3:]) < config.convergence_translation_m
             if small or old_mean - new_mean < config.convergence_cost_ratio * old_mean:
                 break
         else:
@@ -358,9 +381,7 @@ def register_to_map(
         ad = lag.inverse().AdjointMap()
         prior = (T_p.compose(lag.inverse()), ad.T @ info @ ad)
     elif config.prior_translation_m > 0 and config.prior_rotation_deg > 0:
-        s_r = np.radians(config.prior_rotation_deg)
-        s_t = config.prior_translation_m
-        info = np.diag([1 / s_r**2] * 3 + [1 / s_t**2] * 3) * config.prior_residual_sigma**2
+        info = _isotropic_information(config.prior_rotation_deg, config.prior_translation_m, config.prior_residual_sigma)
         T_p = gtsam.Pose3(np.asarray(T_world_cam_init if T_world_cam_prior is None else T_world_cam_prior, dtype=np.float64))
         prior = (T_p.compose(lag.inverse()), info)
     total_it = 0
