@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
+
 import cv2
 import numpy as np
 
@@ -95,3 +97,20 @@ def track_features(prev8: np.ndarray, cur8: np.ndarray, pts: np.ndarray, cfg: Fe
     ok = (st1.ravel() == 1) & (st2.ravel() == 1) & (fb <= cfg.klt_max_bidir_error_px)
     ok &= (p1[:, 0] >= 0) & (p1[:, 0] <= w - 1) & (p1[:, 1] >= 0) & (p1[:, 1] <= h - 1)
     return p1.astype(np.float32), ok
+
+
+@dataclass
+class FrontendTracks:
+    """KLT tracks on MCIs and the association of tracks with map points."""
+
+    ids: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    uv: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), np.float32))
+    prev8: np.ndarray | None = None
+    prev_t: int = 0
+    """Time of the MCI ``prev8`` was made from, us."""
+    next_id: int = 0
+    track_to_point: dict = field(default_factory=dict)
+    init_ref: dict | None = None
+    """Track id -> pixel in the initialisation reference MCI."""
+    init_ref_t: int = 0
+    init_frames: int = 0

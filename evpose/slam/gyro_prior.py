@@ -126,3 +126,8 @@ def refine_pose_with_rotation_prior(K: np.ndarray, Xw: np.ndarray, uv: np.ndarra
         if np.linalg.norm(delta) < 1e-9:
             break  # converged (rad and map units): further steps change nothing measurable
     return T
+
+
+def rotation_angle_deg(R_a: np.ndarray, R_b: np.ndarray) -> float:
+    """Angle of the rotation between two orientations (3, 3), degrees."""
+    return float(np.degrees(Rotation.from_matrix(R_a.T @ R_b).magnitude()))

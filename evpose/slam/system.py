@@ -20,7 +20,7 @@ failures that keep the map instead of opening a new one.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -35,7 +35,7 @@ from evpose.slam.bundle_adjustment import local_bundle_adjustment
 from evpose.slam.coasting import camera_frame_velocity, coast_pose, constant_velocity_pose, drop_contradicted
 from evpose.slam.config import SlamConfig, SlamMode
 from evpose.slam.event_window import WINDOW_REASONS, EventWindowSelector, ReconstructionWindow
-from evpose.slam.features import detect_features, track_features
+from evpose.slam.features import FrontendTracks, detect_features, track_features
 from evpose.slam.inertial import InertialConfiguration, imu_init_due, initialize_imu
 from evpose.slam.inertial_bridge import predict_camera_pose
 from evpose.slam.inertial_ba import InertialState, inertial_local_bundle_adjustment
@@ -47,26 +47,9 @@ from evpose.slam.projection_search import refind_points, store_patches
 from evpose.slam.step_result import SlamStatus, SlamStepResult
 from evpose.slam.geometry import project
 from evpose.slam.gyro_prior import (camera_delta_rotation, gyro_delta_rotation, keyframe_rotation_priors, reanchor_rotations,
-                                    refine_pose_with_rotation_prior)
+                                    refine_pose_with_rotation_prior, rotation_angle_deg)
 from evpose.slam.tracking import PoseEstimate, estimate_pose
 
-
-
-@dataclass
-class _Frontend:
-    """KLT tracks on MCIs and the association of tracks with map points."""
-
-    ids: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
-    uv: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), np.float32))
-    prev8: np.ndarray | None = None
-    prev_t: int = 0
-    """Time of the MCI ``prev8`` was made from, us."""
-    next_id: int = 0
-    track_to_point: dict = field(default_factory=dict)
-    init_ref: dict | None = None
-    """Track id -> pixel in the initialisation reference MCI."""
-    init_ref_t: int = 0
-    init_frames: int = 0
 
 
 class EventSlam:
@@ -94,7 +77,7 @@ class EventSlam:
         self.window = EventWindowSelector(wcfg, config.features, config.image, self.width, self.height, config.seed)
         self.mci_gen = MciGenerator(config.mci, config.image, self.K, self.width, self.height, config.seed)
         self.atlas = Atlas()
-        self.fe = _Frontend()
+        self.fe = FrontendTracks()
         self.results: list[SlamStepResult] = []
         """One result per processed MCI."""
         self._next_point = 0
@@ -350,6 +333,11 @@ class EventSlam:
         err = np.linalg.norm(proj - uv, axis=1)
         inliers = (z > 0) & (err < tc.reprojection_threshold_px)
         if inliers.sum() < max(tc.min_inliers, tc.min_inlier_ratio * len(Xw)):
+            lim = self.cfg.inertial.max_gyro_disagreement_deg
+            if 0 < lim < rotation_angle_deg(R_wc_prior, est.T_wc[:3, :3]) and not self.atlas.active.imu_initialised:
+                # Over one MCI step the gyro's rotation is good to hundredths of a degree even with an unknown bias;
+                # a visual pose degrees away is a bad association, and keeping it spikes the trajectory's rotation.
+                return PoseEstimate(False, reason=f"visual rotation {rotation_angle_deg(R_wc_prior, est.T_wc[:3, :3]):.1f} deg off the gyro's")
             return est  # the prior disagrees with the images (a wrong bias or a bad time offset): keep the visual pose
         return PoseEstimate(True, invert_pose(T_cw), inliers, rms_px=float(np.sqrt(np.mean(err[inliers] ** 2))))
 

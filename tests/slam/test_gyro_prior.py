@@ -95,3 +95,32 @@ def test_klt_start_from_the_gyro_moves_features_as_the_camera_rotation_moves_dis
     assert np.abs(pred - uv).max() > 0.5  # the camera did rotate
     slam.cfg.inertial.klt_gyro_prediction = False
     assert slam._gyro_flow(int(rec.ground_truth.t[i]), int(rec.ground_truth.t[j]), uv) is None
+
+
+def _disagreeing_pose(rec, initialised: bool, limit_deg: float):
+    from evpose.slam import EventSlam, SlamConfig, SlamMode
+    from evpose.slam.tracking import PoseEstimate
+
+    cfg = SlamConfig(mode=SlamMode.EVENT_INERTIAL)
+    cfg.inertial.max_gyro_disagreement_deg = limit_deg
+    slam = EventSlam(cfg, rec.calibration, rec.imu)
+    slam.atlas.new_map().imu_initialised = initialised
+    # Depths from 2 to 8: a translation cannot stand in for the rotation, as it could on a plane.
+    rng = np.random.default_rng(3)
+    Xw = np.c_[rng.uniform(-2, 2, 60), rng.uniform(-1.5, 1.5, 60), rng.uniform(2.0, 8.0, 60)]
+    T_wc = np.eye(4)
+    uv, _ = project(K, invert_pose(T_wc), Xw)
+    est = PoseEstimate(True, T_wc, np.ones(len(Xw), bool), rms_px=0.0)
+    R_prior = Rotation.from_rotvec([0.0, np.radians(5.0), 0.0]).as_matrix() @ T_wc[:3, :3]
+    return est, slam._refine_with_gyro(est, Xw, uv, R_prior, sigma_deg=0.01)
+
+
+def test_a_visual_pose_degrees_off_the_gyro_fails_tracking_before_the_imu_initialisation(rec):
+    _, out = _disagreeing_pose(rec, initialised=False, limit_deg=2.0)
+    assert not out.ok and "off the gyro" in out.reason
+
+
+def test_the_visual_pose_is_kept_once_initialised_or_with_the_check_off(rec):
+    for initialised, limit in ((True, 2.0), (False, 0.0)):
+        est, out = _disagreeing_pose(rec, initialised, limit)
+        assert out is est
