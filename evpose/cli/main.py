@@ -19,6 +19,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "convert": ("evpose.cli.convert", "convert a recording to evpose HDF5"),
     "simulate": ("evpose.cli.simulate", "simulate an event camera + IMU recording with ground truth"),
     "build-map": ("evpose.cli.build_map", "build a contour map from a raw point cloud"),
+    "refine-map": ("evpose.cli.refine_map", "move a map's edges to where a tracked recording's events see them"),
     "track": ("evpose.cli.track", "track the camera pose against a map (EV-Pose)"),
     "eval": ("evpose.cli.eval", "compare an estimated trajectory with ground truth"),
     "bench": ("evpose.cli.bench", "run the benchmark suite and write a report"),

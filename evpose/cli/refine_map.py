@@ -1,0 +1,125 @@
+"""``evpose refine-map RECORDING --map MAP.ply --out REFINED.ply``: move a map's edges to where the events see them."""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import tyro
+
+from evpose.errors import InputError
+
+
+def track_for_refinement(recording, cmap, mode: str = "full", config: Path | None = None, progress: bool = False):
+    """(trajectory of every update that has a pose, times of the updates whose registration succeeded)."""
+    from evpose.tracker.config import TrackerConfig, TrackerMode, load_config
+    from evpose.tracker.session import TrackingSession
+    from evpose.tracker.step_result import TrackStatus
+
+    cfg = load_config(config) if config is not None else TrackerConfig()
+    cfg.mode = TrackerMode(mode)
+    session = TrackingSession(recording, cmap, cfg)
+    n = 0
+    while session.step() is not None:
+        n += 1
+        if progress and n % 100 == 0:
+            print(f"  tracked {n}/{session.total_steps} updates", file=sys.stderr, flush=True)
+    registered = np.array([r.t_us for r in session.results if r.status is TrackStatus.OK], np.int64)
+    return session.trajectory(), registered
+
+
+def main(
+    recording: tyro.conf.Positional[Path],
+    map: Path,  # noqa: A002 - the CLI flag is --map
+    out: Path,
+    iterations: int = 1,
+    mode: str = "full",
+    config: Path | None = None,
+    refine_config: Path | None = None,
+    report: Path | None = None,
+    width: int | None = None,
+    height: int | None = None,
+    quiet: bool = False,
+) -> int:
+    """Refine the edge positions of MAP from the events of RECORDING, tracked against it; write REFINED.
+
+    Each iteration tracks RECORDING on the current map (``--mode``, default ``full``: IMU-fused, which stays on
+    track where the unrefined map misleads STPE alone), measures per map point where the events place its edge
+    along its in-plane edge normal, and moves the points the events place clearly. Evaluate the result on a
+    different recording of the same scene, never on RECORDING.
+
+    Args:
+        recording: A recording of the mapped scene with IMU and a starting pose (ground truth at the start).
+        map: Contour map with edge and plane normals (``evpose build-map``).
+        out: The refined map (.ply); never an input.
+        iterations: Track-measure-move rounds. Later rounds move the points closer to the true edges but let the map
+            absorb the refinement flight's own pose errors: on the simulated landing one round tracked a separate
+            flight best (ATE 16.4 / 12.6 mm against 16.8 / 13.3 mm after two rounds).
+        mode: Tracker mode used to obtain the poses: full, stpe+filter or stpe.
+        config: Tracker configuration (YAML/JSON, ``evpose.tracker.config``).
+        refine_config: Refinement settings (``evpose.mapping.refine_from_events.EventRefineConfig``) as YAML/JSON.
+        report: Write per-iteration figures (points moved, shift statistics) to this JSON file.
+        width: Sensor width, for formats that do not state it.
+        height: Sensor height, for formats that do not state it.
+        quiet: No progress or summary.
+    """
+    from evpose.io.atomic import atomic_path
+    from evpose.io.config_file import read_config
+    from evpose.io.map_ply import read_contour_map, write_contour_map
+    from evpose.io.open import open_recording
+    from evpose.mapping.refine_from_events import EventRefineConfig, measure_edge_offsets, refine_map
+    from evpose.tracker.config import TrackerMode
+
+    inputs = [p.resolve() for p in (recording, map)]
+    for dst in (out, report):
+        if dst is not None and dst.resolve() in inputs:
+            raise InputError(dst, "refusing to overwrite an input file")
+    if out.suffix.lower() != ".ply":
+        raise InputError(out, "the refined map is written as PLY; use a .ply output name")
+    if iterations < 1:
+        raise InputError(None, f"--iterations must be at least 1, got {iterations}")
+    if mode not in {m.value for m in TrackerMode}:
+        raise InputError(None, f"--mode must be one of {', '.join(m.value for m in TrackerMode)}, got {mode!r}")
+    rcfg = read_config(EventRefineConfig, refine_config) if refine_config is not None else EventRefineConfig()
+    cmap = read_contour_map(map)
+    if not cmap.has_edge_normals:
+        raise InputError(map, "the map has no edge normals (a plain point cloud?): nothing to move the points along")
+    rec = open_recording(recording, width, height)
+    if rec.calibration is None:
+        raise InputError(recording, "the recording has no camera calibration")
+    original = cmap.points.copy()
+    rounds = []
+    for it in range(iterations):
+        t0 = time.perf_counter()
+        traj, registered = track_for_refinement(rec, cmap, mode, config, progress=not quiet)
+        if registered.size == 0:
+            raise InputError(recording, f"iteration {it + 1}: no update registered against the map")
+        offsets = measure_edge_offsets(rec.events, traj, registered, rec.calibration, cmap, rcfg)
+        result = refine_map(cmap, offsets)
+        cmap = result.contour_map
+        s = np.abs(result.shift_m[result.moved])
+        total = np.linalg.norm(cmap.points - original, axis=1)
+        rounds.append({
+            "iteration": it + 1,
+            "updates_registered": int(registered.size),
+            "points_measured": int(np.count_nonzero(offsets.updates_seen)),
+            "points_moved": int(result.moved.sum()),
+            "median_shift_mm": round(float(np.median(s)) * 1e3, 2) if s.size else 0.0,
+            "p95_shift_mm": round(float(np.percentile(s, 95)) * 1e3, 2) if s.size else 0.0,
+            "total_moved_points": int(np.count_nonzero(total > 0)),
+            "seconds": round(time.perf_counter() - t0, 1),
+        })
+        if not quiet:
+            r = rounds[-1]
+            print(f"evpose refine-map: iteration {r['iteration']}: {r['points_moved']} of {r['points_measured']} measured points"
+                  f" moved (median {r['median_shift_mm']} mm, p95 {r['p95_shift_mm']} mm), {r['seconds']} s", file=sys.stderr)
+    write_contour_map(out, cmap, comment=f"evpose contour map refined from the events of {recording.name}")
+    if report is not None:
+        with atomic_path(report, inputs=(recording, map)) as tmp:
+            tmp.write_text(json.dumps({"recording": str(recording), "map": str(map), "rounds": rounds}, indent=1) + "\n")
+    if not quiet:
+        print(f"evpose refine-map: wrote {out}", file=sys.stderr)
+    return 0
