@@ -18,6 +18,8 @@ class Keyframe:
     """Pose ``T_world_cam`` (4, 4), map units."""
     obs: dict[int, np.ndarray] = field(default_factory=dict)
     """Track id -> ideal-pinhole pixel (2,) in this keyframe."""
+    image8: np.ndarray | None = None
+    """The keyframe's MCI (uint8) while the keyframe is in the local window, for KLT re-finding of its points; else None."""
 
 
 @dataclass

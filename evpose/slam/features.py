@@ -72,11 +72,14 @@ def detect_features(img8: np.ndarray, cfg: FeatureConfig, existing: np.ndarray |
     return np.ascontiguousarray(pts, np.float32)
 
 
-def track_features(prev8: np.ndarray, cur8: np.ndarray, pts: np.ndarray, cfg: FeatureConfig, guess: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+def track_features(prev8: np.ndarray, cur8: np.ndarray, pts: np.ndarray, cfg: FeatureConfig, guess: np.ndarray | None = None,
+                   guess_back: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """Track ``pts`` from ``prev8`` into ``cur8``; returns (new positions (N, 2) float32, ok mask (N,)).
 
     A track survives when both directions converge, the forward-backward error is
-    at most ``klt_max_bidir_error_px`` and the point stays inside the image.
+    at most ``klt_max_bidir_error_px`` and the point stays inside the image. ``guess_back`` starts the backward pass
+    at ``pts`` shifted by the forward result's offset from ``guess`` (for displacements beyond KLT's reach, where a
+    backward pass started at the forward result itself would not converge).
     """
     n = len(pts)
     if n == 0:
@@ -90,7 +93,11 @@ def track_features(prev8: np.ndarray, cur8: np.ndarray, pts: np.ndarray, cfg: Fe
         p1_init = np.ascontiguousarray(guess, np.float32).reshape(-1, 1, 2).copy()
         flags = cv2.OPTFLOW_USE_INITIAL_FLOW
     p1, st1, _ = cv2.calcOpticalFlowPyrLK(prev8, cur8, p0, p1_init, winSize=win, maxLevel=int(cfg.klt_levels), criteria=crit, flags=flags)
-    p0b, st2, _ = cv2.calcOpticalFlowPyrLK(cur8, prev8, p1, None, winSize=win, maxLevel=int(cfg.klt_levels), criteria=crit)
+    p0_init, flags_b = None, 0
+    if guess_back and p1_init is not None:
+        p0_init = (p0 + (p1 - p1_init)).astype(np.float32)
+        flags_b = cv2.OPTFLOW_USE_INITIAL_FLOW
+    p0b, st2, _ = cv2.calcOpticalFlowPyrLK(cur8, prev8, p1, p0_init, winSize=win, maxLevel=int(cfg.klt_levels), criteria=crit, flags=flags_b)
     p1 = p1.reshape(-1, 2)
     fb = np.linalg.norm(p0b.reshape(-1, 2) - p0.reshape(-1, 2), axis=1)
     h, w = cur8.shape

@@ -6,9 +6,9 @@ re-seeded before every call, so a run repeats bit for bit.
 
 Associations are KLT tracks; when the sharpest MCI hypothesis differs from the
 previous MCI's and KLT fails on it, the previous hypothesis's image is tracked
-instead (``MciConfig.keep_hypothesis_survival``). Optionally
-(``SlamConfig.search``), untracked local-map points are re-found by projection
-and patch search after each pose estimate (:mod:`evpose.slam.projection_search`).
+instead (``MciConfig.keep_hypothesis_survival``). Untracked local-map points
+are re-found near their projection after each pose estimate (``SlamConfig.search``:
+KLT from keyframe MCIs, :mod:`evpose.slam.keyframe_search`, or NCC patches).
 
 Event-inertial mode adds: the gyro rotation between MCIs as a prior of pose
 tracking (and, before the IMU initialisation, loosely, of the visual local BA),
@@ -43,13 +43,13 @@ from evpose.slam.initialization import initialize_two_view
 from evpose.slam.local_map import cull_points, insert_keyframe, need_keyframe, triangulate_new_points
 from evpose.slam.event_image import to_uint8
 from evpose.slam.mci import Hypothesis, MciGenerator, MciResult, MotionPrior
-from evpose.slam.projection_search import refind_points, store_patches
+from evpose.slam.keyframe_search import keep_keyframe_image, klt_refind_points
+from evpose.slam.projection_search import SearchMatcher, refind_points, store_patches
 from evpose.slam.step_result import SlamStatus, SlamStepResult
 from evpose.slam.geometry import project
 from evpose.slam.gyro_prior import (camera_delta_rotation, gyro_delta_rotation, keyframe_rotation_priors, reanchor_rotations,
                                     refine_pose_with_rotation_prior, rotation_angle_deg)
 from evpose.slam.tracking import PoseEstimate, estimate_pose
-
 
 
 class EventSlam:
@@ -269,6 +269,8 @@ class EventSlam:
         local_bundle_adjustment(m, self.K, 2, tc.ba_iterations, tc.ba_huber_px, n_fixed=2)
         cull_points(m, self.K, fe.track_to_point, tc)
         store_patches(m, kf1.id, mci.image8, self.cfg.search.patch_px)
+        if self._matcher() is SearchMatcher.KLT:
+            keep_keyframe_image(m, kf1, mci.image8, tc.local_window)
         m.add_pose(kf0.t_us, kf0.T_wc)
         m.add_pose(kf1.t_us, kf1.T_wc)
         fe.init_ref = None
@@ -407,14 +409,23 @@ class EventSlam:
             est = self._refine_with_gyro(est, Xw, uv, R_prior, sigma_deg)
         return est, sel
 
+    def _matcher(self) -> SearchMatcher | None:
+        """The projection search's matcher; None while it is off (event-inertial runs need ``search.event_inertial``)."""
+        sc = self.cfg.search
+        return sc.matcher if sc.enabled and (self.imu is None or sc.event_inertial) else None
+
     def _refind(self, m: SlamMap, mci: MciResult, T_wc: np.ndarray, radius: int) -> int:
         """Re-find untracked local-map points near their projection by ``T_wc``; each found point gets a new track. Returns how many."""
-        sc, fe = self.cfg.search, self.fe
-        if not sc.enabled:
+        matcher, sc, fe = self._matcher(), self.cfg.search, self.fe
+        if matcher is None:
             return 0
         tracked = [i for i, t in enumerate(fe.ids.tolist()) if fe.track_to_point.get(t) in m.points]
         tracked_pids = {fe.track_to_point[int(fe.ids[i])] for i in tracked}
-        pids, uv = refind_points(m, mci.image8, self.K, T_wc, tracked_pids, fe.uv[tracked], self.cfg.tracking.local_window, radius, sc)
+        if matcher is SearchMatcher.KLT:
+            pids, uv = klt_refind_points(m, mci.image8, self.K, T_wc, tracked_pids, fe.uv[tracked], self.cfg.tracking.local_window,
+                                         radius, self.cfg.features, self.cfg.features.border_px, sc.klt_keyframes)
+        else:
+            pids, uv = refind_points(m, mci.image8, self.K, T_wc, tracked_pids, fe.uv[tracked], self.cfg.tracking.local_window, radius, sc)
         if not pids:
             return 0
         new_ids = np.arange(fe.next_id, fe.next_id + len(pids), dtype=np.int64)
@@ -436,6 +447,8 @@ class EventSlam:
         self._next_point = triangulate_new_points(m, self.K, kf, fe.track_to_point, tc, self._next_point)
         if img8 is not None:
             store_patches(m, kf.id, img8, self.cfg.search.patch_px)
+            if self._matcher() is SearchMatcher.KLT:
+                keep_keyframe_image(m, kf, img8, tc.local_window)
         ic = self.cfg.inertial
         if not adjust:
             pass

@@ -8,6 +8,7 @@ import pytest
 from evpose.slam import EventSlam, SlamConfig, SlamStatus
 from evpose.slam.event_image import event_image, to_uint8
 from evpose.slam.mci import Hypothesis, MciResult
+from evpose.slam.projection_search import SearchMatcher
 from slam_synthetic import make_recording
 
 
@@ -16,6 +17,7 @@ def tracked_slam():
     rec = make_recording(duration_s=1.0, speed=1.5, seed=9)
     cfg = SlamConfig()
     cfg.search.enabled = True
+    cfg.search.matcher = SearchMatcher.NCC  # the synthetic points keep their KLT tracks; patch search re-finds dropped ones
     slam = EventSlam(cfg, rec.calibration)
     ev = rec.events
     for a in range(0, len(ev), 20000):

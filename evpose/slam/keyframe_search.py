@@ -1,0 +1,78 @@
+"""Re-finding map points by KLT from the keyframe MCIs that observed them (the local-map matcher of event SLAM).
+
+A KLT track that dies between two MCIs takes its map point with it: on the
+simulated landing only about two thirds of the tracks survive each MCI, points
+collect two or three keyframe observations and each pose rests on about 30 of
+130 tracks. Here an untracked local-map point is tracked again by pyramidal KLT
+from a keyframe observation (in that keyframe's MCI) into the current MCI,
+started at its projection by the estimated pose; the match must pass KLT's
+forward-backward check and land near the projection. The backward pass starts
+from the observation shifted by the forward result's offset from the
+projection: keyframe and MCI are tens of pixels apart, and a backward pass
+started at the forward result converged for about 2 % of the candidates (16 %
+with the guided start, landing seed 0). An edge makes events only when it moves
+across itself, so a point missing in the newest keyframe's view is tried from
+older ones.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from evpose.core.trajectory import invert_pose
+from evpose.slam.atlas import SlamMap
+from evpose.slam.config import FeatureConfig
+from evpose.slam.features import track_features
+from evpose.slam.geometry import project
+
+
+def klt_refind_points(m: SlamMap, img8: np.ndarray, K: np.ndarray, T_wc: np.ndarray, tracked_pids: set[int], occupied_uv: np.ndarray,
+                      window: int, radius: float, fcfg: FeatureConfig, border: int = 8,
+                      max_keyframes: int = 1) -> tuple[list[int], np.ndarray]:
+    """Untracked points of the last ``window`` keyframes found in ``img8`` by KLT from keyframe MCIs: (point ids, pixels (M, 2)).
+
+    A match lies within ``radius`` px of the projection by ``T_wc``; matches within 2 px of ``occupied_uv`` (tracked
+    points) or of another match are dropped as conflicts.
+    """
+    kfs = [kf for kf in m.keyframes[-window:] if kf.image8 is not None]
+    if not kfs:
+        return [], np.zeros((0, 2))
+    first = m.keyframes[-window:][0].id
+    cand = [pid for pid, p in sorted(m.points.items()) if pid not in tracked_pids and p.obs and max(p.obs) >= first]
+    if not cand:
+        return [], np.zeros((0, 2))
+    h, w = img8.shape
+    proj, z = project(K, invert_pose(T_wc), np.stack([m.points[p].xyz for p in cand]))
+    inside = (z > 0) & (proj[:, 0] >= border) & (proj[:, 0] < w - border) & (proj[:, 1] >= border) & (proj[:, 1] < h - border)
+    todo = set(np.flatnonzero(inside).tolist())
+    pids_out, uv_out = [], []
+    # Newest keyframe first; a point missed there is tried from older views, whose event image may look more like this one.
+    for kf in reversed(kfs[-max_keyframes:] if max_keyframes > 0 else kfs):
+        idx = np.array([i for i in sorted(todo) if kf.id in m.points[cand[i]].obs], np.int64)
+        if not len(idx):
+            continue
+        src = np.array([m.points[cand[i]].obs[kf.id] for i in idx], np.float32)
+        found, ok = track_features(kf.image8, img8, src, fcfg, guess=proj[idx].astype(np.float32), guess_back=True)
+        ok &= np.linalg.norm(found.astype(np.float64) - proj[idx], axis=1) <= radius
+        for k in np.flatnonzero(ok):
+            pids_out.append(cand[idx[k]])
+            uv_out.append(found[k].astype(np.float64))
+            todo.discard(int(idx[k]))
+    if not pids_out:
+        return [], np.zeros((0, 2))
+    uv = np.array(uv_out)
+    keep = np.ones(len(uv), bool)
+    if len(uv) > 1:
+        d = np.linalg.norm(uv[:, None] - uv[None], axis=2) + np.eye(len(uv)) * 1e9
+        keep &= d.min(axis=1) >= 2.0
+    if len(occupied_uv):
+        keep &= np.linalg.norm(uv[:, None] - np.asarray(occupied_uv, np.float64)[None], axis=2).min(axis=1) >= 2.0
+    order = np.argsort(np.array(pids_out)[keep], kind="stable")
+    return [pids_out[i] for i in np.flatnonzero(keep)[order]], uv[keep][order]
+
+
+def keep_keyframe_image(m: SlamMap, kf, img8: np.ndarray, window: int) -> None:
+    """Keep ``kf``'s MCI as a KLT source; keyframes out of the local window drop theirs (never searched, only snapshot weight)."""
+    kf.image8 = img8
+    for old in m.keyframes[:-window]:
+        old.image8 = None
