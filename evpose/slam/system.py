@@ -336,10 +336,11 @@ class EventSlam:
         inliers = (z > 0) & (err < tc.reprojection_threshold_px)
         if inliers.sum() < max(tc.min_inliers, tc.min_inlier_ratio * len(Xw)):
             lim = self.cfg.inertial.max_gyro_disagreement_deg
-            if 0 < lim < rotation_angle_deg(R_wc_prior, est.T_wc[:3, :3]) and not self.atlas.active.imu_initialised:
+            off = rotation_angle_deg(R_wc_prior, est.T_wc[:3, :3]) if lim > 0 and not self.atlas.active.imu_initialised else 0.0
+            if off > lim > 0:
                 # Over one MCI step the gyro's rotation is good to hundredths of a degree even with an unknown bias;
                 # a visual pose degrees away is a bad association, and keeping it spikes the trajectory's rotation.
-                return PoseEstimate(False, reason=f"visual rotation {rotation_angle_deg(R_wc_prior, est.T_wc[:3, :3]):.1f} deg off the gyro's")
+                return PoseEstimate(False, reason=f"visual rotation {off:.1f} deg off the gyro's")
             return est  # the prior disagrees with the images (a wrong bias or a bad time offset): keep the visual pose
         return PoseEstimate(True, invert_pose(T_cw), inliers, rms_px=float(np.sqrt(np.mean(err[inliers] ** 2))))
 

@@ -84,3 +84,15 @@ def test_every_reader_rejects_bad_records_naming_file_and_record(tmp_path, datas
         with pytest.raises(InputError) as exc:
             read(path)
         assert str(exc.value).startswith(f"{path}: {record}: ") and message in str(exc.value)
+
+
+def test_info_of_an_evpose_h5_without_events_is_an_input_error(tmp_path):
+    import dataclasses
+
+    from evpose.core.events import EventArray
+    from evpose.io.summary import summarize_recording
+
+    path = tmp_path / "empty.h5"
+    write_recording_h5(path, dataclasses.replace(make_recording(n=10), events=EventArray.empty()))
+    with pytest.raises(InputError, match="empty.h5: contains no events"):
+        summarize_recording(path)
