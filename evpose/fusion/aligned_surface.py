@@ -136,6 +136,40 @@ def _select_times(touched, n, tag, owner, last_on, last_off, last_comb, recent_u
 
 
 @nb.njit(cache=True)
+def _reopen_contradicted(touched, n, tag, owner, last_on, last_off, last_comb, recent_us, times, has_events, polarity, seen_other):
+    """Patches of single-polarity points that show no recent event of their polarity but do of the other accept both:
+    their prediction is contradicted by the events themselves (a wrong sign or edge normal), and reading only the
+    predicted polarity would hide their own edge. Updates ``tag`` / ``times`` / ``has_events`` / ``polarity`` in place;
+    returns how many points it reopened. ``seen_other`` (M,) is scratch (all False on entry)."""
+    for i in range(n):
+        r = touched[i, 0]
+        c = touched[i, 1]
+        a = tag[r, c] & 3
+        if a == 1:
+            if last_off[r, c] >= recent_us:
+                seen_other[owner[r, c]] = True
+        elif a == 2:
+            if last_on[r, c] >= recent_us:
+                seen_other[owner[r, c]] = True
+    reopened = 0
+    for k in range(polarity.shape[0]):
+        if seen_other[k] and not has_events[k] and polarity[k] != 0:
+            polarity[k] = 0
+            has_events[k] = True
+            reopened += 1
+        else:
+            seen_other[k] = False
+    if reopened:
+        for i in range(n):
+            r = touched[i, 0]
+            c = touched[i, 1]
+            if seen_other[owner[r, c]]:
+                tag[r, c] |= 3
+                times[i] = last_comb[r, c]
+    return reopened
+
+
+@nb.njit(cache=True)
 def _scatter_times(touched, n, times, out):
     """``out`` at the patch pixels: their selected timestamps (the rest of ``out`` already reads NEVER)."""
     for i in range(n):
@@ -245,7 +279,8 @@ class AlignedTimeSurface:
 
     def compose(self, surface, points_world: np.ndarray, T_world_cam: np.ndarray, K: np.ndarray, polarity: np.ndarray,
                 radius_px: float, roi: tuple[int, int, int, int] | None, events=None, keep: np.ndarray | None = None,
-                t_us: int | None = None, empty_after_eta: float = 3.0, classify_radius_px: float | None = None) -> "AlignedTimeSurface":
+                t_us: int | None = None, empty_after_eta: float = 3.0, classify_radius_px: float | None = None,
+                reopen_contradicted: bool = False) -> "AlignedTimeSurface":
         """Build ``T_align`` in ``roi`` from ``surface`` for map points (M, 3) with predicted ``polarity`` (M,) at ``T_world_cam``.
 
         ``events`` / ``keep`` (the step's batch and the mask of those stored in
@@ -253,6 +288,8 @@ class AlignedTimeSurface:
         :attr:`point_has_events` marks the points whose own patch pixels hold an
         accepted event younger than ``empty_after_eta`` time-surface constants at
         ``t_us`` (default: the newest event of the batch, or none is recent).
+        With ``reopen_contradicted`` a single-polarity point whose patch holds no
+        such event but one of the other polarity accepts both (see :func:`_reopen_contradicted`).
         The same pass labels the kept events as :meth:`classify` would within
         ``classify_radius_px`` (default ``radius_px``), so classifying them afterwards costs nothing.
         """
@@ -265,8 +302,7 @@ class AlignedTimeSurface:
         R_cw = np.ascontiguousarray(T[:3, :3].T)
         t_cw = -R_cw @ T[:3, 3]
         pts = np.ascontiguousarray(points_world, np.float64).reshape(-1, 3)
-        pol = np.ascontiguousarray(polarity, np.int8).reshape(pts.shape[0])
-        self._polarity = pol.copy()
+        pol = np.array(polarity, np.int8).reshape(pts.shape[0])  # a copy: reopened points change it
         self.last_point_count = int(pol.size)
         self._gen += 1
         if self._gen > _MAX_GENERATION:  # tags would repeat: start over from an all-empty map
@@ -279,9 +315,15 @@ class AlignedTimeSurface:
         recent = np.int64(t_us) - np.int64(round(float(empty_after_eta) * float(surface.config.eta_ms) * 1e3))
         _select_times(self._touched, self._n_touched, self._tag, self._owner, surface.last_of(1), surface.last_of(-1),
                       surface.last_of(0), recent, self._times, self.point_has_events)
+        reopened = 0
+        if reopen_contradicted:
+            reopened = int(_reopen_contradicted(self._touched, self._n_touched, self._tag, self._owner, surface.last_of(1), surface.last_of(-1),
+                                                surface.last_of(0), recent, self._times, self.point_has_events, pol,
+                                                np.zeros(pts.shape[0], np.bool_)))
+        self._polarity = pol
         self._last_fresh = False
         counts = {"points_single_polarity": int(np.count_nonzero(pol)), "points_both": int(pol.size - np.count_nonzero(pol)),
-                  "points_with_events": int(np.count_nonzero(self.point_has_events))}
+                  "points_with_events": int(np.count_nonzero(self.point_has_events)), "points_reopened": reopened}
         self._judged = None
         if events is not None and len(events):
             k = np.ones(len(events), np.bool_) if keep is None else np.ascontiguousarray(keep, np.bool_)

@@ -61,10 +61,23 @@ class PolarityFilterConfig:
     predicted polarity's events, nothing outside the patches (False: per-point ON/OFF/combined fields over the whole box)."""
     drop_empty_points: bool = False
     """Registration skips map points whose ``T_align`` patch shows no accepted event younger than
-    ``empty_after_eta`` (60-80 % of the used points on the simulated landing read TDF 1 at the final pose). Off by
-    default: on the simulated landing 346x260 it halved the registration time (1.2 vs 2.6 ms median) but full mode
-    lost accuracy (30.9 vs 23.0 mm ATE) and stpe+filter lost track; the registration's covariance is estimated
-    from the residuals of all points, so it shrinks with the dropped ones and the fusion trusts it more."""
+    ``empty_after_eta`` (50-60 % of the used points on the simulated landing); points whose patch shows only the
+    other polarity are first reopened (``reopen_contradicted``): they are the wrongly predicted ones, whose edge
+    registration needs (dropping them too cost ``stpe+filter`` 34 -> 91 mm ATE). Dropped points still count in the
+    registration's residual variance (:meth:`MapPolaritySelector.registration_covariance`) and still learn signs.
+    Measured, simulated landing seeds 0-3 mean, 346x260 / 240x180: ``full`` 13.6 / 15.1 mm, 0.172 / 0.194 deg
+    against 13.5 / 15.5 mm, 0.171 / 0.198 deg off (seed 0: 15.4 / 19.8 mm, 0.228 / 0.295 deg against 16.6 / 20.7
+    mm, 0.241 / 0.312 deg); 4 s demos: landing 17.1 vs 17.4 mm (0 vs 50 IMU-bridged updates), fast 23.6 vs 22.3 mm,
+    dynamic 34.2 vs 34.9 mm; but ``stpe+filter`` 33.1 / 39.0 against 30.5 / 35.8 mm. Registration wall time fell
+    only 16 % (0.70 -> 0.59 ms median, paired, load 2.1) for 54 % fewer points, the filter's own time rose
+    0.15 ms: the registration's per-iteration overhead, not its points, dominates. So off by default."""
+    reopen_contradicted: bool = False
+    """``T_align`` accepts both polarities in the patch of a single-polarity point that shows no event of its predicted
+    polarity younger than ``empty_after_eta`` but does of the other: the events contradict the prediction (a wrong
+    sign or edge normal; ~10 % of the single-polarity points on the simulated landing), and reading the predicted
+    polarity only would hide the point's own edge. What makes ``drop_empty_points`` work (see there). Alone it does
+    not pay on the simulated landing (seeds 0-3 mean, 346x260 / 240x180): ``stpe+filter`` 30.4 / 34.6 mm against
+    30.5 / 35.8 mm off (``stpe`` 30.0 / 34.9), ``full`` 14.3 / 16.0 against 13.5 / 15.5 mm."""
     empty_after_eta: float = field(default=3.0, metadata={"min": 0.5, "max": 12.0, "step": 0.5, "unit": "eta"})
     """A patch whose newest accepted event is older than this many time-surface constants counts as empty (TDF > 0.95 at 3), eta."""
     align_patch_radius_px: float = field(default=4.0, metadata={"min": 1.0, "max": 30.0, "step": 0.5, "unit": "px"})
@@ -344,6 +357,10 @@ class MapPolaritySelector:
         self._aligned = None
         self._aligned_fresh = False
         """True between :meth:`align` and the :meth:`observe` of the same step (the grid is this step's)."""
+        self._dropped = 0
+        """Points :meth:`points_to_register` dropped this step."""
+        self._step_points: tuple[np.ndarray, np.ndarray] | None = None
+        """(map indices, predicted polarity) of this step's :meth:`__call__`: every point :meth:`align` composed."""
 
     def align(self, surface, points_world: np.ndarray, T_world_cam: np.ndarray, polarity: np.ndarray,
               roi: tuple[int, int, int, int] | None, events=None, keep: np.ndarray | None = None, t_us: int | None = None):
@@ -362,7 +379,8 @@ class MapPolaritySelector:
         if self._aligned is None or (self._aligned.width, self._aligned.height) != (surface.width, surface.height):
             self._aligned = AlignedTimeSurface(surface.width, surface.height, self.calibration)
         out = self._aligned.compose(surface, points_world, T_world_cam, self.K, polarity, c.align_patch_radius_px, roi, events, keep,
-                                    t_us, c.empty_after_eta, c.patch_radius_px)
+                                    t_us, c.empty_after_eta, c.patch_radius_px,
+                                    c.reopen_contradicted or c.drop_empty_points)
         self._aligned_fresh = True
         self.last_counts.update(out.last_counts)
         return out
@@ -370,12 +388,39 @@ class MapPolaritySelector:
     def points_to_register(self) -> np.ndarray | None:
         """bool (M,) over the points of the last :meth:`align`: those whose patch shows recent accepted events
         (None: use all, when ``drop_empty_points`` is off or no ``T_align`` was built this step)."""
+        self._dropped = 0
         if not (self.predictor.config.drop_empty_points and self._aligned_fresh and self._aligned is not None):
             return None
-        return self._aligned.point_has_events
+        keep = self._aligned.point_has_events
+        self._dropped = int(keep.size - np.count_nonzero(keep))
+        return keep
+
+    def registration_covariance(self, registration, config) -> np.ndarray | None:
+        """The covariance of ``registration`` (a :class:`~evpose.tracker.registration.RegistrationResult` over the
+        points :meth:`points_to_register` kept) as if the dropped points had been registered too.
+
+        A dropped point reads the field's "never fired" value (TDF 1, no gradient): it adds nothing to ``J^T W J``
+        but, with ``residual_variance: all``, its ``w r^2`` to the residual variance. Without that share the
+        covariance shrinks with every dropped point (about 2x in standard deviation at 60 % dropped) and the fusion
+        or the motion filter trusts the registration more than before (measured: ``full`` 15.6 / 19.7 mm with it,
+        16.8 / 22.6 mm without, simulated landing seed 0, 346x260 / 240x180).
+        """
+        from evpose.tracker.registration import _LOSS_ID, RobustLoss, ResidualVariance, _rho_weight  # the registration's own loss
+
+        cov = registration.covariance
+        if cov is None or not self._dropped or ResidualVariance(config.residual_variance) is not ResidualVariance.ALL:
+            return cov
+        w = np.asarray(registration.weights, np.float64)
+        r = np.asarray(registration.residuals, np.float64)
+        share = float(np.dot(w, r * r))
+        if not share > 0:
+            return cov
+        _, w1 = _rho_weight(1.0, _LOSS_ID[RobustLoss(config.robust_loss)], float(config.robust_scale))
+        return cov * ((share + self._dropped * w1) / share)
 
     def __call__(self, T_world_cam: np.ndarray, t_us: int, map_indices: np.ndarray) -> np.ndarray:
         self._aligned_fresh = False
+        self._dropped = 0
         idx = np.asarray(map_indices, np.int64)
         state = self.motion.predict(int(t_us))
         omega = np.zeros(3) if state.omega_cam is None else state.omega_cam
@@ -385,6 +430,7 @@ class MapPolaritySelector:
                                           state.velocity_world, self.K, idx, rows=idx).polarity
         single = int(np.count_nonzero(pol))
         self.last_counts = {"points": int(idx.size), "points_single_polarity": single, "points_both": int(pol.size) - single}
+        self._step_points = (idx, pol)
         return pol
 
     def observe(self, events, T_world_cam: np.ndarray, map_indices: np.ndarray, polarity: np.ndarray,
@@ -392,9 +438,17 @@ class MapPolaritySelector:
         """Label the step's events (1 kept, 0 removed by polarity, -1 in no patch), learn signs; returns the labels.
 
         Events are on sensor pixels; with a distorted ``calibration`` they are
-        moved to the ideal pinhole frame the map is projected in.
+        moved to the ideal pinhole frame the map is projected in. When
+        :meth:`points_to_register` dropped points, ``map_indices`` / ``polarity``
+        may be the registered subset: labels and sign votes are still taken over
+        every point of the step's prediction (the grid :meth:`align` built), so
+        dropped points keep learning their signs and no second grid is built.
         """
         idx = np.asarray(map_indices, np.int64)
+        step = self._step_points
+        if (self._dropped and step is not None and self._aligned_fresh and self._aligned is not None
+                and step[0].size == self._aligned.last_point_count):
+            idx, polarity = step
         r = self.predictor.config.patch_radius_px
         if self._aligned_fresh and self._aligned is not None and self._aligned.last_point_count == idx.size:
             # This step's T_align grid already knows each pixel's nearest point (at the predicted pose, within

@@ -308,6 +308,9 @@ class Tracker:
                 prior_info = self.predictor.prior_information(until) if self.config.motion_filter.prior_in_registration else _NO_PRIOR
             reg = register_to_map(levels, pts, predicted, self.K, self._registration, field_polarity, twist_per_s=twist,
                                   prior_information=prior_info, prior_residual_sigma=self.config.motion_filter.prior_residual_sigma)
+            if self.polarity_selector is not None and hasattr(self.polarity_selector, "registration_covariance"):
+                # Points the polarity filter dropped (no events in their patch) still count in the residual variance.
+                reg.covariance = self.polarity_selector.registration_covariance(reg, self._registration)
             reason = reg.reason
             if not self._acquired and reg.success:
                 reason = self._acquisition_test(reg)

@@ -181,3 +181,20 @@ def test_kept_events_are_labelled_in_the_compose_pass_exactly_as_classify_labels
     assert (judged[0] >= 0).any() and (judged[0] == 0).any() and (judged[0] == -1).any()
     # Other events or another radius are not the compose pass's: classify them afresh.
     assert a.kept_labels(ev, 2.0) is None and a.kept_labels(kept, 3.0) is None
+
+
+def test_a_point_whose_patch_shows_only_the_other_polarity_is_reopened_to_both():
+    # Point 0 predicts ON and sees only a fresh OFF event (its prediction is contradicted); point 1 predicts ON and sees
+    # a fresh ON and a fresh OFF event (not contradicted: keeps ON only); point 2 predicts OFF and sees nothing.
+    s = SeparatedTimeSurface(TimeSurfaceConfig(eta_ms=10.0), W, H)
+    s.update(_events([10, 30, 31], [10, 10, 10], [-1, 1, -1], t0=59_000))
+    pts = _points_at([(10.0, 10.0), (30.5, 10.0), (50.0, 30.0)])
+    pol = np.array([1, 1, -1], np.int8)
+    plain = AlignedTimeSurface(W, H).compose(s, pts, np.eye(4), K, pol, 3.0, None, t_us=60_000)
+    assert plain.last_of(0)[10, 10] == NEVER_US and plain.point_has_events.tolist() == [False, True, False]
+    a = AlignedTimeSurface(W, H).compose(s, pts, np.eye(4), K, pol, 3.0, None, t_us=60_000, reopen_contradicted=True)
+    assert a.last_counts["points_reopened"] == 1
+    assert a.point_has_events.tolist() == [True, True, False]
+    assert a.accept[10, 10] == 3 and a.last_of(0)[10, 10] == s.last_of(-1)[10, 10]
+    assert a.accept[10, 31] == 1 and a.last_of(0)[10, 31] == NEVER_US  # point 1 still hides its OFF event
+    assert pol.tolist() == [1, 1, -1]  # the caller's prediction is not modified

@@ -251,3 +251,55 @@ def test_predict_full_on_rows_of_the_map_equals_predicting_the_gathered_points_b
     assert np.count_nonzero(a.polarity) > 50
     with pytest.raises(IndexError):
         in_place.predict_full(P, nrm, sign, T, omega, v, K, rows=np.array([0, n_map]))
+
+
+def _selector_with_dropped_points():
+    """A selector whose last step dropped the points of a square map that show no event (one ON event on one point)."""
+    from evpose.core.events import EventArray
+    from evpose.frontend.time_surface import SeparatedTimeSurface, TimeSurfaceConfig
+
+    cmap = _square_map()
+    T = _pose(0.0, np.array([0.0, 0.0, 2.0]), R_DOWN, np.zeros(3), np.zeros(3))
+
+    class Motion:
+        def predict(self, t_us):
+            return FusedState(t_us, T, np.array([1.0, 0.0, 0.0]), np.zeros(3), np.zeros(3), omega_cam=np.zeros(3))
+
+    sel = MapPolaritySelector(PolarityPredictor(PolarityFilterConfig(drop_empty_points=True, learn_min_votes=1)), cmap, K, Motion())
+    idx = np.arange(0, len(cmap), 3)
+    pol = sel(T, 60_000, idx)
+    k = int(np.flatnonzero(pol == 1)[0])
+    uv = _project(cmap.points[idx[k : k + 1]], T)[0]
+    ev = EventArray.from_arrays([59_000], [round(uv[0])], [round(uv[1])], np.array([-1], np.int8))  # of the other polarity
+    surface = SeparatedTimeSurface(TimeSurfaceConfig(), W, H)
+    surface.update(ev)
+    sel.align(surface, cmap.points[idx], T, pol, None, ev, None, 60_000)
+    keep = sel.points_to_register()
+    return sel, idx, pol, keep, ev, T, k
+
+
+def test_dropping_empty_points_keeps_the_contradicted_point_and_learns_over_all_points():
+    sel, idx, pol, keep, ev, T, k = _selector_with_dropped_points()
+    # The point's patch shows only an OFF event: it is reopened (both polarities), so it is kept, not dropped.
+    assert keep is not None and keep[k] and np.count_nonzero(keep) < keep.size
+    label = sel.observe(ev, T, idx[keep], pol[keep], W, H)  # the tracker passes the registered subset
+    assert label.tolist() == [1]
+    # The vote went to the map point it belongs to, found on the step's full grid.
+    assert sel.predictor.learned_sign(idx[k : k + 1])[0] != 0
+
+
+def test_registration_covariance_keeps_the_dropped_points_share_of_the_residual_variance():
+    from types import SimpleNamespace
+
+    from evpose.tracker.registration_config import RegistrationConfig, ResidualVariance
+
+    sel, idx, pol, keep, ev, T, k = _selector_with_dropped_points()
+    dropped = int(keep.size - np.count_nonzero(keep))
+    cov = np.diag([1e-6] * 3 + [1e-4] * 3)
+    reg = SimpleNamespace(covariance=cov, weights=np.array([1.0, 1.0, 0.0], np.float32), residuals=np.array([0.2, 0.1, 1.0], np.float32))
+    cfg = RegistrationConfig()  # Huber, scale 0.3: a point reading TDF 1 adds w r^2 = 0.3
+    out = sel.registration_covariance(reg, cfg)
+    share = 0.2 ** 2 + 0.1 ** 2
+    assert np.allclose(out, cov * (share + dropped * cfg.robust_scale) / share, rtol=1e-6)
+    cfg.residual_variance = ResidualVariance.INLIERS  # dropped points never counted there: unchanged
+    assert sel.registration_covariance(reg, cfg) is cov
