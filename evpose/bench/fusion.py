@@ -10,6 +10,8 @@
   ATE/ARE (RMSE) of raw registrations, factor graph, EKF and IMU-only.
 * ``ablation``, ``ablation_texture``, ``ablation_seeds``, ``realtime_300hz``, ``registration_wander``, ``aligned_field``: whole tracking runs on
   the simulated landing, in :mod:`evpose.bench.fusion_tracking`.
+* ``polarity_ceiling`` (:mod:`evpose.bench.polarity_ceiling`): the filter's wrong predictions on the
+  simulated landing, with fused and true motion, and ``stpe+filter`` with oracle polarities.
 * ``polarity_sim``: the simulator's landing scenario, a contour map built from
   its cloud, ground-truth poses and motion: agreement of the predicted polarity
   with the events near each point (outside the buffer zone), share of events
@@ -26,6 +28,7 @@ from scipy.spatial.transform import Rotation
 
 from evpose.bench.fusion_tracking import (ABLATION, ablation_run, bench_ablation, bench_ablation_seeds, bench_ablation_texture,  # noqa: F401
                                           bench_aligned_field, bench_realtime_300hz, bench_registration_wander)
+from evpose.bench.polarity_ceiling import bench_polarity_ceiling
 from evpose.bench.stats import latency_summary, peak_rss_mb
 
 
@@ -381,4 +384,5 @@ def bench_imu_buffer(ctx) -> dict:
 
 BENCHMARKS = {"backends": bench_backends, "polarity_sim": bench_polarity_sim, "ego_motion_dynamic": bench_ego_motion_dynamic,
               "ablation": bench_ablation, "ablation_texture": bench_ablation_texture, "ablation_seeds": bench_ablation_seeds, "realtime_300hz": bench_realtime_300hz, "snapshot_restore": bench_snapshot_restore, "imu_buffer": bench_imu_buffer,
-              "registration_wander": bench_registration_wander, "aligned_field": bench_aligned_field}
+              "registration_wander": bench_registration_wander, "aligned_field": bench_aligned_field,
+              "polarity_ceiling": bench_polarity_ceiling}
