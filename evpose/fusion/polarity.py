@@ -74,7 +74,7 @@ class PolarityFilterConfig:
     reopen_contradicted: bool = False
     """``T_align`` accepts both polarities in the patch of a single-polarity point that shows no event of its predicted
     polarity younger than ``empty_after_eta`` but does of the other: the events contradict the prediction (a wrong
-    sign or edge normal; ~10 % of the single-polarity points on the simulated landing), and reading the predicted
+    sign or edge normal: 8-10 % of the single-polarity predictions on the simulated landing), and reading the predicted
     polarity only would hide the point's own edge. What makes ``drop_empty_points`` work (see there). Alone it does
     not pay on the simulated landing (seeds 0-3 mean, 346x260 / 240x180): ``stpe+filter`` 30.4 / 34.6 mm against
     30.5 / 35.8 mm off (``stpe`` 30.0 / 34.9), ``full`` 14.3 / 16.0 against 13.5 / 15.5 mm."""
