@@ -65,6 +65,13 @@ class ViewerApp:
         self.stage = Stage.TDF
         self.last_frame: Frame | None = None
         self._select_lock = threading.Lock()
+        self._cloud_lock = threading.Lock()
+        self._cloud_entry: DataEntry | None = None
+        """Map entry of the open recording, whose raw cloud is read when first shown."""
+        self._cloud_generation = 0
+        """Counts openings, so a cloud read for an earlier one is not drawn over a later one."""
+        self._cloud_read = -1
+        """Opening whose cloud has been read (-1: none)."""
         self.frames_published = 0
         self._last_slow = 0.0
         self._build_main_panel()
@@ -225,7 +232,6 @@ class ViewerApp:
             if map_entry is not None and map_entry.error:
                 raise InputError(map_entry.path, map_entry.error)
             cmap = load_map(self.roots.check(map_entry.path)) if map_entry is not None else None
-            cloud = self._cloud_for(map_entry)
         except EvposeError as exc:
             self.rec_info.content = f"**Cannot open:** {exc}\n\n" + self._scan_note()
             self._notify("cannot open", str(exc), "red")
@@ -243,7 +249,7 @@ class ViewerApp:
         def reset_view(_engine=None):
             # Runs on the player thread (or before it exists) so no frame of the old recording is drawn over it.
             self.recording, self.contour_map = recording, cmap
-            self.scene.load(cmap, cloud, recording.ground_truth, recording.calibration)
+            self.scene.load(cmap, None, recording.ground_truth, recording.calibration)
             self.scene.apply_toggles()
             self.plots.remove()
 
@@ -258,7 +264,26 @@ class ViewerApp:
             self.player.call(reset_view)
             # Keep the user's tuned parameters across recordings when the engine kind stays the same.
             self.player.load(factory, self.config_gui.config if self.config_gui is not None else None)
+        with self._cloud_lock:
+            self._cloud_entry, self._cloud_generation = map_entry, self._cloud_generation + 1
+        self._ensure_cloud()
         return True
+
+    def _ensure_cloud(self) -> None:
+        """Read and draw the open map's raw cloud when it is to be shown and is not drawn yet.
+
+        Only then: the first read imports open3d (0.5-2.4 s measured), which at start delayed the
+        run-ahead while the cloud, hidden in every shipped layout, was not even shown.
+        """
+        with self._cloud_lock:
+            entry, gen = self._cloud_entry, self._cloud_generation
+            if entry is None or self.player is None or not self.scene.toggles.raw_cloud or self._cloud_read == gen:
+                return
+            self._cloud_read = gen
+        cloud = self._cloud_for(entry)
+        if cloud is not None:
+            # On the player thread, so it lands after reset_view (which clears the scene), and only for the same opening.
+            self.player.call(lambda _engine: gen == self._cloud_generation and self.scene.set_cloud(cloud))
 
     def _cloud_for(self, map_entry: DataEntry | None):
         if map_entry is None:
@@ -359,6 +384,8 @@ class ViewerApp:
         if self.layout is not None:
             setattr(self.layout.scene, name, bool(value))
         self.scene.apply_toggles()
+        if name == "raw_cloud" and value:
+            self._ensure_cloud()
         if name == "slam_aligned":
             self._redraw()  # the SLAM maps move between the ground truth's frame and their own
 
@@ -414,6 +441,7 @@ class ViewerApp:
             box.value = getattr(layout.scene, name)
         self.scene.toggles = type(layout.scene)(**vars(layout.scene))
         self.scene.apply_toggles()
+        self._ensure_cloud()
 
     # ------------------------------------------------------------------ export
     def export(self, what: str, client=None) -> Path | None:

@@ -193,3 +193,37 @@ def test_the_layout_folder_docks_and_sizes_panels_and_a_saved_layout_restores_th
         assert app.layout.to_dict() == saved.to_dict()
     finally:
         app.stop()
+
+
+def test_the_raw_cloud_is_read_only_when_shown_and_drawn_again_for_each_opening(tmp_path, squares_scene, monkeypatch):
+    import numpy as np
+
+    import app.server as server
+
+    rec, cmap = squares_scene
+    (tmp_path / "data").mkdir()
+    write_recording_h5(tmp_path / "data" / "squares.h5", rec)
+    write_contour_map(tmp_path / "data" / "squares_map.ply", cmap)
+    pts = np.asarray(cmap.points, np.float64)
+    (tmp_path / "data" / "squares_cloud.ply").write_text(
+        f"ply\nformat ascii 1.0\nelement vertex {len(pts)}\nproperty float x\nproperty float y\nproperty float z\nend_header\n"
+        + "".join(f"{x} {y} {z}\n" for x, y, z in pts))
+    reads = []
+    real = server.load_cloud
+    monkeypatch.setattr(server, "load_cloud", lambda path: reads.append(path.name) or real(path))
+    app = ViewerApp(AppConfig(data=[tmp_path / "data"], port=free_port(), export_dir=tmp_path / "exports",
+                              player=PlayerConfig(prefetch=False)))
+    try:
+        app.player.wait_idle()
+        # Hidden (every shipped layout): not read, so opening a recording never waits for open3d's import.
+        assert not app.scene.toggles.raw_cloud and reads == [] and "cloud" not in app.scene._nodes
+        app._set_toggle("raw_cloud", True)
+        app.player.wait_idle()
+        assert reads == ["squares_cloud.ply"] and len(app.scene._nodes["cloud"].points) == len(pts)
+        app._set_toggle("raw_cloud", False)
+        app._set_toggle("raw_cloud", True)  # read once per opening
+        assert app.select(app.rec_dropdown.value)  # reopening clears the scene, then draws the cloud again
+        app.player.wait_idle()
+        assert reads == ["squares_cloud.ply"] * 2 and "cloud" in app.scene._nodes
+    finally:
+        app.stop()
