@@ -192,6 +192,13 @@ def test_docking_a_panel_from_the_layout_folder_moves_it_and_a_saved_layout_puts
     assert panel_edge(page, "SP-TS positive") == "left"
     assert viewer.layout.panels["images"].dock == "left"
     wait_for(lambda: panel_box(page, "Plots")[0] < 30, what="plots, stacked on images, follows it")
+    other = page.context.browser.new_page(viewport={"width": 1400, "height": 900})
+    try:  # a tab opened afterwards gets the same placement
+        other.goto(f"http://127.0.0.1:{viewer.cfg.port}")
+        other.get_by_text("SP-TS positive").first.wait_for(timeout=30_000)
+        wait_for(lambda: panel_edge(other, "SP-TS positive") == "left" and panel_edge(other, "Plots") == "left", what="second tab")
+    finally:
+        other.close()
     # The width: the left edge (images+plots column, parameters, main panel) is sized to the sum of its columns.
     page.get_by_label("images width [px]", exact=True).fill("500")
     wait_for(lambda: viewer.layout.panels["images"].width == 500, what="width applied")
