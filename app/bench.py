@@ -440,8 +440,10 @@ def bench_far_seek(ctx) -> dict:
     return out
 
 
+from app.bench_start import bench_run_ahead_start  # noqa: E402 (it imports helpers from this module lazily)
+
 BENCHMARKS = {"playback_realtime": bench_playback, "seek_latency": bench_seek, "run_ahead_cpu": bench_run_ahead,
-              "far_seek": bench_far_seek}
+              "far_seek": bench_far_seek, "run_ahead_start": bench_run_ahead_start}
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -458,6 +460,8 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--seconds", type=float, default=None, help="wall seconds of each playback phase")
     ap.add_argument("--seeks", type=int, default=None, help="random seek targets per phase")
     args = ap.parse_args(argv)
+    # Run as ``python -m app.bench`` this module is __main__: benchmarks elsewhere that import app.bench must see these settings.
+    sys.modules.setdefault("app.bench", sys.modules[__name__])
     global DEMO_OVERRIDE, PLAY_SECONDS, N_SEEKS
     PLAY_SECONDS, N_SEEKS = args.seconds, args.seeks
     if args.recording is not None and args.map is not None:

@@ -18,6 +18,50 @@ PANELS = ("images", "plots", "teaching", "parameters")
 """The movable panels a layout places (the main control panel always stays docked left)."""
 
 _DOCK = re.compile(r"^(left|right|float|(above|below):(images|plots|teaching|parameters))$")
+EDGES = ("left", "right", "float")
+"""Docks that need no other panel."""
+MIN_WIDTH = 160
+"""Narrowest panel width a layout sets, CSS pixels (a narrower column leaves its controls unreadable)."""
+MAX_WIDTH = 1600
+"""Widest panel width a layout sets, CSS pixels."""
+CONTROL_PANEL_PX = 320
+"""Width of viser's main control panel at control_width='medium' (20 em x 16 px); it is always docked left."""
+DEFAULT_COLUMN_PX = 300
+"""Width viser gives a newly docked column (its DEFAULT_REGION_PX)."""
+
+
+def dock_choices(name: str) -> list[str]:
+    """The docks a panel can be given: the edges, float, and above/below every other panel (never itself)."""
+    return [*EDGES] + [f"{side}:{p}" for p in PANELS if p != name for side in ("above", "below")]
+
+
+def dock_anchor(dock: str) -> str | None:
+    """The panel a dock stacks on ('below:images' -> 'images'), None for left/right/float."""
+    return dock.split(":", 1)[1] if ":" in dock else None
+
+
+def _check_docks(panels: dict[str, "PanelPlacement"], source: str | None) -> None:
+    """Refuse a panel stacked on itself and stacks that go round in a circle (neither could be placed first)."""
+    for name in panels:
+        seen = [name]
+        anchor = dock_anchor(panels[name].dock)
+        while anchor is not None:
+            if anchor in seen:
+                what = "on itself" if seen == [name] else "in a circle: " + " -> ".join(seen + [anchor])
+                raise InputError(source, f"dock {panels[name].dock!r} stacks the panel {what}", f"panels.{name}")
+            seen.append(anchor)
+            anchor = dock_anchor(panels[anchor].dock)
+
+
+def check_width(width, source: str | None = None, key: str = "width") -> int | None:
+    """A layout width: None (viewer default) or whole CSS pixels in [MIN_WIDTH, MAX_WIDTH]."""
+    if width is None:
+        return None
+    if isinstance(width, bool) or not isinstance(width, (int, float)) or width != int(width):
+        raise InputError(source, f"width {width!r} must be whole pixels or null", key)
+    if not MIN_WIDTH <= width <= MAX_WIDTH:
+        raise InputError(source, f"width {int(width)} is outside {MIN_WIDTH}-{MAX_WIDTH} px", key)
+    return int(width)
 
 
 @dataclass
@@ -71,12 +115,74 @@ class Layout:
                 raise InputError(source, str(exc), f"panels.{key}") from None
             if not _DOCK.match(str(placement.dock)):
                 raise InputError(source, f"dock {placement.dock!r} is not left/right/float/above:<panel>/below:<panel>", f"panels.{key}")
+            placement.width = check_width(placement.width, source, f"panels.{key}.width")
+            placement.visible = bool(placement.visible)
             panels[key] = placement
+        _check_docks(panels, source)
         try:
             scene = SceneToggles(**(data.get("scene") or {}))
         except TypeError as exc:
             raise InputError(source, str(exc), "scene") from None
         return cls(name, str(data.get("description", "")), bool(data.get("dark_mode", False)), panels, scene)
+
+
+    def with_dock(self, name: str, dock: str) -> "Layout":
+        """A copy with one panel's dock changed; an unknown dock, or one stacking panels in a circle, raises InputError."""
+        data = self.to_dict()
+        data["panels"][name]["dock"] = dock
+        return Layout.from_dict(data, f"{name} dock")
+
+    def placements(self) -> list[tuple[str, str]]:
+        """(panel, dock as shown) for the visible panels, in an order where every anchor is placed before the panels on it.
+
+        A panel stacked on a hidden panel takes that panel's place (its dock as shown), so
+        'below:images' with images hidden docks where images would be. A panel stacked on a
+        floating one docks on the right edge (a stack needs a docked neighbour; viser does the same).
+        """
+        shown: dict[str, str] = {}
+
+        def resolve(name: str) -> str:
+            # Hidden panels resolve too, as the place their dependants take; no cycles (from_dict refuses them).
+            dock = self.panels[name].dock
+            anchor = dock_anchor(dock)
+            if anchor is None:
+                return dock
+            if not self.panels[anchor].visible:
+                return resolve(anchor)
+            return "right" if resolve(anchor) == "float" else dock
+
+        for name in PANELS:
+            shown[name] = resolve(name)
+        order: list[str] = []
+        pending = [p for p in PANELS if self.panels[p].visible]
+        while pending:  # anchors first; terminates because shown docks only name visible, acyclic anchors
+            ready = [p for p in pending if dock_anchor(shown[p]) in (None, *order)]
+            order += ready
+            pending = [p for p in pending if p not in ready]
+        return [(p, shown[p]) for p in order]
+
+
+    def region_widths(self) -> dict[str, int]:
+        """Width to command for each docked edge, CSS pixels: the sum of the columns docked there.
+
+        viser's ``set_width`` on a docked panel sets the width of its whole edge and shares it
+        among the columns there in proportion to their current widths. So a panel's width is
+        reached by asking for the edge's total: each column at its panel's width (the first
+        width set among the panels stacked in it, else viser's default), plus the main panel on the left.
+        """
+        shown = dict(self.placements())
+        columns: dict[str, list[str]] = {}
+        for name, dock in shown.items():
+            root = name
+            while dock_anchor(shown[root]) is not None:
+                root = dock_anchor(shown[root])
+            columns.setdefault(root, []).append(name)
+        totals = {"left": CONTROL_PANEL_PX, "right": 0}
+        for root, members in columns.items():
+            if shown[root] in totals:
+                widths = [self.panels[p].width for p in members if self.panels[p].width]
+                totals[shown[root]] += widths[0] if widths else DEFAULT_COLUMN_PX
+        return totals
 
 
 def layout_path(name: str, directory: Path = LAYOUT_DIR) -> Path:

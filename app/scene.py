@@ -146,15 +146,7 @@ class SceneView:
             self._set("map", self.server.scene.add_point_cloud(
                 "/map", contour_map.points.astype(np.float32), map_colours(len(contour_map), None),
                 point_size=pt, point_shape="circle", visible=self.toggles.contour_map))
-        if cloud is not None and len(cloud[0]):
-            pts, cols = cloud
-            # A fixed stride keeps the browser responsive on dense clouds (same points every time).
-            stride = max(1, len(pts) // MAX_CLOUD_POINTS)
-            pts = pts[::stride]
-            cols = cols[::stride] if cols is not None else None
-            cols = cols if cols is not None else np.array([170, 170, 170], np.uint8)
-            self._set("cloud", self.server.scene.add_point_cloud(
-                "/cloud", np.asarray(pts, np.float32), cols, point_size=pt * 0.7, visible=self.toggles.raw_cloud))
+        self.set_cloud(cloud)
         if ground_truth is not None and len(ground_truth) > 1:
             self._set("gt", self.server.scene.add_line_segments(
                 "/trajectory/ground_truth", polyline_segments(ground_truth.position), (40, 170, 60),
@@ -167,6 +159,19 @@ class SceneView:
             position=(float(centre[0]), float(centre[1]), zmin)))
         self.ground_truth = ground_truth
         self._frame_view(centre, zmin)
+
+    def set_cloud(self, cloud: tuple[np.ndarray, np.ndarray | None] | None) -> None:
+        """Draw (or replace) the raw cloud, at the scale of the last :meth:`load`."""
+        if cloud is None or not len(cloud[0]):
+            return
+        pts, cols = cloud
+        # A fixed stride keeps the browser responsive on dense clouds (same points every time).
+        stride = max(1, len(pts) // MAX_CLOUD_POINTS)
+        pts = pts[::stride]
+        cols = cols[::stride] if cols is not None else None
+        cols = cols if cols is not None else np.array([170, 170, 170], np.uint8)
+        self._set("cloud", self.server.scene.add_point_cloud(
+            "/cloud", np.asarray(pts, np.float32), cols, point_size=0.006 * self.scale * 0.7, visible=self.toggles.raw_cloud))
 
     def _frame_view(self, centre: np.ndarray, zmin: float) -> None:
         """Point the initial (and every connected) browser camera obliquely at the scene."""

@@ -22,7 +22,8 @@ from app.engine import Engine
 from app.engine_factory import MODES, NO_MAP_NOTE, engine_factory
 from app.export import export_action, write_config
 from app.frame import Frame
-from app.layouts import PANELS, Layout, list_layouts, save_layout
+from app.layout_gui import LayoutGui
+from app.layouts import Layout
 from app.panels import SLAM_PANELS, OverlayColour, panel_images
 from app.player import Player, PlayState, RerunFrom
 from app.plots import PlotsView
@@ -63,12 +64,19 @@ class ViewerApp:
         self.overlay = OverlayColour.RESIDUAL
         self.stage = Stage.TDF
         self.last_frame: Frame | None = None
-        self.layout: Layout | None = None
         self._select_lock = threading.Lock()
+        self._cloud_lock = threading.Lock()
+        self._cloud_entry: DataEntry | None = None
+        """Map entry of the open recording, whose raw cloud is read when first shown."""
+        self._cloud_generation = 0
+        """Counts openings, so a cloud read for an earlier one is not drawn over a later one."""
+        self._cloud_read = -1
+        """Opening whose cloud has been read (-1: none)."""
         self.frames_published = 0
         self._last_slow = 0.0
         self._build_main_panel()
         self._build_panels()
+        self.layout_gui.panels = self.panels
         self.refresh_entries()
         self.apply_layout_name(cfg.layout)
         self._bind_hotkeys()
@@ -101,11 +109,7 @@ class ViewerApp:
                 self.toggle_boxes[name] = g.add_checkbox(name.replace("_", " "), getattr(self.scene.toggles, name), hint=TOGGLE_HINTS.get(name))
             self.overlay_dropdown = g.add_dropdown("TDF points coloured by", [o.value for o in OverlayColour], initial_value=self.overlay.value)
         with g.add_folder("Layout", expand_by_default=False):
-            self.layout_dropdown = g.add_dropdown("layout", ["debug"])
-            self.panel_boxes = {name: g.add_checkbox(f"show {name}", True, hint=f"Show the {name} panel (saved with the layout)")
-                                for name in PANELS}
-            self.layout_name = g.add_text("save as", "my_layout")
-            self.layout_save = g.add_button("save current layout")
+            self.layout_gui = LayoutGui(g, self.cfg.layout_dir, self._notify, self._layout_applied, self._redraw)
         with g.add_folder("Export", expand_by_default=False):
             self.export_buttons = g.add_button_group("export", ["trajectory", "config", "screenshot", "GIF"])
             self.export_info = g.add_markdown("")
@@ -124,10 +128,6 @@ class ViewerApp:
         for name, box in self.toggle_boxes.items():
             box.on_update(lambda e, name=name, box=box: self._set_toggle(name, box.value))
         self.overlay_dropdown.on_update(lambda e: self._set_overlay(self.overlay_dropdown.value))
-        self.layout_dropdown.on_update(lambda e: e.client is not None and self.apply_layout_name(self.layout_dropdown.value))
-        self.layout_save.on_click(lambda e: self.save_current_layout(self.layout_name.value, e.client))
-        for name, box in self.panel_boxes.items():
-            box.on_update(lambda e, name=name, box=box: e.client is not None and self.set_panel_visible(name, box.value))
         self.export_buttons.on_click(lambda e: self.export(e.target.value, e.client))
 
     def _build_panels(self) -> None:
@@ -232,7 +232,6 @@ class ViewerApp:
             if map_entry is not None and map_entry.error:
                 raise InputError(map_entry.path, map_entry.error)
             cmap = load_map(self.roots.check(map_entry.path)) if map_entry is not None else None
-            cloud = self._cloud_for(map_entry)
         except EvposeError as exc:
             self.rec_info.content = f"**Cannot open:** {exc}\n\n" + self._scan_note()
             self._notify("cannot open", str(exc), "red")
@@ -250,7 +249,7 @@ class ViewerApp:
         def reset_view(_engine=None):
             # Runs on the player thread (or before it exists) so no frame of the old recording is drawn over it.
             self.recording, self.contour_map = recording, cmap
-            self.scene.load(cmap, cloud, recording.ground_truth, recording.calibration)
+            self.scene.load(cmap, None, recording.ground_truth, recording.calibration)
             self.scene.apply_toggles()
             self.plots.remove()
 
@@ -265,7 +264,26 @@ class ViewerApp:
             self.player.call(reset_view)
             # Keep the user's tuned parameters across recordings when the engine kind stays the same.
             self.player.load(factory, self.config_gui.config if self.config_gui is not None else None)
+        with self._cloud_lock:
+            self._cloud_entry, self._cloud_generation = map_entry, self._cloud_generation + 1
+        self._ensure_cloud()
         return True
+
+    def _ensure_cloud(self) -> None:
+        """Read and draw the open map's raw cloud when it is to be shown and is not drawn yet.
+
+        Only then: the first read imports open3d (0.5-2.4 s measured), which at start delayed the
+        run-ahead while the cloud, hidden in every shipped layout, was not even shown.
+        """
+        with self._cloud_lock:
+            entry, gen = self._cloud_entry, self._cloud_generation
+            if entry is None or self.player is None or not self.scene.toggles.raw_cloud or self._cloud_read == gen:
+                return
+            self._cloud_read = gen
+        cloud = self._cloud_for(entry)
+        if cloud is not None:
+            # On the player thread, so it lands after reset_view (which clears the scene), and only for the same opening.
+            self.player.call(lambda _engine: gen == self._cloud_generation and self.scene.set_cloud(cloud))
 
     def _cloud_for(self, map_entry: DataEntry | None):
         if map_entry is None:
@@ -366,6 +384,8 @@ class ViewerApp:
         if self.layout is not None:
             setattr(self.layout.scene, name, bool(value))
         self.scene.apply_toggles()
+        if name == "raw_cloud" and value:
+            self._ensure_cloud()
         if name == "slam_aligned":
             self._redraw()  # the SLAM maps move between the ground truth's frame and their own
 
@@ -393,75 +413,35 @@ class ViewerApp:
         for client in self.server.get_clients().values():
             client.add_notification(title, body, auto_close_seconds=6.0, color=color)
 
-    # ------------------------------------------------------------------ layouts
-    def available_layouts(self) -> dict:
-        return list_layouts(self.cfg.layout_dir)
+    # ------------------------------------------------------------------ layouts (app/layout_gui.py)
+    @property
+    def layout(self) -> Layout | None:
+        """The layout as shown now (run-time changes included)."""
+        return self.layout_gui.layout
+
+    @property
+    def panel_boxes(self) -> dict:
+        return self.layout_gui.boxes
 
     def apply_layout_name(self, name: str) -> bool:
-        found = self.available_layouts()
-        usable = sorted(k for k, v in found.items() if isinstance(v, Layout))
-        self.layout_dropdown.options = usable or ["debug"]
-        layout = found.get(name)
-        if not isinstance(layout, Layout):
-            if isinstance(layout, str):
-                self._notify("layout", layout, "red")
-            layout = found.get("debug") if isinstance(found.get("debug"), Layout) else Layout("debug")
-        self.apply_layout(layout)
-        return True
-
-    def set_panel_visible(self, name: str, visible: bool) -> None:
-        """Show or hide a panel at run time; the current layout remembers it (and a saved layout records it)."""
-        if self.layout is None:
-            return
-        self.layout.panels[name] = dataclasses.replace(self.layout.panels[name], visible=bool(visible))
-        self.panels[name].visible = bool(visible)
-        self.panel_boxes[name].value = bool(visible)
-        if visible:
-            self._redraw()  # images of hidden panels were neither drawn nor sent
+        return self.layout_gui.apply_name(name)
 
     def apply_layout(self, layout: Layout) -> None:
-        # A copy: run-time changes (panels shown, 3D toggles) must not alter the loaded file's Layout.
-        layout = Layout.from_dict(layout.to_dict())
-        self.layout = layout
+        self.layout_gui.apply(layout)
+
+    def set_panel_visible(self, name: str, visible: bool) -> None:
+        self.layout_gui.set_visible(name, visible)
+
+    def save_current_layout(self, name: str, client=None) -> Path | None:
+        return self.layout_gui.save(name)
+
+    def _layout_applied(self, layout: Layout) -> None:
         self.gui.configure_theme(dark_mode=layout.dark_mode, show_share_button=False, control_width="medium")
-        # Absolute placements first, so panels stacked on others find their anchor placed.
-        order = sorted(PANELS, key=lambda p: ":" in layout.panels[p].dock)
-        for name in order:
-            place, panel = layout.panels[name], self.panels[name]
-            panel.visible = place.visible
-            self.panel_boxes[name].value = place.visible
-            if place.dock == "left":
-                panel.dock_left()
-            elif place.dock == "right":
-                panel.dock_right()
-            elif place.dock == "float":
-                panel.float(x=-15 if name != "teaching" else 60, y=15)
-            else:
-                where, anchor = place.dock.split(":")
-                (panel.dock_above if where == "above" else panel.dock_below)(self.panels[anchor])
-            if place.width:
-                panel.set_width(place.width)
         for name, box in self.toggle_boxes.items():
             box.value = getattr(layout.scene, name)
         self.scene.toggles = type(layout.scene)(**vars(layout.scene))
         self.scene.apply_toggles()
-        if layout.name in self.layout_dropdown.options:
-            self.layout_dropdown.value = layout.name
-
-    def save_current_layout(self, name: str, client=None) -> Path | None:
-        try:
-            base = self.layout or Layout(name)
-            # As shown now: panels as placed and shown at run time, the 3D toggles as ticked.
-            layout = Layout(name, base.description, base.dark_mode, {k: dataclasses.replace(v) for k, v in base.panels.items()},
-                            type(self.scene.toggles)(**vars(self.scene.toggles)))
-            path = save_layout(layout, self.cfg.layout_dir)
-        except EvposeError as exc:
-            self._notify("layout", str(exc), "red")
-            return None
-        self.layout_dropdown.options = sorted(k for k, v in self.available_layouts().items() if isinstance(v, Layout))
-        self.layout_dropdown.value = name
-        self.layout = Layout.from_dict(layout.to_dict())  # what is shown is now this layout
-        return path
+        self._ensure_cloud()
 
     # ------------------------------------------------------------------ export
     def export(self, what: str, client=None) -> Path | None:
@@ -476,6 +456,7 @@ class ViewerApp:
         return path
 
     def stop(self) -> None:
+        self.layout_gui.stop()
         if self.player is not None:
             self.player.stop()
         self.server.stop()

@@ -1,10 +1,11 @@
-"""Layout files: the shipped presets load, bad files are refused with the key, saving round-trips."""
+"""Layout files: the shipped presets load, bad files are refused with the key, saving round-trips, docks resolve and edges are sized."""
 
 import json
 
 import pytest
 
-from app.layouts import LAYOUT_DIR, Layout, layout_path, list_layouts, load_layout, save_layout
+from app.layouts import (CONTROL_PANEL_PX, DEFAULT_COLUMN_PX, LAYOUT_DIR, MAX_WIDTH, MIN_WIDTH, Layout, check_width, dock_choices,
+                         layout_path, list_layouts, load_layout, save_layout)
 from evpose.errors import InputError
 
 
@@ -44,3 +45,57 @@ def test_layout_names_cannot_escape_the_folder(tmp_path):
     for bad in ("../evil", "a/b", "", "x" * 65):
         with pytest.raises(InputError):
             layout_path(bad, tmp_path)
+
+
+def _debug():
+    return load_layout(LAYOUT_DIR / "debug.json")
+
+
+def test_a_panel_stacked_on_itself_or_in_a_circle_is_refused(tmp_path):
+    (tmp_path / "self.json").write_text(json.dumps({"name": "x", "panels": {"plots": {"dock": "below:plots"}}}))
+    with pytest.raises(InputError, match="panels.plots.*on itself"):
+        load_layout(tmp_path / "self.json")
+    lay = _debug()  # plots is below:images
+    with pytest.raises(InputError, match="images -> plots -> images"):
+        lay.with_dock("images", "above:plots")
+    assert lay.panels["images"].dock == "right"  # the refused change left the layout alone
+
+
+def test_dock_choices_offer_the_edges_and_every_other_panel_never_itself():
+    choices = dock_choices("plots")
+    assert choices[:3] == ["left", "right", "float"]
+    assert "below:images" in choices and "above:parameters" in choices
+    assert not any(c.endswith(":plots") for c in choices)
+    lay = _debug()
+    for c in choices:
+        if c != "above:images" and c != "below:images":
+            assert lay.with_dock("plots", c).panels["plots"].dock == c
+
+
+def test_placements_put_anchors_first_and_panels_on_a_hidden_or_floating_anchor_take_its_place():
+    lay = _debug()  # images right, plots below:images, parameters left, teaching hidden
+    order = [p for p, _ in lay.placements()]
+    assert order.index("images") < order.index("plots") and "teaching" not in order
+    lay.panels["images"].visible = False
+    assert dict(lay.placements())["plots"] == "right"  # where images would be
+    lay = _debug().with_dock("images", "below:parameters")
+    lay.panels["images"].visible = False
+    assert dict(lay.placements())["plots"] == "below:parameters"
+    lay = _debug().with_dock("images", "float")
+    assert dict(lay.placements())["plots"] == "right"  # a stack needs a docked neighbour
+
+
+def test_edge_widths_sum_the_columns_docked_there():
+    lay = _debug()  # right: images 420 with plots stacked in its column; left: main panel + parameters 320
+    assert lay.region_widths() == {"left": CONTROL_PANEL_PX + 320, "right": 420}
+    lay = lay.with_dock("images", "left")
+    assert lay.region_widths() == {"left": CONTROL_PANEL_PX + 320 + 420, "right": 0}
+    lay.panels["images"].width = None
+    assert lay.region_widths()["left"] == CONTROL_PANEL_PX + 320 + DEFAULT_COLUMN_PX
+
+
+def test_widths_outside_the_range_or_not_whole_pixels_are_refused():
+    assert check_width(None) is None and check_width(420.0) == 420
+    for bad in (MIN_WIDTH - 1, MAX_WIDTH + 1, 400.5, "wide", True):
+        with pytest.raises(InputError):
+            check_width(bad)

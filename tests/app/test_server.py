@@ -158,3 +158,72 @@ def test_saving_the_layout_records_what_is_shown_at_run_time_and_loading_restore
         assert app.layout.to_dict() == saved.to_dict()
     finally:
         app.stop()
+
+
+def test_the_layout_folder_docks_and_sizes_panels_and_a_saved_layout_restores_them(tmp_path):
+    from app.layouts import LAYOUT_DIR, load_layout
+
+    layouts = tmp_path / "layouts"
+    layouts.mkdir()
+    for f in LAYOUT_DIR.glob("*.json"):
+        (layouts / f.name).write_text(f.read_text())
+    (tmp_path / "data").mkdir()
+    app = ViewerApp(AppConfig(data=[tmp_path / "data"], port=free_port(), layout_dir=layouts, export_dir=tmp_path / "exports"))
+    lg = app.layout_gui
+    try:
+        assert app.apply_layout_name("debug")
+        assert lg.docks["images"].value == "right" and lg.widths["images"].value == 420 and lg.widths["plots"].value == 0
+        assert lg.set_dock("images", "left") and lg.set_width("images", 500)
+        assert app.layout.panels["images"].dock == "left" and app.layout.panels["images"].width == 500
+        assert lg.shown_docks["plots"] == "below:images"  # stacked on images, it went left with it
+        # A circle is refused and the control shows the dock in effect; a width typed half-way is ignored.
+        assert not lg.set_dock("images", "below:plots") and lg.docks["images"].value == "left"
+        assert not lg.set_width("images", 50) and app.layout.panels["images"].width == 500
+        app.set_panel_visible("images", False)
+        assert lg.shown_docks == {"plots": "left", "parameters": "left"} and "images is hidden" in lg.note.content
+        app.set_panel_visible("images", True)
+        assert lg.set_dock("teaching", "float") and lg.set_width("teaching", 0)
+        saved = load_layout(app.save_current_layout("moved"))
+        assert (saved.panels["images"].dock, saved.panels["images"].width) == ("left", 500)
+        assert (saved.panels["teaching"].dock, saved.panels["teaching"].width) == ("float", None)
+        assert load_layout(layouts / "debug.json").panels["images"].dock == "right"  # the preset is untouched
+        assert app.apply_layout_name("teaching") and lg.docks["images"].value == "right"
+        assert app.apply_layout_name("moved")
+        assert lg.docks["images"].value == "left" and lg.widths["images"].value == 500 and lg.shown_docks["images"] == "left"
+        assert app.layout.to_dict() == saved.to_dict()
+    finally:
+        app.stop()
+
+
+def test_the_raw_cloud_is_read_only_when_shown_and_drawn_again_for_each_opening(tmp_path, squares_scene, monkeypatch):
+    import numpy as np
+
+    import app.server as server
+
+    rec, cmap = squares_scene
+    (tmp_path / "data").mkdir()
+    write_recording_h5(tmp_path / "data" / "squares.h5", rec)
+    write_contour_map(tmp_path / "data" / "squares_map.ply", cmap)
+    pts = np.asarray(cmap.points, np.float64)
+    (tmp_path / "data" / "squares_cloud.ply").write_text(
+        f"ply\nformat ascii 1.0\nelement vertex {len(pts)}\nproperty float x\nproperty float y\nproperty float z\nend_header\n"
+        + "".join(f"{x} {y} {z}\n" for x, y, z in pts))
+    reads = []
+    real = server.load_cloud
+    monkeypatch.setattr(server, "load_cloud", lambda path: reads.append(path.name) or real(path))
+    app = ViewerApp(AppConfig(data=[tmp_path / "data"], port=free_port(), export_dir=tmp_path / "exports",
+                              player=PlayerConfig(prefetch=False)))
+    try:
+        app.player.wait_idle()
+        # Hidden (every shipped layout): not read, so opening a recording never waits for open3d's import.
+        assert not app.scene.toggles.raw_cloud and reads == [] and "cloud" not in app.scene._nodes
+        app._set_toggle("raw_cloud", True)
+        app.player.wait_idle()
+        assert reads == ["squares_cloud.ply"] and len(app.scene._nodes["cloud"].points) == len(pts)
+        app._set_toggle("raw_cloud", False)
+        app._set_toggle("raw_cloud", True)  # read once per opening
+        assert app.select(app.rec_dropdown.value)  # reopening clears the scene, then draws the cloud again
+        app.player.wait_idle()
+        assert reads == ["squares_cloud.ply"] * 2 and "cloud" in app.scene._nodes
+    finally:
+        app.stop()

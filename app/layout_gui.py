@@ -1,0 +1,221 @@
+"""The Layout folder: switch layouts, show/hide, dock and size each panel, save what is shown.
+
+viser's panel placement is write-only: ``dock_*``/``float``/``set_width`` are commands sent
+to every client, and a panel the user drags in the browser stays there on screen but is
+never reported back to the server. So the placement a saved layout records is the one set
+here, through these controls, and applying it re-sends the commands to every client.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import threading
+from pathlib import Path
+from typing import Callable
+
+from app.layouts import MAX_WIDTH, MIN_WIDTH, PANELS, Layout, check_width, dock_anchor, dock_choices, list_layouts, save_layout
+from evpose.errors import EvposeError, InputError
+
+FLOAT_AT = {"teaching": (60, 15)}
+"""Where a floating panel opens, CSS pixels from the canvas's top-left (negative x: from the right)."""
+FLOAT_DEFAULT = (-15, 15)
+RESEND_S = 0.4
+"""Delay before an edge's width is sent again, seconds (see LayoutGui._size_edges)."""
+
+
+class LayoutGui:
+    """The Layout folder's controls and the current :class:`Layout` (a copy: run-time changes never touch the file)."""
+
+    def __init__(self, gui, layout_dir: Path, notify: Callable[[str, str, str], None],
+                 on_applied: Callable[[Layout], None], on_shown: Callable[[], None]):
+        self.gui = gui
+        self.layout_dir = layout_dir
+        self._notify = notify
+        self._on_applied = on_applied
+        """Called with each applied layout (dark mode and the 3D toggles are the viewer's)."""
+        self._on_shown = on_shown
+        """Called when a panel is shown (images of hidden panels were neither drawn nor sent)."""
+        self.layout: Layout | None = None
+        self.panels: dict = {}
+        self._timer: threading.Timer | None = None
+        self._timer_lock = threading.Lock()
+        self.shown_docks: dict[str, str] = {}
+        """Panel -> dock last sent to the clients (differs from the layout's when its anchor is hidden or floats)."""
+        self.dropdown = gui.add_dropdown("layout", ["debug"])
+        self.boxes, self.docks, self.widths = {}, {}, {}
+        for name in PANELS:
+            with gui.add_folder(f"{name} panel", expand_by_default=False):
+                self.boxes[name] = gui.add_checkbox(f"show {name}", True, hint=f"Show the {name} panel (saved with the layout)")
+                self.docks[name] = gui.add_dropdown(
+                    f"{name} dock", dock_choices(name), initial_value="right",
+                    hint="Where the panel goes, for every open tab; a panel dragged in the browser is not seen by the server, set it here to save it")
+                self.widths[name] = gui.add_number(
+                    f"{name} width [px]", 0, min=0, max=MAX_WIDTH, step=10,
+                    hint=f"{MIN_WIDTH}-{MAX_WIDTH} px; 0 leaves the width to the viewer")
+        self.note = gui.add_markdown("")
+        self.name_box = gui.add_text("save as", "my_layout")
+        self.save_button = gui.add_button("save current layout")
+        self.dropdown.on_update(lambda e: e.client is not None and self.apply_name(self.dropdown.value))
+        self.save_button.on_click(lambda e: self.save(self.name_box.value))
+        for name in PANELS:
+            # Only a user's change acts: the values written here by apply() must not echo back.
+            self.boxes[name].on_update(lambda e, n=name: e.client is not None and self.set_visible(n, self.boxes[n].value))
+            self.docks[name].on_update(lambda e, n=name: e.client is not None and self.set_dock(n, self.docks[n].value))
+            self.widths[name].on_update(lambda e, n=name: e.client is not None and self.set_width(n, self.widths[n].value))
+
+    # ------------------------------------------------------------------ applying
+    def available(self) -> dict:
+        return list_layouts(self.layout_dir)
+
+    def apply_name(self, name: str) -> bool:
+        found = self.available()
+        self.dropdown.options = sorted(k for k, v in found.items() if isinstance(v, Layout)) or ["debug"]
+        layout = found.get(name)
+        if not isinstance(layout, Layout):
+            if isinstance(layout, str):
+                self._notify("layout", layout, "red")
+            layout = found.get("debug") if isinstance(found.get("debug"), Layout) else Layout("debug")
+        self.apply(layout)
+        return True
+
+    def apply(self, layout: Layout) -> None:
+        self.layout = Layout.from_dict(layout.to_dict())
+        for name in PANELS:
+            place = self.layout.panels[name]
+            self.boxes[name].value = place.visible
+            self.docks[name].value = place.dock
+            self.widths[name].value = place.width or 0
+            self.panels[name].visible = place.visible
+        self.shown_docks = {}
+        self._on_applied(self.layout)  # first: the theme sets the main panel's width, the edge widths below include it
+        self._place(set(PANELS))
+        if layout.name in self.dropdown.options:
+            self.dropdown.value = layout.name
+
+    def _place(self, touched: set[str]) -> None:
+        """Send placement commands for the touched panels, those whose shown dock changed, and everything stacked on those."""
+        placements = self.layout.placements()
+        moved = set(touched) | {p for p, dock in placements if self.shown_docks.get(p) != dock}
+        for name, dock in placements:  # anchors come first, so a panel follows an anchor moved just before it
+            if name not in moved and dock_anchor(dock) not in moved:
+                continue
+            moved.add(name)
+            panel, width = self.panels[name], self.layout.panels[name].width
+            if dock == "left":
+                panel.dock_left()
+            elif dock == "right":
+                panel.dock_right()
+            elif dock == "float":
+                x, y = FLOAT_AT.get(name, FLOAT_DEFAULT)
+                panel.float(x=x, y=y, width=width)
+            else:
+                where, anchor = dock.split(":")
+                (panel.dock_above if where == "above" else panel.dock_below)(self.panels[anchor])
+        self.shown_docks = dict(placements)  # visible panels only: hidden ones are re-placed when shown
+        self._size_edges({self._edge(p) for p in moved if p in self.shown_docks} & {"left", "right"})
+        self._describe(dict(placements))
+
+    def _edge(self, name: str, shown: dict[str, str] | None = None) -> str:
+        """Where the column holding a (visible) panel is: 'left', 'right' or 'float'."""
+        shown = self.shown_docks if shown is None else shown
+        while dock_anchor(shown[name]) is not None:
+            name = dock_anchor(shown[name])
+        return shown[name]
+
+    def _size_edges(self, edges: set[str], again: bool = True) -> None:
+        """Command each edge's total width (viser shares it among that edge's columns, see Layout.region_widths).
+
+        Sent through the edge's panel that the browser places last (it places panels in
+        creation order, PANELS). The browser drops a width that arrives in the same update as
+        a move that merges or adds a column on that edge (its column bookkeeping restores the
+        old widths; measured: a re-shown images panel came back 300 px instead of 420), so
+        the width is sent once more after RESEND_S, when the moves have been drawn.
+        """
+        if not edges or self.layout is None:
+            return
+        totals, shown = self.layout.region_widths(), self.shown_docks  # one snapshot: the resend runs on a timer thread
+        for edge in edges:
+            on_edge = [p for p in PANELS if p in shown and self._edge(p, shown) == edge]
+            if on_edge:
+                self.panels[on_edge[-1]].set_width(totals[edge])
+        if again:
+            with self._timer_lock:
+                if self._timer is not None:
+                    self._timer.cancel()
+                    edges = edges | self._timer.args[0]
+                self._timer = threading.Timer(RESEND_S, self._size_edges, (set(edges), False))
+                self._timer.daemon = True
+                self._timer.start()
+
+    def stop(self) -> None:
+        with self._timer_lock:
+            if self._timer is not None:
+                self._timer.cancel()
+
+    def _describe(self, shown: dict[str, str]) -> None:
+        lines = []
+        for name in PANELS:
+            place = self.layout.panels[name]
+            if place.visible and shown.get(name) != place.dock:
+                anchor = dock_anchor(place.dock)
+                why = "is hidden" if not self.layout.panels[anchor].visible else "floats"
+                lines.append(f"- {name}: `{place.dock}` but {anchor} {why}, so `{shown[name]}`")
+        self.note.content = ("_Shown differently from the layout:_\n" + "\n".join(lines)) if lines else ""
+
+    # ------------------------------------------------------------------ run-time changes
+    def set_visible(self, name: str, visible: bool) -> None:
+        """Show or hide a panel; panels stacked on it move to its place (or back onto it)."""
+        if self.layout is None:
+            return
+        self.layout.panels[name].visible = bool(visible)
+        self.panels[name].visible = bool(visible)
+        self.boxes[name].value = bool(visible)
+        self._place({name} if visible else set())
+        if visible:
+            self._on_shown()
+
+    def set_dock(self, name: str, dock: str) -> bool:
+        """Dock a panel (left/right/float/above:<panel>/below:<panel>) for every client; a circle of stacks is refused."""
+        if self.layout is None:
+            return False
+        try:
+            self.layout = self.layout.with_dock(name, dock)
+        except InputError as exc:
+            self._notify("layout", str(exc), "red")
+            self.docks[name].value = self.layout.panels[name].dock  # the control shows what is in effect
+            return False
+        self.docks[name].value = dock
+        self._place({name})
+        return True
+
+    def set_width(self, name: str, width: float) -> bool:
+        """Set a panel's width in CSS pixels (0: leave it to the viewer); out-of-range values, as while typing, are ignored."""
+        if self.layout is None:
+            return False
+        try:
+            value = check_width(None if width == 0 else width, f"{name} width")
+        except InputError as exc:
+            self.note.content = f"_{exc}_"
+            return False
+        self.layout.panels[name].width = value
+        if self.layout.panels[name].visible and value is not None:
+            if self._edge(name) == "float":
+                self.panels[name].set_width(value)
+            else:
+                self._size_edges({self._edge(name)})
+        return True
+
+    def save(self, name: str) -> Path | None:
+        """Save the layout as shown now (panels as set here, 3D toggles as ticked) and make it the current one."""
+        try:
+            base = self.layout or Layout(name)
+            layout = Layout(name, base.description, base.dark_mode,
+                            {k: dataclasses.replace(v) for k, v in base.panels.items()}, dataclasses.replace(base.scene))
+            path = save_layout(layout, self.layout_dir)
+        except EvposeError as exc:
+            self._notify("layout", str(exc), "red")
+            return None
+        self.dropdown.options = sorted(k for k, v in self.available().items() if isinstance(v, Layout))
+        self.dropdown.value = name
+        self.layout = Layout.from_dict(layout.to_dict())
+        return path
