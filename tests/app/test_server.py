@@ -128,8 +128,9 @@ def test_a_disk_cache_inside_a_data_folder_is_turned_off_and_the_reason_shown(tm
     assert not (tmp_path / "cache").exists()
 
 
-def test_saving_the_layout_records_what_is_shown_at_run_time_and_loading_restores_it(tmp_path):
-    from app.layouts import LAYOUT_DIR, load_layout
+def _app_with_copied_layouts(tmp_path):
+    """A viewer over an empty data folder whose layout folder is a copy of the shipped presets."""
+    from app.layouts import LAYOUT_DIR
 
     layouts = tmp_path / "layouts"
     layouts.mkdir()
@@ -137,6 +138,13 @@ def test_saving_the_layout_records_what_is_shown_at_run_time_and_loading_restore
         (layouts / f.name).write_text(f.read_text())
     (tmp_path / "data").mkdir()
     app = ViewerApp(AppConfig(data=[tmp_path / "data"], port=free_port(), layout_dir=layouts, export_dir=tmp_path / "exports"))
+    return app, layouts
+
+
+def test_saving_the_layout_records_what_is_shown_at_run_time_and_loading_restores_it(tmp_path):
+    from app.layouts import load_layout
+
+    app, layouts = _app_with_copied_layouts(tmp_path)
     try:
         debug = load_layout(layouts / "debug.json")
         assert app.apply_layout_name("debug") and app.panels["plots"].visible
@@ -161,14 +169,9 @@ def test_saving_the_layout_records_what_is_shown_at_run_time_and_loading_restore
 
 
 def test_the_layout_folder_docks_and_sizes_panels_and_a_saved_layout_restores_them(tmp_path):
-    from app.layouts import LAYOUT_DIR, load_layout
+    from app.layouts import load_layout
 
-    layouts = tmp_path / "layouts"
-    layouts.mkdir()
-    for f in LAYOUT_DIR.glob("*.json"):
-        (layouts / f.name).write_text(f.read_text())
-    (tmp_path / "data").mkdir()
-    app = ViewerApp(AppConfig(data=[tmp_path / "data"], port=free_port(), layout_dir=layouts, export_dir=tmp_path / "exports"))
+    app, layouts = _app_with_copied_layouts(tmp_path)
     lg = app.layout_gui
     try:
         assert app.apply_layout_name("debug")
