@@ -37,6 +37,7 @@ from evpose.frontend.time_surface import SeparatedTimeSurface
 from evpose.fusion import aligned_field
 from evpose.fusion.aligned_surface import AlignedTimeSurface
 from evpose.tracker.config import MotionModel, TrackerConfig
+from evpose.tracker.map_refinement import PaintedEdgeRefiner
 from evpose.tracker.motion_filter import ConstantVelocityKalman
 from evpose.tracker.predictor import ConstantPosePredictor, ConstantVelocityPredictor, MotionPredictor
 from evpose.tracker.registration import register_to_map, subsample_indices
@@ -85,8 +86,9 @@ class Tracker:
         self.K = calibration.K
         w, h = calibration.width, calibration.height
         self.width, self.height = w, h
-        self._points = np.ascontiguousarray(contour_map.points, dtype=np.float64)
-        self.visible_map = VisibleMap(self._points, self.K, w, h)
+        self._points = np.array(contour_map.points, dtype=np.float64, order="C")
+        """The points registration reads (a copy: the painted-edge refiner moves some of them)."""
+        self.visible_map = VisibleMap(contour_map.points, self.K, w, h)
         self.noise_filter = ConsistencyNoiseFilter(config.noise_filter, w, h)
         self.time_surface = SeparatedTimeSurface(config.time_surface, w, h, calibration)
         self.distance_field = TemporalDistanceField(config.distance_field, w, h)
@@ -94,6 +96,9 @@ class Tracker:
         self.coarse_field = TemporalDistanceField(config.distance_field.level(coarse), w, h) if coarse > 0 else None
         """Optional coarser field registered first (coarse-to-fine), None when ``coarse_blur_px`` is 0."""
         self.components = components if components is not None else MotionComponents()
+        self.refiner = (PaintedEdgeRefiner(config.map_refinement, contour_map)
+                        if config.map_refinement.enabled and not self.components.drives_pose else None)
+        """``stpe``: online refinement of the map's painted edges (None when off or in the fused modes)."""
         rc = config.registration
         self._registration = (dataclasses.replace(rc, min_inlier_ratio=rc.fused_min_inlier_ratio)
                               if self.components.drives_pose else rc)
@@ -183,6 +188,7 @@ class Tracker:
             "ego_history": tuple(np.copy(a) for a in self._ego_history),
             "acquisition": (self._acquired, self._strict_streak),
             "tracking": (self._tracking, self._regain_streak),
+            "map_refinement": None if self.refiner is None else self.refiner.snapshot(),
         }
 
     def restore(self, state: dict) -> None:
@@ -200,6 +206,9 @@ class Tracker:
         self._ego_history = tuple(np.copy(a) for a in state["ego_history"])
         self._acquired, self._strict_streak = state["acquisition"]
         self._tracking, self._regain_streak = state.get("tracking", (True, 0))
+        if self.refiner is not None and state.get("map_refinement") is not None:
+            self.refiner.restore(state["map_refinement"])
+            self.refiner.apply(self._points)
 
     def _acquisition_test(self, reg) -> str:
         """Before the map is acquired, a registration must pass the strict inlier test; '' when it does."""
@@ -323,6 +332,7 @@ class Tracker:
 
         t0 = time.perf_counter()
         weak = False
+        twist = None
         if used.size < self.config.registration.min_points:
             reg = None
             reason = f"only {visible.size} map points in view at the predicted pose (need {self.config.registration.min_points})"
@@ -399,6 +409,14 @@ class Tracker:
         self._t_us = until
         if self._weak_test:
             status, reason = self._regain(status, reason, ok and not weak)
+        if self.refiner is not None and status is TrackStatus.OK and surface is self.time_surface:
+            # Painted edges move towards where this update's events put them, seen from the pose the field shows.
+            t0 = time.perf_counter()
+            lag = float(self._registration.field_lag_ms) * 1e-3
+            T_field = self._pose if twist is None or lag <= 0 else (
+                gtsam.Pose3(self._pose).compose(gtsam.Pose3.Expmap(-np.asarray(twist, dtype=np.float64) * lag)).matrix())
+            counts["points_refined"] = self.refiner.update(self._points, levels[-1], T_field, self.K)
+            timings["map_refinement"] = _ms(t0)
         if self.polarity_selector is not None and hasattr(self.polarity_selector, "observe") and polarity is not None:
             # Label this step's events against the prediction (reports, viewer) and learn point signs from them.
             t0 = time.perf_counter()
