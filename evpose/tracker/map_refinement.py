@@ -45,6 +45,13 @@ class MapRefinementConfig:
     falls 11.9 -> 4.4 mm (seed 0) and 10.2 -> 7.3 mm (seed 2) over the 2 s. About 40 us per update.
     The bundled demo is unchanged within 12 mm (ATE max 241 -> 253 mm). The fused modes do not refine
     (their figures are unchanged)."""
+    fused_modes: bool = False
+    """Refine in the fused modes (``full``, where IMU fusion drives the pose) too.
+
+    Off: mixed in ``full``. 2 s landing, mean of seeds 0-3: ATE 13.4 -> 12.5 mm, ARE 0.171 -> 0.138 deg
+    (346x260), 15.5 -> 15.2 mm, 0.198 -> 0.181 deg (240x180); seed 0 16.6 -> 14.6 and 20.7 -> 19.8 mm; bundled
+    demos (ATE RMSE, ``--align none``): ``landing`` 17.4 -> 16.9 mm, ``landing_dynamic`` 34.9 -> 31.3 mm, but
+    ``landing_fast`` 22.3 -> 23.2 mm, ARE 0.185 -> 0.208 deg; indoor not measured."""
     gain: float = field(default=0.05, metadata={"min": 0.0, "max": 1.0, "step": 0.01, "unit": "ratio"})
     """Share of each update's measured step a point moves by (an average over ~1 / gain updates), ratio.
 

@@ -96,9 +96,10 @@ class Tracker:
         self.coarse_field = TemporalDistanceField(config.distance_field.level(coarse), w, h) if coarse > 0 else None
         """Optional coarser field registered first (coarse-to-fine), None when ``coarse_blur_px`` is 0."""
         self.components = components if components is not None else MotionComponents()
-        self.refiner = (PaintedEdgeRefiner(config.map_refinement, contour_map)
-                        if config.map_refinement.enabled and not self.components.drives_pose else None)
-        """``stpe``: online refinement of the map's painted edges (None when off or in the fused modes)."""
+        mr = config.map_refinement
+        self.refiner = (PaintedEdgeRefiner(mr, contour_map)
+                        if mr.enabled and (mr.fused_modes or not self.components.drives_pose) else None)
+        """Online refinement of the map's painted edges (None when off, or in the fused modes unless asked for)."""
         rc = config.registration
         self._registration = (dataclasses.replace(rc, min_inlier_ratio=rc.fused_min_inlier_ratio)
                               if self.components.drives_pose else rc)
@@ -223,9 +224,9 @@ class Tracker:
 
     def _regain(self, status: TrackStatus, reason: str, strict_ok: bool) -> tuple[TrackStatus, str]:
         """``stpe``'s weak-registration test: a lost track is held again only after ``ACQUIRE_UPDATES`` registrations in
-        a row pass the strict inlier test; until then they are fused but the update is not OK. On the bundled demo a
-        coasted prediction 5.7 m off once met the strict test (91 of 803 points) and weak registrations then kept
-        that wrong lock for 0.3 s."""
+        a row pass the strict inlier test; until then they are fused but the update is still reported lost (a
+        candidate lock, not a pose to write out). On the bundled demo a coasted prediction 5.7 m off once met
+        the strict test (91 of 803 points) and weak registrations then kept that wrong lock for 0.3 s."""
         if status is TrackStatus.LOST:
             self._tracking, self._regain_streak = False, 0
             return status, reason
@@ -233,13 +234,13 @@ class Tracker:
             return status, reason
         if not (strict_ok and status is TrackStatus.OK):
             self._regain_streak = 0
-            return (TrackStatus.DEGRADED if status is TrackStatus.OK else status), reason or "re-acquiring the track"
+            return TrackStatus.LOST, reason or "re-acquiring the track: the registration was not fused"
         self._regain_streak += 1
         if self._regain_streak >= ACQUIRE_UPDATES:
             self._tracking = True
             return status, reason
-        return TrackStatus.DEGRADED, (f"re-acquiring the track: {self._regain_streak} of {ACQUIRE_UPDATES} registrations in a "
-                                      f"row passed the strict inlier test")
+        return TrackStatus.LOST, (f"re-acquiring the track: {self._regain_streak} of {ACQUIRE_UPDATES} registrations in a "
+                                  f"row passed the strict inlier test")
 
     def _side_motion(self):
         """The fusion backend when it runs beside (not as) the predictor, as in ``stpe+filter``."""
@@ -409,7 +410,7 @@ class Tracker:
         self._t_us = until
         if self._weak_test:
             status, reason = self._regain(status, reason, ok and not weak)
-        if self.refiner is not None and status is TrackStatus.OK and surface is self.time_surface:
+        if self.refiner is not None and status is TrackStatus.OK and field_polarity is None:  # registration read slot 0
             # Painted edges move towards where this update's events put them, seen from the pose the field shows.
             t0 = time.perf_counter()
             lag = float(self._registration.field_lag_ms) * 1e-3

@@ -179,8 +179,8 @@ def test_a_lost_track_needs_acquire_updates_strict_registrations_in_a_row_before
     res = run(tr, rec, t, 20)
     statuses = [r.status for r in res]
     first_ok = statuses.index(TrackStatus.OK)
-    # ... and the strict passes before the first OK update are reported as re-acquiring, ACQUIRE_UPDATES - 1 of them.
+    # ... and the strict passes before the first OK update are still lost, re-acquiring, ACQUIRE_UPDATES - 1 of them.
     assert first_ok >= ACQUIRE_UPDATES - 1
-    assert statuses[first_ok - ACQUIRE_UPDATES + 1:first_ok] == [TrackStatus.DEGRADED] * (ACQUIRE_UPDATES - 1)
+    assert statuses[first_ok - ACQUIRE_UPDATES + 1:first_ok] == [TrackStatus.LOST] * (ACQUIRE_UPDATES - 1)
     assert all("re-acquiring" in r.reason for r in res[first_ok - ACQUIRE_UPDATES + 1:first_ok])
     assert all(r.status is TrackStatus.OK for r in res[first_ok:])
