@@ -161,26 +161,30 @@ def test_a_weak_registration_agreeing_with_the_motion_model_keeps_the_track(scen
     assert all(r.status is TrackStatus.LOST for r in res)
 
 
-def test_a_lost_track_needs_acquire_updates_strict_registrations_in_a_row_before_it_is_ok_again(scene):
-    from evpose.tracker.tracker import ACQUIRE_UPDATES
-
+def test_a_lost_track_stays_lost_or_needs_regain_updates_strict_registrations_in_a_row(scene):
     rec, cmap = scene
-    tr = started(rec, cmap)
-    t = int(rec.ground_truth.t[0])
-    run(tr, rec, t, 10)
-    t += 10 * DT_US
-    for _ in range(6):  # no events for 30 ms: the field fades, the track is lost
-        t += DT_US
-        lost = tr.step(t, EventArray.empty())
-    assert lost.status is TrackStatus.LOST
-    # Weak registrations cannot pick a lost track up (its coasted covariance would let a wrong lock through) ...
-    cfg = tr._registration
-    assert 0.0 < cfg.min_inlier_ratio < tr.config.registration.min_inlier_ratio
-    res = run(tr, rec, t, 20)
+
+    def lose_then_resume(regain):
+        cfg = TrackerConfig()
+        cfg.registration.regain_updates = regain
+        tr = started(rec, cmap, cfg)
+        t = int(rec.ground_truth.t[0])
+        run(tr, rec, t, 10)
+        t += 10 * DT_US
+        for _ in range(6):  # no events for 30 ms: the field fades, the track is lost
+            t += DT_US
+            lost = tr.step(t, EventArray.empty())
+        assert lost.status is TrackStatus.LOST
+        # Weak registrations cannot pick a lost track up (its coasted covariance would let a wrong lock through).
+        assert 0.0 < tr._registration.min_inlier_ratio < tr.config.registration.min_inlier_ratio
+        return run(tr, rec, t, 20)
+
+    # By default a lost track is not regained: the strict test cannot tell a wrong lock from a right one.
+    assert all(r.status is TrackStatus.LOST for r in lose_then_resume(0))
+    res = lose_then_resume(4)
     statuses = [r.status for r in res]
     first_ok = statuses.index(TrackStatus.OK)
-    # ... and the strict passes before the first OK update are still lost, re-acquiring, ACQUIRE_UPDATES - 1 of them.
-    assert first_ok >= ACQUIRE_UPDATES - 1
-    assert statuses[first_ok - ACQUIRE_UPDATES + 1:first_ok] == [TrackStatus.LOST] * (ACQUIRE_UPDATES - 1)
-    assert all("re-acquiring" in r.reason for r in res[first_ok - ACQUIRE_UPDATES + 1:first_ok])
+    # The strict passes before the first OK update are still lost, re-acquiring, 3 of them.
+    assert first_ok >= 3 and statuses[first_ok - 3:first_ok] == [TrackStatus.LOST] * 3
+    assert all("re-acquiring" in r.reason for r in res[first_ok - 3:first_ok])
     assert all(r.status is TrackStatus.OK for r in res[first_ok:])
