@@ -115,3 +115,21 @@ def test_tracker_refines_a_copy_of_the_map_and_restores_it_bit_identically(paint
     for x, y in zip(straight[7:], replay):
         assert np.array_equal(x.pose, y.pose) and x.counts == y.counts
     assert np.array_equal(cmap.points, before)  # the map itself is never moved
+
+
+def test_a_points_first_updates_take_a_running_mean_then_the_fixed_gain():
+    # 1 m along x is 50 px at 2 m with f = 100 px: a clipped 0.25 px step is 5 mm.
+    u_edge = (W - 1) / 2
+    fld = line_field(u_edge)
+    steps = {}
+    for first in (0, 3):
+        cmap = painted_line(0.04)
+        refiner = PaintedEdgeRefiner(MapRefinementConfig(gain=0.1, first_updates=first), cmap)
+        pts = np.array(cmap.points)
+        offs = []
+        for _ in range(4):
+            refiner.update(pts, fld, DOWN, K)
+            offs.append(refiner.offsets[0])
+        steps[first] = -np.diff(np.concatenate([[0.0], offs]))
+    assert np.allclose(steps[0], 0.1 * 0.005)
+    assert np.allclose(steps[3], [0.005, 0.005 / 2, 0.005 / 3, 0.1 * 0.005])
