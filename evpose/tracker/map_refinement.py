@@ -50,10 +50,11 @@ class MapRefinementConfig:
     fused_modes: bool = False
     """Refine in the fused modes (``full``, where IMU fusion drives the pose) too.
 
-    Off: mixed in ``full``. 2 s landing, mean of seeds 0-3: ATE 13.4 -> 12.5 mm, ARE 0.171 -> 0.138 deg
-    (346x260), 15.5 -> 15.2 mm, 0.198 -> 0.181 deg (240x180); seed 0 16.6 -> 14.6 and 20.7 -> 19.8 mm; bundled
-    demos (ATE RMSE, ``--align none``): ``landing`` 17.4 -> 16.9 mm, ``landing_dynamic`` 34.9 -> 31.3 mm, but
-    ``landing_fast`` 22.3 -> 23.2 mm, ARE 0.185 -> 0.208 deg; indoor not measured."""
+    Off: mixed in ``full`` (and the fusion is another area's). 2 s landing, mean of seeds 0-3: ATE 13.4 -> 12.6 mm,
+    ARE 0.171 -> 0.133 deg (346x260), 15.5 -> 15.3 mm, 0.198 -> 0.179 deg (240x180) (fixed gain: seed 0
+    16.6 -> 14.6 and 20.7 -> 19.8 mm); bundled demos (ATE RMSE, ``--align none``): ``landing`` 17.4 -> 16.8 mm,
+    ``landing_dynamic`` 34.9 -> 28.9 mm, but ``landing_fast`` 22.3 -> 22.7 mm, ARE 0.185 -> 0.212 deg; indoor
+    not measured."""
     gain: float = field(default=0.05, metadata={"min": 0.0, "max": 1.0, "step": 0.01, "unit": "ratio"})
     """Share of each update's measured step a point moves by (an average over ~1 / gain updates), ratio.
 
