@@ -19,6 +19,7 @@ from evpose.fusion.config import FusionConfig
 from evpose.fusion.ego_motion import EgoMotionConfig
 from evpose.fusion.polarity import PolarityFilterConfig
 from evpose.io.config_file import config_from_dict, config_to_dict, read_config, write_config  # noqa: F401 - re-exported
+from evpose.tracker.map_refinement import MapRefinementConfig
 from evpose.tracker.motion_filter import MotionFilterConfig
 from evpose.tracker.registration_config import RegistrationConfig
 from evpose.tracker.visible_map import VisibleMapConfig
@@ -76,6 +77,8 @@ class TrackerConfig:
     registration: RegistrationConfig = field(default_factory=RegistrationConfig)
     motion_filter: MotionFilterConfig = field(default_factory=MotionFilterConfig)
     """Constant-velocity Kalman filter of ``motion_model: kalman`` (``stpe`` mode)."""
+    map_refinement: MapRefinementConfig = field(default_factory=MapRefinementConfig)
+    """Online refinement of the map's painted edges (``stpe`` mode)."""
     polarity: PolarityFilterConfig = field(default_factory=PolarityFilterConfig)
     """Motion-instructed polarity filter (``stpe+filter`` and ``full``)."""
     fusion: FusionConfig = field(default_factory=FusionConfig)

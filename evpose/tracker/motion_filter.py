@@ -114,6 +114,10 @@ class MotionFilterConfig:
     Alone it changes little on the simulated landing (70.7 / 84.0 mm against 71.2 / 82.3 mm
     at 346x260 / 240x180), but the filter's prior in the registration (``prior_in_registration``)
     only helps with it."""
+    weak_gate_sigma: float = field(default=3.0, metadata={"min": 0.0, "max": 100.0, "step": 0.5, "unit": "sigma"})
+    """A weak registration (inlier share between ``registration.weak_inlier_ratio`` and ``min_inlier_ratio``) is
+    fused only if its innovation is within this Mahalanobis distance of the prediction; otherwise the track is
+    lost, sigma. 2 / 3 / 4 gave the same demo track (the registration's prior keeps its innovations small)."""
     max_gated: int = field(default=20, metadata={"min": 0, "max": 1000, "step": 1, "unit": "updates"})
     """After this many registrations in a row were gated out the next one is fused anyway (the model may be
     the one that is wrong), updates."""
@@ -373,10 +377,12 @@ class ConstantVelocityKalman:
         self._motion_cache = None
         return T_pred.copy()
 
-    def correct(self, t_us: int, T_measured: np.ndarray, covariance: np.ndarray | None) -> np.ndarray:
+    def correct(self, t_us: int, T_measured: np.ndarray, covariance: np.ndarray | None, gate_sigma: float | None = None) -> np.ndarray:
         """Fuse a registration at ``t_us`` (pose and (6, 6) body-frame covariance); returns the filtered pose.
 
-        Without a covariance (or when the innovation fails the gate) the filter coasts.
+        Without a covariance (or when the innovation fails the gate) the filter coasts. ``gate_sigma``, if given,
+        is a strict gate for this registration instead of ``config.gate_sigma``: it is never overridden by
+        ``max_gated`` and does not count towards it (a weak registration must agree with the motion model).
         """
         if self._T is None:
             raise RuntimeError("predictor used before reset()")
@@ -399,11 +405,15 @@ class ConstantVelocityKalman:
         d2 = float(y @ S_inv_y)
         self.last_innovation_sigma = float(np.sqrt(max(d2, 0.0)))
         self._adapt(y, S)
-        gate = float(self.config.gate_sigma)
-        if gate > 0 and self.last_innovation_sigma > gate and self._rejected < int(self.config.max_gated):
-            self._rejected += 1
-            return T_pred.copy()
-        self._rejected = 0
+        if gate_sigma is not None:
+            if self.last_innovation_sigma > float(gate_sigma):
+                return T_pred.copy()
+        else:
+            gate = float(self.config.gate_sigma)
+            if gate > 0 and self.last_innovation_sigma > gate and self._rejected < int(self.config.max_gated):
+                self._rejected += 1
+                return T_pred.copy()
+            self._rejected = 0
         self.last_fused = True
         dx = K @ y
         self._T = gtsam.Pose3(T_pred).compose(gtsam.Pose3.Expmap(dx[:6])).matrix()

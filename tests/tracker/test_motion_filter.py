@@ -245,3 +245,20 @@ def test_adaptive_state_is_part_of_the_snapshot():
     old = {k: v for k, v in state.items() if k not in ("innovation_mean", "innovation_power", "noise_scale")}
     kf.restore(old)
     assert kf.noise_scale == 1.0
+
+
+def test_a_strict_gate_is_never_overridden_and_does_not_count_towards_max_gated():
+    kf = seeded(MotionFilterConfig(gate_sigma=4.0, max_gated=1))
+    cov = np.diag([1e-6] * 3 + [1e-6] * 3)
+    far = (gtsam.Pose3(pose(0.010)) * gtsam.Pose3.Expmap(np.array([0, 0, 0, 0.5, 0, 0]))).matrix()
+    for k in (2, 3, 4):
+        predicted = kf.predict(k * 5_000)
+        out = kf.correct(k * 5_000, far, cov, gate_sigma=3.0)
+        assert not kf.last_fused and kf.last_innovation_sigma > 3.0
+        assert np.array_equal(out, predicted)  # coasting on the model
+    # The strict rejections did not count: the ordinary gate still rejects once before max_gated lets one through.
+    kf.correct(25_000, far, cov)
+    assert not kf.last_fused
+    near = (gtsam.Pose3(pose(0.030)) * gtsam.Pose3.Expmap(np.array([0, 0, 0, 1e-4, 0, 0]))).matrix()
+    kf.correct(30_000, near, np.diag([1e-4] * 6), gate_sigma=3.0)
+    assert kf.last_fused

@@ -144,3 +144,47 @@ def test_tracker_needs_a_calibration_and_a_map(scene):
         Tracker(TrackerConfig(), cmap, None)
     with pytest.raises(InputError, match="no points"):
         Tracker(TrackerConfig(), cmap[np.zeros(len(cmap), bool)], rec.calibration)
+
+
+def test_a_weak_registration_agreeing_with_the_motion_model_keeps_the_track(scene):
+    rec, cmap = scene
+    # Every registration is weak against a strict test no real one passes; the weak test keeps the track on them.
+    cfg = TrackerConfig()
+    cfg.registration.min_inlier_ratio, cfg.registration.weak_inlier_ratio = 0.99, 0.01
+    res = run(started(rec, cmap, cfg), rec, int(rec.ground_truth.t[0]), 30)
+    assert all(r.status is TrackStatus.OK for r in res)
+    T_gt = rec.ground_truth.interpolate(np.array([res[-1].t_us])).matrix(0)
+    assert np.linalg.norm(res[-1].pose[:3, 3] - T_gt[:3, 3]) < 0.02
+    # Without it the same registrations lose the track.
+    cfg.registration.weak_inlier_ratio = 0.0
+    res = run(started(rec, cmap, cfg), rec, int(rec.ground_truth.t[0]), 3)
+    assert all(r.status is TrackStatus.LOST for r in res)
+
+
+def test_a_lost_track_stays_lost_or_needs_regain_updates_strict_registrations_in_a_row(scene):
+    rec, cmap = scene
+
+    def lose_then_resume(regain):
+        cfg = TrackerConfig()
+        cfg.registration.regain_updates = regain
+        tr = started(rec, cmap, cfg)
+        t = int(rec.ground_truth.t[0])
+        run(tr, rec, t, 10)
+        t += 10 * DT_US
+        for _ in range(6):  # no events for 30 ms: the field fades, the track is lost
+            t += DT_US
+            lost = tr.step(t, EventArray.empty())
+        assert lost.status is TrackStatus.LOST
+        # Weak registrations cannot pick a lost track up (its coasted covariance would let a wrong lock through).
+        assert 0.0 < tr._registration.min_inlier_ratio < tr.config.registration.min_inlier_ratio
+        return run(tr, rec, t, 20)
+
+    # By default a lost track is not regained: the strict test cannot tell a wrong lock from a right one.
+    assert all(r.status is TrackStatus.LOST for r in lose_then_resume(0))
+    res = lose_then_resume(4)
+    statuses = [r.status for r in res]
+    first_ok = statuses.index(TrackStatus.OK)
+    # The strict passes before the first OK update are still lost, re-acquiring, 3 of them.
+    assert first_ok >= 3 and statuses[first_ok - 3:first_ok] == [TrackStatus.LOST] * 3
+    assert all("re-acquiring" in r.reason for r in res[first_ok - 3:first_ok])
+    assert all(r.status is TrackStatus.OK for r in res[first_ok:])
