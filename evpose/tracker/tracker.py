@@ -42,6 +42,7 @@ from evpose.tracker.motion_filter import ConstantVelocityKalman
 from evpose.tracker.predictor import ConstantPosePredictor, ConstantVelocityPredictor, MotionPredictor
 from evpose.tracker.registration import register_to_map, subsample_indices
 from evpose.tracker.step_result import StepDebug, StepResult, TrackStatus
+from evpose.tracker.track_hold import ACQUIRE_UPDATES, TrackHold  # noqa: F401 (ACQUIRE_UPDATES re-exported)
 from evpose.tracker.modes import MotionComponents
 from evpose.tracker.visible_map import VisibleMap, projected_bounds, visible_points
 
@@ -51,8 +52,6 @@ PolaritySelector = Callable[[np.ndarray, int, np.ndarray], "np.ndarray | None"]
 
 _NO_PRIOR = np.zeros((6, 6))
 """Information matrix of "no prior" for :func:`register_to_map`."""
-ACQUIRE_UPDATES = 5
-"""Registrations in a row that must pass the strict inlier test before the fused modes' looser one applies."""
 
 
 def _ms(t0: float) -> float:
@@ -110,15 +109,9 @@ class Tracker:
         judged by their agreement with the motion prediction instead of being a lost track."""
         if self._weak_test:
             self._registration = dataclasses.replace(rc, min_inlier_ratio=rc.weak_inlier_ratio)
-        self._acquired = not self.components.drives_pose or self._registration is rc
-        """The fused modes' looser inlier test applies only once the map is acquired: ``ACQUIRE_UPDATES``
-        registrations in a row passed the strict one (a wrong map passes the loose test now and then)."""
-        self._strict_streak = 0
-        self._tracking = True
-        """Whether the track is held (``stpe``'s weak-registration test applies only then)."""
-        self._regain_streak = 0
-        self._never_lost = True
-        """No update was lost since :meth:`start` (weak registrations count only then)."""
+        self.hold = TrackHold(not self.components.drives_pose or self._registration is rc, rc.regain_updates)
+        """The fused modes' looser inlier test applies only once the map is acquired (``ACQUIRE_UPDATES`` strict
+        registrations in a row); ``stpe`` regains a lost track only after ``regain_updates`` of them."""
         if predictor is None and self.components.drives_pose:
             predictor = self.components.motion
         if polarity_selector is None:
@@ -165,7 +158,7 @@ class Tracker:
             raise InputError(None, "the initial pose has NaN or infinite values")
         self._pose = T.copy()
         self._t_us = int(t_us)
-        self._tracking, self._regain_streak, self._never_lost = True, 0, True
+        self.hold.start()
         self.predictor.reset(int(t_us), T)
         if self._side_motion() is not None:
             self._side_motion().reset(int(t_us), T)
@@ -189,8 +182,8 @@ class Tracker:
             "t_us": self._t_us,
             "steps": self._steps,
             "ego_history": tuple(np.copy(a) for a in self._ego_history),
-            "acquisition": (self._acquired, self._strict_streak),
-            "tracking": (self._tracking, self._regain_streak, self._never_lost),
+            "acquisition": self.hold.snapshot()[0],
+            "tracking": self.hold.snapshot()[1],
             "map_refinement": None if self.refiner is None else self.refiner.snapshot(),
         }
 
@@ -207,44 +200,10 @@ class Tracker:
         self._t_us = state["t_us"]
         self._steps = state["steps"]
         self._ego_history = tuple(np.copy(a) for a in state["ego_history"])
-        self._acquired, self._strict_streak = state["acquisition"]
-        self._tracking, self._regain_streak, self._never_lost = state.get("tracking", (True, 0, True))
+        self.hold.restore(state["acquisition"], state.get("tracking", (True, 0, True)))
         if self.refiner is not None and state.get("map_refinement") is not None:
             self.refiner.restore(state["map_refinement"])
             self.refiner.apply(self._points)
-
-    def _acquisition_test(self, reg) -> str:
-        """Before the map is acquired, a registration must pass the strict inlier test; '' when it does."""
-        need = float(self.config.registration.min_inlier_ratio) * reg.points_used
-        if reg.inliers >= need:
-            self._strict_streak += 1
-            self._acquired = self._strict_streak >= ACQUIRE_UPDATES
-            return ""
-        self._strict_streak = 0
-        return (f"acquiring the map: only {reg.inliers} of {reg.points_used} map points lie on recent events "
-                f"(need {int(np.ceil(need))} until {ACQUIRE_UPDATES} updates in a row have them)")
-
-    def _regain(self, status: TrackStatus, reason: str, strict_ok: bool) -> tuple[TrackStatus, str]:
-        """``stpe``'s weak-registration test: a lost track is held again only after ``registration.regain_updates``
-        registrations in a row pass the strict inlier test (0 = never); until then they are fused but the update
-        is still reported lost (a candidate lock, not a pose to write out)."""
-        if status is TrackStatus.LOST:
-            self._tracking, self._regain_streak = False, 0
-            return status, reason
-        if self._tracking:
-            return status, reason
-        need = int(self.config.registration.regain_updates)
-        if not (strict_ok and status is TrackStatus.OK):
-            self._regain_streak = 0
-            return TrackStatus.LOST, reason or "the track was lost: the registration was not fused"
-        self._regain_streak += 1
-        if need > 0 and self._regain_streak >= need:
-            self._tracking = True
-            return status, reason
-        if need <= 0:
-            return TrackStatus.LOST, "the track was lost and is not regained (registration.regain_updates = 0)"
-        return TrackStatus.LOST, (f"re-acquiring the track: {self._regain_streak} of {need} registrations in a "
-                                  f"row passed the strict inlier test")
 
     def _side_motion(self):
         """The fusion backend when it runs beside (not as) the predictor, as in ``stpe+filter``."""
@@ -362,15 +321,15 @@ class Tracker:
             reason = reg.reason
             if self._weak_test and reg.success and reg.inliers < float(self.config.registration.min_inlier_ratio) * reg.points_used:
                 weak = True
-                if not (self._tracking and self._never_lost):
+                if not (self.hold.tracking and self.hold.never_lost):
                     # A coasted prediction has a wide covariance that would let a wrong lock through, and a regained
                     # track may be one the strict test cannot tell from a right one (indoor demo: held 0.3-0.45 m and
                     # 19-97 deg off by weak registrations): after a loss only strict registrations count.
                     reg.success = False
                     reason = (f"only {reg.inliers} of {reg.points_used} map points lie on recent events (need "
                               f"{self.config.registration.min_inlier_ratio:g} of them once the track was lost)")
-            if not self._acquired and reg.success:
-                reason = self._acquisition_test(reg)
+            if not self.hold.acquired and reg.success:
+                reason = self.hold.acquisition_test(reg.inliers, reg.points_used, self.config.registration.min_inlier_ratio)
         timings["registration"] = _ms(t0)
 
         ok = reg is not None and reg.success and not reason
@@ -417,10 +376,10 @@ class Tracker:
             status = TrackStatus.LOST
         self._t_us = until
         if self._weak_test:
-            status, reason = self._regain(status, reason, ok and not weak)
+            status, reason = self.hold.regain(status, reason, ok and not weak)
         if status is TrackStatus.LOST:
-            self._never_lost = False
-        if self.refiner is not None and status is TrackStatus.OK and field_polarity is None and self._never_lost:
+            self.hold.never_lost = False
+        if self.refiner is not None and status is TrackStatus.OK and field_polarity is None and self.hold.never_lost:
             # Registration read slot 0. A regained track may be a wrong lock the map would learn, so only a track
             # never lost since its start refines (indoor demo, stpe: refining after regains 192 -> 861 mm ATE).
             # Painted edges move towards where this update's events put them, seen from the pose the field shows.

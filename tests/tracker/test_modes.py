@@ -168,7 +168,7 @@ def test_full_mode_with_ego_motion_history_seek_back_replays_bit_identically(lan
 
 
 def test_full_mode_takes_the_looser_inlier_test_only_once_the_map_is_acquired(landing):
-    from evpose.tracker.tracker import ACQUIRE_UPDATES
+    from evpose.tracker.track_hold import ACQUIRE_UPDATES
 
     rec, cmap = landing
     cfg = TrackerConfig(mode=TrackerMode.FULL)
@@ -177,8 +177,8 @@ def test_full_mode_takes_the_looser_inlier_test_only_once_the_map_is_acquired(la
     never.run()
     # The loose test alone would pass every registration; without the strict one first, none is fused.
     assert all(r.counts["registered"] == 0 and r.reason.startswith("acquiring the map") for r in never.results)
-    assert all(r.status is TrackStatus.DEGRADED for r in never.results) and not never.tracker._acquired
+    assert all(r.status is TrackStatus.DEGRADED for r in never.results) and not never.tracker.hold.acquired
     ok = TrackingSession(rec, cmap, TrackerConfig(mode=TrackerMode.FULL))
     for _ in range(ACQUIRE_UPDATES):
         ok.step()
-    assert ok.tracker._acquired and all(r.counts["registered"] for r in ok.results)
+    assert ok.tracker.hold.acquired and all(r.counts["registered"] for r in ok.results)
