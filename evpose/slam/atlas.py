@@ -53,7 +53,11 @@ class SlamMap:
     imu_initialised: bool = False
     """Event-inertial mode: the map was scaled to metres and gravity-aligned by the IMU initialisation."""
     scale: float = 1.0
-    """Metres per original map unit applied by the IMU initialisation."""
+    """Metres per original map unit applied by the IMU initialisation (and its refinement)."""
+    imu_init_t_us: int = -1
+    """Time of the keyframe at which the IMU initialisation succeeded, us (-1 before)."""
+    scale_refined: bool = False
+    """Event-inertial mode: the scale and gravity were re-estimated once over a longer stretch (``InertialConfig.refine_after_s``)."""
     inertial: object = None
     """:class:`evpose.slam.inertial_ba.InertialState` once the IMU is initialised."""
     lost_reason: str = ""

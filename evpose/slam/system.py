@@ -45,6 +45,7 @@ from evpose.slam.event_image import to_uint8
 from evpose.slam.mci import Hypothesis, MciGenerator, MciResult, MotionPrior
 from evpose.slam.keyframe_search import keep_keyframe_image, klt_refind_points
 from evpose.slam.projection_search import SearchMatcher, refind_points, store_patches
+from evpose.slam.scale_refinement import refine_map_scale
 from evpose.slam.step_result import SlamStatus, SlamStepResult
 from evpose.slam.geometry import project
 from evpose.slam.gyro_prior import (camera_delta_rotation, gyro_delta_rotation, keyframe_rotation_priors, reanchor_rotations,
@@ -85,6 +86,8 @@ class EventSlam:
         self._last_t = 0
         self.last_imu_init = None
         """Outcome of the last IMU initialisation attempt (event-inertial mode)."""
+        self.last_scale_refinement = None
+        """Outcome of the last scale refinement (``InertialConfig.refine_after_s``)."""
         self._prev_hypothesis: str | None = None
         """Hypothesis of the previous MCI ("H1".."H4")."""
         self._last_visual_t = 0
@@ -124,6 +127,7 @@ class EventSlam:
             "n_hist": self.window.n_events_history, "atlas": self.atlas, "fe": self.fe, "next_point": self._next_point,
             "state": self._state, "last_t": self._last_t, "imu_init": self.last_imu_init, "n_results": len(self.results),
             "last_visual_t": self._last_visual_t, "prev_hypothesis": self._prev_hypothesis,
+            "scale_refinement": self.last_scale_refinement,
         })
 
     def restore(self, snap: dict) -> None:
@@ -136,6 +140,7 @@ class EventSlam:
         self._state, self._last_t, self.last_imu_init = s["state"], s["last_t"], s["imu_init"]
         self._last_visual_t = s.get("last_visual_t", 0)
         self._prev_hypothesis = s.get("prev_hypothesis")
+        self.last_scale_refinement = s.get("scale_refinement")
         del self.results[s["n_results"]:]
 
     # ------------------------------------------------------------- pipeline
@@ -288,6 +293,7 @@ class EventSlam:
         if res.ok:
             m.transform(res.R_align, res.scale)
             m.imu_initialised = True
+            m.imu_init_t_us = kfs[-1].t_us
             m.scale = res.scale
             m.inertial = InertialState({kfs[k].id: v for k, v in zip(res.used, res.velocities)}, np.zeros(3), res.gyro_bias.copy())
             ic, tc = self.cfg.inertial, self.cfg.tracking
@@ -471,7 +477,17 @@ class EventSlam:
             self._reanchor_rotations(m, {m.keyframes[-2].id})
         if self.imu is not None and not m.imu_initialised:
             self._try_imu_init(m)
+        elif self.imu is not None and not m.scale_refined and ic.refine_after_s > 0 and (t_us - m.imu_init_t_us) / 1e6 >= ic.refine_after_s:
+            self._refine_scale(m)
         return m.keyframes[-1].T_wc
+
+    def _refine_scale(self, m: SlamMap) -> None:
+        """Re-solve scale and gravity over all keyframes of a metric map, once (:mod:`evpose.slam.scale_refinement`)."""
+        tc = self.cfg.tracking
+        self.last_scale_refinement = refine_map_scale(m, self.K, self.imu, self.calib.T_cam_imu, self.calib.time_offset_us,
+                                                      self.cfg.inertial, tc.ba_iterations, tc.ba_huber_px)
+        if self.last_scale_refinement.ok:
+            self._reanchor_rotations(m)
 
     def _imu_prediction(self, t_us: int) -> np.ndarray | None:
         """``T_world_cam`` at ``t_us`` propagated by the IMU from the newest keyframe of a metric map, else None."""

@@ -4,7 +4,10 @@ from scipy.spatial.transform import Rotation
 
 from evpose.eval.slam_metrics import atlas_metrics
 from evpose.slam import SlamConfig, SlamMode, run_slam
+from evpose.slam.atlas import Keyframe, SlamMap
 from evpose.slam.inertial import InertialConfig, initialize_imu, preintegrate
+from evpose.slam.inertial_ba import InertialState
+from evpose.slam.system import EventSlam
 from slam_synthetic import make_recording
 
 BIAS = np.array([0.004, -0.003, 0.002])
@@ -34,7 +37,8 @@ def test_imu_initialisation_recovers_scale_gravity_and_gyro_bias(shaken):
     poses = [T[k].copy() for k in idx]
     for P in poses:
         P[:3, 3] *= 0.3  # an up-to-scale visual map
-    res = initialize_imu([int(gt.t[k]) for k in idx], poses, shaken.imu, np.eye(4), 0, InertialConfig())
+    # Without the bias prior (exact visual rotations here; the prior would hold the bias near zero).
+    res = initialize_imu([int(gt.t[k]) for k in idx], poses, shaken.imu, np.eye(4), 0, InertialConfig(init_gyro_bias_sigma=0.0))
     assert res.ok, res.reason
     assert res.scale == pytest.approx(1 / 0.3, rel=0.01)
     assert np.abs(res.gyro_bias - BIAS).max() < 2e-4
@@ -56,3 +60,52 @@ def test_event_inertial_slam_gives_the_map_metric_scale(shaken):
 def test_imu_initialisation_refuses_too_few_keyframes(shaken):
     res = initialize_imu([0, 1000], [np.eye(4)] * 2, shaken.imu, np.eye(4), 0, InertialConfig())
     assert not res.ok and "keyframes" in res.reason
+
+
+def _keyframes_with_rotation_drift(shaken, drift_rad_s):
+    """Keyframe poses of an up-to-scale map whose rotations drift from the truth at ``drift_rad_s`` (visual errors)."""
+    gt = shaken.ground_truth
+    T = gt.matrices()
+    idx = list(range(0, 1900, 150))
+    poses = []
+    for k in idx:
+        P = T[k].copy()
+        P[:3, :3] = P[:3, :3] @ Rotation.from_rotvec(np.asarray(drift_rad_s) * gt.t[k] / 1e6).as_matrix()
+        P[:3, 3] *= 0.3
+        poses.append(P)
+    return [int(gt.t[k]) for k in idx], poses
+
+
+def test_gyro_bias_prior_keeps_visual_rotation_drift_out_of_the_bias(shaken):
+    times, poses = _keyframes_with_rotation_drift(shaken, [0.03, 0.0, 0.0])
+    free = initialize_imu(times, poses, shaken.imu, np.eye(4), 0, InertialConfig(init_gyro_bias_sigma=0.0, max_residual_ratio=1.0))
+    prior = initialize_imu(times, poses, shaken.imu, np.eye(4), 0, InertialConfig(max_residual_ratio=1.0))
+    # Unconstrained, the 0.03 rad/s drift of the visual rotations lands in the bias; the prior keeps it near zero.
+    assert np.abs(free.gyro_bias - BIAS).max() > 0.025
+    assert np.abs(prior.gyro_bias).max() < 0.003
+
+
+def test_gyro_bias_prior_with_accurate_visual_rotations_recovers_the_bias(shaken):
+    times, poses = _keyframes_with_rotation_drift(shaken, [0.0, 0.0, 0.0])
+    res = initialize_imu(times, poses, shaken.imu, np.eye(4), 0, InertialConfig(init_rotation_sigma_deg=0.01))
+    assert np.abs(res.gyro_bias - BIAS).max() < 3e-4
+
+
+def test_scale_refinement_rescales_a_metric_map_whose_scale_is_off(shaken):
+    gt = shaken.ground_truth
+    T = gt.matrices()
+    m = SlamMap(0)
+    for i, k in enumerate(range(0, 1900, 100)):
+        P = T[k].copy()
+        P[:3, 3] *= 1.4  # the first initialisation got the scale 40 % too large
+        m.keyframes.append(Keyframe(i, int(gt.t[k]), P))
+    m.imu_initialised, m.imu_init_t_us = True, m.keyframes[0].t_us
+    m.inertial = InertialState({}, np.zeros(3), np.zeros(3))
+    cfg = SlamConfig(mode=SlamMode.EVENT_INERTIAL)
+    slam = EventSlam(cfg, shaken.calibration, shaken.imu)
+    slam._refine_scale(m)  # what _new_keyframe calls refine_after_s after the initialisation
+    assert slam.last_scale_refinement.ok and m.scale_refined
+    est = np.linalg.norm(m.keyframes[-1].T_wc[:3, 3] - m.keyframes[0].T_wc[:3, 3])
+    true = np.linalg.norm(T[1800][:3, 3] - T[0][:3, 3])
+    assert est == pytest.approx(true, rel=0.02)
+    assert m.scale == pytest.approx(1 / 1.4, rel=0.02)

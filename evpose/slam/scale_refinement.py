@@ -1,0 +1,42 @@
+"""Refinement of an event-inertial map's IMU initialisation: scale and gravity re-solved once the map is longer.
+
+The first IMU initialisation rests on a few keyframes of an up-to-scale visual
+map (``InertialConfig.init_min_span_s``, thinned to ``init_min_gap_s``); on
+the simulated landing it left maps up to 1.65 times too large. ORB-SLAM3
+refines its initialisation as the map grows; here the same alignment
+(:func:`evpose.slam.inertial.initialize_imu`) runs once more over all keyframes
+of the now metric map, the map is rescaled and re-aligned with the result, and
+an inertial BA over every keyframe follows.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from evpose.core.imu import ImuSamples
+from evpose.slam.atlas import SlamMap
+from evpose.slam.inertial import ImuInitResult, InertialConfig, initialize_imu
+from evpose.slam.inertial_ba import inertial_local_bundle_adjustment
+
+
+def refine_map_scale(m: SlamMap, K: np.ndarray, imu: ImuSamples, T_cam_imu: np.ndarray, time_offset_us: int, ic: InertialConfig,
+                     ba_iterations: int, ba_huber_px: float) -> ImuInitResult:
+    """Re-align the IMU-initialised map ``m`` in place (marks it refined); a refused alignment leaves it as it is."""
+    m.scale_refined = True
+    kfs = m.keyframes
+    res = initialize_imu([k.t_us for k in kfs], [k.T_wc for k in kfs], imu, T_cam_imu, time_offset_us,
+                         replace(ic, max_residual_ratio=ic.refine_max_residual_ratio))
+    if not res.ok:
+        return res
+    m.transform(res.R_align, res.scale)
+    m.scale *= res.scale
+    st = m.inertial
+    # Velocities live in the map frame and follow the similarity; the alignment's own estimates replace those it solved.
+    st.velocities = {k: res.scale * (res.R_align @ v) for k, v in st.velocities.items()}
+    st.velocities.update({kfs[k].id: v for k, v in zip(res.used, res.velocities)})
+    if ic.inertial_ba:
+        inertial_local_bundle_adjustment(m, st, K, imu, T_cam_imu, time_offset_us, len(kfs), ba_iterations, ba_huber_px,
+                                         ic.acc_noise, ic.gyro_noise, ic.acc_bias_sigma, ic.gyro_bias_sigma)
+    return res
