@@ -291,3 +291,32 @@ def bench_aligned_field(ctx) -> dict:
         out[f"{mode}_outputs_bit_identical"] = len(pooled["image"][2] | pooled["patch_list"][2]) == 1
     out.update(_load())
     return out
+
+
+def bench_refinement_cost(ctx) -> dict:
+    """Per-update CPU of ``stpe`` and ``full`` with and without the online painted-edge refinement
+    (``map_refinement.enabled``), 2 s landing at 346x260 (1 s at 240x180 with ``quick``), the four runs alternated
+    over rounds in one process so that the machine's phases hit both alike. ATE of each for reference."""
+    from evpose.bench.tracking import landing_case
+    from evpose.eval.metrics import Alignment, EvalConfig, evaluate
+    from evpose.tracker.config import TrackerConfig, TrackerMode
+    from evpose.tracker.session import TrackingSession
+
+    res, seconds, rounds = (((240, 180), 1.0, 1) if ctx.quick else ((346, 260), 2.0, 4))
+    rec, cmap = landing_case(ctx.work_dir, res, seconds, ctx.seed)
+    cpu: dict[str, list[float]] = {}
+    out: dict = {"resolution": f"{res[0]}x{res[1]}", "rounds": rounds}
+    for _ in range(rounds):
+        for mode in ("stpe", "full"):
+            for on in (False, True):
+                cfg = TrackerConfig(mode=TrackerMode(mode))
+                cfg.map_refinement.enabled = on
+                session = TrackingSession(rec, cmap, cfg)
+                key = f"{mode}_{'refined' if on else 'unrefined'}"
+                cpu.setdefault(key, []).extend(ms for _, ms in list(_timed_steps(session))[5:])
+                ev = evaluate(session.trajectory(), rec.ground_truth, EvalConfig(align=Alignment.NONE))
+                out[f"{key}_ate_rmse_mm"] = float(ev.ate["rmse"] * 1e3)
+    for key, samples in cpu.items():
+        out.update({k: v for k, v in latency_summary(samples, f"{key}_update_cpu_").items() if k.endswith(LATENCY_KEYS)})
+    out.update(_load())
+    return out
