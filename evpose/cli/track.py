@@ -140,6 +140,11 @@ def main(
     cmap = read_contour_map(map)
     rec = open_recording(recording, width, height)
     session = TrackingSession(rec, cmap, cfg, initial_pose=initial)
+    if session.total_steps == 0:
+        # Otherwise this exits 0 saying "0 poses written" and writes no file at all.
+        raise InputError(recording, f"no pose update to run: the events end at {session.t_end_us} us, less than one update"
+                         f" ({session.dt_us} us) after the start at {session.t0_us} us"
+                         + (" (the first ground-truth pose)" if initial is None else ""))
     inputs = _record_fusion_inputs(session, cfg) if smoothed is not None else None
 
     lost = []

@@ -60,9 +60,12 @@ def config_from_dict(cls, data: dict, source: str | None = None, prefix: str = "
                     raise ValueError(f"expected an integer, got {raw!r}")
                 kwargs[name] = int(float(raw))
             elif typ is float:
-                if isinstance(raw, bool):
+                if isinstance(raw, bool) or not isinstance(raw, (int, float, str)):
                     raise ValueError(f"expected a number, got {raw!r}")
-                kwargs[name] = float(raw)
+                try:
+                    kwargs[name] = float(raw)
+                except ValueError:
+                    raise ValueError(f"expected a number, got {raw!r}") from None
             else:
                 kwargs[name] = raw
             if typ in (int, float):
@@ -87,9 +90,11 @@ def read_config(cls, path: str | Path):
     """Read dataclass ``cls`` from ``.yaml``/``.yml``/``.json``; missing keys keep their defaults."""
     path = Path(path)
     try:
-        text = path.read_text()
+        text = path.read_text(encoding="utf-8")
     except OSError as exc:
         raise InputError(path, f"cannot read the config file ({exc.strerror})") from None
+    except UnicodeDecodeError:
+        raise InputError(path, "not a text file (a config file is UTF-8 YAML or JSON)") from None
     try:
         if path.suffix.lower() == ".json":
             data = json.loads(text)
@@ -98,7 +103,12 @@ def read_config(cls, path: str | Path):
 
             data = yaml.safe_load(text)
     except Exception as exc:  # noqa: BLE001 - any parser error is bad input
-        raise InputError(path, f"not valid {'JSON' if path.suffix.lower() == '.json' else 'YAML'} ({str(exc).splitlines()[0]})") from None
+        # Both parsers know where they stopped (JSONDecodeError.lineno, YAML's problem_mark): name that line.
+        mark = getattr(exc, "problem_mark", None)
+        line = getattr(exc, "lineno", None) or (mark.line + 1 if mark is not None else None)
+        what = "JSON" if path.suffix.lower() == ".json" else "YAML"
+        detail = getattr(exc, "problem", None) or getattr(exc, "msg", None) or str(exc).splitlines()[0]
+        raise InputError(path, f"not valid {what} ({detail})", f"line {line}" if line else None) from None
     return config_from_dict(cls, data or {}, str(path))
 
 
