@@ -57,6 +57,7 @@ def main(
             override it where they differ from their defaults.
         quiet: No progress bar or summary.
     """
+    from evpose.io.atomic import check_outputs
     from evpose.io.map_ply import write_contour_map
     from evpose.mapping.build import MapBuildConfig, MapBuildError, build_contour_map
     from evpose.mapping.cloud_input import load_cloud
@@ -65,6 +66,7 @@ def main(
         raise InputError(out, "refusing to overwrite the input cloud")
     if out.suffix.lower() != ".ply":
         raise InputError(out, "the contour map is written as PLY; use a .ply output name")
+    check_outputs((out,), inputs=(cloud, config))
     t0 = time.perf_counter()
     raw = load_cloud(cloud)
     flags = dict(

@@ -122,8 +122,9 @@ def main(
         correct_scale: Atlas mode: align each map with scale (sim3), as for event-only runs; --align sim3 implies it.
         duration_s: Atlas mode: span of the recording for the tracked fraction, s (default: from ``EST.slam.json``, else the ground truth's span).
     """
-    from evpose.io.atomic import atomic_path
+    from evpose.io.atomic import atomic_path, check_outputs
 
+    check_outputs((json,), inputs=(estimate, ground_truth, *maps), folders=(plots,))
     if atlas or maps:
         summary = evaluate_atlas(estimate, ground_truth, maps, correct_scale or align == "sim3", duration_s)
         if not quiet:

@@ -107,7 +107,7 @@ def main(
     """
     from tqdm import tqdm
 
-    from evpose.io.atomic import atomic_path
+    from evpose.io.atomic import atomic_path, check_outputs
     from evpose.io.map_ply import read_contour_map
     from evpose.io.open import open_recording
     from evpose.io.tum import write_tum
@@ -115,9 +115,7 @@ def main(
     from evpose.tracker.session import TrackingSession
     from evpose.tracker.step_result import TrackStatus
 
-    for dst in (out, timings, smoothed):
-        if dst is not None and dst.resolve() in (recording.resolve(), map.resolve()):
-            raise InputError(dst, "refusing to overwrite an input file")
+    check_outputs((out, timings, smoothed), inputs=(recording, map, config))
     cfg = load_config(config) if config is not None else TrackerConfig()
     if mode is not None:
         try:

@@ -200,3 +200,13 @@ def test_atlas_without_usable_maps_is_a_one_line_error(tmp_path, files, capsys):
     write_tum(tmp_path / "late.txt", Trajectory.from_arrays(late.t + 100_000_000, late.position, late.quat_xyzw))
     assert run(["eval", str(tmp_path / "late.txt"), str(gt), "--atlas"]) == 2
     assert "none of the 1 map trajectories" in one_line_error(capsys)
+
+
+def test_plots_folder_that_is_a_file_is_a_one_line_error_before_evaluating(tmp_path, files, capsys):
+    # Used to end in a NotADirectoryError traceback from the first PNG's temporary file.
+    est, gt = files
+    in_the_way = tmp_path / "plots"
+    in_the_way.write_text("not a folder")
+    assert run(["eval", str(est), str(gt), "--quiet", "--plots", str(in_the_way)]) == 2
+    assert "plots: output folder exists and is a file" in one_line_error(capsys)
+    assert in_the_way.read_text() == "not a folder"

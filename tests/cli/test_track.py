@@ -165,3 +165,12 @@ def test_track_with_events_ending_before_the_ground_truth_starts_is_a_one_line_e
     err = capsys.readouterr().err.strip()
     assert code == 2 and len(err.splitlines()) == 1 and "late.h5: no pose update to run" in err
     assert not out.exists()
+
+
+def test_track_out_onto_a_folder_is_refused_before_tracking(files, tmp_path, capsys):
+    # Used to track the whole recording, then fail in os.replace with an IsADirectoryError traceback.
+    d, _ = files
+    (tmp_path / "est").mkdir()
+    code = run(["track", str(d / "rec.h5"), "--map", str(d / "map.ply"), "--out", str(tmp_path / "est"), "--no-progress"])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1 and "output is an existing folder" in err
