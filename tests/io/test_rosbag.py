@@ -122,7 +122,7 @@ def test_corrupt_bag_is_an_input_error(tmp_path):
 
 def test_random_bytes_named_bag_is_a_one_line_error_not_a_unicode_traceback(tmp_path):
     path = tmp_path / "junk.bag"
-    path.write_bytes(bytes(range(256)) * 4)
+    path.write_bytes(b"\x8e\xae\xff" + bytes(range(256)) * 4)  # not UTF-8 in the first line
     with pytest.raises(InputError, match="not a ROS1 bag") as info:
         open_recording(path)
     assert "\n" not in str(info.value)
