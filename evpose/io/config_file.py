@@ -56,7 +56,11 @@ def config_from_dict(cls, data: dict, source: str | None = None, prefix: str = "
                     raise ValueError(f"expected true/false, got {raw!r}")
                 kwargs[name] = raw
             elif typ is int:
-                if isinstance(raw, bool) or float(raw) != int(float(raw)):
+                try:
+                    whole = not isinstance(raw, bool) and isinstance(raw, (int, float, str)) and float(raw) == int(float(raw))
+                except (ValueError, OverflowError):  # OverflowError: int(inf)
+                    whole = False
+                if not whole:
                     raise ValueError(f"expected an integer, got {raw!r}")
                 kwargs[name] = int(float(raw))
             elif typ is float:
