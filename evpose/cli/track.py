@@ -134,6 +134,11 @@ def main(
             cfg.fusion.backend = FusionBackend(aliases.get(fusion, fusion))
         except ValueError:
             raise InputError(None, f"--fusion must be one of {', '.join(b.value for b in FusionBackend)}, got {fusion!r}") from None
+    from evpose.io.config_file import check_config
+
+    check_config(cfg)  # --rate-hz inf would run a million updates per second of recording
+    if not np.isfinite(acquire_s):
+        raise InputError(None, f"--acquire-s must be a finite number of seconds (0 = never give up), got {acquire_s}")
     initial = parse_init(init)
     cmap = read_contour_map(map)
     rec = open_recording(recording, width, height)

@@ -79,6 +79,27 @@ def config_from_dict(cls, data: dict, source: str | None = None, prefix: str = "
     return cls(**kwargs)
 
 
+def check_config(cfg, prefix: str = "") -> None:
+    """Every number of a config dataclass (nested ones too) finite and inside its field's ``min``..``max``.
+
+    :func:`config_from_dict` checks what a file sets; commands call this after applying their flags, so
+    ``--spacing nan`` or ``--k 0`` is the same one-line error as in a file, not a traceback or a silent run.
+    """
+    for f in dataclasses.fields(cfg):
+        value, key = getattr(cfg, f.name), prefix + f.name
+        if dataclasses.is_dataclass(value):
+            check_config(value, key + ".")
+            continue
+        numbers = value if isinstance(value, (tuple, list)) else (value,)
+        for v in numbers:
+            if isinstance(v, bool) or not isinstance(v, (int, float)):
+                continue
+            try:
+                _check_range(v, f.metadata if v is value else {})
+            except ValueError as exc:
+                raise InputError(None, str(exc), key) from None
+
+
 def _check_range(value, meta) -> None:
     """A number must be finite and inside the field's declared ``min``..``max`` (the range the viewer's slider
     offers): a negative window or a NaN decay would otherwise run and quietly produce nonsense."""

@@ -210,3 +210,17 @@ def test_plots_folder_that_is_a_file_is_a_one_line_error_before_evaluating(tmp_p
     assert run(["eval", str(est), str(gt), "--quiet", "--plots", str(in_the_way)]) == 2
     assert "plots: output folder exists and is a file" in one_line_error(capsys)
     assert in_the_way.read_text() == "not a folder"
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--rpe-delta", "0"], "--rpe-delta must be a finite number > 0, got 0.0"),
+    (["--rpe-delta", "nan"], "--rpe-delta must be a finite number > 0, got nan"),
+    (["--max-time-diff-s", "-1"], "--max-time-diff-s must be a finite number >= 0"),
+    (["--time-offset-s", "inf"], "--time-offset-s must be a finite number, got inf"),
+    (["--atlas", "--duration-s", "-2"], "--duration-s must be a finite number > 0"),
+])
+def test_non_finite_or_out_of_range_numbers_are_one_line_errors(files, capsys, args, message):
+    # --rpe-delta 0 was a ZeroDivisionError traceback, nan a ValueError one; a negative --duration-s was used as is.
+    est, gt = files
+    assert run(["eval", str(est), str(gt), "--quiet", *args]) == 2
+    assert message in one_line_error(capsys)

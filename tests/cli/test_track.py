@@ -174,3 +174,16 @@ def test_track_out_onto_a_folder_is_refused_before_tracking(files, tmp_path, cap
     code = run(["track", str(d / "rec.h5"), "--map", str(d / "map.ply"), "--out", str(tmp_path / "est"), "--no-progress"])
     err = capsys.readouterr().err.strip()
     assert code == 2 and len(err.splitlines()) == 1 and "output is an existing folder" in err
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--rate-hz", "inf"], "rate_hz: expected a finite number, got inf"),
+    (["--rate-hz", "5000"], "rate_hz: 5000.0 is outside the allowed range 10.0..1000.0 Hz"),
+    (["--acquire-s", "nan"], "--acquire-s must be a finite number"),
+])
+def test_track_numbers_from_flags_are_checked_like_config_files(files, tmp_path, capsys, args, message):
+    # --rate-hz inf ran ~1e6 updates per recorded second (a hang); --acquire-s nan was a ValueError traceback.
+    d, _ = files
+    code = run(["track", str(d / "rec.h5"), "--map", str(d / "map.ply"), "--out", str(tmp_path / "e.txt"), "--no-progress", *args])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and message in err and len(err.splitlines()) == 1

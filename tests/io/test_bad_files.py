@@ -112,3 +112,19 @@ def test_negative_ecd_timestamp_is_refused(tmp_path):
     with pytest.raises(InputError) as info:
         open_recording(d, 240, 180)
     assert "event 0: timestamp -100 us is negative" in _one_line(info, d)
+
+
+def test_check_config_walks_nested_numbers_and_names_the_dotted_field():
+    import dataclasses
+
+    from evpose.io.config_file import check_config
+
+    cfg = TrackerConfig()
+    check_config(cfg)  # the defaults are valid
+    nested = next(f.name for f in dataclasses.fields(cfg) if dataclasses.is_dataclass(getattr(cfg, f.name))
+                  and any(isinstance(getattr(getattr(cfg, f.name), g.name), float) for g in dataclasses.fields(getattr(cfg, f.name))))
+    sub = getattr(cfg, nested)
+    field = next(g.name for g in dataclasses.fields(sub) if isinstance(getattr(sub, g.name), float))
+    setattr(sub, field, float("nan"))
+    with pytest.raises(InputError, match=rf"{nested}\.{field}: expected a finite number, got nan"):
+        check_config(cfg)
