@@ -320,6 +320,8 @@ class H5RecordingReader:
             # The index must span exactly the first to the last event, or windowed reads silently miss events
             # (and a bogus far-future last timestamp would make every command allocate billions of time bins).
             t_first, t_last = int(self._read(t, 0, 1)[0]), int(self._read(t, n - 1, n)[0])
+            if t_first < 0:  # the same rule as every other reader's (evpose.io.open.check_nonnegative_times)
+                raise H5FormatError(self.path, f"timestamp {t_first} us is negative (event times must be >= 0)", "event 0")
             if t_first != self._origin or t_last < t_first or (t_last - self._origin) // 1000 + 1 != self._index.size - 1:
                 raise H5FormatError(self.path, f"events/ms_to_idx (origin {self._origin} us, {self._index.size - 1} ms) does not span the events"
                                     f" ({t_first} .. {t_last} us): the file is damaged or a timestamp is wrong", f"event {n - 1}")

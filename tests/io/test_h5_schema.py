@@ -122,6 +122,10 @@ def test_negative_event_times_are_refused_by_every_reader(tmp_path):
         open_recording(path)
     with pytest.raises(InputError, match="is negative"):
         list(open_stream(path).batches(None))
+    from evpose.io.summary import summarize_recording  # `evpose info` reads HDF5 through its own path
+
+    with pytest.raises(InputError, match="event 0: timestamp -4.* us is negative"):
+        summarize_recording(path)
 
 
 def test_nan_imu_sample_is_refused_when_streaming(h5copy):
