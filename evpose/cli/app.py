@@ -6,6 +6,27 @@ import time
 from pathlib import Path
 
 
+def check_arguments(data: list[Path], port: int, layout: str, export_dir: Path, cache_dir: Path | None) -> None:
+    """Refuse what would otherwise start a server that cannot work as asked: a typo in ``--data`` served an empty
+    browser, an unknown ``--layout`` a default one, and an out-of-range port ended in a bind() traceback."""
+    from app.layouts import LAYOUT_DIR, layout_path
+
+    from evpose.errors import InputError
+    from evpose.io.atomic import check_outputs
+
+    if not 0 <= port <= 65535:
+        raise InputError(None, f"--port must be 0..65535, got {port}")
+    for root in data:
+        if not root.exists():
+            raise InputError(root, "no such folder (--data takes folders of recordings and maps)")
+        if not root.is_dir():
+            raise InputError(root, "not a folder (--data takes folders of recordings and maps, not single files)")
+    if not layout_path(layout).is_file():
+        known = sorted(q.stem for q in LAYOUT_DIR.glob("*.json"))
+        raise InputError(None, f"--layout {layout!r} is not in {LAYOUT_DIR} (known: {', '.join(known)})")
+    check_outputs((), folders=(export_dir, cache_dir))
+
+
 def main(
     data: list[Path] = [Path("demo_data"), Path("maps")],  # noqa: B006 - tyro reads the default
     host: str = "127.0.0.1",
@@ -30,6 +51,7 @@ def main(
     from app.disk_cache import DiskCacheConfig
     from app.server import AppConfig, ViewerApp
 
+    check_arguments(data, port, layout, export_dir, cache_dir)
     cache = DiskCacheConfig(enabled=disk_cache, directory=cache_dir)
     viewer = ViewerApp(AppConfig(data=list(data), host=host, port=port, layout=layout, export_dir=export_dir,
                                  disk_cache=cache))

@@ -39,6 +39,9 @@ def main(
     from evpose.eval.runner import RunnerConfig
     from evpose.eval.suite import SuiteName
 
+    from evpose.cli.runner_args import check_runner_args
+
+    check_runner_args(workers, scheduler, (out, data))
     runner = RunnerConfig(workers=workers, scheduler=scheduler, progress=progress)
     result = run_bench(SuiteName(suite), out, runner, data_dir=data, micro=micro, peers=peers)
     md, js = write_report(result, out, runner_description(runner))

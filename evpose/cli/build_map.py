@@ -57,6 +57,7 @@ def main(
             override it where they differ from their defaults.
         quiet: No progress bar or summary.
     """
+    from evpose.io.atomic import check_outputs
     from evpose.io.map_ply import write_contour_map
     from evpose.mapping.build import MapBuildConfig, MapBuildError, build_contour_map
     from evpose.mapping.cloud_input import load_cloud
@@ -65,8 +66,8 @@ def main(
         raise InputError(out, "refusing to overwrite the input cloud")
     if out.suffix.lower() != ".ply":
         raise InputError(out, "the contour map is written as PLY; use a .ply output name")
+    check_outputs((out,), inputs=(cloud, config))
     t0 = time.perf_counter()
-    raw = load_cloud(cloud)
     flags = dict(
         voxel_m=voxel, k_neighbours=k, angle_threshold_deg=angle_deg, plane_angle_deg=plane_angle_deg,
         curvature_limit=curvature, min_region_points=min_region, plane_distance_m=plane_distance,
@@ -83,6 +84,10 @@ def main(
         defaults = MapBuildConfig()
         cfg = dataclasses.replace(read_config(MapBuildConfig, config),
                                   **{name: v for name, v in flags.items() if v != getattr(defaults, name)})
+    from evpose.io.config_file import check_config
+
+    check_config(cfg)
+    raw = load_cloud(cloud)
     try:
         cmap = build_contour_map(raw.points, raw.normals, raw.intensity, cfg, progress=not quiet and sys.stderr.isatty())
     except MapBuildError as exc:

@@ -81,6 +81,22 @@ def evaluate_atlas(estimate: Path, ground_truth: Path, maps: tuple[Path, ...], c
             "duration_s": result.duration_s, **result.to_dict()}
 
 
+def check_numbers(max_time_diff_s: float, time_offset_s: float, rpe_delta: float, duration_s: float | None) -> None:
+    """A NaN or zero RPE delta ended in a ZeroDivisionError/ValueError traceback; a negative duration was accepted."""
+    import math
+
+    from evpose.errors import InputError
+
+    checks = [("--max-time-diff-s", max_time_diff_s, 0.0, True), ("--time-offset-s", time_offset_s, None, True),
+              ("--rpe-delta", rpe_delta, 0.0, False), ("--duration-s", duration_s, 0.0, False)]
+    for flag, value, low, inclusive in checks:
+        if value is None:
+            continue
+        if not math.isfinite(value) or (low is not None and (value < low or (value == low and not inclusive))):
+            bound = "" if low is None else f" {'>=' if inclusive else '>'} {low:g}"
+            raise InputError(None, f"{flag} must be a finite number{bound}, got {value}")
+
+
 def main(
     estimate: tyro.conf.Positional[Path],
     ground_truth: tyro.conf.Positional[Path],
@@ -122,8 +138,10 @@ def main(
         correct_scale: Atlas mode: align each map with scale (sim3), as for event-only runs; --align sim3 implies it.
         duration_s: Atlas mode: span of the recording for the tracked fraction, s (default: from ``EST.slam.json``, else the ground truth's span).
     """
-    from evpose.io.atomic import atomic_path
+    from evpose.io.atomic import atomic_path, check_outputs
 
+    check_outputs((json,), inputs=(estimate, ground_truth, *maps), folders=(plots,))
+    check_numbers(max_time_diff_s, time_offset_s, rpe_delta, duration_s)
     if atlas or maps:
         summary = evaluate_atlas(estimate, ground_truth, maps, correct_scale or align == "sim3", duration_s)
         if not quiet:

@@ -66,17 +66,14 @@ def main(
         height: Sensor height, for formats that do not state it.
         quiet: No progress or summary.
     """
-    from evpose.io.atomic import atomic_path
+    from evpose.io.atomic import atomic_path, check_outputs
     from evpose.io.config_file import read_config
     from evpose.io.map_ply import read_contour_map, write_contour_map
     from evpose.io.open import open_recording
     from evpose.mapping.refine_from_events import EventRefineConfig, measure_edge_offsets, refine_map
     from evpose.tracker.config import TrackerMode
 
-    inputs = [p.resolve() for p in (recording, map)]
-    for dst in (out, report):
-        if dst is not None and dst.resolve() in inputs:
-            raise InputError(dst, "refusing to overwrite an input file")
+    check_outputs((out, report), inputs=(recording, map, config, refine_config))
     if out.suffix.lower() != ".ply":
         raise InputError(out, "the refined map is written as PLY; use a .ply output name")
     if iterations < 1:

@@ -47,7 +47,7 @@ def main(
 
     from evpose.bench.stats import latency_summary
     from evpose.eval.slam_metrics import atlas_metrics
-    from evpose.io.atomic import atomic_path
+    from evpose.io.atomic import atomic_path, check_outputs
     from evpose.io.open import open_recording
     from evpose.io.tum import write_tum
     from evpose.slam.config import SlamConfig, SlamMode
@@ -55,6 +55,8 @@ def main(
     from evpose.slam.inertial import InertialConfiguration
     from evpose.slam.run import run_slam
 
+    # Every output, the per-map files included, before the run: a refused --out used to leave EST.map<k> files behind.
+    check_outputs((out, summary or out.with_suffix(".slam.json"), *output_paths(out, 1)), inputs=(recording, config))
     try:
         slam_mode = SlamMode(mode)
     except ValueError:

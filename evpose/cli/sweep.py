@@ -45,6 +45,17 @@ def main(
 
     if maximize and minimize:
         raise ConfigError("--maximize and --minimize exclude each other")
+    from evpose.cli.runner_args import check_runner_args
+
+    check_runner_args(workers, scheduler, (out,))
+    from evpose.errors import InputError
+
+    for item in recordings:
+        if not item.startswith("sim:"):
+            # A typo would otherwise become one failed job per configuration and exit 1 after the whole grid.
+            for part in item.split("::"):
+                if not Path(part).exists():
+                    raise InputError(part, "no such file or folder", f"--recordings {item}")
     direction = True if minimize else (False if maximize else None)
     result = run_sweep(target, list(grid), list(recordings), out, RunnerConfig(workers=workers, scheduler=scheduler, progress=progress), score=score, minimize=direction)
     print(markdown_table(result.table), end="")

@@ -107,7 +107,7 @@ def main(
     """
     from tqdm import tqdm
 
-    from evpose.io.atomic import atomic_path
+    from evpose.io.atomic import atomic_path, check_outputs
     from evpose.io.map_ply import read_contour_map
     from evpose.io.open import open_recording
     from evpose.io.tum import write_tum
@@ -115,9 +115,7 @@ def main(
     from evpose.tracker.session import TrackingSession
     from evpose.tracker.step_result import TrackStatus
 
-    for dst in (out, timings, smoothed):
-        if dst is not None and dst.resolve() in (recording.resolve(), map.resolve()):
-            raise InputError(dst, "refusing to overwrite an input file")
+    check_outputs((out, timings, smoothed), inputs=(recording, map, config))
     cfg = load_config(config) if config is not None else TrackerConfig()
     if mode is not None:
         try:
@@ -136,10 +134,20 @@ def main(
             cfg.fusion.backend = FusionBackend(aliases.get(fusion, fusion))
         except ValueError:
             raise InputError(None, f"--fusion must be one of {', '.join(b.value for b in FusionBackend)}, got {fusion!r}") from None
+    from evpose.io.config_file import check_config
+
+    check_config(cfg)  # --rate-hz inf would run a million updates per second of recording
+    if not np.isfinite(acquire_s):
+        raise InputError(None, f"--acquire-s must be a finite number of seconds (0 = never give up), got {acquire_s}")
     initial = parse_init(init)
     cmap = read_contour_map(map)
     rec = open_recording(recording, width, height)
     session = TrackingSession(rec, cmap, cfg, initial_pose=initial)
+    if session.total_steps == 0:
+        # Otherwise this exits 0 saying "0 poses written" and writes no file at all.
+        raise InputError(recording, f"no pose update to run: the events end at {session.t_end_us} us, less than one update"
+                         f" ({session.dt_us} us) after the start at {session.t0_us} us"
+                         + (" (the first ground-truth pose)" if initial is None else ""))
     inputs = _record_fusion_inputs(session, cfg) if smoothed is not None else None
 
     lost = []

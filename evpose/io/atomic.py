@@ -26,6 +26,39 @@ def _check_not_input(dst: Path, inputs: tuple[Path, ...]) -> None:
             continue
 
 
+def _check_target(dst: Path, is_dir: bool) -> None:
+    """``dst`` can be created: not a folder where a file goes (or the reverse), under a writable folder (or one we can make)."""
+    if not is_dir and dst.is_dir():
+        raise InputError(dst, "output is an existing folder; give a file name")
+    if is_dir and dst.exists() and not dst.is_dir():
+        raise InputError(dst, "output folder exists and is a file")
+    ancestor = dst.parent if str(dst.parent) else Path(".")
+    while not ancestor.exists() and ancestor != ancestor.parent:
+        ancestor = ancestor.parent
+    if not ancestor.is_dir():
+        raise InputError(dst, f"cannot create the output: {ancestor} is a file, not a folder")
+    if not os.access(ancestor, os.W_OK):
+        raise InputError(dst, "output folder is not writable")
+
+
+def check_outputs(outputs, inputs=(), folders=()) -> None:
+    """Refuse, before any work, outputs that would replace an input or cannot be written.
+
+    A command calls this first so that a bad ``--out`` fails in a second with nothing written, not after a
+    long run (or after writing its other outputs). ``folders`` are output paths that are directories.
+    """
+    ins = tuple(Path(p) for p in inputs if p is not None)
+    for dst, is_dir in [(o, False) for o in outputs] + [(f, True) for f in folders]:
+        if dst is None:
+            continue
+        dst = Path(dst)
+        _check_not_input(dst, ins)
+        for src in ins:
+            if dst.resolve() == src.resolve():
+                raise InputError(dst, "refusing to overwrite an input file")
+        _check_target(dst, is_dir)
+
+
 @contextlib.contextmanager
 def atomic_path(dst: str | Path, inputs: tuple[str | Path, ...] = (), is_dir: bool = False):
     """Yield a temporary path next to ``dst``; on success rename it onto ``dst``, on error delete it.
@@ -34,6 +67,7 @@ def atomic_path(dst: str | Path, inputs: tuple[str | Path, ...] = (), is_dir: bo
     """
     dst = Path(dst)
     _check_not_input(dst, tuple(Path(p) for p in inputs))
+    _check_target(dst, is_dir)
     parent = dst.parent if str(dst.parent) else Path(".")
     if not parent.exists():
         try:

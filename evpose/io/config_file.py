@@ -56,13 +56,20 @@ def config_from_dict(cls, data: dict, source: str | None = None, prefix: str = "
                     raise ValueError(f"expected true/false, got {raw!r}")
                 kwargs[name] = raw
             elif typ is int:
-                if isinstance(raw, bool) or float(raw) != int(float(raw)):
+                try:
+                    whole = not isinstance(raw, bool) and isinstance(raw, (int, float, str)) and float(raw) == int(float(raw))
+                except (ValueError, OverflowError):  # OverflowError: int(inf)
+                    whole = False
+                if not whole:
                     raise ValueError(f"expected an integer, got {raw!r}")
                 kwargs[name] = int(float(raw))
             elif typ is float:
-                if isinstance(raw, bool):
+                if isinstance(raw, bool) or not isinstance(raw, (int, float, str)):
                     raise ValueError(f"expected a number, got {raw!r}")
-                kwargs[name] = float(raw)
+                try:
+                    kwargs[name] = float(raw)
+                except ValueError:
+                    raise ValueError(f"expected a number, got {raw!r}") from None
             else:
                 kwargs[name] = raw
             if typ in (int, float):
@@ -70,6 +77,27 @@ def config_from_dict(cls, data: dict, source: str | None = None, prefix: str = "
         except (TypeError, ValueError) as exc:
             raise InputError(source, str(exc), key) from None
     return cls(**kwargs)
+
+
+def check_config(cfg, prefix: str = "") -> None:
+    """Every number of a config dataclass (nested ones too) finite and inside its field's ``min``..``max``.
+
+    :func:`config_from_dict` checks what a file sets; commands call this after applying their flags, so
+    ``--spacing nan`` or ``--k 0`` is the same one-line error as in a file, not a traceback or a silent run.
+    """
+    for f in dataclasses.fields(cfg):
+        value, key = getattr(cfg, f.name), prefix + f.name
+        if dataclasses.is_dataclass(value):
+            check_config(value, key + ".")
+            continue
+        numbers = value if isinstance(value, (tuple, list)) else (value,)
+        for v in numbers:
+            if isinstance(v, bool) or not isinstance(v, (int, float)):
+                continue
+            try:
+                _check_range(v, f.metadata if v is value else {})
+            except ValueError as exc:
+                raise InputError(None, str(exc), key) from None
 
 
 def _check_range(value, meta) -> None:
@@ -87,9 +115,11 @@ def read_config(cls, path: str | Path):
     """Read dataclass ``cls`` from ``.yaml``/``.yml``/``.json``; missing keys keep their defaults."""
     path = Path(path)
     try:
-        text = path.read_text()
+        text = path.read_text(encoding="utf-8")
     except OSError as exc:
         raise InputError(path, f"cannot read the config file ({exc.strerror})") from None
+    except UnicodeDecodeError:
+        raise InputError(path, "not a text file (a config file is UTF-8 YAML or JSON)") from None
     try:
         if path.suffix.lower() == ".json":
             data = json.loads(text)
@@ -98,7 +128,12 @@ def read_config(cls, path: str | Path):
 
             data = yaml.safe_load(text)
     except Exception as exc:  # noqa: BLE001 - any parser error is bad input
-        raise InputError(path, f"not valid {'JSON' if path.suffix.lower() == '.json' else 'YAML'} ({str(exc).splitlines()[0]})") from None
+        # Both parsers know where they stopped (JSONDecodeError.lineno, YAML's problem_mark): name that line.
+        mark = getattr(exc, "problem_mark", None)
+        line = getattr(exc, "lineno", None) or (mark.line + 1 if mark is not None else None)
+        what = "JSON" if path.suffix.lower() == ".json" else "YAML"
+        detail = getattr(exc, "problem", None) or getattr(exc, "msg", None) or str(exc).splitlines()[0]
+        raise InputError(path, f"not valid {what} ({detail})", f"line {line}" if line else None) from None
     return config_from_dict(cls, data or {}, str(path))
 
 

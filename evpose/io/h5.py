@@ -281,33 +281,80 @@ class H5RecordingReader:
         except (TypeError, ValueError):
             raise H5FormatError(self.path, f"attribute {name!r} is not valid JSON") from None
 
+    def _typed(self, name: str, kinds: str, cols: int | None = None, n: int | None = None):
+        """Dataset ``name``, checked against the schema: dtype kind, (N,) or (N, cols) shape, N == ``n`` if given.
+
+        A float or string column would otherwise be cast silently (a NaN time becomes -2**63) or fail deep inside a command.
+        """
+        ds = self._need(name)
+        want = {"iu": "an integer", "iuf": "a numeric"}[kinds]
+        if not isinstance(ds, h5py.Dataset) or ds.dtype.kind not in kinds:
+            what = "a group" if not isinstance(ds, h5py.Dataset) else f"dtype {ds.dtype}"
+            raise H5FormatError(self.path, f"dataset {name!r} is {what}, expected {want} dtype (see docs/recording_h5.md)")
+        shape = (ds.shape[0] if ds.ndim else -1,) + (() if cols is None else (cols,))
+        if ds.shape != shape or (n is not None and ds.shape[0] != n):
+            expected = f"({'N' if n is None else n},{'' if cols is None else f' {cols}'})"
+            raise H5FormatError(self.path, f"dataset {name!r} has shape {ds.shape}, expected {expected}")
+        return ds
+
     def _load(self) -> None:
         f = self._file
         if f.attrs.get("evpose_format") != FORMAT_NAME:
             raise H5FormatError(self.path, "not an evpose recording (no evpose_format='recording' attribute)")
-        version = int(f.attrs.get("evpose_format_version", 0))
+        try:
+            version = int(f.attrs.get("evpose_format_version", 0))
+        except (TypeError, ValueError):
+            raise H5FormatError(self.path, f"attribute 'evpose_format_version' is {f.attrs['evpose_format_version']!r}, not an integer") from None
         if version > FORMAT_VERSION:
             raise H5FormatError(self.path, f"format version {version} is newer than this evpose reads ({FORMAT_VERSION})")
-        self._cols = {name: self._need(f"events/{name}") for name, _ in _EVENT_COLUMNS}
-        n = self._cols["t"].shape[0]
-        if any(ds.shape != (n,) for ds in self._cols.values()):
-            raise H5FormatError(self.path, "event columns differ in length")
-        idx = self._need("events/ms_to_idx")
+        t = self._typed("events/t", "iu")
+        n = t.shape[0]
+        self._cols = {name: self._typed(f"events/{name}", "iu", n=n) for name, _ in _EVENT_COLUMNS}
+        idx = self._typed("events/ms_to_idx", "iu")
         self._index = np.asarray(idx[()], dtype=np.int64)
         self._origin = int(idx.attrs.get("t_origin_us", 0))
         if self._index.size == 0 or self._index[-1] != n or self._index[0] != 0 or np.any(np.diff(self._index) < 0):
             raise H5FormatError(self.path, "events/ms_to_idx is inconsistent with the event count")
         self.n_events = int(n)
+        if n:
+            # The index must span exactly the first to the last event, or windowed reads silently miss events
+            # (and a bogus far-future last timestamp would make every command allocate billions of time bins).
+            t_first, t_last = int(self._read(t, 0, 1)[0]), int(self._read(t, n - 1, n)[0])
+            if t_first < 0:  # the same rule as every other reader's (evpose.io.open.check_nonnegative_times)
+                raise H5FormatError(self.path, f"timestamp {t_first} us is negative (event times must be >= 0)", "event 0")
+            if t_first != self._origin or t_last < t_first or (t_last - self._origin) // 1000 + 1 != self._index.size - 1:
+                raise H5FormatError(self.path, f"events/ms_to_idx (origin {self._origin} us, {self._index.size - 1} ms) does not span the events"
+                                    f" ({t_first} .. {t_last} us): the file is damaged or a timestamp is wrong", f"event {n - 1}")
         self.metadata: dict = self._json_attr("metadata") or {}
+        if not isinstance(self.metadata, dict):
+            raise H5FormatError(self.path, f"attribute 'metadata' is a JSON {type(self.metadata).__name__}, expected an object")
         cal = self._json_attr("calibration")
+        if cal is not None and not isinstance(cal, dict):
+            raise H5FormatError(self.path, f"attribute 'calibration' is a JSON {type(cal).__name__}, expected an object")
         self.calibration: CameraCalibration | None = None if cal is None else CameraCalibration.from_dict(cal, source=str(self.path))
         self.imu: ImuSamples | None = None
         if "imu" in f:
-            self.imu = ImuSamples.from_arrays(self._need("imu/t")[()], self._need("imu/acc")[()], self._need("imu/gyro")[()])
+            it = self._typed("imu/t", "iu")
+            m = it.shape[0]
+            self.imu = ImuSamples.from_arrays(self._read(it), self._read(self._typed("imu/acc", "iuf", 3, m)), self._read(self._typed("imu/gyro", "iuf", 3, m)))
         self.ground_truth: Trajectory | None = None
         if "ground_truth" in f:
             g = "ground_truth/"
-            self.ground_truth = Trajectory.from_arrays(self._need(g + "t")[()], self._need(g + "position")[()], self._need(g + "quat_xyzw")[()])
+            gt = self._typed(g + "t", "iu")
+            m = gt.shape[0]
+            q = self._read(self._typed(g + "quat_xyzw", "iuf", 4, m))
+            bad = np.flatnonzero(np.linalg.norm(q, axis=1) < 1e-9)
+            if bad.size:
+                raise H5FormatError(self.path, "quaternion has zero length", f"ground-truth pose {int(bad[0])}")
+            self.ground_truth = Trajectory.from_arrays(self._read(gt), self._read(self._typed(g + "position", "iuf", 3, m)), q)
+
+    def _read(self, ds, i0: int | None = None, i1: int | None = None) -> np.ndarray:
+        """``ds[i0:i1]``; a chunk that fails to decompress is a damaged file, reported with the rows it holds."""
+        try:
+            return ds[()] if i0 is None else ds[i0:i1]
+        except OSError as exc:
+            rows = f"rows {i0}-{i1}" if i0 is not None else None
+            raise H5FormatError(self.path, f"cannot read dataset {ds.name.lstrip('/')!r} ({str(exc).split(' (')[-1].rstrip(')')}): the file is damaged", rows) from None
 
     # ------------------------------------------------------------ lifecycle
     def close(self) -> None:
@@ -322,11 +369,11 @@ class H5RecordingReader:
     # ------------------------------------------------------------ events
     @property
     def t_start_us(self) -> int:
-        return int(self._cols["t"][0]) if self.n_events else 0
+        return int(self._read(self._cols["t"], 0, 1)[0]) if self.n_events else 0
 
     @property
     def t_end_us(self) -> int:
-        return int(self._cols["t"][self.n_events - 1]) if self.n_events else 0
+        return int(self._read(self._cols["t"], self.n_events - 1, self.n_events)[0]) if self.n_events else 0
 
     def _locate(self, t0_us: int | None, t1_us: int | None) -> tuple[int, int, np.ndarray]:
         """(i0, i1, t[i0:i1]) for ``t0 <= t < t1``, reading only the timestamps of the bracketing milliseconds."""
@@ -338,7 +385,7 @@ class H5RecordingReader:
         if t1_us is not None:
             k1 = int(np.clip(-((self._origin - int(t1_us)) // 1000), 0, K))  # ceil division
             hi = max(lo, int(self._index[k1]))
-        t = self._cols["t"][lo:hi]
+        t = self._read(self._cols["t"], lo, hi)
         j0 = int(np.searchsorted(t, t0_us, side="left")) if t0_us is not None else 0
         j1 = max(j0, int(np.searchsorted(t, t1_us, side="left")) if t1_us is not None else t.size)
         return lo + j0, lo + j1, t[j0:j1]
@@ -350,12 +397,12 @@ class H5RecordingReader:
 
     def read_slice(self, i0: int, i1: int) -> EventArray:
         """Events ``i0:i1`` by index."""
-        return EventArray(*(np.ascontiguousarray(self._cols[c][i0:i1]) for c in "txyp"))
+        return EventArray(*(np.ascontiguousarray(self._read(self._cols[c], i0, i1)) for c in "txyp"))
 
     def read_events(self, t0_us: int | None = None, t1_us: int | None = None) -> EventArray:
         """Events with ``t0 <= t < t1`` (None = open end)."""
         i0, i1, t = self._locate(t0_us, t1_us)
-        return EventArray(np.ascontiguousarray(t), *(np.ascontiguousarray(self._cols[c][i0:i1]) for c in "xyp"))
+        return EventArray(np.ascontiguousarray(t), *(np.ascontiguousarray(self._read(self._cols[c], i0, i1)) for c in "xyp"))
 
     def iter_chunks(self, chunk_events: int = 1 << 22):
         """Yield the events as consecutive batches of at most ``chunk_events``."""

@@ -19,6 +19,10 @@ open3d and become maps with unknown attributes.
 
 from __future__ import annotations
 
+import contextlib
+import os
+import sys
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -72,8 +76,10 @@ def _parse_header(fh, path: Path):
         return None
     fmt = None
     elements: list[tuple[str, int, list[tuple[str, str]]]] = []
+    lineno = 1
     while True:
         line = fh.readline()
+        lineno += 1
         if not line:
             raise MapFileError(path, "PLY header has no end_header")
         words = line.decode("ascii", "replace").split()
@@ -82,6 +88,8 @@ def _parse_header(fh, path: Path):
         if words[0] == "format":
             fmt = words[1]
         elif words[0] == "element":
+            if len(words) != 3 or not words[2].isdigit():
+                raise MapFileError(path, f"expected 'element NAME COUNT' with a non-negative count, got {line.decode('ascii', 'replace').strip()!r}", f"header line {lineno}")
             elements.append((words[1], int(words[2]), []))
         elif words[0] == "property":
             if not elements:
@@ -93,6 +101,8 @@ def _parse_header(fh, path: Path):
             else:
                 raise MapFileError(path, f"unknown PLY property type {words[1]!r}")
         elif words[0] == "end_header":
+            if fmt is None:
+                raise MapFileError(path, "PLY header has no 'format' line")
             return fmt, elements
 
 
@@ -106,6 +116,11 @@ def _read_vertices(path: Path) -> np.ndarray | None:
         if not elements or elements[0][0] != "vertex" or any(t == "list" for _, t in elements[0][2]):
             return None
         _, n, props = elements[0]
+        data_bytes = path.stat().st_size - fh.tell()
+        # Every vertex takes at least one byte per property (a digit and a separator in ASCII): a count beyond that is a
+        # damaged header, refused before allocating an array for it.
+        if n * len(props) > data_bytes:
+            raise MapFileError(path, f"file is truncated: header promises {n} vertices, the data after the header has only {data_bytes} bytes")
         if fmt == "binary_little_endian":
             dtype = np.dtype([(name, "<" + t) for name, t in props])
             raw = fh.read(n * dtype.itemsize)
@@ -147,7 +162,9 @@ def read_contour_map(path: str | Path) -> ContourMap:
             verts = _read_vertices(path)
         except (ValueError, UnicodeDecodeError) as exc:
             raise MapFileError(path, f"malformed PLY ({exc})") from None
-    if verts is not None and all(name in verts.dtype.names for name in ("x", "y", "z")):
+    if verts is not None and not all(name in verts.dtype.names for name in ("x", "y", "z")):
+        raise MapFileError(path, f"vertices have no x, y, z properties (they have {', '.join(verts.dtype.names)})")
+    if verts is not None:
         names = set(verts.dtype.names)
         pts = np.stack([verts["x"], verts["y"], verts["z"]], axis=1).astype(np.float64)
         _check_points(pts, path)
@@ -166,6 +183,41 @@ def read_contour_map(path: str | Path) -> ContourMap:
     return ContourMap.from_points(read_point_cloud(path)[0])
 
 
+def _check_ply_size(path: Path) -> None:
+    """Refuse a PLY whose header promises more vertices than the file holds, before a reader allocates for them."""
+    with open(path, "rb") as fh:
+        try:
+            parsed = _parse_header(fh, path)
+        except (ValueError, UnicodeDecodeError) as exc:
+            raise MapFileError(path, f"malformed PLY ({exc})") from None
+        data_bytes = path.stat().st_size - fh.tell()
+    if parsed is None or not parsed[1] or parsed[1][0][0] != "vertex":
+        return
+    fmt, ((_, n, props), *_rest) = parsed
+    if any(t == "list" for _, t in props):
+        return
+    per_vertex = np.dtype([(name, t) for name, t in props]).itemsize if fmt.startswith("binary") else len(props)
+    if n * per_vertex > data_bytes:
+        raise MapFileError(path, f"file is truncated: header promises {n} vertices, the data after the header has only {data_bytes} bytes")
+
+
+@contextlib.contextmanager
+def _captured_stderr():
+    """Redirect file descriptor 2 (C libraries write there directly) to a temporary file; yields a getter of its lines."""
+    sys.stderr.flush()
+    saved = os.dup(2)
+    with tempfile.TemporaryFile(mode="w+b") as tmp:
+        os.dup2(tmp.fileno(), 2)
+        lines: list[str] = []
+        try:
+            yield lambda: lines
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+            tmp.seek(0)
+            lines.extend(tmp.read().decode("utf-8", "replace").splitlines())
+
+
 def read_point_cloud(path: str | Path) -> tuple[np.ndarray, dict[str, np.ndarray]]:
     """Raw cloud via open3d: positions (N, 3) and optional ``normals``/``colors`` (N, 3)."""
     import open3d as o3d
@@ -179,7 +231,18 @@ def read_point_cloud(path: str | Path) -> tuple[np.ndarray, dict[str, np.ndarray
         head = fh.read(64)
     if path.suffix.lower() == ".ply" and not head.startswith(b"ply"):
         raise MapFileError(path, "not a PLY file (missing 'ply' magic)")
-    pcd = o3d.io.read_point_cloud(str(path))
+    if path.suffix.lower() == ".ply":
+        _check_ply_size(path)
+    # open3d's PLY reader (RPly) prints a damaged file's problem to stderr and returns the points read so far (a
+    # truncated scan became half a map): catch what it prints and make it our one-line error instead.
+    with _captured_stderr() as said:
+        try:
+            pcd = o3d.io.read_point_cloud(str(path))
+        except MemoryError:
+            raise MapFileError(path, "cannot hold the point cloud in memory (a damaged header?)") from None
+    problems = [ln.strip() for ln in said() if "RPly" in ln or "Read PLY failed" in ln]
+    if problems:
+        raise MapFileError(path, f"malformed PLY ({problems[0]})")
     pts = np.asarray(pcd.points, dtype=np.float64)
     _check_points(pts, path)
     extra = {}

@@ -54,6 +54,13 @@ def check_events(ev: EventArray, offset: int, last_t: int | None, size: tuple[in
         raise InputError(source, f"timestamp {int(ev.t[0])} us is earlier than the previous {last_t} us (timestamps must be sorted)", f"{record} {offset}")
 
 
+def check_nonnegative_times(ev: EventArray, source: str | Path | None, offset: int = 0, record: str = "event") -> None:
+    """Event times are microseconds since the recording's origin: a negative one is a broken conversion or clock
+    (it puts the events before the IMU and ground truth, and the tracker then runs no update at all)."""
+    if len(ev) and int(ev.t[0]) < 0:  # sorted, so the first is the smallest
+        raise InputError(source, f"timestamp {int(ev.t[0])} us is negative (event times must be >= 0)", f"{record} {offset}")
+
+
 def _is_hdf5(path: Path) -> bool:
     try:
         with open(path, "rb") as fh:
@@ -91,7 +98,28 @@ def open_stream(path: str | Path, width: int | None = None, height: int | None =
     """Open ``path`` for streaming. ``width``/``height`` state the sensor size where the format lacks it.
 
     ``options`` go to the format's reader (bag topics: ``events_topic``, ``imu_topic``, ``pose_topic``).
+    The IMU and ground truth are checked here (the event batches as they stream), so no command, ``convert``
+    included, passes on a NaN or an unsorted sample.
     """
+    stream = _open_stream(path, width, height, **options)
+    for small in (stream.context.imu, stream.context.ground_truth):
+        if small is not None:
+            small.validate(source=str(path))
+    inner = stream.batches
+
+    def batches(cb=None):
+        first = True
+        for b in inner(cb):
+            if first and len(b):
+                check_nonnegative_times(b, path)  # batches are sorted: the first event is the earliest
+                first = False
+            yield b
+
+    stream.batches = batches
+    return stream
+
+
+def _open_stream(path: str | Path, width: int | None = None, height: int | None = None, **options) -> RecordingStream:
     path = Path(path)
     if (width is None) != (height is None):
         raise ConfigError("give both width and height of the sensor, or neither")
@@ -148,4 +176,5 @@ def open_recording(path: str | Path, width: int | None = None, height: int | Non
         rec = stream.context
         rec.events = EventArray.concatenate(list(stream.batches(None)))
     rec.validate()
+    check_nonnegative_times(rec.events, path)
     return rec

@@ -202,7 +202,11 @@ def open_bag_stream(path: str | Path, events_topic: str | None = None, imu_topic
         reader = AnyReader(paths, default_typestore=store)
         reader.open()
     except (AnyReaderError, FileNotFoundError, OSError) as exc:
-        raise BagError(path, f"cannot open bag ({exc})") from None
+        # rosbags quotes whole YAML parser reports: keep their first line, the message must stay one line.
+        raise BagError(path, f"cannot open bag ({' '.join(str(exc).split(chr(10))[0].split())})") from None
+    except UnicodeDecodeError:
+        # rosbags decodes the ROS1 magic line as text: random bytes end here, not in AnyReaderError.
+        raise BagError(path, "cannot open bag (not a ROS1 bag: no '#ROSBAG V2.0' header)") from None
     try:
         conns = reader.connections
         ev_conns = _pick(conns, EVENT_ARRAY, events_topic, path, "events", True)

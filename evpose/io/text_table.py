@@ -42,11 +42,13 @@ def parse_time_us(text: str, unit: TimeUnit = TimeUnit.SECONDS) -> int:
     return int(us)
 
 
-def read_table(path: str | Path, n_cols: int, unit: TimeUnit = TimeUnit.SECONDS, what: str = "line", delimiter: str | None = None) -> tuple[np.ndarray, np.ndarray]:
+def read_table(path: str | Path, n_cols: int, unit: TimeUnit = TimeUnit.SECONDS, what: str = "line", delimiter: str | None = None,
+               line_numbers: list[int] | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Read ``t v1 .. v{n_cols-1}`` rows; returns (t int64 us, values float64 (N, n_cols-1)).
 
     Blank lines and ``#`` comments are skipped; times must strictly increase.
-    Every problem raises :class:`InputError` naming the file and line.
+    Every problem raises :class:`InputError` naming the file and line. ``line_numbers``, if given, receives
+    each row's line number, so a caller's own checks can name the line too.
     """
     path = Path(path)
     if not path.is_file():
@@ -81,6 +83,8 @@ def read_table(path: str | Path, n_cols: int, unit: TimeUnit = TimeUnit.SECONDS,
                     raise InputError(path, f"timestamp {parts[0]} does not increase (timestamps must be strictly increasing)", f"line {lineno}")
                 ts.append(t)
                 rows.append(vals)
+                if line_numbers is not None:
+                    line_numbers.append(lineno)
         except UnicodeDecodeError:
             raise InputError(path, "not a text file") from None
     values = np.asarray(rows, dtype=np.float64).reshape(-1, n_cols - 1)

@@ -14,13 +14,14 @@ from evpose.io.text_table import TimeUnit, read_table, write_table
 
 def read_tum(path: str | Path, unit: TimeUnit = TimeUnit.SECONDS) -> Trajectory:
     """Read a TUM file (``#`` comments allowed). Times must strictly increase; quaternions are normalised."""
-    t, v = read_table(path, 8, unit=unit)
+    lines: list[int] = []
+    t, v = read_table(path, 8, unit=unit, line_numbers=lines)
     if t.size == 0:
         raise InputError(path, "contains no poses")
     norms = np.linalg.norm(v[:, 3:7], axis=1)
     bad = np.flatnonzero(norms < 1e-9)
     if bad.size:
-        raise InputError(path, "quaternion has zero length", f"pose {int(bad[0])}")
+        raise InputError(path, "quaternion has zero length", f"line {lines[int(bad[0])]}")
     return Trajectory.from_arrays(t, v[:, 0:3], v[:, 3:7])
 
 

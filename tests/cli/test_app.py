@@ -41,3 +41,21 @@ def test_disk_cache_is_on_by_default(monkeypatch):
     with pytest.raises(_Started):
         run(["app", "--port", "0"])
     assert seen["cfg"].disk_cache.enabled is True and seen["cfg"].disk_cache.directory is None
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--data", "no/such/folder"], "no/such/folder: no such folder"),
+    (["--data", "README.md"], "README.md: not a folder"),
+    (["--layout", "nope"], "--layout 'nope' is not in"),
+    (["--port", "99999"], "--port must be 0..65535, got 99999"),
+    (["--export-dir", "README.md"], "README.md: output folder exists and is a file"),
+])
+def test_bad_arguments_are_one_line_errors_before_the_server_starts(monkeypatch, capsys, args, message):
+    # A typo in --data served an empty browser, an unknown layout a default one, a port > 65535 a bind() traceback.
+    from evpose.cli.main import run
+
+    started = _capture_config(monkeypatch)
+    assert run(["app", "--data", "demo_data", "--port", "0", *args]) == 2
+    err = capsys.readouterr().err.strip()
+    assert message in err and len(err.splitlines()) == 1
+    assert not started

@@ -200,3 +200,27 @@ def test_atlas_without_usable_maps_is_a_one_line_error(tmp_path, files, capsys):
     write_tum(tmp_path / "late.txt", Trajectory.from_arrays(late.t + 100_000_000, late.position, late.quat_xyzw))
     assert run(["eval", str(tmp_path / "late.txt"), str(gt), "--atlas"]) == 2
     assert "none of the 1 map trajectories" in one_line_error(capsys)
+
+
+def test_plots_folder_that_is_a_file_is_a_one_line_error_before_evaluating(tmp_path, files, capsys):
+    # Used to end in a NotADirectoryError traceback from the first PNG's temporary file.
+    est, gt = files
+    in_the_way = tmp_path / "plots"
+    in_the_way.write_text("not a folder")
+    assert run(["eval", str(est), str(gt), "--quiet", "--plots", str(in_the_way)]) == 2
+    assert "plots: output folder exists and is a file" in one_line_error(capsys)
+    assert in_the_way.read_text() == "not a folder"
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--rpe-delta", "0"], "--rpe-delta must be a finite number > 0, got 0.0"),
+    (["--rpe-delta", "nan"], "--rpe-delta must be a finite number > 0, got nan"),
+    (["--max-time-diff-s", "-1"], "--max-time-diff-s must be a finite number >= 0"),
+    (["--time-offset-s", "inf"], "--time-offset-s must be a finite number, got inf"),
+    (["--atlas", "--duration-s", "-2"], "--duration-s must be a finite number > 0"),
+])
+def test_non_finite_or_out_of_range_numbers_are_one_line_errors(files, capsys, args, message):
+    # --rpe-delta 0 was a ZeroDivisionError traceback, nan a ValueError one; a negative --duration-s was used as is.
+    est, gt = files
+    assert run(["eval", str(est), str(gt), "--quiet", *args]) == 2
+    assert message in one_line_error(capsys)

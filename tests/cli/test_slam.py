@@ -69,3 +69,15 @@ def test_slam_cli_event_inertial_configuration_is_recorded_and_checked(moving_h5
     assert json.loads((tmp_path / "ei.slam.json").read_text())["config"]["inertial"]["configuration"] == "c3"
     assert run(["slam", str(moving_h5), "--out", str(out), "--configuration", "c9"]) == 2
     assert "--configuration" in capsys.readouterr().err
+
+
+def test_slam_onto_its_input_refuses_before_running_and_leaves_no_map_files(moving_h5, tmp_path, capsys):
+    # The per-map EST.map0 file used to be written before --out was refused.
+    import shutil
+
+    rec = tmp_path / "in.h5"
+    shutil.copy(moving_h5, rec)
+    assert run(["slam", str(rec), "--out", str(rec)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "refusing to overwrite an input file" in err and len(err.splitlines()) == 1
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["in.h5"]

@@ -148,3 +148,42 @@ def test_smoothed_needs_the_factor_graph(landing_files, tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert code == 2 and "--smoothed needs --mode full" in err and len(err.splitlines()) == 1
     assert not (tmp_path / "s.txt").exists()
+
+
+def test_track_with_events_ending_before_the_ground_truth_starts_is_a_one_line_error(files, tmp_path, capsys):
+    # Used to exit 0 with "0 updates, 0 poses written to e.txt" and write no file.
+    d, rec = files
+    import dataclasses
+
+    from evpose.core.trajectory import Trajectory
+
+    gt = rec.ground_truth
+    late = dataclasses.replace(rec, ground_truth=Trajectory(gt.t + 10_000_000, gt.position, gt.quat_xyzw), source=None)
+    write_recording_h5(tmp_path / "late.h5", late)
+    out = tmp_path / "e.txt"
+    code = run(["track", str(tmp_path / "late.h5"), "--map", str(d / "map.ply"), "--out", str(out), "--mode", "stpe", "--no-progress"])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1 and "late.h5: no pose update to run" in err
+    assert not out.exists()
+
+
+def test_track_out_onto_a_folder_is_refused_before_tracking(files, tmp_path, capsys):
+    # Used to track the whole recording, then fail in os.replace with an IsADirectoryError traceback.
+    d, _ = files
+    (tmp_path / "est").mkdir()
+    code = run(["track", str(d / "rec.h5"), "--map", str(d / "map.ply"), "--out", str(tmp_path / "est"), "--no-progress"])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1 and "output is an existing folder" in err
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--rate-hz", "inf"], "rate_hz: expected a finite number, got inf"),
+    (["--rate-hz", "5000"], "rate_hz: 5000.0 is outside the allowed range 10.0..1000.0 Hz"),
+    (["--acquire-s", "nan"], "--acquire-s must be a finite number"),
+])
+def test_track_numbers_from_flags_are_checked_like_config_files(files, tmp_path, capsys, args, message):
+    # --rate-hz inf ran ~1e6 updates per recorded second (a hang); --acquire-s nan was a ValueError traceback.
+    d, _ = files
+    code = run(["track", str(d / "rec.h5"), "--map", str(d / "map.ply"), "--out", str(tmp_path / "e.txt"), "--no-progress", *args])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and message in err and len(err.splitlines()) == 1

@@ -32,3 +32,33 @@ def test_folders_are_replaced_whole(tmp_path):
     with atomic_path(tmp_path / "d", is_dir=True) as tmp:
         (tmp / "b").write_text("2")
     assert sorted(p.name for p in (tmp_path / "d").iterdir()) == ["b"]
+
+
+def test_file_output_onto_an_existing_folder_is_refused_up_front(tmp_path):
+    (tmp_path / "d").mkdir()
+    with pytest.raises(InputError, match="output is an existing folder; give a file name"):
+        with atomic_path(tmp_path / "d"):
+            raise AssertionError("the body must not run")
+
+
+def test_output_under_a_file_names_the_file_in_the_way(tmp_path):
+    (tmp_path / "f.txt").write_text("x")
+    with pytest.raises(InputError, match=r"f.txt is a file, not a folder"):
+        with atomic_path(tmp_path / "f.txt" / "sub" / "out.txt"):
+            pass
+
+
+def test_check_outputs_refuses_inputs_folders_and_files_in_the_way_before_any_work(tmp_path):
+    from evpose.io.atomic import check_outputs
+
+    src = tmp_path / "in.txt"
+    src.write_text("keep")
+    (tmp_path / "d").mkdir()
+    with pytest.raises(InputError, match="refusing to overwrite an input"):
+        check_outputs((tmp_path / "x.txt", tmp_path / "sub" / ".." / "in.txt"), inputs=(src,))
+    with pytest.raises(InputError, match="existing folder"):
+        check_outputs((tmp_path / "d",))
+    with pytest.raises(InputError, match="output folder exists and is a file"):
+        check_outputs((), folders=(src,))
+    check_outputs((None, tmp_path / "new" / "deeper" / "o.txt"), inputs=(src, None), folders=(tmp_path / "d", None))
+    assert src.read_text() == "keep" and not (tmp_path / "new").exists()

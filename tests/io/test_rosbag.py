@@ -118,3 +118,20 @@ def test_corrupt_bag_is_an_input_error(tmp_path):
     (tmp_path / "x.bag").write_bytes(b"not a bag at all")
     with pytest.raises(InputError, match="x.bag: cannot open bag"):
         open_recording(tmp_path / "x.bag")
+
+
+def test_random_bytes_named_bag_is_a_one_line_error_not_a_unicode_traceback(tmp_path):
+    path = tmp_path / "junk.bag"
+    path.write_bytes(b"\x8e\xae\xff" + bytes(range(256)) * 4)  # not UTF-8 in the first line
+    with pytest.raises(InputError, match="not a ROS1 bag") as info:
+        open_recording(path)
+    assert "\n" not in str(info.value)
+
+
+def test_ros2_metadata_yaml_error_is_reported_in_one_line(tmp_path):
+    d = tmp_path / "bag"
+    d.mkdir()
+    (d / "metadata.yaml").write_text("garbage: [\n")
+    with pytest.raises(InputError, match="cannot open bag") as info:
+        open_recording(d)
+    assert "\n" not in str(info.value)

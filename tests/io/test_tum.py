@@ -48,3 +48,10 @@ def test_write_refuses_to_overwrite_its_input(tmp_path):
     f.write_text("0.1 1 2 3 0 0 0 1\n")
     with pytest.raises(InputError, match="refusing"):
         write_tum(f, read_tum(f), inputs=(f,))
+
+
+def test_zero_quaternion_names_its_line_like_every_other_tum_error(tmp_path):
+    path = tmp_path / "est.txt"
+    path.write_text("# header\n0.0 0 0 0 0 0 0 1\n\n0.1 0 0 0 0 0 0 0\n")
+    with pytest.raises(InputError, match=r"est.txt: line 4: quaternion has zero length"):
+        read_tum(path)
