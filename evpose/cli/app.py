@@ -6,6 +6,18 @@ import time
 from pathlib import Path
 
 
+_DEFAULT_DATA = (Path("demo_data"), Path("maps"))
+
+
+def default_data_folders(data: list[Path]) -> list[Path]:
+    """The default ``--data`` resolved: ``demo_data`` and ``maps`` of the current folder when it has them, else the
+    bundled ones of this checkout (so ``evpose app`` works from any folder); any other ``--data`` as given."""
+    if tuple(data) != _DEFAULT_DATA or all(d.is_dir() for d in data):
+        return list(data)
+    bundled = [Path(__file__).resolve().parents[2] / d for d in _DEFAULT_DATA]
+    return bundled if all(d.is_dir() for d in bundled) else list(data)
+
+
 def check_arguments(data: list[Path], port: int, layout: str, export_dir: Path, cache_dir: Path | None) -> None:
     """Refuse what would otherwise start a server that cannot work as asked: a typo in ``--data`` served an empty
     browser, an unknown ``--layout`` a default one, and an out-of-range port ended in a bind() traceback."""
@@ -39,7 +51,7 @@ def main(
     """Start the browser-based viewer: browse, play, step and tune the tracker on recordings and maps.
 
     Args:
-        data: Folders searched for recordings (*.h5, bags, ECD folders) and maps (*_map.ply, *_cloud.ply); nothing outside them is opened.
+        data: Folders searched for recordings (*.h5, bags, ECD folders) and maps (*_map.ply, *_cloud.ply); nothing outside them is opened (default: demo_data and maps here, else the bundled ones).
         host: Interface to listen on; localhost by default.
         port: TCP port; the command fails with a clear message if it is taken.
         layout: Layout name from layouts/ (debug, teaching, compare, or one you saved).
@@ -51,6 +63,7 @@ def main(
     from app.disk_cache import DiskCacheConfig
     from app.server import AppConfig, ViewerApp
 
+    data = default_data_folders(list(data))
     check_arguments(data, port, layout, export_dir, cache_dir)
     cache = DiskCacheConfig(enabled=disk_cache, directory=cache_dir)
     viewer = ViewerApp(AppConfig(data=list(data), host=host, port=port, layout=layout, export_dir=export_dir,

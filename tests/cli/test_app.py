@@ -59,3 +59,27 @@ def test_bad_arguments_are_one_line_errors_before_the_server_starts(monkeypatch,
     err = capsys.readouterr().err.strip()
     assert message in err and len(err.splitlines()) == 1
     assert not started
+
+
+def test_the_default_data_folders_are_the_bundled_ones_when_started_elsewhere(monkeypatch, tmp_path: Path):
+    # Run from a folder without demo_data/ and maps/, the default --data used to be refused as missing.
+    from evpose.cli.main import run
+
+    repo = Path(__file__).resolve().parents[2]
+    monkeypatch.chdir(tmp_path)
+    seen = _capture_config(monkeypatch)
+    with pytest.raises(_Started):
+        run(["app", "--port", "0"])
+    assert seen["cfg"].data == [repo / "demo_data", repo / "maps"]
+
+
+def test_the_default_data_folders_of_the_current_folder_come_first(monkeypatch, tmp_path: Path):
+    from evpose.cli.main import run
+
+    (tmp_path / "demo_data").mkdir()
+    (tmp_path / "maps").mkdir()
+    monkeypatch.chdir(tmp_path)
+    seen = _capture_config(monkeypatch)
+    with pytest.raises(_Started):
+        run(["app", "--port", "0"])
+    assert seen["cfg"].data == [Path("demo_data"), Path("maps")]
