@@ -109,6 +109,7 @@ def main(
 
     from evpose.io.atomic import atomic_path, check_outputs
     from evpose.io.map_ply import read_contour_map
+    from evpose.tracker.session import MapOutOfViewError
     from evpose.io.open import open_recording
     from evpose.io.tum import write_tum
     from evpose.tracker.config import TrackerConfig, TrackerMode, load_config
@@ -142,7 +143,10 @@ def main(
     initial = parse_init(init)
     cmap = read_contour_map(map)
     rec = open_recording(recording, width, height)
-    session = TrackingSession(rec, cmap, cfg, initial_pose=initial)
+    try:
+        session = TrackingSession(rec, cmap, cfg, initial_pose=initial)
+    except MapOutOfViewError as exc:
+        raise InputError(map, f"{exc.problem} (recording {recording})") from None
     if session.total_steps == 0:
         # Otherwise this exits 0 saying "0 poses written" and writes no file at all.
         raise InputError(recording, f"no pose update to run: the events end at {session.t_end_us} us, less than one update"

@@ -9,6 +9,12 @@ import numpy as np
 from evpose.errors import InputError
 
 
+MAX_ACCELERATION = 2000.0
+"""Largest specific force an IMU sample may report, m/s^2 (about 200 g)."""
+MAX_ANGULAR_RATE = 200.0
+"""Largest angular rate an IMU sample may report, rad/s."""
+
+
 @dataclass(frozen=True)
 class ImuSamples:
     """Time-sorted accelerometer and gyroscope samples.
@@ -67,3 +73,16 @@ class ImuSamples:
         bad = np.flatnonzero(~finite)
         if bad.size:
             raise InputError(source, "NaN or infinite value", f"IMU sample {int(bad[0])}")
+        # Far beyond any IMU's range (MEMS parts saturate at 16-32 g and 35-70 rad/s): a unit or scale error, which
+        # would otherwise end in an indeterminate factor graph.
+        for name, values, limit, unit in (("acceleration", self.acc, MAX_ACCELERATION, "m/s^2"), ("angular rate", self.gyro, MAX_ANGULAR_RATE, "rad/s")):
+            mag = np.linalg.norm(values, axis=1)
+            bad = np.flatnonzero(mag > limit)
+            if bad.size:
+                i = int(bad[0])
+                raise InputError(source, f"{name} {mag[i]:.3g} {unit} is beyond any IMU's range (limit {limit:g} {unit}; wrong units?)",
+                                 f"IMU sample {i}")
+
+    def covers(self, t0_us: int, t1_us: int) -> bool:
+        """Whether samples lie at or before ``t0_us`` and at or after ``t1_us`` (IMU clock)."""
+        return len(self) > 0 and int(self.t[0]) <= t0_us and int(self.t[-1]) >= t1_us

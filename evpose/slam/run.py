@@ -11,7 +11,7 @@ from evpose.core.recording import Recording
 from evpose.core.trajectory import Trajectory
 from evpose.errors import InputError
 from evpose.slam.atlas import Atlas
-from evpose.slam.config import SlamConfig
+from evpose.slam.config import SlamConfig, SlamMode
 from evpose.slam.step_result import SlamStepResult
 from evpose.slam.system import EventSlam
 
@@ -36,6 +36,14 @@ def run_slam(recording: Recording, config: SlamConfig, chunk_us: int = 5000, sla
     """Run SLAM over a whole recording, feeding events in ``chunk_us`` slices."""
     if recording.calibration is None:
         raise InputError(recording.source, "the recording has no camera calibration; SLAM needs one")
+    if config.mode is SlamMode.EVENT_INERTIAL and slam is None:
+        imu, ev = recording.imu, recording.events
+        if imu is None or len(imu) < 2:
+            raise InputError(recording.source, "event-inertial mode needs IMU samples; the recording has none", "imu")
+        t0 = int(ev.t[0]) + recording.calibration.time_offset_us if len(ev) else None
+        if t0 is not None and not imu.covers(t0, t0 + 1):
+            raise InputError(recording.source, f"the IMU samples ({int(imu.t[0])}..{int(imu.t[-1])} us, IMU clock) do not cover "
+                             f"the first event at {t0} us: is the IMU on another clock?", "imu")
     slam = slam or EventSlam(config, recording.calibration, recording.imu)
     ev = recording.events
     t_start = time.perf_counter()

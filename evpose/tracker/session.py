@@ -21,6 +21,11 @@ from evpose.tracker.step_result import StepResult, TrackStatus
 from evpose.tracker.tracker import MotionPredictor, PolaritySelector, Tracker
 
 
+
+class MapOutOfViewError(InputError):
+    """Too few map points are in view at the initial pose: most often a map of another scene or frame (the fault
+    is then the map's, though the recording is what the session knows)."""
+
 class TrackingSession:
     """One tracking run over a recording: ``step()`` until it returns None; ``seek(t)`` to go back or forward."""
 
@@ -74,6 +79,9 @@ class TrackingSession:
         if components is not None and components.motion is not None:
             # IMU samples just before the start let the first preintegration interpolate at t0.
             off = recording.calibration.time_offset_us
+            if recording.imu is not None and len(recording.imu) > 1 and not recording.imu.covers(t0 + off, t0 + off + 1):
+                raise InputError(src, f"the IMU samples ({int(recording.imu.t[0])}..{int(recording.imu.t[-1])} us, IMU clock) do not "
+                                 f"cover the start of tracking at {t0 + off} us: is the IMU on another clock?", "imu")
             components.motion.fusion.add_imu(recording.imu.time_window(t0 + off - 20_000, t0 + off))
         fused_pose = components is not None and components.drives_pose
         if seed_velocity and not fused_pose:
@@ -84,7 +92,7 @@ class TrackingSession:
                 self.tracker.predictor.update(t0, pose0)
         need = self.config.registration.min_points
         if n_vis < need:
-            raise InputError(
+            raise MapOutOfViewError(
                 src,
                 f"only {n_vis} map points are in view at the initial pose (need {need}): are the map and the recording in the same frame?",
             )

@@ -55,7 +55,24 @@ def test_slam_cli_event_inertial_mode_needs_imu(tmp_path, capsys):
     path = tmp_path / "noimu.h5"
     write_recording_h5(path, rec)
     assert run(["slam", str(path), "--out", str(tmp_path / "e.txt"), "--mode", "event-inertial"]) == 2
-    assert "IMU" in capsys.readouterr().err
+    err = capsys.readouterr().err.strip()
+    assert "IMU" in err and str(path) in err and len(err.splitlines()) == 1
+
+
+def test_slam_cli_event_inertial_mode_refuses_an_imu_on_another_clock(tmp_path, capsys):
+    # IMU samples 10 s after the events: the run exited 0 and quietly went without the IMU.
+    import dataclasses
+
+    rec = make_recording(duration_s=0.2, speed=1.5)
+    if rec.imu is None:
+        pytest.skip("the synthetic SLAM recording has no IMU")
+    rec.imu = dataclasses.replace(rec.imu, t=rec.imu.t + 10_000_000)
+    path = tmp_path / "late.h5"
+    write_recording_h5(path, rec)
+    assert run(["slam", str(path), "--out", str(tmp_path / "e.txt"), "--mode", "event-inertial"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert str(path) in err and "do not cover the first event" in err and len(err.splitlines()) == 1
+    assert not (tmp_path / "e.txt").exists()
 
 
 def test_slam_cli_event_inertial_configuration_is_recorded_and_checked(moving_h5, tmp_path, capsys):

@@ -82,6 +82,7 @@ def test_track_with_a_map_in_another_frame_fails_with_one_line(files, tmp_path, 
     code = run(["track", str(d / "rec.h5"), "--map", str(tmp_path / "far.ply"), "--out", str(tmp_path / "e.txt"), "--mode", "stpe", "--no-progress"])
     err = capsys.readouterr().err.strip()
     assert code == 2 and "same frame" in err and len(err.splitlines()) == 1
+    assert err.split(": ")[2] == str(tmp_path / "far.ply")  # "evpose track: error: MAP: ...": the map is named, it is what is wrong
 
 
 def test_track_with_a_map_that_never_registers_fails_with_one_line_and_writes_nothing(files, tmp_path, capsys):
@@ -187,3 +188,29 @@ def test_track_numbers_from_flags_are_checked_like_config_files(files, tmp_path,
     code = run(["track", str(d / "rec.h5"), "--map", str(d / "map.ply"), "--out", str(tmp_path / "e.txt"), "--no-progress", *args])
     err = capsys.readouterr().err.strip()
     assert code == 2 and message in err and len(err.splitlines()) == 1
+
+
+def test_track_with_an_imu_on_another_clock_is_a_one_line_error(landing_files, tmp_path, capsys):
+    # IMU samples that start after the events: the first preintegration had nothing to integrate, and the error
+    # named no file.
+    import dataclasses
+
+    d, rec = landing_files
+    imu = dataclasses.replace(rec.imu, t=rec.imu.t + 10_000_000)
+    write_recording_h5(tmp_path / "late.h5", dataclasses.replace(rec, imu=imu))
+    code = run(["track", str(tmp_path / "late.h5"), "--map", str(d / "map.ply"), "--out", str(tmp_path / "e.txt"), "--no-progress"])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1
+    assert str(tmp_path / "late.h5") in err and "imu: the IMU samples" in err and "do not cover" in err
+    assert not (tmp_path / "e.txt").exists()
+
+
+def test_track_with_an_absurd_imu_is_a_one_line_error(landing_files, tmp_path, capsys):
+    # Accelerations of 1e30 m/s^2 (wrong units) ended in gtsam's "Indeterminate linear system" traceback.
+    import dataclasses
+
+    d, rec = landing_files
+    write_recording_h5(tmp_path / "huge.h5", dataclasses.replace(rec, imu=dataclasses.replace(rec.imu, acc=rec.imu.acc * 1e30)))
+    code = run(["track", str(tmp_path / "huge.h5"), "--map", str(d / "map.ply"), "--out", str(tmp_path / "e.txt"), "--no-progress"])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1 and "IMU sample 0: acceleration" in err and "beyond any IMU's range" in err
