@@ -30,6 +30,7 @@ import numba as nb
 import numpy as np
 
 from evpose.core.contour_map import ContourMap
+from evpose.frontend.distance_field import _bilinear_weights
 
 
 @dataclass
@@ -113,15 +114,7 @@ def _refine_kernel(points, idx, base, normals, offsets, seen, R_cw, t_cw, fx, fy
         L = np.sqrt(du * du + dv * dv)
         if L < 1e-6:
             continue
-        x0 = int(u)
-        y0 = int(v)
-        if x0 > c1 - 2:
-            x0 = c1 - 2
-        if y0 > r1 - 2:
-            y0 = r1 - 2
-        a = u - x0
-        b = v - y0
-        w00, w01, w10, w11 = (1 - a) * (1 - b), a * (1 - b), (1 - a) * b, a * b
+        x0, y0, w00, w01, w10, w11 = _bilinear_weights(u, v, r1, c1)
         f = w00 * value[0, y0, x0] + w01 * value[0, y0, x0 + 1] + w10 * value[0, y0 + 1, x0] + w11 * value[0, y0 + 1, x0 + 1]
         gu = w00 * grad_u[0, y0, x0] + w01 * grad_u[0, y0, x0 + 1] + w10 * grad_u[0, y0 + 1, x0] + w11 * grad_u[0, y0 + 1, x0 + 1]
         gv = w00 * grad_v[0, y0, x0] + w01 * grad_v[0, y0, x0 + 1] + w10 * grad_v[0, y0 + 1, x0] + w11 * grad_v[0, y0 + 1, x0 + 1]
