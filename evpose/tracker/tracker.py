@@ -171,6 +171,7 @@ class Tracker:
         C-ordered copy takes another BLAS path in later products, so a restored run would drift from the
         uninterrupted one at the rounding level (seen with numpy 2.4).
         """
+        hold = self.hold.snapshot()
         return {
             "noise_filter": self.noise_filter.snapshot(),
             "time_surface": self.time_surface.snapshot(),
@@ -182,8 +183,8 @@ class Tracker:
             "t_us": self._t_us,
             "steps": self._steps,
             "ego_history": tuple(np.copy(a) for a in self._ego_history),
-            "acquisition": self.hold.snapshot()[0],
-            "tracking": self.hold.snapshot()[1],
+            "acquisition": hold[0],
+            "tracking": hold[1],
             "map_refinement": None if self.refiner is None else self.refiner.snapshot(),
         }
 
