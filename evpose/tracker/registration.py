@@ -404,7 +404,7 @@ def register_to_map(
     loss = _LOSS_ID[RobustLoss(config.robust_loss)]
     k = float(config.robust_scale)
     thr = float(config.inlier_threshold)
-    pose = gtsam.Pose3(np.asarray(T_world_cam_init, dtype=np.float64))
+    pose = init = gtsam.Pose3(np.asarray(T_world_cam_init, dtype=np.float64))
     lag = gtsam.Pose3()
     if twist_per_s is not None and config.field_lag_ms > 0:
         xi = np.asarray(twist_per_s, dtype=np.float64).reshape(6)
@@ -421,13 +421,13 @@ def register_to_map(
     elif prior_information is not None:
         sig = float(config.prior_residual_sigma if prior_residual_sigma is None else prior_residual_sigma)
         info = 0.5 * (prior_information + prior_information.T) * sig**2
-        T_p = gtsam.Pose3(np.asarray(T_world_cam_init if T_world_cam_prior is None else T_world_cam_prior, dtype=np.float64))
+        T_p = init if T_world_cam_prior is None else gtsam.Pose3(np.asarray(T_world_cam_prior, dtype=np.float64))
         # The prior's covariance belongs to the query time; moved back by the lag it changes by Ad(lag).
         ad = lag_inv.AdjointMap()
         prior = (T_p.compose(lag_inv), ad.T @ info @ ad)
     elif config.prior_translation_m > 0 and config.prior_rotation_deg > 0:
         info = _isotropic_information(config.prior_rotation_deg, config.prior_translation_m, config.prior_residual_sigma)
-        T_p = gtsam.Pose3(np.asarray(T_world_cam_init if T_world_cam_prior is None else T_world_cam_prior, dtype=np.float64))
+        T_p = init if T_world_cam_prior is None else gtsam.Pose3(np.asarray(T_world_cam_prior, dtype=np.float64))
         prior = (T_p.compose(lag_inv), info)
     total_it = 0
     for fld in levels:
