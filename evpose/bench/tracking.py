@@ -160,5 +160,13 @@ def _superset_culling(ctx: BenchContext) -> dict:
     return out
 
 
+def _registration_cost(ctx: BenchContext) -> dict:
+    """``register_to_map`` latency against the point count and its per-call / per-point split (registration_cost)."""
+    from evpose.bench.registration_cost import bench_registration_cost
+
+    return bench_registration_cost(ctx)
+
+
 BENCHMARKS = {"landing_240x180": _bench((240, 180)), "landing_346x260": _bench((346, 260)), "registration_bias_346x260": _bias,
-              "superset_culling_346x260": _superset_culling}
+              "superset_culling_346x260": _superset_culling,
+              "registration_cost": _registration_cost}

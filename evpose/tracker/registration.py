@@ -9,9 +9,13 @@ tangent order (rotation, translation). Then ``X' = X + [X]x omega - v``, so
 IRLS: the robust weight multiplies residual *and* Jacobian (normal equations
 ``J^T W J xi = -J^T W r``), unlike ESVO which weights the residual only.
 Covariance is ``(J^T W J)^-1 * sigma^2`` with the weighted residual variance.
-All per-point work for one linearisation is one numba pass; the 6x6 solve and
-the SE(3) update (gtsam ``Pose3.Expmap``) run in Python, a few microseconds per
-iteration.
+All per-point work for one linearisation is one numba pass, and the damped 6x6
+solve (prior added) another; the SE(3) algebra (gtsam ``Pose3``) and the prior's
+terms stay in gtsam / numpy, whose rounding a compiled copy would not reproduce
+(numpy's small products go through OpenBLAS). What a call costs besides its
+points, from ``tracking.registration_cost`` (2 s landing, 346x260, load ~6):
+25-65 us per call and 8-11 us per linearisation (57-90 and 12-17 before these
+helpers), next to ~65-90 ns per point and linearisation.
 """
 
 from __future__ import annotations
@@ -267,52 +271,97 @@ def _norm3(v: np.ndarray) -> float:
     return math.sqrt(v.dot(v))
 
 
+try:  # numpy's own LAPACK gufuncs behind np.linalg.eigvalsh / inv (the same call, the same bits)
+    from numpy.linalg import _umath_linalg as _lapack
+
+    def _eigvalsh(a: np.ndarray) -> np.ndarray:
+        """``np.linalg.eigvalsh`` of a finite symmetric float64 matrix without its wrapper's checks and error-state
+        context (~6 us of the ~10 it costs on a 6x6); a LAPACK failure reads NaN, which the callers' tests reject."""
+        return _lapack.eigvalsh_lo(a, signature="d->d")
+
+    def _inv(a: np.ndarray) -> np.ndarray:
+        """``np.linalg.inv`` of a positive-definite float64 matrix (checked by the caller), without its wrapper."""
+        return _lapack.inv(a, signature="d->d")
+except (ImportError, AttributeError):  # another numpy layout: the public functions
+    _eigvalsh, _inv = np.linalg.eigvalsh, np.linalg.inv
+
+
+@nb.njit(cache=True)
+def _linearise_at(points, slots, T_cw, fx, fy, cx, cy, value, grad_u, grad_v, box, second_order, loss, k, inlier_thr, H, b, res, wts, uv):
+    """:func:`_linearise` at the (4, 4) ``T_cw`` as gtsam hands it out (any memory layout): its rotation and
+    translation copied here, not by two ``np.ascontiguousarray`` calls per linearisation."""
+    R = np.empty((3, 3))
+    t = np.empty(3)
+    for i in range(3):
+        for j in range(3):
+            R[i, j] = T_cw[i, j]
+        t[i] = T_cw[i, 3]
+    return _linearise(points, slots, R, t, fx, fy, cx, cy, value, grad_u, grad_v, box, second_order, loss, k, inlier_thr,
+                      H, b, res, wts, uv)
+
+
+@nb.njit(cache=True)
+def _lm_step(H, b, prior_H, prior_b, with_prior, lam):
+    """(step, finite) of the damped system at the current linearisation, the prior's terms added when ``with_prior``
+    (the same sums numpy forms, one compiled call instead of two additions, the solve and a finiteness test)."""
+    if with_prior:
+        step = _damped_step(H + prior_H, b + prior_b, lam)
+    else:
+        step = _damped_step(H, b, lam)
+    for i in range(6):
+        if not np.isfinite(step[i]):
+            return step, False
+    return step, True
+
+
+_NO_PRIOR_TERMS = (np.zeros((6, 6)), np.zeros(6))
+"""Placeholders handed to :func:`_lm_step` when there is no prior (never read)."""
+
+
 def _levenberg_marquardt(pts, slots, fld, pose, K, config, loss, k, thr, prior=None):
     """Robust LM on one field; returns (pose, cost, inside, inliers, [sum w r^2, its inlier part], H, residuals, weights, uv,
     iterations)."""
     m = pts.shape[0]
     fx, fy, cx, cy = float(K[0, 0]), float(K[1, 1]), float(K[0, 2]), float(K[1, 2])
-
-    def lin(p: gtsam.Pose3, bufs):
-        T_cw = p.inverse().matrix()
-        return _linearise(pts, slots, np.ascontiguousarray(T_cw[:3, :3]), np.ascontiguousarray(T_cw[:3, 3]), fx, fy, cx, cy,
-                          fld.value, fld.grad_u, fld.grad_v, fld.box, bool(config.second_order), loss, k, thr, *bufs)
-
+    value, grad_u, grad_v, box, second = fld.value, fld.grad_u, fld.grad_v, fld.box, bool(config.second_order)
     cur = [np.zeros((6, 6)), np.zeros(6), np.empty(m), np.empty(m), np.empty((m, 2))]
     trial = [np.zeros((6, 6)), np.zeros(6), np.empty(m), np.empty(m), np.empty((m, 2))]
-    cost, inside, inl, *swr2 = lin(pose, cur)
+    cost, inside, inl, swr2, swr2_in = _linearise_at(pts, slots, pose.inverse().matrix(), fx, fy, cx, cy, value, grad_u, grad_v,
+                                                     box, second, loss, k, thr, *cur)
     pc, pg, pI = _prior_terms(pose, prior)
+    with_prior = pI is not None
     lam = float(config.lm_lambda)
     min_lam = float(config.lm_lambda_min)
+    conv_rot, conv_trans, conv_ratio = config.convergence_rotation_rad, config.convergence_translation_m, config.convergence_cost_ratio
     it = 0
     for it in range(1, int(config.max_iterations) + 1):
         if inside < 6:
             break
-        # Without a prior the buffers are used as they are (adding zeros would only cost allocations).
-        H, b = (cur[0], cur[1]) if pI is None else (cur[0] + pI, cur[1] + pg)
-        delta = _damped_step(H, b, lam)
-        if not np.isfinite(delta).all():
+        prior_H, prior_b = (pI, pg) if with_prior else _NO_PRIOR_TERMS
+        delta, finite = _lm_step(cur[0], cur[1], prior_H, prior_b, with_prior, lam)
+        if not finite:
             break  # singular (NaN) or overflowing system
         cand = pose.compose(gtsam.Pose3.Expmap(delta))
-        c_cost, c_inside, c_inl, *c_swr2 = lin(cand, trial)
+        c_cost, c_inside, c_inl, c_swr2, c_swr2_in = _linearise_at(pts, slots, cand.inverse().matrix(), fx, fy, cx, cy, value, grad_u,
+                                                                   grad_v, box, second, loss, k, thr, *trial)
         c_pc, c_pg, _ = _prior_terms(cand, prior)
         # Compare mean cost: the set of points inside the image may change with the pose.
         old_mean = (cost + pc) / max(inside, 1)
         new_mean = (c_cost + c_pc) / c_inside if c_inside > 0 else np.inf
         if c_inside >= 6 and new_mean <= old_mean:
             pose = cand
-            cost, inside, inl, swr2 = c_cost, c_inside, c_inl, c_swr2
+            cost, inside, inl, swr2, swr2_in = c_cost, c_inside, c_inl, c_swr2, c_swr2_in
             pc, pg = c_pc, c_pg
             cur, trial = trial, cur
             lam = max(lam * 0.3, min_lam)
-            small = _norm3(delta[:3]) < config.convergence_rotation_rad and _norm3(delta[3:]) < config.convergence_translation_m
-            if small or old_mean - new_mean < config.convergence_cost_ratio * old_mean:
+            small = _norm3(delta[:3]) < conv_rot and _norm3(delta[3:]) < conv_trans
+            if small or old_mean - new_mean < conv_ratio * old_mean:
                 break
         else:
             lam = lam * 10.0 if lam > 0 else 1e-4
             if lam > 1e6:
                 break
-    return pose, cost, inside, inl, swr2, cur[0].copy() if pI is None else cur[0] + pI, cur[2], cur[3], cur[4], it
+    return pose, cost, inside, inl, [swr2, swr2_in], cur[0].copy() if pI is None else cur[0] + pI, cur[2], cur[3], cur[4], it
 
 
 def register_to_map(
@@ -360,13 +409,14 @@ def register_to_map(
     loss = _LOSS_ID[RobustLoss(config.robust_loss)]
     k = float(config.robust_scale)
     thr = float(config.inlier_threshold)
-    pose = gtsam.Pose3(np.asarray(T_world_cam_init, dtype=np.float64))
+    pose = init = gtsam.Pose3(np.asarray(T_world_cam_init, dtype=np.float64))
     lag = gtsam.Pose3()
     if twist_per_s is not None and config.field_lag_ms > 0:
         xi = np.asarray(twist_per_s, dtype=np.float64).reshape(6)
         if np.all(np.isfinite(xi)):
             lag = gtsam.Pose3.Expmap(xi * (float(config.field_lag_ms) * 1e-3))
-    pose = pose.compose(lag.inverse())
+    lag_inv = lag.inverse()
+    pose = pose.compose(lag_inv)
     if m == 0 or not levels:
         z = np.zeros(0, np.float32)
         return RegistrationResult(pose.compose(lag).matrix(), False, "no map points to register", None, 0, 0, 0, 0.0, z, z, np.zeros((0, 2), np.float32))
@@ -376,14 +426,14 @@ def register_to_map(
     elif prior_information is not None:
         sig = float(config.prior_residual_sigma if prior_residual_sigma is None else prior_residual_sigma)
         info = 0.5 * (prior_information + prior_information.T) * sig**2
-        T_p = gtsam.Pose3(np.asarray(T_world_cam_init if T_world_cam_prior is None else T_world_cam_prior, dtype=np.float64))
+        T_p = init if T_world_cam_prior is None else gtsam.Pose3(np.asarray(T_world_cam_prior, dtype=np.float64))
         # The prior's covariance belongs to the query time; moved back by the lag it changes by Ad(lag).
-        ad = lag.inverse().AdjointMap()
-        prior = (T_p.compose(lag.inverse()), ad.T @ info @ ad)
+        ad = lag_inv.AdjointMap()
+        prior = (T_p.compose(lag_inv), ad.T @ info @ ad)
     elif config.prior_translation_m > 0 and config.prior_rotation_deg > 0:
         info = _isotropic_information(config.prior_rotation_deg, config.prior_translation_m, config.prior_residual_sigma)
-        T_p = gtsam.Pose3(np.asarray(T_world_cam_init if T_world_cam_prior is None else T_world_cam_prior, dtype=np.float64))
-        prior = (T_p.compose(lag.inverse()), info)
+        T_p = init if T_world_cam_prior is None else gtsam.Pose3(np.asarray(T_world_cam_prior, dtype=np.float64))
+        prior = (T_p.compose(lag_inv), info)
     total_it = 0
     for fld in levels:
         pose, cost, inside, inl, swr2, H, res, wts, uv, it = _levenberg_marquardt(pts, slots, fld, pose, K, config, loss, k, thr, prior)
@@ -402,8 +452,8 @@ def register_to_map(
     if not np.all(np.isfinite(H)):
         return result(False, "registration produced non-finite values", None)
     d = np.sqrt(np.maximum(np.diag(H), 1e-300))
-    eig = np.linalg.eigvalsh(H / np.outer(d, d))
-    if eig[0] <= 0 or eig[-1] / eig[0] > config.max_condition:
+    eig = _eigvalsh(H / np.outer(d, d))
+    if not eig[0] > 0 or eig[-1] / eig[0] > config.max_condition:  # not > 0: also NaN from a failed solver
         return result(False, "degenerate geometry: the visible map does not constrain all 6 degrees of freedom", None)
     # Points reading TDF ~1 (their edge did not fire) add nothing to H but w r^2 ~ w each: counted in the residual
     # variance they inflate the covariance several times over (see ``ResidualVariance``).
@@ -411,10 +461,10 @@ def register_to_map(
     if prior is not None and prior_information is not None:
         # The caller fuses the prior itself (a motion filter): report what the events alone say.
         H = H - prior[1]
-        if np.linalg.eigvalsh(0.5 * (H + H.T))[0] <= 0:
+        if not _eigvalsh(0.5 * (H + H.T))[0] > 0:
             return result(True, "", None)
-    cov = np.linalg.inv(H) * sigma2
+    cov = _inv(H) * sigma2
     # Moving the pose by ``lag`` (right) maps a body perturbation d to Ad(lag^-1) d.
-    ad = lag.inverse().AdjointMap()
+    ad = lag_inv.AdjointMap()
     cov = ad @ cov @ ad.T
     return result(True, "", 0.5 * (cov + cov.T))
