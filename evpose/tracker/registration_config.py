@@ -167,3 +167,23 @@ class RegistrationConfig:
     marker: a pixel's last event fires later in a bright-to-dark crossing of its footprint, log response).
     Registrations from the truth with the points moved by a per-polarity fit (converged, 346x260) were no
     better than the global fit once one outlier was set aside; a per-segment oracle offset only 11.6 -> 9.1 mm."""
+    lag_floor_px: float = field(default=0.0, metadata={"min": 0.0, "max": 3.0, "step": 0.05, "unit": "px"})
+    """Smallest distance the TDF minimum trails a moving edge, pixels (0 = off); needs the map's edge directions
+    and the motion twist. The fused modes use ``fused_lag_floor_px`` instead.
+
+    ``field_lag_ms`` makes the trail proportional to the edge's normal image speed, but slow edges trail by a
+    nearly constant amount (``registration_bias_346x260``, true-edge map: -0.52 / -0.46 / -0.52 px at 0.03 /
+    0.08 / 0.13 px/ms against -0.15 / -0.36 / -0.56 px for 4.5 ms): each point's field is then sampled behind
+    its projection by the difference, along its projected edge normal, against the direction of its image
+    motion. Registrations from the truth (true twist, true-edge map, 346x260): 11.9 -> 10.0 mm RMS with 0.55 px
+    (7.4 -> 5.4 mm with ``crowded_radius_px`` 3). But ``stpe`` tracks worse with it (seeds 0-3, 2 s landing,
+    346x260 / 240x180, crowded points skipped: 21.79 / 28.49 -> 21.99 / 29.92 mm with 0.3 px, 23.8 / 36.1 mm with
+    0.55 px at 2.5 px crowding): the Kalman filter's twist gets the motion direction of slow points wrong."""
+    fused_lag_floor_px: float = field(default=0.45, metadata={"min": 0.0, "max": 3.0, "step": 0.05, "unit": "px"})
+    """``lag_floor_px`` where an IMU fusion backend drives the pose (``full``): its twist comes from the IMU, pixels.
+
+    ``full``, 2 s landing from ground truth, seeds 0-3, mean ATE at 346x260 / 240x180 (``crowded_radius_px`` 3):
+    0 -> 0.45 px 11.72 / 12.33 -> 10.37 / 10.56 mm (ARE 0.125 / 0.151 -> 0.131 / 0.155 deg); sweep (with the
+    earlier crowding variant) 0 / 0.3 / 0.45 / 0.55 / 0.65 px 11.74 / 12.39, 11.05 / 11.16, 10.39 / 10.50,
+    9.88 / 12.43, 10.99 / 15.63 mm. Bundled demos, ``full``, ``--align none``, 0 -> 0.45 px: ``landing`` 15.28 ->
+    15.79 mm, ``landing_dynamic`` 24.83 -> 21.83 mm, ``landing_fast`` 23.57 -> 24.19 mm (ARE 0.227 -> 0.231 deg)."""
