@@ -307,16 +307,19 @@ def bench_refinement_cost(ctx) -> dict:
 
 
 def bench_crowding_cost(ctx) -> dict:
-    """As ``refinement_cost``, for skipping the crowded points (``visible_map.crowded_radius_px`` 0 against its
-    default): per-update CPU of ``stpe`` and ``full``, alternated in one process, ATE of each."""
+    """As ``refinement_cost``, for the crowded-point test and the fused modes' lag floor together
+    (``visible_map.crowded_radius_px`` and ``registration.fused_lag_floor_px`` 0 against their defaults): per-update
+    CPU of ``stpe`` and ``full``, alternated in one process, ATE of each."""
+    from evpose.tracker.registration_config import RegistrationConfig
     from evpose.tracker.visible_map import VisibleMapConfig
 
-    default = VisibleMapConfig().crowded_radius_px or 3.0
+    radius, floor = VisibleMapConfig().crowded_radius_px, RegistrationConfig().fused_lag_floor_px
 
-    def crowd(cfg, on):
-        cfg.visible_map.crowded_radius_px = default if on else 0.0
+    def configure(cfg, on):
+        cfg.visible_map.crowded_radius_px = radius if on else 0.0
+        cfg.registration.fused_lag_floor_px = floor if on else 0.0
 
-    return _paired_cost(ctx, crowd, ("all_points", "uncrowded"))
+    return _paired_cost(ctx, configure, ("all_points", "uncrowded"))
 
 
 def _paired_cost(ctx, configure, labels: tuple[str, str]) -> dict:

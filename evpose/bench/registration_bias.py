@@ -5,7 +5,7 @@ the events so far; registration starts *at* the ground-truth pose, with the
 ground-truth twist for the lag compensation and no prior, and we record where it
 ends (body-frame error, rotation then translation) and the error's Mahalanobis
 distance under the reported covariance (NEES; 6 on average if the covariance is
-right). Two maps: the simulator's true edges sampled every 5 mm (a perfect map)
+right). The points are those the tracker registers (subsampled, crowded ones skipped). Two maps: the simulator's true edges sampled every 5 mm (a perfect map)
 and the map ``build_contour_map`` makes from the raw cloud. A mean error far
 from zero with a perfect map means the residual model is biased; a large NEES
 means the covariance a filter would fuse is overconfident.
@@ -56,6 +56,18 @@ def true_edge_samples(segments: np.ndarray, step_m: float = 0.005) -> tuple[np.n
     return np.concatenate(pts), np.concatenate(dirs), np.concatenate(seg)
 
 
+def true_edge_map(segments: np.ndarray, step_m: float = 0.005):
+    """(ContourMap, directions, segment index) of :func:`true_edge_samples`, the map's normals chosen so that the
+    tracker's edge direction (``plane_normal x edge_normal``) is the segment's: the crowding test needs it."""
+    from evpose.core.contour_map import ContourMap
+
+    pts, dirs, seg = true_edge_samples(segments, step_m)
+    helper = np.where(np.abs(dirs[:, 2:3]) < 0.9, [[0.0, 0.0, 1.0]], [[1.0, 0.0, 0.0]])
+    edge_n = np.cross(dirs, helper)
+    edge_n /= np.maximum(np.linalg.norm(edge_n, axis=1, keepdims=True), 1e-12)
+    return ContourMap.from_points(pts, edge_normal=edge_n, plane_normal=np.cross(edge_n, dirs)), dirs, seg
+
+
 def true_edge_points(segments: np.ndarray, step_m: float = 0.005) -> np.ndarray:
     """(N, 3) points every ``step_m`` along (M, 2, 3) segments, both ends included."""
     return true_edge_samples(segments, step_m)[0]
@@ -102,6 +114,7 @@ def _errors_from_ground_truth(recording, contour_map, config, every: int = 10, d
     import dataclasses
     import gtsam
 
+    from evpose.tracker.crowding import crowded_points
     from evpose.tracker.registration import register_to_map, subsample_indices
     from evpose.tracker.tracker import Tracker
 
@@ -126,6 +139,10 @@ def _errors_from_ground_truth(recording, contour_map, config, every: int = 10, d
         T_gt = gt.interpolate(np.array([t])).matrix(0)
         visible = tracker.visible_map.visible(T_gt, cfg.visible_map)
         used = visible[subsample_indices(visible.size, reg_cfg.max_points)]
+        vm = cfg.visible_map
+        if vm.crowded_radius_px > 0:  # the points the tracker registers (see ``Tracker.step``)
+            used = used[~crowded_points(tracker._points[used], tracker._tangents[used], T_gt, tracker.K, vm.crowded_radius_px,
+                                        vm.crowded_tolerance_px)]
         pts = np.ascontiguousarray(tracker._points[used])
         tracker.distance_field.compute(tracker.time_surface, t, (0,), tracker._field_box(pts, T_gt), False)  # registration derives the curvature itself
         T_prev = gt.interpolate(np.array([t - dt_us])).matrix(0)
@@ -202,7 +219,6 @@ def _summary(prefix: str, errs: np.ndarray, nees: np.ndarray) -> dict:
 def registration_bias(work_dir: Path, resolution: tuple[int, int], seconds: float, seed: int = 0) -> dict:
     """Registration-from-ground-truth errors with the true-edge map and the built map (see the module docstring)."""
     from evpose.bench.tracking import landing_case
-    from evpose.core.contour_map import ContourMap
     from evpose.sim import SimulationConfig
     from evpose.sim.cache import load_or_simulate
     from evpose.tracker.config import TrackerConfig, TrackerMode
@@ -212,8 +228,8 @@ def registration_bias(work_dir: Path, resolution: tuple[int, int], seconds: floa
                            Path(work_dir) / "tracking" / "sim")
     edges = np.concatenate([sim.edges, sim.albedo_edges]) if len(sim.albedo_edges) else sim.edges
     out: dict = {"resolution": f"{resolution[0]}x{resolution[1]}", "seconds": seconds}
-    pts, dirs, seg = true_edge_samples(edges)
-    for name, cmap, info in (("true_edges", ContourMap.from_points(pts), (dirs, seg)), ("built", built, None)):
+    true_map, dirs, seg = true_edge_map(edges)
+    for name, cmap, info in (("true_edges", true_map, (dirs, seg)), ("built", built, None)):
         times, errs, nees, conv, offsets = _errors_from_ground_truth(rec, cmap, TrackerConfig(mode=TrackerMode.STPE), edges=info)
         early = times < EARLY_S
         out[f"{name}_registrations"] = int(times.size)

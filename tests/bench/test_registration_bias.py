@@ -53,3 +53,12 @@ def test_true_edge_samples_give_each_point_its_segment_direction_and_index():
     pts, dirs, seg = true_edge_samples(segs, step_m=0.5)
     assert pts.shape == (5 + 2, 3) and seg.tolist() == [0] * 5 + [1] * 2
     assert np.allclose(dirs[:5], [0.0, 1.0, 0.0]) and np.allclose(dirs[5:], [0.0, 0.0, -1.0])
+
+
+def test_true_edge_map_gives_the_tracker_each_segment_direction():
+    from evpose.bench.registration_bias import true_edge_map
+
+    segs = np.array([[[0.0, 0.0, 0.0], [0.0, 2.0, 0.0]], [[1.0, 0.0, 0.0], [1.0, 0.0, -0.5]]])
+    cmap, dirs, _ = true_edge_map(segs, step_m=0.5)
+    tangent = np.cross(cmap.plane_normal, cmap.edge_normal)
+    assert np.allclose(tangent, dirs, atol=1e-6) and np.allclose(np.linalg.norm(cmap.edge_normal, axis=1), 1.0, atol=1e-6)
