@@ -307,17 +307,18 @@ def bench_refinement_cost(ctx) -> dict:
 
 
 def bench_crowding_cost(ctx) -> dict:
-    """As ``refinement_cost``, for the crowded-point test and the fused modes' lag floor together
-    (``visible_map.crowded_radius_px`` and ``registration.fused_lag_floor_px`` 0 against their defaults): per-update
-    CPU of ``stpe`` and ``full``, alternated in one process, ATE of each."""
+    """As ``refinement_cost``, for the crowded-point test and the fused modes' per-point trail model together
+    (``visible_map.crowded_radius_px``, ``registration.fused_lag_floor_px`` and ``fused_polarity_trail_px`` 0 against
+    their defaults): per-update CPU of ``stpe`` and ``full``, alternated in one process, ATE of each."""
     from evpose.tracker.registration_config import RegistrationConfig
     from evpose.tracker.visible_map import VisibleMapConfig
 
-    radius, floor = VisibleMapConfig().crowded_radius_px, RegistrationConfig().fused_lag_floor_px
+    radius, reg = VisibleMapConfig().crowded_radius_px, RegistrationConfig()
 
     def configure(cfg, on):
         cfg.visible_map.crowded_radius_px = radius if on else 0.0
-        cfg.registration.fused_lag_floor_px = floor if on else 0.0
+        cfg.registration.fused_lag_floor_px = reg.fused_lag_floor_px if on else 0.0
+        cfg.registration.fused_polarity_trail_px = reg.fused_polarity_trail_px if on else 0.0
 
     return _paired_cost(ctx, configure, ("all_points", "uncrowded"))
 

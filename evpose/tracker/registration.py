@@ -75,12 +75,13 @@ def _rho_weight(r, loss, k):
 
 
 @nb.njit(cache=True, inline="always")
-def _floor_shift(tangents, i, R_cw, X, Y, Z, fx, fy, Ju, Jv, twist, lag_px_per_px_s, floor_px):
+def _floor_shift(tangents, i, R_cw, X, Y, Z, fx, fy, Ju, Jv, twist, lag_px_per_px_s, floor_px, extra_px):
     """(du, dv): how far behind its projection point ``i``'s TDF minimum lies beyond what the lag explains.
 
     Along the projected edge normal, oriented against the image motion, by ``floor_px - lag * normal speed``
-    when positive (slow edges: see ``RegistrationConfig.lag_floor_px``), else (0, 0). ``Ju`` / ``Jv`` are the
-    point's image rows, so ``Ju . twist`` is its image velocity (px/s)."""
+    when positive (slow edges: see ``RegistrationConfig.lag_floor_px``), plus the point's own ``extra_px``
+    (negative: ahead), else (0, 0). ``Ju`` / ``Jv`` are the point's image rows, so ``Ju . twist`` is its image
+    velocity (px/s)."""
     tx, ty, tz = tangents[i, 0], tangents[i, 1], tangents[i, 2]
     dX = R_cw[0, 0] * tx + R_cw[0, 1] * ty + R_cw[0, 2] * tz
     dY = R_cw[1, 0] * tx + R_cw[1, 1] * ty + R_cw[1, 2] * tz
@@ -98,8 +99,8 @@ def _floor_shift(tangents, i, R_cw, X, Y, Z, fx, fy, Ju, Jv, twist, lag_px_per_p
         vu += Ju[j] * twist[j]
         vv += Jv[j] * twist[j]
     vn = vu * nu + vv * nv
-    e = floor_px - lag_px_per_px_s * abs(vn)
-    if e <= 0.0:
+    e = max(floor_px - lag_px_per_px_s * abs(vn), 0.0) + extra_px
+    if e == 0.0:
         return 0.0, 0.0
     if vn < 0.0:
         e = -e
@@ -108,11 +109,12 @@ def _floor_shift(tangents, i, R_cw, X, Y, Z, fx, fy, Ju, Jv, twist, lag_px_per_p
 
 @nb.njit(cache=True)
 def _linearise(points, slots, R_cw, t_cw, fx, fy, cx, cy, value, grad_u, grad_v, box, second_order, loss, k, inlier_thr, H, b, res, wts, uv,
-               tangents, twist, lag_s, floor_px):
+               tangents, twist, lag_s, floor_px, extra):
     """Residuals, weights, projections and the weighted normal equations at one pose.
 
     ``floor_px`` > 0 samples each point's field behind its projection by :func:`_floor_shift` (``tangents`` (M, 3)
-    world edge directions, ``twist`` (6,) body twist per second, ``lag_s`` the lag the pose already carries).
+    world edge directions, ``twist`` (6,) body twist per second, ``lag_s`` the lag the pose already carries);
+    ``extra`` (M,) per-point trail beyond that, pixels (empty = none; it also needs the tangents and twist).
     Returns (cost, points inside the image, inliers, sum of w r^2, sum of w r^2 over the inliers).
     """
     for i in range(6):
@@ -166,10 +168,11 @@ def _linearise(points, slots, R_cw, t_cw, fx, fy, cx, cy, value, grad_u, grad_v,
         Jv[5] = -pvz
         us = u
         vs = v
-        if floor_px > 0.0:
+        if floor_px > 0.0 or extra.shape[0]:
             # The shift is held constant within a linearisation (it changes with the pose only through the
             # point's image velocity and normal, a second-order effect).
-            du, dv = _floor_shift(tangents, i, R_cw, X, Y, Z, fx, fy, Ju, Jv, twist, lag_s, floor_px)
+            du, dv = _floor_shift(tangents, i, R_cw, X, Y, Z, fx, fy, Ju, Jv, twist, lag_s, floor_px,
+                                  extra[i] if extra.shape[0] else 0.0)
             us += du
             vs += dv
         f, fu, fv, ok = bilinear_sample(value, grad_u, grad_v, box, np.int64(slots[i]), us, vs)
@@ -312,20 +315,21 @@ def _norm3(v: np.ndarray) -> float:
 
 _NO_TANGENTS = np.zeros((0, 3))
 _NO_TWIST = np.zeros(6)
+_NO_EXTRA = np.zeros(0)
 
 
 def _levenberg_marquardt(pts, slots, fld, pose, K, config, loss, k, thr, prior=None, floor=None):
     """Robust LM on one field; returns (pose, cost, inside, inliers, [sum w r^2, its inlier part], H, residuals, weights, uv,
-    iterations). ``floor`` = (tangents, twist, lag s, floor px) for :func:`_floor_shift`, None = off."""
+    iterations). ``floor`` = (tangents, twist, lag s, floor px, per-point extra px) for :func:`_floor_shift`, None = off."""
     m = pts.shape[0]
     fx, fy, cx, cy = float(K[0, 0]), float(K[1, 1]), float(K[0, 2]), float(K[1, 2])
-    tangents, twist, lag_s, floor_px = floor if floor is not None else (_NO_TANGENTS, _NO_TWIST, 0.0, 0.0)
+    tangents, twist, lag_s, floor_px, extra = floor if floor is not None else (_NO_TANGENTS, _NO_TWIST, 0.0, 0.0, _NO_EXTRA)
 
     def lin(p: gtsam.Pose3, bufs):
         T_cw = p.inverse().matrix()
         return _linearise(pts, slots, np.ascontiguousarray(T_cw[:3, :3]), np.ascontiguousarray(T_cw[:3, 3]), fx, fy, cx, cy,
                           fld.value, fld.grad_u, fld.grad_v, fld.box, bool(config.second_order), loss, k, thr, *bufs,
-                          tangents, twist, lag_s, floor_px)
+                          tangents, twist, lag_s, floor_px, extra)
 
     cur = [np.zeros((6, 6)), np.zeros(6), np.empty(m), np.empty(m), np.empty((m, 2))]
     trial = [np.zeros((6, 6)), np.zeros(6), np.empty(m), np.empty(m), np.empty((m, 2))]
@@ -376,6 +380,7 @@ def register_to_map(
     prior_information: np.ndarray | None = None,
     prior_residual_sigma: float | None = None,
     tangents_world: np.ndarray | None = None,
+    trail_offsets_px: np.ndarray | None = None,
 ) -> RegistrationResult:
     """Refine ``T_world_cam_init`` so the map points ``points_world`` (M, 3) land on low TDF.
 
@@ -404,7 +409,9 @@ def register_to_map(
     itself.
 
     ``tangents_world`` (M, 3): unit edge direction of each point (zero = unknown), which ``config.lag_floor_px``
-    needs (with ``twist_per_s``); without them that floor is off.
+    needs (with ``twist_per_s``); without them that floor is off. ``trail_offsets_px`` (M,): how much further
+    each point's field is sampled behind it than the lag model says (negative: ahead), pixels, e.g. by the polarity
+    it fires; it needs the tangents and the twist too.
     """
     levels = [field_] if isinstance(field_, TemporalDistanceField) else list(field_)
     pts = np.ascontiguousarray(points_world, dtype=np.float64).reshape(-1, 3)
@@ -421,11 +428,12 @@ def register_to_map(
             lag = gtsam.Pose3.Expmap(xi * (float(config.field_lag_ms) * 1e-3))
     pose = pose.compose(lag.inverse())
     floor = None
-    if config.lag_floor_px > 0 and tangents_world is not None and twist_per_s is not None and m:
+    if (config.lag_floor_px > 0 or trail_offsets_px is not None) and tangents_world is not None and twist_per_s is not None and m:
         xi = np.ascontiguousarray(twist_per_s, dtype=np.float64).reshape(6)
         if np.all(np.isfinite(xi)):
+            extra = _NO_EXTRA if trail_offsets_px is None else np.ascontiguousarray(trail_offsets_px, dtype=np.float64).reshape(m)
             floor = (np.ascontiguousarray(tangents_world, dtype=np.float64).reshape(m, 3), xi,
-                     float(config.field_lag_ms) * 1e-3, float(config.lag_floor_px))
+                     float(config.field_lag_ms) * 1e-3, float(config.lag_floor_px), extra)
     if m == 0 or not levels:
         z = np.zeros(0, np.float32)
         return RegistrationResult(pose.compose(lag).matrix(), False, "no map points to register", None, 0, 0, 0, 0.0, z, z, np.zeros((0, 2), np.float32))

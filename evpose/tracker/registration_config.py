@@ -187,3 +187,16 @@ class RegistrationConfig:
     earlier crowding variant) 0 / 0.3 / 0.45 / 0.55 / 0.65 px 11.74 / 12.39, 11.05 / 11.16, 10.39 / 10.50,
     9.88 / 12.43, 10.99 / 15.63 mm. Bundled demos, ``full``, ``--align none``, 0 -> 0.45 px: ``landing`` 15.28 ->
     15.79 mm, ``landing_dynamic`` 24.83 -> 21.83 mm, ``landing_fast`` 23.57 -> 24.19 mm (ARE 0.227 -> 0.231 deg)."""
+    fused_polarity_trail_px: float = field(default=0.2, metadata={"min": -1.0, "max": 1.0, "step": 0.05, "unit": "px"})
+    """In the fused modes, how much further the field of a point predicted to fire OFF events trails than that of an
+    ON point (the polarity filter's prediction), pixels: each is sampled half of it behind / ahead of the lag model,
+    along its edge normal (0 = off).
+
+    A pixel's last event of a crossing fires later in a bright-to-dark (OFF) crossing of its footprint than in a
+    dark-to-bright one (log response): on the simulated landing's true-edge map OFF segments trail ~0.2 px more
+    (``registration_bias``; registrations from the truth, oracle offsets: 5.6 -> 5.1 mm with 0.1 px, 7.8 mm with
+    -0.2 px). ``full``, seeds 0-3, mean ATE at 346x260 / 240x180 (with ``fused_lag_floor_px`` 0.45): 0 / 0.1 / 0.2 /
+    0.3 / -0.2 px gave 10.37 / 10.56, 10.05 / 10.21, 9.83 / 10.06, 10.05 / 10.12, 10.37 / 11.42 mm (ARE 0.131 /
+    0.155 -> 0.123 / 0.152 deg at 0.2). Bundled demos (``full``, ``--align none``) 0 -> 0.2: ``landing`` 15.79 ->
+    15.55 mm, ``landing_dynamic`` 21.83 -> 20.58 mm, ``landing_fast`` 24.19 -> 23.88 mm. ``stpe+filter`` (not
+    applied there) would go 22.28 / 30.38 -> 22.47 / 28.54 mm."""

@@ -323,10 +323,16 @@ class Tracker:
                 # The filter fuses the prediction itself; the registration's isotropic prior would count it twice
                 # (all-zero information = no prior), unless the filter's own covariance is asked to act as the prior.
                 prior_info = self.predictor.prior_information(until) if self.config.motion_filter.prior_in_registration else _NO_PRIOR
-            tangents = np.take(self._tangents, used, axis=0) if self._registration.lag_floor_px > 0 else None
+            trail = None
+            split = float(self.config.registration.fused_polarity_trail_px)
+            if split != 0 and self.components.drives_pose and polarity is not None:
+                # OFF points' fields trail further than ON points' (see ``fused_polarity_trail_px``).
+                p_ = np.asarray(polarity)
+                trail = np.where(p_ < 0, 0.5 * split, np.where(p_ > 0, -0.5 * split, 0.0))
+            tangents = np.take(self._tangents, used, axis=0) if self._registration.lag_floor_px > 0 or trail is not None else None
             reg = register_to_map(levels, pts, predicted, self.K, self._registration, field_polarity, twist_per_s=twist,
                                   prior_information=prior_info, prior_residual_sigma=self.config.motion_filter.prior_residual_sigma,
-                                  tangents_world=tangents)
+                                  tangents_world=tangents, trail_offsets_px=trail)
             if self.polarity_selector is not None and hasattr(self.polarity_selector, "registration_covariance"):
                 # Points the polarity filter dropped (no events in their patch) still count in the residual variance.
                 reg.covariance = self.polarity_selector.registration_covariance(reg, self._registration)

@@ -73,7 +73,7 @@ def test_registration_jacobian_matches_finite_differences_on_a_smooth_field(scen
         H, b = np.zeros((6, 6)), np.zeros(6)
         out = reg._linearise(P, slots, np.ascontiguousarray(Tcw[:3, :3]), np.ascontiguousarray(Tcw[:3, 3]), cal.fx, cal.fy, cal.cx, cal.cy,
                              f.value, f.grad_u, f.grad_v, f.box, False, 0, 1.0, 1.0, H, b, np.empty(m), np.empty(m), np.empty((m, 2)),
-                             reg._NO_TANGENTS, reg._NO_TWIST, 0.0, 0.0)
+                             reg._NO_TANGENTS, reg._NO_TWIST, 0.0, 0.0, reg._NO_EXTRA)
         return out[0], b
 
     _, b = lin(T_gt)
@@ -242,7 +242,7 @@ def test_lag_floor_samples_each_point_behind_its_projection_against_its_image_mo
         H, b, res = np.zeros((6, 6)), np.zeros(6), np.empty(m)
         reg._linearise(P, np.zeros(m, np.int8), np.eye(3), np.zeros(3), cal.fx, cal.fy, cal.cx, cal.cy, field.value, field.grad_u,
                        field.grad_v, field.box, False, 0, 1.0, 1.0, H, b, res, np.empty(m), np.empty((m, 2)), tangents, twist, lag_s,
-                       floor_px)
+                       floor_px, reg._NO_EXTRA)
         return res
 
     # The point reads the field that far behind its projection, where the minimum is.
@@ -261,3 +261,22 @@ def test_lag_floor_is_off_without_tangents_or_twist(scene):
     no_tangents = register_to_map(field, pts, T_gt, cal.K, cfg, twist_per_s=None, tangents_world=np.tile([1.0, 0.0, 0.0], (len(pts), 1)))
     no_twist = register_to_map(field, pts, T_gt, cal.K, cfg)
     assert np.array_equal(base.T_world_cam, no_twist.T_world_cam) and np.array_equal(base.T_world_cam, no_tangents.T_world_cam)
+
+
+def test_trail_offsets_move_each_point_behind_or_ahead_of_the_lag_model(scene):
+    _, _, _, cal, _ = scene
+    ys = np.linspace(-0.2, 0.2, 5)
+    P = np.ascontiguousarray(np.c_[np.zeros_like(ys), ys, np.full_like(ys, 2.0)])
+    tangents = np.ascontiguousarray(np.tile([0.0, 1.0, 0.0], (ys.size, 1)))
+    twist = np.array([0.0, 0.0, 0.0, 50.0 * 2.0 / cal.fx, 0.0, 0.0])  # the edge moves towards -u
+    m = P.shape[0]
+
+    def residuals(field, extra):
+        res = np.empty(m)
+        reg._linearise(P, np.zeros(m, np.int8), np.eye(3), np.zeros(3), cal.fx, cal.fy, cal.cx, cal.cy, field.value, field.grad_u,
+                       field.grad_v, field.box, False, 0, 1.0, 1.0, np.zeros((6, 6)), np.zeros(6), res, np.empty(m), np.empty((m, 2)),
+                       tangents, twist, 0.0, 0.0, np.full(m, extra))
+        return res
+
+    assert np.allclose(residuals(_line_field(cal, cal.cx + 0.5), 0.5), 0.0, atol=1e-9)  # behind: +u
+    assert np.allclose(residuals(_line_field(cal, cal.cx - 0.5), -0.5), 0.0, atol=1e-9)  # negative: ahead
