@@ -182,8 +182,8 @@ class RegistrationConfig:
     fused_lag_floor_px: float = field(default=0.45, metadata={"min": 0.0, "max": 3.0, "step": 0.05, "unit": "px"})
     """``lag_floor_px`` where an IMU fusion backend drives the pose (``full``): its twist comes from the IMU, pixels.
 
-    ``full``, 2 s landing from ground truth, seeds 0-3, mean ATE at 346x260 / 240x180 (``crowded_radius_px`` 3):
-    0 -> 0.45 px 11.72 / 12.33 -> 10.37 / 10.56 mm (ARE 0.125 / 0.151 -> 0.131 / 0.155 deg); sweep (with the
+    ``full``, 2 s landing from ground truth, seeds 0-3, mean ATE at 346x260 / 240x180 (``crowded_radius_px`` 3,
+    ``fused_polarity_trail_px`` 0): 0 -> 0.45 px 11.72 / 12.33 -> 10.37 / 10.56 mm (ARE 0.125 / 0.151 -> 0.131 / 0.155 deg); sweep (with the
     earlier crowding variant) 0 / 0.3 / 0.45 / 0.55 / 0.65 px 11.74 / 12.39, 11.05 / 11.16, 10.39 / 10.50,
     9.88 / 12.43, 10.99 / 15.63 mm. Bundled demos, ``full``, ``--align none``, 0 -> 0.45 px: ``landing`` 15.28 ->
     15.79 mm, ``landing_dynamic`` 24.83 -> 21.83 mm, ``landing_fast`` 23.57 -> 24.19 mm (ARE 0.227 -> 0.231 deg)."""
