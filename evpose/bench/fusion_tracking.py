@@ -12,6 +12,8 @@
   errors and, on the same recorded inputs, online / smoothed / EKF / dead-reckoning estimates.
 * ``aligned_field``: ``T_align``'s distance field from its patch list against the
   image path, alternating in one process, outputs hashed.
+* ``refinement_cost`` / ``crowding_cost``: per-update CPU with and without the painted-edge refinement / the
+  crowded-point test, alternated in one process.
 
 Registered under the ``fusion`` area by :mod:`evpose.bench.fusion`.
 """
@@ -297,6 +299,32 @@ def bench_refinement_cost(ctx) -> dict:
     """Per-update CPU of ``stpe`` and ``full`` with and without the online painted-edge refinement
     (``map_refinement.enabled``), 2 s landing at 346x260 (1 s at 240x180 with ``quick``), the four runs alternated
     over rounds in one process so that the machine's phases hit both alike. ATE of each for reference."""
+
+    def refine(cfg, on):
+        cfg.map_refinement.enabled = on
+
+    return _paired_cost(ctx, refine, ("unrefined", "refined"))
+
+
+def bench_crowding_cost(ctx) -> dict:
+    """As ``refinement_cost``, for the crowded-point test and the fused modes' per-point trail model together
+    (``visible_map.crowded_radius_px``, ``registration.fused_lag_floor_px`` and ``fused_polarity_trail_px`` 0 against
+    their defaults): per-update CPU of ``stpe`` and ``full``, alternated in one process, ATE of each."""
+    from evpose.tracker.registration_config import RegistrationConfig
+    from evpose.tracker.visible_map import VisibleMapConfig
+
+    radius, reg = VisibleMapConfig().crowded_radius_px, RegistrationConfig()
+
+    def configure(cfg, on):
+        cfg.visible_map.crowded_radius_px = radius if on else 0.0
+        cfg.registration.fused_lag_floor_px = reg.fused_lag_floor_px if on else 0.0
+        cfg.registration.fused_polarity_trail_px = reg.fused_polarity_trail_px if on else 0.0
+
+    return _paired_cost(ctx, configure, ("all_points", "uncrowded"))
+
+
+def _paired_cost(ctx, configure, labels: tuple[str, str]) -> dict:
+    """Per-update CPU and ATE of ``stpe`` and ``full`` with ``configure(cfg, False)`` / ``(cfg, True)``, alternated."""
     from evpose.bench.tracking import landing_case
     from evpose.eval.metrics import Alignment, EvalConfig, evaluate
     from evpose.tracker.config import TrackerConfig, TrackerMode
@@ -310,9 +338,9 @@ def bench_refinement_cost(ctx) -> dict:
         for mode in ("stpe", "full"):
             for on in (False, True):
                 cfg = TrackerConfig(mode=TrackerMode(mode))
-                cfg.map_refinement.enabled = on
+                configure(cfg, on)
                 session = TrackingSession(rec, cmap, cfg)
-                key = f"{mode}_{'refined' if on else 'unrefined'}"
+                key = f"{mode}_{labels[int(on)]}"
                 cpu.setdefault(key, []).extend(ms for _, ms in list(_timed_steps(session))[5:])
                 ev = evaluate(session.trajectory(), rec.ground_truth, EvalConfig(align=Alignment.NONE))
                 out[f"{key}_ate_rmse_mm"] = float(ev.ate["rmse"] * 1e3)

@@ -78,10 +78,47 @@ def _rho_weight(r, loss, k):
     return 0.5 * r * r, 1.0
 
 
+@nb.njit(cache=True, inline="always")
+def _floor_shift(tangents, i, R_cw, X, Y, Z, fx, fy, Ju, Jv, twist, lag_px_per_px_s, floor_px, extra_px):
+    """(du, dv): how far behind its projection point ``i``'s TDF minimum lies beyond what the lag explains.
+
+    Along the projected edge normal, oriented against the image motion, by ``floor_px - lag * normal speed``
+    when positive (slow edges: see ``RegistrationConfig.lag_floor_px``), plus the point's own ``extra_px``
+    (negative: ahead), else (0, 0). ``Ju`` / ``Jv`` are the point's image rows, so ``Ju . twist`` is its image
+    velocity (px/s)."""
+    tx, ty, tz = tangents[i, 0], tangents[i, 1], tangents[i, 2]
+    dX = R_cw[0, 0] * tx + R_cw[0, 1] * ty + R_cw[0, 2] * tz
+    dY = R_cw[1, 0] * tx + R_cw[1, 1] * ty + R_cw[1, 2] * tz
+    dZ = R_cw[2, 0] * tx + R_cw[2, 1] * ty + R_cw[2, 2] * tz
+    a = fx * (dX * Z - X * dZ)
+    c = fy * (dY * Z - Y * dZ)
+    L = np.sqrt(a * a + c * c)
+    if L <= 0.0:
+        return 0.0, 0.0
+    nu = -c / L
+    nv = a / L
+    vu = 0.0
+    vv = 0.0
+    for j in range(6):
+        vu += Ju[j] * twist[j]
+        vv += Jv[j] * twist[j]
+    vn = vu * nu + vv * nv
+    e = max(floor_px - lag_px_per_px_s * abs(vn), 0.0) + extra_px
+    if e == 0.0:
+        return 0.0, 0.0
+    if vn < 0.0:
+        e = -e
+    return -e * nu, -e * nv
+
+
 @nb.njit(cache=True)
-def _linearise(points, slots, R_cw, t_cw, fx, fy, cx, cy, value, grad_u, grad_v, box, second_order, loss, k, inlier_thr, H, b, res, wts, uv):
+def _linearise(points, slots, R_cw, t_cw, fx, fy, cx, cy, value, grad_u, grad_v, box, second_order, loss, k, inlier_thr, H, b, res, wts, uv,
+               tangents, twist, lag_s, floor_px, extra):
     """Residuals, weights, projections and the weighted normal equations at one pose.
 
+    ``floor_px`` > 0 samples each point's field behind its projection by :func:`_floor_shift` (``tangents`` (M, 3)
+    world edge directions, ``twist`` (6,) body twist per second, ``lag_s`` the lag the pose already carries);
+    ``extra`` (M,) per-point trail beyond that, pixels (empty = none; it also needs the tangents and twist).
     Returns (cost, points inside the image, inliers, sum of w r^2, sum of w r^2 over the inliers).
     """
     for i in range(6):
@@ -116,18 +153,6 @@ def _linearise(points, slots, R_cw, t_cw, fx, fy, cx, cy, value, grad_u, grad_v,
         v = fy * Y * iz + cy
         uv[i, 0] = u
         uv[i, 1] = v
-        f, fu, fv, ok = bilinear_sample(value, grad_u, grad_v, box, np.int64(slots[i]), u, v)
-        if not ok:
-            continue
-        inside += 1
-        rho, w = _rho_weight(f, loss, k)
-        res[i] = f
-        wts[i] = w
-        cost += rho
-        if f < inlier_thr:
-            inl += 1
-            swr2_in += w * f * f
-        swr2 += w * f * f
         # Rows of d(u, v)/d xi: p_u = d u/dX, p_v = d v/dX; d/domega = p x X, d/dv = -p.
         pux = fx * iz
         puz = -fx * X * iz * iz
@@ -145,6 +170,27 @@ def _linearise(points, slots, R_cw, t_cw, fx, fy, cx, cy, value, grad_u, grad_v,
         Jv[3] = 0.0
         Jv[4] = -pvy
         Jv[5] = -pvz
+        us = u
+        vs = v
+        if floor_px > 0.0 or extra.shape[0]:
+            # The shift is held constant within a linearisation (it changes with the pose only through the
+            # point's image velocity and normal, a second-order effect).
+            du, dv = _floor_shift(tangents, i, R_cw, X, Y, Z, fx, fy, Ju, Jv, twist, lag_s, floor_px,
+                                  extra[i] if extra.shape[0] else 0.0)
+            us += du
+            vs += dv
+        f, fu, fv, ok = bilinear_sample(value, grad_u, grad_v, box, np.int64(slots[i]), us, vs)
+        if not ok:
+            continue
+        inside += 1
+        rho, w = _rho_weight(f, loss, k)
+        res[i] = f
+        wts[i] = w
+        cost += rho
+        if f < inlier_thr:
+            inl += 1
+            swr2_in += w * f * f
+        swr2 += w * f * f
         for a in range(6):
             J[a] = fu * Ju[a] + fv * Jv[a]
             b[a] += w * f * J[a]
@@ -158,7 +204,7 @@ def _linearise(points, slots, R_cw, t_cw, fx, fy, cx, cy, value, grad_u, grad_v,
         # Newton on 0.5 f^2 in the image: A = grad f grad f^T + f * Hess f, clamped to PSD, so points
         # sitting on the TDF minimum (zero gradient) still hold the pose through the curvature.
         # From the field itself (the same values as its curvature images): the field need not build them.
-        huu, huv, hvv = bilinear_curvature_from_value(value, box, np.int64(slots[i]), u, v)
+        huu, huv, hvv = bilinear_curvature_from_value(value, box, np.int64(slots[i]), us, vs)
         a11 = fu * fu + f * huu
         a12 = fu * fv + f * huv
         a22 = fv * fv + f * hvv
@@ -287,7 +333,8 @@ except (ImportError, AttributeError):  # another numpy layout: the public functi
 
 
 @nb.njit(cache=True)
-def _linearise_at(points, slots, T_cw, fx, fy, cx, cy, value, grad_u, grad_v, box, second_order, loss, k, inlier_thr, H, b, res, wts, uv):
+def _linearise_at(points, slots, T_cw, fx, fy, cx, cy, value, grad_u, grad_v, box, second_order, loss, k, inlier_thr, H, b, res, wts, uv,
+                  tangents, twist, lag_s, floor_px, extra):
     """:func:`_linearise` at the (4, 4) ``T_cw`` as gtsam hands it out (any memory layout): its rotation and
     translation copied here, not by two ``np.ascontiguousarray`` calls per linearisation."""
     R = np.empty((3, 3))
@@ -297,7 +344,7 @@ def _linearise_at(points, slots, T_cw, fx, fy, cx, cy, value, grad_u, grad_v, bo
             R[i, j] = T_cw[i, j]
         t[i] = T_cw[i, 3]
     return _linearise(points, slots, R, t, fx, fy, cx, cy, value, grad_u, grad_v, box, second_order, loss, k, inlier_thr,
-                      H, b, res, wts, uv)
+                      H, b, res, wts, uv, tangents, twist, lag_s, floor_px, extra)
 
 
 @nb.njit(cache=True)
@@ -318,16 +365,22 @@ _NO_PRIOR_TERMS = (np.zeros((6, 6)), np.zeros(6))
 """Placeholders handed to :func:`_lm_step` when there is no prior (never read)."""
 
 
-def _levenberg_marquardt(pts, slots, fld, pose, K, config, loss, k, thr, prior=None):
+_NO_TANGENTS = np.zeros((0, 3))
+_NO_TWIST = np.zeros(6)
+_NO_EXTRA = np.zeros(0)
+
+
+def _levenberg_marquardt(pts, slots, fld, pose, K, config, loss, k, thr, prior=None, floor=None):
     """Robust LM on one field; returns (pose, cost, inside, inliers, [sum w r^2, its inlier part], H, residuals, weights, uv,
-    iterations)."""
+    iterations). ``floor`` = (tangents, twist, lag s, floor px, per-point extra px) for :func:`_floor_shift`, None = off."""
     m = pts.shape[0]
     fx, fy, cx, cy = float(K[0, 0]), float(K[1, 1]), float(K[0, 2]), float(K[1, 2])
     value, grad_u, grad_v, box, second = fld.value, fld.grad_u, fld.grad_v, fld.box, bool(config.second_order)
+    tangents, twist, lag_s, floor_px, extra = floor if floor is not None else (_NO_TANGENTS, _NO_TWIST, 0.0, 0.0, _NO_EXTRA)
     cur = [np.zeros((6, 6)), np.zeros(6), np.empty(m), np.empty(m), np.empty((m, 2))]
     trial = [np.zeros((6, 6)), np.zeros(6), np.empty(m), np.empty(m), np.empty((m, 2))]
     cost, inside, inl, swr2, swr2_in = _linearise_at(pts, slots, pose.inverse().matrix(), fx, fy, cx, cy, value, grad_u, grad_v,
-                                                     box, second, loss, k, thr, *cur)
+                                                     box, second, loss, k, thr, *cur, tangents, twist, lag_s, floor_px, extra)
     pc, pg, pI = _prior_terms(pose, prior)
     with_prior = pI is not None
     lam = float(config.lm_lambda)
@@ -343,7 +396,8 @@ def _levenberg_marquardt(pts, slots, fld, pose, K, config, loss, k, thr, prior=N
             break  # singular (NaN) or overflowing system
         cand = pose.compose(gtsam.Pose3.Expmap(delta))
         c_cost, c_inside, c_inl, c_swr2, c_swr2_in = _linearise_at(pts, slots, cand.inverse().matrix(), fx, fy, cx, cy, value, grad_u,
-                                                                   grad_v, box, second, loss, k, thr, *trial)
+                                                                   grad_v, box, second, loss, k, thr, *trial, tangents, twist, lag_s,
+                                                                   floor_px, extra)
         c_pc, c_pg, _ = _prior_terms(cand, prior)
         # Compare mean cost: the set of points inside the image may change with the pose.
         old_mean = (cost + pc) / max(inside, 1)
@@ -375,6 +429,8 @@ def register_to_map(
     twist_per_s: np.ndarray | None = None,
     prior_information: np.ndarray | None = None,
     prior_residual_sigma: float | None = None,
+    tangents_world: np.ndarray | None = None,
+    trail_offsets_px: np.ndarray | None = None,
 ) -> RegistrationResult:
     """Refine ``T_world_cam_init`` so the map points ``points_world`` (M, 3) land on low TDF.
 
@@ -401,6 +457,11 @@ def register_to_map(
     isotropic prior). All zeros means no prior. With it, the returned covariance is that of the events
     alone (the prior's information taken out), for a caller that fuses the prior
     itself.
+
+    ``tangents_world`` (M, 3): unit edge direction of each point (zero = unknown), which ``config.lag_floor_px``
+    needs (with ``twist_per_s``); without them that floor is off. ``trail_offsets_px`` (M,): how much further
+    each point's field is sampled behind it than the lag model says (negative: ahead), pixels, e.g. by the polarity
+    it fires; it needs the tangents and the twist too.
     """
     levels = [field_] if isinstance(field_, TemporalDistanceField) else list(field_)
     pts = np.ascontiguousarray(points_world, dtype=np.float64).reshape(-1, 3)
@@ -417,6 +478,13 @@ def register_to_map(
             lag = gtsam.Pose3.Expmap(xi * (float(config.field_lag_ms) * 1e-3))
     lag_inv = lag.inverse()
     pose = pose.compose(lag_inv)
+    floor = None
+    if (config.lag_floor_px > 0 or trail_offsets_px is not None) and tangents_world is not None and twist_per_s is not None and m:
+        xi = np.ascontiguousarray(twist_per_s, dtype=np.float64).reshape(6)
+        if np.all(np.isfinite(xi)):
+            extra = _NO_EXTRA if trail_offsets_px is None else np.ascontiguousarray(trail_offsets_px, dtype=np.float64).reshape(m)
+            floor = (np.ascontiguousarray(tangents_world, dtype=np.float64).reshape(m, 3), xi,
+                     float(config.field_lag_ms) * 1e-3, float(config.lag_floor_px), extra)
     if m == 0 or not levels:
         z = np.zeros(0, np.float32)
         return RegistrationResult(pose.compose(lag).matrix(), False, "no map points to register", None, 0, 0, 0, 0.0, z, z, np.zeros((0, 2), np.float32))
@@ -436,7 +504,8 @@ def register_to_map(
         prior = (T_p.compose(lag_inv), info)
     total_it = 0
     for fld in levels:
-        pose, cost, inside, inl, swr2, H, res, wts, uv, it = _levenberg_marquardt(pts, slots, fld, pose, K, config, loss, k, thr, prior)
+        pose, cost, inside, inl, swr2, H, res, wts, uv, it = _levenberg_marquardt(pts, slots, fld, pose, K, config, loss, k, thr, prior,
+                                                                                  floor)
         total_it += it
 
     def result(ok, reason, cov):

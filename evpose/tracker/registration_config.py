@@ -158,4 +158,45 @@ class RegistrationConfig:
     time-surface trail behind them pulls the (blurred) minimum further back, so the
     field shows the map as seen ``field_lag_ms`` before the query time (measured
     4-5 ms with ``eta`` 10 ms and a 5 px blur on the simulated landing). The pose is
-    registered at that time and moved forward by the motion twist."""
+    registered at that time and moved forward by the motion twist.
+
+    Re-measured per point (``registration_bias_346x260``, ``true_edges_offset_*``: the TDF minimum's offset from
+    the true edge along its image normal, at the truth, 3 px blur): ``-0.09 px - 4.1 ms x normal speed``, so this
+    lag is right on average and a constant pixel term would add < 0.1 px. What is left is spread, not bias:
+    0.60 px per point and 0.25 px between the edges' means (OFF edges trail ON edges by ~0.2 px on the pad
+    marker: a pixel's last event fires later in a bright-to-dark crossing of its footprint, log response).
+    Registrations from the truth with the points moved by a per-polarity fit (converged, 346x260) were no
+    better than the global fit once one outlier was set aside; a per-segment oracle offset only 11.6 -> 9.1 mm."""
+    lag_floor_px: float = field(default=0.0, metadata={"min": 0.0, "max": 3.0, "step": 0.05, "unit": "px"})
+    """Smallest distance the TDF minimum trails a moving edge, pixels (0 = off); needs the map's edge directions
+    and the motion twist. The fused modes use ``fused_lag_floor_px`` instead.
+
+    ``field_lag_ms`` makes the trail proportional to the edge's normal image speed, but slow edges trail by a
+    nearly constant amount (``registration_bias_346x260``, true-edge map: -0.52 / -0.46 / -0.52 px at 0.03 /
+    0.08 / 0.13 px/ms against -0.15 / -0.36 / -0.56 px for 4.5 ms): each point's field is then sampled behind
+    its projection by the difference, along its projected edge normal, against the direction of its image
+    motion. Registrations from the truth (true twist, true-edge map, 346x260): 11.9 -> 10.0 mm RMS with 0.55 px
+    (7.4 -> 5.4 mm with ``crowded_radius_px`` 3). But ``stpe`` tracks worse with it (seeds 0-3, 2 s landing,
+    346x260 / 240x180, crowded points skipped: 21.79 / 28.49 -> 21.99 / 29.92 mm with 0.3 px, 23.8 / 36.1 mm with
+    0.55 px at 2.5 px crowding): the Kalman filter's twist gets the motion direction of slow points wrong."""
+    fused_lag_floor_px: float = field(default=0.45, metadata={"min": 0.0, "max": 3.0, "step": 0.05, "unit": "px"})
+    """``lag_floor_px`` where an IMU fusion backend drives the pose (``full``): its twist comes from the IMU, pixels.
+
+    ``full``, 2 s landing from ground truth, seeds 0-3, mean ATE at 346x260 / 240x180 (``crowded_radius_px`` 3,
+    ``fused_polarity_trail_px`` 0): 0 -> 0.45 px 11.72 / 12.33 -> 10.37 / 10.56 mm (ARE 0.125 / 0.151 -> 0.131 / 0.155 deg); sweep (with the
+    earlier crowding variant) 0 / 0.3 / 0.45 / 0.55 / 0.65 px 11.74 / 12.39, 11.05 / 11.16, 10.39 / 10.50,
+    9.88 / 12.43, 10.99 / 15.63 mm. Bundled demos, ``full``, ``--align none``, 0 -> 0.45 px: ``landing`` 15.28 ->
+    15.79 mm, ``landing_dynamic`` 24.83 -> 21.83 mm, ``landing_fast`` 23.57 -> 24.19 mm (ARE 0.227 -> 0.231 deg)."""
+    fused_polarity_trail_px: float = field(default=0.2, metadata={"min": -1.0, "max": 1.0, "step": 0.05, "unit": "px"})
+    """In the fused modes, how much further the field of a point predicted to fire OFF events trails than that of an
+    ON point (the polarity filter's prediction), pixels: each is sampled half of it behind / ahead of the lag model,
+    along its edge normal (0 = off).
+
+    A pixel's last event of a crossing fires later in a bright-to-dark (OFF) crossing of its footprint than in a
+    dark-to-bright one (log response): on the simulated landing's true-edge map OFF segments trail ~0.2 px more
+    (``registration_bias``; registrations from the truth, oracle offsets: 5.6 -> 5.1 mm with 0.1 px, 7.8 mm with
+    -0.2 px). ``full``, seeds 0-3, mean ATE at 346x260 / 240x180 (with ``fused_lag_floor_px`` 0.45): 0 / 0.1 / 0.2 /
+    0.3 / -0.2 px gave 10.37 / 10.56, 10.05 / 10.21, 9.83 / 10.06, 10.05 / 10.12, 10.37 / 11.42 mm (ARE 0.131 /
+    0.155 -> 0.123 / 0.152 deg at 0.2). Bundled demos (``full``, ``--align none``) 0 -> 0.2: ``landing`` 15.79 ->
+    15.55 mm, ``landing_dynamic`` 21.83 -> 20.58 mm, ``landing_fast`` 24.19 -> 23.88 mm. ``stpe+filter`` (not
+    applied there) would go 22.28 / 30.38 -> 22.47 / 28.54 mm."""

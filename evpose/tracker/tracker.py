@@ -37,6 +37,7 @@ from evpose.frontend.time_surface import SeparatedTimeSurface
 from evpose.fusion import aligned_field
 from evpose.fusion.aligned_surface import AlignedTimeSurface
 from evpose.tracker.config import MotionModel, TrackerConfig
+from evpose.tracker.crowding import crowded_points
 from evpose.tracker.map_refinement import PaintedEdgeRefiner
 from evpose.tracker.motion_filter import ConstantVelocityKalman
 from evpose.tracker.predictor import ConstantPosePredictor, ConstantVelocityPredictor, MotionPredictor
@@ -88,6 +89,8 @@ class Tracker:
         self._points = np.array(contour_map.points, dtype=np.float64, order="C")
         """The points registration reads (a copy: the painted-edge refiner moves some of them)."""
         self.visible_map = VisibleMap(contour_map.points, self.K, w, h)
+        self._tangents = np.ascontiguousarray(np.cross(contour_map.plane_normal, contour_map.edge_normal), dtype=np.float64)
+        """Unit edge direction per map point (zero where the map does not know it), for the crowding test."""
         self.noise_filter = ConsistencyNoiseFilter(config.noise_filter, w, h)
         self.time_surface = SeparatedTimeSurface(config.time_surface, w, h, calibration)
         self.distance_field = TemporalDistanceField(config.distance_field, w, h)
@@ -100,7 +103,7 @@ class Tracker:
                         if mr.enabled and (mr.fused_modes or not self.components.drives_pose) else None)
         """Online refinement of the map's painted edges (None when off, or in the fused modes unless asked for)."""
         rc = config.registration
-        self._registration = (dataclasses.replace(rc, min_inlier_ratio=rc.fused_min_inlier_ratio)
+        self._registration = (dataclasses.replace(rc, min_inlier_ratio=rc.fused_min_inlier_ratio, lag_floor_px=rc.fused_lag_floor_px)
                               if self.components.drives_pose else rc)
         """The registration settings this tracker's mode uses (the fused modes' own inlier test)."""
         self._weak_test = (not self.components.drives_pose and config.motion_model is MotionModel.KALMAN and predictor is None
@@ -259,6 +262,12 @@ class Tracker:
         visible = self.visible_map.visible(predicted, self.config.visible_map)
         used = visible[subsample_indices(visible.size, int(self.config.registration.max_points))]
         pts = np.take(self._points, used, axis=0)  # the rows of ``used``; 3x cheaper than fancy indexing
+        vm = self.config.visible_map
+        if vm.crowded_radius_px > 0 and used.size:
+            # Another edge's TDF overlaps theirs: their minimum is not their edge's (see evpose.tracker.crowding).
+            alone = ~crowded_points(pts, np.take(self._tangents, used, axis=0), predicted, self.K, vm.crowded_radius_px,
+                                    vm.crowded_tolerance_px)
+            used, pts = used[alone], pts[alone]
         roi = self._field_box(pts, predicted)
         timings["culling"] = _ms(t0)
         counts.update(points_visible=int(visible.size), points_used=int(used.size))
@@ -314,8 +323,16 @@ class Tracker:
                 # The filter fuses the prediction itself; the registration's isotropic prior would count it twice
                 # (all-zero information = no prior), unless the filter's own covariance is asked to act as the prior.
                 prior_info = self.predictor.prior_information(until) if self.config.motion_filter.prior_in_registration else _NO_PRIOR
+            trail = None
+            split = float(self.config.registration.fused_polarity_trail_px)
+            if split != 0 and self.components.drives_pose and polarity is not None:
+                # OFF points' fields trail further than ON points' (see ``fused_polarity_trail_px``).
+                p_ = np.asarray(polarity)
+                trail = np.where(p_ < 0, 0.5 * split, np.where(p_ > 0, -0.5 * split, 0.0))
+            tangents = np.take(self._tangents, used, axis=0) if self._registration.lag_floor_px > 0 or trail is not None else None
             reg = register_to_map(levels, pts, predicted, self.K, self._registration, field_polarity, twist_per_s=twist,
-                                  prior_information=prior_info, prior_residual_sigma=self.config.motion_filter.prior_residual_sigma)
+                                  prior_information=prior_info, prior_residual_sigma=self.config.motion_filter.prior_residual_sigma,
+                                  tangents_world=tangents, trail_offsets_px=trail)
             if self.polarity_selector is not None and hasattr(self.polarity_selector, "registration_covariance"):
                 # Points the polarity filter dropped (no events in their patch) still count in the residual variance.
                 reg.covariance = self.polarity_selector.registration_covariance(reg, self._registration)

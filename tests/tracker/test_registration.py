@@ -72,7 +72,8 @@ def test_registration_jacobian_matches_finite_differences_on_a_smooth_field(scen
         Tcw = np.linalg.inv(T)
         H, b = np.zeros((6, 6)), np.zeros(6)
         out = reg._linearise(P, slots, np.ascontiguousarray(Tcw[:3, :3]), np.ascontiguousarray(Tcw[:3, 3]), cal.fx, cal.fy, cal.cx, cal.cy,
-                             f.value, f.grad_u, f.grad_v, f.box, False, 0, 1.0, 1.0, H, b, np.empty(m), np.empty(m), np.empty((m, 2)))
+                             f.value, f.grad_u, f.grad_v, f.box, False, 0, 1.0, 1.0, H, b, np.empty(m), np.empty(m), np.empty((m, 2)),
+                             reg._NO_TANGENTS, reg._NO_TWIST, 0.0, 0.0, reg._NO_EXTRA)
         return out[0], b
 
     _, b = lin(T_gt)
@@ -210,3 +211,72 @@ def test_damped_step_solves_the_levenberg_marquardt_system():
     expected = -np.linalg.solve(H + lam * np.diag(np.diag(H) + 1e-12), b)
     assert np.allclose(reg._damped_step(H, b, lam), expected, rtol=1e-10, atol=1e-12)
     assert np.all(np.isnan(reg._damped_step(np.zeros((6, 6)), b, 0.0)))
+
+
+def _line_field(cal, min_col):
+    """A field reading |column - min_col| / 4 (a vertical valley), exactly bilinear, over the whole image."""
+    f = TemporalDistanceField(DistanceFieldConfig(), cal.width, cal.height)
+    uu = np.broadcast_to(np.arange(cal.width, dtype=np.float64)[None, :], (cal.height, cal.width))
+    f.value[0] = np.abs(uu - min_col) / 4.0
+    f.grad_u[0] = np.sign(uu - min_col) / 4.0
+    f.grad_v[0] = 0.0
+    f.box[:] = (0, cal.height, 0, cal.width)
+    return f
+
+
+@pytest.mark.parametrize("lag_s, floor_px", [(0.0, 0.5), (0.004, 0.7)])
+def test_lag_floor_samples_each_point_behind_its_projection_against_its_image_motion(scene, lag_s, floor_px):
+    _, _, _, cal, _ = scene
+    expected_shift_px = 0.5  # floor less the lag's share (lag x 50 px/s); cx + 0.5 is a whole pixel, where |u - m| is exact
+    assert (cal.cx + expected_shift_px) % 1.0 == 0.0
+    # A vertical edge at X = 0, 2 m ahead; the camera moves along +x, so the edge moves towards -u at 0.05 px/ms:
+    # its field's minimum trails it on the +u side.
+    ys = np.linspace(-0.2, 0.2, 9)
+    P = np.ascontiguousarray(np.c_[np.zeros_like(ys), ys, np.full_like(ys, 2.0)])
+    tangents = np.ascontiguousarray(np.tile([0.0, 1.0, 0.0], (ys.size, 1)))
+    speed_px_s = 50.0
+    twist = np.array([0.0, 0.0, 0.0, speed_px_s * 2.0 / cal.fx, 0.0, 0.0])
+    m = P.shape[0]
+
+    def residuals(field, floor_px):
+        H, b, res = np.zeros((6, 6)), np.zeros(6), np.empty(m)
+        reg._linearise(P, np.zeros(m, np.int8), np.eye(3), np.zeros(3), cal.fx, cal.fy, cal.cx, cal.cy, field.value, field.grad_u,
+                       field.grad_v, field.box, False, 0, 1.0, 1.0, H, b, res, np.empty(m), np.empty((m, 2)), tangents, twist, lag_s,
+                       floor_px, reg._NO_EXTRA)
+        return res
+
+    # The point reads the field that far behind its projection, where the minimum is.
+    field = _line_field(cal, cal.cx + expected_shift_px)
+    assert np.allclose(residuals(field, floor_px), 0.0, atol=1e-9)
+    assert np.allclose(residuals(field, 0.0), expected_shift_px / 4.0, atol=1e-9)  # off: read at the projection
+    # The edge moving the other way puts the trail on the other side.
+    twist[3] = -twist[3]
+    assert np.allclose(residuals(_line_field(cal, cal.cx - expected_shift_px), floor_px), 0.0, atol=1e-9)
+
+
+def test_lag_floor_is_off_without_tangents_or_twist(scene):
+    field, pts, T_gt, cal, _ = scene
+    cfg = RegistrationConfig(lag_floor_px=0.5)
+    base = register_to_map(field, pts, T_gt, cal.K, RegistrationConfig())
+    no_tangents = register_to_map(field, pts, T_gt, cal.K, cfg, twist_per_s=None, tangents_world=np.tile([1.0, 0.0, 0.0], (len(pts), 1)))
+    no_twist = register_to_map(field, pts, T_gt, cal.K, cfg)
+    assert np.array_equal(base.T_world_cam, no_twist.T_world_cam) and np.array_equal(base.T_world_cam, no_tangents.T_world_cam)
+
+
+def test_trail_offsets_move_each_point_behind_or_ahead_of_the_lag_model(scene):
+    _, _, _, cal, _ = scene
+    ys = np.linspace(-0.2, 0.2, 5)
+    P = np.ascontiguousarray(np.c_[np.zeros_like(ys), ys, np.full_like(ys, 2.0)])
+    tangents = np.ascontiguousarray(np.tile([0.0, 1.0, 0.0], (ys.size, 1)))
+    twist = np.array([0.0, 0.0, 0.0, 50.0 * 2.0 / cal.fx, 0.0, 0.0])  # the edge moves towards -u
+    m = P.shape[0]
+
+    def residuals(field, extra):
+        res = np.empty(m)
+        reg._linearise(P, np.zeros(m, np.int8), np.eye(3), np.zeros(3), cal.fx, cal.fy, cal.cx, cal.cy, field.value, field.grad_u,
+                       field.grad_v, field.box, False, 0, 1.0, 1.0, np.zeros((6, 6)), np.zeros(6), res, np.empty(m), np.empty((m, 2)),
+                       tangents, twist, 0.0, 0.0, np.full(m, extra))
+        return res
+
+    assert np.allclose(residuals(_line_field(cal, cal.cx + 0.5), 0.5), 0.0, atol=1e-9)  # behind: +u
+    assert np.allclose(residuals(_line_field(cal, cal.cx - 0.5), -0.5), 0.0, atol=1e-9)  # negative: ahead

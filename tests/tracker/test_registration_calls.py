@@ -40,14 +40,15 @@ def test_linearise_at_a_gtsam_pose_matrix_equals_linearise_with_contiguous_rotat
     f.box[:] = (0, h, 0, w)
     pts = np.c_[rng.uniform(-1, 1, (300, 2)), rng.uniform(2, 4, 300)]
     slots = np.zeros(300, np.int8)
+    off = (reg._NO_TANGENTS, reg._NO_TWIST, 0.0, 0.0, reg._NO_EXTRA)  # no lag floor
     T_cw = gtsam.Pose3(gtsam.Rot3.Rodrigues(0.01, -0.02, 0.03), np.array([0.05, -0.02, 0.1])).inverse().matrix()
     for second_order in (False, True):
         a = [np.zeros((6, 6)), np.zeros(6), np.empty(300), np.empty(300), np.empty((300, 2))]
         b = [np.zeros((6, 6)), np.zeros(6), np.empty(300), np.empty(300), np.empty((300, 2))]
         ra = reg._linearise_at(pts, slots, T_cw, 100.0, 100.0, 60.0, 45.0, f.value, f.grad_u, f.grad_v, f.box, second_order,
-                               1, 0.3, 0.5, *a)
+                               1, 0.3, 0.5, *a, *off)
         rb = reg._linearise(pts, slots, np.ascontiguousarray(T_cw[:3, :3]), np.ascontiguousarray(T_cw[:3, 3]), 100.0, 100.0,
-                            60.0, 45.0, f.value, f.grad_u, f.grad_v, f.box, second_order, 1, 0.3, 0.5, *b)
+                            60.0, 45.0, f.value, f.grad_u, f.grad_v, f.box, second_order, 1, 0.3, 0.5, *b, *off)
         assert ra == rb
         for x, y in zip(a, b):
             assert np.array_equal(x, y, equal_nan=True)

@@ -1,0 +1,130 @@
+"""Map points whose image neighbourhood holds another edge: their TDF minimum is not their own edge's.
+
+Where two edges project within a few pixels of each other (a corner, the top rim
+and the contact line of the landing pad seen from above, a crate's rim over the
+ground behind it) their time-surface ramps overlap and the blurred field's
+minimum sits between them or on the fresher one. Measured on the simulated
+landing (true-edge map, registrations from the truth): dropping the points with
+another segment's point within 4 px cut the error from 11.6 to 8.0 mm RMS.
+Without segment labels (a built map), "another edge" is a neighbour off the
+point's own image tangent line by more than a tolerance; with it at 3 px
+(``registration_bias_346x260``) the true-edge map's registrations from the truth
+end 11.6 / 12.0 -> 8.4 / 7.1 mm RMS away (before / after 0.4 s), the built map's
+12.7 / 23.5 -> 11.6 / 22.6 mm, and the TDF-minimum offsets' spread left after the
+lag fit falls 0.60 -> 0.41 px per point, 0.25 -> 0.15 px between segments.
+
+One numba pass: bin the projections into square cells of the radius (counting sort), then
+test each point against the points of its 3 x 3 cells: 55 us CPU for 1000 points warm, 115 us
+median inside the tracker (cold caches), on this machine at load 6.
+"""
+
+from __future__ import annotations
+
+import numba as nb
+import numpy as np
+
+
+@nb.njit(cache=True)
+def _crowded_kernel(points, tangents, R_cw, t_cw, fx, fy, cx, cy, radius, tol, out):
+    n = points.shape[0]
+    u = np.empty(n)
+    v = np.empty(n)
+    tu = np.zeros(n)
+    tv = np.zeros(n)
+    ok = np.zeros(n, dtype=np.bool_)  # in front of the camera: a neighbour of others
+    has_tangent = np.zeros(n, dtype=np.bool_)  # and its own line is known: it can be tested
+    for i in range(n):
+        out[i] = False
+        px, py, pz = points[i, 0], points[i, 1], points[i, 2]
+        X = R_cw[0, 0] * px + R_cw[0, 1] * py + R_cw[0, 2] * pz + t_cw[0]
+        Y = R_cw[1, 0] * px + R_cw[1, 1] * py + R_cw[1, 2] * pz + t_cw[1]
+        Z = R_cw[2, 0] * px + R_cw[2, 1] * py + R_cw[2, 2] * pz + t_cw[2]
+        if Z <= 1e-6:
+            continue
+        u[i] = fx * X / Z + cx
+        v[i] = fy * Y / Z + cy
+        ok[i] = True
+        # Image direction of the tangent: d(u, v) / d(metres along it).
+        dX = R_cw[0, 0] * tangents[i, 0] + R_cw[0, 1] * tangents[i, 1] + R_cw[0, 2] * tangents[i, 2]
+        dY = R_cw[1, 0] * tangents[i, 0] + R_cw[1, 1] * tangents[i, 1] + R_cw[1, 2] * tangents[i, 2]
+        dZ = R_cw[2, 0] * tangents[i, 0] + R_cw[2, 1] * tangents[i, 1] + R_cw[2, 2] * tangents[i, 2]
+        a = fx * (dX * Z - X * dZ) / (Z * Z)
+        b = fy * (dY * Z - Y * dZ) / (Z * Z)
+        L = np.sqrt(a * a + b * b)
+        if L > 1e-9:
+            tu[i] = a / L
+            tv[i] = b / L
+            has_tangent[i] = True
+    # Cells of side ``radius``: every neighbour within it lies in the 3 x 3 cells around a point's own.
+    umin = np.inf
+    vmin = np.inf
+    umax = -np.inf
+    vmax = -np.inf
+    for i in range(n):
+        if ok[i]:
+            umin = min(umin, u[i])
+            vmin = min(vmin, v[i])
+            umax = max(umax, u[i])
+            vmax = max(vmax, v[i])
+    if not umin <= umax:
+        return
+    gw = int((umax - umin) / radius) + 1
+    gh = int((vmax - vmin) / radius) + 1
+    # Counting sort of the points by cell (linear time; an argsort of the keys cost half the function).
+    key = np.full(n, -1, dtype=np.int64)
+    start = np.zeros(gw * gh + 1, dtype=np.int64)
+    for i in range(n):
+        if ok[i]:
+            key[i] = int((v[i] - vmin) / radius) * gw + int((u[i] - umin) / radius)
+            start[key[i] + 1] += 1
+    for c in range(gw * gh):
+        start[c + 1] += start[c]
+    fill = start[:-1].copy()
+    order = np.empty(max(start[gw * gh], 1), dtype=np.int64)
+    for i in range(n):
+        if key[i] >= 0:
+            order[fill[key[i]]] = i
+            fill[key[i]] += 1
+    r2 = radius * radius
+    for i in range(n):
+        if not has_tangent[i]:
+            continue
+        ci = int((u[i] - umin) / radius)
+        ri = int((v[i] - vmin) / radius)
+        found = False
+        for dr in range(-1, 2):
+            rr = ri + dr
+            if rr < 0 or rr >= gh or found:
+                continue
+            for dc in range(-1, 2):
+                cc = ci + dc
+                if cc < 0 or cc >= gw or found:
+                    continue
+                k = rr * gw + cc
+                for s in range(start[k], start[k + 1]):
+                    j = order[s]
+                    du = u[j] - u[i]
+                    dv = v[j] - v[i]
+                    if du * du + dv * dv > r2:
+                        continue
+                    if abs(du * tv[i] - dv * tu[i]) > tol:
+                        found = True
+                        break
+        out[i] = found
+
+
+def crowded_points(points: np.ndarray, tangents: np.ndarray, T_world_cam: np.ndarray, K: np.ndarray, radius_px: float,
+                   tolerance_px: float) -> np.ndarray:
+    """bool (N,): the points with another of ``points`` within ``radius_px`` of their projection and more than
+    ``tolerance_px`` off their own projected tangent line (another edge). Points with an unknown (zero) tangent are
+    never crowded themselves but crowd others; points behind the camera take no part."""
+    n = points.shape[0]
+    out = np.zeros(n, dtype=np.bool_)
+    if n == 0 or radius_px <= 0:
+        return out
+    T = np.asarray(T_world_cam, dtype=np.float64)
+    R_cw = np.ascontiguousarray(T[:3, :3].T)  # rigid inverse: no general 4x4 inversion per update
+    _crowded_kernel(np.ascontiguousarray(points, dtype=np.float64), np.ascontiguousarray(tangents, dtype=np.float64),
+                    R_cw, np.ascontiguousarray(-R_cw @ T[:3, 3]), float(K[0, 0]), float(K[1, 1]),
+                    float(K[0, 2]), float(K[1, 2]), float(radius_px), float(tolerance_px), out)
+    return out
