@@ -306,7 +306,10 @@ class EventSlam:
             self._reanchor_rotations(m)
 
     def _reanchor_rotations(self, m: SlamMap, refs: set | None = None) -> None:
-        reanchor_rotations(m, self.imu, self.calib.T_cam_imu, self.calib.time_offset_us, m.inertial.bias_gyro, refs)
+        # Before the initialisation the bias is unknown, but over one keyframe interval (tens of ms) a MEMS bias of a
+        # few mrad/s turns the camera by hundredths of a degree: far less than the visual rotation error indoors.
+        bias = m.inertial.bias_gyro if m.imu_initialised and m.inertial is not None else np.zeros(3)
+        reanchor_rotations(m, self.imu, self.calib.T_cam_imu, self.calib.time_offset_us, bias, refs)
 
     # ------------------------------------------------------------- tracking
     def _gyro_rotation(self, t0_us: int, t1_us: int, T_wc0: np.ndarray) -> np.ndarray | None:
@@ -465,14 +468,14 @@ class EventSlam:
                                              ic.acc_bias_sigma, ic.gyro_bias_sigma)
         else:
             local_bundle_adjustment(m, self.K, tc.local_window, tc.ba_iterations, tc.ba_huber_px, n_fixed=1,
-                                    rotation_priors=self._keyframe_rotation_priors(m), rotation_sigma_rad=np.radians(max(ic.gyro_prior_uninit_deg, 1e-6)),
+                                    rotation_priors=self._keyframe_rotation_priors(m), rotation_sigma_rad=np.radians(max(ic.ba_gyro_prior_uninit_deg or ic.gyro_prior_uninit_deg, 1e-6)),
                                     # Event-inertial maps get their scale from the IMU initialisation; anchoring the visual
                                     # scale before it made E-I-C2 worse (TrackingConfig.ba_scale_anchor).
                                     scale_anchor=tc.ba_scale_anchor if self.imu is None else 0.0)
         cull_points(m, self.K, fe.track_to_point, tc)
         # BA moved the newest keyframe: the trajectory's last pose follows it.
         m.add_pose(t_us, m.keyframes[-1].T_wc)
-        if m.imu_initialised and m.inertial is not None and len(m.keyframes) >= 2:
+        if self.imu is not None and (m.imu_initialised or self.cfg.inertial.reanchor_before_init) and len(m.keyframes) >= 2:
             # The MCIs between the previous keyframe and this one are complete: their rotations follow the gyro.
             self._reanchor_rotations(m, {m.keyframes[-2].id})
         if self.imu is not None and not m.imu_initialised:
