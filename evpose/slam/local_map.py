@@ -65,12 +65,28 @@ def triangulate_new_points(m: SlamMap, K: np.ndarray, kf: Keyframe, track_to_poi
         uv2 = np.array([kf.obs[t] for t in tids])
         X = triangulate(K, invert_pose(old.T_wc), invert_pose(kf.T_wc), uv1, uv2)
         good = good_triangulation(K, old.T_wc, kf.T_wc, uv1, uv2, X, 2.0 * cfg.reprojection_threshold_px, cfg.min_triangulation_deg)
+        between = [b for b in m.keyframes if old.id < b.id < kf.id] if cfg.intermediate_observations else []
         for k in np.flatnonzero(good):
             tid = tids[k]
-            m.points[next_point_id] = MapPoint(next_point_id, X[k].copy(), {old.id: uv1[k], kf.id: uv2[k]}, tid, kf.id)
+            obs = {old.id: uv1[k], kf.id: uv2[k]}
+            for b in between:
+                uv = b.obs.get(tid)
+                if uv is not None and _reprojects(K, b.T_wc, X[k], uv, 2.0 * cfg.reprojection_threshold_px):
+                    obs[b.id] = uv
+            m.points[next_point_id] = MapPoint(next_point_id, X[k].copy(), dict(sorted(obs.items())), tid, kf.id)
             track_to_point[tid] = next_point_id
             next_point_id += 1
     return next_point_id
+
+
+def _reprojects(K: np.ndarray, T_wc: np.ndarray, X: np.ndarray, uv: np.ndarray, max_err_px: float) -> bool:
+    """``X`` lies in front of the camera ``T_wc`` and projects within ``max_err_px`` of ``uv``."""
+    T_cw = invert_pose(T_wc)
+    Xc = T_cw[:3, :3] @ X + T_cw[:3, 3]
+    if not Xc[2] > 0:
+        return False
+    q = Xc[:2] / Xc[2] * np.array([K[0, 0], K[1, 1]]) + np.array([K[0, 2], K[1, 2]])
+    return bool(np.linalg.norm(q - uv) < max_err_px)
 
 
 def _median_depth(m: SlamMap, kf: Keyframe, track_to_point: dict[int, int]) -> float | None:
