@@ -62,3 +62,25 @@ def test_true_edge_map_gives_the_tracker_each_segment_direction():
     cmap, dirs, _ = true_edge_map(segs, step_m=0.5)
     tangent = np.cross(cmap.plane_normal, cmap.edge_normal)
     assert np.allclose(tangent, dirs, atol=1e-6) and np.allclose(np.linalg.norm(cmap.edge_normal, axis=1), 1.0, atol=1e-6)
+
+
+def test_distance_to_segments_is_the_exact_distance_to_the_nearest_segment_clamped_at_its_ends():
+    from evpose.bench.registration_bias import distance_to_segments
+
+    segs = np.array([[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0], [1.0, 1.0, 0.0]]])
+    pts = np.array([[0.5, 0.1, 0.0], [0.5, 0.8, 0.0], [2.0, 0.0, 0.0], [-1.0, 1.0, 1.0]])
+    d, k = distance_to_segments(pts, segs)
+    assert np.allclose(d, [0.1, 0.2, 1.0, np.sqrt(2.0)])
+    assert list(k) == [0, 1, 0, 1]
+
+
+def test_map_accuracy_counts_points_off_by_more_than_two_centimetres_by_nearest_segment_kind():
+    from evpose.bench.registration_bias import map_accuracy
+    from evpose.core.contour_map import ContourMap
+
+    segs = np.array([[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0], [1.0, 1.0, 0.0]]])  # the second painted
+    cmap = ContourMap.from_points(np.array([[0.2, 0.001, 0.0], [0.4, 0.03, 0.0], [0.6, 0.97, 0.0], [0.8, 1.005, 0.0]]))
+    acc = map_accuracy(cmap, segs, n_painted_segments=1)
+    assert acc["map_points"] == 4 and acc["map_misplaced_share"] == 0.5
+    assert acc["map_misplaced_geometric"] == 1 and acc["map_misplaced_painted"] == 1
+    assert np.isclose(acc["map_error_median_mm"], 17.5)
