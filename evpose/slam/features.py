@@ -73,13 +73,14 @@ def detect_features(img8: np.ndarray, cfg: FeatureConfig, existing: np.ndarray |
 
 
 def track_features(prev8: np.ndarray, cur8: np.ndarray, pts: np.ndarray, cfg: FeatureConfig, guess: np.ndarray | None = None,
-                   guess_back: bool = False) -> tuple[np.ndarray, np.ndarray]:
+                   guess_back: bool = False, min_ncc: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """Track ``pts`` from ``prev8`` into ``cur8``; returns (new positions (N, 2) float32, ok mask (N,)).
 
     A track survives when both directions converge, the forward-backward error is
     at most ``klt_max_bidir_error_px`` and the point stays inside the image. ``guess_back`` starts the backward pass
     at ``pts`` shifted by the forward result's offset from ``guess`` (for displacements beyond KLT's reach, where a
-    backward pass started at the forward result itself would not converge).
+    backward pass started at the forward result itself would not converge). ``min_ncc`` > 0 also drops tracks whose
+    patches correlate below it (:func:`patch_ncc`).
     """
     n = len(pts)
     if n == 0:
@@ -103,7 +104,37 @@ def track_features(prev8: np.ndarray, cur8: np.ndarray, pts: np.ndarray, cfg: Fe
     h, w = cur8.shape
     ok = (st1.ravel() == 1) & (st2.ravel() == 1) & (fb <= cfg.klt_max_bidir_error_px)
     ok &= (p1[:, 0] >= 0) & (p1[:, 0] <= w - 1) & (p1[:, 1] >= 0) & (p1[:, 1] <= h - 1)
+    if min_ncc > 0 and ok.any():
+        idx = np.flatnonzero(ok)
+        ok[idx[patch_ncc(prev8, cur8, p0.reshape(-1, 2)[idx], p1[idx]) < min_ncc]] = False
     return p1.astype(np.float32), ok
+
+
+def patch_ncc(img0: np.ndarray, img1: np.ndarray, uv0: np.ndarray, uv1: np.ndarray, radius: int = 5) -> np.ndarray:
+    """Normalised cross-correlation of the (2 radius + 1)^2 patches around ``uv0`` in ``img0`` and ``uv1`` in ``img1``
+    (nearest pixel; -1 where a patch leaves the image or is flat), float64 (N,)."""
+    n = len(uv0)
+    out = np.full(n, -1.0)
+    if n == 0:
+        return out
+    h, w = img0.shape
+    c0 = np.rint(uv0).astype(np.int64)
+    c1 = np.rint(uv1).astype(np.int64)
+    inside = np.all((c0 >= radius) & (c1 >= radius), axis=1)
+    inside &= (c0[:, 0] < w - radius) & (c1[:, 0] < w - radius) & (c0[:, 1] < h - radius) & (c1[:, 1] < h - radius)
+    k = np.flatnonzero(inside)
+    if not len(k):
+        return out
+    d = np.arange(-radius, radius + 1)
+    dy, dx = np.meshgrid(d, d, indexing="ij")
+    a = img0[c0[k, 1, None, None] + dy, c0[k, 0, None, None] + dx].reshape(len(k), -1).astype(np.float64)
+    b = img1[c1[k, 1, None, None] + dy, c1[k, 0, None, None] + dx].reshape(len(k), -1).astype(np.float64)
+    a -= a.mean(axis=1, keepdims=True)
+    b -= b.mean(axis=1, keepdims=True)
+    den = np.sqrt((a * a).sum(axis=1) * (b * b).sum(axis=1))
+    ncc = np.where(den > 0, (a * b).sum(axis=1) / np.where(den > 0, den, 1.0), -1.0)
+    out[k] = ncc
+    return out
 
 
 @dataclass

@@ -177,13 +177,14 @@ class EventSlam:
         fe = self.fe
         if fe.prev8 is not None and len(fe.ids):
             guess = self._gyro_flow(fe.prev_t, mci.t_us, fe.uv)
-            new, ok = track_features(fe.prev8, mci.image8, fe.uv, self.cfg.features, guess=guess)
+            min_ncc = self.cfg.features.klt_min_ncc
+            new, ok = track_features(fe.prev8, mci.image8, fe.uv, self.cfg.features, guess=guess, min_ncc=min_ncc)
             keep = self.cfg.mci.keep_hypothesis_survival
             prev_h = self._prev_hypothesis
             if keep > 0 and prev_h is not None and prev_h != mci.hypothesis.value and prev_h in mci.candidates and ok.sum() < keep * len(ok):
                 img = mci.candidates[prev_h]
                 alt = replace(mci, image=img, image8=to_uint8(img), hypothesis=Hypothesis(prev_h))
-                new2, ok2 = track_features(fe.prev8, alt.image8, fe.uv, self.cfg.features, guess=guess)
+                new2, ok2 = track_features(fe.prev8, alt.image8, fe.uv, self.cfg.features, guess=guess, min_ncc=min_ncc)
                 if ok2.sum() > ok.sum():
                     mci, new, ok = alt, new2, ok2
             fe.ids, fe.uv = fe.ids[ok], new[ok]
