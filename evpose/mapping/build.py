@@ -121,6 +121,8 @@ class MapBuildConfig:
     """Fewest points of a low step's face that move a contour point onto it (:func:`evpose.mapping.adjacency.snap_to_steps`), points. The landing pad's 15 cm sides are sampled sparser than the scan's median (one or two points within 2 cells): with 3 its rim stayed on the top's last points, 3-10 cm inside the true rim, and the ground's contour as far outside its foot. Measured 3 -> 1 with step_retry_radius_cells 4 (2 s landing, seeds 0-3): pad points misplaced by > 2 cm 411 / 739 / 997 / 686 -> 108 / 139 / 496 / 300; bundled landing precision / recall 99.01 / 96.47 -> 99.34 / 96.82 %; indoor (bundled) 97.97 / 92.31 -> 97.91 / 92.37 %."""
     step_retry_radius_cells: float = field(default=4.0, metadata={"min": 2.0, "max": 10.0, "step": 0.5, "unit": "cells"})
     """Search radius, raster cells, of a second look for a low step's face points around contour points the first (2 cells) left unmoved; 2 = no second look. A single look at 4 cells moved indoor points onto wrong faces (bundled indoor precision 97.97 -> 97.33 %); the second look only where the first found nothing keeps the landing gain (see step_min_points) at indoor 97.91 %."""
+    step_retry_shift_cells: float = field(default=1.5, metadata={"min": 0.5, "max": 10.0, "step": 0.5, "unit": "cells"})
+    """Largest move onto a step's face in the second look (step_retry_radius_cells), raster cells (the first look's limit is 1.5). Measured 1.5 -> 2.5 (2 s landing, seeds 0-3): pad points misplaced 108 / 139 / 116 / 92 -> 43 / 139 / 147 / 43, bundled landing precision / recall 99.33 / 96.82 -> 99.40 / 96.88 %, but indoor 97.91 / 92.37 -> 97.83 / 92.22 % and tracking no better: ablation_seeds stpe ATE 15.8 / 23.8 -> 16.0 / 23.9 mm, full 9.06 / 9.50 -> 9.09 / 9.73 mm (346x260 / 240x180); so 1.5."""
     contour_min_width: float = field(default=1.5, metadata={"min": 0.0, "max": 10.0, "step": 0.1, "unit": "spacings"})
     """Regions narrower than this (std along the minor in-plane axis, median point spacings) give no contour of their own: a strip a point or two wide (a 15 cm step's side on a sparse scan) has an ill-defined tilt, so its outline lies off both of the step's edges, which its neighbours' contours already give; 0 = every region. Measured 0 -> 1.5 (2 s landing, with the step options above): seeds 2 / 3's tilted strip across the pad's side (1.44 spacings wide) gone, pad points misplaced 496 / 300 -> 116 / 92 (seeds 0 / 1 unchanged); bundled landing precision 99.34 -> 99.33 %, bundled indoor unchanged; six indoor re-samples recall -0.05 points."""
     brightness_radius_m: float = field(default=0.0, metadata={"min": 0.0, "max": 0.5, "step": 0.01, "unit": "m"})
@@ -356,7 +358,7 @@ def build_contour_map(
             stepped = snap_to_steps(
                 stepped, cen_unit, creg, unmoved, pts, labels, nb.tree, regions.normals,
                 radius=cfg.step_retry_radius_cells * cell, min_offset=cfg.plane_distance_m, max_offset=sc.adjacent,
-                max_shift=1.5 * cell, min_count=cfg.step_min_points,
+                max_shift=cfg.step_retry_shift_cells * cell, min_count=cfg.step_min_points,
             )
         cpts = stepped
         # Brightness edges are squared to the outline: the creases give it more exactly than the trace.
