@@ -16,7 +16,9 @@ Stages (EV-Pose VI-B, NOTES.md "Map construction"):
    straighten straight runs, drop the scan's own rim; contour points next to another
    plane snapped onto the planes' intersection line (of several crease lines across the
    edge, the innermost: the sofa's back, not the wall behind it), contour points of low steps
-   (no region on the step's face) moved onto the face's points;
+   (no region on the step's face) moved onto the face's points (a second, wider look where
+   the face is sampled sparser than the scan); regions only a point or two wide (a step's
+   side) give no contour of their own;
 5. per point: edge normal, plane normal, region, curvature, brightness sign;
 6. with intensity or colour: brightness (albedo) edges inside each region - painted
    markers, pictures, doors (:mod:`evpose.mapping.albedo_edges`), sign +1 with the normal
@@ -115,6 +117,14 @@ class MapBuildConfig:
     """Of the crease lines a contour point could snap to by a move across its edge (sideways part under this many raster cells), the innermost is taken - the sofa's back, not the wall 10 cm behind it; measured 0.25-1 alike (indoor precision +1.1 points)."""
     snap_max_shift_m: float = field(default=0.0, metadata={"min": 0.0, "max": 0.5, "step": 0.005, "unit": "m"})
     """Largest move of a contour point onto a crease line, metres; 0 = the snap radius."""
+    step_min_points: int = field(default=1, metadata={"min": 1, "max": 32, "step": 1, "unit": "points"})
+    """Fewest points of a low step's face that move a contour point onto it (:func:`evpose.mapping.adjacency.snap_to_steps`), points. The landing pad's 15 cm sides are sampled sparser than the scan's median (one or two points within 2 cells): with 3 its rim stayed on the top's last points, 3-10 cm inside the true rim, and the ground's contour as far outside its foot. Measured 3 -> 1 with step_retry_radius_cells 4 (2 s landing, seeds 0-3): pad points misplaced by > 2 cm 411 / 739 / 997 / 686 -> 108 / 139 / 496 / 300; bundled landing precision / recall 99.01 / 96.47 -> 99.34 / 96.82 %; indoor (bundled) 97.97 / 92.31 -> 97.91 / 92.37 %."""
+    step_retry_radius_cells: float = field(default=4.0, metadata={"min": 2.0, "max": 10.0, "step": 0.5, "unit": "cells"})
+    """Search radius, raster cells, of a second look for a low step's face points around contour points the first (2 cells) left unmoved; 2 = no second look. A single look at 4 cells moved indoor points onto wrong faces (bundled indoor precision 97.97 -> 97.33 %); the second look only where the first found nothing keeps the landing gain (see step_min_points) at indoor 97.91 %."""
+    step_retry_shift_cells: float = field(default=1.5, metadata={"min": 0.5, "max": 10.0, "step": 0.5, "unit": "cells"})
+    """Largest move onto a step's face in the second look (step_retry_radius_cells), raster cells (the first look's limit is 1.5). Measured 1.5 -> 2.5 (2 s landing, seeds 0-3): pad points misplaced 108 / 139 / 116 / 92 -> 43 / 139 / 147 / 43, bundled landing precision / recall 99.33 / 96.82 -> 99.40 / 96.88 %, but indoor 97.91 / 92.37 -> 97.83 / 92.22 % and tracking no better: ablation_seeds stpe ATE 15.8 / 23.8 -> 16.0 / 23.9 mm, full 9.06 / 9.50 -> 9.09 / 9.73 mm (346x260 / 240x180); so 1.5."""
+    contour_min_width: float = field(default=1.5, metadata={"min": 0.0, "max": 10.0, "step": 0.1, "unit": "spacings"})
+    """Regions narrower than this (std along the minor in-plane axis, median point spacings) give no contour of their own: a strip a point or two wide (a 15 cm step's side on a sparse scan) has an ill-defined tilt, so its outline lies off both of the step's edges, which its neighbours' contours already give; 0 = every region. Measured 0 -> 1.5 (2 s landing, with the step options above): seeds 2 / 3's tilted strip across the pad's side (1.44 spacings wide) gone, pad points misplaced 496 / 300 -> 116 / 92 (seeds 0 / 1 unchanged); bundled landing precision 99.34 -> 99.33 %, bundled indoor unchanged; six indoor re-samples recall -0.05 points."""
     brightness_radius_m: float = field(default=0.0, metadata={"min": 0.0, "max": 0.5, "step": 0.01, "unit": "m"})
     """Neighbourhood compared on either side of the edge for the brightness sign, metres; 0 = max(4x spacing, 8 cm)."""
     brightness_threshold: float = field(default=0.05, metadata={"min": 0.0, "max": 1.0, "step": 0.01, "unit": ""})
@@ -287,6 +297,10 @@ def build_contour_map(
     axis_angles = np.full(regions.sizes.size, np.nan)
     region_bar = _progress(progress, regions.sizes.size, "contours")
     for r in range(regions.sizes.size):
+        if regions.minor_std[r] < cfg.contour_min_width * nb.spacing:
+            if region_bar is not None:
+                region_bar.update(1)
+            continue
         own = pts[order[starts[r]:starts[r + 1]]]
         c, n, ax = regions.centroids[r], regions.normals[r], regions.axes[r]
         box = index.query(bounds[r, 0] - far, bounds[r, 1] + far)
@@ -316,6 +330,8 @@ def build_contour_map(
             region_bar.update(1)
     if region_bar is not None:
         region_bar.close()
+    if not pts3:  # every region too narrow for a contour of its own
+        pts3, en3, reg3 = [np.zeros((0, 3))], [np.zeros((0, 3))], [np.zeros(0, np.int32)]
     cpts = np.concatenate(pts3)
     cen = np.concatenate(en3)
     creg = np.concatenate(reg3)
@@ -330,10 +346,21 @@ def build_contour_map(
             reliable=(regions.minor_std >= cfg.snap_min_width * nb.spacing) & (regions.rms <= cfg.plane_distance_m),
             outward=cen_unit, across_tol=cfg.snap_across_cells * cell,
         )
-        cpts = snap_to_steps(
+        stepped = snap_to_steps(
             cpts, cen_unit, creg, crease < 0, pts, labels, nb.tree, regions.normals,
             radius=2.0 * cell, min_offset=cfg.plane_distance_m, max_offset=sc.adjacent, max_shift=1.5 * cell,
+            min_count=cfg.step_min_points,
         )
+        if cfg.step_retry_radius_cells > 2.0:
+            # Where the scan is sparser than its median spacing (the landing pad's sides), too few of
+            # the face's points lie within 2 cells: look again, farther, for the points left unmoved.
+            unmoved = (crease < 0) & np.all(stepped == cpts, axis=1)
+            stepped = snap_to_steps(
+                stepped, cen_unit, creg, unmoved, pts, labels, nb.tree, regions.normals,
+                radius=cfg.step_retry_radius_cells * cell, min_offset=cfg.plane_distance_m, max_offset=sc.adjacent,
+                max_shift=cfg.step_retry_shift_cells * cell, min_count=cfg.step_min_points,
+            )
+        cpts = stepped
         # Brightness edges are squared to the outline: the creases give it more exactly than the trace.
         from_creases = crease_axes(creg, crease, regions.normals, regions.axes)
         axis_angles = np.where(np.isfinite(from_creases), from_creases, axis_angles)
