@@ -8,8 +8,9 @@
 * ``ablation_seeds``: the four modes over several simulator seeds at both resolutions (means and per seed).
 * ``realtime_300hz``: ``full`` at 300 updates/s, whole session against the
   recording's duration (issue 7: sustains 300 Hz faster than real time).
-* ``registration_wander``: why ``full`` stays near 16-18 mm: the registrations'
-  errors and, on the same recorded inputs, online / smoothed / EKF / dead-reckoning estimates.
+* ``registration_wander``: why ``full`` stays near 9-10 mm: the registrations'
+  errors and, on the same recorded inputs, online / smoothed / EKF / dead-reckoning estimates, and the online
+  estimate fed only the slow or only the fast part of the registrations' errors.
 * ``aligned_field``: ``T_align``'s distance field from its patch list against the
   image path, alternating in one process, outputs hashed.
 * ``refinement_cost`` / ``crowding_cost``: per-update CPU with and without the painted-edge refinement / the
@@ -206,13 +207,16 @@ def bench_realtime_300hz(ctx) -> dict:
 
 
 def bench_registration_wander(ctx) -> dict:
-    """Why ``full`` stays near 16-18 mm (issue 7): the registrations' errors on the simulated moderate landing
-    (:func:`~evpose.fusion.registration_errors.analyse_registration_errors`: calibration, time correlation,
-    tilt/shift coupling), and on the same recorded inputs the online, fixed-lag and batch smoothed estimates, the
-    EKF, and IMU dead reckoning with the simulator's true biases (:func:`~evpose.fusion.replay.fusion_error_study`)."""
+    """Why ``full`` stays near 9-10 mm (issue 7; 16-18 mm in earlier sessions): the registrations' errors on the
+    simulated moderate landing (:func:`~evpose.fusion.registration_errors.analyse_registration_errors`: calibration,
+    time correlation, tilt/shift coupling), and on the same recorded inputs the online, fixed-lag and batch smoothed
+    estimates, the EKF, and IMU dead reckoning with the simulator's true biases
+    (:func:`~evpose.fusion.replay.fusion_error_study`); the online estimate on registrations carrying only the slow or
+    only the fast part of their errors (:func:`~evpose.fusion.replay.error_band_study`)."""
     from evpose.bench.tracking import landing_case
     from evpose.fusion.registration_errors import analyse_registration_errors, ate_are, pose_error_vectors
-    from evpose.fusion.replay import FusionInputs, fusion_error_study
+    from evpose.fusion import FusionConfig
+    from evpose.fusion.replay import FusionInputs, error_band_study, fusion_error_study
     from evpose.sim import SimulationConfig
     from evpose.sim.cache import load_or_simulate
     from evpose.tracker.config import TrackerConfig, TrackerMode
@@ -235,6 +239,8 @@ def bench_registration_wander(ctx) -> dict:
                              ctx.work_dir / "tracking" / "sim").imu_truth
     i0 = int(np.searchsorted(truth.samples.t, inputs.t0_us))
     out.update(fusion_error_study(rec.calibration, rec.imu, inputs, rec.ground_truth, (truth.acc_bias[i0], truth.gyro_bias[i0])))
+    bands = error_band_study(FusionConfig(), rec.calibration, rec.imu, inputs, rec.ground_truth)
+    out.update({f"error_band_{k}": v for k, v in bands.items()})
     return out
 
 

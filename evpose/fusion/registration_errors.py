@@ -57,6 +57,27 @@ def pose_error_vectors(t_us: np.ndarray, poses: np.ndarray, ground_truth: Trajec
     return np.concatenate([rot, trans], axis=1)
 
 
+def poses_with_errors(t_us: np.ndarray, errors: np.ndarray, ground_truth: Trajectory) -> np.ndarray:
+    """Camera poses (N, 4, 4) that carry the given (N, 6) errors against the ground truth: the inverse of
+    :func:`pose_error_vectors` (rotation ``R_gt Exp(e_r)``, position ``p_gt + R_gt e_t``)."""
+    G = ground_truth.interpolate(np.asarray(t_us, np.int64)).matrices()
+    e = np.asarray(errors, np.float64)
+    out = np.tile(np.eye(4), (len(e), 1, 1))
+    out[:, :3, :3] = np.einsum("nij,njk->nik", G[:, :3, :3], Rotation.from_rotvec(e[:, :3]).as_matrix())
+    out[:, :3, 3] = G[:, :3, 3] + np.einsum("nij,nj->ni", G[:, :3, :3], e[:, 3:])
+    return out
+
+
+def slow_part(errors: np.ndarray, window: int) -> np.ndarray:
+    """Centred moving average of (N, 6) error series over ``window`` samples (ends padded with the end values): the
+    part of the errors slower than about ``window`` samples. Two-sided, so an offline (oracle) decomposition."""
+    e = np.asarray(errors, np.float64)
+    w = max(int(window), 1)
+    padded = np.pad(e, ((w // 2, w - 1 - w // 2), (0, 0)), mode="edge")
+    c = np.cumsum(np.vstack([np.zeros((1, e.shape[1])), padded]), axis=0)
+    return (c[w:] - c[:-w]) / w
+
+
 def ate_are(t_us: np.ndarray, poses: np.ndarray, ground_truth: Trajectory) -> tuple[float, float]:
     """RMS translation error (mm) and RMS rotation angle (deg) of camera poses against the ground truth, no alignment."""
     e = pose_error_vectors(t_us, poses, ground_truth)

@@ -9,6 +9,8 @@ from evpose.fusion.registration_errors import (
     analyse_registration_errors,
     integrated_autocorrelation,
     pose_error_vectors,
+    poses_with_errors,
+    slow_part,
 )
 
 
@@ -58,3 +60,22 @@ def test_pose_error_vectors_are_in_the_camera_frame():
     T[:, 2, 3] += 0.01
     e = pose_error_vectors(t, T, gt)
     assert np.allclose(e[:, :3], 0) and np.allclose(e[:, 3:], [0, 0, -0.01])
+
+
+def test_poses_with_errors_invert_pose_error_vectors():
+    rng = np.random.default_rng(3)
+    t = np.arange(0, 1_000_000, 50_000, dtype=np.int64)
+    q = rng.standard_normal((len(t), 4))
+    gt = Trajectory.from_arrays(t, rng.normal(0, 2.0, (len(t), 3)), q / np.linalg.norm(q, axis=1, keepdims=True))
+    e = np.c_[rng.normal(0, 0.01, (len(t), 3)), rng.normal(0, 0.02, (len(t), 3))]
+    assert np.allclose(pose_error_vectors(t, poses_with_errors(t, e, gt), gt), e, atol=1e-12)
+
+
+def test_slow_part_is_a_centred_moving_average_that_keeps_ramps_and_removes_alternation():
+    n = 40
+    ramp = np.outer(np.arange(n, dtype=float), np.ones(6))
+    s = slow_part(ramp, 5)
+    assert s.shape == ramp.shape and np.allclose(s[2:-2], ramp[2:-2])  # centred: a linear trend passes unchanged
+    assert np.allclose(s[0], (0 + 0 + 0 + 1 + 2) / 5)  # the ends are padded with the end values
+    alternating = np.outer((-1.0) ** np.arange(n), np.ones(6))
+    assert np.abs(slow_part(alternating, 2)[1:]).max() < 1e-12  # a two-sample average cancels the fastest swing
