@@ -379,27 +379,31 @@ def _far_seek_once(rec, cmap, t_us: int, catch_up: bool) -> dict:
     return out
 
 
-def _far_seek_player(rec, cmap, t_us: int) -> dict:
+def _far_seek_player(rec, cmap, t_us: int, factory=None) -> dict:
     """The same seek through the player (run-ahead on, as ``evpose app`` runs it): when the status line first
-    says how far it is, and when the frame is drawn."""
+    says how far it is, and when the frame is drawn. ``factory``: the engines (default: no disk cache)."""
     from app.player import Player
     from app.tracker_engine import TrackerEngine
 
-    drawn, first_progress, previews = threading.Event(), [], []
+    drawn, first_progress, previews, drawn_at = threading.Event(), [], [], []
 
     def on_frame(f, e):
         if f.preview:
             previews.append(time.perf_counter())
         else:
+            drawn_at.append(time.perf_counter())
             drawn.set()
 
-    p = Player(lambda cfg: TrackerEngine(rec, cmap, cfg), on_frame,
+    t_open = time.perf_counter()
+    p = Player(factory or (lambda cfg: TrackerEngine(rec, cmap, cfg)), on_frame,
                on_progress=lambda e: first_progress or first_progress.append(time.perf_counter()))
     try:
         p.seek(rec.t_start_us)
         p.wait_idle(600)
+        open_s = time.perf_counter() - t_open  # engine made (a prepared one reads the disk cache) and step 0 drawn
         p.call(lambda e: e.prefetch(5)).result(600)
         drawn.clear()
+        drawn_at.clear()
         load0 = os.getloadavg()[0]
         first_progress.clear()
         t0 = time.perf_counter()
@@ -413,9 +417,9 @@ def _far_seek_player(rec, cmap, t_us: int) -> dict:
             waits.append((time.perf_counter() - c0) * 1e3)
             time.sleep(0.2)
         drawn.wait(600)
-        wall = time.perf_counter() - t0
+        wall = drawn_at[0] - t0  # when it was drawn, however long the command probes above took
         p.wait_idle(600)
-        return {"first_status_update_s": (first_progress[0] - t0) if first_progress else None,
+        return {"open_s": open_s, "first_status_update_s": (first_progress[0] - t0) if first_progress else None,
                 "preview_drawn_s": (previews[0] - t0) if previews else None, "frame_drawn_s": wall,
                 "command_wait_while_computing_ms": waits, "catch_up": p.last_catch_up,
                 "loadavg_1min": [load0, os.getloadavg()[0]]}
@@ -437,6 +441,10 @@ def bench_far_seek(ctx) -> dict:
         for name, catch_up in (("grid_stepping", False), ("catch_up", True)):
             out.setdefault(name, []).append(_far_seek_once(rec, cmap, t, catch_up))
     out["player"] = _far_seek_player(rec, cmap, t)
+    from app.bench_prepared import far_seek_prepared
+
+    # The same seek through the player once the viewer's warm-up has prepared the recording (its time included).
+    out["prepared"] = far_seek_prepared(rec_path, map_path, rec, cmap, t, Path(ctx.work_dir))
     return out
 
 
@@ -459,6 +467,8 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--map", type=Path, default=None, help="its contour map")
     ap.add_argument("--seconds", type=float, default=None, help="wall seconds of each playback phase")
     ap.add_argument("--seeks", type=int, default=None, help="random seek targets per phase")
+    ap.add_argument("--background-warm-up", type=Path, nargs="*", default=[],
+                    help="recordings the viewer's warm-up prepares over and over while the benchmarks run (maps from maps/)")
     args = ap.parse_args(argv)
     # Run as ``python -m app.bench`` this module is __main__: benchmarks elsewhere that import app.bench must see these settings.
     sys.modules.setdefault("app.bench", sys.modules[__name__])
@@ -467,10 +477,18 @@ def main(argv: list[str] | None = None) -> None:
     if args.recording is not None and args.map is not None:
         DEMO_OVERRIDE = (args.recording, args.map)
     ctx = BenchContext(quick=not args.full, work_dir=args.work_dir)
-    for name, fn in BENCHMARKS.items():
-        if args.only and name != args.only:
-            continue
-        print(json.dumps({name: fn(ctx)}, indent=1), flush=True)
+    from contextlib import nullcontext
+
+    from app.bench_prepared import BackgroundWarmUp
+
+    with (BackgroundWarmUp(args.background_warm_up, Path("maps"), args.work_dir) if args.background_warm_up
+          else nullcontext()) as background:
+        for name, fn in BENCHMARKS.items():
+            if args.only and name != args.only:
+                continue
+            print(json.dumps({name: fn(ctx)}, indent=1), flush=True)
+    if background is not None:
+        print(json.dumps({"background_warm_up": background.report()}, indent=1), flush=True)
 
 
 if __name__ == "__main__":
