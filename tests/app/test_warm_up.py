@@ -167,3 +167,40 @@ def test_evpose_app_prepare_fills_the_cache_for_a_recording_and_guesses_its_map(
     assert run(["app", "--prepare", str(data_root / "squares.h5"), "--data", str(data_root), "--cache-dir", str(cache)]) == 0
     assert "already in the disk cache" in capsys.readouterr().out
     assert run(["app", "--prepare", str(data_root / "squares.h5"), "--data", str(data_root), "--no-disk-cache"]) == 2
+
+
+def _chunk_contents(folder):
+    """Every chunk of the one entry under ``folder``, without the wall-clock timings (they differ run to run)."""
+    import pickle
+
+    (entry,) = [d for d in folder.iterdir() if d.is_dir()]
+    out = []
+    for path in sorted(entry.glob("chunk_*.pkl")):
+        with open(path, "rb") as f:
+            chunk = pickle.load(f)
+        summaries = [pickle.dumps({k: v for k, v in vars(s).items() if k != "timings_ms"}) for s in chunk["summaries"]]
+        frames = {k: (size, {n: pickle.dumps(v) for n, v in fields.items() if n != "timings_ms"})
+                  for k, (size, fields) in chunk["frames"].items()}
+        out.append((path.name, summaries, frames))
+    return entry.name, out
+
+
+def test_the_warm_up_writes_the_same_entry_as_the_players_own_run_ahead(data_root, tmp_path):
+    rec_path, map_path = _pair(data_root, "squares")
+    entries = [e for e in _entries(data_root) if e.kind == EntryKind.MAP or e.path == rec_path.resolve()]
+    assert _run_worker(entries, DiskCacheConfig(directory=tmp_path / "warm", chunk_steps=20))
+    disk = DiskCacheConfig(directory=tmp_path / "player", chunk_steps=20)
+    rec, cmap = load_recording(rec_path), load_map(map_path)
+    p = Player(engine_factory(rec, cmap, "tracking", FrameCacheConfig(), disk, (rec_path.resolve(), map_path.resolve())),
+               lambda f, e: None)
+    try:
+        p.seek(rec.t_start_us)
+        for _ in range(1200):
+            if p.call(lambda e: len(e.disk.written) * e.disk.chunk_steps >= e.n_steps).result(60):
+                break
+            threading.Event().wait(0.1)
+    finally:
+        p.stop()
+    warm, played = _chunk_contents(tmp_path / "warm"), _chunk_contents(tmp_path / "player")
+    assert warm[0] == played[0] and len(warm[1]) == len(played[1]) > 1  # same key: same recording, map, configuration
+    assert warm == played
