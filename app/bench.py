@@ -448,10 +448,12 @@ def bench_far_seek(ctx) -> dict:
     return out
 
 
-from app.bench_start import bench_run_ahead_start  # noqa: E402 (it imports helpers from this module lazily)
+from app.bench_prepared import bench_warm_up_interference  # noqa: E402 (they import helpers from this module lazily)
+from app.bench_start import bench_run_ahead_start  # noqa: E402
 
 BENCHMARKS = {"playback_realtime": bench_playback, "seek_latency": bench_seek, "run_ahead_cpu": bench_run_ahead,
-              "far_seek": bench_far_seek, "run_ahead_start": bench_run_ahead_start}
+              "far_seek": bench_far_seek, "run_ahead_start": bench_run_ahead_start,
+              "warm_up_interference": bench_warm_up_interference}
 
 
 def main(argv: list[str] | None = None) -> None:

@@ -1,5 +1,6 @@
-"""Benchmarks of the warm-up (``app/warm_up.py``): a far seek in a prepared recording, and a warm-up kept running in
-the background while another benchmark plays (``python -m app.bench --background-warm-up R.h5``)."""
+"""Benchmarks of the warm-up (``app/warm_up.py``): a far seek in a prepared recording (part of ``far_seek``), a
+warm-up kept running in the background while other benchmarks run (``python -m app.bench --background-warm-up R.h5``),
+and the tracker's speed with the warm-up running vs paused (``warm_up_interference``)."""
 
 from __future__ import annotations
 
@@ -108,3 +109,54 @@ class BackgroundWarmUp:
             self._current.stop()
         self._thread.join(timeout=3600)
         shutil.rmtree(self.cache_dir, ignore_errors=True)
+
+
+def bench_warm_up_interference(ctx) -> dict:
+    """What the warm-up takes from the viewer: plain tracker steps (the player's run-ahead work) timed in windows of
+    wall time while the viewer's warm-up process prepares a recording in the background, alternately running and
+    paused (SIGSTOP / SIGCONT), in one run, so a change of the machine's load hits both alike."""
+    import signal
+
+    import numpy as np
+
+    from app.bench import demo_pair
+    from app.browser import load_map, load_recording
+    from evpose.tracker.session import TrackingSession
+
+    rec_path, map_path = demo_pair(Path(ctx.work_dir))
+    rec, cmap = load_recording(rec_path), load_map(map_path)
+    window_s, pairs = (1.0, 6) if ctx.quick else (1.5, 12)
+    session = TrackingSession(rec, cmap)
+    session.step()  # numba caches outside the timing
+    rates: dict[str, list[float]] = {"running": [], "paused": []}
+    shares: dict[str, list[float]] = {"running": [], "paused": []}
+    load0 = os.getloadavg()[0]
+    with BackgroundWarmUp([rec_path], map_path.parent, Path(ctx.work_dir)) as background:
+        time.sleep(3.0)  # the process imports and loads before it computes
+        for i in range(2 * pairs):
+            phase = "running" if i % 2 == 0 else "paused"
+            w = background._current
+            pid = w._proc.pid if w is not None and w._proc is not None else None
+            if pid is not None and phase == "paused":
+                os.kill(pid, signal.SIGSTOP)
+            steps, w0, c0 = 0, time.perf_counter(), time.thread_time()
+            try:
+                while time.perf_counter() - w0 < window_s:
+                    if session.step(debug=False) is None:
+                        session = TrackingSession(rec, cmap)
+                    del session.results[:]
+                    steps += 1
+            finally:
+                if pid is not None and phase == "paused":
+                    os.kill(pid, signal.SIGCONT)
+            wall = time.perf_counter() - w0
+            rates[phase].append(steps / wall)
+            shares[phase].append((time.thread_time() - c0) / wall)
+    report = background.report()
+    out = {"recording": str(rec_path), "window_s": window_s, "windows_each": pairs,
+           "loadavg_1min": [load0, os.getloadavg()[0]], "background_warm_up": report}
+    for phase in rates:
+        out[f"steps_per_s_warm_up_{phase}"] = float(np.mean(rates[phase]))
+        out[f"tracker_core_share_warm_up_{phase}"] = float(np.mean(shares[phase]))
+    out["steps_per_s_ratio_running_over_paused"] = out["steps_per_s_warm_up_running"] / out["steps_per_s_warm_up_paused"]
+    return out

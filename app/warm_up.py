@@ -205,7 +205,8 @@ class WarmUp:
         self._show()
 
     def opened(self, recording_path: Path | None) -> None:
-        """The recording the player now tracks with the default pairing's code path (None: none); deferred while open."""
+        """The recording the viewer has open in tracking mode (None: none): left to the player's run-ahead, which
+        writes its entry, until another one is opened."""
         self._open = Path(recording_path).resolve() if recording_path is not None else None
         if self._proc is not None and self._proc.is_alive():
             self._commands.put(("open", self._open))
