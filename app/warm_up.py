@@ -22,6 +22,8 @@ and a later opening's far seek reads its frame from disk.
   same contents (the tracker is deterministic).
 - A recording that cannot be read is reported ("failed: reason") and skipped;
   the warm-up goes on with the next.
+- No new recording is started once the cache holds :data:`FULL_SHARE` of its
+  budget, so preparing never pushes out entries of recordings that were watched.
 """
 
 from __future__ import annotations
@@ -40,6 +42,16 @@ from app.browser import DataEntry, EntryKind
 
 OPEN_NOTE = "open in the viewer: its run-ahead prepares it"
 PREPARED = "prepared"
+FULL_SHARE = 0.8
+"""The warm-up starts no new recording once the cache folder holds this share of its budget: the cache drops the
+least recently used entries to fit, and prepared recordings nobody opened must not push out what was watched."""
+
+
+def cache_bytes(folder: Path) -> int:
+    """Bytes of every file in the cache folder's entries."""
+    folder = Path(folder)
+    return sum(f.stat().st_size for d in folder.iterdir() if d.is_dir() for f in d.iterdir() if f.is_file()) \
+        if folder.is_dir() else 0
 
 
 @dataclass
@@ -145,6 +157,10 @@ def _worker(jobs: list[DataEntry], maps: list[DataEntry], open_path: Path | None
                 reports.put((label, f"preparing {100 * fraction:.0f} %"))
 
         try:
+            if cache_bytes(disk.folder()) >= FULL_SHARE * disk.budget_mb * 2**20:
+                reports.put((entry.label, f"not prepared: the disk cache is {100 * FULL_SHARE:.0f} % full "
+                                          f"(budget {disk.budget_mb:.0f} MB)"))
+                continue
             reports.put((entry.label, "preparing 0 %"))
             recording = load_recording(entry.path)
             map_entry = guess_map_for(entry, maps, recording.metadata)

@@ -204,3 +204,14 @@ def test_the_warm_up_writes_the_same_entry_as_the_players_own_run_ahead(data_roo
     warm, played = _chunk_contents(tmp_path / "warm"), _chunk_contents(tmp_path / "player")
     assert warm[0] == played[0] and len(warm[1]) == len(played[1]) > 1  # same key: same recording, map, configuration
     assert warm == played
+
+
+def test_a_nearly_full_disk_cache_stops_the_warm_up_from_pushing_out_watched_recordings(data_root, tmp_path):
+    disk = DiskCacheConfig(directory=tmp_path / "cache", budget_mb=64.0)
+    watched = tmp_path / "cache" / "watched"
+    watched.mkdir(parents=True)
+    (watched / "meta.json").write_text("{}")
+    (watched / "chunk_00000.pkl").write_bytes(b"x" * int(0.85 * 64 * 2**20))
+    states = _run_worker(_entries(data_root), disk)
+    assert states and all(v.startswith("not prepared: the disk cache is 80 % full") for v in states.values()), states
+    assert sorted(p.name for p in (tmp_path / "cache").iterdir()) == ["watched"]
