@@ -36,6 +36,8 @@ PLAY_SECONDS: float | None = None
 """Wall seconds of each playback phase given on the command line (default: 4 quick, 8 full)."""
 N_SEEKS: int | None = None
 """Random seek targets per phase given on the command line (default: 4 quick, 10 full)."""
+CURRENT_VIEWER = None
+"""The viewer :func:`_viewer` made last (a ``--background-warm-up`` holds still while it plays, as the app's does)."""
 
 
 def demo_pair(work_dir: Path, seconds: float = 10.0) -> tuple[Path, Path]:
@@ -79,6 +81,8 @@ def _viewer(rec: Path, cmap: Path, work_dir: Path, prefetch: bool = True):
     map_entry = next(e for e in app.entries if e.path == cmap.resolve())
     if not app.select(rec_entry.display, map_entry.display):
         raise RuntimeError(app.rec_info.content)
+    global CURRENT_VIEWER
+    CURRENT_VIEWER = app
     app.player.wait_idle(120)
     return app
 
@@ -483,7 +487,8 @@ def main(argv: list[str] | None = None) -> None:
 
     from app.bench_prepared import BackgroundWarmUp
 
-    with (BackgroundWarmUp(args.background_warm_up, Path("maps"), args.work_dir) if args.background_warm_up
+    busy = lambda: CURRENT_VIEWER is not None and CURRENT_VIEWER._player_busy()  # noqa: E731
+    with (BackgroundWarmUp(args.background_warm_up, Path("maps"), args.work_dir, busy) if args.background_warm_up
           else nullcontext()) as background:
         for name, fn in BENCHMARKS.items():
             if args.only and name != args.only:

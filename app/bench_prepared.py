@@ -11,7 +11,7 @@ import time
 from pathlib import Path
 
 
-def _start_warm_up(rec_path: Path, maps_dir: Path, cache_dir: Path):
+def _start_warm_up(rec_path: Path, maps_dir: Path, cache_dir: Path, busy=None):
     """The viewer's warm-up process (nice 19) started on this one recording, the maps of ``maps_dir`` to pick from."""
     from app.browser import DataRoots, EntryKind
     from app.disk_cache import DiskCacheConfig
@@ -20,7 +20,7 @@ def _start_warm_up(rec_path: Path, maps_dir: Path, cache_dir: Path):
 
     entries = DataRoots(sorted({rec_path.parent.resolve(), Path(maps_dir).resolve()})).scan()
     entries = [e for e in entries if e.kind != EntryKind.RECORDING or e.path == rec_path.resolve()]
-    w = WarmUp(DiskCacheConfig(directory=cache_dir), FrameCacheConfig(), lambda md: None)
+    w = WarmUp(DiskCacheConfig(directory=cache_dir), FrameCacheConfig(), lambda md: None, busy=busy)
     w.start(entries)
     return w
 
@@ -49,9 +49,11 @@ def far_seek_prepared(rec_path: Path, map_path: Path, rec, cmap, t_us: int, work
 
 class BackgroundWarmUp:
     """Keeps the viewer's warm-up process busy with ``recordings`` (each with the map the viewer guesses from
-    ``maps_dir``) into a throwaway cache, over and over, until closed: the load a warm-up puts on the machine."""
+    ``maps_dir``) into a throwaway cache, over and over, until closed: the load a warm-up puts on the machine.
+    ``busy``: as the viewer's (:class:`~app.warm_up.WarmUp`), when the warm-up is to hold still."""
 
-    def __init__(self, recordings: list[Path], maps_dir: Path, work_dir: Path):
+    def __init__(self, recordings: list[Path], maps_dir: Path, work_dir: Path, busy=None):
+        self.busy = busy
         self.recordings, self.maps_dir = [Path(r) for r in recordings], Path(maps_dir)
         self.cache_dir = Path(work_dir) / "background_warm_up_cache"
         self.runs: list[dict] = []
@@ -77,7 +79,7 @@ class BackgroundWarmUp:
             for rec in self.recordings:
                 if self._stop.is_set():
                     return
-                self._current = w = _start_warm_up(rec, self.maps_dir, self.cache_dir)
+                self._current = w = _start_warm_up(rec, self.maps_dir, self.cache_dir, self.busy)
                 cpu = 0.0
                 while not w.wait(0.5) and not self._stop.is_set():
                     cpu = max(cpu, self._sample(w))

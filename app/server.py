@@ -76,7 +76,8 @@ class ViewerApp:
         self.frames_published = 0
         self._last_slow = 0.0
         self._build_main_panel()
-        self.warm_up = WarmUp(cfg.disk_cache, cfg.frame_cache, lambda md: setattr(self.warm_info, "content", md), cfg.warm_up)
+        self.warm_up = WarmUp(cfg.disk_cache, cfg.frame_cache, lambda md: setattr(self.warm_info, "content", md), cfg.warm_up,
+                              busy=self._player_busy)
         self._build_panels()
         self.layout_gui.panels = self.panels
         self.refresh_entries()
@@ -273,6 +274,11 @@ class ViewerApp:
             self._cloud_entry, self._cloud_generation = map_entry, self._cloud_generation + 1
         self._ensure_cloud()
         return True
+
+    def _player_busy(self) -> bool:
+        """Playing or computing a seek: the warm-up holds still, so it takes no core from either."""
+        stats = self.player.stats() if self.player is not None else {}
+        return stats.get("state") == PlayState.PLAYING.value or stats.get("catching_up") is not None
 
     def _ensure_cloud(self) -> None:
         """Read and draw the open map's raw cloud when it is to be shown and is not drawn yet.

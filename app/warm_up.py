@@ -13,6 +13,8 @@ and a later opening's far seek reads its frame from disk.
 - One process (``multiprocessing`` "spawn": the server's threads are not
   forked) at the lowest CPU priority (``os.nice(19)``): it only gets a core the
   UI and the player leave idle. One recording at a time, in browser order.
+  While the player plays or computes a far seek it holds still altogether (at
+  nice 19 it still took ~5 % of the tracker's steps when both wanted one core).
 - Entries already complete are skipped (the engine reads them back and finds
   every step there).
 - The recording open in the viewer is left to the player's run-ahead, which
@@ -110,9 +112,10 @@ def prepare_files(recording_path: Path, map_path: Path, disk, frames=None, on_pr
 
 
 def _worker(jobs: list[DataEntry], maps: list[DataEntry], open_path: Path | None, disk, frames, commands, reports,
-            nice: int = 19) -> None:
+            nice: int = 19, hold: bool = False) -> None:
     """The warm-up process: prepare each job's default pairing, reporting ``(label, state)`` on ``reports`` (None
-    when done). ``nice``: added to its CPU niceness (19: only the cores the viewer leaves idle; tests run it in-process with 0)."""
+    when done). ``nice``: added to its CPU niceness (19: only the cores the viewer leaves idle; tests run it in-process
+    with 0). ``hold``: start held (the viewer is playing); ``("hold", bool)`` commands change it."""
     try:
         os.nice(nice)
     except OSError:
@@ -120,7 +123,7 @@ def _worker(jobs: list[DataEntry], maps: list[DataEntry], open_path: Path | None
     from app.browser import guess_map_for, load_map, load_recording
 
     parent = os.getppid()
-    state = {"open": open_path, "stop": False}
+    state = {"open": open_path, "stop": False, "hold": bool(hold)}
 
     def poll() -> bool:
         """Hear the viewer's commands; False once told to stop (or orphaned)."""
@@ -133,12 +136,20 @@ def _worker(jobs: list[DataEntry], maps: list[DataEntry], open_path: Path | None
                 state["stop"] = True
             elif cmd[0] == "open":
                 state["open"] = cmd[1]
+            elif cmd[0] == "hold":
+                state["hold"] = cmd[1]
         if os.getppid() != parent:
             state["stop"] = True
         return not state["stop"]
 
+    def wait_while_held() -> bool:
+        """Sleep while the viewer plays or computes a seek; False once told to stop."""
+        while poll() and state["hold"]:
+            time.sleep(0.2)
+        return not state["stop"]
+
     pending = list(jobs)
-    while pending and poll():
+    while pending and wait_while_held():
         for e in pending:
             if e.path == state["open"]:
                 reports.put((e.label, OPEN_NOTE))
@@ -168,7 +179,7 @@ def _worker(jobs: list[DataEntry], maps: list[DataEntry], open_path: Path | None
                 reports.put((entry.label, "no map found: events only, nothing to prepare"))
                 continue
             result = prepare_pair(recording, load_map(map_entry.path), (entry.path, map_entry.path), disk, frames,
-                                  progress, lambda p=entry.path: poll() and state["open"] != p)
+                                  progress, lambda p=entry.path: wait_while_held() and state["open"] != p)
         except Exception as exc:  # one unreadable recording must not stop the others
             reports.put((entry.label, f"failed: {getattr(exc, 'problem', None) or exc}"))
             continue
@@ -183,8 +194,11 @@ def _worker(jobs: list[DataEntry], maps: list[DataEntry], open_path: Path | None
 class WarmUp:
     """The viewer's side of the warm-up: starts and stops the process, tells it what is open, shows its progress."""
 
-    def __init__(self, disk, frames, on_status: Callable[[str], None], enabled: bool = True):
+    def __init__(self, disk, frames, on_status: Callable[[str], None], enabled: bool = True,
+                 busy: Callable[[], bool] | None = None):
         self.disk, self.frames = disk, frames
+        self._busy = busy
+        """Whether the player is playing or computing a seek: the warm-up holds still meanwhile (checked every 0.5 s)."""
         self.enabled = bool(enabled and disk is not None and disk.enabled)
         """Off with ``--no-warm-up``, and whenever the disk cache is off (there would be nowhere to write)."""
         self._on_status = on_status
@@ -212,10 +226,11 @@ class WarmUp:
             return
         ctx = multiprocessing.get_context("spawn")  # forking a process with the server's threads running is unsafe
         self._commands, self._reports = ctx.Queue(), ctx.Queue()
+        held = self._is_busy()
         self._proc = ctx.Process(target=_worker, name="evpose-warm-up", daemon=True,
-                                 args=(jobs, maps, self._open, self.disk, self.frames, self._commands, self._reports))
+                                 args=(jobs, maps, self._open, self.disk, self.frames, self._commands, self._reports, 19, held))
         self._proc.start()
-        self._listener = threading.Thread(target=self._listen, args=(self._proc, self._reports, self.finished),
+        self._listener = threading.Thread(target=self._listen, args=(self._proc, self._reports, self.finished, held),
                                           name="warm-up-status", daemon=True)
         self._listener.start()
         self._show()
@@ -244,8 +259,12 @@ class WarmUp:
         if self._listener is not None:
             self._listener.join(timeout=2.0)
 
-    def _listen(self, proc, reports, finished: threading.Event) -> None:
+    def _listen(self, proc, reports, finished: threading.Event, held: bool) -> None:
         while True:
+            busy = self._is_busy()
+            if busy != held and proc.is_alive():
+                held = busy
+                self._commands.put(("hold", busy))
             try:
                 msg = reports.get(timeout=0.5)
             except queue.Empty:
@@ -264,6 +283,12 @@ class WarmUp:
             if not msg[0]:
                 break
         finished.set()
+
+    def _is_busy(self) -> bool:
+        try:
+            return bool(self._busy()) if self._busy is not None else False
+        except Exception:  # a player being replaced: not busy for now, asked again in 0.5 s
+            return False
 
     def markdown(self) -> str:
         """The browser's list of what is prepared for seeking (empty when the warm-up is off)."""

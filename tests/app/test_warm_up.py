@@ -215,3 +215,19 @@ def test_a_nearly_full_disk_cache_stops_the_warm_up_from_pushing_out_watched_rec
     states = _run_worker(_entries(data_root), disk)
     assert states and all(v.startswith("not prepared: the disk cache is 80 % full") for v in states.values()), states
     assert sorted(p.name for p in (tmp_path / "cache").iterdir()) == ["watched"]
+
+
+def test_the_warm_up_holds_still_while_the_player_plays_or_computes_a_seek(data_root, tmp_path):
+    busy = threading.Event()
+    busy.set()
+    w = WarmUp(DiskCacheConfig(directory=tmp_path / "cache", chunk_steps=20), FrameCacheConfig(), lambda md: None,
+               busy=busy.is_set)
+    squares = [e for e in _entries(data_root) if e.kind == EntryKind.MAP or e.path.name == "squares.h5"]
+    try:
+        w.start(squares)
+        assert not w.wait(4.0)  # long enough for the process to start and prepare it, were it not held
+        assert set(w.states.values()) == {"queued"} and not (tmp_path / "cache").exists()
+        busy.clear()  # the player paused: the warm-up goes on
+        assert w.wait(120) and all(v.startswith(PREPARED) for v in w.states.values()), w.states
+    finally:
+        w.stop()
