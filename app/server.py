@@ -276,9 +276,8 @@ class ViewerApp:
         return True
 
     def _player_busy(self) -> bool:
-        """Playing or computing a seek: the warm-up holds still, so it takes no core from either."""
-        stats = self.player.stats() if self.player is not None else {}
-        return stats.get("state") == PlayState.PLAYING.value or stats.get("catching_up") is not None
+        """Playing, computing a seek or running ahead: the warm-up holds still, so it takes no core from the player."""
+        return self.player is not None and self.player.busy
 
     def _ensure_cloud(self) -> None:
         """Read and draw the open map's raw cloud when it is to be shown and is not drawn yet.

@@ -13,8 +13,9 @@ and a later opening's far seek reads its frame from disk.
 - One process (``multiprocessing`` "spawn": the server's threads are not
   forked) at the lowest CPU priority (``os.nice(19)``): it only gets a core the
   UI and the player leave idle. One recording at a time, in browser order.
-  While the player plays or computes a far seek it holds still altogether (at
-  nice 19 it still took ~5 % of the tracker's steps when both wanted one core).
+  While the player plays, computes a far seek or runs ahead it holds still
+  altogether (at nice 19 alone it took 1-7 % of the tracker's steps when both
+  wanted a core, and delayed the open recording's run-ahead).
 - Entries already complete are skipped (the engine reads them back and finds
   every step there).
 - The recording open in the viewer is left to the player's run-ahead, which
@@ -198,7 +199,8 @@ class WarmUp:
                  busy: Callable[[], bool] | None = None):
         self.disk, self.frames = disk, frames
         self._busy = busy
-        """Whether the player is playing or computing a seek: the warm-up holds still meanwhile (checked every 0.5 s)."""
+        """Whether the player wants a core (playing, computing a seek, running ahead): the warm-up holds still meanwhile
+        (checked every 0.5 s)."""
         self.enabled = bool(enabled and disk is not None and disk.enabled)
         """Off with ``--no-warm-up``, and whenever the disk cache is off (there would be nowhere to write)."""
         self._on_status = on_status

@@ -231,3 +231,24 @@ def test_the_warm_up_holds_still_while_the_player_plays_or_computes_a_seek(data_
         assert w.wait(120) and all(v.startswith(PREPARED) for v in w.states.values()), w.states
     finally:
         w.stop()
+
+
+def test_the_player_is_busy_while_it_runs_ahead_or_plays_and_idle_once_done(squares_scene):
+    from app.tracker_engine import TrackerEngine
+
+    rec, cmap = squares_scene
+    p = Player(lambda cfg: TrackerEngine(rec, cmap, cfg), lambda f, e: None)
+    try:
+        p.seek(rec.t_start_us)
+        assert p.call(lambda e: p.busy).result(60)  # the run-ahead has the whole recording to do
+        for _ in range(1200):
+            if not p.call(lambda e: p.busy).result(60):
+                break
+            threading.Event().wait(0.05)
+        assert p.call(lambda e: e.frontier >= e.n_steps).result(60) and not p.busy
+        p.seek(rec.t_start_us)
+        assert p.wait_idle(60)
+        p.play()
+        assert p.call(lambda e: p.busy).result(60)
+    finally:
+        p.stop()
