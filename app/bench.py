@@ -151,6 +151,7 @@ def _play(app, meter: DrawMeter, seconds: float) -> dict:
     cpu0, kids0, load0 = *_cpu_s(), os.getloadavg()[0]
     t0 = time.perf_counter()
     app.player.play()
+    app.player.call(lambda e: None).result(600)  # the play command handled (a loaded machine delayed it past 0.5 s)
     # Until ``seconds`` have passed or playback stopped at the end of the recording (then only until then).
     time.sleep(0.5)
     while time.perf_counter() - t0 < seconds and app.player.state.value == "playing":
