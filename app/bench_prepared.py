@@ -40,7 +40,8 @@ def far_seek_prepared(rec_path: Path, map_path: Path, rec, cmap, t_us: int, work
     w = _start_warm_up(rec_path, map_path.parent, cache_dir)
     w.wait(3600)
     wall = time.perf_counter() - t0
-    out = {"warm_up_wall_s": wall, "warm_up_states": dict(w.states), "warm_up_loadavg_1min": [load0, os.getloadavg()[0]]}
+    out = {"warm_up_wall_s": wall, "warm_up_states": dict(w.states),
+           "warm_up_loadavg_1min": [load0, os.getloadavg()[0]]}
     factory = engine_factory(rec, cmap, "tracking", FrameCacheConfig(), DiskCacheConfig(directory=cache_dir),
                              (rec_path.resolve(), map_path.resolve()))
     out["player"] = _far_seek_player(rec, cmap, t_us, factory)
@@ -160,5 +161,6 @@ def bench_warm_up_interference(ctx) -> dict:
     for phase in rates:
         out[f"steps_per_s_warm_up_{phase}"] = float(np.mean(rates[phase]))
         out[f"tracker_core_share_warm_up_{phase}"] = float(np.mean(shares[phase]))
-    out["steps_per_s_ratio_running_over_paused"] = out["steps_per_s_warm_up_running"] / out["steps_per_s_warm_up_paused"]
+    out["steps_per_s_ratio_running_over_paused"] = (out["steps_per_s_warm_up_running"]
+                                                    / out["steps_per_s_warm_up_paused"])
     return out

@@ -76,8 +76,8 @@ class ViewerApp:
         self.frames_published = 0
         self._last_slow = 0.0
         self._build_main_panel()
-        self.warm_up = WarmUp(cfg.disk_cache, cfg.frame_cache, lambda md: setattr(self.warm_info, "content", md), cfg.warm_up,
-                              busy=self._player_busy)
+        self.warm_up = WarmUp(cfg.disk_cache, cfg.frame_cache, lambda md: setattr(self.warm_info, "content", md),
+                              cfg.warm_up, busy=self._player_busy)
         self._build_panels()
         self.layout_gui.panels = self.panels
         self.refresh_entries()

@@ -103,15 +103,6 @@ def prepare_pair(recording, contour_map, paths: tuple[Path, Path], disk, frames=
     return PrepareResult(n, True, time.perf_counter() - t0, complete)
 
 
-def prepare_files(recording_path: Path, map_path: Path, disk, frames=None, on_progress=None) -> PrepareResult:
-    """:func:`prepare_pair` on files (``evpose app --prepare``)."""
-    from app.browser import load_map, load_recording
-
-    recording_path, map_path = Path(recording_path).resolve(), Path(map_path).resolve()
-    return prepare_pair(load_recording(recording_path), load_map(map_path), (recording_path, map_path), disk, frames,
-                        on_progress)
-
-
 def _worker(jobs: list[DataEntry], maps: list[DataEntry], open_path: Path | None, disk, frames, commands, reports,
             nice: int = 19, hold: bool = False) -> None:
     """The warm-up process: prepare each job's default pairing, reporting ``(label, state)`` on ``reports`` (None
@@ -144,16 +135,23 @@ def _worker(jobs: list[DataEntry], maps: list[DataEntry], open_path: Path | None
         return not state["stop"]
 
     def wait_while_held() -> bool:
-        """Sleep while the viewer plays or computes a seek; False once told to stop."""
+        """Sleep while the viewer's player wants a core (plays, computes a seek, runs ahead); False once stopped."""
         while poll() and state["hold"]:
             time.sleep(0.2)
         return not state["stop"]
+
+    said: dict[str, str] = {}
+
+    def say(label: str, text: str) -> None:
+        if said.get(label) != text:  # the browser's list is redrawn only when something changed
+            said[label] = text
+            reports.put((label, text))
 
     pending = list(jobs)
     while pending and wait_while_held():
         for e in pending:
             if e.path == state["open"]:
-                reports.put((e.label, OPEN_NOTE))
+                say(e.label, OPEN_NOTE)
         ready = [e for e in pending if e.path != state["open"]]
         if not ready:
             time.sleep(0.5)  # only the open recording is left: wait until another is opened
@@ -166,27 +164,27 @@ def _worker(jobs: list[DataEntry], maps: list[DataEntry], open_path: Path | None
             now = time.monotonic()
             if int(fraction * 100) != int(last[0] * 100) and now - last[1] >= 0.5:
                 last[:] = [fraction, now]
-                reports.put((label, f"preparing {100 * fraction:.0f} %"))
+                say(label, f"preparing {100 * fraction:.0f} %")
 
         try:
             if cache_bytes(disk.folder()) >= FULL_SHARE * disk.budget_mb * 2**20:
-                reports.put((entry.label, f"not prepared: the disk cache is {100 * FULL_SHARE:.0f} % full "
-                                          f"(budget {disk.budget_mb:.0f} MB)"))
+                say(entry.label, f"not prepared: the disk cache is {100 * FULL_SHARE:.0f} % full "
+                                 f"(budget {disk.budget_mb:.0f} MB)")
                 continue
-            reports.put((entry.label, "preparing 0 %"))
+            say(entry.label, "preparing 0 %")
             recording = load_recording(entry.path)
             map_entry = guess_map_for(entry, maps, recording.metadata)
             if map_entry is None:
-                reports.put((entry.label, "no map found: events only, nothing to prepare"))
+                say(entry.label, "no map found: events only, nothing to prepare")
                 continue
             result = prepare_pair(recording, load_map(map_entry.path), (entry.path, map_entry.path), disk, frames,
                                   progress, lambda p=entry.path: wait_while_held() and state["open"] != p)
         except Exception as exc:  # one unreadable recording must not stop the others
-            reports.put((entry.label, f"failed: {getattr(exc, 'problem', None) or exc}"))
+            say(entry.label, f"failed: {getattr(exc, 'problem', None) or exc}")
             continue
         if result.complete:
             how = f"computed in {result.seconds:.1f} s" if result.computed else "found in the disk cache"
-            reports.put((entry.label, f"{PREPARED} (with `{map_entry.label}`, {how})"))
+            say(entry.label, f"{PREPARED} (with `{map_entry.label}`, {how})")
         elif not state["stop"]:
             pending.append(entry)  # opened meanwhile: the player goes on with it; back to it once it is closed
     reports.put(None)
@@ -230,7 +228,8 @@ class WarmUp:
         self._commands, self._reports = ctx.Queue(), ctx.Queue()
         held = self._is_busy()
         self._proc = ctx.Process(target=_worker, name="evpose-warm-up", daemon=True,
-                                 args=(jobs, maps, self._open, self.disk, self.frames, self._commands, self._reports, 19, held))
+                                 args=(jobs, maps, self._open, self.disk, self.frames, self._commands, self._reports,
+                                       19, held))
         self._proc.start()
         self._listener = threading.Thread(target=self._listen, args=(self._proc, self._reports, self.finished, held),
                                           name="warm-up-status", daemon=True)
