@@ -35,6 +35,12 @@ class AppConfig:
     """Which steps the tracker's run-ahead keeps a display frame of, and the memory they may take."""
     disk_cache: DiskCacheConfig = field(default_factory=DiskCacheConfig)
     """Where the run-ahead's work is kept between openings of the same recording, map and configuration."""
+    warm_up: bool = False
+    """Prepare every recording's default pairing into the disk cache in a background process at the lowest CPU
+    priority (``app/warm_up.py``), so the first far seek reads its pose from disk (9.5 s into the 10 s recording,
+    player alone: drawn after 3-4 ms instead of 8.3-14 s, ``python -m app.bench --only far_seek``, load 2-7).
+    ``evpose app`` turns it on (``--no-warm-up``: off); off here so viewers made in code (tests, benchmarks) start
+    no process unless asked. Off whenever the disk cache is."""
 
 
 def check_port_free(host: str, port: int) -> None:

@@ -36,6 +36,8 @@ PLAY_SECONDS: float | None = None
 """Wall seconds of each playback phase given on the command line (default: 4 quick, 8 full)."""
 N_SEEKS: int | None = None
 """Random seek targets per phase given on the command line (default: 4 quick, 10 full)."""
+CURRENT_VIEWER = None
+"""The viewer :func:`_viewer` made last (a ``--background-warm-up`` holds still while it plays, as the app's does)."""
 
 
 def demo_pair(work_dir: Path, seconds: float = 10.0) -> tuple[Path, Path]:
@@ -79,6 +81,8 @@ def _viewer(rec: Path, cmap: Path, work_dir: Path, prefetch: bool = True):
     map_entry = next(e for e in app.entries if e.path == cmap.resolve())
     if not app.select(rec_entry.display, map_entry.display):
         raise RuntimeError(app.rec_info.content)
+    global CURRENT_VIEWER
+    CURRENT_VIEWER = app
     app.player.wait_idle(120)
     return app
 
@@ -147,6 +151,7 @@ def _play(app, meter: DrawMeter, seconds: float) -> dict:
     cpu0, kids0, load0 = *_cpu_s(), os.getloadavg()[0]
     t0 = time.perf_counter()
     app.player.play()
+    app.player.call(lambda e: None).result(600)  # the play command handled (a loaded machine delayed it past 0.5 s)
     # Until ``seconds`` have passed or playback stopped at the end of the recording (then only until then).
     time.sleep(0.5)
     while time.perf_counter() - t0 < seconds and app.player.state.value == "playing":
@@ -379,27 +384,31 @@ def _far_seek_once(rec, cmap, t_us: int, catch_up: bool) -> dict:
     return out
 
 
-def _far_seek_player(rec, cmap, t_us: int) -> dict:
+def _far_seek_player(rec, cmap, t_us: int, factory=None) -> dict:
     """The same seek through the player (run-ahead on, as ``evpose app`` runs it): when the status line first
-    says how far it is, and when the frame is drawn."""
+    says how far it is, and when the frame is drawn. ``factory``: the engines (default: no disk cache)."""
     from app.player import Player
     from app.tracker_engine import TrackerEngine
 
-    drawn, first_progress, previews = threading.Event(), [], []
+    drawn, first_progress, previews, drawn_at = threading.Event(), [], [], []
 
     def on_frame(f, e):
         if f.preview:
             previews.append(time.perf_counter())
         else:
+            drawn_at.append(time.perf_counter())
             drawn.set()
 
-    p = Player(lambda cfg: TrackerEngine(rec, cmap, cfg), on_frame,
+    t_open = time.perf_counter()
+    p = Player(factory or (lambda cfg: TrackerEngine(rec, cmap, cfg)), on_frame,
                on_progress=lambda e: first_progress or first_progress.append(time.perf_counter()))
     try:
         p.seek(rec.t_start_us)
         p.wait_idle(600)
+        open_s = time.perf_counter() - t_open  # engine made (a prepared one reads the disk cache) and step 0 drawn
         p.call(lambda e: e.prefetch(5)).result(600)
         drawn.clear()
+        drawn_at.clear()
         load0 = os.getloadavg()[0]
         first_progress.clear()
         t0 = time.perf_counter()
@@ -413,9 +422,9 @@ def _far_seek_player(rec, cmap, t_us: int) -> dict:
             waits.append((time.perf_counter() - c0) * 1e3)
             time.sleep(0.2)
         drawn.wait(600)
-        wall = time.perf_counter() - t0
+        wall = drawn_at[0] - t0  # when it was drawn, however long the command probes above took
         p.wait_idle(600)
-        return {"first_status_update_s": (first_progress[0] - t0) if first_progress else None,
+        return {"open_s": open_s, "first_status_update_s": (first_progress[0] - t0) if first_progress else None,
                 "preview_drawn_s": (previews[0] - t0) if previews else None, "frame_drawn_s": wall,
                 "command_wait_while_computing_ms": waits, "catch_up": p.last_catch_up,
                 "loadavg_1min": [load0, os.getloadavg()[0]]}
@@ -437,13 +446,19 @@ def bench_far_seek(ctx) -> dict:
         for name, catch_up in (("grid_stepping", False), ("catch_up", True)):
             out.setdefault(name, []).append(_far_seek_once(rec, cmap, t, catch_up))
     out["player"] = _far_seek_player(rec, cmap, t)
+    from app.bench_prepared import far_seek_prepared
+
+    # The same seek through the player once the viewer's warm-up has prepared the recording (its time included).
+    out["prepared"] = far_seek_prepared(rec_path, map_path, rec, cmap, t, Path(ctx.work_dir))
     return out
 
 
-from app.bench_start import bench_run_ahead_start  # noqa: E402 (it imports helpers from this module lazily)
+from app.bench_prepared import bench_warm_up_interference  # noqa: E402 (they import helpers from this module lazily)
+from app.bench_start import bench_run_ahead_start  # noqa: E402
 
 BENCHMARKS = {"playback_realtime": bench_playback, "seek_latency": bench_seek, "run_ahead_cpu": bench_run_ahead,
-              "far_seek": bench_far_seek, "run_ahead_start": bench_run_ahead_start}
+              "far_seek": bench_far_seek, "run_ahead_start": bench_run_ahead_start,
+              "warm_up_interference": bench_warm_up_interference}
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -459,6 +474,8 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--map", type=Path, default=None, help="its contour map")
     ap.add_argument("--seconds", type=float, default=None, help="wall seconds of each playback phase")
     ap.add_argument("--seeks", type=int, default=None, help="random seek targets per phase")
+    ap.add_argument("--background-warm-up", type=Path, nargs="*", default=[],
+                    help="recordings the viewer's warm-up prepares over and over while the benchmarks run (maps from maps/)")
     args = ap.parse_args(argv)
     # Run as ``python -m app.bench`` this module is __main__: benchmarks elsewhere that import app.bench must see these settings.
     sys.modules.setdefault("app.bench", sys.modules[__name__])
@@ -467,10 +484,19 @@ def main(argv: list[str] | None = None) -> None:
     if args.recording is not None and args.map is not None:
         DEMO_OVERRIDE = (args.recording, args.map)
     ctx = BenchContext(quick=not args.full, work_dir=args.work_dir)
-    for name, fn in BENCHMARKS.items():
-        if args.only and name != args.only:
-            continue
-        print(json.dumps({name: fn(ctx)}, indent=1), flush=True)
+    from contextlib import nullcontext
+
+    from app.bench_prepared import BackgroundWarmUp
+
+    busy = lambda: CURRENT_VIEWER is not None and CURRENT_VIEWER._player_busy()  # noqa: E731
+    with (BackgroundWarmUp(args.background_warm_up, Path("maps"), args.work_dir, busy) if args.background_warm_up
+          else nullcontext()) as background:
+        for name, fn in BENCHMARKS.items():
+            if args.only and name != args.only:
+                continue
+            print(json.dumps({name: fn(ctx)}, indent=1), flush=True)
+    if background is not None:
+        print(json.dumps({"background_warm_up": background.report()}, indent=1), flush=True)
 
 
 if __name__ == "__main__":

@@ -158,6 +158,11 @@ class Player:
         self._queue.put(("stop",))
         self._thread.join(timeout=5.0)
 
+    @property
+    def busy(self) -> bool:
+        """Playing, computing a seek or running ahead: the worker thread wants a core (the warm-up waits meanwhile)."""
+        return self.state == PlayState.PLAYING or self._catch_up is not None or bool(self._prefetching)
+
     def stats(self) -> dict:
         wall, media = self._play_stats
         f = self.last_frame

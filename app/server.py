@@ -31,6 +31,7 @@ from app.scene import SceneView
 from app.slam_engine import slam_markdown
 from app.status import status_markdown
 from app.teaching import STAGE_PANEL, Stage, teaching_markdown
+from app.warm_up import WarmUp
 from evpose.errors import EvposeError, InputError
 
 __all__ = ["AppConfig", "ViewerApp"]
@@ -75,6 +76,8 @@ class ViewerApp:
         self.frames_published = 0
         self._last_slow = 0.0
         self._build_main_panel()
+        self.warm_up = WarmUp(cfg.disk_cache, cfg.frame_cache, lambda md: setattr(self.warm_info, "content", md),
+                              cfg.warm_up, busy=self._player_busy)
         self._build_panels()
         self.layout_gui.panels = self.panels
         self.refresh_entries()
@@ -96,6 +99,7 @@ class ViewerApp:
             self.mode_dropdown = g.add_dropdown("mode", list(MODES), initial_value=MODES[0], hint="tracking: EV-Pose against the map; slam: map-free event SLAM")
             self.rescan_button = g.add_button("rescan data folders")
             self.rec_info = g.add_markdown("")
+            self.warm_info = g.add_markdown("")
         with g.add_folder("Playback"):
             self.play_button = g.add_button("play / pause (space)")
             self.step_buttons = g.add_button_group("step", ["< back", "forward >"])
@@ -177,6 +181,7 @@ class ViewerApp:
         self.rec_dropdown.options = [e.display for e in recs] or ["(none found)"]
         self.map_dropdown.options = [NO_MAP] + [e.display for e in maps]
         self.rec_info.content = self._scan_note()
+        self.warm_up.start(self.entries)
 
     def _scan_note(self) -> str:
         recs = [e for e in self.entries if e.kind == EntryKind.RECORDING]
@@ -242,6 +247,7 @@ class ViewerApp:
         self.rec_info.content = (f"`{entry.label}`: {s['events']:,} events, {s['duration_s']:.2f} s, "
                                  f"{s['sensor_size']}; map: {map_entry.label if map_entry else 'none'}"
                                  + ("" if cmap is not None or self.mode == "slam" else f"\n\n_{NO_MAP_NOTE}_") + "\n\n" + self._scan_note())
+        self.warm_up.opened(path if self.mode == "tracking" and cmap is not None else None)
         self.time_slider.max = max(0.001, (recording.t_end_us - recording.t_start_us) / 1e6)
         factory = engine_factory(recording, cmap, self.mode, self.cfg.frame_cache, self.cfg.disk_cache,
                                  (path, map_entry.path) if map_entry is not None else None)
@@ -268,6 +274,10 @@ class ViewerApp:
             self._cloud_entry, self._cloud_generation = map_entry, self._cloud_generation + 1
         self._ensure_cloud()
         return True
+
+    def _player_busy(self) -> bool:
+        """Playing, computing a seek or running ahead: the warm-up holds still, so it takes no core from the player."""
+        return self.player is not None and self.player.busy
 
     def _ensure_cloud(self) -> None:
         """Read and draw the open map's raw cloud when it is to be shown and is not drawn yet.
@@ -456,6 +466,7 @@ class ViewerApp:
         return path
 
     def stop(self) -> None:
+        self.warm_up.stop()
         self.layout_gui.stop()
         if self.player is not None:
             self.player.stop()

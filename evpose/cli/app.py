@@ -39,6 +39,44 @@ def check_arguments(data: list[Path], port: int, layout: str, export_dir: Path, 
     check_outputs((), folders=(export_dir, cache_dir))
 
 
+def prepare_recording(recording: Path, map_path: Path | None, data: list[Path], cache) -> int:
+    """``evpose app --prepare``: fill the disk cache for ``recording`` (and its map) as the warm-up does, printing progress."""
+    from app.browser import DataEntry, DataRoots, EntryKind, guess_map_for, load_recording
+    from app.warm_up import prepare_pair
+
+    from evpose.errors import InputError
+    from evpose.io.atomic import check_outputs
+    from evpose.io.map_ply import read_contour_map
+
+    if not cache.enabled:
+        raise InputError(None, "--prepare fills the disk cache: it cannot be used with --no-disk-cache")
+    check_outputs((), folders=(cache.folder(),))
+    for p in (recording, map_path):
+        if p is not None and not p.exists():
+            raise InputError(p, "no such file")
+    rec_path = recording.resolve()
+    rec = load_recording(rec_path)
+    if map_path is None:
+        maps = [e for e in DataRoots([d for d in data if d.is_dir()]).scan() if e.kind == EntryKind.MAP]
+        guess = guess_map_for(DataEntry(EntryKind.RECORDING, rec_path, rec_path.name), maps, rec.metadata)
+        if guess is None:
+            raise InputError(recording, "no map under --data matches it; give one with --map")
+        map_path = guess.path
+    map_path = map_path.resolve()
+    print(f"evpose app: preparing {rec_path} with {map_path} into {cache.folder()}", flush=True)
+    shown = [0]
+
+    def progress(fraction: float) -> None:
+        if int(fraction * 10) > shown[0]:
+            shown[0] = int(fraction * 10)
+            print(f"  {100 * fraction:.0f} %", flush=True)
+
+    result = prepare_pair(rec, read_contour_map(map_path), (rec_path, map_path), cache, None, progress)
+    how = f"computed in {result.seconds:.1f} s" if result.computed else "already in the disk cache"
+    print(f"evpose app: prepared {result.steps} steps ({how})", flush=True)
+    return 0
+
+
 def main(
     data: list[Path] = [Path("demo_data"), Path("maps")],  # noqa: B006 - tyro reads the default
     host: str = "127.0.0.1",
@@ -47,6 +85,9 @@ def main(
     export_dir: Path = Path("evpose_exports"),
     cache_dir: Path | None = None,
     disk_cache: bool = True,
+    warm_up: bool = True,
+    prepare: Path | None = None,
+    map: Path | None = None,  # noqa: A002 - the option is --map
 ) -> int:
     """Start the browser-based viewer: browse, play, step and tune the tracker on recordings and maps.
 
@@ -59,15 +100,22 @@ def main(
         cache_dir: Where computed steps are kept between openings of the same recording, map, configuration and
             code (default ``$XDG_CACHE_HOME/evpose/viewer``, i.e. ``~/.cache/evpose/viewer``; never inside a data folder).
         disk_cache: Keep and reuse computed steps in the cache folder (``--no-disk-cache``: compute afresh, write nothing).
+        warm_up: Prepare every recording under ``--data`` (with the map it opens with, default parameters) into the
+            cache folder in the background at the lowest CPU priority, so a seek anywhere in it answers at once even
+            before it was ever opened (``--no-warm-up``: only what the player computes is kept; off with ``--no-disk-cache``).
+        prepare: Instead of serving, prepare this recording into the cache folder now (in the foreground) and exit.
+        map: The contour map for ``--prepare`` (default: the one the viewer would open it with, from ``--data``).
     """
     from app.disk_cache import DiskCacheConfig
     from app.server import AppConfig, ViewerApp
 
     data = default_data_folders(list(data))
-    check_arguments(data, port, layout, export_dir, cache_dir)
     cache = DiskCacheConfig(enabled=disk_cache, directory=cache_dir)
+    if prepare is not None:
+        return prepare_recording(prepare, map, data, cache)
+    check_arguments(data, port, layout, export_dir, cache_dir)
     viewer = ViewerApp(AppConfig(data=list(data), host=host, port=port, layout=layout, export_dir=export_dir,
-                                 disk_cache=cache))
+                                 disk_cache=cache, warm_up=warm_up))
     print(f"evpose app: serving http://{host}:{port} (Ctrl+C to stop)", flush=True)
     try:
         while True:
