@@ -35,6 +35,7 @@ import math
 import multiprocessing
 import os
 import queue
+import signal
 import threading
 import time
 from dataclasses import dataclass
@@ -108,6 +109,8 @@ def _worker(jobs: list[DataEntry], maps: list[DataEntry], open_path: Path | None
     """The warm-up process: prepare each job's default pairing, reporting ``(label, state)`` on ``reports`` (None
     when done). ``nice``: added to its CPU niceness (19: only the cores the viewer leaves idle; tests run it in-process
     with 0). ``hold``: start held (the viewer is playing); ``("hold", bool)`` commands change it."""
+    # Ctrl+C reaches the whole process group; the viewer stops this process itself (no traceback on the terminal).
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     try:
         os.nice(nice)
     except OSError:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import signal
 import time
 from pathlib import Path
 
@@ -77,6 +78,12 @@ def prepare_recording(recording: Path, map_path: Path | None, data: list[Path], 
     return 0
 
 
+
+def _interrupt(signum, frame) -> None:
+    """SIGTERM handler: unwind as Ctrl+C does."""
+    raise KeyboardInterrupt
+
+
 def main(
     data: list[Path] = [Path("demo_data"), Path("maps")],  # noqa: B006 - tyro reads the default
     host: str = "127.0.0.1",
@@ -117,6 +124,8 @@ def main(
     viewer = ViewerApp(AppConfig(data=list(data), host=host, port=port, layout=layout, export_dir=export_dir,
                                  disk_cache=cache, warm_up=warm_up))
     print(f"evpose app: serving http://{host}:{port} (Ctrl+C to stop)", flush=True)
+    # A service manager's SIGTERM stops the viewer as Ctrl+C does (the warm-up process and its queues shut down too).
+    signal.signal(signal.SIGTERM, _interrupt)
     try:
         while True:
             time.sleep(3600)

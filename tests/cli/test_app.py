@@ -83,3 +83,46 @@ def test_the_default_data_folders_of_the_current_folder_come_first(monkeypatch, 
     with pytest.raises(_Started):
         run(["app", "--port", "0"])
     assert seen["cfg"].data == [Path("demo_data"), Path("maps")]
+
+
+@pytest.mark.parametrize("how", ["ctrl-c to the process group", "sigterm to the server"])
+def test_the_viewer_and_its_warm_up_stop_without_a_traceback(tmp_path: Path, how: str):
+    import os
+    import signal
+    import socket
+    import subprocess
+    import sys
+    import time
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    root = Path(__file__).resolve().parents[2]
+    proc = subprocess.Popen([sys.executable, "-m", "evpose.cli.main", "app", "--port", str(port), "--cache-dir", str(tmp_path / "cache")],
+                            cwd=root, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    try:
+        for line in proc.stdout:  # viser's banner, then ours once the server and its warm-up process are up
+            if "evpose app: serving" in line:
+                break
+        else:
+            raise AssertionError(f"the viewer did not start: {proc.stderr.read()}")
+        time.sleep(2.0)  # the warm-up process is preparing a demo recording now
+        if how.startswith("ctrl-c"):
+            os.killpg(proc.pid, signal.SIGINT)
+        else:
+            proc.send_signal(signal.SIGTERM)
+        _, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    assert "Traceback" not in err and "leaked" not in err, err
+    assert "interrupted" in err
+    deadline = time.monotonic() + 10.0  # multiprocessing's resource tracker exits just after the server
+    while time.monotonic() < deadline:
+        try:
+            os.killpg(proc.pid, 0)
+        except ProcessLookupError:
+            break
+        time.sleep(0.1)
+    else:
+        raise AssertionError("a process of the viewer's group (the warm-up?) was left running")
