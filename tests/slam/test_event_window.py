@@ -66,7 +66,7 @@ def _with_dropout(rec, t0_us: int, t1_us: int):
 def test_no_window_spans_a_dropout_longer_than_max_event_gap():
     rec = make_recording(duration_s=0.8, speed=2.0, seed=3)
     ev = _with_dropout(rec, 400_000, 460_000)
-    sel = EventWindowSelector(EventWindowConfig(), FeatureConfig(), EventImageConfig(), 240, 180)
+    sel = EventWindowSelector(EventWindowConfig(max_event_gap_ms=20.0), FeatureConfig(), EventImageConfig(), 240, 180)
     out = []
     for a in range(0, len(ev), 5000):  # the dropout falls inside one push and between others
         b = min(a + 5000, len(ev))
