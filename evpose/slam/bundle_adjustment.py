@@ -22,7 +22,8 @@ class BaReport:
 
 
 def local_bundle_adjustment(m: SlamMap, K: np.ndarray, window: int, iterations: int, huber_px: float, n_fixed: int = 1,
-                            rotation_priors: dict | None = None, rotation_sigma_rad: float = 1e-3, scale_anchor: float = 0.0) -> BaReport:
+                            rotation_priors: dict | None = None, rotation_sigma_rad: float = 1e-3, scale_anchor: float = 0.0,
+                            rotation_sigmas_rad: dict | None = None) -> BaReport:
     """Optimise the last ``window`` keyframes of ``m`` and the points they see, in place.
 
     The ``n_fixed`` oldest keyframes of the window (two while the map has only
@@ -32,7 +33,7 @@ def local_bundle_adjustment(m: SlamMap, K: np.ndarray, window: int, iterations: 
     observations are left out. ``rotation_priors`` maps keyframe-id pairs
     ``(a, b)`` to a measured camera rotation ``R_ca_cb`` (3, 3), e.g. from the
     gyro; each adds a between factor of ``rotation_sigma_rad`` on the rotation
-    (translation free). ``scale_anchor`` > 0 adds a range factor holding the distance between the two oldest
+    (translation free; ``rotation_sigmas_rad`` may give a pair its own sigma). ``scale_anchor`` > 0 adds a range factor holding the distance between the two oldest
     keyframes of the window at its value before the optimisation, with that sigma relative to the distance: with one
     fixed keyframe the monocular scale is a gauge freedom the solver may slide along.
     """
@@ -76,9 +77,11 @@ def local_bundle_adjustment(m: SlamMap, K: np.ndarray, window: int, iterations: 
             n_free += 1
     if rotation_priors:
         # Pose3 tangent order is (rotation, translation): a loose translation sigma leaves it to the images.
-        rot_noise = gtsam.noiseModel.Diagonal.Sigmas(np.r_[np.full(3, rotation_sigma_rad), np.full(3, 1e4)])
+        sigmas = rotation_sigmas_rad or {}
         for (a, b), R_ab in sorted(rotation_priors.items()):
             if a in used_kfs and b in used_kfs and (a in in_window or b in in_window):
+                sig = float(sigmas.get((a, b), rotation_sigma_rad))
+                rot_noise = gtsam.noiseModel.Diagonal.Sigmas(np.r_[np.full(3, sig), np.full(3, 1e4)])
                 graph.add(gtsam.BetweenFactorPose3(X(a), X(b), gtsam.Pose3(gtsam.Rot3(np.asarray(R_ab, np.float64)), np.zeros(3)), rot_noise))
     if scale_anchor > 0 and len(free_ids) >= 2 and free_ids[1] not in fixed_ids and free_ids[0] in used_kfs and free_ids[1] in used_kfs:
         a, b = kf_by_id[free_ids[0]], kf_by_id[free_ids[1]]

@@ -28,6 +28,8 @@ class WindowEvent(str, enum.Enum):
     """Not enough events buffered for a tiny window yet."""
     LOW_RATE = "low_rate"
     """The tiny window's event rate was below ``th_e`` (camera still or too slow); state was reset."""
+    GAP = "gap"
+    """The stream held no event for longer than ``max_event_gap_ms`` (a dropout); state was reset at the gap."""
     NO_TEXTURE = "no_texture"
     """Too few FAST features in the tiny frame to start a reference."""
     TRACKING = "tracking"
@@ -92,6 +94,8 @@ class WindowState:
     t_cur_us: int = 0
     n_frames: int = 0
     median_displacement_px: float = 0.0
+    last_t_us: int | None = None
+    """Time of the last event taken into a tiny window (the gap test looks across tiny windows too), us."""
 
 
 def _empty_chunk() -> _Chunk:
@@ -146,12 +150,33 @@ class EventWindowSelector:
             n = s.n_events
             tiny = _Chunk(s.buf.t[:n], s.buf.x[:n], s.buf.y[:n], s.buf.p[:n])
             s.buf = _Chunk(s.buf.t[n:], s.buf.x[n:], s.buf.y[n:], s.buf.p[n:])
+            k = self._after_gap(tiny.t)
+            if k is not None:
+                # A dropout: nothing before the gap may share an MCI with what follows it. The events after the gap
+                # go back to the buffer and start a fresh tiny window.
+                self._reset(keep_overlap=False)
+                s.buf = _cat([_Chunk(tiny.t[k:], tiny.x[k:], tiny.y[k:], tiny.p[k:]), s.buf])
+                s.last_t_us = int(tiny.t[k])
+                self.last_event = WindowEvent.GAP
+                continue
+            s.last_t_us = int(tiny.t[-1])
             rw = self._process_tiny(tiny)
             if rw is not None:
                 out.append(rw)
         if not out and len(s.buf.t) < s.n_events and self.last_event is WindowEvent.DISPATCHED:
             self.last_event = WindowEvent.WAITING
         return out
+
+    def _after_gap(self, t: np.ndarray) -> int | None:
+        """Index of the first event of ``t`` after the last gap longer than ``max_event_gap_ms``
+        (counting the gap since the previous tiny window), else None."""
+        lim = self.cfg.max_event_gap_ms
+        if lim <= 0 or not len(t):
+            return None
+        prev = self.state.last_t_us
+        d = np.diff(t, prepend=t[0] if prev is None else prev)
+        big = np.flatnonzero(d > lim * 1e3)
+        return int(big[-1]) if len(big) else None
 
     # --------------------------------------------------------------- stages
     def _reset(self, keep_overlap: bool) -> None:
@@ -261,6 +286,7 @@ class EventWindowSelector:
 WINDOW_REASONS = {
     WindowEvent.WAITING: "collecting events",
     WindowEvent.LOW_RATE: "event rate below th_e (camera still or too slow)",
+    WindowEvent.GAP: "no events for longer than max_event_gap_ms (dropout): window restarted",
     WindowEvent.NO_TEXTURE: "too few features in the tiny frames (no texture)",
     WindowEvent.TRACKING: "tracking features in tiny frames",
     WindowEvent.DISPATCHED: "",

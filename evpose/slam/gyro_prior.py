@@ -53,6 +53,17 @@ def keyframe_rotation_priors(kfs: list, imu: ImuSamples, T_cam_imu: np.ndarray, 
     return out
 
 
+def sparse_pair_sigmas(m, priors: dict, min_points: int, sigma_rad: float) -> dict:
+    """``{(id_a, id_b): sigma_rad}`` for the keyframe pairs of ``priors`` where either keyframe observes fewer than
+    ``min_points`` map points of ``m``."""
+    seen = dict.fromkeys({k for pair in priors for k in pair}, 0)
+    for p in m.points.values():
+        for k in p.obs:
+            if k in seen:
+                seen[k] += 1
+    return {pair: sigma_rad for pair in priors if min(seen[pair[0]], seen[pair[1]]) < min_points}
+
+
 def reanchor_rotations(m, imu: ImuSamples, T_cam_imu: np.ndarray, time_offset_us: int, bias: np.ndarray, refs: set | None = None) -> None:
     """Take the rotation of each MCI pose relative to its reference keyframe from the bias-corrected gyro, in place.
 

@@ -49,7 +49,7 @@ from evpose.slam.scale_refinement import refine_map_scale
 from evpose.slam.step_result import SlamStatus, SlamStepResult
 from evpose.slam.geometry import project
 from evpose.slam.gyro_prior import (camera_delta_rotation, gyro_delta_rotation, keyframe_rotation_priors, reanchor_rotations,
-                                    refine_pose_with_rotation_prior, rotation_angle_deg)
+                                    refine_pose_with_rotation_prior, rotation_angle_deg, sparse_pair_sigmas)
 from evpose.slam.tracking import PoseEstimate, estimate_pose
 
 
@@ -335,6 +335,17 @@ class EventSlam:
         kfs = m.keyframes[-(self.cfg.tracking.local_window + 1):]
         return keyframe_rotation_priors(kfs, self.imu, self.calib.T_cam_imu, self.calib.time_offset_us) or None
 
+    def _ba_rotation_sigmas(self, m: SlamMap, priors: dict | None) -> tuple[float, dict | None]:
+        """Sigma (rad) of the visual BA's gyro rotation priors, and per-pair exceptions (``ba_gyro_prior_min_points``)."""
+        ic = self.cfg.inertial
+        loose = np.radians(max(ic.gyro_prior_uninit_deg, 1e-6))
+        if ic.ba_gyro_prior_uninit_deg <= 0:
+            return loose, None
+        tight = np.radians(max(ic.ba_gyro_prior_uninit_deg, 1e-6))
+        if ic.ba_gyro_prior_min_points <= 0 or not priors:
+            return tight, None
+        return tight, sparse_pair_sigmas(m, priors, ic.ba_gyro_prior_min_points, loose)
+
     def _refine_with_gyro(self, est, Xw: np.ndarray, uv: np.ndarray, R_wc_prior: np.ndarray, sigma_deg: float):
         """Re-solve the pose with the gyro rotation as a prior (planar scenes confuse tilt with shift; the gyro does not)."""
         tc = self._pose_tc(self.atlas.active)
@@ -468,8 +479,10 @@ class EventSlam:
                                              tc.local_window, tc.ba_iterations, tc.ba_huber_px, ic.acc_noise, ic.gyro_noise,
                                              ic.acc_bias_sigma, ic.gyro_bias_sigma)
         else:
+            priors = self._keyframe_rotation_priors(m)
+            sigma, pair_sigmas = self._ba_rotation_sigmas(m, priors)
             local_bundle_adjustment(m, self.K, tc.local_window, tc.ba_iterations, tc.ba_huber_px, n_fixed=1,
-                                    rotation_priors=self._keyframe_rotation_priors(m), rotation_sigma_rad=np.radians(max(ic.ba_gyro_prior_uninit_deg or ic.gyro_prior_uninit_deg, 1e-6)),
+                                    rotation_priors=priors, rotation_sigma_rad=sigma, rotation_sigmas_rad=pair_sigmas,
                                     # Event-inertial maps get their scale from the IMU initialisation; anchoring the visual
                                     # scale before it made E-I-C2 worse (TrackingConfig.ba_scale_anchor).
                                     scale_anchor=tc.ba_scale_anchor if self.imu is None else 0.0)

@@ -72,3 +72,19 @@ def test_scale_anchor_is_deterministic():
         local_bundle_adjustment(m, K, window=5, iterations=10, huber_px=2.0, n_fixed=1, scale_anchor=0.02)
     assert np.array_equal(a.point_array(), b.point_array())
     assert all(np.array_equal(x.T_wc, y.T_wc) for x, y in zip(a.keyframes, b.keyframes))
+
+
+def test_a_pair_sigma_overrides_the_rotation_prior_sigma_of_that_pair_only():
+    # A wrong rotation prior (1 deg off the truth) between keyframes 2 and 3: the tight sigma pulls keyframe 3 towards
+    # it; the same prior with a loose sigma of its own for that pair leaves keyframe 3 where the images alone put it.
+    def adjusted_rotation_error(priors, sigmas):
+        m, _, true_T = _map(seed=3, n_kf=4, n_pts=80)
+        R23 = true_T[2][:3, :3].T @ true_T[3][:3, :3] @ Rotation.from_rotvec([0, 0, np.radians(1.0)]).as_matrix()
+        local_bundle_adjustment(m, K, window=4, iterations=20, huber_px=2.0, n_fixed=2, rotation_priors={(2, 3): R23} if priors else None,
+                                rotation_sigma_rad=np.radians(0.01), rotation_sigmas_rad=sigmas)
+        R = m.keyframes[3].T_wc[:3, :3].T @ true_T[3][:3, :3]
+        return np.degrees(np.linalg.norm(Rotation.from_matrix(R).as_rotvec()))
+
+    images_only = adjusted_rotation_error(False, None)
+    assert adjusted_rotation_error(True, None) > images_only + 0.3
+    assert abs(adjusted_rotation_error(True, {(2, 3): np.radians(10.0)}) - images_only) < 0.01

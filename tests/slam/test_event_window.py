@@ -54,3 +54,31 @@ def test_selector_is_deterministic_across_push_chunking():
     assert len(parts) == len(whole)
     for a, b in zip(parts, whole):
         assert np.array_equal(a.t, b.t) and np.array_equal(a.cur_pts, b.cur_pts)
+
+
+def _with_dropout(rec, t0_us: int, t1_us: int):
+    """``rec``'s events with nothing at all in ``[t0_us, t1_us)`` (a sensor or transfer dropout)."""
+    ev = rec.events
+    keep = (ev.t < t0_us) | (ev.t >= t1_us)
+    return ev[keep]
+
+
+def test_no_window_spans_a_dropout_longer_than_max_event_gap():
+    rec = make_recording(duration_s=0.8, speed=2.0, seed=3)
+    ev = _with_dropout(rec, 400_000, 460_000)
+    sel = EventWindowSelector(EventWindowConfig(max_event_gap_ms=20.0), FeatureConfig(), EventImageConfig(), 240, 180)
+    out = []
+    for a in range(0, len(ev), 5000):  # the dropout falls inside one push and between others
+        b = min(a + 5000, len(ev))
+        out += sel.push(ev.t[a:b], ev.x[a:b].astype(float), ev.y[a:b].astype(float), ev.p[a:b])
+    assert any(w.t[-1] < 400_000 for w in out) and any(w.t[0] >= 460_000 for w in out)
+    # Neither the windows' own events nor the overlap carried from the previous window cross the gap.
+    assert all(w.t[-1] < 400_000 or w.t[0] >= 460_000 for w in out)
+
+
+def test_a_dropout_is_ignored_when_the_gap_rule_is_off():
+    rec = make_recording(duration_s=0.8, speed=2.0, seed=3)
+    ev = _with_dropout(rec, 400_000, 460_000)
+    sel = EventWindowSelector(EventWindowConfig(max_event_gap_ms=0.0), FeatureConfig(), EventImageConfig(), 240, 180)
+    out = sel.push(ev.t, ev.x.astype(float), ev.y.astype(float), ev.p)
+    assert any(w.t[0] < 400_000 <= w.t[-1] for w in out)

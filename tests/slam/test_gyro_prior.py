@@ -124,3 +124,18 @@ def test_the_visual_pose_is_kept_once_initialised_or_with_the_check_off(rec):
     for initialised, limit in ((True, 2.0), (False, 0.0)):
         est, out = _disagreeing_pose(rec, initialised, limit)
         assert out is est
+
+
+def test_sparse_pair_sigmas_loosen_only_pairs_with_a_sparsely_observed_keyframe():
+    from evpose.slam.atlas import MapPoint, SlamMap
+    from evpose.slam.gyro_prior import sparse_pair_sigmas
+
+    m = SlamMap(0)
+    # Keyframes 0 and 1 see 5 points each, keyframe 2 sees 2.
+    for j in range(5):
+        obs = {0: np.zeros(2), 1: np.zeros(2)} | ({2: np.zeros(2)} if j < 2 else {})
+        m.points[j] = MapPoint(j, np.zeros(3), obs, j, 1)
+    priors = {(0, 1): np.eye(3), (1, 2): np.eye(3)}
+    assert sparse_pair_sigmas(m, priors, 3, 0.01) == {(1, 2): 0.01}
+    assert sparse_pair_sigmas(m, priors, 2, 0.01) == {}
+    assert sparse_pair_sigmas(m, priors, 6, 0.01) == {(0, 1): 0.01, (1, 2): 0.01}
