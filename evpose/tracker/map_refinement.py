@@ -76,11 +76,13 @@ class MapRefinementConfig:
     The 'H' of the simulated landing enters the view only after ~0.5 s, its points 10 mm (median) and up to
     4 cm off, and for the first updates they pull the pose towards their errors while the refiner is still
     moving them; held out meanwhile, they are still refined (the field is sampled at every painted point in
-    its box). ``stpe``, 2 s landing from ground truth, built map, mean ATE of seeds 0-3 at 346x260 / 240x180:
+    its box). ``stpe``, 2 s landing from ground truth, built map, mean ATE of seeds 0-3 at 346x260 / 240x180,
+    ``motion_filter.measurement_anisotropy`` 0.2: 0 / 10 gave 14.68 / 21.41, 13.42 / 19.00 mm; with 0.3,
     0 / 5 / 10 / 20 / 40 / 80 gave 14.39 / 21.24, 13.78 / 18.55, 13.49 / 18.46, 13.44 / 20.13, 12.78 / 34.35,
     15.57 / 70.60 mm (the longer the 'H' is held out the later its points start to anchor the pose; 40 and 80
-    lose one or all 240x180 seeds to a slide). For scale: the simulator's painted edges themselves (painted points
-    moved onto the true edges, no refinement) gave 11.84 / 15.69 mm."""
+    lose one or all 240x180 seeds to a slide); 7 gave 13.67 / 18.01 mm. Bundled demo (``stpe``, ``--align none``,
+    lost from ~2 s either way, anisotropy 0): 134.9 -> 129.7 mm ATE RMSE. For scale: the simulator's painted
+    edges themselves (painted points moved onto the true edges, no refinement) gave 11.84 / 15.69 mm."""
     max_offset_m: float = field(default=0.05, metadata={"min": 0.0, "max": 0.5, "step": 0.005, "unit": "m"})
     """Largest distance a point may move from the map's position, metres (0.03: 26.2 / 33.6 mm, as 0.05)."""
     step_clip_px: float = field(default=0.25, metadata={"min": 0.01, "max": 5.0, "step": 0.05, "unit": "px"})
