@@ -47,7 +47,16 @@ class MapRefinementConfig:
     About 40 us per update. ``stpe+filter`` 30.5 -> 24.5 mm and 35.8 -> 32.5 mm; textured landing
     (seed 0, 346x260) ``stpe`` 62.4 -> 54.3 mm, ``stpe+filter`` 36.6 -> 26.1 mm. Bundled demos: landing
     ATE of the written poses 125 -> 126 mm (max 240 -> 253 mm), indoor 97 -> 90 mm. The fused modes refine
-    too unless ``fused_modes`` is off."""
+    too unless ``fused_modes`` is off.
+
+    Session 7 split of the map's share (``stpe``, seeds 0-3, 346x260 / 240x180, before ``register_after_updates``
+    and the filter's anisotropy, crowding radius 2.08 px at 240x180): built map 15.82 / 22.21 mm; every point
+    moved onto its nearest true edge 14.32 / 19.97 mm, and without refinement 12.02 / 15.91 mm; the simulator's
+    true edges (3 px crowding) 11.90 / 16.83 mm. The refiner's fixed point is the field's minimum, not the edge:
+    on an accurate map it costs 2-4 mm, on the built one the painted edges (10 mm median error) need it. With
+    the defaults, ``gain`` 0.03 / 0.05 / 0.1 gave 13.19 / 19.20, 13.42 / 19.00, 14.15 / 18.98 mm and
+    ``step_clip_px`` 0.5 / 1.0 14.07 / 19.49, 16.90 / 21.74 mm; smoothing each painted point's position with
+    its neighbours' (same normal, 3-25 cm) 13.50 / 18.01 mm at best (6 cm): not kept."""
     fused_modes: bool = True
     """Refine in the fused modes (``full``, where IMU fusion drives the pose) too.
 
