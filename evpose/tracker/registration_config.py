@@ -165,6 +165,11 @@ class RegistrationConfig:
     lag is right on average and a constant pixel term would add < 0.1 px. What is left is spread, not bias:
     0.60 px per point and 0.25 px between the edges' means (OFF edges trail ON edges by ~0.2 px on the pad
     marker: a pixel's last event fires later in a bright-to-dark crossing of its footprint, log response).
+    Session 7, ``stpe`` seeds 0-3, mean ATE at 240x180: 3.5 / 4.5 / 5.5 ms gave 24.26 / 23.80 / 23.31 mm (no change
+    worth a per-resolution lag; ``time_surface.eta_ms`` 15 with 5.5 ms and crowding at 2.08 px: 16.61 / 22.01 mm at
+    346x260 / 240x180, against 15.82 / 22.21). Registering the level set
+    ``TDF = 1 - exp(-lag / eta)`` (signed residual, the edge's position ``lag`` ago, sub-pixel on the ramp) instead of
+    the minimum lost badly: lag 6 / 8 ms 27.2 / 27.0 mm at 346x260, 8 ms 39.4 mm at 240x180.
     Registrations from the truth with the points moved by a per-polarity fit (converged, 346x260) were no
     better than the global fit once one outlier was set aside; a per-segment oracle offset only 11.6 -> 9.1 mm."""
     lag_floor_px: float = field(default=0.0, metadata={"min": 0.0, "max": 3.0, "step": 0.05, "unit": "px"})
@@ -178,7 +183,10 @@ class RegistrationConfig:
     motion. Registrations from the truth (true twist, true-edge map, 346x260): 11.9 -> 10.0 mm RMS with 0.55 px
     (7.4 -> 5.4 mm with ``crowded_radius_px`` 3). But ``stpe`` tracks worse with it (seeds 0-3, 2 s landing,
     346x260 / 240x180, crowded points skipped: 21.79 / 28.49 -> 21.99 / 29.92 mm with 0.3 px, 23.8 / 36.1 mm with
-    0.55 px at 2.5 px crowding): the Kalman filter's twist gets the motion direction of slow points wrong."""
+    0.55 px at 2.5 px crowding): the Kalman filter's twist gets the motion direction of slow points wrong. Session 7
+    (rebuilt maps, crowding 2.08 px at 240x180): 0 / 0.3 / 0.45 px 15.82 / 22.21, 16.01 / 23.04, 17.09 / 26.51 mm.
+    A trail growing with the distance from the image centre (the from-truth offsets trail 0.28-0.35 px x r^2 more
+    at the border, r = distance / focal length, both resolutions), ``0.3 (r^2 - 0.25)`` px: 16.30 / 22.96 mm."""
     fused_lag_floor_px: float = field(default=0.45, metadata={"min": 0.0, "max": 3.0, "step": 0.05, "unit": "px"})
     """``lag_floor_px`` where an IMU fusion backend drives the pose (``full``): its twist comes from the IMU, pixels.
 

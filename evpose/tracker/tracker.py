@@ -260,7 +260,15 @@ class Tracker:
         predicted = self.predictor.predict(until)
         t0 = time.perf_counter()
         visible = self.visible_map.visible(predicted, self.config.visible_map)
-        used = visible[subsample_indices(visible.size, int(self.config.registration.max_points))]
+        # Painted points the refiner has not yet placed would pull the pose towards their map error. Only where
+        # the field shows every event: T_align (polarity filter) shows the used points' patches alone.
+        held = None if self.refiner is None or self.polarity_selector is not None else self.refiner.held_out()
+        candidates = visible
+        if held is not None:
+            ready = ~held[visible]
+            if 2 * int(np.count_nonzero(ready)) >= visible.size:  # else the painted points are the map: keep them
+                candidates = visible[ready]
+        used = candidates[subsample_indices(candidates.size, int(self.config.registration.max_points))]
         pts = np.take(self._points, used, axis=0)  # the rows of ``used``; 3x cheaper than fancy indexing
         vm = self.config.visible_map
         if vm.crowded_radius_px > 0 and used.size:

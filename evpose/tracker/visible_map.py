@@ -50,7 +50,11 @@ class VisibleMapConfig:
     11.74 / 12.39 mm; tolerance 0.7 / 1.2 / 1.5 px no better. Bundled demo ``landing`` (``--align none``):
     ``full`` 16.81 -> 15.28 mm, ARE 0.215 -> 0.180 deg; ``stpe`` (lost from ~2 s on either way) 125.7 -> 131.8 mm
     (2 px: 124.7, 2.5 px: 135.0), first loss 2.030 -> 2.015 s; ``full`` ``landing_dynamic`` 28.85 -> 24.83 mm,
-    ``landing_fast`` 22.66 -> 23.57 mm. The true-edge map, registrations from the truth (bench ``registration_bias``' setting): 11.9 -> 7.4 mm RMS at 3 px."""
+    ``landing_fast`` 22.66 -> 23.57 mm. The true-edge map, registrations from the truth (bench ``registration_bias``' setting): 11.9 -> 7.4 mm RMS at 3 px.
+    Session 7 (``stpe``, seeds 0-3): the radius scaled with the focal length (an angle: 2.08 px at 240x180) took
+    240x180 from 23.80 to 22.21 mm (346x260 unchanged, 346x260 radius 2.5 / 3.5 px: 16.05 / 15.68 against 15.82 mm)
+    but ``full`` at 240x180 from 9.50 to 10.65 mm, and 1.5 / 2.0 / 2.5 px there gave 23.50 / 21.48 / 23.88 mm (no
+    trend): the overlap it guards against is one of blurred pixels, so it stays in pixels."""
     crowded_tolerance_px: float = field(default=1.0, metadata={"min": 0.0, "max": 10.0, "step": 0.1, "unit": "px"})
     """A neighbour belongs to another edge if it lies farther than this from the point's projected tangent line, pixels."""
 

@@ -262,3 +262,58 @@ def test_a_strict_gate_is_never_overridden_and_does_not_count_towards_max_gated(
     near = (gtsam.Pose3(pose(0.030)) * gtsam.Pose3.Expmap(np.array([0, 0, 0, 1e-4, 0, 0]))).matrix()
     kf.correct(30_000, near, np.diag([1e-4] * 6), gate_sigma=3.0)
     assert kf.last_fused
+
+
+def _valley_covariance(z_m: float = 4.0) -> np.ndarray:
+    """A registration covariance with the tilt-vs-sideways valley of a downward camera: rotation about y and
+    translation along x nearly cancel (t_x ~ -z omega_y), so their combination is far less certain than either
+    alone suggests."""
+    sd_r, sd_t = np.radians(0.05), 0.002
+    cov = np.diag([sd_r**2] * 3 + [sd_t**2] * 3)
+    weak = np.zeros(6)
+    weak[1], weak[3] = 1.0 / z_m, -1.0  # 1 m of sideways shift with the tilt that hides it at the image centre
+    return cov + np.outer(weak, weak) * 0.02**2
+
+
+def test_stretch_weak_directions_leaves_a_diagonal_covariance_alone():
+    from evpose.tracker.motion_filter import stretch_weak_directions
+
+    cov = np.diag([np.radians(0.2) ** 2] * 3 + [0.01**2] * 3)
+    assert np.allclose(stretch_weak_directions(cov, 0.3), cov, rtol=1e-12, atol=0)
+
+
+def test_stretch_weak_directions_widens_the_valley_and_keeps_the_best_determined_direction():
+    from evpose.tracker.motion_filter import stretch_weak_directions
+
+    cov = _valley_covariance()
+    out = stretch_weak_directions(cov, 0.3)
+    d = np.sqrt(np.diag(cov))
+    lam, V = np.linalg.eigh(cov / np.outer(d, d))
+    lam_out = np.array([V[:, i] @ (out / np.outer(d, d)) @ V[:, i] for i in range(6)])
+    assert np.isclose(lam_out[0], lam[0], rtol=1e-9)  # the best determined combination is untouched
+    assert np.allclose(lam_out, lam * (lam / lam[0]) ** 0.3, rtol=1e-9)
+    assert lam_out[-1] > 2.0 * lam[-1]  # the valley grows
+    # Scale-free: rotation in other units (here x 1000) gives the same covariance in those units.
+    D = np.diag([1e3] * 3 + [1.0] * 3)
+    assert np.allclose(stretch_weak_directions(D @ cov @ D, 0.3), D @ out @ D, rtol=1e-9)
+
+
+VALLEY_STEP = np.array([0, 1.0 / 4.0, 0, -1.0, 0, 0]) * 0.01
+"""1 cm sideways with the tilt that hides it at the image centre from 4 m (the valley of :func:`_valley_covariance`)."""
+DEPTH_STEP = np.array([0, 0, 0, 0, 0, 0.01])
+"""1 cm along the optical axis (well determined)."""
+
+
+def _followed(exponent: float, step: np.ndarray) -> float:
+    """Share of a registration's offset ``step`` from the prediction that the filtered position takes."""
+    kf = seeded(MotionFilterConfig(measurement_anisotropy=exponent))
+    predicted = kf.predict(10_000)
+    out = kf.correct(10_000, (gtsam.Pose3(predicted) * gtsam.Pose3.Expmap(step)).matrix(), _valley_covariance())
+    return float(np.linalg.norm(gtsam.Pose3.Logmap(gtsam.Pose3(predicted).between(gtsam.Pose3(out)))[3:]) / np.linalg.norm(step[3:]))
+
+
+def test_measurement_anisotropy_makes_the_filter_follow_a_registration_less_along_its_valley():
+    valley = _followed(0.3, VALLEY_STEP) / _followed(0.0, VALLEY_STEP)
+    depth = _followed(0.3, DEPTH_STEP) / _followed(0.0, DEPTH_STEP)
+    assert valley < 0.5 * depth  # the valley loses far more weight than a well determined direction
+    assert depth > 0.6
