@@ -47,13 +47,11 @@ from evpose.slam.keyframe_search import keep_keyframe_image, klt_refind_points
 from evpose.slam.projection_search import SearchMatcher, refind_points, store_patches
 from evpose.slam.scale_refinement import refine_map_scale
 from evpose.slam.step_result import SlamStatus, SlamStepResult
-from evpose.slam.geometry import project
-from evpose.slam.gyro_prior import (camera_delta_rotation, gyro_delta_rotation, keyframe_rotation_priors, reanchor_rotations,
-                                    refine_pose_with_rotation_prior, rotation_angle_deg, sparse_pair_sigmas)
+from evpose.slam.system_gyro import GyroAids
 from evpose.slam.tracking import PoseEstimate, estimate_pose
 
 
-class EventSlam:
+class EventSlam(GyroAids):
     """Map-free event(-inertial) SLAM. Feed events with :meth:`step`; read maps from :attr:`atlas`."""
 
     def __init__(self, config: SlamConfig, calibration: CameraCalibration, imu: ImuSamples | None = None):
@@ -192,17 +190,6 @@ class EventSlam:
         self._prev_hypothesis = mci.hypothesis.value
         return mci
 
-    def _gyro_flow(self, t0_us: int, t1_us: int, uv: np.ndarray) -> np.ndarray | None:
-        """Where the gyro rotation alone moves ``uv`` between two MCIs (the infinite homography ``K R^T K^-1``): KLT's start."""
-        if not self.cfg.inertial.klt_gyro_prediction:
-            return None
-        dR_cam = self._gyro_camera_delta(t0_us, t1_us)
-        if dR_cam is None:
-            return None
-        H = self.K @ dR_cam.T @ np.linalg.inv(self.K)
-        q = np.c_[uv.astype(np.float64), np.ones(len(uv))] @ H.T
-        return (q[:, :2] / q[:, 2:3]).astype(np.float32)
-
     def _replenish(self, img8: np.ndarray, img: np.ndarray | None = None) -> None:
         fe = self.fe
         if len(fe.ids) >= self.cfg.features.target_tracks:
@@ -306,65 +293,7 @@ class EventSlam:
                                              ic.acc_bias_sigma, ic.gyro_bias_sigma)
             self._reanchor_rotations(m)
 
-    def _reanchor_rotations(self, m: SlamMap, refs: set | None = None) -> None:
-        # Before the initialisation the bias is unknown, but over one keyframe interval (tens of ms) a MEMS bias of a
-        # few mrad/s turns the camera by hundredths of a degree: far less than the visual rotation error indoors.
-        bias = m.inertial.bias_gyro if m.imu_initialised and m.inertial is not None else np.zeros(3)
-        reanchor_rotations(m, self.imu, self.calib.T_cam_imu, self.calib.time_offset_us, bias, refs)
-
     # ------------------------------------------------------------- tracking
-    def _gyro_rotation(self, t0_us: int, t1_us: int, T_wc0: np.ndarray) -> np.ndarray | None:
-        """Camera orientation at ``t1`` predicted from ``T_wc0`` at ``t0`` by the gyro (event-inertial mode), else None."""
-        dR_cam = self._gyro_camera_delta(t0_us, t1_us)
-        return None if dR_cam is None else T_wc0[:3, :3] @ dR_cam
-
-    def _gyro_camera_delta(self, t0_us: int, t1_us: int) -> np.ndarray | None:
-        """Camera rotation from ``t0`` to ``t1`` integrated from the gyro (bias-corrected once the IMU is initialised), else None."""
-        if self.imu is None:
-            return None
-        m = self.atlas.active
-        bias = m.inertial.bias_gyro if m is not None and m.imu_initialised and m.inertial is not None else None
-        off = self.calib.time_offset_us
-        dR = gyro_delta_rotation(self.imu, int(t0_us) + off, int(t1_us) + off, bias)
-        return None if dR is None else camera_delta_rotation(dR, self.calib.T_cam_imu)
-
-    def _keyframe_rotation_priors(self, m: SlamMap) -> dict | None:
-        """Gyro rotations between consecutive keyframes of the BA window (event-inertial mode), else None."""
-        if self.imu is None or self.cfg.inertial.gyro_prior_uninit_deg <= 0:
-            return None
-        kfs = m.keyframes[-(self.cfg.tracking.local_window + 1):]
-        return keyframe_rotation_priors(kfs, self.imu, self.calib.T_cam_imu, self.calib.time_offset_us) or None
-
-    def _ba_rotation_sigmas(self, m: SlamMap, priors: dict | None) -> tuple[float, dict | None]:
-        """Sigma (rad) of the visual BA's gyro rotation priors, and per-pair exceptions (``ba_gyro_prior_min_points``)."""
-        ic = self.cfg.inertial
-        loose = np.radians(max(ic.gyro_prior_uninit_deg, 1e-6))
-        if ic.ba_gyro_prior_uninit_deg <= 0:
-            return loose, None
-        tight = np.radians(max(ic.ba_gyro_prior_uninit_deg, 1e-6))
-        if ic.ba_gyro_prior_min_points <= 0 or not priors:
-            return tight, None
-        return tight, sparse_pair_sigmas(m, priors, ic.ba_gyro_prior_min_points, loose)
-
-    def _refine_with_gyro(self, est, Xw: np.ndarray, uv: np.ndarray, R_wc_prior: np.ndarray, sigma_deg: float):
-        """Re-solve the pose with the gyro rotation as a prior (planar scenes confuse tilt with shift; the gyro does not)."""
-        tc = self._pose_tc(self.atlas.active)
-        inl = est.inliers
-        T_cw = refine_pose_with_rotation_prior(self.K, Xw[inl], uv[inl], invert_pose(est.T_wc), R_wc_prior.T,
-                                               np.radians(sigma_deg), huber_px=tc.ba_huber_px)
-        proj, z = project(self.K, T_cw, Xw)
-        err = np.linalg.norm(proj - uv, axis=1)
-        inliers = (z > 0) & (err < tc.reprojection_threshold_px)
-        if inliers.sum() < max(tc.min_inliers, tc.min_inlier_ratio * len(Xw)):
-            lim = self.cfg.inertial.max_gyro_disagreement_deg
-            off = rotation_angle_deg(R_wc_prior, est.T_wc[:3, :3]) if lim > 0 and not self.atlas.active.imu_initialised else 0.0
-            if off > lim > 0:
-                # Over one MCI step the gyro's rotation is good to hundredths of a degree even with an unknown bias;
-                # a visual pose degrees away is a bad association, and keeping it spikes the trajectory's rotation.
-                return PoseEstimate(False, reason=f"visual rotation {off:.1f} deg off the gyro's")
-            return est  # the prior disagrees with the images (a wrong bias or a bad time offset): keep the visual pose
-        return PoseEstimate(True, invert_pose(T_cw), inliers, rms_px=float(np.sqrt(np.mean(err[inliers] ** 2))))
-
     def _pose_tc(self, m: SlamMap):
         return self.cfg.tracking if m is None or m.imu_initialised else self._tc_uninit
 

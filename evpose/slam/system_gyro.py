@@ -1,0 +1,90 @@
+"""The gyro's aids to the event-inertial SLAM system (:class:`evpose.slam.system.EventSlam` inherits them).
+
+KLT's start where the gyro rotation moves each feature, the gyro rotation between poses and keyframes, the visual
+local BA's rotation-prior sigmas, and the pose re-solved with the gyro rotation as a prior. They read the system's
+``imu``, ``calib``, ``K``, ``cfg`` and ``atlas``; the event-only mode has no ``imu`` and gets None from each.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from evpose.core.trajectory import invert_pose
+from evpose.slam.atlas import SlamMap
+from evpose.slam.geometry import project
+from evpose.slam.gyro_prior import (camera_delta_rotation, gyro_delta_rotation, keyframe_rotation_priors, reanchor_rotations,
+                                    refine_pose_with_rotation_prior, rotation_angle_deg, sparse_pair_sigmas)
+from evpose.slam.tracking import PoseEstimate
+
+
+class GyroAids:
+    """Gyro-based helpers of :class:`evpose.slam.system.EventSlam` (a mixin: it owns no state)."""
+
+    def _gyro_flow(self, t0_us: int, t1_us: int, uv: np.ndarray) -> np.ndarray | None:
+        """Where the gyro rotation alone moves ``uv`` between two MCIs (the infinite homography ``K R^T K^-1``): KLT's start."""
+        if not self.cfg.inertial.klt_gyro_prediction:
+            return None
+        dR_cam = self._gyro_camera_delta(t0_us, t1_us)
+        if dR_cam is None:
+            return None
+        H = self.K @ dR_cam.T @ np.linalg.inv(self.K)
+        q = np.c_[uv.astype(np.float64), np.ones(len(uv))] @ H.T
+        return (q[:, :2] / q[:, 2:3]).astype(np.float32)
+
+    def _reanchor_rotations(self, m: SlamMap, refs: set | None = None) -> None:
+        # Before the initialisation the bias is unknown, but over one keyframe interval (tens of ms) a MEMS bias of a
+        # few mrad/s turns the camera by hundredths of a degree: far less than the visual rotation error indoors.
+        bias = m.inertial.bias_gyro if m.imu_initialised and m.inertial is not None else np.zeros(3)
+        reanchor_rotations(m, self.imu, self.calib.T_cam_imu, self.calib.time_offset_us, bias, refs)
+
+    def _gyro_rotation(self, t0_us: int, t1_us: int, T_wc0: np.ndarray) -> np.ndarray | None:
+        """Camera orientation at ``t1`` predicted from ``T_wc0`` at ``t0`` by the gyro (event-inertial mode), else None."""
+        dR_cam = self._gyro_camera_delta(t0_us, t1_us)
+        return None if dR_cam is None else T_wc0[:3, :3] @ dR_cam
+
+    def _gyro_camera_delta(self, t0_us: int, t1_us: int) -> np.ndarray | None:
+        """Camera rotation from ``t0`` to ``t1`` integrated from the gyro (bias-corrected once the IMU is initialised), else None."""
+        if self.imu is None:
+            return None
+        m = self.atlas.active
+        bias = m.inertial.bias_gyro if m is not None and m.imu_initialised and m.inertial is not None else None
+        off = self.calib.time_offset_us
+        dR = gyro_delta_rotation(self.imu, int(t0_us) + off, int(t1_us) + off, bias)
+        return None if dR is None else camera_delta_rotation(dR, self.calib.T_cam_imu)
+
+    def _keyframe_rotation_priors(self, m: SlamMap) -> dict | None:
+        """Gyro rotations between consecutive keyframes of the BA window (event-inertial mode), else None."""
+        if self.imu is None or self.cfg.inertial.gyro_prior_uninit_deg <= 0:
+            return None
+        kfs = m.keyframes[-(self.cfg.tracking.local_window + 1):]
+        return keyframe_rotation_priors(kfs, self.imu, self.calib.T_cam_imu, self.calib.time_offset_us) or None
+
+    def _ba_rotation_sigmas(self, m: SlamMap, priors: dict | None) -> tuple[float, dict | None]:
+        """Sigma (rad) of the visual BA's gyro rotation priors, and per-pair exceptions (``ba_gyro_prior_min_points``)."""
+        ic = self.cfg.inertial
+        loose = np.radians(max(ic.gyro_prior_uninit_deg, 1e-6))
+        if ic.ba_gyro_prior_uninit_deg <= 0:
+            return loose, None
+        tight = np.radians(max(ic.ba_gyro_prior_uninit_deg, 1e-6))
+        if ic.ba_gyro_prior_min_points <= 0 or not priors:
+            return tight, None
+        return tight, sparse_pair_sigmas(m, priors, ic.ba_gyro_prior_min_points, loose)
+
+    def _refine_with_gyro(self, est, Xw: np.ndarray, uv: np.ndarray, R_wc_prior: np.ndarray, sigma_deg: float):
+        """Re-solve the pose with the gyro rotation as a prior (planar scenes confuse tilt with shift; the gyro does not)."""
+        tc = self._pose_tc(self.atlas.active)
+        inl = est.inliers
+        T_cw = refine_pose_with_rotation_prior(self.K, Xw[inl], uv[inl], invert_pose(est.T_wc), R_wc_prior.T,
+                                               np.radians(sigma_deg), huber_px=tc.ba_huber_px)
+        proj, z = project(self.K, T_cw, Xw)
+        err = np.linalg.norm(proj - uv, axis=1)
+        inliers = (z > 0) & (err < tc.reprojection_threshold_px)
+        if inliers.sum() < max(tc.min_inliers, tc.min_inlier_ratio * len(Xw)):
+            lim = self.cfg.inertial.max_gyro_disagreement_deg
+            off = rotation_angle_deg(R_wc_prior, est.T_wc[:3, :3]) if lim > 0 and not self.atlas.active.imu_initialised else 0.0
+            if off > lim > 0:
+                # Over one MCI step the gyro's rotation is good to hundredths of a degree even with an unknown bias;
+                # a visual pose degrees away is a bad association, and keeping it spikes the trajectory's rotation.
+                return PoseEstimate(False, reason=f"visual rotation {off:.1f} deg off the gyro's")
+            return est  # the prior disagrees with the images (a wrong bias or a bad time offset): keep the visual pose
+        return PoseEstimate(True, invert_pose(T_cw), inliers, rms_px=float(np.sqrt(np.mean(err[inliers] ** 2))))
