@@ -109,8 +109,9 @@ def _worker(jobs: list[DataEntry], maps: list[DataEntry], open_path: Path | None
     """The warm-up process: prepare each job's default pairing, reporting ``(label, state)`` on ``reports`` (None
     when done). ``nice``: added to its CPU niceness (19: only the cores the viewer leaves idle; tests run it in-process
     with 0). ``hold``: start held (the viewer is playing); ``("hold", bool)`` commands change it."""
-    # Ctrl+C reaches the whole process group; the viewer stops this process itself (no traceback on the terminal).
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if threading.current_thread() is threading.main_thread():  # its own process (tests run it in a thread)
+        # Ctrl+C reaches the whole process group; the viewer stops this process itself (no traceback on the terminal).
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
     try:
         os.nice(nice)
     except OSError:

@@ -99,7 +99,10 @@ def test_the_viewer_and_its_warm_up_stop_without_a_traceback(tmp_path: Path, how
         port = s.getsockname()[1]
     root = Path(__file__).resolve().parents[2]
     proc = subprocess.Popen([sys.executable, "-m", "evpose.cli.main", "app", "--port", str(port), "--cache-dir", str(tmp_path / "cache")],
-                            cwd=root, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+                            cwd=root, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True,
+                            # as from a terminal: a harness run in the background (or under time(1)) ignores SIGINT,
+                            # and the child would inherit that
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     try:
         for line in proc.stdout:  # viser's banner, then ours once the server and its warm-up process are up
             if "evpose app: serving" in line:
