@@ -413,7 +413,7 @@ def bench_far_seek(ctx) -> dict:
     the old path (the run-ahead steps there keeping every grid frame) and the catch-up (plain steps, then the
     target step), alternated in one run; then through the player, which shows progress while it computes; then in a
     recording prepared, fully and half-way."""
-    from app.bench_seek import far_seek_once, far_seek_partly_prepared
+    from app.bench_seek import exact_seek_prepared, far_seek_once, far_seek_partly_prepared
     from app.browser import load_map, load_recording
 
     rec_path, map_path = demo_pair(Path(ctx.work_dir))
@@ -431,6 +431,8 @@ def bench_far_seek(ctx) -> dict:
     out["prepared"] = far_seek_prepared(rec_path, map_path, rec, cmap, t, Path(ctx.work_dir))
     # The disk holding only the first half: resume from its last disk snapshot vs from step 0 (app/bench_seek.py).
     out["partly_prepared"] = far_seek_partly_prepared(rec_path, map_path, rec, cmap, t, Path(ctx.work_dir))
+    # Prepared to the end: an exact seek off the kept-frame grid, from the disk snapshot before it vs the run-ahead.
+    out["exact_prepared"] = exact_seek_prepared(rec_path, map_path, rec, cmap, t + 7_000, Path(ctx.work_dir))
     return out
 
 

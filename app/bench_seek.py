@@ -13,22 +13,22 @@ from pathlib import Path
 import numpy as np
 
 
-def far_seek_once(rec, cmap, t_us: int, catch_up: bool, disk=None) -> dict:
+def far_seek_once(rec, cmap, t_us: int, catch_up: bool, disk=None, exact: bool = False) -> dict:
     """A fresh engine as the viewer opens it (first step shown, a few run-ahead steps), then one far seek.
-    ``disk``: the engine's disk cache entry maker (default: none)."""
+    ``disk``: the engine's disk cache entry maker (default: none); ``exact``: to that step (else the grid step)."""
     from app.tracker_engine import TrackerEngine
 
     eng = TrackerEngine(rec, cmap, disk=disk)
     eng.seek(rec.t_start_us)
     eng.prefetch(5)
     load0 = os.getloadavg()[0]
-    steps = eng.catch_up_steps(t_us)
+    steps = eng.catch_up_steps(t_us, exact)
     w0, c0 = time.perf_counter(), time.thread_time()
     slices = 0
     if catch_up:
-        while not eng.catch_up(t_us, 25):
+        while not eng.catch_up(t_us, 25, exact):
             slices += 1
-    frame = eng.seek_near(t_us)
+    frame = eng.seek(t_us) if exact else eng.seek_near(t_us)
     out = {"wall_s": time.perf_counter() - w0, "cpu_s": time.thread_time() - c0, "index": frame.index,
            "steps": steps if disk is not None else frame.index, "slices": slices + 1 if catch_up else 0,
            "kept_frames": len(eng.cache), "loadavg_1min": [load0, os.getloadavg()[0]], "pose": frame.pose}
@@ -50,17 +50,20 @@ def _maker(rec_path: Path, map_path: Path, directory: Path, snapshots: bool):
     return lambda config, every: DiskCache(conf, *cache_key(rec_path, map_path, config, every))
 
 
-def _prepare_half(rec, cmap, maker) -> dict:
-    """The run-ahead of a fresh engine with a disk cache stepped to the chunk end nearest half the recording."""
+def _prepare_half(rec, cmap, maker, fraction: float = 0.5) -> dict:
+    """The run-ahead of a fresh engine with a disk cache stepped to the chunk end nearest ``fraction`` of the
+    recording (1: to its end)."""
     from app.tracker_engine import TrackerEngine
 
     eng = TrackerEngine(rec, cmap, disk=maker)
     c = eng.disk.chunk_steps
-    half = max(c, int(round(eng.n_steps / 2 / c)) * c)
+    half = max(c, int(round(eng.n_steps * fraction / c)) * c) if fraction < 1 else eng.n_steps + 1
     eng.seek(rec.t_start_us)
     load0 = os.getloadavg()[0]
     w0, c0 = time.perf_counter(), time.thread_time()
     while eng.frontier < half and eng.prefetch(25):
+        pass
+    while fraction >= 1 and eng.prefetch(25):  # to the end, and the frames a catch-up skipped
         pass
     cpu = time.thread_time() - c0
     return {"wall_s": time.perf_counter() - w0, "cpu_s": cpu, "snapshot_cpu_share": eng.disk_snapshot_cpu_s / cpu,
@@ -119,6 +122,44 @@ def far_seek_partly_prepared(rec_path: Path, map_path: Path, rec, cmap, t_us: in
         out["seek"][f"{name}_mean_wall_s"] = float(np.mean([r["wall_s"] for r in s]))
         out["seek"][f"{name}_mean_cpu_s"] = float(np.mean([r["cpu_s"] for r in s]))
     out["seek"]["cpu_ratio_on_over_off"] = out["seek"]["on_mean_cpu_s"] / out["seek"]["off_mean_cpu_s"]
+    # Through the player (run-ahead on, as ``evpose app`` runs it), once each: when the frame is drawn.
+    from app.bench import _far_seek_player
+    from app.engine_factory import engine_factory
+    from app.frame_cache import FrameCacheConfig
+
+    for on in (True, False):
+        d = root / f"player_{int(on)}"
+        shutil.copytree(pristine, d)
+        from app.disk_cache import DiskCacheConfig
+
+        factory = engine_factory(rec, cmap, "tracking", FrameCacheConfig(), DiskCacheConfig(directory=d, snapshots=on),
+                                 (Path(rec_path).resolve(), Path(map_path).resolve()))
+        r = _far_seek_player(rec, cmap, t_us, factory)
+        out["seek"][f"player_snapshots_{'on' if on else 'off'}"] = {
+            k: r[k] for k in ("frame_drawn_s", "command_wait_while_computing_ms", "loadavg_1min")}
+        shutil.rmtree(d, ignore_errors=True)
+    shutil.rmtree(root, ignore_errors=True)
+    return out
+
+
+def exact_seek_prepared(rec_path: Path, map_path: Path, rec, cmap, t_us: int, work_dir: Path, pairs: int = 2) -> dict:
+    """A recording prepared to its end (disk snapshots on), then a fresh opening's *exact* seek to the step at
+    ``t_us`` (off the kept-frame grid), with the disk snapshots vs without them (which waits for the run-ahead to
+    step there), alternated; the poses must be equal bit for bit."""
+    root = Path(work_dir) / "exact_prepared"
+    shutil.rmtree(root, ignore_errors=True)
+    prep = _prepare_half(rec, cmap, _maker(rec_path, map_path, root / "entry", True), fraction=1.0)
+    prep.pop("dir")
+    out: dict = {"prepare": prep, "snapshots_on": [], "snapshots_off": []}
+    poses = []
+    for _ in range(pairs):
+        for on in (True, False):
+            r = far_seek_once(rec, cmap, t_us, True, _maker(rec_path, map_path, root / "entry", on), exact=True)
+            poses.append(r.pop("pose"))
+            out["snapshots_on" if on else "snapshots_off"].append(r)
+    out["poses_bit_identical"] = all(np.array_equal(p, poses[0]) for p in poses)
+    for name in ("on", "off"):
+        out[f"{name}_mean_wall_s"] = float(np.mean([r["wall_s"] for r in out[f"snapshots_{name}"]]))
     shutil.rmtree(root, ignore_errors=True)
     return out
 
