@@ -125,18 +125,29 @@ def read_state(path):
         return pickle.loads(zlib.decompress(f.read()))
 
 
-def rebuild(stored, step0_snapshot, headers: list[dict]):
-    """The session snapshot ``(state, cursor)`` of the last of ``headers`` (files ``0..n`` in order): the stored
-    state with each smoother rebuilt from step 0's (``step0_snapshot``, a session's own) and the journal segments."""
+def _smoother_keys(state: dict) -> list[str]:
+    return [k for k, v in state.items() if isinstance(v, dict) and isinstance(v.get("fusion"), dict)
+            and isinstance(v["fusion"].get("smoother"), str) and v["fusion"]["smoother"] == _SMOOTHER]
+
+
+def start_rebuild(stored, step0_snapshot) -> dict:
+    """Copies of step 0's smoothers (``step0_snapshot``: a session's own) for each one the stored state left out."""
+    base = step0_snapshot[0]
+    return {key: base[key]["fusion"]["smoother"].copy() for key in _smoother_keys(stored[0])}
+
+
+def replay_header(smoothers: dict, header: dict) -> None:
+    """Replay one file's journal segments on the smoothers being rebuilt (files in order from the first)."""
+    segments = _decode_segments(header["journal"])
+    for key, sm in smoothers.items():
+        sm.replay(segments.get(key, []))
+
+
+def finish_rebuild(stored, smoothers: dict):
+    """The session snapshot ``(state, cursor)``: the stored state with its rebuilt smoothers put back."""
     state, cursor = stored
     state = dict(state)
-    base = step0_snapshot[0]
-    for key in [k for k, v in state.items() if isinstance(v, dict) and isinstance(v.get("fusion"), dict)
-                and v["fusion"].get("smoother") == _SMOOTHER]:
-        sm = base[key]["fusion"]["smoother"].copy()
-        for h in headers:
-            sm.replay(_decode_segments(h["journal"]).get(key, []))
-        sm.journal = None
+    for key, sm in smoothers.items():
         owner = dict(state[key])
         owner["fusion"] = {**owner["fusion"], "smoother": sm}
         state[key] = owner
@@ -171,6 +182,8 @@ class DiskSnapshotsMixin:
     """Running estimate of a disk restore (read, unpickle, journal replay) per step restored to, seconds."""
     _disk_queue: list
     _disk_adopted: dict
+    _disk_job = None
+    """A disk restore under way in slices (a catch-up's): [session, step, loader generator, seconds so far]."""
     disk_snapshot_cpu_s = 0.0
     """Thread CPU spent encoding and writing disk snapshots so far, seconds (what they add to the run-ahead)."""
     """id(session) -> step of the last disk snapshot it was given."""
@@ -199,19 +212,36 @@ class DiskSnapshotsMixin:
         return d if d * (self._disk_restore_s_per_step or 0.2 * plain) < (d - start) * plain else -1
 
     def _adopt_disk(self, s, step: int) -> bool:
-        """Give session ``s`` the disk snapshot at ``step``; False if a file it needs was unreadable (dropped)."""
+        """Give session ``s`` the disk snapshot at ``step`` at once; False if a file it needs was unreadable."""
+        while (done := self._disk_restore_slice(s, step)) is False:
+            pass
+        return bool(done)
+
+    def _disk_restore_slice(self, s, step: int):
+        """One slice of giving session ``s`` the disk snapshot at ``step`` (a file's journal segment replayed):
+        True once it has it, False while replaying, None if a file it needs was unreadable (dropped)."""
         import time
 
+        job = self._disk_job
+        if job is None or job[0] is not s or job[1] != step:
+            loader = self.disk.snapshot_loader(step // self.disk.chunk_steps - 1, s.snapshot_at(0))
+            job = self._disk_job = [s, step, loader, 0.0]
         t0 = time.perf_counter()
-        snap = self.disk.load_snapshot(step // self.disk.chunk_steps - 1, s.snapshot_at(0))
-        if snap is None:
+        try:
+            next(job[2])
+            job[3] += time.perf_counter() - t0
             return False
+        except StopIteration as stop:
+            snap = stop.value
+        self._disk_job = None
+        if snap is None:
+            return None
         last = self._disk_adopted.get(id(s))
         if last is not None and last != step and s is not self._ahead:
             s.drop_snapshot(last)  # the shown session keeps one snapshot read from disk (~3.7 MB each), the latest
         self._disk_adopted[id(s)] = step
         s.adopt_snapshot(step, snap)
-        per = (time.perf_counter() - t0) / max(step, 1)
+        per = (job[3] + time.perf_counter() - t0) / max(step, 1)
         old = self._disk_restore_s_per_step
         self._disk_restore_s_per_step = per if not old else 0.7 * old + 0.3 * per
         return True

@@ -391,13 +391,16 @@ class TrackerEngine(DiskSnapshotsMixin, Engine):
         """Step towards the seek target plainly: no debug products, no kept frames, no per-step display; only
         the run-ahead's snapshots and the summaries. The seek itself then computes the target step with its
         debug products, so what is shown equals a headless run. The grid frames passed are filled in later
-        (:meth:`_backfill`). True once the seek answers with at most that one step."""
+        (:meth:`_backfill`). A disk snapshot the run-ahead jumps to is restored in slices as well (one file's fusion
+        journal per call). True once the seek answers with at most that one step."""
         k = self._target(t_us, exact)
         if k in self.cache:
             return True
         if self._ahead is None:
             self._ahead = self._new_ahead()
         s, start = self._start_for(k)
+        if s is self._ahead and start > s.step_count and start not in s.snapshot_steps and not self._disk_restore_slice(s, start):
+            return False  # a slice of the disk restore (a file's fusion journal replayed; None: unreadable, replanned)
         if s.step_count != start:
             self._restore_for(s, k)
         for _ in range(max(int(budget_steps), 1)):
