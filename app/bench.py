@@ -360,30 +360,6 @@ def bench_run_ahead(ctx) -> dict:
     return out
 
 
-def _far_seek_once(rec, cmap, t_us: int, catch_up: bool) -> dict:
-    """A fresh engine as the viewer opens it (first step shown, a few run-ahead steps), then one far seek."""
-    from app.tracker_engine import TrackerEngine
-
-    eng = TrackerEngine(rec, cmap)
-    eng.seek(rec.t_start_us)
-    eng.prefetch(5)
-    load0 = os.getloadavg()[0]
-    w0, c0 = time.perf_counter(), time.thread_time()
-    slices = 0
-    if catch_up:
-        while not eng.catch_up(t_us, 25):
-            slices += 1
-    frame = eng.seek_near(t_us)
-    out = {"wall_s": time.perf_counter() - w0, "cpu_s": time.thread_time() - c0, "index": frame.index,
-           "steps": frame.index, "slices": slices + 1 if catch_up else 0, "kept_frames": len(eng.cache),
-           "loadavg_1min": [load0, os.getloadavg()[0]]}
-    # A later seek half-way back: from a kept frame (old path) or a snapshot and a few steps (catch-up path).
-    t0 = time.perf_counter()
-    eng.seek_near(rec.t_start_us + (t_us - rec.t_start_us) // 2 + 7_000)
-    out["then_mid_seek_ms"] = (time.perf_counter() - t0) * 1e3
-    return out
-
-
 def _far_seek_player(rec, cmap, t_us: int, factory=None) -> dict:
     """The same seek through the player (run-ahead on, as ``evpose app`` runs it): when the status line first
     says how far it is, and when the frame is drawn. ``factory``: the engines (default: no disk cache)."""
@@ -435,7 +411,9 @@ def _far_seek_player(rec, cmap, t_us: int, factory=None) -> dict:
 def bench_far_seek(ctx) -> dict:
     """A seek to 95 % of the recording right after opening it (nothing computed there yet), on the engine alone:
     the old path (the run-ahead steps there keeping every grid frame) and the catch-up (plain steps, then the
-    target step), alternated in one run; then through the player, which shows progress while it computes."""
+    target step), alternated in one run; then through the player, which shows progress while it computes; then in a
+    recording prepared, fully and half-way."""
+    from app.bench_seek import exact_seek_prepared, far_seek_once, far_seek_partly_prepared
     from app.browser import load_map, load_recording
 
     rec_path, map_path = demo_pair(Path(ctx.work_dir))
@@ -444,12 +422,17 @@ def bench_far_seek(ctx) -> dict:
     out: dict = {"recording": str(rec_path), "target_s": (t - rec.t_start_us) / 1e6}
     for _ in range(1 if ctx.quick else 2):
         for name, catch_up in (("grid_stepping", False), ("catch_up", True)):
-            out.setdefault(name, []).append(_far_seek_once(rec, cmap, t, catch_up))
+            out.setdefault(name, []).append(far_seek_once(rec, cmap, t, catch_up))
+            out[name][-1].pop("pose")
     out["player"] = _far_seek_player(rec, cmap, t)
     from app.bench_prepared import far_seek_prepared
 
     # The same seek through the player once the viewer's warm-up has prepared the recording (its time included).
     out["prepared"] = far_seek_prepared(rec_path, map_path, rec, cmap, t, Path(ctx.work_dir))
+    # The disk holding only the first half: resume from its last disk snapshot vs from step 0 (app/bench_seek.py).
+    out["partly_prepared"] = far_seek_partly_prepared(rec_path, map_path, rec, cmap, t, Path(ctx.work_dir))
+    # Prepared to the end: an exact seek off the kept-frame grid, from the disk snapshot before it vs the run-ahead.
+    out["exact_prepared"] = exact_seek_prepared(rec_path, map_path, rec, cmap, t + 7_000, Path(ctx.work_dir))
     return out
 
 

@@ -13,10 +13,12 @@ Layout: ``<directory>/<key>/meta.json`` (what the key was made of, for people)
 and ``chunk_<n>.pkl``, one per ``chunk_steps`` steps, each written atomically
 once the run-ahead has passed it: ``{"summaries": [...], "frames": {index: packed
 fields}}``. Only chunks from the first one on without a gap are read. Entries
-are dropped least recently used first to stay within ``budget_mb``. Engine
-snapshots are not stored: the fusion's gtsam smoother cannot be pickled, so
-exact steps off the frame grid are still computed (from the run-ahead's
-snapshots once it has passed them).
+are dropped least recently used first to stay within ``budget_mb`` (every file
+of an entry counts). Beside them ``snap_<n>.pkl``: the engine snapshot at step
+``(n + 1) * chunk_steps`` (``app/disk_snapshots.py``), so a seek past the
+in-memory frontier restores the farthest one at or before it instead of
+computing from step 0; snapshot ``n`` needs files ``0..n`` (each holds the
+fusion journal since the previous one).
 
 The files are Python pickles of our own making in the user's cache folder; a
 file that cannot be read is treated as missing (and removed), never an error.
@@ -31,6 +33,7 @@ import pickle
 import shutil
 import sys
 import time
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -40,7 +43,7 @@ from evpose.io.atomic import atomic_path
 ROOT = Path(__file__).resolve().parent.parent
 """The source tree whose code is hashed into the key."""
 KEYED_SOURCES = ("evpose/__init__.py", "evpose/errors.py", "evpose/core", "evpose/io", "evpose/frontend",
-                 "evpose/fusion", "evpose/tracker", "app/browser.py", "app/disk_cache.py", "app/engine.py",
+                 "evpose/fusion", "evpose/tracker", "app/browser.py", "app/disk_cache.py", "app/disk_snapshots.py", "app/engine.py",
                  "app/frame.py", "app/frame_cache.py", "app/tracker_engine.py")
 """Everything that can change a cached step: the tracker and what it may import (DEVELOPERS.md layers: core,
 io, frontend, fusion), the loaders, and the viewer's frame code. Edits elsewhere (SLAM, mapping, the server)
@@ -59,6 +62,10 @@ class DiskCacheConfig:
     """Most disk space all entries together may use; the least recently used go first, MB."""
     chunk_steps: int = field(default=200, metadata={"min": 10, "max": 10000, "step": 10, "unit": "steps"})
     """Steps per file (written once the run-ahead has passed all of them), steps."""
+    snapshots: bool = True
+    """Also store an engine snapshot at each chunk's end, so a seek past what the run-ahead has computed in this
+    opening resumes from the farthest one on disk instead of step 0 (10 s landing, disk holding its first 5 s: seek
+    to 9.5 s from the 5 s snapshot instead of step 0; see README / ``python -m app.bench --only far_seek``)."""
 
     def folder(self) -> Path:
         if self.directory is not None:
@@ -144,11 +151,92 @@ class DiskCache:
         self.chunk_steps = max(int(config.chunk_steps), 1)
         self.written: set[int] = set()
         """Chunks present on disk (read or written by this process)."""
+        self.snapshots_written: set[int] = set()
+        """Disk snapshots present on disk (found or written by this process)."""
         self.error = ""
         """Why writing stopped (disk full, no permission...); empty while it works."""
 
     def _chunk_path(self, n: int) -> Path:
         return self.dir / f"chunk_{n:05d}.pkl"
+
+    def _snapshot_path(self, n: int) -> Path:
+        return self.dir / f"snap_{n:05d}.pkl"
+
+    def snapshot_step(self, n: int) -> int:
+        """Step count of disk snapshot ``n``: after chunk ``n``."""
+        return (n + 1) * self.chunk_steps
+
+    def snapshot_chunks(self) -> list[int]:
+        """Disk snapshots present from the first on without a gap (a later one needs every earlier file)."""
+        out = []
+        while self.config.snapshots and self._snapshot_path(len(out)).is_file():
+            out.append(len(out))
+        self.snapshots_written.update(out)
+        return out
+
+    def want_snapshot(self, n: int) -> bool:
+        return self.config.snapshots and not self.error and n not in self.snapshots_written
+
+    def write_snapshot(self, n: int, header: bytes, body: bytes) -> None:
+        """Store disk snapshot ``n`` (atomically: a reader sees the whole file or none); on failure stop writing."""
+        if not self.want_snapshot(n):
+            return
+        try:
+            self.dir.mkdir(parents=True, exist_ok=True)
+            with atomic_path(self._snapshot_path(n)) as tmp:
+                with open(tmp, "wb") as f:
+                    f.write(header)
+                    f.write(body)
+            self.snapshots_written.add(n)
+            self.trim()
+        except Exception as exc:  # the viewer works without its disk cache
+            self.error = f"disk cache off: {exc}"
+
+    def load_snapshot(self, n: int, step0_snapshot):
+        """The session snapshot ``(state, cursor)`` of disk snapshot ``n`` (fusion smoothers rebuilt from step 0's,
+        ``step0_snapshot``), or None if a file it needs cannot be read (see :meth:`snapshot_loader`)."""
+        loader = self.snapshot_loader(n, step0_snapshot)
+        while True:
+            try:
+                next(loader)
+            except StopIteration as stop:
+                return stop.value
+
+    def snapshot_loader(self, n: int, step0_snapshot):
+        """:meth:`load_snapshot` in slices: a generator that yields after each earlier file's journal segment is
+        replayed (~0.15 s each on the 10 s landing) and returns the snapshot. A file that cannot be read is removed
+        with the later ones (the run-ahead writes them again) with a warning, and it returns None: the caller falls
+        back to an earlier snapshot."""
+        from app.disk_snapshots import finish_rebuild, read_header, read_state, replay_header, start_rebuild
+
+        m = n
+        try:
+            header = read_header(self._snapshot_path(n))
+            stored = read_state(self._snapshot_path(n))
+            if header["step"] != self.snapshot_step(n):
+                raise ValueError("step does not match the file name")
+            smoothers = start_rebuild(stored, step0_snapshot)
+            for m in range(n + 1):
+                replay_header(smoothers, header if m == n else read_header(self._snapshot_path(m)))
+                if m < n:
+                    yield
+            return finish_rebuild(stored, smoothers)
+        except Exception as exc:  # truncated, foreign or stale: never trusted, never fatal
+            warnings.warn(f"disk snapshot {self._snapshot_path(m)} ignored ({exc!r}); "
+                          "an earlier snapshot (or step 0) is used instead", RuntimeWarning, stacklevel=2)
+            self.drop_snapshots_from(m)
+            return None
+
+    def drop_snapshots_from(self, m: int) -> None:
+        """Remove disk snapshots ``m`` and later (they cannot be restored without ``m``)."""
+        for path in self.dir.glob("snap_*.pkl"):
+            try:
+                k = int(path.stem.split("_")[1])
+            except (IndexError, ValueError):
+                continue
+            if k >= m:
+                path.unlink(missing_ok=True)
+                self.snapshots_written.discard(k)
 
     def load(self) -> tuple[list[StepSummary], dict[int, tuple[int, dict]]]:
         """Summaries of the steps stored without a gap from step 0, and their kept frames (packed, with sizes)."""

@@ -27,7 +27,11 @@ restore a snapshot and replay a few steps.
 
 With a :class:`~app.disk_cache.DiskCache`, summaries and kept frames of an
 earlier opening (same recording, map, configuration and code) are read back at
-start, and chunks the run-ahead completes are written out.
+start, and chunks the run-ahead completes are written out, with an engine
+snapshot at each chunk's end (``app/disk_snapshots.py``). A seek past the
+in-memory frontier restores the farthest disk snapshot at or before it (the
+run-ahead jumps there when it is the one to step on) rather than stepping from
+step 0 or from where the run-ahead is.
 """
 
 from __future__ import annotations
@@ -37,6 +41,7 @@ import time
 import numpy as np
 
 from app.disk_cache import DiskCache
+from app.disk_snapshots import DiskSnapshotsMixin, array_nbytes, share_snapshot, start_journals
 from app.engine import Engine
 from app.frame import Frame, StepSummary
 from app.frame_cache import FrameCache, FrameCacheConfig, compact
@@ -73,7 +78,7 @@ def summary_from_result(result, index: int) -> StepSummary:
                        dict(result.timings_ms), dict(result.counts))
 
 
-class TrackerEngine(Engine):
+class TrackerEngine(DiskSnapshotsMixin, Engine):
     """Shown session + run-ahead session + frame cache; see the module docstring."""
 
     def __init__(self, recording: Recording, contour_map: ContourMap, config=None, cache: FrameCacheConfig | None = None,
@@ -110,17 +115,26 @@ class TrackerEngine(Engine):
         """Steps whose summaries (and kept frames) came from the disk cache."""
         self._unkept: set[int] = set()
         """Grid steps a catch-up passed without keeping their frame; :meth:`prefetch` fills them in later."""
+        self._disk_queue, self._disk_adopted = [], {}
         if self.disk is not None:
             summaries, frames = self.disk.load()
             self._summaries = summaries
             self._disk_steps = len(summaries)
             for k in sorted(frames):
                 self.cache.put_packed(k, frames[k], near=0)
+            self.disk.snapshot_chunks()
 
     def _new_session(self):
         from evpose.tracker.session import TrackingSession
 
         return TrackingSession(self.recording, self.contour_map, self.config, initial_pose=None)
+
+    def _new_ahead(self):
+        """The run-ahead session; with a disk cache its fusion journals its calls for the disk snapshots."""
+        s = self._new_session()
+        if self.disk is not None and self.disk.config.snapshots:
+            start_journals(s.tracker)
+        return s
 
     # ------------------------------------------------------------------ views
     @property
@@ -200,6 +214,8 @@ class TrackerEngine(Engine):
             self.cache.put(frame, near=max(self._shown, 0))
             self._unkept.discard(i)
         if role == "ahead":
+            if self.disk is not None:
+                self._write_disk_snapshot(s, defer=not fill)
             self._thin_snapshots(s)
             if self.disk is not None:
                 self._maybe_write_chunk(i)
@@ -261,15 +277,23 @@ class TrackerEngine(Engine):
         base = max(j for j in s.snapshot_steps if j <= k)
         if s is self.session and self._ahead is not None:
             base = max([base] + [j for j in self._ahead.snapshot_steps if j <= k])
-        return base
+        return max(base, self._disk_base(k))
 
     def _restore_for(self, s, k: int) -> None:
-        """Put session ``s`` at or before step ``k`` through the nearest snapshot it can restore."""
+        """Put session ``s`` at or before step ``k`` through the nearest snapshot it can restore, in memory or on
+        disk (an unreadable disk snapshot is dropped and the next nearest used). The run-ahead only ever moves on."""
         base = self._base(s, k)
+        if s is self._ahead and base <= s.step_count:
+            return
         if base not in s.snapshot_steps:
-            share_snapshot(self._ahead, s, base)
+            if self._ahead is not None and s is not self._ahead and base in self._ahead.snapshot_steps:
+                share_snapshot(self._ahead, s, base)
+            elif not self._adopt_disk(s, base):
+                return self._restore_for(s, k)
         t0 = time.perf_counter()
         s.restore_snapshot(base)
+        if s is self._ahead and self.disk is not None and self.disk.config.snapshots:
+            start_journals(s.tracker)  # the segments before ``base`` are on disk already
         if base > 0:
             per = (time.perf_counter() - t0) / base
             self._restore_s_per_step = per if not self._restore_s_per_step else 0.7 * self._restore_s_per_step + 0.3 * per
@@ -278,7 +302,9 @@ class TrackerEngine(Engine):
         """Whether session ``s`` (at or before step ``k``) should step forward rather than restore its nearest snapshot."""
         plain = self._step_s["plain"] or 0.01
         base = self._base(s, k)
-        restore = base * (self._restore_s_per_step or 0.3 * plain) + (k - base + 1) * plain
+        in_memory = base in s.snapshot_steps or (self._ahead is not None and base in self._ahead.snapshot_steps)
+        per = (self._restore_s_per_step or 0.3 * plain) if in_memory else (self._disk_restore_s_per_step or 0.2 * plain)
+        restore = base * per + (k - base + 1) * plain
         return (k - s.step_count + 1) * plain <= restore
 
     def _produce(self, k: int) -> Frame | None:
@@ -297,7 +323,8 @@ class TrackerEngine(Engine):
             forward = ahead is not None and ahead.step_count <= k and (
                 self.session.step_count > k or ahead.step_count >= self.session.step_count)
             s = ahead if forward else self.session
-            if s.step_count > k or (s is self.session and not self._forward_is_cheaper(s, k)):
+            if s.step_count > k or (s is self.session and not self._forward_is_cheaper(s, k)) or (
+                    s is ahead and self._disk_jump(k, s.step_count) > 0):
                 self._restore_for(s, k)
             cached = self._step_to(s, k)
             if cached is None:
@@ -348,6 +375,8 @@ class TrackerEngine(Engine):
         snapshot interval nearer: what the run-ahead computes is kept (snapshots, summaries), the other's is not."""
         ahead, s = self._ahead, self.session
         best = (ahead, ahead.step_count) if ahead is not None and ahead.step_count <= k else (None, -1)
+        if best[0] is not None and (d := self._disk_jump(k, best[1])) > 0:
+            best = (ahead, d)  # the run-ahead jumps to the disk snapshot
         start = max(s.step_count if s.step_count <= k else -1, self._base(s, k))
         margin = self._snapshot_spacing if best[0] is not None else 0
         return (s, start) if start > best[1] + margin else best
@@ -362,13 +391,16 @@ class TrackerEngine(Engine):
         """Step towards the seek target plainly: no debug products, no kept frames, no per-step display; only
         the run-ahead's snapshots and the summaries. The seek itself then computes the target step with its
         debug products, so what is shown equals a headless run. The grid frames passed are filled in later
-        (:meth:`_backfill`). True once the seek answers with at most that one step."""
+        (:meth:`_backfill`). A disk snapshot the run-ahead jumps to is restored in slices as well (one file's fusion
+        journal per call). True once the seek answers with at most that one step."""
         k = self._target(t_us, exact)
         if k in self.cache:
             return True
         if self._ahead is None:
-            self._ahead = self._new_session()
+            self._ahead = self._new_ahead()
         s, start = self._start_for(k)
+        if s is self._ahead and start > s.step_count and start not in s.snapshot_steps and not self._disk_restore_slice(s, start):
+            return False  # a slice of the disk restore (a file's fusion journal replayed; None: unreadable, replanned)
         if s.step_count != start:
             self._restore_for(s, k)
         for _ in range(max(int(budget_steps), 1)):
@@ -425,8 +457,10 @@ class TrackerEngine(Engine):
         The shown session and the shown step are untouched.
         """
         if self._ahead is None:
-            self._ahead = self._new_session()
+            self._ahead = self._new_ahead()
         s = self._ahead
+        if self.disk is not None and self._flush_disk_snapshot():
+            return True  # one queued disk snapshot per call: a command waits at most one write
         if s.done:
             return self._backfill(budget_steps)
         if s.step_count < self._disk_steps:
@@ -462,22 +496,3 @@ class TrackerEngine(Engine):
                 break  # the next one is nearer a snapshot: restore there next slice
         return bool(self._unkept)
 
-
-def array_nbytes(obj) -> int:
-    """Bytes of the numpy arrays in a nested snapshot (dicts, lists, tuples); other objects count as nothing."""
-    if isinstance(obj, np.ndarray):
-        return obj.nbytes
-    if isinstance(obj, dict):
-        return sum(array_nbytes(v) for v in obj.values())
-    if isinstance(obj, (list, tuple)):
-        return sum(array_nbytes(v) for v in obj)
-    return 0
-
-
-def share_snapshot(src, dst, step: int) -> None:
-    """Give session ``dst`` the snapshot ``src`` keeps at ``step`` (same recording and configuration).
-
-    ``Tracker.restore`` copies every array and the fusion smoother out of a
-    snapshot, so both sessions can restore the same one.
-    """
-    dst.adopt_snapshot(step, src.snapshot_at(step))

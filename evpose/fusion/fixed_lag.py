@@ -144,6 +144,11 @@ class CopyableFixedLagSmoother:
         # Every key of the window in ordering group 1, kept up to date instead of rebuilt per update (a
         # pybind call per key); the keys to marginalise move to group 0 for the one update that needs it.
         self._groups = gtsam.KeyGroupMap()
+        self.journal: list | None = None
+        """When a list (the viewer's disk snapshots turn it on), every call that changes or reads the iSAM2 state is
+        appended: ``("update", graph, values, timestamps)`` or ``(estimate method name, key)``. iSAM2 cannot be
+        pickled, but replaying these calls on a copy of an earlier state (:meth:`replay`) gives the same smoother
+        bit for bit (reads matter too: an estimate updates iSAM2's lazily computed delta). A copy does not journal."""
 
     def copy(self) -> "CopyableFixedLagSmoother":
         """An independent deep copy (the iSAM2 copy constructor clones the Bayes tree, values and factors)."""
@@ -160,6 +165,8 @@ class CopyableFixedLagSmoother:
     def update(self, graph=None, values=None, timestamps: dict | None = None) -> None:
         """Add factors and new variables with their timestamps, update iSAM2, marginalise keys older than the lag."""
         gtsam = self._gtsam
+        if self.journal is not None:
+            self.journal.append(("update", graph, values, None if timestamps is None else dict(timestamps)))
         if timestamps:
             for key, stamp in sorted(timestamps.items()):  # gtsam walks its std::map<Key, double>: keys ascending
                 self._insert(int(key), float(stamp))
@@ -213,15 +220,31 @@ class CopyableFixedLagSmoother:
             self._stamps.insert(i, stamp)
             self._keys.insert(i, [key])
 
+    def replay(self, entries) -> None:
+        """Make the calls of a :attr:`journal` (graphs and values as gtsam objects) again, in order."""
+        for entry in entries:
+            if entry[0] == "update":
+                self.update(entry[1], entry[2], entry[3])
+            else:
+                getattr(self, entry[0])(entry[1])
+
     # Estimates: the same calls as on gtsam's smoother.
     def calculateEstimatePose3(self, key):
+        if self.journal is not None:
+            self.journal.append(("calculateEstimatePose3", key))
         return self.isam.calculateEstimatePose3(key)
 
     def calculateEstimateVector(self, key):
+        if self.journal is not None:
+            self.journal.append(("calculateEstimateVector", key))
         return self.isam.calculateEstimateVector(key)
 
     def calculateEstimateConstantBias(self, key):
+        if self.journal is not None:
+            self.journal.append(("calculateEstimateConstantBias", key))
         return self.isam.calculateEstimateConstantBias(key)
 
     def marginalCovariance(self, key):
+        if self.journal is not None:
+            self.journal.append(("marginalCovariance", key))
         return self.isam.marginalCovariance(key)
