@@ -73,23 +73,16 @@ def _encode_segments(segments: dict[str, list]) -> bytes:
 def _decode_segments(blob: bytes) -> dict[str, list]:
     import gtsam
 
-    def graph(text):
+    def load(cls, text):
         if text is None:
             return None
-        g = gtsam.NonlinearFactorGraph()
-        g.deserialize(text)
-        return g
-
-    def values(text):
-        if text is None:
-            return None
-        v = gtsam.Values()
-        v.deserialize(text)
-        return v
+        obj = cls()
+        obj.deserialize(text)
+        return obj
 
     ser = pickle.loads(zlib.decompress(blob))
-    return {key: [("update", graph(e[1]), values(e[2]), e[3]) if e[0] == "update" else e for e in entries]
-            for key, entries in ser.items()}
+    return {key: [("update", load(gtsam.NonlinearFactorGraph, e[1]), load(gtsam.Values, e[2]), e[3]) if e[0] == "update" else e
+                  for e in entries] for key, entries in ser.items()}
 
 
 def encode(step: int, snapshot, segments: dict[str, list]) -> tuple[bytes, bytes]:

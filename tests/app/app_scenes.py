@@ -99,3 +99,15 @@ def map_scene(duration_s: float = 0.5, width: int = 160, height: int = 120, seed
     imu = ImuSamples.from_arrays(gt.t[::5], np.tile([0, 0, 9.81], (len(gt.t[::5]), 1)), np.zeros((len(gt.t[::5]), 3)))
     rec = Recording(events, imu, gt, cal, {"scene": "squares"})
     return rec, ContourMap.from_points(_sample(_square_edges(), 0.01))
+
+
+def old_and_recent_entries(folder, file_name: str, size: int) -> None:
+    """Two disk-cache entries, ``old`` used before ``recent``, each holding one file of ``size`` bytes."""
+    import os
+
+    for i, name in enumerate(("old", "recent")):
+        d = folder / name
+        d.mkdir(parents=True)
+        (d / "meta.json").write_text("{}")
+        (d / file_name).write_bytes(b"x" * size)
+        os.utime(d / "meta.json", (1000 + i, 1000 + i))

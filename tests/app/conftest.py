@@ -29,3 +29,12 @@ def bar_recording():
 @pytest.fixture(scope="session")
 def squares_scene():
     return map_scene()
+
+
+@pytest.fixture
+def pair_files(tmp_path):
+    """Stand-ins for the recording and map files the key is made of (the engine gets the scene in memory)."""
+    rec, cmap = tmp_path / "rec.h5", tmp_path / "map.ply"
+    rec.write_bytes(b"recording bytes")
+    cmap.write_bytes(b"map bytes")
+    return rec, cmap

@@ -6,6 +6,7 @@ import os
 
 import numpy as np
 import pytest
+from app_scenes import old_and_recent_entries
 
 from app.app_config import AppConfig, cache_inside_data
 from app.disk_cache import DiskCache, DiskCacheConfig, cache_key
@@ -13,15 +14,6 @@ from app.frame_cache import FrameCacheConfig, quantize
 from app.tracker_engine import TrackerEngine, frame_from_result
 from evpose.tracker.config import TrackerConfig
 from evpose.tracker.session import TrackingSession
-
-
-@pytest.fixture
-def pair_files(tmp_path):
-    """Stand-ins for the recording and map files the key is made of (the engine gets the scene in memory)."""
-    rec, cmap = tmp_path / "rec.h5", tmp_path / "map.ply"
-    rec.write_bytes(b"recording bytes")
-    cmap.write_bytes(b"map bytes")
-    return rec, cmap
 
 
 def _maker(conf, files, made=None):
@@ -106,12 +98,7 @@ def test_an_unreadable_chunk_is_dropped_and_only_the_steps_before_it_are_used(sq
 
 def test_the_budget_drops_the_least_recently_used_entries(tmp_path):
     conf = DiskCacheConfig(directory=tmp_path / "cache", budget_mb=1.0)
-    for i, name in enumerate(("old", "recent")):
-        d = conf.folder() / name
-        d.mkdir(parents=True)
-        (d / "meta.json").write_text("{}")
-        (d / "chunk_00000.pkl").write_bytes(b"x" * 600_000)
-        os.utime(d / "meta.json", (1000 + i, 1000 + i))
+    old_and_recent_entries(conf.folder(), "chunk_00000.pkl", 600_000)
     disk = DiskCache(conf, "current", {})
     disk.write_chunk(0, [], {})
     assert sorted(p.name for p in conf.folder().iterdir()) == ["current", "recent"]

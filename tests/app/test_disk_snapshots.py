@@ -1,10 +1,10 @@
 """Engine snapshots in the disk cache: a seek past what is computed resumes from the farthest one on disk, and what it
 shows equals a headless run bit for bit; a damaged snapshot file falls back to an earlier one, never a failure."""
 
-import os
 
 import numpy as np
 import pytest
+from app_scenes import old_and_recent_entries
 
 from app.disk_cache import DiskCache, DiskCacheConfig, cache_key
 from app.disk_snapshots import live_smoothers
@@ -13,14 +13,6 @@ from app.tracker_engine import TrackerEngine
 from evpose.tracker.session import TrackingSession
 
 CHUNK = 20
-
-
-@pytest.fixture
-def pair_files(tmp_path):
-    rec, cmap = tmp_path / "rec.h5", tmp_path / "map.ply"
-    rec.write_bytes(b"recording bytes")
-    cmap.write_bytes(b"map bytes")
-    return rec, cmap
 
 
 @pytest.fixture(scope="module")
@@ -120,12 +112,7 @@ def test_snapshot_files_count_in_the_entry_size_the_trimming_goes_by(squares_sce
 
 def test_writing_a_snapshot_trims_older_entries_to_the_budget_counting_every_file(tmp_path):
     conf = DiskCacheConfig(directory=tmp_path / "cache", budget_mb=1.0)
-    for i, name in enumerate(("old", "recent")):
-        d = conf.folder() / name
-        d.mkdir(parents=True)
-        (d / "meta.json").write_text("{}")
-        (d / "snap_00000.pkl").write_bytes(b"x" * 400_000)  # snapshot files count as much as chunks
-        os.utime(d / "meta.json", (1000 + i, 1000 + i))
+    old_and_recent_entries(conf.folder(), "snap_00000.pkl", 400_000)  # snapshot files count as much as chunks
     disk = DiskCache(conf, "current", {})
     disk.dir.mkdir(parents=True)
     (disk.dir / "meta.json").write_text("{}")
