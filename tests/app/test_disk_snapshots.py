@@ -1,7 +1,6 @@
 """Engine snapshots in the disk cache: a seek past what is computed resumes from the farthest one on disk, and what it
 shows equals a headless run bit for bit; a damaged snapshot file falls back to an earlier one, never a failure."""
 
-
 import numpy as np
 import pytest
 from app_scenes import old_and_recent_entries
