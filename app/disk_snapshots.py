@@ -194,6 +194,18 @@ class DiskSnapshotsMixin:
             best, n = step, n + 1
         return best
 
+    def catch_up_cost_steps(self, t_us: int, exact: bool = False) -> int:
+        """The engine's :meth:`catch_up_steps` plus a disk snapshot's restore, in steps of CPU time."""
+        k = self._target(t_us, exact)
+        steps = self.catch_up_steps(t_us, exact)
+        s, start = self._start_for(k)
+        in_memory = start in s.snapshot_steps or (self._ahead is not None and start in self._ahead.snapshot_steps)
+        if steps and start > s.step_count and not in_memory and start == self._disk_base(k):
+            # The restore replays the fusion journal of every step before the disk snapshot.
+            plain = self._step_s["plain"] or 0.01
+            steps += int(start * (self._disk_restore_s_per_step or 0.2 * plain) / plain)
+        return steps
+
     def _disk_jump(self, k: int, start: int) -> int:
         """The disk snapshot step the run-ahead (at ``start``) should restore on its way to step ``k``, or -1: only
         when restoring it (which replays the fusion journal from step 0, ~0.6 ms per step before it on the 10 s

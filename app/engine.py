@@ -77,6 +77,11 @@ class Engine(ABC):
         0 when it answers at once, or when the engine cannot say (its seeks are then made in one go)."""
         return 0
 
+    def catch_up_cost_steps(self, t_us: int, exact: bool = False) -> int:
+        """:meth:`catch_up_steps` plus what else the seek must do first (a snapshot to restore), in steps of CPU
+        time: the player slices a seek above ``catch_up_steps`` of it."""
+        return self.catch_up_steps(t_us, exact)
+
     def catch_up(self, t_us: int, budget_steps: int, exact: bool = False) -> bool:
         """Compute at most ``budget_steps`` of those steps, the cheapest way (no display products on the way);
         True once none are left. The player calls it in slices so commands are heard in between."""

@@ -213,7 +213,7 @@ class Player:
         """Show the step at ``t_us``: at once when little is left to compute, else start a catch-up (sliced)."""
         exact = exact or not self.pc.snap_seeks
         self._catch_up = None
-        if self.engine.catch_up_steps(t_us, exact) <= self.pc.catch_up_steps:
+        if self.engine.catch_up_cost_steps(t_us, exact) <= self.pc.catch_up_steps:
             self._publish(self._timed_seek(t_us, exact))
             self._reanchor()
             return
