@@ -23,6 +23,8 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
+from evpose.tracker.camera_point import camera_point
+
 
 @nb.njit(cache=True)
 def _crowded_kernel(points, tangents, R_cw, t_cw, fx, fy, cx, cy, radius, tol, out):
@@ -35,10 +37,7 @@ def _crowded_kernel(points, tangents, R_cw, t_cw, fx, fy, cx, cy, radius, tol, o
     has_tangent = np.zeros(n, dtype=np.bool_)  # and its own line is known: it can be tested
     for i in range(n):
         out[i] = False
-        px, py, pz = points[i, 0], points[i, 1], points[i, 2]
-        X = R_cw[0, 0] * px + R_cw[0, 1] * py + R_cw[0, 2] * pz + t_cw[0]
-        Y = R_cw[1, 0] * px + R_cw[1, 1] * py + R_cw[1, 2] * pz + t_cw[1]
-        Z = R_cw[2, 0] * px + R_cw[2, 1] * py + R_cw[2, 2] * pz + t_cw[2]
+        X, Y, Z = camera_point(points, i, R_cw, t_cw)
         if Z <= 1e-6:
             continue
         u[i] = fx * X / Z + cx

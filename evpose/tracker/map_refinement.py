@@ -31,6 +31,7 @@ import numpy as np
 
 from evpose.core.contour_map import ContourMap
 from evpose.frontend.distance_field import _bilinear_weights
+from evpose.tracker.camera_point import camera_point
 
 
 @dataclass
@@ -119,12 +120,9 @@ def _refine_kernel(points, idx, base, normals, offsets, seen, R_cw, t_cw, fx, fy
     moved = 0
     for j in range(idx.shape[0]):
         i = idx[j]
-        px, py, pz = points[i, 0], points[i, 1], points[i, 2]
-        Z = R_cw[2, 0] * px + R_cw[2, 1] * py + R_cw[2, 2] * pz + t_cw[2]
+        X, Y, Z = camera_point(points, i, R_cw, t_cw)
         if Z <= 1e-6:
             continue
-        X = R_cw[0, 0] * px + R_cw[0, 1] * py + R_cw[0, 2] * pz + t_cw[0]
-        Y = R_cw[1, 0] * px + R_cw[1, 1] * py + R_cw[1, 2] * pz + t_cw[1]
         u = fx * X / Z + cx
         v = fy * Y / Z + cy
         if not (u >= c0 and v >= r0 and u <= c1 - 1.0 and v <= r1 - 1.0) or r1 - r0 < 2 or c1 - c0 < 2:

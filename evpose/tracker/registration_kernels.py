@@ -11,6 +11,7 @@ import numba as nb
 import numpy as np
 
 from evpose.frontend.distance_field import bilinear_curvature_from_value, bilinear_sample
+from evpose.tracker.camera_point import camera_point
 
 
 @nb.njit(cache=True, inline="always")
@@ -90,12 +91,7 @@ def _linearise(points, slots, R_cw, t_cw, fx, fy, cx, cy, value, grad_u, grad_v,
     Q1 = np.empty(6)
     Q2 = np.empty(6)
     for i in range(points.shape[0]):
-        px = points[i, 0]
-        py = points[i, 1]
-        pz = points[i, 2]
-        X = R_cw[0, 0] * px + R_cw[0, 1] * py + R_cw[0, 2] * pz + t_cw[0]
-        Y = R_cw[1, 0] * px + R_cw[1, 1] * py + R_cw[1, 2] * pz + t_cw[1]
-        Z = R_cw[2, 0] * px + R_cw[2, 1] * py + R_cw[2, 2] * pz + t_cw[2]
+        X, Y, Z = camera_point(points, i, R_cw, t_cw)
         res[i] = 1.0
         wts[i] = 0.0
         if Z <= 1e-6:

@@ -18,6 +18,8 @@ from dataclasses import dataclass, field
 import numba as nb
 import numpy as np
 
+from evpose.tracker.camera_point import camera_point
+
 
 @dataclass
 class VisibleMapConfig:
@@ -120,12 +122,7 @@ def _bounds_kernel(points, R_cw, t_cw, fx, fy, cx, cy):
     vmin = np.inf
     vmax = -np.inf
     for i in range(points.shape[0]):
-        px = points[i, 0]
-        py = points[i, 1]
-        pz = points[i, 2]
-        X = R_cw[0, 0] * px + R_cw[0, 1] * py + R_cw[0, 2] * pz + t_cw[0]
-        Y = R_cw[1, 0] * px + R_cw[1, 1] * py + R_cw[1, 2] * pz + t_cw[1]
-        Z = R_cw[2, 0] * px + R_cw[2, 1] * py + R_cw[2, 2] * pz + t_cw[2]
+        X, Y, Z = camera_point(points, i, R_cw, t_cw)
         if Z < 1e-6:
             Z = 1e-6
         u = fx * X / Z + cx
