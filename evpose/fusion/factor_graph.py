@@ -120,6 +120,10 @@ def robust_noise(config: FusionConfig, cov: np.ndarray, robust: bool = True):
 class FactorGraphFusion:
     """iSAM2 / fixed-lag-smoother fusion of registration poses with the IMU."""
 
+    rebase_every_states = 50
+    """The smoother rebuilds itself from its factors and linearisation point every this many states (at least the
+    window; 0: never), so a restored smoother replays at most this many updates (:meth:`CopyableFixedLagSmoother.rebase`)."""
+
     def __init__(self, config: FusionConfig | None = None, calibration: CameraCalibration | None = None):
         import gtsam
 
@@ -162,7 +166,9 @@ class FactorGraphFusion:
         # bias random walk over a few ms and the pose priors); QR factorises the same graph robustly.
         p.setFactorization("QR")
         # Smoother "time" is the state index, so the lag is exactly N-1 states.
-        return CopyableFixedLagSmoother(float(self.config.window_states - 1), p)
+        n = self.config.window_states
+        every = max(int(self.rebase_every_states), n) if self.rebase_every_states else None
+        return CopyableFixedLagSmoother(float(n - 1), p, rebase_every=every)
 
     # ------------------------------------------------------------ public API
     def initialize(self, t_us: int, T_world_cam: np.ndarray, velocity_world=None, acc_bias=None, gyro_bias=None) -> FusedState:
