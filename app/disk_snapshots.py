@@ -13,8 +13,10 @@ its journal then restarts with that content (``("rebase", graph, values,
 stamps)``). Restoring the snapshot after chunk ``n`` makes the same rebuild from
 the last re-base's content and replays the journal since: the same smoother bit
 for bit (``tests/app/test_disk_snapshots.py``), at a cost that does not grow with
-the step (about a tenth of a tracker step per replayed update, at most
-``rebase_every_states`` of them). Before a smoother's first re-base the restore
+the step (~0.6 ms per replayed update, at most ``rebase_every_states`` of
+them: on the 10 s landing the restore at 9 s took 13 ms with 8 journal entries
+to replay, 41-56 ms with 287 entries when the last re-base was 51 updates
+before, against 1.2 s replaying all 1800 steps before the re-bases). Before a smoother's first re-base the restore
 copies the smoother of step 0 (a fresh session's, deterministic) and replays
 segments ``0..n`` on it.
 

@@ -22,7 +22,22 @@ The Bayes tree's cliques are not reachable from the Python wrapper, but
 ``ISAM2.dot`` prints them (frontal keys in order, parent keys, parent -> child
 edges) in a few microseconds, which is all the helper needs. The tests check
 the estimates equal gtsam's smoother bit for bit over long runs with outliers
-and tracking losses.
+and tracking losses (with :attr:`~CopyableFixedLagSmoother.rebase_every` off).
+
+``ISAM2`` itself cannot be pickled either, but its factors (the marginals of
+the keys gone included, as ``LinearContainerFactor``), its linearisation point
+and the timestamps serialise. With ``rebase_every`` set the smoother
+periodically *re-bases*: it rebuilds iSAM2 from exactly that content with one
+batch update (:meth:`~CopyableFixedLagSmoother.rebase`), so its state is a
+function of the last re-base's content and the calls since, and a stored state
+(the viewer's disk snapshots) is restored at a cost that does not depend on the
+step instead of by replaying every call since step 0. It changes the
+algorithm slightly (the window is re-eliminated at its linearisation point,
+which iSAM2 does only partly), headless as well; measured with every 50 states:
+fused positions within 0.09 mm (median 0.001 mm) of a never re-based run on a
+10 s synthetic flight, ``full`` on the 2 s landings (seeds 0-3) 9.152 / 9.510 mm
+(9.151 / 9.510 never re-based), the demo 15.979 mm either way; 0.5 ms per
+re-base (~0.01 ms per update, against ~0.75 ms for the update itself).
 """
 
 from __future__ import annotations
@@ -151,7 +166,9 @@ class CopyableFixedLagSmoother:
         """When a list (the viewer's disk snapshots turn it on), every call that changes or reads the iSAM2 state is
         appended: ``("update", graph, values, timestamps)`` or ``(estimate method name, key)``. iSAM2 cannot be
         pickled, but replaying these calls on a copy of an earlier state (:meth:`replay`) gives the same smoother
-        bit for bit (reads matter too: an estimate updates iSAM2's lazily computed delta). A copy does not journal."""
+        bit for bit (reads matter too: an estimate updates iSAM2's lazily computed delta). A re-base restarts it
+        with ``("rebase", graph, values, stamps)``, its content (what came before is not needed any more). A copy
+        does not journal."""
 
     def copy(self) -> "CopyableFixedLagSmoother":
         """An independent deep copy (the iSAM2 copy constructor clones the Bayes tree, values and factors)."""
