@@ -33,7 +33,11 @@ def far_seek_once(rec, cmap, t_us: int, catch_up: bool, disk=None, exact: bool =
            "steps": steps if disk is not None else frame.index, "slices": slices + 1 if catch_up else 0,
            "kept_frames": len(eng.cache), "loadavg_1min": [load0, os.getloadavg()[0]], "pose": frame.pose}
     if disk is not None:
-        out["disk_restore_s"] = eng._disk_restore_s_per_step * (frame.index - steps)  # read, unpickle, replay
+        # Read, unpickle, rebuild the smoothers from their last re-base and replay their journal since.
+        out["disk_restore_s"] = eng._disk_restore_s  # one restore in a fresh engine (0: none)
+        out["disk_replayed_entries"] = eng.disk.replayed_entries
+        out["disk_snapshot_step"] = frame.index - steps
+        out["plain_step_s"] = eng._step_s["plain"]  # the tracker's running estimate, for the steps after the restore
         out["snapshot_cpu_s_during_seek"] = eng.disk_snapshot_cpu_s  # later ones are queued: 0 unless > MAX_QUEUED
         return out
     # A later seek half-way back: from a kept frame (old path) or a snapshot and a few steps (catch-up path).
@@ -160,6 +164,9 @@ def exact_seek_prepared(rec_path: Path, map_path: Path, rec, cmap, t_us: int, wo
     out["poses_bit_identical"] = all(np.array_equal(p, poses[0]) for p in poses)
     for name in ("on", "off"):
         out[f"{name}_mean_wall_s"] = float(np.mean([r["wall_s"] for r in out[f"snapshots_{name}"]]))
+    on = out["snapshots_on"]
+    out["on_restore_s"] = [r["disk_restore_s"] for r in on]
+    out["on_replayed_entries"] = [r["disk_replayed_entries"] for r in on]
     shutil.rmtree(root, ignore_errors=True)
     return out
 

@@ -17,8 +17,9 @@ are dropped least recently used first to stay within ``budget_mb`` (every file
 of an entry counts). Beside them ``snap_<n>.pkl``: the engine snapshot at step
 ``(n + 1) * chunk_steps`` (``app/disk_snapshots.py``), so a seek past the
 in-memory frontier restores the farthest one at or before it instead of
-computing from step 0; snapshot ``n`` needs files ``0..n`` (each holds the
-fusion journal since the previous one).
+computing from step 0; snapshot ``n`` needs the files from the one holding the
+fusion smoother's last re-base to ``n`` (each holds the fusion journal since the
+previous one or since a re-base in it), and is only written after ``0..n-1``.
 
 The files are Python pickles of our own making in the user's cache folder; a
 file that cannot be read is treated as missing (and removed), never an error.
@@ -155,6 +156,8 @@ class DiskCache:
         """Disk snapshots present on disk (found or written by this process)."""
         self.error = ""
         """Why writing stopped (disk full, no permission...); empty while it works."""
+        self.replayed_entries = 0
+        """Fusion journal entries the last disk snapshot restore replayed (its cost, which the re-bases bound)."""
 
     def _chunk_path(self, n: int) -> Path:
         return self.dir / f"chunk_{n:05d}.pkl"
@@ -193,8 +196,9 @@ class DiskCache:
             self.error = f"disk cache off: {exc}"
 
     def load_snapshot(self, n: int, step0_snapshot):
-        """The session snapshot ``(state, cursor)`` of disk snapshot ``n`` (fusion smoothers rebuilt from step 0's,
-        ``step0_snapshot``), or None if a file it needs cannot be read (see :meth:`snapshot_loader`)."""
+        """The session snapshot ``(state, cursor)`` of disk snapshot ``n`` (fusion smoothers rebuilt from their last
+        re-base, or from step 0's, ``step0_snapshot``), or None if a file it needs cannot be read (see
+        :meth:`snapshot_loader`)."""
         loader = self.snapshot_loader(n, step0_snapshot)
         while True:
             try:
@@ -204,10 +208,12 @@ class DiskCache:
 
     def snapshot_loader(self, n: int, step0_snapshot):
         """:meth:`load_snapshot` in slices: a generator that yields after each earlier file's journal segment is
-        replayed (~0.15 s each on the 10 s landing) and returns the snapshot. A file that cannot be read is removed
-        with the later ones (the run-ahead writes them again) with a warning, and it returns None: the caller falls
-        back to an earlier snapshot."""
-        from app.disk_snapshots import finish_rebuild, read_header, read_state, replay_header, start_rebuild
+        replayed and returns the snapshot. Only the files from the one holding each smoother's last re-base are
+        replayed (the smoother re-bases every ``FactorGraphFusion.rebase_every_states`` updates, so usually the
+        snapshot's own file alone), else every file from the first. A file that cannot be read is removed with the
+        later ones (the run-ahead writes them again) with a warning, and it returns None: the caller falls back to
+        an earlier snapshot."""
+        from app.disk_snapshots import finish_rebuild, read_header, read_state, replay_header, replay_start, start_rebuild
 
         m = n
         try:
@@ -216,8 +222,17 @@ class DiskCache:
             if header["step"] != self.snapshot_step(n):
                 raise ValueError("step does not match the file name")
             smoothers = start_rebuild(stored, step0_snapshot)
-            for m in range(n + 1):
-                replay_header(smoothers, header if m == n else read_header(self._snapshot_path(m)))
+            # Headers from the last, back to the one holding every smoother's last re-base (usually the last itself).
+            headers = {n: header}
+            while m > 0 and len(replay_start([headers[j] for j in range(m, n + 1)])) < len(smoothers):
+                m -= 1
+                headers[m] = read_header(self._snapshot_path(m))
+            first = m
+            start = {key: first + j for key, j in replay_start([headers[j] for j in range(first, n + 1)]).items()}
+            self.replayed_entries = 0
+            for m in range(first, n + 1):
+                self.replayed_entries += replay_header({k: sm for k, sm in smoothers.items() if start.get(k, 0) <= m},
+                                                       headers[m])
                 if m < n:
                     yield
             return finish_rebuild(stored, smoothers)

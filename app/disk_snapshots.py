@@ -6,14 +6,24 @@ gtsam ``ISAM2`` cannot be pickled. For it the run-ahead keeps a *journal* of
 its calls (:attr:`evpose.fusion.fixed_lag.CopyableFixedLagSmoother.journal`):
 each disk snapshot file holds the journal segment since the previous one
 (graphs and values in gtsam's own serialisation) and the state without the
-smoother. Restoring the snapshot after chunk ``n`` copies the smoother of step 0
-(a fresh session's, deterministic) and replays segments ``0..n`` on it: the same
-smoother bit for bit (``tests/app/test_disk_snapshots.py``), at about a tenth of
-a tracker step per replayed step.
+smoother. The smoother re-bases itself every
+``FactorGraphFusion.rebase_every_states`` updates (headless too: it is part of
+the algorithm), rebuilding iSAM2 from its factors and linearisation point, and
+its journal then restarts with that content (``("rebase", graph, values,
+stamps)``). Restoring the snapshot after chunk ``n`` makes the same rebuild from
+the last re-base's content and replays the journal since: the same smoother bit
+for bit (``tests/app/test_disk_snapshots.py``), at a cost that does not grow with
+the step (~0.6 ms per replayed update, at most ``rebase_every_states`` of
+them: on the 10 s landing the restore at 9 s took 13 ms with 8 journal entries
+to replay, 41-56 ms with 287 entries when the last re-base was 51 updates
+before, against 1.2 s replaying all 1800 steps before the re-bases). Before a smoother's first re-base the restore
+copies the smoother of step 0 (a fresh session's, deterministic) and replays
+segments ``0..n`` on it.
 
 File ``snap_<n>.pkl`` (written atomically once the run-ahead has passed step
 ``(n + 1) * chunk_steps``): two pickles, the header ``{"version", "step",
-"journal": zlib bytes}`` and then the zlib-compressed state, so the segments of
+"journal": zlib bytes, "rebased": keys of the smoothers whose segment starts
+with a re-base}`` and then the zlib-compressed state, so the segments of
 earlier files are read without their states.
 """
 
@@ -24,13 +34,15 @@ import zlib
 
 import numpy as np
 
-VERSION = 1
+VERSION = 2
 """Layout of a snapshot file; a file of another version is ignored."""
 LEVEL = 1
 """zlib level: 1 packs a snapshot of the 10 s landing 3.7 -> 1.0 MB in 40 ms (level 6 saves ~20 % more, 4x slower)."""
 MAX_QUEUED = 8
 """Disk snapshots waiting to be written beyond which the oldest is written at once (~4.6 MB each in memory on the
 10 s landing: a long catch-up must not hold them all)."""
+_GRAPHS = ("update", "rebase")
+"""Journal entries ``(name, graph, values, timestamps)`` whose graph and values are stored in gtsam's serialisation."""
 _SMOOTHER = "__smoother_from_journal__"
 """Stands in the stored state where the smoother was."""
 
@@ -66,7 +78,7 @@ def take_segments(tracker) -> dict[str, list]:
 
 def _encode_segments(segments: dict[str, list]) -> bytes:
     ser = {key: [(e[0], None if e[1] is None else e[1].serialize(), None if e[2] is None else e[2].serialize(), e[3])
-                 if e[0] == "update" else e for e in entries] for key, entries in segments.items()}
+                 if e[0] in _GRAPHS else e for e in entries] for key, entries in segments.items()}
     return zlib.compress(pickle.dumps(ser, protocol=pickle.HIGHEST_PROTOCOL), LEVEL)
 
 
@@ -81,7 +93,7 @@ def _decode_segments(blob: bytes) -> dict[str, list]:
         return obj
 
     ser = pickle.loads(zlib.decompress(blob))
-    return {key: [("update", load(gtsam.NonlinearFactorGraph, e[1]), load(gtsam.Values, e[2]), e[3]) if e[0] == "update" else e
+    return {key: [(e[0], load(gtsam.NonlinearFactorGraph, e[1]), load(gtsam.Values, e[2]), e[3]) if e[0] in _GRAPHS else e
                   for e in entries] for key, entries in ser.items()}
 
 
@@ -95,8 +107,9 @@ def encode(step: int, snapshot, segments: dict[str, list]) -> tuple[bytes, bytes
         owner["fusion"] = {**owner["fusion"], "smoother": _SMOOTHER}
         stored[key] = owner
     body = zlib.compress(pickle.dumps((stored, cursor), protocol=pickle.HIGHEST_PROTOCOL), LEVEL)
-    header = pickle.dumps({"version": VERSION, "step": int(step), "journal": _encode_segments(segments)},
-                          protocol=pickle.HIGHEST_PROTOCOL)
+    rebased = sorted(key for key, entries in segments.items() if entries and entries[0][0] == "rebase")
+    header = pickle.dumps({"version": VERSION, "step": int(step), "journal": _encode_segments(segments),
+                           "rebased": rebased}, protocol=pickle.HIGHEST_PROTOCOL)
     return header, body
 
 
@@ -129,11 +142,26 @@ def start_rebuild(stored, step0_snapshot) -> dict:
     return {key: base[key]["fusion"]["smoother"].copy() for key in _smoother_keys(stored[0])}
 
 
-def replay_header(smoothers: dict, header: dict) -> None:
-    """Replay one file's journal segments on the smoothers being rebuilt (files in order from the first)."""
+def replay_start(headers) -> dict[str, int]:
+    """For each smoother key, the index into ``headers`` (the files up to the one restored, oldest first) of the
+    last file whose segment starts with a re-base of that smoother: its replay starts there (0 if none did)."""
+    start: dict[str, int] = {}
+    for m in range(len(headers) - 1, -1, -1):
+        for key in headers[m].get("rebased", ()):
+            start.setdefault(key, m)
+    return start
+
+
+def replay_header(smoothers: dict, header: dict) -> int:
+    """Replay one file's journal segments on the smoothers being rebuilt (files in order from the first, or from
+    the one whose segment starts with each smoother's last re-base); the number of entries replayed."""
     segments = _decode_segments(header["journal"])
+    n = 0
     for key, sm in smoothers.items():
-        sm.replay(segments.get(key, []))
+        entries = segments.get(key, [])
+        sm.replay(entries)
+        n += len(entries)
+    return n
 
 
 def finish_rebuild(stored, smoothers: dict):
@@ -171,8 +199,8 @@ class DiskSnapshotsMixin:
     """The :class:`~app.tracker_engine.TrackerEngine`'s side: write a disk snapshot at each chunk end the run-ahead
     passes, and find / adopt the farthest one for a seek (``self.disk``, ``self._summaries``, ``self._ahead``)."""
 
-    _disk_restore_s_per_step = 0.0
-    """Running estimate of a disk restore (read, unpickle, journal replay) per step restored to, seconds."""
+    _disk_restore_s = 0.0
+    """Running estimate of one disk restore (read, unpickle, journal replay since the last re-base), seconds."""
     _disk_queue: list
     _disk_adopted: dict
     _disk_job = None
@@ -194,6 +222,11 @@ class DiskSnapshotsMixin:
             best, n = step, n + 1
         return best
 
+    def _disk_restore_cost_s(self) -> float:
+        """Seconds a disk restore costs: the running estimate, or before any was measured, a chunk's journal
+        replayed (~0.2 of a plain step each: an upper bound, as the smoother re-bases at least that often)."""
+        return self._disk_restore_s or 0.2 * (self._step_s["plain"] or 0.01) * self.disk.chunk_steps
+
     def catch_up_cost_steps(self, t_us: int, exact: bool = False) -> int:
         """The engine's :meth:`catch_up_steps` plus a disk snapshot's restore, in steps of CPU time."""
         k = self._target(t_us, exact)
@@ -201,20 +234,20 @@ class DiskSnapshotsMixin:
         s, start = self._start_for(k)
         in_memory = start in s.snapshot_steps or (self._ahead is not None and start in self._ahead.snapshot_steps)
         if steps and start > s.step_count and not in_memory and start == self._disk_base(k):
-            # The restore replays the fusion journal of every step before the disk snapshot.
-            plain = self._step_s["plain"] or 0.01
-            steps += int(start * (self._disk_restore_s_per_step or 0.2 * plain) / plain)
+            # The restore replays the fusion journal since the smoother's last re-base before the disk snapshot.
+            steps += int(self._disk_restore_cost_s() / (self._step_s["plain"] or 0.01))
         return steps
 
     def _disk_jump(self, k: int, start: int) -> int:
         """The disk snapshot step the run-ahead (at ``start``) should restore on its way to step ``k``, or -1: only
-        when restoring it (which replays the fusion journal from step 0, ~0.6 ms per step before it on the 10 s
-        landing) costs less than stepping there from ``start`` (~4 ms per step)."""
+        when restoring it (which replays the fusion journal since the smoother's last re-base, at most
+        ``FactorGraphFusion.rebase_every_states`` updates at ~0.6 ms each on the 10 s landing, whatever the step)
+        costs less than stepping there from ``start`` (~4 ms per step)."""
         d = self._disk_base(k)
         if d <= start + self._snapshot_spacing:
             return -1
         plain = self._step_s["plain"] or 0.01
-        return d if d * (self._disk_restore_s_per_step or 0.2 * plain) < (d - start) * plain else -1
+        return d if self._disk_restore_cost_s() < (d - start) * plain else -1
 
     def _adopt_disk(self, s, step: int) -> bool:
         """Give session ``s`` the disk snapshot at ``step`` at once; False if a file it needs was unreadable."""
@@ -246,9 +279,9 @@ class DiskSnapshotsMixin:
             s.drop_snapshot(last)  # the shown session keeps one snapshot read from disk (~3.7 MB each), the latest
         self._disk_adopted[id(s)] = step
         s.adopt_snapshot(step, snap)
-        per = (job[3] + time.perf_counter() - t0) / max(step, 1)
-        old = self._disk_restore_s_per_step
-        self._disk_restore_s_per_step = per if not old else 0.7 * old + 0.3 * per
+        took = job[3] + time.perf_counter() - t0
+        old = self._disk_restore_s
+        self._disk_restore_s = took if not old else 0.7 * old + 0.3 * took
         return True
 
     def _write_disk_snapshot(self, s, defer: bool = False) -> None:

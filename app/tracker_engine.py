@@ -303,8 +303,8 @@ class TrackerEngine(DiskSnapshotsMixin, Engine):
         plain = self._step_s["plain"] or 0.01
         base = self._base(s, k)
         in_memory = base in s.snapshot_steps or (self._ahead is not None and base in self._ahead.snapshot_steps)
-        per = (self._restore_s_per_step or 0.3 * plain) if in_memory else (self._disk_restore_s_per_step or 0.2 * plain)
-        restore = base * per + (k - base + 1) * plain
+        first = base * (self._restore_s_per_step or 0.3 * plain) if in_memory else self._disk_restore_cost_s()
+        restore = first + (k - base + 1) * plain
         return (k - s.step_count + 1) * plain <= restore
 
     def _produce(self, k: int) -> Frame | None:

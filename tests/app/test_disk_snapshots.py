@@ -137,3 +137,27 @@ def test_with_snapshots_off_nothing_is_stored_and_a_far_seek_computes_from_step_
         off.prefetch(1)
     assert not list(off.disk.dir.glob("snap_*.pkl")) and all(
         sm.journal is None for sm in live_smoothers(off._ahead.tracker).values())
+
+
+@pytest.mark.parametrize("rebase_every", [10, 0])
+def test_a_restore_replays_only_the_journal_since_the_smoothers_last_re_base_at_any_depth(
+        squares_scene, tmp_path, pair_files, monkeypatch, rebase_every):
+    from evpose.fusion.factor_graph import FactorGraphFusion
+
+    monkeypatch.setattr(FactorGraphFusion, "rebase_every_states", rebase_every)  # 0: never (the old restore)
+    s = TrackingSession(*squares_scene)
+    ref = [s.step() for _ in range(s.total_steps)]
+    first = _prepare_part(squares_scene, tmp_path, pair_files, 85)
+    assert sorted(first.disk.snapshots_written) == [0, 1, 2, 3]
+    replayed = []
+    for n in range(4):
+        eng = _engine(squares_scene, tmp_path, pair_files)
+        eng.seek(eng.t_start_us)
+        k = (n + 1) * CHUNK + 7  # off the kept-frame grid: the disk snapshot before it restored, 7 steps computed
+        g = eng.seek_step(k)
+        assert g.index == k and np.array_equal(g.pose, ref[k].pose)
+        replayed.append(eng.disk.replayed_entries)
+    if rebase_every:  # the same few entries (those of the updates since the last re-base) at every depth
+        assert len(set(replayed)) == 1 and 0 < replayed[0] < 30
+    else:  # every entry since step 0: a chunk's worth more for each snapshot further in
+        assert replayed == [replayed[0] * (n + 1) for n in range(4)] and replayed[0] > 30
