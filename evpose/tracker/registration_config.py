@@ -80,7 +80,9 @@ class RegistrationConfig:
     119-350 of 393 updates at 346x260 or 240x180 (ATE 0.1-0.8 m) and ``full`` got
     35-81 mm against Huber's 19.5 / 22.9 mm; with Huber, ``stpe`` ATE 115-129 / 89-100
     mm against 140 / 108 mm for this test but ``full`` 19.5-20.3 / 23.8-25.3 mm and
-    up to 10 iterations per update, so the cost test stays the default."""
+    up to 10 iterations per update, so the cost test stays the default. Session 8, ``full`` seeds 0-3 (buffer-zone
+    trail 0), 0 with 30 iterations: 8.65 / 9.85 mm against 9.15 / 9.51 at 346x260 / 240x180, median iterations
+    2 -> 12."""
     prior_translation_m: float = field(default=0.01, metadata={"min": 0.0, "max": 1.0, "step": 0.001, "unit": "m"})
     """Std of a Gaussian prior pulling the pose towards the prediction, translation, metres (0 = no prior).
 
@@ -89,7 +91,11 @@ class RegistrationConfig:
     Too tight a prior makes the track follow the constant-velocity model: on the
     simulated landing (lag compensated, 346x260 / 240x180) 1 mm / 0.02 deg gave
     83 / 89 mm ATE, 2 mm / 0.05 deg 35 / 54 mm, 5 mm / 0.1 deg 18 / 31 mm,
-    10 mm / 0.2 deg 18 / 26 mm, none 105 / 28 mm."""
+    10 mm / 0.2 deg 18 / 26 mm, none 105 / 28 mm. Session 8, ``full`` (buffer-zone trail 0), seeds 0 / 1 at 346x260
+    (11.37 / 8.23 mm with this prior): none 9.70 / 8.56 mm; the prior kept but the reported covariance the events'
+    alone (the fusion counts the prediction once) 10.23 / 8.29; that and the pose moved to the events' own minimum
+    (one Newton step, ``H_e^-1 P e``) 11.04 / 8.61, with converged registrations (seeds 0-3) 9.02 / 9.78 mm against
+    9.15 / 9.51 at 346x260 / 240x180."""
     prior_rotation_deg: float = field(default=0.2, metadata={"min": 0.0, "max": 10.0, "step": 0.01, "unit": "deg"})
     """Std of the same prior, rotation, degrees (0 = no prior)."""
     prior_residual_sigma: float = field(default=0.2, metadata={"min": 0.01, "max": 1.0, "step": 0.01, "unit": "TDF"})
@@ -208,3 +214,15 @@ class RegistrationConfig:
     0.155 -> 0.123 / 0.152 deg at 0.2). Bundled demos (``full``, ``--align none``) 0 -> 0.2: ``landing`` 15.79 ->
     15.55 mm, ``landing_dynamic`` 21.83 -> 20.58 mm, ``landing_fast`` 24.19 -> 23.88 mm. ``stpe+filter`` (not
     applied there) would go 22.28 / 30.38 -> 22.47 / 28.54 mm."""
+    fused_buffer_trail_px: float = field(default=0.1, metadata={"min": -1.0, "max": 1.0, "step": 0.05, "unit": "px"})
+    """In the fused modes, how much further behind the lag model the field of a point in the polarity filter's buffer
+    zone (predicted polarity 0: its patch shows events of both polarities) is sampled, along its edge normal, pixels
+    (0 = as the model says).
+
+    ``full`` with its prediction replaced by the truth (seeds 0 and 1, 2 s landing), the TDF minimum of every
+    registered point against the trail model (lag, floor, polarity split), by normal speed 0.05-0.1 / 0.15-0.2 /
+    0.2-0.25 px/ms: ON and OFF points within ~0.1 px of it (OFF up to 0.17 px ahead at 240x180), buffer-zone points
+    (about half of those registered) -0.13 / -0.09 / -0.26 px at 346x260 and +0.04 / -0.16 / -0.27 px at 240x180:
+    behind it. Their shared offset moves the whole image (0.1-0.3 px), which the fusion, unable to tell a tilt from a
+    shift, takes partly as a tilt that the gyro then keeps (seed-mean ``full`` error at the first update already
+    -34 mdeg about camera x, against the registration's +35): the slow error common to the seeds."""
