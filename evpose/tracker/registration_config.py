@@ -177,7 +177,9 @@ class RegistrationConfig:
     ``TDF = 1 - exp(-lag / eta)`` (signed residual, the edge's position ``lag`` ago, sub-pixel on the ramp) instead of
     the minimum lost badly: lag 6 / 8 ms 27.2 / 27.0 mm at 346x260, 8 ms 39.4 mm at 240x180.
     Registrations from the truth with the points moved by a per-polarity fit (converged, 346x260) were no
-    better than the global fit once one outlier was set aside; a per-segment oracle offset only 11.6 -> 9.1 mm."""
+    better than the global fit once one outlier was set aside; a per-segment oracle offset only 11.6 -> 9.1 mm.
+    Session 8, ``full``, a trail affine in the normal speed (floor off, every point 0.5 px + 2.5 ms x speed, or
+    0.7 px + 1.5 ms): seeds 0 / 1 14.5 / 9.8 and 24.8 / 12.7 mm at 346x260 against 11.4 / 8.2."""
     lag_floor_px: float = field(default=0.0, metadata={"min": 0.0, "max": 3.0, "step": 0.05, "unit": "px"})
     """Smallest distance the TDF minimum trails a moving edge, pixels (0 = off); needs the map's edge directions
     and the motion twist. The fused modes use ``fused_lag_floor_px`` instead.
