@@ -333,10 +333,12 @@ class Tracker:
                 prior_info = self.predictor.prior_information(until) if self.config.motion_filter.prior_in_registration else _NO_PRIOR
             trail = None
             split = float(self.config.registration.fused_polarity_trail_px)
-            if split != 0 and self.components.drives_pose and polarity is not None:
-                # OFF points' fields trail further than ON points' (see ``fused_polarity_trail_px``).
+            both = float(self.config.registration.fused_buffer_trail_px)
+            if (split != 0 or both != 0) and self.components.drives_pose and polarity is not None:
+                # OFF points' fields trail further than ON points' (see ``fused_polarity_trail_px``), and those of
+                # points shown both polarities (the buffer zone) further still (``fused_buffer_trail_px``).
                 p_ = np.asarray(polarity)
-                trail = np.where(p_ < 0, 0.5 * split, np.where(p_ > 0, -0.5 * split, 0.0))
+                trail = np.where(p_ < 0, 0.5 * split, np.where(p_ > 0, -0.5 * split, both))
             tangents = np.take(self._tangents, used, axis=0) if self._registration.lag_floor_px > 0 or trail is not None else None
             reg = register_to_map(levels, pts, predicted, self.K, self._registration, field_polarity, twist_per_s=twist,
                                   prior_information=prior_info, prior_residual_sigma=self.config.motion_filter.prior_residual_sigma,

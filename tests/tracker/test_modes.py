@@ -182,3 +182,43 @@ def test_full_mode_takes_the_looser_inlier_test_only_once_the_map_is_acquired(la
     for _ in range(ACQUIRE_UPDATES):
         ok.step()
     assert ok.tracker.hold.acquired and all(r.counts["registered"] for r in ok.results)
+
+
+def _recorded_trails(rec, cmap, mode, buffer_px, split_px=0.2, steps=8):
+    """The per-point trail offsets registration got in the first ``steps`` updates, with the predicted polarities."""
+    import evpose.tracker.tracker as tracker_module
+
+    cfg = TrackerConfig(mode=mode)
+    cfg.registration.fused_buffer_trail_px = buffer_px
+    cfg.registration.fused_polarity_trail_px = split_px
+    s = TrackingSession(rec, cmap, cfg)
+    seen, original = [], tracker_module.register_to_map
+
+    def recording(*args, trail_offsets_px=None, **kwargs):
+        seen.append(None if trail_offsets_px is None else np.array(trail_offsets_px))
+        return original(*args, trail_offsets_px=trail_offsets_px, **kwargs)
+
+    tracker_module.register_to_map = recording
+    try:
+        polarities = [s.step(debug=True).debug.predicted_polarity for _ in range(steps)]
+    finally:
+        tracker_module.register_to_map = original
+    return seen, polarities
+
+
+def test_full_mode_samples_buffer_zone_points_further_behind_than_the_lag_model(landing, sim_landing_small):
+    from evpose.bench.registration_bias import true_edge_map
+
+    rec, _ = landing
+    # Edge normals and a brightness sign let the polarity filter predict ON / OFF points besides its buffer zone.
+    cmap = true_edge_map(sim_landing_small.edges, 0.02)[0]
+    cmap.brightness_sign[:] = 1
+    seen, polarities = _recorded_trails(rec, cmap, TrackerMode.FULL, buffer_px=0.1)
+    assert len(seen) == len(polarities) and all(t is not None for t in seen)
+    for trail, pol in zip(seen, polarities):
+        assert trail.shape == pol.shape
+        assert np.all(trail[pol == 0] == 0.1) and np.all(trail[pol > 0] == -0.1) and np.all(trail[pol < 0] == 0.1)
+    assert any(np.any(p == 0) for p in polarities) and any(np.any(p != 0) for p in polarities)
+    # Both terms off: no per-point trail at all; the polarity-filter mode without fusion never gets one.
+    assert all(t is None for t in _recorded_trails(rec, cmap, TrackerMode.FULL, buffer_px=0.0, split_px=0.0, steps=3)[0])
+    assert all(t is None for t in _recorded_trails(rec, cmap, TrackerMode.STPE_FILTER, buffer_px=0.1, steps=3)[0])
