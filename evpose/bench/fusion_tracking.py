@@ -314,7 +314,7 @@ def bench_refinement_cost(ctx) -> dict:
 
 def bench_crowding_cost(ctx) -> dict:
     """As ``refinement_cost``, for the crowded-point test and the fused modes' per-point trail model together
-    (``visible_map.crowded_radius_px``, ``registration.fused_lag_floor_px`` and ``fused_polarity_trail_px`` 0 against
+    (``visible_map.crowded_radius_px``, ``registration.fused_lag_floor_px``, ``fused_polarity_trail_px`` and ``fused_buffer_trail_px`` 0 against
     their defaults): per-update CPU of ``stpe`` and ``full``, alternated in one process, ATE of each."""
     from evpose.tracker.registration_config import RegistrationConfig
     from evpose.tracker.visible_map import VisibleMapConfig
@@ -325,6 +325,7 @@ def bench_crowding_cost(ctx) -> dict:
         cfg.visible_map.crowded_radius_px = radius if on else 0.0
         cfg.registration.fused_lag_floor_px = reg.fused_lag_floor_px if on else 0.0
         cfg.registration.fused_polarity_trail_px = reg.fused_polarity_trail_px if on else 0.0
+        cfg.registration.fused_buffer_trail_px = reg.fused_buffer_trail_px if on else 0.0
 
     return _paired_cost(ctx, configure, ("all_points", "uncrowded"))
 
