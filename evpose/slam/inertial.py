@@ -52,6 +52,10 @@ class InertialConfig:
     simulated indoor room (E-I-C2, seeds 0-3, with ``min_inliers`` 8) 0.4 s raised the tracked time from 53-67 % to
     76-99 %, cut the maps from 10-14 to 1-5 and the RPE from 0.34-1.81 to 0.004-0.05 m/m; 0.1 s left 6-8 maps, 0.6 s
     sent one seed's ATE to 159 %, 1.0 s equalled 0.4 s on three seeds. Landing (seeds 0-7) unchanged."""
+    rejoin_s: float = field(default=0.0, metadata={"min": 0.0, "max": 5.0, "step": 0.05, "unit": "s"})
+    """C2/C3 before the IMU initialisation: a map lost after coasting is continued by the next two-view map when that
+    map's second keyframe comes within this long of the lost map's last pose (:mod:`evpose.slam.map_rejoin`; 0:
+    never, every loss opens an independent map), seconds."""
     coast_velocity_span_s: float = field(default=0.03, metadata={"min": 0.005, "max": 0.5, "step": 0.005, "unit": "s"})
     """The coasting velocity is the mean over the newest poses spanning this long (consecutive MCIs are a few ms
     apart and their difference mostly noise), seconds. Not tuned: 0.03 s spans 5-6 MCIs indoors."""
@@ -110,6 +114,9 @@ class InertialConfig:
     MCI shrink the velocity from 1.25 to 0.08 m/s within the first BAs.)"""
     max_residual_ratio: float = field(default=0.02, metadata={"min": 0.001, "max": 0.5, "step": 0.001, "unit": "ratio"})
     """RMS residual of the alignment over the RMS of the IMU deltas above which initialisation is refused, ratio."""
+    velocity_from_imu: bool = False
+    """A keyframe of a metric map without a velocity estimate starts the inertial BA from the velocity the IMU
+    propagates from its predecessor's, instead of the finite difference of the two keyframes' positions."""
     inertial_ba: bool = True
     full_ba_after_init: bool = True
     """Right after a successful initialisation, run the inertial BA once over all keyframes of the map."""
