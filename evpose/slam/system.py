@@ -253,7 +253,10 @@ class EventSlam(GyroAids):
         m = self.atlas.new_map() if (self.atlas.active is None or self.atlas.active.keyframes) else self.atlas.active
         kf0 = Keyframe(0, fe.init_ref_t, np.eye(4), {int(t): fe.init_ref[int(t)].copy() for t in ids})
         kf1 = Keyframe(1, mci.t_us, res.T_wc2, {int(t): uv.astype(np.float64) for t, uv in zip(fe.ids.tolist(), fe.uv)})
-        m.keyframes = [kf0, kf1]
+        # The first pose refers to its own keyframe: later BAs move the second one, and the first pose must not follow.
+        m.keyframes = [kf0]
+        m.add_pose(kf0.t_us, kf0.T_wc)
+        m.keyframes.append(kf1)
         fe.track_to_point = {}
         for k in np.flatnonzero(res.good):
             tid = int(ids[k])
@@ -268,7 +271,6 @@ class EventSlam(GyroAids):
         store_patches(m, kf1.id, mci.image8, self.cfg.search.patch_px)
         if self._matcher() is SearchMatcher.KLT:
             keep_keyframe_image(m, kf1, mci.image8, tc.local_window)
-        m.add_pose(kf0.t_us, kf0.T_wc)
         m.add_pose(kf1.t_us, kf1.T_wc)
         fe.init_ref = None
         self._state = SlamStatus.OK
