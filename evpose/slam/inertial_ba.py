@@ -32,7 +32,8 @@ class InertialState:
 
 def inertial_local_bundle_adjustment(m: SlamMap, state: InertialState, K: np.ndarray, imu: ImuSamples, T_cam_imu: np.ndarray, time_offset_us: int,
                                      window: int, iterations: int, huber_px: float, acc_sigma: float = 0.01, gyro_sigma: float = 0.001,
-                                     acc_bias_sigma: float = 0.1, gyro_bias_sigma: float = 0.01) -> float:
+                                     acc_bias_sigma: float = 0.1, gyro_bias_sigma: float = 0.01,
+                                     fill_from_imu: bool = False) -> float:
     """Optimise the last ``window`` keyframes (poses, velocities), the window's bias and the points they see, in place.
 
     The oldest keyframe of the window is held by a tight prior (the IMU fixes scale and
@@ -45,6 +46,10 @@ def inertial_local_bundle_adjustment(m: SlamMap, state: InertialState, K: np.nda
     kfs = m.keyframes[-window:]
     if iterations <= 0 or len(kfs) < 2:
         return float("nan")
+    if fill_from_imu:
+        from evpose.slam.inertial_bridge import fill_velocities
+
+        fill_velocities(m.keyframes, state, imu, T_cam_imu, time_offset_us, acc_sigma, gyro_sigma)
     T_cb = np.asarray(T_cam_imu, np.float64)
     T_bc = invert_pose(T_cb)
     body_P_cam = gtsam.Pose3(T_bc)

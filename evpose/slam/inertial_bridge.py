@@ -30,3 +30,21 @@ def predict_camera_pose(kf: Keyframe, state: InertialState, imu: ImuSamples, T_c
     nav = pim.predict(gtsam.NavState(gtsam.Pose3(kf.T_wc @ T_cb), np.asarray(v, np.float64)), bias)
     T_wb = nav.pose().matrix()
     return T_wb @ invert_pose(T_cb), np.asarray(nav.velocity(), np.float64)
+
+
+def fill_velocities(keyframes: list[Keyframe], state: InertialState, imu: ImuSamples, T_cam_imu: np.ndarray, time_offset_us: int,
+                    acc_sigma: float, gyro_sigma: float) -> int:
+    """Give each keyframe without a velocity the one the IMU propagates from its predecessor's, in place; returns how many.
+
+    Indoors keyframes come a few ms apart and their positions jump by centimetres where tracking re-localises: a
+    finite-difference velocity between two of them was metres per second off, and the inertial BA started from it.
+    """
+    n = 0
+    for a, b in zip(keyframes[:-1], keyframes[1:]):
+        if b.id in state.velocities or a.id not in state.velocities:
+            continue
+        pred = predict_camera_pose(a, state, imu, T_cam_imu, time_offset_us, b.t_us, acc_sigma, gyro_sigma)
+        if pred is not None:
+            state.velocities[b.id] = pred[1]
+            n += 1
+    return n

@@ -38,5 +38,5 @@ def refine_map_scale(m: SlamMap, K: np.ndarray, imu: ImuSamples, T_cam_imu: np.n
     st.velocities.update({kfs[k].id: v for k, v in zip(res.used, res.velocities)})
     if ic.inertial_ba:
         inertial_local_bundle_adjustment(m, st, K, imu, T_cam_imu, time_offset_us, len(kfs), ba_iterations, ba_huber_px,
-                                         ic.acc_noise, ic.gyro_noise, ic.acc_bias_sigma, ic.gyro_bias_sigma)
+                                         ic.acc_noise, ic.gyro_noise, ic.acc_bias_sigma, ic.gyro_bias_sigma, ic.velocity_from_imu)
     return res

@@ -40,6 +40,7 @@ from evpose.slam.inertial import InertialConfiguration, imu_init_due, initialize
 from evpose.slam.inertial_bridge import predict_camera_pose
 from evpose.slam.inertial_ba import InertialState, inertial_local_bundle_adjustment
 from evpose.slam.initialization import initialize_two_view
+from evpose.slam.map_rejoin import RejoinCandidate, merge_into, rejoin_similarity
 from evpose.slam.local_map import cull_points, insert_keyframe, need_keyframe, triangulate_new_points
 from evpose.slam.event_image import to_uint8
 from evpose.slam.mci import Hypothesis, MciGenerator, MciResult, MotionPrior
@@ -90,6 +91,8 @@ class EventSlam(GyroAids):
         """Hypothesis of the previous MCI ("H1".."H4")."""
         self._last_visual_t = 0
         """Time of the last MCI tracked visually (C2/C3 bound their IMU bridges by it), us."""
+        self._rejoin: RejoinCandidate | None = None
+        """The last map lost while coasting (``InertialConfig.rejoin_s``), which the next two-view map may continue."""
 
     # --------------------------------------------------------------- public
     def step(self, events: EventArray) -> SlamStepResult:
@@ -125,7 +128,7 @@ class EventSlam(GyroAids):
             "n_hist": self.window.n_events_history, "atlas": self.atlas, "fe": self.fe, "next_point": self._next_point,
             "state": self._state, "last_t": self._last_t, "imu_init": self.last_imu_init, "n_results": len(self.results),
             "last_visual_t": self._last_visual_t, "prev_hypothesis": self._prev_hypothesis,
-            "scale_refinement": self.last_scale_refinement,
+            "scale_refinement": self.last_scale_refinement, "rejoin": self._rejoin,
         })
 
     def restore(self, snap: dict) -> None:
@@ -139,6 +142,7 @@ class EventSlam(GyroAids):
         self._last_visual_t = s.get("last_visual_t", 0)
         self._prev_hypothesis = s.get("prev_hypothesis")
         self.last_scale_refinement = s.get("scale_refinement")
+        self._rejoin = s.get("rejoin")
         del self.results[s["n_results"]:]
 
     # ------------------------------------------------------------- pipeline
@@ -249,7 +253,10 @@ class EventSlam(GyroAids):
         m = self.atlas.new_map() if (self.atlas.active is None or self.atlas.active.keyframes) else self.atlas.active
         kf0 = Keyframe(0, fe.init_ref_t, np.eye(4), {int(t): fe.init_ref[int(t)].copy() for t in ids})
         kf1 = Keyframe(1, mci.t_us, res.T_wc2, {int(t): uv.astype(np.float64) for t, uv in zip(fe.ids.tolist(), fe.uv)})
-        m.keyframes = [kf0, kf1]
+        # The first pose refers to its own keyframe: later BAs move the second one, and the first pose must not follow.
+        m.keyframes = [kf0]
+        m.add_pose(kf0.t_us, kf0.T_wc)
+        m.keyframes.append(kf1)
         fe.track_to_point = {}
         for k in np.flatnonzero(res.good):
             tid = int(ids[k])
@@ -264,12 +271,30 @@ class EventSlam(GyroAids):
         store_patches(m, kf1.id, mci.image8, self.cfg.search.patch_px)
         if self._matcher() is SearchMatcher.KLT:
             keep_keyframe_image(m, kf1, mci.image8, tc.local_window)
-        m.add_pose(kf0.t_us, kf0.T_wc)
         m.add_pose(kf1.t_us, kf1.T_wc)
         fe.init_ref = None
         self._state = SlamStatus.OK
         self._last_visual_t = mci.t_us
+        if self._rejoin is not None:
+            joined = self._try_rejoin(m)
+            if joined is not None:
+                return SlamStatus.OK, joined, self.atlas.active.keyframes[-1].T_wc.copy()
         return SlamStatus.OK, f"map {m.id} initialised ({res.model}, {len(m.points)} points, parallax {res.median_parallax_deg:.1f} deg)", m.keyframes[-1].T_wc.copy()
+
+    def _try_rejoin(self, m: SlamMap) -> str | None:
+        """Append the fresh two-view map ``m`` to the map lost while coasting, in that map's frame (:mod:`evpose.slam.map_rejoin`)."""
+        cand, self._rejoin = self._rejoin, None
+        old = cand.map
+        if old is m or not old.traj_t or (m.keyframes[-1].t_us - old.traj_t[-1]) / 1e6 > self.cfg.inertial.rejoin_s:
+            return None
+        R0 = self._gyro_rotation(old.traj_t[-1], m.keyframes[0].t_us, old.traj_T[-1])
+        R1 = self._gyro_rotation(old.traj_t[-1], m.keyframes[1].t_us, old.traj_T[-1])
+        sim = None if R0 is None or R1 is None else rejoin_similarity(old, m, R0, R1, cand.v_cam)
+        if sim is None:
+            return None
+        merge_into(old, m, *sim)
+        self.atlas.maps.remove(m)
+        return f"map {old.id} re-joined by a two-view map ({len(m.points)} points, scale {sim[2]:.3g} of it)"
 
     def _try_imu_init(self, m: SlamMap) -> None:
         """Scale the map to metres and align it with gravity once enough keyframes span enough time."""
@@ -290,7 +315,7 @@ class EventSlam(GyroAids):
                 # corrects the whole visual map, not only the next local window.
                 inertial_local_bundle_adjustment(m, m.inertial, self.K, self.imu, self.calib.T_cam_imu, self.calib.time_offset_us,
                                                  len(m.keyframes), tc.ba_iterations, tc.ba_huber_px, ic.acc_noise, ic.gyro_noise,
-                                             ic.acc_bias_sigma, ic.gyro_bias_sigma)
+                                                 ic.acc_bias_sigma, ic.gyro_bias_sigma, ic.velocity_from_imu)
             self._reanchor_rotations(m)
 
     # ------------------------------------------------------------- tracking
@@ -406,11 +431,13 @@ class EventSlam(GyroAids):
         elif m.imu_initialised and ic.inertial_ba:
             inertial_local_bundle_adjustment(m, m.inertial, self.K, self.imu, self.calib.T_cam_imu, self.calib.time_offset_us,
                                              tc.local_window, tc.ba_iterations, tc.ba_huber_px, ic.acc_noise, ic.gyro_noise,
-                                             ic.acc_bias_sigma, ic.gyro_bias_sigma)
+                                             ic.acc_bias_sigma, ic.gyro_bias_sigma, ic.velocity_from_imu)
         else:
             priors = self._keyframe_rotation_priors(m)
             sigma, pair_sigmas = self._ba_rotation_sigmas(m, priors)
-            local_bundle_adjustment(m, self.K, tc.local_window, tc.ba_iterations, tc.ba_huber_px, n_fixed=1,
+            # A re-joined map's older segment shares no points with the newest one (SlamMap.segment_start_kf).
+            window = min(tc.local_window, sum(k.id >= m.segment_start_kf for k in m.keyframes))
+            local_bundle_adjustment(m, self.K, window, tc.ba_iterations, tc.ba_huber_px, n_fixed=1,
                                     rotation_priors=priors, rotation_sigma_rad=sigma, rotation_sigmas_rad=pair_sigmas,
                                     # Event-inertial maps get their scale from the IMU initialisation; anchoring the visual
                                     # scale before it made E-I-C2 worse (TrackingConfig.ba_scale_anchor).
@@ -460,6 +487,7 @@ class EventSlam(GyroAids):
         else:
             v = camera_frame_velocity(m, int(ic.coast_velocity_span_s * 1e6))
             if gap_s > ic.coast_s or R_prior is None or v is None:
+                self._rejoin = RejoinCandidate(m, v) if v is not None and ic.rejoin_s > 0 else None
                 return self._lose(reason)
             T_wc, how = coast_pose(m, mci.t_us, R_prior, v), "coasted on the gyro and the last velocity (IMU not initialised)"
         if T_wc is None:

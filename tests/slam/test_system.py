@@ -40,6 +40,13 @@ def test_event_only_slam_tracks_most_of_the_recording_with_small_scale_aligned_e
     assert set(r.hypothesis_scores) >= {"H2", "H4"} and r.hypothesis in r.hypothesis_scores
 
 
+def test_each_initial_pose_follows_its_own_keyframe(radtan_run):
+    # The two-view pose at the first keyframe stays with it when later BAs move the second keyframe.
+    m = radtan_run.atlas.maps[0]
+    assert m.traj_ref[0] == m.keyframes[0].id and m.traj_ref[1] == m.keyframes[1].id
+    assert np.allclose(m.trajectory().matrices()[0], m.keyframes[0].T_wc)
+
+
 def test_slam_is_deterministic(radtan_recording, radtan_run):
     again = run_slam(radtan_recording, SlamConfig())
     a, b = radtan_run.trajectories(), again.trajectories()
