@@ -206,6 +206,14 @@ class TrackingConfig:
     """Points seen by fewer keyframes after three newer keyframes are culled, keyframes."""
     local_window: int = field(default=6, metadata={"min": 2, "max": 30, "step": 1, "unit": "keyframes"})
     """Keyframes optimised by local bundle adjustment, keyframes."""
+    ba_fixed_keyframes: int = field(default=1, metadata={"min": 1, "max": 5, "step": 1, "unit": "keyframes"})
+    """Event-only local BA holds this many of the window's oldest keyframes fixed once the map has more keyframes than
+    the window (before that, only the first keyframe and ``ba_scale_anchor``); with two or more the fixed poses also
+    set the window's scale, and the range factor of ``ba_scale_anchor`` is not added. Event-inertial maps keep one,
+    keyframes."""
+    ba_velocity_prior: float = field(default=0.0, metadata={"min": 0.0, "max": 2.0, "step": 0.05, "unit": "ratio"})
+    """Event-only local BA: sigma of a constant-velocity factor per three consecutive keyframes, as a share of their
+    speed (:mod:`evpose.slam.motion_prior`; 0 disables), ratio."""
     ba_iterations: int = field(default=10, metadata={"min": 0, "max": 100, "step": 1, "unit": "iterations"})
     """Levenberg-Marquardt iterations of local BA (0 disables it), iterations."""
     ba_huber_px: float = field(default=2.0, metadata={"min": 0.1, "max": 10.0, "step": 0.1, "unit": "px"})
