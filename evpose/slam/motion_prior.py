@@ -6,7 +6,8 @@ triangulated from it, is wrong by tens of percent. The map scale then jumps from
 simulated landing, 0.5 s pieces of one map aligned on their own needed scales 45-260 % apart), which no image factor
 sees. A camera carried by a vehicle does not change its velocity by that much between keyframes tens of milliseconds
 apart; this factor says so, with a sigma relative to the speed (the scale is unknown) and a Huber kernel so that real
-accelerations still pass.
+accelerations still pass. It is off by default: on 24 landing seeds it did not lower the ATE as a whole (the figures
+are in ``TrackingConfig.ba_velocity_prior``).
 """
 
 from __future__ import annotations
