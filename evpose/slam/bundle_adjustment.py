@@ -23,7 +23,7 @@ class BaReport:
 
 def local_bundle_adjustment(m: SlamMap, K: np.ndarray, window: int, iterations: int, huber_px: float, n_fixed: int = 1,
                             rotation_priors: dict | None = None, rotation_sigma_rad: float = 1e-3, scale_anchor: float = 0.0,
-                            rotation_sigmas_rad: dict | None = None) -> BaReport:
+                            rotation_sigmas_rad: dict | None = None, velocity_sigma_ratio: float = 0.0) -> BaReport:
     """Optimise the last ``window`` keyframes of ``m`` and the points they see, in place.
 
     The ``n_fixed`` oldest keyframes of the window (two while the map has only
@@ -36,6 +36,8 @@ def local_bundle_adjustment(m: SlamMap, K: np.ndarray, window: int, iterations: 
     (translation free; ``rotation_sigmas_rad`` may give a pair its own sigma). ``scale_anchor`` > 0 adds a range factor holding the distance between the two oldest
     keyframes of the window at its value before the optimisation, with that sigma relative to the distance: with one
     fixed keyframe the monocular scale is a gauge freedom the solver may slide along.
+    ``velocity_sigma_ratio`` > 0 adds constant-velocity factors between consecutive keyframes
+    (:mod:`evpose.slam.motion_prior`), that share of the speed as sigma.
     """
     import gtsam
     from gtsam.symbol_shorthand import L, X
@@ -88,6 +90,11 @@ def local_bundle_adjustment(m: SlamMap, K: np.ndarray, window: int, iterations: 
         d = float(np.linalg.norm(a.T_wc[:3, 3] - b.T_wc[:3, 3]))
         if d > 0:
             graph.add(gtsam.RangeFactorPose3(X(a.id), X(b.id), d, gtsam.noiseModel.Isotropic.Sigma(1, scale_anchor * d)))
+    if velocity_sigma_ratio > 0:
+        from evpose.slam.motion_prior import add_velocity_factors
+
+        # The keyframe before the window, when it sees the window's points, ties the first free velocity to the past.
+        add_velocity_factors(graph, m.keyframes[-(window + 1):], used_kfs, in_window - fixed_ids, velocity_sigma_ratio)
     params = gtsam.LevenbergMarquardtParams()
     params.setMaxIterations(int(iterations))
     e0 = graph.error(values)

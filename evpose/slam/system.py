@@ -437,11 +437,13 @@ class EventSlam(GyroAids):
             sigma, pair_sigmas = self._ba_rotation_sigmas(m, priors)
             # A re-joined map's older segment shares no points with the newest one (SlamMap.segment_start_kf).
             window = min(tc.local_window, sum(k.id >= m.segment_start_kf for k in m.keyframes))
-            local_bundle_adjustment(m, self.K, window, tc.ba_iterations, tc.ba_huber_px, n_fixed=1,
+            n_fixed = tc.ba_fixed_keyframes if self.imu is None and len(m.keyframes) > tc.local_window else 1
+            local_bundle_adjustment(m, self.K, window, tc.ba_iterations, tc.ba_huber_px, n_fixed=n_fixed,
                                     rotation_priors=priors, rotation_sigma_rad=sigma, rotation_sigmas_rad=pair_sigmas,
                                     # Event-inertial maps get their scale from the IMU initialisation; anchoring the visual
                                     # scale before it made E-I-C2 worse (TrackingConfig.ba_scale_anchor).
-                                    scale_anchor=tc.ba_scale_anchor if self.imu is None else 0.0)
+                                    scale_anchor=tc.ba_scale_anchor if self.imu is None else 0.0,
+                                    velocity_sigma_ratio=tc.ba_velocity_prior if self.imu is None else 0.0)
         cull_points(m, self.K, fe.track_to_point, tc)
         # BA moved the newest keyframe: the trajectory's last pose follows it.
         m.add_pose(t_us, m.keyframes[-1].T_wc)

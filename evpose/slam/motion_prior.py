@@ -1,0 +1,65 @@
+"""A constant-velocity prior between consecutive keyframes of the event-only local BA.
+
+Monocular keyframes of a camera at several metres from its scene are a few decimetres apart, and a tilt error of one
+degree is a sideways shift of about ten centimetres there: the baseline, and with it the depth of every point
+triangulated from it, is wrong by tens of percent. The map scale then jumps from one keyframe to the next (on the
+simulated landing, 0.5 s pieces of one map aligned on their own needed scales 45-260 % apart), which no image factor
+sees. A camera carried by a vehicle does not change its velocity by that much between keyframes tens of milliseconds
+apart; this factor says so, with a sigma relative to the speed (the scale is unknown) and a Huber kernel so that real
+accelerations still pass. It is off by default: on 24 landing seeds it did not lower the ATE as a whole (the figures
+are in ``TrackingConfig.ba_velocity_prior``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def velocity_residual(p0: np.ndarray, p1: np.ndarray, p2: np.ndarray, dt0: float, dt1: float) -> np.ndarray:
+    """Change of velocity from ``p0 -> p1`` (``dt0`` s) to ``p1 -> p2`` (``dt1`` s), map units per second (3,)."""
+    return (p2 - p1) / dt1 - (p1 - p0) / dt0
+
+
+def add_velocity_factors(graph, kfs: list, present: set, free: set, sigma_ratio: float, max_gap_s: float = 0.5) -> int:
+    """Add one constant-velocity factor per triple of consecutive keyframes of ``kfs`` (all in ``present``, the graph's
+    pose variables, one at least in ``free``); returns how many.
+
+    Each factor's sigma is ``sigma_ratio`` times the triple's mean speed before the optimisation, map units per second.
+    Triples with a gap over ``max_gap_s`` seconds are skipped (the motion over it is not one velocity).
+    """
+    import gtsam
+    from gtsam.symbol_shorthand import X
+
+    n = 0
+    for a, b, c in zip(kfs[:-2], kfs[1:-1], kfs[2:]):
+        if not {a.id, b.id, c.id} <= present or not ({a.id, b.id, c.id} & free):
+            continue
+        dt0, dt1 = (b.t_us - a.t_us) / 1e6, (c.t_us - b.t_us) / 1e6
+        if not (0 < dt0 <= max_gap_s and 0 < dt1 <= max_gap_s):
+            continue
+        p0, p1, p2 = (k.T_wc[:3, 3] for k in (a, b, c))
+        speed = 0.5 * (np.linalg.norm(p1 - p0) / dt0 + np.linalg.norm(p2 - p1) / dt1)
+        if not speed > 0:
+            continue
+        noise = gtsam.noiseModel.Robust.Create(gtsam.noiseModel.mEstimator.Huber.Create(2.0),
+                                               gtsam.noiseModel.Isotropic.Sigma(3, sigma_ratio * speed))
+        graph.add(gtsam.CustomFactor(noise, [X(a.id), X(b.id), X(c.id)], _error(dt0, dt1)))
+        n += 1
+    return n
+
+
+def _error(dt0: float, dt1: float):
+    w = (1.0 / dt0, -1.0 / dt1 - 1.0 / dt0, 1.0 / dt1)
+
+    def error(this, values, jacobians):
+        poses = [values.atPose3(k) for k in this.keys()]
+        p = [np.asarray(P.translation(), np.float64) for P in poses]
+        if jacobians is not None:
+            # d translation / d (rotation, translation) of a Pose3 perturbed on the right: [0, R].
+            for i, P in enumerate(poses):
+                J = np.zeros((3, 6))
+                J[:, 3:] = w[i] * P.rotation().matrix()
+                jacobians[i] = J
+        return velocity_residual(p[0], p[1], p[2], dt0, dt1)
+
+    return error
