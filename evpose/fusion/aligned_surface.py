@@ -36,6 +36,15 @@ The composed map is kept as a list of patch pixels and the timestamps they show
 distance field from the list (:mod:`evpose.fusion.aligned_field`, bit for bit the
 field of the image), and :meth:`AlignedTimeSurface.last_of` scatters the image
 only when asked (viewer, tests, the coarse field).
+
+Cost (session 8, textured landing 346x260 seed 0, ``stpe+filter``, ~900 points, ~13,000 patch pixels, ~4,100
+events per update, load 0.9-2.2): ``compose`` takes 0.63-0.70 ms per update in a run (``_mark_patches`` 0.31,
+``_select_times`` 0.20, ``_judge_events`` 0.10 ms wall), but 0.18-0.22 ms when called again and again on one
+update's inputs, and 0.56 ms for marking and selecting after 64 MB of other memory traffic: the kernels wait on
+memory, not on arithmetic. Tried on the same inputs, paired, bit for bit the same outputs, none kept: one 12-byte
+record per pixel instead of the three arrays (0.98x), points sorted by image row (1.08x, slower), the disk's row extent
+instead of the square (1.41x, slower), 2 MB pages for every array (0.99x), a branch-free selection (0.95x), per-
+pixel slots into compact per-update arrays (marking 1.00x, selecting 0.80x: 45 us).
 """
 
 from __future__ import annotations
