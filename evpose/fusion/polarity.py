@@ -436,8 +436,12 @@ class MapPolaritySelector:
         return pol
 
     def observe(self, events, T_world_cam: np.ndarray, map_indices: np.ndarray, polarity: np.ndarray,
-                width: int, height: int) -> np.ndarray:
+                width: int, height: int, keep: np.ndarray | None = None) -> np.ndarray:
         """Label the step's events (1 kept, 0 removed by polarity, -1 in no patch), learn signs; returns the labels.
+
+        ``keep`` (optional): ``events`` is the whole batch and only ``events[keep]`` are labelled (the labels are
+        those of ``observe(events[keep], ...)``); when they are the events this step's ``T_align`` judged, its labels
+        and per-point majorities are used and no copy of the kept events is made (a view is returned then).
 
         Events are on sensor pixels; with a distorted ``calibration`` they are
         moved to the ideal pinhole frame the map is projected in. When
@@ -452,7 +456,17 @@ class MapPolaritySelector:
                 and step[0].size == self._aligned.last_point_count):
             idx, polarity = step
         r = self.predictor.config.patch_radius_px
-        if self._aligned_fresh and self._aligned is not None and self._aligned.last_point_count == idx.size:
+        fresh = self._aligned_fresh and self._aligned is not None and self._aligned.last_point_count == idx.size
+        if keep is not None:
+            judged = self._aligned.batch_judgement(events, keep, r) if fresh else None
+            if judged is not None:
+                label, majority = judged
+                self._aligned_fresh = False
+                self.predictor.learn(idx, majority)
+                self.last_counts.update(filter_summary(label))
+                return label
+            events = events[keep]
+        if fresh:
             # This step's T_align grid already knows each pixel's nearest point (at the predicted pose, within
             # ~1 px of the registered one): label from it instead of building another nearest-point grid.
             judged = self._aligned.kept_labels(events, r)  # usually labelled in compose's counting pass already

@@ -424,7 +424,7 @@ class Tracker:
         if self.polarity_selector is not None and hasattr(self.polarity_selector, "observe") and polarity is not None:
             # Label this step's events against the prediction (reports, viewer) and learn point signs from them.
             t0 = time.perf_counter()
-            labels = self.polarity_selector.observe(events[keep], self._pose, used, polarity, self.width, self.height)
+            labels = self.polarity_selector.observe(events, self._pose, used, polarity, self.width, self.height, keep=keep)
             counts.setdefault("events_polarity_removed", int(np.count_nonzero(labels == 0)))  # T_align's count if it ran
             counts["points_single_polarity"] = int(np.count_nonzero(polarity))
             timings["polarity_observe"] = _ms(t0)
