@@ -56,7 +56,9 @@ def ablation_run(recording, contour_map, mode: str, event_filter: bool | None = 
     """One tracking run from ground truth: accuracy, losses, per-module latency and the polarity filter's counts.
 
     ``stpe_latency`` is the registration front end per update (distance field +
-    polarity filter + registration, wall); ``events_removed_share`` is the share
+    polarity filter + registration, wall); ``stpe_latency_to_pose`` the same without the filter's labelling and
+    sign learning (``polarity_observe``, after the pose is out); the filter's parts are ``polarity_predict`` /
+    ``polarity_align`` / ``polarity_observe``; ``events_removed_share`` is the share
     of the noise-filtered events entering the SP-TS that ``T_align`` does not show
     to registration (outside every map point's patch, or of the polarity the
     patch does not accept), summed over the run.
@@ -93,11 +95,15 @@ def ablation_run(recording, contour_map, mode: str, event_filter: bool | None = 
                           EvalConfig(align=Alignment.NONE))
             out["smoothed_ate_rmse_mm"], out["smoothed_are_rmse_deg"] = ev.ate["rmse"] * 1e3, ev.are["rmse"]
     warm = res[5:] if len(res) > 10 else res
-    for m in ("distance_field", "polarity_filter", "registration", "fusion", "ego_motion", "culling", "total"):
+    for m in ("distance_field", "polarity_filter", "polarity_predict", "polarity_align", "polarity_observe", "registration", "fusion",
+              "ego_motion", "culling", "total"):
         out.update({k: v for k, v in latency_summary([r.timings_ms[m] for r in warm if m in r.timings_ms], f"{m}_").items()
                     if k.endswith(LATENCY_KEYS)})
     stpe = [sum(r.timings_ms.get(m, 0.0) for m in ("distance_field", "polarity_filter", "registration")) for r in warm]
     out.update({k: v for k, v in latency_summary(stpe, "stpe_latency_").items() if k.endswith(LATENCY_KEYS + ("mean_ms",))})
+    # The same without the filter's labelling and sign learning, which run after the pose is out (the pose's latency).
+    to_pose = [sum(r.timings_ms.get(m, 0.0) for m in ("distance_field", "polarity_predict", "polarity_align", "registration")) for r in warm]
+    out.update({k: v for k, v in latency_summary(to_pose, "stpe_latency_to_pose_").items() if k.endswith(LATENCY_KEYS)})
     out.update({k: v for k, v in latency_summary(cpu[5:] if len(cpu) > 10 else cpu, "update_cpu_").items() if k.endswith(LATENCY_KEYS)})
     judged = sum(r.counts.get("events_polarity_judged", 0) for r in res)
     if judged:

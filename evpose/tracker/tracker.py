@@ -282,9 +282,14 @@ class Tracker:
 
         t0 = time.perf_counter()
         polarity = None if self.polarity_selector is None else self.polarity_selector(predicted, until, used)
+        if self.polarity_selector is not None:
+            # Per part of the filter: prediction (includes the fusion's IMU propagation to ``until``, which its update
+            # then reuses), T_align composition, and the labelling after registration (below).
+            timings["polarity_predict"] = _ms(t0)
         # --- polarity event filter (issue 7, evpose/fusion/aligned_surface.py): registration reads T_align, one field.
         surface, field_polarity = self.time_surface, polarity
         if polarity is not None and hasattr(self.polarity_selector, "align"):
+            t1 = time.perf_counter()
             box = self._field_box(pts, predicted, True) if self.coarse_field is not None else roi
             aligned = self.polarity_selector.align(self.time_surface, pts, predicted, polarity, box, events, keep, until)
             if aligned is not None:
@@ -295,6 +300,7 @@ class Tracker:
                     # Points whose patch shows no recent event of their polarity cannot pull the pose: skip them.
                     used, pts, polarity = used[with_events], pts[with_events], polarity[with_events]
                 counts["points_registered"] = int(used.size)
+            timings["polarity_align"] = _ms(t1)
         # --- end polarity event filter
         if self.polarity_selector is not None:
             timings["polarity_filter"] = _ms(t0)
@@ -420,10 +426,11 @@ class Tracker:
         if self.polarity_selector is not None and hasattr(self.polarity_selector, "observe") and polarity is not None:
             # Label this step's events against the prediction (reports, viewer) and learn point signs from them.
             t0 = time.perf_counter()
-            labels = self.polarity_selector.observe(events[keep], self._pose, used, polarity, self.width, self.height)
+            labels = self.polarity_selector.observe(events, self._pose, used, polarity, self.width, self.height, keep=keep)
             counts.setdefault("events_polarity_removed", int(np.count_nonzero(labels == 0)))  # T_align's count if it ran
             counts["points_single_polarity"] = int(np.count_nonzero(polarity))
-            timings["polarity_filter"] = timings.get("polarity_filter", 0.0) + _ms(t0)
+            timings["polarity_observe"] = _ms(t0)
+            timings["polarity_filter"] = timings.get("polarity_filter", 0.0) + timings["polarity_observe"]
         counts["registered"] = int(ok)
         if reg is not None:
             counts.update(inliers=reg.inliers, iterations=reg.iterations, points_in_image=reg.points_used)

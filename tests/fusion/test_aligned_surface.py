@@ -183,6 +183,25 @@ def test_kept_events_are_labelled_in_the_compose_pass_exactly_as_classify_labels
     assert a.kept_labels(ev, 2.0) is None and a.kept_labels(kept, 3.0) is None
 
 
+def test_batch_judgement_gives_the_kept_labels_and_each_points_majority_polarity_without_copying_the_events():
+    from evpose.fusion.event_labels import observed_point_polarity
+
+    rng = np.random.default_rng(7)
+    uv = np.stack([rng.uniform(5, W - 5, 30), rng.uniform(5, H - 5, 30)], 1)
+    pol = rng.integers(-1, 2, 30).astype(np.int8)
+    ev = _events(rng.integers(0, W, 600), rng.integers(0, H, 600), rng.choice([-1, 1], 600))
+    keep = rng.random(600) < 0.7
+    a = AlignedTimeSurface(W, H).compose(_surface(ev), _points_at(uv), np.eye(4), K, pol, 4.0, (4, 40, 6, 60), ev, keep,
+                                         classify_radius_px=2.0)
+    label, majority = a.batch_judgement(ev, keep, 2.0)
+    ref_label, ref_point = a.classify(ev[keep], 2.0)
+    assert np.array_equal(label, ref_label)
+    assert np.array_equal(majority, observed_point_polarity(ref_point, ev[keep].p, 30))
+    assert (majority == 1).any() and (majority == -1).any() and (majority == 0).any()
+    # Another mask or radius is not the compose pass's batch.
+    assert a.batch_judgement(ev, ~keep, 2.0) is None and a.batch_judgement(ev, keep, 3.0) is None
+
+
 def test_a_point_whose_patch_shows_only_the_other_polarity_is_reopened_to_both():
     # Point 0 predicts ON and sees only a fresh OFF event (its prediction is contradicted); point 1 predicts ON and sees
     # a fresh ON and a fresh OFF event (not contradicted: keeps ON only); point 2 predicts OFF and sees nothing.

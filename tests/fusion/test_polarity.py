@@ -288,6 +288,38 @@ def test_dropping_empty_points_keeps_the_contradicted_point_and_learns_over_all_
     assert sel.predictor.learned_sign(idx[k : k + 1])[0] != 0
 
 
+def test_observe_with_the_batch_and_its_keep_mask_labels_and_learns_as_with_the_kept_events():
+    from evpose.core.events import EventArray
+    from evpose.frontend.time_surface import SeparatedTimeSurface, TimeSurfaceConfig
+
+    cmap = _square_map()
+    T = _pose(0.0, np.array([0.0, 0.0, 2.0]), R_DOWN, np.zeros(3), np.zeros(3))
+
+    class Motion:
+        def predict(self, t_us):
+            return FusedState(t_us, T, np.array([1.0, 0.0, 0.0]), np.zeros(3), np.zeros(3), omega_cam=np.zeros(3))
+
+    idx = np.arange(0, len(cmap), 2)
+    rng = np.random.default_rng(3)
+    uv = _project(cmap.points[idx], T)
+    pick = rng.integers(0, idx.size, 300)
+    x = np.clip(np.round(uv[pick, 0] + rng.integers(-2, 3, 300)), 0, W - 1)
+    y = np.clip(np.round(uv[pick, 1] + rng.integers(-2, 3, 300)), 0, H - 1)
+    ev = EventArray.from_arrays(np.arange(59_000, 59_300), x, y, rng.choice(np.array([-1, 1], np.int8), 300))
+    keep = rng.random(300) < 0.8
+    runs = []
+    for with_mask in (True, False):
+        sel = MapPolaritySelector(PolarityPredictor(PolarityFilterConfig(learn_min_votes=1)), cmap, K, Motion())
+        pol = sel(T, 60_000, idx)
+        surface = SeparatedTimeSurface(TimeSurfaceConfig(), W, H)
+        surface.update(ev, keep)
+        sel.align(surface, cmap.points[idx], T, pol, None, ev, keep, 60_000)
+        label = sel.observe(ev, T, idx, pol, W, H, keep=keep) if with_mask else sel.observe(ev[keep], T, idx, pol, W, H)
+        runs.append((np.array(label), sel.predictor.learned_sign(idx), dict(sel.last_counts)))
+    assert np.array_equal(runs[0][0], runs[1][0]) and np.array_equal(runs[0][1], runs[1][1]) and runs[0][2] == runs[1][2]
+    assert (runs[0][0] == 1).any() and np.count_nonzero(runs[0][1]) > 0
+
+
 def test_registration_covariance_keeps_the_dropped_points_share_of_the_residual_variance():
     from types import SimpleNamespace
 

@@ -101,6 +101,11 @@ def test_polarity_filter_mode_labels_events_and_reports_counts(landing):
     s = TrackingSession(rec, cm, TrackerConfig(mode=TrackerMode.STPE_FILTER))
     results = [s.step() for _ in range(30)]
     assert all("polarity_filter" in r.timings_ms and "events_polarity_removed" in r.counts for r in results)
+    # The filter's time is reported per part (prediction, T_align, labelling): disjoint spans within its total.
+    for r in results[1:]:
+        t = r.timings_ms
+        assert min(t["polarity_predict"], t["polarity_align"], t["polarity_observe"]) > 0
+        assert t["polarity_predict"] + t["polarity_align"] + t["polarity_observe"] <= t["polarity_filter"] + 1e-9
     assert all(r.velocity is not None for r in results)
     # The event filter (T_align) judged every stored event and registered only points whose patch shows events.
     for r in results[1:]:
