@@ -166,14 +166,20 @@ def test_patches_match_a_brute_force_nearest_point_rule_with_ties():
     assert np.count_nonzero(flag == 3) > 0 and len(np.unique(flag)) == 4  # ties and all polarities occurred
 
 
-def test_kept_events_are_labelled_in_the_compose_pass_exactly_as_classify_labels_them():
-    rng = np.random.default_rng(5)
+def _composed_with_random_events(seed: int, n_events: int):
+    """A surface composed for 30 random points of random polarity, with ``n_events`` random events, 70 % kept."""
+    rng = np.random.default_rng(seed)
     uv = np.stack([rng.uniform(5, W - 5, 30), rng.uniform(5, H - 5, 30)], 1)
     pol = rng.integers(-1, 2, 30).astype(np.int8)
-    ev = _events(rng.integers(0, W, 400), rng.integers(0, H, 400), rng.choice([-1, 1], 400))
-    keep = rng.random(400) < 0.7
+    ev = _events(rng.integers(0, W, n_events), rng.integers(0, H, n_events), rng.choice([-1, 1], n_events))
+    keep = rng.random(n_events) < 0.7
     a = AlignedTimeSurface(W, H).compose(_surface(ev), _points_at(uv), np.eye(4), K, pol, 4.0, (4, 40, 6, 60), ev, keep,
                                          classify_radius_px=2.0)
+    return a, ev, keep
+
+
+def test_kept_events_are_labelled_in_the_compose_pass_exactly_as_classify_labels_them():
+    a, ev, keep = _composed_with_random_events(5, 400)
     kept = ev[keep]
     judged = a.kept_labels(kept, 2.0)
     assert judged is not None
@@ -186,13 +192,7 @@ def test_kept_events_are_labelled_in_the_compose_pass_exactly_as_classify_labels
 def test_batch_judgement_gives_the_kept_labels_and_each_points_majority_polarity_without_copying_the_events():
     from evpose.fusion.event_labels import observed_point_polarity
 
-    rng = np.random.default_rng(7)
-    uv = np.stack([rng.uniform(5, W - 5, 30), rng.uniform(5, H - 5, 30)], 1)
-    pol = rng.integers(-1, 2, 30).astype(np.int8)
-    ev = _events(rng.integers(0, W, 600), rng.integers(0, H, 600), rng.choice([-1, 1], 600))
-    keep = rng.random(600) < 0.7
-    a = AlignedTimeSurface(W, H).compose(_surface(ev), _points_at(uv), np.eye(4), K, pol, 4.0, (4, 40, 6, 60), ev, keep,
-                                         classify_radius_px=2.0)
+    a, ev, keep = _composed_with_random_events(7, 600)
     label, majority = a.batch_judgement(ev, keep, 2.0)
     ref_label, ref_point = a.classify(ev[keep], 2.0)
     assert np.array_equal(label, ref_label)

@@ -45,6 +45,16 @@ def _events(T0, T1, C=0.12):
     return xs.astype(np.float64), ys.astype(np.float64), np.sign(dl[ys, xs]).astype(np.int8)
 
 
+class _MovingAlongX:
+    """A fused motion source: pose ``T``, moving at 1 m/s along world x, not rotating."""
+
+    def __init__(self, T):
+        self.T = T
+
+    def predict(self, t_us):
+        return FusedState(t_us, self.T, np.array([1.0, 0.0, 0.0]), np.zeros(3), np.zeros(3), omega_cam=np.zeros(3))
+
+
 def _square_map(half=0.5, step=0.01, corner_gap=0.04):
     s = np.arange(-half + corner_gap, half - corner_gap + 1e-9, step)
     pts, nrm = [], []
@@ -155,11 +165,7 @@ def test_selector_adapter_uses_fused_motion():
     cmap = _square_map()
     T = _pose(0.0, np.array([0.0, 0.0, 2.0]), R_DOWN, np.zeros(3), np.zeros(3))
 
-    class Motion:
-        def predict(self, t_us):
-            return FusedState(t_us, T, np.array([1.0, 0.0, 0.0]), np.zeros(3), np.zeros(3), omega_cam=np.zeros(3))
-
-    sel = MapPolaritySelector(PolarityPredictor(), cmap, K, Motion())
+    sel = MapPolaritySelector(PolarityPredictor(), cmap, K, _MovingAlongX(T))
     idx = np.arange(0, len(cmap), 3)
     pol = sel(T, 1000, idx)
     assert pol.shape == idx.shape and pol.dtype == np.int8
@@ -261,11 +267,7 @@ def _selector_with_dropped_points():
     cmap = _square_map()
     T = _pose(0.0, np.array([0.0, 0.0, 2.0]), R_DOWN, np.zeros(3), np.zeros(3))
 
-    class Motion:
-        def predict(self, t_us):
-            return FusedState(t_us, T, np.array([1.0, 0.0, 0.0]), np.zeros(3), np.zeros(3), omega_cam=np.zeros(3))
-
-    sel = MapPolaritySelector(PolarityPredictor(PolarityFilterConfig(drop_empty_points=True, learn_min_votes=1)), cmap, K, Motion())
+    sel = MapPolaritySelector(PolarityPredictor(PolarityFilterConfig(drop_empty_points=True, learn_min_votes=1)), cmap, K, _MovingAlongX(T))
     idx = np.arange(0, len(cmap), 3)
     pol = sel(T, 60_000, idx)
     k = int(np.flatnonzero(pol == 1)[0])
@@ -295,10 +297,6 @@ def test_observe_with_the_batch_and_its_keep_mask_labels_and_learns_as_with_the_
     cmap = _square_map()
     T = _pose(0.0, np.array([0.0, 0.0, 2.0]), R_DOWN, np.zeros(3), np.zeros(3))
 
-    class Motion:
-        def predict(self, t_us):
-            return FusedState(t_us, T, np.array([1.0, 0.0, 0.0]), np.zeros(3), np.zeros(3), omega_cam=np.zeros(3))
-
     idx = np.arange(0, len(cmap), 2)
     rng = np.random.default_rng(3)
     uv = _project(cmap.points[idx], T)
@@ -309,7 +307,7 @@ def test_observe_with_the_batch_and_its_keep_mask_labels_and_learns_as_with_the_
     keep = rng.random(300) < 0.8
     runs = []
     for with_mask in (True, False):
-        sel = MapPolaritySelector(PolarityPredictor(PolarityFilterConfig(learn_min_votes=1)), cmap, K, Motion())
+        sel = MapPolaritySelector(PolarityPredictor(PolarityFilterConfig(learn_min_votes=1)), cmap, K, _MovingAlongX(T))
         pol = sel(T, 60_000, idx)
         surface = SeparatedTimeSurface(TimeSurfaceConfig(), W, H)
         surface.update(ev, keep)
