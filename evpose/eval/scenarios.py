@@ -46,9 +46,15 @@ class ScenarioSpec:
     """Density of the raw cloud the contour map is built from, points per square metre (the simulator's default)."""
 
     def key(self) -> str:
+        """Settings plus the source of the simulator and of the map builder: changed code never reuses old files
+        (``SIMULATOR_VERSION`` alone relied on a hand bump that an edit of the simulator can forget)."""
+        import evpose.mapping
+        import evpose.sim
+        from evpose.sim.cache import source_digest
         from evpose.sim.simulator import SIMULATOR_VERSION
 
-        blob = json.dumps({**self.__dict__, "simulator_version": SIMULATOR_VERSION}, sort_keys=True)
+        code = source_digest(Path(evpose.sim.__file__).parent, Path(evpose.mapping.__file__).parent)
+        blob = json.dumps({**self.__dict__, "simulator_version": SIMULATOR_VERSION, "code": code}, sort_keys=True)
         return f"{self.scenario}-{hashlib.sha256(blob.encode()).hexdigest()[:12]}"
 
 
