@@ -16,4 +16,8 @@ Layers (each folder one layer, lower layers never import higher ones):
 ``evpose`` never imports viser; the viewer lives in the top-level ``app`` package.
 """
 
+from evpose.blas_kernels import pin_blas_kernels as _pin_blas_kernels
+
+_pin_blas_kernels()  # before anything loads numpy: one BLAS kernel set, so results reproduce across machines
+
 __version__ = "0.1.0"

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import pickle
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -172,13 +173,18 @@ def _scenario_recording(ctx: BenchContext, scenario: str, seed: int | None = Non
         from evpose.sim import SimulationConfig, simulate
     except ImportError:
         return None
+    from evpose.io.atomic import atomic_path
+    from evpose.sim.cache import source_digest
+
     seed = ctx.seed if seed is None else int(seed)
-    cache = ctx.work_dir / f"slam_{scenario}_3s_seed{seed}.pkl"
+    # Keyed by the simulator's source too: a changed simulator never reuses recordings made by older code.
+    cache = ctx.work_dir / f"slam_{scenario}_3s_seed{seed}_{source_digest()[:12]}.pkl"
     if cache.exists():
         return pickle.loads(cache.read_bytes())
     rec = simulate(SimulationConfig(scenario=scenario, seconds=3.0, resolution=(346, 260), seed=seed)).recording
     ctx.work_dir.mkdir(parents=True, exist_ok=True)
-    cache.write_bytes(pickle.dumps(rec))
+    with atomic_path(cache) as tmp:
+        Path(tmp).write_bytes(pickle.dumps(rec))
     return rec
 
 
