@@ -43,7 +43,7 @@ from evpose.io.atomic import atomic_path
 
 ROOT = Path(__file__).resolve().parent.parent
 """The source tree whose code is hashed into the key."""
-KEYED_SOURCES = ("evpose/__init__.py", "evpose/errors.py", "evpose/core", "evpose/io", "evpose/frontend",
+KEYED_SOURCES = ("evpose/__init__.py", "evpose/blas_kernels.py", "evpose/errors.py", "evpose/core", "evpose/io", "evpose/frontend",
                  "evpose/fusion", "evpose/tracker", "app/browser.py", "app/disk_cache.py", "app/disk_snapshots.py", "app/engine.py",
                  "app/frame.py", "app/frame_cache.py", "app/tracker_engine.py")
 """Everything that can change a cached step: the tracker and what it may import (DEVELOPERS.md layers: core,

@@ -13,7 +13,9 @@ results bit for bit, the bundled ``maps/landing_map.ply`` included.
 
 This only works before numpy loads OpenBLAS, so ``evpose/__init__.py`` calls
 it first. A program that imports numpy before evpose keeps its machine's
-kernels, and so does a user who set the variable themselves. CPUs without AVX2
+kernels, and so does a user who set the variable themselves. Such a program's
+child processes (the viewer's warm-up) still pin theirs and then disagree with it in
+the last bits: the test suite's conftest imports evpose first for that reason. CPUs without AVX2
 (and other architectures) are left alone: forcing the kernel set there would
 stop the process with an illegal instruction.
 """

@@ -21,6 +21,8 @@ Simulated recordings (session-scoped, generated once per test run):
 
 from __future__ import annotations
 
+import evpose  # noqa: F401  first, before numpy: the suite runs on the BLAS kernels evpose pins (evpose.blas_kernels)
+
 import pytest
 
 SIM_LANDING_SMALL = dict(scenario="landing", seconds=1.0, resolution=(240, 180), seed=0)
