@@ -46,6 +46,7 @@ from evpose.tracker.step_result import StepDebug, StepResult, TrackStatus
 from evpose.tracker.track_hold import ACQUIRE_UPDATES, TrackHold  # noqa: F401 (ACQUIRE_UPDATES re-exported)
 from evpose.tracker.modes import MotionComponents
 from evpose.tracker.visible_map import VisibleMap, projected_bounds, visible_points
+from evpose.tracker.wall_occlusion import hidden_by_walls, wall_foot_mask
 
 PolaritySelector = Callable[[np.ndarray, int, np.ndarray], "np.ndarray | None"]
 """``(T_world_cam_predicted, t_us, map_point_indices) -> int8 polarity per point (+1/-1/0) or None (all combined)``."""
@@ -112,6 +113,11 @@ class Tracker:
         judged by their agreement with the motion prediction instead of being a lost track."""
         if self._weak_test:
             self._registration = dataclasses.replace(rc, min_inlier_ratio=rc.weak_inlier_ratio)
+        vm = config.visible_map
+        self._wall_feet = (wall_foot_mask(contour_map, vm.wall_inward_m, vm.wall_radius_m, vm.wall_min_height_m, vm.wall_max_height_m)
+                           if (vm.fused_wall_occlusion if self.components.drives_pose else vm.wall_occlusion) else None)
+        """Map points at the foot of a wall (:mod:`evpose.tracker.wall_occlusion`), None when off for this mode."""
+        self._edge_normals = np.ascontiguousarray(contour_map.edge_normal, dtype=np.float64)
         self.hold = TrackHold(not self.components.drives_pose or self._registration is rc, rc.regain_updates)
         """The fused modes' looser inlier test applies only once the map is acquired (``ACQUIRE_UPDATES`` strict
         registrations in a row); ``stpe`` regains a lost track only after ``regain_updates`` of them."""
@@ -260,6 +266,9 @@ class Tracker:
         predicted = self.predictor.predict(until)
         t0 = time.perf_counter()
         visible = self.visible_map.visible(predicted, self.config.visible_map)
+        if self._wall_feet is not None and visible.size:
+            # Feet seen over their wall read the rim's events (see evpose.tracker.wall_occlusion).
+            visible = visible[~hidden_by_walls(self._points, self._edge_normals, self._wall_feet, visible, predicted[:3, 3])]
         # Painted points the refiner has not yet placed would pull the pose towards their map error. Only where
         # the field shows every event: T_align (polarity filter) shows the used points' patches alone.
         held = None if self.refiner is None or self.polarity_selector is not None else self.refiner.held_out()
