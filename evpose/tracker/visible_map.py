@@ -72,7 +72,9 @@ class VisibleMapConfig:
     15.76 / 23.37 -> 14.78 / 21.70 mm. A prototype that turned every plane normal up (19 % of the points flagged),
     inward / radius 0.03 / 0.06, 0 / 0.06, 0.03 / 0.04, 0.03 / 0.1 m: 12.80 / 18.43, 11.96 / 18.61, 12.21 / 18.20,
     12.94 / 18.48 mm (seeds 0-3). A tighter z-buffer instead (``occlusion_tolerance`` 0.03 / 0.02) also culls the
-    feet that are in view: 17.9 / 40.0 mm."""
+    feet that are in view: 17.9 / 40.0 mm. Bundled demo (``evpose track demo_data/landing.h5 --map
+    maps/landing_map.ply --mode stpe``, ``--align none``, lost from ~2 s either way): ATE RMSE 140.1 -> 141.1 mm,
+    poses written 399 -> 396."""
     fused_wall_occlusion: bool = False
     """``wall_occlusion`` in the fused modes (``full``), off: ``full`` seeds 0-3 7.78 / 9.40 -> 7.82 / 9.22 mm
     (ARE 0.077 / 0.098 -> 0.075 / 0.096 deg) with it, mixed (the prototype above, inward 0.03 m / radius 0.04 m:
