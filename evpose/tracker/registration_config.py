@@ -113,7 +113,8 @@ class RegistrationConfig:
     (one Newton step, ``H_e^-1 P e``) 11.04 / 8.61, with converged registrations (seeds 0-3) 9.02 / 9.78 mm against
     9.15 / 9.51 at 346x260 / 240x180."""
     prior_rotation_deg: float = field(default=0.2, metadata={"min": 0.0, "max": 10.0, "step": 0.01, "unit": "deg"})
-    """Std of the same prior, rotation, degrees (0 = no prior)."""
+    """Std of the same prior, rotation, degrees (0 = no prior). Session 9, ``full`` seeds 0-3 (7.78 / 9.40 mm at 0.2):
+    0.1 / 0.05 gave 7.82 / 9.57, 7.42 / 10.28 mm."""
     prior_residual_sigma: float = field(default=0.2, metadata={"min": 0.01, "max": 1.0, "step": 0.01, "unit": "TDF"})
     """Typical TDF residual of one point, which converts the prior stds into the cost's units, TDF units."""
     residual_variance: ResidualVariance = ResidualVariance.ALL
@@ -195,7 +196,10 @@ class RegistrationConfig:
     Registrations from the truth with the points moved by a per-polarity fit (converged, 346x260) were no
     better than the global fit once one outlier was set aside; a per-segment oracle offset only 11.6 -> 9.1 mm.
     Session 8, ``full``, a trail affine in the normal speed (floor off, every point 0.5 px + 2.5 ms x speed, or
-    0.7 px + 1.5 ms): seeds 0 / 1 14.5 / 9.8 and 24.8 / 12.7 mm at 346x260 against 11.4 / 8.2."""
+    0.7 px + 1.5 ms): seeds 0 / 1 14.5 / 9.8 and 24.8 / 12.7 mm at 346x260 against 11.4 / 8.2.
+    Session 9, ``full`` seeds 0-3 (7.78 / 9.40 mm): 4.0 / 5.0 ms 7.82 / 10.76, 8.31 / 9.19 mm; 240x180 alone 5.5 / 6.5
+    ms 10.04 / 12.31 mm. The registrations' image-shift error against the true camera velocity: a lag-like term
+    explains only ~20 % of its variance (the cross-flow part -6 ms x velocity at 346x260, ~0 at 240x180)."""
     lag_floor_px: float = field(default=0.0, metadata={"min": 0.0, "max": 3.0, "step": 0.05, "unit": "px"})
     """Smallest distance the TDF minimum trails a moving edge, pixels (0 = off); needs the map's edge directions
     and the motion twist. The fused modes use ``fused_lag_floor_px`` instead.
@@ -250,4 +254,17 @@ class RegistrationConfig:
     1.0 / 1.5 ms x speed, 8.36 / 9.45, 7.88 / 9.54 mm; with 0.1 here, ``fused_polarity_trail_px`` 0.1 8.03 / 9.99 mm.
     Bundled demos (``full``, ``--align none``, ATE RMSE) 0 -> 0.1: ``landing`` 15.98 -> 16.01 mm (ARE 0.188 ->
     0.170 deg), ``landing_dynamic`` 20.96 -> 15.64 mm, ``landing_fast`` 23.20 -> 24.04 mm; textured landing (seed 0)
-    10.15 -> 10.13 mm (EKF 9.85 -> 9.12). The modes without fusion do not use it."""
+    10.15 -> 10.13 mm (EKF 9.85 -> 9.12). The modes without fusion do not use it.
+
+    Session 9, ``full``, seeds 0-3 (7.78 / 9.40 mm with the defaults). Buffer-zone points left out of registration:
+    1215 / 24.2 mm (they hold the cross-flow direction). The TDF minimum at the truth against this trail model, closed
+    loop, weighted by the final robust weights (``d`` = measured - model, + = the model trails too much): buffer
+    points ``+0.23 - 1.29 v`` / ``+0.34 - 2.35 v`` px (``v`` normal speed, px/ms), ON ``-0.03 - 0.32 v`` / ``+0.11 -
+    0.43 v``, OFF ``+0.09 - 0.29 v`` / ``+0.22 - 0.46 v`` at 346x260 / 240x180; correcting the buffer points by it
+    (-0.13 px + 1.3 ms x speed, or -0.18 px + 1.8 ms) gave 9.69 / 10.05, 9.80 / 10.33 mm; a further trail of
+    +0.3 / -0.3 ms x speed on ON/OFF points 8.46 / 9.68, 7.88 / 9.46, of -0.5 ms on buffer points 8.40 / 9.37; every
+    trail shrunk linearly to 0 below 0.02 / 0.05 px/ms 7.84 / 9.47, 8.10 / 9.42 mm. A common trail offset as a 7th
+    registration parameter (Schur complement at the converged pose): only ~12 % of its information independent of
+    the pose, +0.03-0.10 px on average, 0.13-0.23 px from update to update; applied, 12.4 / 15.3 mm (per update),
+    11.5 / 20.4 mm (averaged over ~50 updates). The offsets at the minimum are not what biases the pose: the knobs
+    sit at an empirical optimum."""
