@@ -126,6 +126,9 @@ class MciConfig:
     """Side of the non-overlapping patches of the local-STD sharpness score, pixels."""
     time_slices: int = field(default=24, metadata={"min": 1, "max": 256, "step": 1, "unit": "slices"})
     """Events are warped with one transform per time slice of the window (Exp(psi dt) sampled), slices."""
+    reference_fraction: float = field(default=1.0, metadata={"min": 0.0, "max": 1.0, "step": 0.05, "unit": "fraction"})
+    """Where in its window an MCI's reference time lies (the time its events are warped to, and its pose's time), as a
+    fraction of the window from its first event (1: the last event, as the paper; 0.5: the middle), fraction."""
     use_map_depth: bool = True
     """H1: SE(3) warp with the map's median depth when a map exists."""
     use_feature_fit: bool = True
