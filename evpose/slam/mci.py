@@ -1,7 +1,8 @@
 """Motion-compensated images (paper Algorithm 2): warp hypotheses H1-H4, local-STD scoring, selection.
 
 Every hypothesis is a constant velocity over the window (``psi = Log(theta)/dT``);
-events are moved forward to the window's last timestamp with ``Exp(psi dt)``,
+events are moved to the window's reference time (its last timestamp, or
+``MciConfig.reference_fraction`` of the way to it) with ``Exp(psi dt)``,
 sampled once per time slice. A Sim(2) motion and an SE(3) motion seen through a
 fronto-parallel plane at one depth are both pixel homographies, so one splat
 kernel renders them all.
@@ -51,7 +52,7 @@ class MciResult:
     """The dispatched image and what was tried."""
 
     t_us: int
-    """Reference time of the MCI (the window's last event), us."""
+    """Reference time of the MCI (the window's last event, or ``MciConfig.reference_fraction`` of the way to it), us."""
     image: np.ndarray
     """Selected MCI, float32 (H, W)."""
     image8: np.ndarray
@@ -68,13 +69,22 @@ class MciResult:
     """Every rendered hypothesis ("H1".."H4") -> float32 image: the tracker may prefer the previous MCI's hypothesis."""
 
 
-def _slices(t: np.ndarray, n_slices: int) -> tuple[np.ndarray, np.ndarray]:
-    """Slice index per event and each slice's time before the window end, seconds."""
+def reference_time_us(t: np.ndarray, fraction: float = 1.0) -> int:
+    """The time the events of a window are warped to: ``fraction`` of the way from its first to its last event, us."""
+    t0, t1 = int(t[0]), int(t[-1])
+    return t1 if fraction >= 1.0 else t0 + int(round(fraction * (t1 - t0)))
+
+
+def _slices(t: np.ndarray, n_slices: int, fraction: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    """Slice index per event and each slice's time before the reference time (``reference_time_us``), seconds.
+
+    Slices after the reference time get negative times: their events are moved back by the inverse motion.
+    """
     t0, t1 = int(t[0]), int(t[-1])
     span = max(t1 - t0, 1)
     idx = np.minimum(((t - t0) * n_slices) // span, n_slices - 1).astype(np.int64)
     centres = t0 + (np.arange(n_slices) + 0.5) * span / n_slices
-    return idx, (t1 - centres) / 1e6
+    return idx, (reference_time_us(t, fraction) - centres) / 1e6
 
 
 def fit_sim2(ref: np.ndarray, cur: np.ndarray, seed: int = 0) -> np.ndarray | None:
@@ -183,7 +193,8 @@ class MciGenerator:
     def generate(self, rw: ReconstructionWindow, prior: MotionPrior | None = None) -> MciResult:
         prior = prior or MotionPrior()
         cands: dict[Hypothesis, np.ndarray] = {}
-        idx, dts = _slices(rw.t, self.cfg.time_slices)
+        frac = self.cfg.reference_fraction
+        idx, dts = _slices(rw.t, self.cfg.time_slices, frac)
         track_s = (rw.t_cur_us - rw.t_ref_us) / 1e6
         sim2 = None
         depth = None
@@ -210,5 +221,6 @@ class MciGenerator:
         # Highest score wins; ties go to the earlier hypothesis in H1..H4 order (deterministic).
         best = max(sorted(cands, key=lambda h: h.value), key=lambda h: scores[h.value])
         img = cands[best]
-        return MciResult(t_us=rw.t_end_us, image=img, image8=to_uint8(img), hypothesis=best, scores=scores, n_events=len(rw.t), sim2=sim2, depth=depth,
+        t_ref = reference_time_us(rw.t, frac) if len(rw.t) else rw.t_end_us
+        return MciResult(t_us=t_ref, image=img, image8=to_uint8(img), hypothesis=best, scores=scores, n_events=len(rw.t), sim2=sim2, depth=depth,
                          candidates={h.value: im for h, im in cands.items()})

@@ -91,3 +91,37 @@ def test_fit_average_depth_recovers_plane_depth():
     cur = q[:, :2] / q[:, 2:3]
     z = fit_average_depth(K, omega, v, ref, cur, sec)
     assert abs(z - 2.5) < 0.05
+
+
+def _translating_window(velocity_px_s, span_us=40_000, n_pts=30, per_pt=60, seed=3):
+    """Points translating at ``velocity_px_s`` in the image; tracks at 1/6 and 5/6 of the window. Returns (window, start positions)."""
+    rng = np.random.default_rng(seed)
+    p0 = np.c_[rng.uniform(30, 130, n_pts), rng.uniform(25, 95, n_pts)]
+    t = np.sort(rng.integers(0, span_us, n_pts * per_pt))
+    j = rng.integers(0, n_pts, t.size)
+    pos = p0[j] + np.outer(t / 1e6, velocity_px_s)
+    a, b = span_us // 6, 5 * span_us // 6
+    ref, cur = p0 + velocity_px_s * a / 1e6, p0 + velocity_px_s * b / 1e6
+    rw = ReconstructionWindow(t.astype(np.int64), pos[:, 0], pos[:, 1], np.ones(t.size, np.int8), ref.astype(np.float32), cur.astype(np.float32), a, b, 4, 5.0)
+    return rw, p0
+
+
+def test_mci_reference_fraction_warps_events_to_that_time_and_stamps_it():
+    v = np.array([200.0, -100.0])  # px/s: 8 px and -4 px over the window
+    rw, p0 = _translating_window(v)
+    t0, t1 = int(rw.t[0]), int(rw.t[-1])
+    for frac in (1.0, 0.5):
+        res = MciGenerator(MciConfig(reference_fraction=frac, use_pose_prior=False, use_map_depth=False), EventImageConfig(), K, W, H).generate(rw)
+        assert res.hypothesis is Hypothesis.H2_SIM2
+        t_ref = t1 if frac == 1.0 else t0 + round(frac * (t1 - t0))
+        assert res.t_us == t_ref
+        # Each point is sharp where it was at the reference time (the image's peak near it, to a fraction of a pixel).
+        expect = p0 + v * t_ref / 1e6
+        errs = []
+        for u, w in expect:
+            iu, iv = int(round(u)), int(round(w))
+            patch = res.image[iv - 3:iv + 4, iu - 3:iu + 4].astype(np.float64)
+            yy, xx = np.mgrid[-3:4, -3:4]
+            c = np.array([(patch * xx).sum(), (patch * yy).sum()]) / patch.sum() + [iu, iv]
+            errs.append(np.linalg.norm(c - [u, w]))
+        assert np.median(errs) < 0.3
