@@ -178,7 +178,8 @@ class InitializationConfig:
     0 disables), degrees. A prior for short baselines: the fit soaks up translation flow of the order of the parallax,
     so wide-baseline views (several degrees) need a larger value. Indoor room, event-only, seeds 0-3: the fit was within
     ~1 deg of the true rotation where the chosen decompositions were 1-24 deg off; 2 -> mean ATE 8.57 -> 7.30 %, but
-    tracked 52.4 -> 40.0 % (fewer, better maps); 1 -> 5.17 % at 24 %; 3 -> 10.07 % at 44.6 %."""
+    tracked 52.4 -> 40.0 % (fewer, better maps; seeds 0-7: 10.75 -> 7.17 %, 51.0 -> 39.9 %); 1 -> 5.17 % at 24 %;
+    3 -> 10.07 % at 44.6 %. See ``TrackingConfig.coast_s`` for the pair that improves both figures."""
     min_triangulated: int = field(default=15, metadata={"min": 8, "max": 500, "step": 1, "unit": "points"})
     """Fewest good triangulated points to accept the map, points."""
     max_frames: int = field(default=8, metadata={"min": 1, "max": 100, "step": 1, "unit": "MCIs"})
@@ -251,7 +252,10 @@ class TrackingConfig:
     rate and camera-frame velocity (:mod:`evpose.slam.event_coasting`), before it is given up (0: lost at once),
     seconds. Event-inertial maps use ``InertialConfig.coast_s``. Indoor room, seeds 0-3 (default: ATE 8.57 %, tracked
     52.4 %): 0.1 -> 12.14 % / 68.5 %, 0.2 -> 11.97 / 70.3, 0.4 -> 10.21 / 77.6; 0.4 with ``max_rotation_disagreement_deg``
-    2 -> 9.29 / 73.1. The coasted stretches that end in a loss carry most of the added error (seed 0: 0.19 s coasted
+    2 -> 9.29 / 73.1. Seeds 0-7 (default 10.75 % / 51.0 %, tracked at least 45.2 %): 0.4 -> 10.90 / 76.7 (min 70.7);
+    with that gate -> 9.19 / 74.2 (min 60.7), better than the default on both figures, but not a default: landing
+    seeds 0-7 (default 2.41 %) went to 3.15 % with 0.4 and 5.59 % with the pair (the gate refuses its wider
+    baselines). The coasted stretches that end in a loss carry most of the added error (seed 0: 0.19 s coasted
     at 100 deg/s, 0.43 m ATE over that map). Searching the map's points 6 / 12 px around the coasted pose's projection
     before pose estimation: 13.56 / 68.6 and 13.31 / 79.8 (with the gate above; not kept)."""
     coast_drop_unconfirmed: bool = False
