@@ -10,6 +10,7 @@ import numpy as np
 from evpose.core.trajectory import invert_pose
 from evpose.slam.config import InitializationConfig
 from evpose.slam.geometry import good_triangulation, parallax_deg, pose_from_rt, triangulate
+from evpose.slam.init_parallax import rotation_compensated_parallax_deg, rotation_fit_disagreement_deg
 
 # chi-square 95 % bounds for 1 and 2 degrees of freedom (ORB-SLAM's model scores, sigma = 1 px).
 _CHI2_1 = 3.841
@@ -81,6 +82,10 @@ def initialize_two_view(K: np.ndarray, p1: np.ndarray, p2: np.ndarray, cfg: Init
         return TwoViewResult(False, f"{n} matches < {cfg.min_matches}")
     if np.median(np.linalg.norm(p1 - p2, axis=1)) < 1.0:
         return TwoViewResult(False, "features barely moved (no baseline)")
+    if cfg.min_rotation_free_parallax_deg > 0:
+        rfp = rotation_compensated_parallax_deg(K, p1, p2)
+        if not rfp >= cfg.min_rotation_free_parallax_deg:
+            return TwoViewResult(False, f"parallax after the best pure rotation {rfp:.2f} deg < {cfg.min_rotation_free_parallax_deg}")
     cv2.setRNGSeed(seed)
     E, mask_e = cv2.findEssentialMat(p1, p2, K, cv2.RANSAC, 0.999, cfg.ransac_threshold_px)
     cv2.setRNGSeed(seed)
@@ -110,6 +115,12 @@ def initialize_two_view(K: np.ndarray, p1: np.ndarray, p2: np.ndarray, cfg: Init
         candidates.append(_evaluate(K, R, t.ravel(), p1, p2, cfg))
     else:
         return TwoViewResult(False, "essential matrix estimation failed", homography_ratio=ratio)
+    if candidates and cfg.max_rotation_disagreement_deg > 0:
+        n_all = len(candidates)
+        candidates = [c for c in candidates if rotation_fit_disagreement_deg(K, p1, p2, c[3]) <= cfg.max_rotation_disagreement_deg]
+        if not candidates:
+            return TwoViewResult(False, f"all {n_all} {model} solutions turn the camera more than "
+                                 f"{cfg.max_rotation_disagreement_deg} deg away from the rays' pure-rotation fit", model=model, homography_ratio=ratio)
     if not candidates:
         return TwoViewResult(False, f"no valid {model} decomposition", homography_ratio=ratio)
     counts = sorted((c[0] for c in candidates), reverse=True)

@@ -19,6 +19,9 @@ class SlamStatus(str, enum.Enum):
     """The MCI was tracked against the active map."""
     INERTIAL = "inertial"
     """Event-inertial C2/C3: visual tracking failed on this MCI; the pose was propagated by the IMU and the map kept."""
+    COASTING = "coasting"
+    """Event-only: visual tracking failed on this MCI; the pose was predicted by the map's recent motion and the map
+    kept (``TrackingConfig.coast_s``)."""
     LOST = "lost"
     """Tracking failed on this MCI; the next map of the atlas will be initialised."""
 

@@ -42,6 +42,7 @@ from evpose.slam.inertial_ba import InertialState, inertial_local_bundle_adjustm
 from evpose.slam.initialization import initialize_two_view
 from evpose.slam.map_rejoin import RejoinCandidate, merge_into, rejoin_similarity
 from evpose.slam.local_map import cull_points, insert_keyframe, need_keyframe, triangulate_new_points
+from evpose.slam.event_coasting import drop_unconfirmed_poses, event_only_coast_pose
 from evpose.slam.event_image import to_uint8
 from evpose.slam.mci import Hypothesis, MciGenerator, MciResult, MotionPrior
 from evpose.slam.keyframe_search import keep_keyframe_image, klt_refind_points
@@ -482,7 +483,9 @@ class EventSlam(GyroAids):
         """
         m, fe, ic, tc = self.atlas.active, self.fe, self.cfg.inertial, self.cfg.tracking
         gap_s = (mci.t_us - self._last_visual_t) / 1e6
-        if self.imu is None or ic.configuration is InertialConfiguration.C1 or gap_s > ic.max_bridge_s:
+        if self.imu is None:
+            return self._coast_event_only(mci, reason, gap_s)
+        if ic.configuration is InertialConfiguration.C1 or gap_s > ic.max_bridge_s:
             return self._lose(reason)
         if m.imu_initialised:
             T_wc, how = self._imu_prediction(mci.t_us), "propagated by the IMU"
@@ -498,3 +501,19 @@ class EventSlam(GyroAids):
         m.add_pose(mci.t_us, T_wc)
         T_wc = self._new_keyframe(m, mci.t_us, T_wc, mci.image8, adjust=m.imu_initialised or ic.coast_ba)
         return SlamStatus.INERTIAL, f"visual tracking failed ({reason}); pose {how}, map {m.id} kept", T_wc.copy(), True
+
+    def _coast_event_only(self, mci: MciResult, reason: str, gap_s: float) -> tuple[SlamStatus, str, np.ndarray | None, bool]:
+        """Event-only: keep the map through a visual failure of at most ``TrackingConfig.coast_s`` (``SlamStatus.COASTING``)."""
+        m, fe, tc = self.atlas.active, self.fe, self.cfg.tracking
+        if tc.coast_s <= 0:
+            return self._lose(reason)
+        T_wc = event_only_coast_pose(m, mci.t_us, int(tc.coast_span_s * 1e6)) if gap_s <= tc.coast_s else None
+        if T_wc is None:
+            if tc.coast_drop_unconfirmed:
+                drop_unconfirmed_poses(m, self._last_visual_t)
+            return self._lose(reason)
+        drop_contradicted(m, self.K, T_wc, fe.ids, fe.uv, fe.track_to_point, 2.0 * tc.reprojection_threshold_px)
+        m.add_pose(mci.t_us, T_wc)
+        # No BA on a keyframe at a predicted pose (InertialConfig.coast_ba: with one fixed keyframe it slid along the scale).
+        T_wc = self._new_keyframe(m, mci.t_us, T_wc, mci.image8, adjust=False)
+        return SlamStatus.COASTING, f"visual tracking failed ({reason}); pose coasted on the map's recent motion, map {m.id} kept", T_wc.copy(), True

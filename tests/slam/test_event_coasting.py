@@ -1,0 +1,87 @@
+"""Event-only coasting through visual failures (TrackingConfig.coast_s) and its motion model."""
+
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from evpose.slam import EventSlam, SlamConfig, SlamStatus
+from evpose.slam.atlas import SlamMap
+from evpose.slam.event_coasting import camera_frame_rate, drop_unconfirmed_poses, event_only_coast_pose
+from slam_synthetic import make_recording
+
+
+def _circle_pose(t_s: float, radius: float = 1.6, speed: float = 1.2) -> np.ndarray:
+    """A camera circling the origin, looking outwards (the simulated room's motion)."""
+    a = speed * t_s / radius
+    T = np.eye(4)
+    z = np.array([np.cos(a), np.sin(a), 0.0])
+    y = np.array([0.0, 0.0, -1.0])
+    T[:3, :3] = np.stack([np.cross(y, z), y, z], axis=1)
+    T[:3, 3] = radius * z
+    return T
+
+
+def _circle_map(n: int, step_us: int) -> SlamMap:
+    m = SlamMap(0)
+    for k in range(n):
+        m.add_pose(k * step_us, _circle_pose(k * step_us / 1e6))
+    return m
+
+
+def test_coasting_holds_the_turn_rate_and_velocity_of_a_steady_turn():
+    m = _circle_map(12, 5000)
+    w = camera_frame_rate(m, 30_000)
+    assert abs(np.linalg.norm(w) * 1e6 - 1.2 / 1.6) < 1e-6  # rad/s of the circle
+    t = m.traj_t[-1] + 60_000
+    truth = _circle_pose(t / 1e6)
+    T = event_only_coast_pose(m, t, 30_000)
+    assert np.degrees(Rotation.from_matrix(T[:3, :3].T @ truth[:3, :3]).magnitude()) < 1e-6
+    step = np.linalg.norm(truth[:3, 3] - m.traj_T[-1][:3, 3])
+    assert np.linalg.norm(T[:3, 3] - truth[:3, 3]) < 0.02 * step
+
+
+def test_coasting_needs_enough_trajectory():
+    m = _circle_map(3, 5000)
+    assert camera_frame_rate(m, 30_000) is None
+    assert event_only_coast_pose(m, 20_000, 30_000) is None
+
+
+def test_unconfirmed_poses_are_dropped_back_to_the_last_visual_one():
+    m = _circle_map(10, 5000)
+    assert drop_unconfirmed_poses(m, 30_000) == 3
+    assert m.traj_t[-1] == 30_000 and len(m.traj_T) == len(m.traj_ref) == len(m.traj_rel) == 7
+
+
+@pytest.fixture(scope="module")
+def early_map():
+    return make_recording(duration_s=0.4, speed=1.5, seed=7, shake=0.08)
+
+
+def _fail(rec, coast_s: float, after_us: int, drop: bool = False):
+    cfg = SlamConfig()
+    cfg.tracking.coast_s = coast_s
+    cfg.tracking.coast_drop_unconfirmed = drop
+    slam = EventSlam(cfg, rec.calibration)
+    slam.step(rec.events)
+    m = slam.atlas.active
+    assert m is not None and len(m.traj_t) >= 3
+    mci = SimpleNamespace(t_us=m.traj_t[-1] + after_us, image8=np.zeros((rec.calibration.height, rec.calibration.width), np.uint8))
+    return slam, m, slam._bridge_or_lose(mci, "no tracks")
+
+
+def test_event_only_map_coasts_instead_of_opening_a_new_one(early_map):
+    slam, m, (status, reason, pose, keyframe) = _fail(early_map, 0.4, 8000)
+    assert status is SlamStatus.COASTING and "coasted" in reason and pose is not None and keyframe
+    assert slam.atlas.active is m and m.traj_t[-1] == m.keyframes[-1].t_us
+
+
+def test_a_coast_longer_than_coast_s_loses_the_map_and_can_drop_its_unconfirmed_poses(early_map):
+    for drop in (False, True):
+        slam, m, _ = _fail(early_map, 0.4, 8000, drop)
+        n = len(m.traj_t)
+        mci = SimpleNamespace(t_us=m.traj_t[-1] + 500_000, image8=None)
+        status, _, pose, _ = slam._bridge_or_lose(mci, "still no tracks")
+        assert status is SlamStatus.LOST and pose is None and slam.atlas.active is not m
+        assert len(m.traj_t) == (n - 1 if drop else n)
