@@ -177,7 +177,7 @@ class FactorGraphFusion:
         # Smoother "time" is the state index, so the lag is exactly N-1 states.
         n = self.config.window_states
         every = max(int(self.rebase_every_states), n) if self.rebase_every_states else None
-        return CopyableFixedLagSmoother(float(n - 1), p, rebase_every=every)
+        return CopyableFixedLagSmoother(float(n - 1), p, rebase_every=every, newest_last=bool(self.config.newest_state_last))
 
     # ------------------------------------------------------------ public API
     def initialize(self, t_us: int, T_world_cam: np.ndarray, velocity_world=None, acc_bias=None, gyro_bias=None) -> FusedState:

@@ -143,7 +143,7 @@ class CopyableFixedLagSmoother:
     ``lag`` is in the caller's timestamp unit (the fusion uses the state index).
     """
 
-    def __init__(self, lag: float, params, _isam=None, rebase_every: float | None = None):
+    def __init__(self, lag: float, params, _isam=None, rebase_every: float | None = None, newest_last: bool = False):
         import gtsam
 
         self._gtsam = gtsam
@@ -152,6 +152,11 @@ class CopyableFixedLagSmoother:
         self.rebase_every = None if not rebase_every else float(rebase_every)
         """When set, the first update whose newest timestamp reaches a new multiple of it first re-bases the smoother
         (:meth:`rebase`), in the timestamp unit; None: never (gtsam's smoother exactly)."""
+        self.newest_last = bool(newest_last)
+        """In an update that marginalises, the keys of the newest and the previous newest timestamp (those the new
+        factors of a filter-like graph touch) form a third ordering group, eliminated last, as plain iSAM2 orders
+        the keys of new factors; False: gtsam's smoother exactly (every kept key in one group). See
+        ``FusionConfig.newest_state_last``."""
         self.isam = gtsam.ISAM2(params) if _isam is None else _isam
         # Ascending timestamps and their keys (in insertion order): gtsam's timestamp -> key multimap.
         self._stamps: list[float] = []
@@ -172,7 +177,7 @@ class CopyableFixedLagSmoother:
 
     def copy(self) -> "CopyableFixedLagSmoother":
         """An independent deep copy (the iSAM2 copy constructor clones the Bayes tree, values and factors)."""
-        other = CopyableFixedLagSmoother(self.lag, self.params, self._gtsam.ISAM2(self.isam), self.rebase_every)
+        other = CopyableFixedLagSmoother(self.lag, self.params, self._gtsam.ISAM2(self.isam), self.rebase_every, self.newest_last)
         other._stamps = list(self._stamps)
         other._keys = [list(k) for k in self._keys]
         other._stamp_of = dict(self._stamp_of)
@@ -195,6 +200,7 @@ class CopyableFixedLagSmoother:
 
     def _update(self, graph, values, timestamps) -> None:
         gtsam = self._gtsam
+        hot = list(self._keys[-1]) + [int(k) for k in timestamps] if self.newest_last and timestamps and self._stamps else []
         if timestamps:
             for key, stamp in sorted(timestamps.items()):  # gtsam walks its std::map<Key, double>: keys ascending
                 self._insert(int(key), float(stamp))
@@ -215,8 +221,17 @@ class CopyableFixedLagSmoother:
         for key in marginalize:  # eliminated first (KeyGroupMap.insert2 does not overwrite: erase first)
             groups.erase(key)
             groups.insert2(key, 0)
+        if hot:
+            gone = set(marginalize)
+            hot = [key for key in dict.fromkeys(hot) if key not in gone]
+            for key in hot:  # eliminated last: the newest state at the root (see ``newest_last``)
+                groups.erase(key)
+                groups.insert2(key, 2)
         self.isam.update(gtsam.NonlinearFactorGraph() if graph is None else graph,
                          gtsam.Values() if values is None else values, [], groups, None, extra)
+        for key in hot:
+            groups.erase(key)
+            groups.insert2(key, 1)
         leaves = gtsam.KeyList()
         for key in marginalize:
             leaves.push_back(key)

@@ -88,7 +88,8 @@ class PolarityFilterConfig:
     99.3 -> 60.5 mm at 240x180, while full mode stays at 17.8 / 19.9 mm but pays ~0.7 ms per update and the
     share of events removed falls from 17 % to 10 %; so 4 stays the default. 3 px (session 8, seed 0, 346x260) cuts
     ``T_align``'s composition by 0.06-0.23 ms but costs ``stpe+filter`` 23.82 -> 24.08 mm (textured landing) and
-    15.15 -> 15.85 mm (plain), ``full`` 11.38 -> 12.09 mm on the plain landing (9.38 vs 10.18 mm textured), pixels."""
+    15.15 -> 15.85 mm (plain), ``full`` 11.38 -> 12.09 mm on the plain landing (9.38 vs 10.18 mm textured). Session 9,
+    ``stpe+filter`` seeds 0-3 (346x260 / 240x180): 4 / 6 / 8 px 15.77 / 23.37, 16.25 / 23.54, 16.12 / 23.25 mm, pixels."""
 
 
 @dataclass

@@ -92,7 +92,12 @@ class MapRefinementConfig:
     15.57 / 70.60 mm (the longer the 'H' is held out the later its points start to anchor the pose; 40 and 80
     lose one or all 240x180 seeds to a slide); 7 gave 13.67 / 18.01 mm. Bundled demo (``stpe``, ``--align none``,
     lost from ~2 s either way, anisotropy 0): 134.9 -> 129.7 mm ATE RMSE. For scale: the simulator's painted
-    edges themselves (painted points moved onto the true edges, no refinement) gave 11.84 / 15.69 mm."""
+    edges themselves (painted points moved onto the true edges, no refinement) gave 11.84 / 15.69 mm.
+    Session 9, held out in the filtered modes too (kept in ``T_align``, skipped by registration only; not kept):
+    seeds 0-3 ``full`` 7.77 / 9.40 -> 7.36 / 9.27 mm, ``stpe+filter`` 15.77 / 23.37 -> 14.90 / 19.59 mm, but the
+    textured landing (seed 0, 346x260) ``stpe+filter`` 23.26 -> 25.94 mm (``full`` 10.08 -> 9.13) and every 4 s demo
+    worse: ``full`` landing / fast / dynamic 15.81 / 23.81 / 15.64 -> 15.84 / 24.74 / 16.14 mm, ``stpe+filter``
+    171.6 / 1579 / 61.9 -> 181.5 / 1600 / 65.6 mm."""
     max_offset_m: float = field(default=0.05, metadata={"min": 0.0, "max": 0.5, "step": 0.005, "unit": "m"})
     """Largest distance a point may move from the map's position, metres (0.03: 26.2 / 33.6 mm, as 0.05)."""
     step_clip_px: float = field(default=0.25, metadata={"min": 0.01, "max": 5.0, "step": 0.05, "unit": "px"})
