@@ -39,6 +39,17 @@ def camera_frame_velocity(m: SlamMap, min_span_us: int) -> np.ndarray | None:
     Two consecutive MCIs are a few ms apart and a few mm of motion; their difference is mostly pose noise, so the
     coasting speed comes from a longer stretch of the trajectory. None when the map has not moved for that long.
     """
+    span = trajectory_span(m, min_span_us)
+    if span is None:
+        return None
+    k, dt = span
+    T_end = m.traj_T[-1]
+    return T_end[:3, :3].T @ (T_end[:3, 3] - m.traj_T[k][:3, 3]) / dt
+
+
+def trajectory_span(m: SlamMap, min_span_us: int) -> tuple[int, int] | None:
+    """(index of the newest pose at least ``min_span_us`` before the map's last one, that span in us); None when the
+    map's trajectory is shorter than that."""
     if len(m.traj_t) < 2:
         return None
     t_end = m.traj_t[-1]
@@ -46,10 +57,7 @@ def camera_frame_velocity(m: SlamMap, min_span_us: int) -> np.ndarray | None:
     while k > 0 and t_end - m.traj_t[k] < min_span_us:
         k -= 1
     dt = t_end - m.traj_t[k]
-    if dt < min_span_us:
-        return None
-    T_end = m.traj_T[-1]
-    return T_end[:3, :3].T @ (T_end[:3, 3] - m.traj_T[k][:3, 3]) / dt
+    return None if dt < min_span_us else (k, dt)
 
 
 def coast_pose(m: SlamMap, t_us: int, R_wc: np.ndarray, v_cam: np.ndarray) -> np.ndarray:

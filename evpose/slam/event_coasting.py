@@ -14,7 +14,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from evpose.slam.atlas import SlamMap
-from evpose.slam.coasting import camera_frame_velocity, coast_pose
+from evpose.slam.coasting import camera_frame_velocity, coast_pose, trajectory_span
 
 
 def camera_frame_rate(m: SlamMap, min_span_us: int) -> np.ndarray | None:
@@ -22,15 +22,10 @@ def camera_frame_rate(m: SlamMap, min_span_us: int) -> np.ndarray | None:
 
     None when the map's trajectory is shorter than that.
     """
-    if len(m.traj_t) < 2:
+    span = trajectory_span(m, min_span_us)
+    if span is None:
         return None
-    t_end = m.traj_t[-1]
-    k = len(m.traj_t) - 2
-    while k > 0 and t_end - m.traj_t[k] < min_span_us:
-        k -= 1
-    dt = t_end - m.traj_t[k]
-    if dt < min_span_us:
-        return None
+    k, dt = span
     R_rel = m.traj_T[k][:3, :3].T @ m.traj_T[-1][:3, :3]
     return Rotation.from_matrix(R_rel).as_rotvec() / dt
 
