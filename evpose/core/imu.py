@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from evpose.core.timestamps import check_series, window_slice
 from evpose.errors import InputError
 
 
@@ -58,21 +59,12 @@ class ImuSamples:
         return float(1e6 / np.median(np.diff(self.t)))
 
     def time_window(self, t0_us: int, t1_us: int) -> "ImuSamples":
-        i0 = int(np.searchsorted(self.t, t0_us, side="left"))
-        i1 = int(np.searchsorted(self.t, t1_us, side="left"))
-        return self[i0:i1]
+        return self[window_slice(self.t, t0_us, t1_us)]
 
     def validate(self, source: str | None = None) -> None:
         if len(self) == 0:
             return
-        bad = np.flatnonzero(np.diff(self.t) <= 0)
-        if bad.size:
-            i = int(bad[0]) + 1
-            raise InputError(source, f"timestamp {int(self.t[i])} us does not increase (previous {int(self.t[i - 1])} us)", f"IMU sample {i}")
-        finite = np.isfinite(self.acc).all(axis=1) & np.isfinite(self.gyro).all(axis=1)
-        bad = np.flatnonzero(~finite)
-        if bad.size:
-            raise InputError(source, "NaN or infinite value", f"IMU sample {int(bad[0])}")
+        check_series(self.t, np.isfinite(self.acc).all(axis=1) & np.isfinite(self.gyro).all(axis=1), source, "IMU sample")
         # Far beyond any IMU's range (MEMS parts saturate at 16-32 g and 35-70 rad/s): a unit or scale error, which
         # would otherwise end in an indeterminate factor graph.
         for name, values, limit, unit in (("acceleration", self.acc, MAX_ACCELERATION, "m/s^2"), ("angular rate", self.gyro, MAX_ANGULAR_RATE, "rad/s")):

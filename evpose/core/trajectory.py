@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation, Slerp
 
-from evpose.errors import InputError
+from evpose.core.timestamps import check_series, window_slice
 
 
 def pose_matrix(rotation: Rotation, position: np.ndarray) -> np.ndarray:
@@ -97,18 +97,9 @@ class Trajectory:
         return Trajectory.from_arrays(tq, pos, rot.as_quat())
 
     def time_window(self, t0_us: int, t1_us: int) -> "Trajectory":
-        i0 = int(np.searchsorted(self.t, t0_us, side="left"))
-        i1 = int(np.searchsorted(self.t, t1_us, side="left"))
-        return self[i0:i1]
+        return self[window_slice(self.t, t0_us, t1_us)]
 
     def validate(self, source: str | None = None) -> None:
         if len(self) == 0:
             return
-        bad = np.flatnonzero(np.diff(self.t) <= 0)
-        if bad.size:
-            i = int(bad[0]) + 1
-            raise InputError(source, f"timestamp {int(self.t[i])} us does not increase (previous {int(self.t[i - 1])} us)", f"pose {i}")
-        finite = np.isfinite(self.position).all(axis=1) & np.isfinite(self.quat_xyzw).all(axis=1)
-        bad = np.flatnonzero(~finite)
-        if bad.size:
-            raise InputError(source, "NaN or infinite value", f"pose {int(bad[0])}")
+        check_series(self.t, np.isfinite(self.position).all(axis=1) & np.isfinite(self.quat_xyzw).all(axis=1), source, "pose")
