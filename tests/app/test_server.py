@@ -23,15 +23,9 @@ def free_port() -> int:
 
 @pytest.fixture(scope="module")
 def data_root(tmp_path_factory, squares_scene):
-    from app_scenes import sweeping_bar_recording
+    from app_scenes import write_data_root
 
-    root = tmp_path_factory.mktemp("data")
-    rec, cmap = squares_scene
-    write_recording_h5(root / "squares.h5", rec)
-    write_contour_map(root / "squares_map.ply", cmap)
-    write_recording_h5(root / "bar.h5", sweeping_bar_recording())
-    (root / "corrupt.h5").write_bytes(b"\x89HDF\r\n\x1a\n broken")
-    return root
+    return write_data_root(tmp_path_factory.mktemp("data"), squares_scene)
 
 
 @pytest.fixture(scope="module")

@@ -10,8 +10,6 @@ import pytest
 from app.tracker_engine import TrackerEngine
 from app.player import PlayerConfig
 from app.server import AppConfig, ViewerApp
-from evpose.io.h5 import write_recording_h5
-from evpose.io.map_ply import write_contour_map
 
 pytestmark = pytest.mark.browser
 
@@ -30,14 +28,9 @@ def wait_for(cond, timeout=40.0, what="condition", detail=None):
 
 @pytest.fixture(scope="module")
 def viewer(tmp_path_factory, squares_scene):
-    from app_scenes import sweeping_bar_recording
+    from app_scenes import write_data_root
 
-    root = tmp_path_factory.mktemp("data")
-    rec, cmap = squares_scene
-    write_recording_h5(root / "squares.h5", rec)
-    write_contour_map(root / "squares_map.ply", cmap)
-    write_recording_h5(root / "bar.h5", sweeping_bar_recording())
-    (root / "corrupt.h5").write_bytes(b"broken")
+    root = write_data_root(tmp_path_factory.mktemp("data"), squares_scene, corrupt_bytes=b"broken")
     layouts = tmp_path_factory.mktemp("layouts")
     from app.layouts import LAYOUT_DIR
 
