@@ -299,11 +299,16 @@ class MapPolaritySelector:
         self.motion = motion
         self.calibration = calibration
         self.last_counts: dict = {}
+        self.fused_pose = True
+        """Whether the pose that follows is the IMU fusion's (``full``); False in ``stpe+filter``, whose prediction is the
+        constant-velocity filter's (``reopen_contradicted_unfused``)."""
         self._aligned = None
         self._aligned_fresh = False
         """True between :meth:`align` and the :meth:`observe` of the same step (the grid is this step's)."""
         self._dropped = 0
-        """Points :meth:`points_to_register` dropped this step."""
+        """Points :meth:`points_to_register` dropped this step for an empty patch (they count in the covariance)."""
+        self._dropped_slow = 0
+        """Points :meth:`points_to_register` dropped this step as predicted not to fire (``register_min_normal_speed_px_s``)."""
         self._step_points: tuple[np.ndarray, np.ndarray] | None = None
         """(map indices, predicted polarity) of this step's :meth:`__call__`: every point :meth:`align` composed."""
 
@@ -325,19 +330,37 @@ class MapPolaritySelector:
             self._aligned = AlignedTimeSurface(surface.width, surface.height, self.calibration)
         out = self._aligned.compose(surface, points_world, T_world_cam, self.K, polarity, c.align_patch_radius_px, roi, events, keep,
                                     t_us, c.empty_after_eta, c.patch_radius_px,
-                                    c.reopen_contradicted or c.drop_empty_points)
+                                    c.reopen_contradicted or c.drop_empty_points or (c.reopen_contradicted_unfused and not self.fused_pose))
         self._aligned_fresh = True
         self.last_counts.update(out.last_counts)
         return out
 
     def points_to_register(self) -> np.ndarray | None:
-        """bool (M,) over the points of the last :meth:`align`: those whose patch shows recent accepted events
-        (None: use all, when ``drop_empty_points`` is off or no ``T_align`` was built this step)."""
-        self._dropped = 0
-        if not (self.predictor.config.drop_empty_points and self._aligned_fresh and self._aligned is not None):
+        """bool (M,) over the points of the last :meth:`align`: those registration needs (None: use all). Drops the
+        points whose patch shows no recent accepted event (``drop_empty_points``) and those predicted to fire almost
+        no events, their image motion nearly along their edge (``register_min_normal_speed_px_s``); only with a
+        ``T_align`` built this step."""
+        c = self.predictor.config
+        self._dropped = self._dropped_slow = 0
+        if not (self._aligned_fresh and self._aligned is not None):
             return None
-        keep = self._aligned.point_has_events
-        self._dropped = int(keep.size - np.count_nonzero(keep))
+        keep = None
+        if c.drop_empty_points:
+            keep = self._aligned.point_has_events.copy()
+            self._dropped = int(keep.size - np.count_nonzero(keep))
+        last = self.predictor.last
+        if float(c.register_min_normal_speed_px_s) > 0 and last is not None and last.speed_px_s.size == self._aligned.last_point_count:
+            speed = last.speed_px_s.astype(np.float64)
+            angle = np.radians(last.angle_deg.astype(np.float64))
+            # No defined angle = no motion (or no projected normal): the speed alone says it. NaN speed (behind the
+            # camera) compares False: kept, registration handles it.
+            normal = np.where(np.isfinite(angle), speed * np.abs(np.cos(angle)), speed)
+            slow = normal < float(c.register_min_normal_speed_px_s)
+            if keep is None:
+                keep = np.ones(slow.size, np.bool_)
+            slow &= keep
+            self._dropped_slow = int(np.count_nonzero(slow))
+            keep &= ~slow
         return keep
 
     def registration_covariance(self, registration, config) -> np.ndarray | None:
@@ -365,7 +388,7 @@ class MapPolaritySelector:
 
     def __call__(self, T_world_cam: np.ndarray, t_us: int, map_indices: np.ndarray) -> np.ndarray:
         self._aligned_fresh = False
-        self._dropped = 0
+        self._dropped = self._dropped_slow = 0
         idx = np.asarray(map_indices, np.int64)
         state = self.motion.predict(int(t_us))
         omega = np.zeros(3) if state.omega_cam is None else state.omega_cam
@@ -395,7 +418,7 @@ class MapPolaritySelector:
         """
         idx = np.asarray(map_indices, np.int64)
         step = self._step_points
-        if (self._dropped and step is not None and self._aligned_fresh and self._aligned is not None
+        if ((self._dropped or self._dropped_slow) and step is not None and self._aligned_fresh and self._aligned is not None
                 and step[0].size == self._aligned.last_point_count):
             idx, polarity = step
         r = self.predictor.config.patch_radius_px
