@@ -23,73 +23,15 @@ sign also replaces a contradicting map sign.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numba as nb
 import numpy as np
 
 # The per-event labelling moved to its own module; re-exported here, where it was (imports and docs name it here).
 from evpose.fusion.event_labels import classify_events, filter_summary, observed_point_polarity  # noqa: F401
-
-
-@dataclass
-class PolarityFilterConfig:
-    """Parameters of the polarity prediction and its buffer zone."""
-
-    enabled: bool = True
-    """Predict polarities (False: every point uses both, i.e. plain STPE)."""
-    buffer_deg: float = field(default=20.0, metadata={"min": 0.0, "max": 89.0, "step": 0.5, "unit": "deg"})
-    """Base half-width of the buffer zone around 90 deg, degrees."""
-    flow_sigma_px_s: float = field(default=15.0, metadata={"min": 0.0, "max": 500.0, "step": 1.0, "unit": "px/s"})
-    """Assumed uncertainty of the predicted image motion; widens the buffer by atan(sigma/speed), px/s."""
-    max_buffer_deg: float = field(default=70.0, metadata={"min": 0.0, "max": 90.0, "step": 0.5, "unit": "deg"})
-    """Upper limit of the adaptive buffer half-width, degrees."""
-    min_image_speed_px_s: float = field(default=20.0, metadata={"min": 0.0, "max": 1000.0, "step": 1.0, "unit": "px/s"})
-    """Below this image speed a point keeps both polarities, px/s."""
-    min_gradient_visibility: float = field(default=0.2, metadata={"min": 0.0, "max": 1.0, "step": 0.01, "unit": "ratio"})
-    """Minimum foreshortening of the projected edge normal (1 = parallel to the image plane) to trust its direction."""
-    learn_min_votes: int = field(default=3, metadata={"min": 1, "max": 100, "step": 1, "unit": "votes"})
-    """Net votes a point needs before a learned brightness sign is used."""
-    learned_overrides_map: bool = True
-    """A confident learned sign replaces the map's sign where they disagree (map signs from cloud albedo miss
-    shading edges, e.g. creases between faces of one albedo: on the simulated landing scene only 69 % of them
-    match the polarities the points trigger, while the learned signs are consistent over time)."""
-    patch_radius_px: float = field(default=2.0, metadata={"min": 0.5, "max": 10.0, "step": 0.5, "unit": "px"})
-    """Radius of a point's patch when classifying events or reading observed polarities, pixels."""
-    event_filter: bool = True
-    """Registration reads ``T_align`` (:mod:`evpose.fusion.aligned_surface`): in each used map point's patch only the
-    predicted polarity's events, nothing outside the patches (False: per-point ON/OFF/combined fields over the whole box)."""
-    drop_empty_points: bool = False
-    """Registration skips map points whose ``T_align`` patch shows no accepted event younger than
-    ``empty_after_eta`` (50-60 % of the used points on the simulated landing); points whose patch shows only the
-    other polarity are first reopened (``reopen_contradicted``): they are the wrongly predicted ones, whose edge
-    registration needs (dropping them too cost ``stpe+filter`` 34 -> 91 mm ATE). Dropped points still count in the
-    registration's residual variance (:meth:`MapPolaritySelector.registration_covariance`) and still learn signs.
-    Measured, simulated landing seeds 0-3 mean, 346x260 / 240x180: ``full`` 13.6 / 15.1 mm, 0.172 / 0.194 deg
-    against 13.5 / 15.5 mm, 0.171 / 0.198 deg off (seed 0: 15.4 / 19.8 mm, 0.228 / 0.295 deg against 16.6 / 20.7
-    mm, 0.241 / 0.312 deg); 4 s demos: landing 17.1 vs 17.4 mm (0 vs 50 IMU-bridged updates), fast 23.6 vs 22.3 mm,
-    dynamic 34.2 vs 34.9 mm; but ``stpe+filter`` 33.1 / 39.0 against 30.5 / 35.8 mm. Registration wall time fell
-    only 16 % (0.70 -> 0.59 ms median, paired, load 2.1) for 54 % fewer points, the filter's own time rose
-    0.15 ms: the registration's per-iteration overhead, not its points, dominates. So off by default."""
-    reopen_contradicted: bool = False
-    """``T_align`` accepts both polarities in the patch of a single-polarity point that shows no event of its predicted
-    polarity younger than ``empty_after_eta`` but does of the other: the events contradict the prediction (a wrong
-    sign or edge normal: 8-10 % of the single-polarity predictions on the simulated landing), and reading the predicted
-    polarity only would hide the point's own edge. What makes ``drop_empty_points`` work (see there). Alone it does
-    not pay on the simulated landing (seeds 0-3 mean, 346x260 / 240x180): ``stpe+filter`` 30.4 / 34.6 mm against
-    30.5 / 35.8 mm off (``stpe`` 30.0 / 34.9), ``full`` 14.3 / 16.0 against 13.5 / 15.5 mm."""
-    empty_after_eta: float = field(default=3.0, metadata={"min": 0.5, "max": 12.0, "step": 0.5, "unit": "eta"})
-    """A patch whose newest accepted event is older than this many time-surface constants counts as empty (TDF > 0.95 at 3), eta."""
-    align_patch_radius_px: float = field(default=4.0, metadata={"min": 1.0, "max": 30.0, "step": 0.5, "unit": "px"})
-    """Radius of the patch around each predicted projection that ``T_align`` keeps; must cover the prediction error
-    plus the TDF blur (points whose true edge lies outside it see no events). Full mode on the simulated landing
-    346x260 scored alike from 3 to 8 px (20.7 / 21.5 / 21.3 mm ATE at 3 / 5 / 8); the cost grows with its square.
-    ``stpe+filter`` (no fused prediction, larger errors) gains from 8 px: 77.0 -> 70.4 mm at 346x260 and
-    99.3 -> 60.5 mm at 240x180, while full mode stays at 17.8 / 19.9 mm but pays ~0.7 ms per update and the
-    share of events removed falls from 17 % to 10 %; so 4 stays the default. 3 px (session 8, seed 0, 346x260) cuts
-    ``T_align``'s composition by 0.06-0.23 ms but costs ``stpe+filter`` 23.82 -> 24.08 mm (textured landing) and
-    15.15 -> 15.85 mm (plain), ``full`` 11.38 -> 12.09 mm on the plain landing (9.38 vs 10.18 mm textured). Session 9,
-    ``stpe+filter`` seeds 0-3 (346x260 / 240x180): 4 / 6 / 8 px 15.77 / 23.37, 16.25 / 23.54, 16.12 / 23.25 mm, pixels."""
+# The settings live in their own module; re-exported here, where they were.
+from evpose.fusion.polarity_config import PolarityFilterConfig  # noqa: F401
 
 
 @dataclass
@@ -357,11 +299,16 @@ class MapPolaritySelector:
         self.motion = motion
         self.calibration = calibration
         self.last_counts: dict = {}
+        self.fused_pose = True
+        """Whether the pose that follows is the IMU fusion's (``full``); False in ``stpe+filter``, whose prediction is the
+        constant-velocity filter's (``reopen_contradicted_unfused``)."""
         self._aligned = None
         self._aligned_fresh = False
         """True between :meth:`align` and the :meth:`observe` of the same step (the grid is this step's)."""
         self._dropped = 0
-        """Points :meth:`points_to_register` dropped this step."""
+        """Points :meth:`points_to_register` dropped this step for an empty patch (they count in the covariance)."""
+        self._dropped_slow = 0
+        """Points :meth:`points_to_register` dropped this step as predicted not to fire (``register_min_normal_speed_px_s``)."""
         self._step_points: tuple[np.ndarray, np.ndarray] | None = None
         """(map indices, predicted polarity) of this step's :meth:`__call__`: every point :meth:`align` composed."""
 
@@ -383,19 +330,37 @@ class MapPolaritySelector:
             self._aligned = AlignedTimeSurface(surface.width, surface.height, self.calibration)
         out = self._aligned.compose(surface, points_world, T_world_cam, self.K, polarity, c.align_patch_radius_px, roi, events, keep,
                                     t_us, c.empty_after_eta, c.patch_radius_px,
-                                    c.reopen_contradicted or c.drop_empty_points)
+                                    c.reopen_contradicted or c.drop_empty_points or (c.reopen_contradicted_unfused and not self.fused_pose))
         self._aligned_fresh = True
         self.last_counts.update(out.last_counts)
         return out
 
     def points_to_register(self) -> np.ndarray | None:
-        """bool (M,) over the points of the last :meth:`align`: those whose patch shows recent accepted events
-        (None: use all, when ``drop_empty_points`` is off or no ``T_align`` was built this step)."""
-        self._dropped = 0
-        if not (self.predictor.config.drop_empty_points and self._aligned_fresh and self._aligned is not None):
+        """bool (M,) over the points of the last :meth:`align`: those registration needs (None: use all). Drops the
+        points whose patch shows no recent accepted event (``drop_empty_points``) and those predicted to fire almost
+        no events, their image motion nearly along their edge (``register_min_normal_speed_px_s``); only with a
+        ``T_align`` built this step."""
+        c = self.predictor.config
+        self._dropped = self._dropped_slow = 0
+        if not (self._aligned_fresh and self._aligned is not None):
             return None
-        keep = self._aligned.point_has_events
-        self._dropped = int(keep.size - np.count_nonzero(keep))
+        keep = None
+        if c.drop_empty_points:
+            keep = self._aligned.point_has_events.copy()
+            self._dropped = int(keep.size - np.count_nonzero(keep))
+        last = self.predictor.last
+        if float(c.register_min_normal_speed_px_s) > 0 and last is not None and last.speed_px_s.size == self._aligned.last_point_count:
+            speed = last.speed_px_s.astype(np.float64)
+            angle = np.radians(last.angle_deg.astype(np.float64))
+            # No defined angle = no motion (or no projected normal): the speed alone says it. NaN speed (behind the
+            # camera) compares False: kept, registration handles it.
+            normal = np.where(np.isfinite(angle), speed * np.abs(np.cos(angle)), speed)
+            slow = normal < float(c.register_min_normal_speed_px_s)
+            if keep is None:
+                keep = np.ones(slow.size, np.bool_)
+            slow &= keep
+            self._dropped_slow = int(np.count_nonzero(slow))
+            keep &= ~slow
         return keep
 
     def registration_covariance(self, registration, config) -> np.ndarray | None:
@@ -423,7 +388,7 @@ class MapPolaritySelector:
 
     def __call__(self, T_world_cam: np.ndarray, t_us: int, map_indices: np.ndarray) -> np.ndarray:
         self._aligned_fresh = False
-        self._dropped = 0
+        self._dropped = self._dropped_slow = 0
         idx = np.asarray(map_indices, np.int64)
         state = self.motion.predict(int(t_us))
         omega = np.zeros(3) if state.omega_cam is None else state.omega_cam
@@ -453,7 +418,7 @@ class MapPolaritySelector:
         """
         idx = np.asarray(map_indices, np.int64)
         step = self._step_points
-        if (self._dropped and step is not None and self._aligned_fresh and self._aligned is not None
+        if ((self._dropped or self._dropped_slow) and step is not None and self._aligned_fresh and self._aligned is not None
                 and step[0].size == self._aligned.last_point_count):
             idx, polarity = step
         r = self.predictor.config.patch_radius_px

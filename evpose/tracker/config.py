@@ -17,10 +17,10 @@ from evpose.frontend.noise_filter import NoiseFilterConfig
 from evpose.frontend.time_surface import TimeSurfaceConfig
 from evpose.fusion.config import FusionConfig
 from evpose.fusion.ego_motion import EgoMotionConfig
-from evpose.fusion.polarity import PolarityFilterConfig
+from evpose.fusion.polarity_config import PolarityFilterConfig
 from evpose.io.config_file import config_from_dict, config_to_dict, read_config, write_config  # noqa: F401 - re-exported
 from evpose.tracker.map_refinement import MapRefinementConfig
-from evpose.tracker.motion_filter import MotionFilterConfig
+from evpose.tracker.motion_filter_config import MotionFilterConfig
 from evpose.tracker.registration_config import RegistrationConfig
 from evpose.tracker.visible_map import VisibleMapConfig
 

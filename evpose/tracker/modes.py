@@ -67,5 +67,6 @@ def build_motion_components(
     selector = None
     if config.polarity.enabled:
         selector = MapPolaritySelector(PolarityPredictor(config.polarity), contour_map, calibration.K, motion.fusion, calibration)
+        selector.fused_pose = mode is TrackerMode.FULL
     ego = EgoMotionFilter(config.ego_motion) if (mode is TrackerMode.FULL and config.ego_motion.enabled) else None
     return MotionComponents(motion, selector, ego, drives_pose=mode is TrackerMode.FULL)

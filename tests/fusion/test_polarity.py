@@ -333,3 +333,67 @@ def test_registration_covariance_keeps_the_dropped_points_share_of_the_residual_
     assert np.allclose(out, cov * (share + dropped * cfg.robust_scale) / share, rtol=1e-6)
     cfg.residual_variance = ResidualVariance.INLIERS  # dropped points never counted there: unchanged
     assert sel.registration_covariance(reg, cfg) is cov
+
+
+def test_points_predicted_not_to_fire_are_left_out_of_registration_but_keep_learning():
+    """``register_min_normal_speed_px_s``: with the camera moving along world x over a square, the two sides along x
+    move along themselves (no normal flow) and are not registered, the two across x are; the covariance is not
+    inflated for them (that is ``drop_empty_points``' empty patches), and observing still learns over every point."""
+    from evpose.core.events import EventArray
+    from evpose.frontend.time_surface import SeparatedTimeSurface, TimeSurfaceConfig
+
+    cmap = _square_map()
+    T = _pose(0.0, np.array([0.0, 0.0, 2.0]), R_DOWN, np.zeros(3), np.zeros(3))
+    cfg = PolarityFilterConfig(register_min_normal_speed_px_s=20.0, learn_min_votes=1)
+    sel = MapPolaritySelector(PolarityPredictor(cfg), cmap, K, _MovingAlongX(T))
+    idx = np.arange(0, len(cmap), 3)
+    pol = sel(T, 60_000, idx)
+    assert sel.points_to_register() is None  # no T_align yet this step
+    surface = SeparatedTimeSurface(TimeSurfaceConfig(), W, H)
+    k = int(np.flatnonzero(pol != 0)[0])
+    uv = _project(cmap.points[idx[k : k + 1]], T)[0]
+    ev = EventArray.from_arrays([59_000], [round(uv[0])], [round(uv[1])], np.array([int(pol[k])], np.int8))
+    surface.update(ev)
+    sel.align(surface, cmap.points[idx], T, pol, None, ev, None, 60_000)
+    keep = sel.points_to_register()
+    across_x = np.abs(cmap.edge_normal[idx, 0]) > 0.5  # edge normal along the motion: the edge sweeps across pixels
+    assert keep is not None and np.array_equal(keep, across_x)
+    last = sel.predictor.last
+    normal = last.speed_px_s * np.abs(np.cos(np.radians(last.angle_deg)))
+    assert np.all(normal[keep] >= 20.0) and np.all(normal[~keep] < 20.0)
+
+    class _Reg:
+        covariance = np.eye(6)
+        weights = np.ones(4, np.float32)
+        residuals = np.full(4, 0.5, np.float32)
+
+    from evpose.tracker.registration_config import RegistrationConfig
+
+    assert np.array_equal(sel.registration_covariance(_Reg(), RegistrationConfig()), np.eye(6))
+    label = sel.observe(ev, T, idx[keep], pol[keep], W, H)  # the tracker passes the registered subset
+    assert label.tolist() == [1]
+    assert sel.predictor.learned_sign(idx[k : k + 1])[0] != 0
+
+
+def test_reopening_contradicted_points_only_without_fusion_follows_the_selectors_mode():
+    """``reopen_contradicted_unfused``: a point whose patch shows only the other polarity is reopened when the pose is
+    not the IMU fusion's (``stpe+filter``) and left as predicted when it is (``full``)."""
+    from evpose.core.events import EventArray
+    from evpose.frontend.time_surface import SeparatedTimeSurface, TimeSurfaceConfig
+
+    cmap = _square_map()
+    T = _pose(0.0, np.array([0.0, 0.0, 2.0]), R_DOWN, np.zeros(3), np.zeros(3))
+    reopened = {}
+    for fused in (True, False):
+        sel = MapPolaritySelector(PolarityPredictor(PolarityFilterConfig(reopen_contradicted_unfused=True)), cmap, K, _MovingAlongX(T))
+        sel.fused_pose = fused
+        idx = np.arange(0, len(cmap), 3)
+        pol = sel(T, 60_000, idx)
+        k = int(np.flatnonzero(pol == 1)[0])
+        uv = _project(cmap.points[idx[k : k + 1]], T)[0]
+        ev = EventArray.from_arrays([59_000], [round(uv[0])], [round(uv[1])], np.array([-1], np.int8))  # the other polarity
+        surface = SeparatedTimeSurface(TimeSurfaceConfig(), W, H)
+        surface.update(ev)
+        sel.align(surface, cmap.points[idx], T, pol, None, ev, None, 60_000)
+        reopened[fused] = sel.last_counts["points_reopened"]
+    assert reopened == {True: 0, False: 1}

@@ -126,6 +126,18 @@ def test_dropping_empty_points_registers_only_points_whose_patch_shows_events(la
     assert any(r.counts["points_registered"] < r.counts["points_used"] for r in results)
 
 
+def test_points_predicted_not_to_fire_are_not_registered_and_only_stpe_filter_reopens(landing):
+    rec, cmap = landing
+    cfg = TrackerConfig(mode=TrackerMode.STPE_FILTER)
+    cfg.polarity.register_min_normal_speed_px_s = 200.0
+    s = TrackingSession(rec, cmap, cfg)
+    assert s.tracker.polarity_selector.fused_pose is False
+    results = [s.step() for _ in range(10)]
+    assert all(r.counts["points_registered"] <= r.counts["points_used"] for r in results)
+    assert any(r.counts["points_registered"] < r.counts["points_used"] for r in results)
+    assert TrackingSession(rec, cmap, TrackerConfig(mode=TrackerMode.FULL)).tracker.polarity_selector.fused_pose is True
+
+
 def test_polarity_filter_off_registers_every_used_point_on_per_point_fields(landing):
     rec, cmap = landing
     cfg = TrackerConfig(mode=TrackerMode.STPE_FILTER)

@@ -1,0 +1,102 @@
+"""Settings of the polarity prediction, its buffer zone and the event filter (:mod:`evpose.fusion.polarity`).
+
+Its own module: the fields carry the measured history of each setting, which outgrew the filter's code.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+
+@dataclass
+class PolarityFilterConfig:
+    """Parameters of the polarity prediction and its buffer zone."""
+
+    enabled: bool = True
+    """Predict polarities (False: every point uses both, i.e. plain STPE)."""
+    buffer_deg: float = field(default=20.0, metadata={"min": 0.0, "max": 89.0, "step": 0.5, "unit": "deg"})
+    """Base half-width of the buffer zone around 90 deg, degrees."""
+    flow_sigma_px_s: float = field(default=15.0, metadata={"min": 0.0, "max": 500.0, "step": 1.0, "unit": "px/s"})
+    """Assumed uncertainty of the predicted image motion; widens the buffer by atan(sigma/speed), px/s."""
+    max_buffer_deg: float = field(default=70.0, metadata={"min": 0.0, "max": 90.0, "step": 0.5, "unit": "deg"})
+    """Upper limit of the adaptive buffer half-width, degrees."""
+    min_image_speed_px_s: float = field(default=20.0, metadata={"min": 0.0, "max": 1000.0, "step": 1.0, "unit": "px/s"})
+    """Below this image speed a point keeps both polarities, px/s."""
+    min_gradient_visibility: float = field(default=0.2, metadata={"min": 0.0, "max": 1.0, "step": 0.01, "unit": "ratio"})
+    """Minimum foreshortening of the projected edge normal (1 = parallel to the image plane) to trust its direction."""
+    learn_min_votes: int = field(default=3, metadata={"min": 1, "max": 100, "step": 1, "unit": "votes"})
+    """Net votes a point needs before a learned brightness sign is used."""
+    learned_overrides_map: bool = True
+    """A confident learned sign replaces the map's sign where they disagree (map signs from cloud albedo miss
+    shading edges, e.g. creases between faces of one albedo: on the simulated landing scene only 69 % of them
+    match the polarities the points trigger, while the learned signs are consistent over time)."""
+    patch_radius_px: float = field(default=2.0, metadata={"min": 0.5, "max": 10.0, "step": 0.5, "unit": "px"})
+    """Radius of a point's patch when classifying events or reading observed polarities, pixels."""
+    event_filter: bool = True
+    """Registration reads ``T_align`` (:mod:`evpose.fusion.aligned_surface`): in each used map point's patch only the
+    predicted polarity's events, nothing outside the patches (False: per-point ON/OFF/combined fields over the whole box)."""
+    drop_empty_points: bool = False
+    """Registration skips map points whose ``T_align`` patch shows no accepted event younger than
+    ``empty_after_eta`` (50-60 % of the used points on the simulated landing); points whose patch shows only the
+    other polarity are first reopened (``reopen_contradicted``): they are the wrongly predicted ones, whose edge
+    registration needs (dropping them too cost ``stpe+filter`` 34 -> 91 mm ATE). Dropped points still count in the
+    registration's residual variance (:meth:`MapPolaritySelector.registration_covariance`) and still learn signs.
+    Measured, simulated landing seeds 0-3 mean, 346x260 / 240x180: ``full`` 13.6 / 15.1 mm, 0.172 / 0.194 deg
+    against 13.5 / 15.5 mm, 0.171 / 0.198 deg off (seed 0: 15.4 / 19.8 mm, 0.228 / 0.295 deg against 16.6 / 20.7
+    mm, 0.241 / 0.312 deg); 4 s demos: landing 17.1 vs 17.4 mm (0 vs 50 IMU-bridged updates), fast 23.6 vs 22.3 mm,
+    dynamic 34.2 vs 34.9 mm; but ``stpe+filter`` 33.1 / 39.0 against 30.5 / 35.8 mm. Registration wall time fell
+    only 16 % (0.70 -> 0.59 ms median, paired, load 2.1) for 54 % fewer points, the filter's own time rose
+    0.15 ms: the registration's per-iteration overhead, not its points, dominates. So off by default. Session 10
+    (``stpe+filter``, seeds 0-3, 346x260 / 240x180): 14.90 / 20.58 mm against 14.78 / 21.70;
+    ``register_to_map`` CPU 1.54 against 1.67 ms median (see ``register_min_normal_speed_px_s``)."""
+    reopen_contradicted: bool = False
+    """``T_align`` accepts both polarities in the patch of a single-polarity point that shows no event of its predicted
+    polarity younger than ``empty_after_eta`` but does of the other: the events contradict the prediction (a wrong
+    sign or edge normal: 8-10 % of the single-polarity predictions on the simulated landing), and reading the predicted
+    polarity only would hide the point's own edge. What makes ``drop_empty_points`` work (see there). Alone it does
+    not pay on the simulated landing (seeds 0-3 mean, 346x260 / 240x180): ``stpe+filter`` 30.4 / 34.6 mm against
+    30.5 / 35.8 mm off (``stpe`` 30.0 / 34.9), ``full`` 14.3 / 16.0 against 13.5 / 15.5 mm. Session 10 (2 s landing
+    from ground truth, mean ATE of seeds 0-3, 346x260 / 240x180): ``stpe+filter`` 14.78 / 21.70 -> 13.80 / 20.76 mm
+    (seeds 4-7: 12.56 / 19.49 -> 11.75 / 18.68 mm; ``stpe`` 12.40 / 18.47 and 11.66 / 20.12), but ``full`` 7.77 ->
+    8.21 mm at 346x260 (12.56 against 13.27 mm on seed 0 at 240x180): see ``reopen_contradicted_unfused``."""
+    register_min_normal_speed_px_s: float = field(default=0.0, metadata={"min": 0.0, "max": 500.0, "step": 1.0, "unit": "px/s"})
+    """Registration skips map points whose predicted image motion across their edge (the image speed times the
+    cosine of the angle between projected edge normal and motion) is below this: they fire almost no events, so
+    their patch shows stale ones (0 = register all), px/s. They stay in ``T_align`` and keep learning signs, and do
+    not count in the registration covariance (their field is not the "never fired" one ``drop_empty_points`` adds).
+    Only with the event filter (``T_align``).
+
+    Off by default, measured (session 10, ``stpe+filter``, 2 s landing from ground truth, mean ATE of seeds 0-3 at
+    346x260 / 240x180; 14.78 / 21.70 mm with 0): 40 px/s (about 16 % of the points, nearly all in the buffer zone)
+    15.89 / 22.36 mm, 100 px/s 18.67 mm at 346x260 (seeds 0-2, against 14.66). A point whose edge moves along itself
+    still holds the cross-flow direction with the events its edge fired earlier (leaving out the whole buffer zone
+    in ``full`` cost 7.8 -> 1215 mm, session 9), and registration time hardly falls with the points: CPU time of
+    ``register_to_map`` per update (seed 0, 346x260, six configurations stepped alternately in one process, load
+    29-38, median / p95) ``stpe`` 1.80 / 2.92 ms, ``stpe+filter`` 1.67 / 2.47, with 40 px/s (756 of 898 points)
+    1.65 / 2.47, ``drop_empty_points`` (421 of 898) 1.54 / 2.32, ``registration.max_points`` 500 (471 points) 1.42 /
+    2.20 ms: the per-call cost, not the points, dominates, so no choice of points reaches the paper's 40 % cut."""
+    reopen_contradicted_unfused: bool = False
+    """As ``reopen_contradicted``, but only where the pose is not fused with the IMU (``stpe+filter``: ``full`` is left
+    as it is, where reopening costs, see there).
+
+    Session 10, ``stpe+filter``, 2 s landing from ground truth, mean ATE at 346x260 / 240x180: seeds 0-3 14.78 /
+    21.70 -> 13.80 / 20.76 mm, seeds 4-7 12.56 / 19.49 -> 11.75 / 18.68 mm (``stpe`` 12.40 / 18.47, 11.66 / 20.12);
+    events removed 13.1 -> 9.5 % (346x260). Why ``stpe+filter`` trails ``stpe`` on this scene: with every point
+    shown both polarities in its patch (``buffer_deg`` 89) it scores 13.79 / 20.42 mm, as with this switch, so the
+    polarity choice costs ~1 mm through the contradicted points and the rest is the patches' and the painted points'
+    share (``map_refinement.register_after_updates`` holds painted points out only in ``stpe``); larger patches
+    (10 px, all both) did not help (13.55 / 12.95 against 12.79 / 12.74 mm on seeds 0 / 1 at 346x260). Off by default:
+    on the textured landing (seed 0, 346x260; ``stpe`` 27.36, ``full`` 10.08 mm, 64 % of the events removed) it
+    costs ``stpe+filter`` 22.66 -> 23.71 mm, where the filter's point is to hide the texture's events."""
+    empty_after_eta: float = field(default=3.0, metadata={"min": 0.5, "max": 12.0, "step": 0.5, "unit": "eta"})
+    """A patch whose newest accepted event is older than this many time-surface constants counts as empty (TDF > 0.95 at 3), eta."""
+    align_patch_radius_px: float = field(default=4.0, metadata={"min": 1.0, "max": 30.0, "step": 0.5, "unit": "px"})
+    """Radius of the patch around each predicted projection that ``T_align`` keeps; must cover the prediction error
+    plus the TDF blur (points whose true edge lies outside it see no events). Full mode on the simulated landing
+    346x260 scored alike from 3 to 8 px (20.7 / 21.5 / 21.3 mm ATE at 3 / 5 / 8); the cost grows with its square.
+    ``stpe+filter`` (no fused prediction, larger errors) gains from 8 px: 77.0 -> 70.4 mm at 346x260 and
+    99.3 -> 60.5 mm at 240x180, while full mode stays at 17.8 / 19.9 mm but pays ~0.7 ms per update and the
+    share of events removed falls from 17 % to 10 %; so 4 stays the default. 3 px (session 8, seed 0, 346x260) cuts
+    ``T_align``'s composition by 0.06-0.23 ms but costs ``stpe+filter`` 23.82 -> 24.08 mm (textured landing) and
+    15.15 -> 15.85 mm (plain), ``full`` 11.38 -> 12.09 mm on the plain landing (9.38 vs 10.18 mm textured). Session 9,
+    ``stpe+filter`` seeds 0-3 (346x260 / 240x180): 4 / 6 / 8 px 15.77 / 23.37, 16.25 / 23.54, 16.12 / 23.25 mm, pixels."""
