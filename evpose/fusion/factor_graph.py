@@ -310,8 +310,12 @@ class FactorGraphFusion:
         values.insert(vj, np.asarray(nav_pred.velocity(), np.float64))
         values.insert(bj, constant_bias=self.propagator.bias)
         stamp = float(j)
-        new_indices = self.smoother.update(graph, values, {xj: stamp, vj: stamp, bj: stamp}, remove)
-        self.temporary_factor = None if temporary is None else int(new_indices[temporary])
+        stamps = {xj: stamp, vj: stamp, bj: stamp}
+        if temporary is None and not remove:  # the white model: the call gtsam's own smoother takes too (tests swap it in)
+            self.smoother.update(graph, values, stamps)
+            self.temporary_factor = None
+        else:
+            self.temporary_factor = None if temporary is None else int(self.smoother.update(graph, values, stamps, remove)[temporary])
         self.index = j
         self.t_state_us = t_us
         self.n_updates += 1

@@ -236,6 +236,10 @@ def test_relinearize_skip_and_covariance_scale_are_validated():
         FactorGraphFusion(FusionConfig(relinearize_skip=0))
     with pytest.raises(ConfigError):
         FactorGraphFusion(FusionConfig(registration_covariance_scale=0.0))
+    for bad in ({"registration_ar_rho": 1.0}, {"registration_ar_rho": -0.1}, {"registration_ar_covariance_scale": 0.0},
+                {"registration_ar_between_scale": 0.0}):
+        with pytest.raises(ConfigError):
+            FactorGraphFusion(FusionConfig(**bad))
 
 
 def test_restore_at_a_late_step_reproduces_the_run_and_the_snapshot_stays_reusable(calibration):
