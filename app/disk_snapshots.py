@@ -77,7 +77,7 @@ def take_segments(tracker) -> dict[str, list]:
 
 
 def _encode_segments(segments: dict[str, list]) -> bytes:
-    ser = {key: [(e[0], None if e[1] is None else e[1].serialize(), None if e[2] is None else e[2].serialize(), e[3])
+    ser = {key: [(e[0], None if e[1] is None else e[1].serialize(), None if e[2] is None else e[2].serialize(), *e[3:])
                  if e[0] in _GRAPHS else e for e in entries] for key, entries in segments.items()}
     return zlib.compress(pickle.dumps(ser, protocol=pickle.HIGHEST_PROTOCOL), LEVEL)
 
@@ -93,7 +93,7 @@ def _decode_segments(blob: bytes) -> dict[str, list]:
         return obj
 
     ser = pickle.loads(zlib.decompress(blob))
-    return {key: [(e[0], load(gtsam.NonlinearFactorGraph, e[1]), load(gtsam.Values, e[2]), e[3]) if e[0] in _GRAPHS else e
+    return {key: [(e[0], load(gtsam.NonlinearFactorGraph, e[1]), load(gtsam.Values, e[2]), *e[3:]) if e[0] in _GRAPHS else e
                   for e in entries] for key, entries in ser.items()}
 
 

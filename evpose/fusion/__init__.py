@@ -20,7 +20,7 @@ gtsam is imported lazily by the backends, so importing this package is cheap.
 """
 
 from evpose.fusion.aligned_surface import AlignedTimeSurface
-from evpose.fusion.config import FusionBackend, FusionConfig, RobustLoss
+from evpose.fusion.config import FusionBackend, FusionConfig, RegistrationErrorModel, RobustLoss
 from evpose.fusion.ego_motion import EgoMotionConfig, EgoMotionFilter
 from evpose.fusion.motion_predictor import FusionMotionPredictor
 from evpose.fusion.polarity import (
@@ -64,6 +64,7 @@ __all__ = [
     "PolarityFilterConfig",
     "PolarityPrediction",
     "PolarityPredictor",
+    "RegistrationErrorModel",
     "RobustLoss",
     "classify_events",
     "filter_summary",

@@ -32,14 +32,14 @@ import numpy as np
 from evpose.core.camera import CameraCalibration
 from evpose.core.imu import ImuSamples
 from evpose.core.trajectory import Trajectory
-from evpose.fusion.config import FusionConfig, RobustLoss
+from evpose.fusion.config import FusionConfig, RegistrationErrorModel, RobustLoss
 from evpose.fusion.fixed_lag import CopyableFixedLagSmoother
 from evpose.fusion.preintegration import ImuBuffer, make_preintegration_params
 from evpose.fusion.propagation import NavPropagator, imu_rate_trajectory
 from evpose.fusion.state import Extrinsic, FusedState
 
 
-def registration_covariance(config: FusionConfig, covariance_6x6: np.ndarray | None) -> np.ndarray:
+def registration_covariance(config: FusionConfig, covariance_6x6: np.ndarray | None, scale: float | None = None) -> np.ndarray:
     """Registration covariance (rotation, translation; camera frame), scaled, with defaults and a floor.
 
     A missing, non-finite or non-positive-definite covariance (a degenerate
@@ -50,7 +50,8 @@ def registration_covariance(config: FusionConfig, covariance_6x6: np.ndarray | N
         c = np.asarray(covariance_6x6, dtype=np.float64).reshape(6, 6)
         c = 0.5 * (c + c.T)
         if np.isfinite(c).all() and _positive_definite(c):
-            cov = c * float(config.registration_covariance_scale)  # correlated errors: see the config field
+            # correlated errors: see the config field
+            cov = c * float(config.registration_covariance_scale if scale is None else scale)
     if cov is None:  # built only when used (every update pays for this function)
         sr, st = config.registration_default_sigma_rot, config.registration_default_sigma_trans
         cov = np.diag([sr * sr] * 3 + [st * st] * 3)
@@ -157,6 +158,11 @@ class FactorGraphFusion:
         self.history: list[tuple] = []
         self.degraded = False
         self.last_state: FusedState | None = None
+        self.last_registration: tuple[int, np.ndarray] | None = None
+        """(state index, measured IMU pose 4x4) of the newest state's registration (None: it had none), for the
+        AR(1) registration error models."""
+        self.temporary_factor: int | None = None
+        """Smoother index of the newest state's extra prior of ``AR1_WHITENED``, removed by the next registration."""
 
     @property
     def initialized(self) -> bool:
@@ -251,7 +257,8 @@ class FactorGraphFusion:
         return {"smoother": None if self.smoother is None else self.smoother.copy(), "index": self.index,
                 "t_state_us": getattr(self, "t_state_us", None), "n_updates": self.n_updates, "degraded": self.degraded,
                 "anchor": (p.t_us, p.nav, p.bias), "history": list(self.history),
-                "last_state": None if self.last_state is None else self.last_state.copy(), "imu": self.buffer.samples}
+                "last_state": None if self.last_state is None else self.last_state.copy(), "imu": self.buffer.samples,
+                "last_registration": self.last_registration, "temporary_factor": self.temporary_factor}
 
     def restore(self, snap: dict) -> None:
         """Put back a snapshot; the snapshot stays usable (its smoother is copied again), and the restored fusion fed
@@ -270,6 +277,8 @@ class FactorGraphFusion:
             self.propagator.anchor(t, nav, bias)
         self.history = list(snap["history"])
         self.last_state = None if snap["last_state"] is None else snap["last_state"].copy()
+        self.last_registration = snap.get("last_registration")
+        self.temporary_factor = snap.get("temporary_factor")
 
     # -------------------------------------------------------------- internals
     def _add_state(self, t_us: int, T_meas_cam: np.ndarray | None, cov_cam: np.ndarray | None) -> FusedState:
@@ -286,9 +295,13 @@ class FactorGraphFusion:
         graph.add(gtsam.CombinedImuFactor(xi, vi, xj, vj, bi, bj, pim))
         degraded = T_meas_cam is None
         reacquire = self.degraded and not degraded
+        remove, temporary = None, None
         if not degraded:
-            cov = self.extrinsic.imu_covariance(registration_covariance(c, cov_cam))
-            graph.add(gtsam.PriorFactorPose3(xj, gtsam.Pose3(self.extrinsic.imu_pose(T_meas_cam)), robust_noise(c, cov, robust=not reacquire)))
+            T_meas_imu = self.extrinsic.imu_pose(T_meas_cam)
+            remove, temporary = self._add_registration(graph, i, xi, xj, T_meas_imu, cov_cam, robust=not reacquire)
+            self.last_registration = (j, T_meas_imu)
+        else:
+            self.last_registration = None
         graph.add(gtsam.BetweenFactorVector(vi, vj, np.zeros(3), self._velocity_noise(c.constant_velocity_sigma * np.sqrt(dt))))
         values = gtsam.Values()
         # Named value arguments select gtsam's insert overload at once: by position pybind11 tries its 45 overloads
@@ -297,7 +310,12 @@ class FactorGraphFusion:
         values.insert(vj, np.asarray(nav_pred.velocity(), np.float64))
         values.insert(bj, constant_bias=self.propagator.bias)
         stamp = float(j)
-        self.smoother.update(graph, values, {xj: stamp, vj: stamp, bj: stamp})
+        stamps = {xj: stamp, vj: stamp, bj: stamp}
+        if temporary is None and not remove:  # the white model: the call gtsam's own smoother takes too (tests swap it in)
+            self.smoother.update(graph, values, stamps)
+            self.temporary_factor = None
+        else:
+            self.temporary_factor = None if temporary is None else int(self.smoother.update(graph, values, stamps, remove)[temporary])
         self.index = j
         self.t_state_us = t_us
         self.n_updates += 1
@@ -305,6 +323,32 @@ class FactorGraphFusion:
             self._joint_optimisation()
         self.degraded = degraded
         return self._finish_state(t_us, degraded=degraded)
+
+    def _add_registration(self, graph, i: int, xi, xj, T_meas_imu: np.ndarray, cov_cam, robust: bool):
+        """Add the registration's factors on state j = i + 1 to ``graph`` (see ``FusionConfig.registration_error_model``).
+
+        Returns ``(smoother factor indices to remove, position in graph of a factor to remove at the next
+        registration)``, either None."""
+        gtsam = self._gtsam
+        c = self.config
+        model = RegistrationErrorModel(c.registration_error_model)  # a config loaded from text holds the string
+        prev = self.last_registration
+        z = gtsam.Pose3(T_meas_imu)
+        rho = float(c.registration_ar_rho)
+        if model is RegistrationErrorModel.WHITE or prev is None or prev[0] != i or rho == 0.0:
+            cov = self.extrinsic.imu_covariance(registration_covariance(c, cov_cam))
+            graph.add(gtsam.PriorFactorPose3(xj, z, robust_noise(c, cov, robust=robust)))
+            return None, None
+        q = self.extrinsic.imu_covariance(registration_covariance(c, cov_cam, c.registration_ar_covariance_scale))
+        # Log((z_i^-1 z_j)^-1 x_i^-1 x_j) ~ e_j - e_i: the relative registration's residual.
+        between = robust_noise(c, q * (c.registration_ar_between_scale / rho), robust=robust)
+        graph.add(gtsam.BetweenFactorPose3(xi, xj, gtsam.Pose3(prev[1]).between(z), between))
+        graph.add(gtsam.PriorFactorPose3(xj, z, robust_noise(c, q / (1.0 - rho) ** 2, robust=robust)))
+        if model is RegistrationErrorModel.AR1_BETWEEN:
+            return None, None
+        remove = None if self.temporary_factor is None else [self.temporary_factor]
+        graph.add(gtsam.PriorFactorPose3(xj, z, robust_noise(c, q / (rho * (1.0 - rho)), robust=robust)))
+        return remove, graph.size() - 1
 
     def _velocity_noise(self, sigma: float):
         """The constant-velocity factor's isotropic noise model; the step (so sigma) rarely changes between updates,

@@ -187,18 +187,22 @@ class CopyableFixedLagSmoother:
             other._groups.insert2(key, 1)
         return other
 
-    def update(self, graph=None, values=None, timestamps: dict | None = None) -> None:
-        """Add factors and new variables with their timestamps, update iSAM2, marginalise keys older than the lag
-        (re-based first when the newest timestamp reaches a new multiple of :attr:`rebase_every`)."""
+    def update(self, graph=None, values=None, timestamps: dict | None = None, remove: list[int] | None = None) -> list[int]:
+        """Add factors and new variables with their timestamps, remove the factors at the indices ``remove`` (as
+        returned by an earlier update), update iSAM2, marginalise keys older than the lag (re-based first when the
+        newest timestamp reaches a new multiple of :attr:`rebase_every`). Returns the new factors' indices."""
         if timestamps and self.rebase_every and self._stamps:
             every = self.rebase_every
             if max(timestamps.values()) // every > self._stamps[-1] // every:
-                self.rebase()
+                moved = self.rebase()
+                if remove:
+                    remove = [moved[i] for i in remove if i in moved]
         if self.journal is not None:
-            self.journal.append(("update", graph, values, None if timestamps is None else dict(timestamps)))
-        self._update(graph, values, timestamps)
+            entry = ("update", graph, values, None if timestamps is None else dict(timestamps))
+            self.journal.append(entry + (list(remove),) if remove else entry)
+        return self._update(graph, values, timestamps, remove)
 
-    def _update(self, graph, values, timestamps) -> None:
+    def _update(self, graph, values, timestamps, remove=None) -> list[int]:
         gtsam = self._gtsam
         hot = list(self._keys[-1]) + [int(k) for k in timestamps] if self.newest_last and timestamps and self._stamps else []
         if timestamps:
@@ -206,9 +210,13 @@ class CopyableFixedLagSmoother:
                 self._insert(int(key), float(stamp))
         cut = bisect.bisect_left(self._stamps, self._stamps[-1] - self.lag) if self._stamps else 0
         if not cut:
-            self.isam.update(gtsam.NonlinearFactorGraph() if graph is None else graph,
-                             gtsam.Values() if values is None else values)
-            return
+            if remove:
+                result = self.isam.update(gtsam.NonlinearFactorGraph() if graph is None else graph,
+                                          gtsam.Values() if values is None else values, list(remove))
+            else:
+                result = self.isam.update(gtsam.NonlinearFactorGraph() if graph is None else graph,
+                                          gtsam.Values() if values is None else values)
+            return list(result.getNewFactorsIndices()) if graph is not None else []
         marginalize = [key for keys in self._keys[:cut] for key in keys]
         dot = self.isam.dot()
         names = {key: self._name_of[key] for key in marginalize}
@@ -227,8 +235,8 @@ class CopyableFixedLagSmoother:
             for key in hot:  # eliminated last: the newest state at the root (see ``newest_last``)
                 groups.erase(key)
                 groups.insert2(key, 2)
-        self.isam.update(gtsam.NonlinearFactorGraph() if graph is None else graph,
-                         gtsam.Values() if values is None else values, [], groups, None, extra)
+        result = self.isam.update(gtsam.NonlinearFactorGraph() if graph is None else graph,
+                                  gtsam.Values() if values is None else values, list(remove) if remove else [], groups, None, extra)
         for key in hot:
             groups.erase(key)
             groups.insert2(key, 1)
@@ -240,21 +248,28 @@ class CopyableFixedLagSmoother:
             groups.erase(key)
             del self._stamp_of[key], self._key_of[self._name_of.pop(key)]
         del self._stamps[:cut], self._keys[:cut]
+        return list(result.getNewFactorsIndices()) if graph is not None else []
 
     def content(self):
         """What the smoother is, in objects gtsam serialises: ``(factors, linearisation point, timestamps)`` -- the
         factors of the window (marginals of the keys gone as ``LinearContainerFactor``) without iSAM2's empty
         slots, iSAM2's linearisation point (a copy), and ``[(stamp, [keys in insertion order]), ...]`` ascending."""
+        return self._content()[:3]
+
+    def _content(self):
+        """:meth:`content` and the map from each factor's iSAM2 index to its index in the content's graph."""
         gtsam = self._gtsam
         factors = self.isam.getFactorsUnsafe()
         graph = gtsam.NonlinearFactorGraph()
+        moved = {}
         for i in range(factors.size()):
             f = factors.at(i)
             if f is not None:
+                moved[i] = graph.size()
                 graph.push_back(f)  # factors are immutable: shared, not copied
-        return graph, gtsam.Values(self.isam.getLinearizationPoint()), [(s, list(k)) for s, k in zip(self._stamps, self._keys)]
+        return graph, gtsam.Values(self.isam.getLinearizationPoint()), [(s, list(k)) for s, k in zip(self._stamps, self._keys)], moved
 
-    def rebase(self) -> None:
+    def rebase(self) -> dict[int, int]:
         """Rebuild the smoother from its :meth:`content` with one batch iSAM2 update on a fresh ``ISAM2``.
 
         What follows then depends only on that content and the later calls, so a
@@ -263,12 +278,14 @@ class CopyableFixedLagSmoother:
         rebuild re-eliminates the whole window at the linearisation point, which
         iSAM2 does only partly (a new Bayes tree and ordering), so estimates
         differ slightly from a smoother that was never re-based. The journal
-        restarts with the re-base: no later restore needs what came before it.
+        restarts with the re-base: no later restore needs what came before it. Returns the map from the old
+        factor indices to the new ones (the batch update numbers the content's factors in order).
         """
-        graph, values, stamps = self.content()
+        graph, values, stamps, moved = self._content()
         if self.journal is not None:
             self.journal = [("rebase", graph, values, stamps)]
         self._rebuild(graph, values, stamps)
+        return moved
 
     def _rebuild(self, graph, values, stamps) -> None:
         gtsam = self._gtsam
@@ -309,7 +326,7 @@ class CopyableFixedLagSmoother:
         """Make the calls of a :attr:`journal` (graphs and values as gtsam objects) again, in order."""
         for entry in entries:
             if entry[0] == "update":
-                self._update(entry[1], entry[2], entry[3])  # a re-base it made is in the journal already
+                self._update(entry[1], entry[2], entry[3], entry[4] if len(entry) > 4 else None)  # a re-base: journalled
             elif entry[0] == "rebase":
                 self._rebuild(entry[1], entry[2], entry[3])
             else:
