@@ -33,17 +33,21 @@ class InertialState:
 def inertial_local_bundle_adjustment(m: SlamMap, state: InertialState, K: np.ndarray, imu: ImuSamples, T_cam_imu: np.ndarray, time_offset_us: int,
                                      window: int, iterations: int, huber_px: float, acc_sigma: float = 0.01, gyro_sigma: float = 0.001,
                                      acc_bias_sigma: float = 0.1, gyro_bias_sigma: float = 0.01,
-                                     fill_from_imu: bool = False) -> float:
+                                     fill_from_imu: bool = False, velocity_prior_sigma: float = 0.5, min_span_s: float = 0.0,
+                                     span_keyframes: int = 4) -> float:
     """Optimise the last ``window`` keyframes (poses, velocities), the window's bias and the points they see, in place.
 
     The oldest keyframe of the window is held by a tight prior (the IMU fixes scale and
-    gravity direction, so one pose suffices); the bias is held near its last estimate by
-    ``acc_bias_sigma`` (m/s^2) and ``gyro_bias_sigma`` (rad/s). Returns the final graph error (nan if skipped).
+    gravity direction, so one pose suffices), its velocity by one of ``velocity_prior_sigma`` (m/s) at its last
+    estimate (``InertialConfig.ba_velocity_prior_sigma``); the bias is held near its last estimate by
+    ``acc_bias_sigma`` (m/s^2) and ``gyro_bias_sigma`` (rad/s). When the window spans less than ``min_span_s``
+    (keyframes made a few ms apart), up to ``span_keyframes`` older keyframes, thinned in time, extend it back to that
+    span (:func:`spanning_window`). Returns the final graph error (nan if skipped).
     """
     import gtsam
     from gtsam.symbol_shorthand import B, L, V, X
 
-    kfs = m.keyframes[-window:]
+    kfs = spanning_window(m.keyframes, window, min_span_s, span_keyframes)
     if iterations <= 0 or len(kfs) < 2:
         return float("nan")
     if fill_from_imu:
@@ -73,7 +77,7 @@ def inertial_local_bundle_adjustment(m: SlamMap, state: InertialState, K: np.nda
             v = ((kf.T_wc[:3, 3] - prev.T_wc[:3, 3]) / max((kf.t_us - prev.t_us) / 1e6, 1e-6)) if prev is not None else np.zeros(3)
         values.insert(V(kf.id), np.asarray(v, np.float64))
     graph.add(gtsam.PriorFactorPose3(X(ids[0]), gtsam.Pose3(kfs[0].T_wc @ T_cb), gtsam.noiseModel.Isotropic.Sigma(6, 1e-6)))
-    graph.add(gtsam.PriorFactorVector(V(ids[0]), values.atVector(V(ids[0])), gtsam.noiseModel.Isotropic.Sigma(3, 0.5)))
+    graph.add(gtsam.PriorFactorVector(V(ids[0]), values.atVector(V(ids[0])), gtsam.noiseModel.Isotropic.Sigma(3, velocity_prior_sigma)))
     for a, b in zip(kfs[:-1], kfs[1:]):
         pim = preintegrated_measurements(imu, a.t_us + time_offset_us, b.t_us + time_offset_us, bias, acc_sigma, gyro_sigma)
         graph.add(gtsam.ImuFactor(X(a.id), V(a.id), X(b.id), V(b.id), B(0), pim))
@@ -101,3 +105,27 @@ def inertial_local_bundle_adjustment(m: SlamMap, state: InertialState, K: np.nda
     b = result.atConstantBias(B(0))
     state.bias_acc, state.bias_gyro = np.asarray(b.accelerometer()), np.asarray(b.gyroscope())
     return float(graph.error(result))
+
+
+def spanning_window(keyframes: list, window: int, min_span_s: float, extra: int) -> list:
+    """The newest ``window`` keyframes, extended back by at most ``extra`` older ones so the window spans ``min_span_s``.
+
+    The older keyframes are picked at least ``min_span_s / (extra + 1)`` apart (IMU factors then join keyframes tens of
+    milliseconds apart, whose preintegrated deltas carry the velocity and scale that a few milliseconds cannot).
+    """
+    kfs = list(keyframes[-window:])
+    if min_span_s <= 0 or extra <= 0 or not kfs or len(keyframes) <= window:
+        return kfs
+    t_new = kfs[-1].t_us
+    span_us = int(min_span_s * 1e6)
+    if t_new - kfs[0].t_us >= span_us:
+        return kfs
+    gap_us = span_us // (extra + 1)
+    older = []
+    for kf in reversed(keyframes[:-window]):
+        ref = older[-1].t_us if older else kfs[0].t_us
+        if ref - kf.t_us >= gap_us:
+            older.append(kf)
+            if len(older) >= extra or t_new - kf.t_us >= span_us:
+                break
+    return older[::-1] + kfs

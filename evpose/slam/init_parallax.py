@@ -59,3 +59,42 @@ def rotation_fit_disagreement_deg(K: np.ndarray, p1: np.ndarray, p2: np.ndarray,
     R_21 = np.asarray(T_wc2)[:3, :3].T
     c = (np.trace(R_fit.T @ R_21) - 1.0) / 2.0
     return float(np.degrees(np.arccos(np.clip(c, -1.0, 1.0))))
+
+
+def relative_pose_near_rotation_fit(K: np.ndarray, p1: np.ndarray, p2: np.ndarray, threshold_px: float) -> tuple[np.ndarray, np.ndarray] | None:
+    """Relative pose ``(R, t)`` (``x2 = R x1 + t``, unit ``t``) at the epipolar-error minimum nearest the pure-rotation fit.
+
+    A decomposed essential matrix or homography is the global minimum of its RANSAC model, which over a few
+    millimetres of baseline the noise decides; the true motion is then a local minimum next to the rotation the rays
+    imply. Started at that rotation (translation: the direction best orthogonal to every ``R b1 x b2``), a robust
+    Gauss-Newton over rotation and translation direction (Sampson error in pixels, Huber at ``threshold_px``) stays in
+    that basin. Both translation signs are tried by the caller's cheirality count. None with fewer than five matches.
+    """
+    from scipy.optimize import least_squares
+    from scipy.spatial.transform import Rotation
+
+    b1, b2 = bearings(K, p1), bearings(K, p2)
+    if len(b1) < 5:
+        return None
+    R0 = best_rotation(b1, b2)
+    n = np.cross(b1 @ R0.T, b2)
+    t0 = np.linalg.svd(n)[2][-1]
+    x1 = np.c_[(np.asarray(p1, float) - K[:2, 2]) / np.diag(K)[:2], np.ones(len(b1))]
+    x2 = np.c_[(np.asarray(p2, float) - K[:2, 2]) / np.diag(K)[:2], np.ones(len(b1))]
+    f = float(K[0, 0])
+
+    def residuals(z):
+        R = Rotation.from_rotvec(z[:3]).as_matrix() @ R0
+        t = z[3:] / max(np.linalg.norm(z[3:]), 1e-12)
+        tx = np.array([[0, -t[2], t[1]], [t[2], 0, -t[0]], [-t[1], t[0], 0]])
+        E = tx @ R
+        Ex1, Etx2 = x1 @ E.T, x2 @ E
+        num = np.sum(x2 * Ex1, axis=1)
+        den = Ex1[:, 0] ** 2 + Ex1[:, 1] ** 2 + Etx2[:, 0] ** 2 + Etx2[:, 1] ** 2
+        # Sampson distance in pixels, plus a weak pull keeping |t| = 1 (the residual only sees its direction).
+        return np.r_[f * num / np.sqrt(np.maximum(den, 1e-18)), 1e-3 * (np.linalg.norm(z[3:]) - 1.0)]
+
+    sol = least_squares(residuals, np.r_[np.zeros(3), t0], loss="huber", f_scale=threshold_px, max_nfev=50)
+    R = Rotation.from_rotvec(sol.x[:3]).as_matrix() @ R0
+    t = sol.x[3:] / max(np.linalg.norm(sol.x[3:]), 1e-12)
+    return R, t

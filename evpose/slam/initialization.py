@@ -10,7 +10,7 @@ import numpy as np
 from evpose.core.trajectory import invert_pose
 from evpose.slam.config import InitializationConfig
 from evpose.slam.geometry import good_triangulation, parallax_deg, pose_from_rt, triangulate
-from evpose.slam.init_parallax import rotation_compensated_parallax_deg, rotation_fit_disagreement_deg
+from evpose.slam.init_parallax import relative_pose_near_rotation_fit, rotation_compensated_parallax_deg, rotation_fit_disagreement_deg
 
 # chi-square 95 % bounds for 1 and 2 degrees of freedom (ORB-SLAM's model scores, sigma = 1 px).
 _CHI2_1 = 3.841
@@ -115,6 +115,15 @@ def initialize_two_view(K: np.ndarray, p1: np.ndarray, p2: np.ndarray, cfg: Init
         candidates.append(_evaluate(K, R, t.ravel(), p1, p2, cfg))
     else:
         return TwoViewResult(False, "essential matrix estimation failed", homography_ratio=ratio)
+    if candidates and cfg.refit_disagreement_deg > 0:
+        best0 = max(candidates, key=lambda c: c[0])
+        if rotation_fit_disagreement_deg(K, p1, p2, best0[3]) > cfg.refit_disagreement_deg:
+            near = relative_pose_near_rotation_fit(K, p1, p2, cfg.ransac_threshold_px)
+            if near is not None:
+                R, t = near
+                # The translation direction's sign is the cheirality choice; the decomposed solutions are dropped.
+                candidates = [max((_evaluate(K, R, sg * t, p1, p2, cfg) for sg in (1.0, -1.0)), key=lambda c: c[0])]
+                model = model + "+refit"
     if candidates and cfg.max_rotation_disagreement_deg > 0:
         n_all = len(candidates)
         candidates = [c for c in candidates if rotation_fit_disagreement_deg(K, p1, p2, c[3]) <= cfg.max_rotation_disagreement_deg]
@@ -126,7 +135,7 @@ def initialize_two_view(K: np.ndarray, p1: np.ndarray, p2: np.ndarray, cfg: Init
     counts = sorted((c[0] for c in candidates), reverse=True)
     best = max(candidates, key=lambda c: c[0])
     # Like ORB-SLAM, an ambiguous homography decomposition (two similar winners) is rejected.
-    if model == "homography" and len(counts) > 1 and counts[1] > cfg.ambiguity_ratio * counts[0]:
+    if model.startswith("homography") and len(counts) > 1 and counts[1] > cfg.ambiguity_ratio * counts[0]:
         return TwoViewResult(False, "ambiguous homography decomposition", model=model, homography_ratio=ratio)
     n_good, good, X, T_wc2 = best
     if n_good < cfg.min_triangulated:

@@ -27,7 +27,7 @@ def refine_map_scale(m: SlamMap, K: np.ndarray, imu: ImuSamples, T_cam_imu: np.n
     m.scale_refined = True
     kfs = m.keyframes
     res = initialize_imu([k.t_us for k in kfs], [k.T_wc for k in kfs], imu, T_cam_imu, time_offset_us,
-                         replace(ic, max_residual_ratio=ic.refine_max_residual_ratio))
+                         replace(ic, max_residual_ratio=ic.refine_max_residual_ratio, max_motion_residual_ratio=0.0))
     if not res.ok:
         return res
     m.transform(res.R_align, res.scale)
@@ -38,5 +38,6 @@ def refine_map_scale(m: SlamMap, K: np.ndarray, imu: ImuSamples, T_cam_imu: np.n
     st.velocities.update({kfs[k].id: v for k, v in zip(res.used, res.velocities)})
     if ic.inertial_ba:
         inertial_local_bundle_adjustment(m, st, K, imu, T_cam_imu, time_offset_us, len(kfs), ba_iterations, ba_huber_px,
-                                         ic.acc_noise, ic.gyro_noise, ic.acc_bias_sigma, ic.gyro_bias_sigma, ic.velocity_from_imu)
+                                         ic.acc_noise, ic.gyro_noise, ic.acc_bias_sigma, ic.gyro_bias_sigma, ic.velocity_from_imu,
+                                         velocity_prior_sigma=ic.ba_velocity_prior_sigma, min_span_s=ic.ba_min_span_s, span_keyframes=ic.ba_span_keyframes)
     return res

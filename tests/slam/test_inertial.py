@@ -157,3 +157,25 @@ def test_gyro_takes_the_mci_rotations_of_a_map_the_imu_initialisation_never_reac
 
     # Between a keyframe and the next, the gyro's rotation (bias unknown, a few mrad/s) beats the per-MCI visual one.
     assert rotation_rpe(True) < 0.7 * rotation_rpe(False)
+
+
+def test_motion_residual_ratio_refuses_the_too_small_scale_the_gravity_dominated_test_passes(shaken):
+    gt = shaken.ground_truth
+    T = gt.matrices()
+    idx = list(range(0, 1900, 150))
+    rng = np.random.default_rng(1)
+    times = [int(gt.t[k]) for k in idx]
+    exact = [T[k].copy() for k in idx]
+    bad = [T[k].copy() for k in idx]
+    for P in exact:
+        P[:3, 3] *= 0.3
+    for P in bad:
+        P[:3, 3] = (P[:3, 3] + rng.normal(0, 0.1, 3)) * 0.3
+    loose = initialize_imu(times, bad, shaken.imu, np.eye(4), 0, InertialConfig(max_residual_ratio=1.0))
+    assert loose.ok and loose.motion_residual_ratio > 0.1
+    good = initialize_imu(times, exact, shaken.imu, np.eye(4), 0, InertialConfig(max_residual_ratio=1.0))
+    assert good.ok and good.motion_residual_ratio < 0.05
+    gated = InertialConfig(max_residual_ratio=1.0, max_motion_residual_ratio=0.1)
+    res = initialize_imu(times, bad, shaken.imu, np.eye(4), 0, gated)
+    assert not res.ok and "explains too little" in res.reason
+    assert initialize_imu(times, exact, shaken.imu, np.eye(4), 0, gated).ok

@@ -48,3 +48,32 @@ def test_inertial_bundle_adjustment_pulls_a_perturbed_keyframe_back(shaken):
     assert np.linalg.norm(m.keyframes[-1].T_wc[:3, 3] - truth[:3, 3]) < 0.25 * before
     assert np.abs(m.keyframes[0].T_wc - first).max() < 1e-6
     assert np.abs(state.bias_gyro - [0.004, -0.003, 0.002]).max() < 2e-3
+
+
+def _kf(k, t_ms):
+    return Keyframe(k, int(t_ms * 1000), np.eye(4), {})
+
+
+def test_spanning_window_extends_a_short_window_back_with_thinned_keyframes():
+    from evpose.slam.inertial_ba import spanning_window
+
+    kfs = [_kf(k, 5.0 * k) for k in range(100)]  # a keyframe every 5 ms, as indoors
+    out = spanning_window(kfs, 6, 0.3, 4)
+    ids = [k.id for k in out]
+    assert ids[-6:] == list(range(94, 100))
+    older = out[:-6]
+    assert len(older) == 4
+    t = [k.t_us for k in out]
+    assert all(b - a >= 60_000 for a, b in zip(t[:4], t[1:5]))  # 0.3 s / 5 apart
+    assert t == sorted(t)
+
+
+def test_spanning_window_leaves_long_windows_and_the_default_alone():
+    from evpose.slam.inertial_ba import spanning_window
+
+    sparse = [_kf(k, 80.0 * k) for k in range(20)]  # 80 ms apart (the landing): 6 keyframes span 0.4 s
+    assert [k.id for k in spanning_window(sparse, 6, 0.3, 4)] == list(range(14, 20))
+    dense = [_kf(k, 5.0 * k) for k in range(20)]
+    assert [k.id for k in spanning_window(dense, 6, 0.0, 4)] == list(range(14, 20))
+    few = [_kf(k, 5.0 * k) for k in range(4)]
+    assert [k.id for k in spanning_window(few, 6, 0.3, 4)] == [0, 1, 2, 3]

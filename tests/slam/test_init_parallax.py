@@ -66,3 +66,22 @@ def test_initialisation_gates():
     p1, p2, _, _ = _views([0.002, 0.0, 0.0], [0.0, -0.06, 0.0], noise=0.3)
     res = initialize_two_view(K, p1, p2, cfg)
     assert not res.ok and "pure rotation" in res.reason
+
+
+def test_pose_near_the_rotation_fit_recovers_a_short_and_a_wide_baseline():
+    from scipy.spatial.transform import Rotation as Rot
+
+    from evpose.slam.init_parallax import relative_pose_near_rotation_fit
+
+    rng = np.random.default_rng(3)
+    X = np.c_[rng.uniform(-2, 2, 80), rng.uniform(-1.5, 1.5, 80), rng.uniform(2, 5, 80)]
+    R = Rot.from_rotvec([0.01, 0.02, -0.005]).as_matrix()
+    Kp = np.array([[200.0, 0, 120], [0, 200.0, 90], [0, 0, 1]])
+    for t, noise, t_tol in (([0.03, 0.0, 0.01], 0.0, 0.1), ([0.2, 0.0, 0.05], 0.3, 3.0), ([0.0, 0.1, -0.3], 0.3, 3.0)):
+        t = np.asarray(t)
+        x2 = X @ R.T + t
+        p1 = X[:, :2] / X[:, 2:] * 200 + [120, 90] + rng.normal(0, noise, (80, 2))
+        p2 = x2[:, :2] / x2[:, 2:] * 200 + [120, 90] + rng.normal(0, noise, (80, 2))
+        Re, te = relative_pose_near_rotation_fit(Kp, p1, p2, 1.0)
+        assert np.degrees(Rot.from_matrix(Re.T @ R).magnitude()) < 0.2
+        assert np.degrees(np.arccos(min(abs(te @ t) / np.linalg.norm(t), 1.0))) < t_tol
