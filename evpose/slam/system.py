@@ -76,7 +76,10 @@ class EventSlam(GyroAids, VisualFailureHandling):
             # E-I-C3: fixed tiny windows, and no withdrawal of tiny windows by event rate.
             wcfg = replace(wcfg, adapt_events=False, min_event_rate=0.0)
         self.window = EventWindowSelector(wcfg, config.features, config.image, self.width, self.height, config.seed)
-        self.mci_gen = MciGenerator(config.mci, config.image, self.K, self.width, self.height, config.seed)
+        mcfg = config.mci
+        if self.imu is not None:
+            mcfg = replace(mcfg, reference_fraction=mcfg.reference_fraction_inertial)
+        self.mci_gen = MciGenerator(mcfg, config.image, self.K, self.width, self.height, config.seed)
         self.atlas = Atlas()
         self.fe = FrontendTracks()
         self.results: list[SlamStepResult] = []
