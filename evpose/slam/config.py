@@ -131,8 +131,9 @@ class MciConfig:
     time_slices: int = field(default=24, metadata={"min": 1, "max": 256, "step": 1, "unit": "slices"})
     """Events are warped with one transform per time slice of the window (Exp(psi dt) sampled), slices."""
     reference_fraction: float = field(default=1.0, metadata={"min": 0.0, "max": 1.0, "step": 0.05, "unit": "fraction"})
-    """Where in its window an MCI's reference time lies (the time its events are warped to, and its pose's time), as a
-    fraction of the window from its first event (1: the last event, as the paper; 0.5: the middle), fraction. Warped to
+    """Where in its window an event-only MCI's reference time lies (the time its events are warped to, and its pose's
+    time), as a fraction of the window from its first event (1: the last event, as the paper; 0.5: the middle),
+    fraction. Event-inertial runs use ``reference_fraction_inertial``. Warped to
     the last event, a warp's error moves every event by up to the whole window's error, one way; warped to the middle,
     by half of it both ways (blur, not a shift). Simulated landing, event-only, 3 s, seeds 0-23: 1.0 -> 0.5 lowered the
     scale-aligned ATE from a mean of 2.64 % (median 2.53, worst 5.81, 8 within 2 %) to 2.28 % (median 1.94, worst 6.04,
@@ -144,7 +145,15 @@ class MciConfig:
     still re-draw some seeds' outcomes. Re-aligning live tracks on their oldest (newest) keyframe MCI by KLT before
     each pose estimate (within 2 px) was worse there: 2.41 (2.40) % on seeds 0-3, 9, 13 against 1.74 %; within 1 px 2.09 %.
     Not the default: landing E-I-C2 seeds 0-7 went from a mean ATE of 1.01 % (8 of 8 within 2 %) to 1.29 % (6 of 8),
-    RPE at most 0.0037 -> 0.0033 m/m and 0.0018 -> 0.0015 deg/m; indoor not measured."""
+    RPE at most 0.0037 -> 0.0033 m/m and 0.0018 -> 0.0015 deg/m. Session 10, event-only only (E-I-C2 keeping
+    ``reference_fraction_inertial`` 1.0), on re-simulated landing recordings, seeds 0-2 and 8-23 (3-7 not simulated in
+    time): 1.0 -> 0.5 mean ATE 3.57 -> 3.04 % (the worst seed 21: 12.9 -> 6.4 %), median 2.18 -> 2.52, 5 -> 5 within
+    2 %, 10 seeds better and 9 worse (seed 17 2.18 -> 7.01 %, split into two maps); indoor event-only seeds 0, 1: 8.73
+    -> 7.43 % and 14.07 -> 12.17 %, tracked 52.0 -> 52.2 % and 51.0 -> 54.2 %, 9 -> 12 and 10 -> 13 maps. No
+    consistent gain on landing, so 1.0 stays the default."""
+    reference_fraction_inertial: float = field(default=1.0, metadata={"min": 0.0, "max": 1.0, "step": 0.05, "unit": "fraction"})
+    """``reference_fraction`` of event-inertial runs, so each mode can have its own (0.5 made landing E-I-C2 worse,
+    figures above), fraction."""
     use_map_depth: bool = True
     """H1: SE(3) warp with the map's median depth when a map exists."""
     use_feature_fit: bool = True

@@ -32,7 +32,7 @@ from evpose.core.trajectory import invert_pose
 from evpose.errors import InputError
 from evpose.slam.atlas import Atlas, Keyframe, MapPoint, SlamMap
 from evpose.slam.bundle_adjustment import local_bundle_adjustment
-from evpose.slam.coasting import camera_frame_velocity, coast_pose, constant_velocity_pose, drop_contradicted
+from evpose.slam.coasting import constant_velocity_pose
 from evpose.slam.config import SlamConfig, SlamMode
 from evpose.slam.event_window import WINDOW_REASONS, EventWindowSelector, ReconstructionWindow
 from evpose.slam.features import FrontendTracks, detect_features, track_features
@@ -42,18 +42,18 @@ from evpose.slam.inertial_ba import InertialState, inertial_local_bundle_adjustm
 from evpose.slam.initialization import initialize_two_view
 from evpose.slam.map_rejoin import RejoinCandidate, merge_into, rejoin_similarity
 from evpose.slam.local_map import cull_points, insert_keyframe, need_keyframe, triangulate_new_points
-from evpose.slam.event_coasting import drop_unconfirmed_poses, event_only_coast_pose
 from evpose.slam.event_image import to_uint8
 from evpose.slam.mci import Hypothesis, MciGenerator, MciResult, MotionPrior
 from evpose.slam.keyframe_search import keep_keyframe_image, klt_refind_points
 from evpose.slam.projection_search import SearchMatcher, refind_points, store_patches
 from evpose.slam.scale_refinement import refine_map_scale
 from evpose.slam.step_result import SlamStatus, SlamStepResult
+from evpose.slam.system_failures import VisualFailureHandling
 from evpose.slam.system_gyro import GyroAids
 from evpose.slam.tracking import PoseEstimate, estimate_pose
 
 
-class EventSlam(GyroAids):
+class EventSlam(GyroAids, VisualFailureHandling):
     """Map-free event(-inertial) SLAM. Feed events with :meth:`step`; read maps from :attr:`atlas`."""
 
     def __init__(self, config: SlamConfig, calibration: CameraCalibration, imu: ImuSamples | None = None):
@@ -76,7 +76,10 @@ class EventSlam(GyroAids):
             # E-I-C3: fixed tiny windows, and no withdrawal of tiny windows by event rate.
             wcfg = replace(wcfg, adapt_events=False, min_event_rate=0.0)
         self.window = EventWindowSelector(wcfg, config.features, config.image, self.width, self.height, config.seed)
-        self.mci_gen = MciGenerator(config.mci, config.image, self.K, self.width, self.height, config.seed)
+        mcfg = config.mci
+        if self.imu is not None:
+            mcfg = replace(mcfg, reference_fraction=mcfg.reference_fraction_inertial)
+        self.mci_gen = MciGenerator(mcfg, config.image, self.K, self.width, self.height, config.seed)
         self.atlas = Atlas()
         self.fe = FrontendTracks()
         self.results: list[SlamStepResult] = []
@@ -324,17 +327,6 @@ class EventSlam(GyroAids):
     def _pose_tc(self, m: SlamMap):
         return self.cfg.tracking if m is None or m.imu_initialised else self._tc_uninit
 
-    def _lose(self, reason: str) -> tuple[SlamStatus, str, None, bool]:
-        m = self.atlas.active
-        if m is not None:
-            m.lost_reason = reason
-        self._state = SlamStatus.NOT_INITIALISED
-        self.fe.track_to_point = {}
-        self.fe.init_ref = None
-        # The next successful initialisation opens a new map of the atlas.
-        self.atlas.new_map()
-        return SlamStatus.LOST, f"tracking lost: {reason}", None, False
-
     def _track_map(self, mci: MciResult) -> tuple[SlamStatus, str, np.ndarray | None, bool]:
         m, fe = self.atlas.active, self.fe
         tc = self._pose_tc(m)
@@ -475,47 +467,3 @@ class EventSlam(GyroAids):
         ic = self.cfg.inertial
         pred = predict_camera_pose(m.keyframes[-1], m.inertial, self.imu, self.calib.T_cam_imu, self.calib.time_offset_us, t_us, ic.acc_noise, ic.gyro_noise)
         return None if pred is None else pred[0]
-
-    def _bridge_or_lose(self, mci: MciResult, reason: str, R_prior: np.ndarray | None = None) -> tuple[SlamStatus, str, np.ndarray | None, bool]:
-        """E-I-C2/C3: keep the map through a visual failure, the pose predicted without the images (``SlamStatus.INERTIAL``).
-
-        A metric map is propagated by the preintegrated IMU; a map the IMU initialisation has not reached yet coasts on
-        the gyro rotation and its recent camera-frame velocity (``InertialConfig.coast_s``). A keyframe at the predicted
-        pose lets new points be triangulated, so the map can be re-localised on the next MCIs.
-        """
-        m, fe, ic, tc = self.atlas.active, self.fe, self.cfg.inertial, self.cfg.tracking
-        gap_s = (mci.t_us - self._last_visual_t) / 1e6
-        if self.imu is None:
-            return self._coast_event_only(mci, reason, gap_s)
-        if ic.configuration is InertialConfiguration.C1 or gap_s > ic.max_bridge_s:
-            return self._lose(reason)
-        if m.imu_initialised:
-            T_wc, how = self._imu_prediction(mci.t_us), "propagated by the IMU"
-        else:
-            v = camera_frame_velocity(m, int(ic.coast_velocity_span_s * 1e6))
-            if gap_s > ic.coast_s or R_prior is None or v is None:
-                self._rejoin = RejoinCandidate(m, v) if v is not None and ic.rejoin_s > 0 else None
-                return self._lose(reason)
-            T_wc, how = coast_pose(m, mci.t_us, R_prior, v), "coasted on the gyro and the last velocity (IMU not initialised)"
-        if T_wc is None:
-            return self._lose(reason)
-        drop_contradicted(m, self.K, T_wc, fe.ids, fe.uv, fe.track_to_point, 2.0 * tc.reprojection_threshold_px)
-        m.add_pose(mci.t_us, T_wc)
-        T_wc = self._new_keyframe(m, mci.t_us, T_wc, mci.image8, adjust=m.imu_initialised or ic.coast_ba)
-        return SlamStatus.INERTIAL, f"visual tracking failed ({reason}); pose {how}, map {m.id} kept", T_wc.copy(), True
-
-    def _coast_event_only(self, mci: MciResult, reason: str, gap_s: float) -> tuple[SlamStatus, str, np.ndarray | None, bool]:
-        """Event-only: keep the map through a visual failure of at most ``TrackingConfig.coast_s`` (``SlamStatus.COASTING``)."""
-        m, fe, tc = self.atlas.active, self.fe, self.cfg.tracking
-        if tc.coast_s <= 0:
-            return self._lose(reason)
-        T_wc = event_only_coast_pose(m, mci.t_us, int(tc.coast_span_s * 1e6)) if gap_s <= tc.coast_s else None
-        if T_wc is None:
-            if tc.coast_drop_unconfirmed:
-                drop_unconfirmed_poses(m, self._last_visual_t)
-            return self._lose(reason)
-        drop_contradicted(m, self.K, T_wc, fe.ids, fe.uv, fe.track_to_point, 2.0 * tc.reprojection_threshold_px)
-        m.add_pose(mci.t_us, T_wc)
-        # No BA on a keyframe at a predicted pose (InertialConfig.coast_ba: with one fixed keyframe it slid along the scale).
-        T_wc = self._new_keyframe(m, mci.t_us, T_wc, mci.image8, adjust=False)
-        return SlamStatus.COASTING, f"visual tracking failed ({reason}); pose coasted on the map's recent motion, map {m.id} kept", T_wc.copy(), True

@@ -2,7 +2,8 @@
 
 Each visible point emits events at a constant rate (independent of its image
 speed), so a faster camera yields fewer events per pixel of motion, which is
-what the ``N_e`` adaptation of Algorithm 1 reacts to.
+what the ``N_e`` adaptation of Algorithm 1 reacts to. ``circle_pose`` / ``circle_map``: a camera circling
+the origin, shared by the coasting and map re-join tests.
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ from evpose.core.events import EventArray
 from evpose.core.imu import ImuSamples
 from evpose.core.recording import Recording
 from evpose.core.trajectory import Trajectory, invert_pose
+from evpose.slam.atlas import SlamMap
 
 
 def make_points(n: int, seed: int, depth=(3.0, 6.0), half_width: float = 3.0) -> np.ndarray:
@@ -82,3 +84,22 @@ def make_recording(duration_s: float = 1.0, speed: float = 0.4, n_points: int = 
     acc = np.einsum("nji,nj->ni", R, a_w - np.array([0.0, 9.81, 0.0]))
     imu = ImuSamples.from_arrays(gt.t, acc, gyro)
     return Recording(events=ev, imu=imu, ground_truth=gt, calibration=calib, metadata={"scenario": "synthetic-points", "seed": seed})
+
+
+def circle_pose(t_s: float, radius: float = 1.6, speed: float = 1.2) -> np.ndarray:
+    """A camera circling the origin, looking outwards (the simulated room's motion)."""
+    a = speed * t_s / radius
+    T = np.eye(4)
+    z = np.array([np.cos(a), np.sin(a), 0.0])
+    y = np.array([0.0, 0.0, -1.0])
+    T[:3, :3] = np.stack([np.cross(y, z), y, z], axis=1)
+    T[:3, 3] = radius * z
+    return T
+
+
+def circle_map(n: int, step_us: int) -> SlamMap:
+    """A map whose trajectory is ``n`` poses of :func:`circle_pose`, ``step_us`` apart (no keyframes, no points)."""
+    m = SlamMap(0)
+    for k in range(n):
+        m.add_pose(k * step_us, circle_pose(k * step_us / 1e6))
+    return m

@@ -9,32 +9,14 @@ from evpose.slam import EventSlam, SlamConfig, SlamMode, SlamStatus
 from evpose.slam.atlas import Keyframe, MapPoint, SlamMap
 from evpose.slam.coasting import camera_frame_velocity, coast_pose, constant_velocity_pose, drop_contradicted
 from evpose.slam.inertial import InertialConfiguration
-from slam_synthetic import make_recording
-
-
-def _circle_pose(t_s: float, radius: float = 1.6, speed: float = 1.2) -> np.ndarray:
-    """A camera circling the origin, looking outwards (the simulated room's motion)."""
-    a = speed * t_s / radius
-    T = np.eye(4)
-    z = np.array([np.cos(a), np.sin(a), 0.0])
-    y = np.array([0.0, 0.0, -1.0])
-    T[:3, :3] = np.stack([np.cross(y, z), y, z], axis=1)
-    T[:3, 3] = radius * z
-    return T
-
-
-def _circle_map(n: int, step_us: int) -> SlamMap:
-    m = SlamMap(0)
-    for k in range(n):
-        m.add_pose(k * step_us, _circle_pose(k * step_us / 1e6))
-    return m
+from slam_synthetic import circle_map, circle_pose, make_recording
 
 
 def test_coasting_follows_a_steady_turn_with_the_camera_frame_velocity():
-    m = _circle_map(12, 5000)
+    m = circle_map(12, 5000)
     v = camera_frame_velocity(m, 30_000)
     t = m.traj_t[-1] + 60_000
-    truth = _circle_pose(t / 1e6)
+    truth = circle_pose(t / 1e6)
     T = coast_pose(m, t, truth[:3, :3], v)
     err = np.linalg.norm(T[:3, 3] - truth[:3, 3])
     assert err < 0.02 * np.linalg.norm(truth[:3, 3] - m.traj_T[-1][:3, 3])
@@ -43,14 +25,14 @@ def test_coasting_follows_a_steady_turn_with_the_camera_frame_velocity():
 
 
 def test_constant_velocity_pose_extrapolates_the_last_step():
-    m = _circle_map(4, 5000)
+    m = circle_map(4, 5000)
     T = constant_velocity_pose(m, m.traj_t[-1] + 5000)
-    assert np.linalg.norm(T[:3, 3] - _circle_pose(0.02)[:3, 3]) < 1e-3
+    assert np.linalg.norm(T[:3, 3] - circle_pose(0.02)[:3, 3]) < 1e-3
     assert np.array_equal(constant_velocity_pose(m, m.traj_t[-1] + 50_000), m.traj_T[-1])
 
 
 def test_coasting_velocity_needs_enough_trajectory():
-    m = _circle_map(3, 5000)
+    m = circle_map(3, 5000)
     assert camera_frame_velocity(m, 30_000) is None
     assert camera_frame_velocity(SlamMap(0), 1000) is None
 

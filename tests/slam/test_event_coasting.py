@@ -7,35 +7,16 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from evpose.slam import EventSlam, SlamConfig, SlamStatus
-from evpose.slam.atlas import SlamMap
 from evpose.slam.event_coasting import camera_frame_rate, drop_unconfirmed_poses, event_only_coast_pose
-from slam_synthetic import make_recording
-
-
-def _circle_pose(t_s: float, radius: float = 1.6, speed: float = 1.2) -> np.ndarray:
-    """A camera circling the origin, looking outwards (the simulated room's motion)."""
-    a = speed * t_s / radius
-    T = np.eye(4)
-    z = np.array([np.cos(a), np.sin(a), 0.0])
-    y = np.array([0.0, 0.0, -1.0])
-    T[:3, :3] = np.stack([np.cross(y, z), y, z], axis=1)
-    T[:3, 3] = radius * z
-    return T
-
-
-def _circle_map(n: int, step_us: int) -> SlamMap:
-    m = SlamMap(0)
-    for k in range(n):
-        m.add_pose(k * step_us, _circle_pose(k * step_us / 1e6))
-    return m
+from slam_synthetic import circle_map, circle_pose, make_recording
 
 
 def test_coasting_holds_the_turn_rate_and_velocity_of_a_steady_turn():
-    m = _circle_map(12, 5000)
+    m = circle_map(12, 5000)
     w = camera_frame_rate(m, 30_000)
     assert abs(np.linalg.norm(w) * 1e6 - 1.2 / 1.6) < 1e-6  # rad/s of the circle
     t = m.traj_t[-1] + 60_000
-    truth = _circle_pose(t / 1e6)
+    truth = circle_pose(t / 1e6)
     T = event_only_coast_pose(m, t, 30_000)
     assert np.degrees(Rotation.from_matrix(T[:3, :3].T @ truth[:3, :3]).magnitude()) < 1e-6
     step = np.linalg.norm(truth[:3, 3] - m.traj_T[-1][:3, 3])
@@ -43,13 +24,13 @@ def test_coasting_holds_the_turn_rate_and_velocity_of_a_steady_turn():
 
 
 def test_coasting_needs_enough_trajectory():
-    m = _circle_map(3, 5000)
+    m = circle_map(3, 5000)
     assert camera_frame_rate(m, 30_000) is None
     assert event_only_coast_pose(m, 20_000, 30_000) is None
 
 
 def test_unconfirmed_poses_are_dropped_back_to_the_last_visual_one():
-    m = _circle_map(10, 5000)
+    m = circle_map(10, 5000)
     assert drop_unconfirmed_poses(m, 30_000) == 3
     assert m.traj_t[-1] == 30_000 and len(m.traj_T) == len(m.traj_ref) == len(m.traj_rel) == 7
 

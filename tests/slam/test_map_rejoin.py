@@ -6,16 +6,16 @@ from evpose.core.trajectory import invert_pose
 from evpose.slam.atlas import Keyframe, MapPoint, SlamMap
 from evpose.slam.coasting import camera_frame_velocity
 from evpose.slam.map_rejoin import merge_into, rejoin_similarity
-from test_coasting import _circle_pose
+from slam_synthetic import circle_pose
 
 
 def _old_map(scale: float) -> SlamMap:
     """A map of the circling camera up to 60 ms, in units of ``1 / scale`` metres, with one keyframe and point."""
     m = SlamMap(0)
-    m.keyframes = [Keyframe(0, 0, _scaled(_circle_pose(0.0), scale))]
+    m.keyframes = [Keyframe(0, 0, _scaled(circle_pose(0.0), scale))]
     m.points[7] = MapPoint(7, np.array([0.5, 0.1, 2.0]) / scale, {0: np.zeros(2)})
     for k in range(13):
-        m.add_pose(k * 5000, _scaled(_circle_pose(k * 0.005), scale))
+        m.add_pose(k * 5000, _scaled(circle_pose(k * 0.005), scale))
     return m
 
 
@@ -28,7 +28,7 @@ def _scaled(T: np.ndarray, s: float) -> np.ndarray:
 def _two_view_map(t0_us: int, t1_us: int, baseline: float) -> tuple[SlamMap, np.ndarray]:
     """The two-view map a fresh initialisation makes at ``t0``/``t1``: first keyframe at the origin, ``baseline`` units
     between them; returns it and a point of the scene (metres, world) expressed in it."""
-    T0, T1 = _circle_pose(t0_us / 1e6), _circle_pose(t1_us / 1e6)
+    T0, T1 = circle_pose(t0_us / 1e6), circle_pose(t1_us / 1e6)
     rel = invert_pose(T0) @ T1
     d = np.linalg.norm(rel[:3, 3])
     rel[:3, 3] *= baseline / d
@@ -47,11 +47,11 @@ def test_the_new_map_lands_where_the_lost_map_coasts_to_at_its_scale():
     v = camera_frame_velocity(old, 30_000)
     new, X_world = _two_view_map(300_000, 330_000, baseline=1.0)
     # The gyro's orientations at the two keyframes (exact here).
-    R0, R1 = _circle_pose(0.3)[:3, :3], _circle_pose(0.33)[:3, :3]
+    R0, R1 = circle_pose(0.3)[:3, :3], circle_pose(0.33)[:3, :3]
     R, t, s = rejoin_similarity(old, new, R0, R1, v)
     first = merge_into(old, new, R, t, s)
     assert first == 1 and [k.id for k in old.keyframes] == [0, 1, 2]
-    truth0, truth1 = _scaled(_circle_pose(0.3), scale), _scaled(_circle_pose(0.33), scale)
+    truth0, truth1 = _scaled(circle_pose(0.3), scale), _scaled(circle_pose(0.33), scale)
     # Coasting on the circle's camera-frame velocity places the keyframes within a few percent of the 0.24 m gap.
     gap = np.linalg.norm(truth0[:3, 3] - old.traj_T[12][:3, 3])
     assert np.linalg.norm(old.keyframes[1].T_wc[:3, 3] - truth0[:3, 3]) < 0.05 * gap

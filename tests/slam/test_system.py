@@ -106,6 +106,16 @@ def test_event_inertial_mode_without_imu_is_an_input_error():
         run_slam(Recording(events=rec.events), SlamConfig())
 
 
+def test_each_mode_warps_its_mcis_to_its_own_reference_fraction():
+    rec = make_recording(duration_s=0.05)
+    cfg = SlamConfig()
+    cfg.mci.reference_fraction, cfg.mci.reference_fraction_inertial = 0.5, 0.8
+    assert EventSlam(cfg, rec.calibration).mci_gen.cfg.reference_fraction == 0.5
+    cfg.mode = SlamMode.EVENT_INERTIAL
+    assert EventSlam(cfg, rec.calibration, rec.imu).mci_gen.cfg.reference_fraction == 0.8
+    assert cfg.mci.reference_fraction == 0.5  # the caller's config is not changed
+
+
 def test_snapshot_and_restore_replay_identically():
     rec = make_recording(duration_s=1.0, speed=1.5, seed=9)
     slam = EventSlam(SlamConfig(), rec.calibration)

@@ -1,0 +1,78 @@
+"""What the SLAM system does when visual tracking fails on an MCI (:class:`evpose.slam.system.EventSlam` inherits it).
+
+E-I-C2/C3 bridge the failure and keep the map: a metric map is propagated by the IMU, a map the IMU initialisation
+has not reached yet coasts on the gyro rotation and its recent velocity. Event-only runs coast on the map's recent
+motion for at most ``TrackingConfig.coast_s``. Otherwise, or when the bridge runs too long, the map is lost and the
+next two-view initialisation opens a new map of the atlas. The methods read the system's ``atlas``, ``fe``, ``cfg``,
+``imu``, ``K`` and ``_last_visual_t`` and call its ``_new_keyframe`` and ``_imu_prediction``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from evpose.slam.coasting import camera_frame_velocity, coast_pose, drop_contradicted
+from evpose.slam.event_coasting import drop_unconfirmed_poses, event_only_coast_pose
+from evpose.slam.inertial import InertialConfiguration
+from evpose.slam.map_rejoin import RejoinCandidate
+from evpose.slam.mci import MciResult
+from evpose.slam.step_result import SlamStatus
+
+
+class VisualFailureHandling:
+    """Bridging, coasting and losing maps for :class:`evpose.slam.system.EventSlam` (a mixin: it owns no state)."""
+
+    def _lose(self, reason: str) -> tuple[SlamStatus, str, None, bool]:
+        m = self.atlas.active
+        if m is not None:
+            m.lost_reason = reason
+        self._state = SlamStatus.NOT_INITIALISED
+        self.fe.track_to_point = {}
+        self.fe.init_ref = None
+        # The next successful initialisation opens a new map of the atlas.
+        self.atlas.new_map()
+        return SlamStatus.LOST, f"tracking lost: {reason}", None, False
+
+    def _bridge_or_lose(self, mci: MciResult, reason: str, R_prior: np.ndarray | None = None) -> tuple[SlamStatus, str, np.ndarray | None, bool]:
+        """E-I-C2/C3: keep the map through a visual failure, the pose predicted without the images (``SlamStatus.INERTIAL``).
+
+        A metric map is propagated by the preintegrated IMU; a map the IMU initialisation has not reached yet coasts on
+        the gyro rotation and its recent camera-frame velocity (``InertialConfig.coast_s``). A keyframe at the predicted
+        pose lets new points be triangulated, so the map can be re-localised on the next MCIs.
+        """
+        m, fe, ic, tc = self.atlas.active, self.fe, self.cfg.inertial, self.cfg.tracking
+        gap_s = (mci.t_us - self._last_visual_t) / 1e6
+        if self.imu is None:
+            return self._coast_event_only(mci, reason, gap_s)
+        if ic.configuration is InertialConfiguration.C1 or gap_s > ic.max_bridge_s:
+            return self._lose(reason)
+        if m.imu_initialised:
+            T_wc, how = self._imu_prediction(mci.t_us), "propagated by the IMU"
+        else:
+            v = camera_frame_velocity(m, int(ic.coast_velocity_span_s * 1e6))
+            if gap_s > ic.coast_s or R_prior is None or v is None:
+                self._rejoin = RejoinCandidate(m, v) if v is not None and ic.rejoin_s > 0 else None
+                return self._lose(reason)
+            T_wc, how = coast_pose(m, mci.t_us, R_prior, v), "coasted on the gyro and the last velocity (IMU not initialised)"
+        if T_wc is None:
+            return self._lose(reason)
+        drop_contradicted(m, self.K, T_wc, fe.ids, fe.uv, fe.track_to_point, 2.0 * tc.reprojection_threshold_px)
+        m.add_pose(mci.t_us, T_wc)
+        T_wc = self._new_keyframe(m, mci.t_us, T_wc, mci.image8, adjust=m.imu_initialised or ic.coast_ba)
+        return SlamStatus.INERTIAL, f"visual tracking failed ({reason}); pose {how}, map {m.id} kept", T_wc.copy(), True
+
+    def _coast_event_only(self, mci: MciResult, reason: str, gap_s: float) -> tuple[SlamStatus, str, np.ndarray | None, bool]:
+        """Event-only: keep the map through a visual failure of at most ``TrackingConfig.coast_s`` (``SlamStatus.COASTING``)."""
+        m, fe, tc = self.atlas.active, self.fe, self.cfg.tracking
+        if tc.coast_s <= 0:
+            return self._lose(reason)
+        T_wc = event_only_coast_pose(m, mci.t_us, int(tc.coast_span_s * 1e6)) if gap_s <= tc.coast_s else None
+        if T_wc is None:
+            if tc.coast_drop_unconfirmed:
+                drop_unconfirmed_poses(m, self._last_visual_t)
+            return self._lose(reason)
+        drop_contradicted(m, self.K, T_wc, fe.ids, fe.uv, fe.track_to_point, 2.0 * tc.reprojection_threshold_px)
+        m.add_pose(mci.t_us, T_wc)
+        # No BA on a keyframe at a predicted pose (InertialConfig.coast_ba: with one fixed keyframe it slid along the scale).
+        T_wc = self._new_keyframe(m, mci.t_us, T_wc, mci.image8, adjust=False)
+        return SlamStatus.COASTING, f"visual tracking failed ({reason}); pose coasted on the map's recent motion, map {m.id} kept", T_wc.copy(), True
