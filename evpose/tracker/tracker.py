@@ -114,6 +114,9 @@ class Tracker:
         judged by their agreement with the motion prediction instead of being a lost track."""
         if self._weak_test:
             self._registration = dataclasses.replace(rc, min_inlier_ratio=rc.weak_inlier_ratio)
+        self._normal_only = (not self.components.drives_pose and float(rc.normal_gradient_min_pixel_mrad) > 0
+                             and 1e3 / float(self.K[0, 0]) >= float(rc.normal_gradient_min_pixel_mrad))
+        """Registration reads the field along the points' edge normals only (``normal_gradient_min_pixel_mrad``)."""
         vm = config.visible_map
         self._wall_feet = (wall_foot_mask(contour_map, vm.wall_inward_m, vm.wall_radius_m, vm.wall_min_height_m, vm.wall_max_height_m)
                            if (vm.fused_wall_occlusion if self.components.drives_pose else vm.wall_occlusion) else None)
@@ -356,10 +359,11 @@ class Tracker:
                 # points shown both polarities (the buffer zone) further still (``fused_buffer_trail_px``).
                 p_ = np.asarray(polarity)
                 trail = np.where(p_ < 0, 0.5 * split, np.where(p_ > 0, -0.5 * split, both))
-            tangents = np.take(self._tangents, used, axis=0) if self._registration.lag_floor_px > 0 or trail is not None else None
+            with_tangents = self._registration.lag_floor_px > 0 or trail is not None or self._normal_only
+            tangents = np.take(self._tangents, used, axis=0) if with_tangents else None
             reg = register_to_map(levels, pts, predicted, self.K, self._registration, field_polarity, twist_per_s=twist,
                                   prior_information=prior_info, prior_residual_sigma=self.config.motion_filter.prior_residual_sigma,
-                                  tangents_world=tangents, trail_offsets_px=trail)
+                                  tangents_world=tangents, trail_offsets_px=trail, normal_only=self._normal_only)
             if self.polarity_selector is not None and hasattr(self.polarity_selector, "registration_covariance"):
                 # Points the polarity filter dropped (no events in their patch) still count in the residual variance.
                 reg.covariance = self.polarity_selector.registration_covariance(reg, self._registration)
