@@ -113,17 +113,23 @@ except (ImportError, AttributeError):  # another numpy layout: the public functi
     _eigvalsh, _inv = np.linalg.eigvalsh, np.linalg.inv
 
 
-def _levenberg_marquardt(pts, slots, fld, pose, K, config, loss, k, thr, prior=None, floor=None):
+def _levenberg_marquardt(pts, slots, fld, pose, K, config, loss, k, thr, prior=None, floor=None, normal_tangents=None):
     """Robust LM on one field; returns (pose, cost, inside, inliers, [sum w r^2, its inlier part], H, residuals, weights, uv,
-    iterations). ``floor`` = (tangents, twist, lag s, floor px, per-point extra px) for :func:`_floor_shift`, None = off."""
+    iterations). ``floor`` = (tangents, twist, lag s, floor px, per-point extra px) for :func:`_floor_shift`, None = off.
+    ``normal_tangents`` (M, 3): world edge directions along whose projected normals alone the field's gradient and
+    curvature are taken, None = both image directions."""
     m = pts.shape[0]
     fx, fy, cx, cy = float(K[0, 0]), float(K[1, 1]), float(K[0, 2]), float(K[1, 2])
     value, grad_u, grad_v, box, second = fld.value, fld.grad_u, fld.grad_v, fld.box, bool(config.second_order)
     tangents, twist, lag_s, floor_px, extra = floor if floor is not None else (_NO_TANGENTS, _NO_TWIST, 0.0, 0.0, _NO_EXTRA)
+    normal_only = normal_tangents is not None
+    if normal_only:
+        tangents = normal_tangents
     cur = [np.zeros((6, 6)), np.zeros(6), np.empty(m), np.empty(m), np.empty((m, 2))]
     trial = [np.zeros((6, 6)), np.zeros(6), np.empty(m), np.empty(m), np.empty((m, 2))]
     cost, inside, inl, swr2, swr2_in = _linearise_at(pts, slots, pose.inverse().matrix(), fx, fy, cx, cy, value, grad_u, grad_v,
-                                                     box, second, loss, k, thr, *cur, tangents, twist, lag_s, floor_px, extra)
+                                                     box, second, loss, k, thr, *cur, tangents, twist, lag_s, floor_px, extra,
+                                                     normal_only)
     pc, pg, pI = _prior_terms(pose, prior)
     with_prior = pI is not None
     lam = float(config.lm_lambda)
@@ -140,7 +146,7 @@ def _levenberg_marquardt(pts, slots, fld, pose, K, config, loss, k, thr, prior=N
         cand = pose.compose(gtsam.Pose3.Expmap(delta))
         c_cost, c_inside, c_inl, c_swr2, c_swr2_in = _linearise_at(pts, slots, cand.inverse().matrix(), fx, fy, cx, cy, value, grad_u,
                                                                    grad_v, box, second, loss, k, thr, *trial, tangents, twist, lag_s,
-                                                                   floor_px, extra)
+                                                                   floor_px, extra, normal_only)
         c_pc, c_pg, _ = _prior_terms(cand, prior)
         # Compare mean cost: the set of points inside the image may change with the pose.
         old_mean = (cost + pc) / max(inside, 1)
@@ -174,6 +180,7 @@ def register_to_map(
     prior_residual_sigma: float | None = None,
     tangents_world: np.ndarray | None = None,
     trail_offsets_px: np.ndarray | None = None,
+    normal_only: bool = False,
 ) -> RegistrationResult:
     """Refine ``T_world_cam_init`` so the map points ``points_world`` (M, 3) land on low TDF.
 
@@ -204,7 +211,9 @@ def register_to_map(
     ``tangents_world`` (M, 3): unit edge direction of each point (zero = unknown), which ``config.lag_floor_px``
     needs (with ``twist_per_s``); without them that floor is off. ``trail_offsets_px`` (M,): how much further
     each point's field is sampled behind it than the lag model says (negative: ahead), pixels, e.g. by the polarity
-    it fires; it needs the tangents and the twist too.
+    it fires; it needs the tangents and the twist too. ``normal_only`` (needs the tangents) takes the field's
+    gradient and curvature along each point's projected edge normal alone (see
+    ``RegistrationConfig.normal_gradient_min_pixel_mrad``).
     """
     levels = [field_] if isinstance(field_, TemporalDistanceField) else list(field_)
     pts = np.ascontiguousarray(points_world, dtype=np.float64).reshape(-1, 3)
@@ -228,6 +237,8 @@ def register_to_map(
             extra = _NO_EXTRA if trail_offsets_px is None else np.ascontiguousarray(trail_offsets_px, dtype=np.float64).reshape(m)
             floor = (np.ascontiguousarray(tangents_world, dtype=np.float64).reshape(m, 3), xi,
                      float(config.field_lag_ms) * 1e-3, float(config.lag_floor_px), extra)
+    normal_tangents = (np.ascontiguousarray(tangents_world, dtype=np.float64).reshape(m, 3)
+                       if normal_only and tangents_world is not None and m else None)
     if m == 0 or not levels:
         z = np.zeros(0, np.float32)
         return RegistrationResult(pose.compose(lag).matrix(), False, "no map points to register", None, 0, 0, 0, 0.0, z, z, np.zeros((0, 2), np.float32))
@@ -248,7 +259,7 @@ def register_to_map(
     total_it = 0
     for fld in levels:
         pose, cost, inside, inl, swr2, H, res, wts, uv, it = _levenberg_marquardt(pts, slots, fld, pose, K, config, loss, k, thr, prior,
-                                                                                  floor)
+                                                                                  floor, normal_tangents)
         total_it += it
 
     def result(ok, reason, cov):

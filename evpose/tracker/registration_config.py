@@ -65,7 +65,23 @@ class RegistrationConfig:
     Session 9, not kept: the gradient and curvature projected on each point's projected edge normal (along the edge
     the field only shows its events' scatter): ``stpe`` seeds 0-3 13.42 / 19.00 -> 14.00 / 18.34 mm at 346x260 /
     240x180; with ``visible_map.wall_occlusion`` 11.92 / 18.26 -> 13.00 / 16.81 (seeds 0-3) and 11.63 / 19.86 ->
-    12.38 / 17.77 mm (seeds 4-7): better at 240x180 only."""
+    12.38 / 17.77 mm (seeds 4-7): better at 240x180 only. Session 10: on for coarse sensors only, see
+    ``normal_gradient_min_pixel_mrad``."""
+    normal_gradient_min_pixel_mrad: float = field(default=5.0, metadata={"min": 0.0, "max": 100.0, "step": 0.1, "unit": "mrad"})
+    """In ``stpe`` and ``stpe+filter``: when one pixel subtends at least this angle (``1 / fx``), the field's gradient
+    and curvature are taken along each point's projected edge normal alone (points whose map edge direction is
+    unknown keep both), milliradians (0 = never). The fused modes never do.
+
+    Along the edge the field shows only its events' scatter, not the edge's position; on a coarse sensor that
+    scatter is a larger share of the gradient (session 9, see ``second_order``: better at 240x180, worse at
+    346x260). The simulated landing's 70 deg cameras: 4.05 mrad at 346x260 (off), 5.83 mrad at 240x180 (on).
+    Session 10, 2 s landing from the truth, 240x180, ATE / ARE mean, off -> on: ``stpe`` seeds 0-3 18.47 / 0.238 ->
+    16.80 mm / 0.250 deg (17.38 18.63 20.75 17.12 -> 18.64 14.23 17.25 17.08 mm), seeds 4-7 20.12 / 0.229 -> 17.95 /
+    0.236; ``stpe+filter`` seeds 0-3 21.70 -> 18.71 mm (ARE 0.295 deg); 346x260 and ``full`` bit-identical.
+    Combined with it at 240x180 (``stpe`` seeds 0-3, 16.80 mm), not kept: ``robust_scale`` 0.45 16.50, ``rate_hz``
+    300 16.83, ``max_points`` 1500 16.73, ``time_surface.eta_ms`` 14.4 with ``field_lag_ms`` 5.2 (both scaled by
+    the pixel pitch) 18.15, ``visible_map.crowded_radius_px`` 2 17.89, ``motion_filter.measurement_covariance_scale``
+    2 17.94 mm."""
     max_iterations: int = field(default=10, metadata={"min": 1, "max": 100, "step": 1, "unit": "iterations"})
     """Levenberg-Marquardt iterations per step, at most. (Session 9, ``full`` seeds 0-3: 1 instead of the median 2
     gave 8.35 / 9.36 mm against 7.77 / 9.40 at 346x260 / 240x180, 0.1-0.15 ms less registration CPU: not kept.)"""

@@ -34,13 +34,9 @@ def _rho_weight(r, loss, k):
 
 
 @nb.njit(cache=True, inline="always")
-def _floor_shift(tangents, i, R_cw, X, Y, Z, fx, fy, Ju, Jv, twist, lag_px_per_px_s, floor_px, extra_px):
-    """(du, dv): how far behind its projection point ``i``'s TDF minimum lies beyond what the lag explains.
-
-    Along the projected edge normal, oriented against the image motion, by ``floor_px - lag * normal speed``
-    when positive (slow edges: see ``RegistrationConfig.lag_floor_px``), plus the point's own ``extra_px``
-    (negative: ahead), else (0, 0). ``Ju`` / ``Jv`` are the point's image rows, so ``Ju . twist`` is its image
-    velocity (px/s)."""
+def _projected_normal(tangents, i, R_cw, X, Y, Z, fx, fy):
+    """Unit image normal (nu, nv) of point ``i``'s edge (its world tangent projected at camera point X, Y, Z);
+    (0, 0) when the map does not know the tangent or it projects to a point."""
     tx, ty, tz = tangents[i, 0], tangents[i, 1], tangents[i, 2]
     dX = R_cw[0, 0] * tx + R_cw[0, 1] * ty + R_cw[0, 2] * tz
     dY = R_cw[1, 0] * tx + R_cw[1, 1] * ty + R_cw[1, 2] * tz
@@ -50,8 +46,20 @@ def _floor_shift(tangents, i, R_cw, X, Y, Z, fx, fy, Ju, Jv, twist, lag_px_per_p
     L = np.sqrt(a * a + c * c)
     if L <= 0.0:
         return 0.0, 0.0
-    nu = -c / L
-    nv = a / L
+    return -c / L, a / L
+
+
+@nb.njit(cache=True, inline="always")
+def _floor_shift(tangents, i, R_cw, X, Y, Z, fx, fy, Ju, Jv, twist, lag_px_per_px_s, floor_px, extra_px):
+    """(du, dv): how far behind its projection point ``i``'s TDF minimum lies beyond what the lag explains.
+
+    Along the projected edge normal, oriented against the image motion, by ``floor_px - lag * normal speed``
+    when positive (slow edges: see ``RegistrationConfig.lag_floor_px``), plus the point's own ``extra_px``
+    (negative: ahead), else (0, 0). ``Ju`` / ``Jv`` are the point's image rows, so ``Ju . twist`` is its image
+    velocity (px/s)."""
+    nu, nv = _projected_normal(tangents, i, R_cw, X, Y, Z, fx, fy)
+    if nu == 0.0 and nv == 0.0:
+        return 0.0, 0.0
     vu = 0.0
     vv = 0.0
     for j in range(6):
@@ -68,12 +76,14 @@ def _floor_shift(tangents, i, R_cw, X, Y, Z, fx, fy, Ju, Jv, twist, lag_px_per_p
 
 @nb.njit(cache=True)
 def _linearise(points, slots, R_cw, t_cw, fx, fy, cx, cy, value, grad_u, grad_v, box, second_order, loss, k, inlier_thr, H, b, res, wts, uv,
-               tangents, twist, lag_s, floor_px, extra):
+               tangents, twist, lag_s, floor_px, extra, normal_only):
     """Residuals, weights, projections and the weighted normal equations at one pose.
 
     ``floor_px`` > 0 samples each point's field behind its projection by :func:`_floor_shift` (``tangents`` (M, 3)
     world edge directions, ``twist`` (6,) body twist per second, ``lag_s`` the lag the pose already carries);
     ``extra`` (M,) per-point trail beyond that, pixels (empty = none; it also needs the tangents and twist).
+    ``normal_only`` keeps only the field's gradient and curvature along each point's projected edge normal (needs
+    ``tangents``; points without a tangent keep both directions).
     Returns (cost, points inside the image, inliers, sum of w r^2, sum of w r^2 over the inliers).
     """
     for i in range(6):
@@ -132,6 +142,15 @@ def _linearise(points, slots, R_cw, t_cw, fx, fy, cx, cy, value, grad_u, grad_v,
         f, fu, fv, ok = bilinear_sample(value, grad_u, grad_v, box, np.int64(slots[i]), us, vs)
         if not ok:
             continue
+        nu = 0.0
+        nv = 0.0
+        if normal_only:
+            # Along the edge the field shows only its events' scatter, not the edge's position.
+            nu, nv = _projected_normal(tangents, i, R_cw, X, Y, Z, fx, fy)
+            if nu != 0.0 or nv != 0.0:
+                gn = fu * nu + fv * nv
+                fu = gn * nu
+                fv = gn * nv
         inside += 1
         rho, w = _rho_weight(f, loss, k)
         res[i] = f
@@ -155,6 +174,11 @@ def _linearise(points, slots, R_cw, t_cw, fx, fy, cx, cy, value, grad_u, grad_v,
         # sitting on the TDF minimum (zero gradient) still hold the pose through the curvature.
         # From the field itself (the same values as its curvature images): the field need not build them.
         huu, huv, hvv = bilinear_curvature_from_value(value, box, np.int64(slots[i]), us, vs)
+        if nu != 0.0 or nv != 0.0:
+            hnn = nu * nu * huu + 2.0 * nu * nv * huv + nv * nv * hvv
+            huu = hnn * nu * nu
+            huv = hnn * nu * nv
+            hvv = hnn * nv * nv
         a11 = fu * fu + f * huu
         a12 = fu * fv + f * huv
         a22 = fv * fv + f * hvv
@@ -231,7 +255,7 @@ def _damped_step(H, b, lam):
 
 @nb.njit(cache=True)
 def _linearise_at(points, slots, T_cw, fx, fy, cx, cy, value, grad_u, grad_v, box, second_order, loss, k, inlier_thr, H, b, res, wts, uv,
-                  tangents, twist, lag_s, floor_px, extra):
+                  tangents, twist, lag_s, floor_px, extra, normal_only):
     """:func:`_linearise` at the (4, 4) ``T_cw`` as gtsam hands it out (any memory layout): its rotation and
     translation copied here, not by two ``np.ascontiguousarray`` calls per linearisation."""
     R = np.empty((3, 3))
@@ -241,7 +265,7 @@ def _linearise_at(points, slots, T_cw, fx, fy, cx, cy, value, grad_u, grad_v, bo
             R[i, j] = T_cw[i, j]
         t[i] = T_cw[i, 3]
     return _linearise(points, slots, R, t, fx, fy, cx, cy, value, grad_u, grad_v, box, second_order, loss, k, inlier_thr,
-                      H, b, res, wts, uv, tangents, twist, lag_s, floor_px, extra)
+                      H, b, res, wts, uv, tangents, twist, lag_s, floor_px, extra, normal_only)
 
 
 @nb.njit(cache=True)

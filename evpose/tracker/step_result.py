@@ -78,3 +78,28 @@ class StepResult:
     imu_poses: Trajectory | None = None
     """IMU-rate propagated poses between the previous step and this one (fused modes)."""
     debug: StepDebug | None = None
+
+
+def step_debug(time_surface, distance_field, until, events, keep, visible, used, reg, polarity) -> StepDebug:
+    """The debug products of one tracker step: its SP-TS and TDF images, the per-point registration results and the
+    events the filters kept and removed (``reg`` None when registration did not run)."""
+    m = used.size
+    extra = {}
+    for p in (1, -1):
+        slot = 1 if p > 0 else 2
+        if slot in distance_field.slots_ready:
+            extra[f"tdf_{'positive' if p > 0 else 'negative'}"] = distance_field.image(p)
+    return StepDebug(
+        ts_positive=time_surface.image(until, 1),
+        ts_negative=time_surface.image(until, -1),
+        tdf=distance_field.image(0),
+        visible_index=visible.astype(np.int64),
+        point_index=used.astype(np.int64),
+        projected_uv=reg.uv if reg is not None else np.full((m, 2), np.nan, np.float32),
+        residuals=reg.residuals if reg is not None else np.ones(m, np.float32),
+        weights=reg.weights if reg is not None else np.zeros(m, np.float32),
+        predicted_polarity=np.zeros(m, np.int8) if polarity is None else np.asarray(polarity, np.int8),
+        events_kept=events[keep],
+        events_removed=events[~keep],
+        extra=extra,
+    )

@@ -38,11 +38,12 @@ from evpose.fusion import aligned_field
 from evpose.fusion.aligned_surface import AlignedTimeSurface
 from evpose.tracker.config import MotionModel, TrackerConfig
 from evpose.tracker.crowding import crowded_points
+from evpose.tracker.ego_motion_events import ego_motion_keep, empty_ego_history
 from evpose.tracker.map_refinement import PaintedEdgeRefiner
 from evpose.tracker.motion_filter import ConstantVelocityKalman
 from evpose.tracker.predictor import ConstantPosePredictor, ConstantVelocityPredictor, MotionPredictor
 from evpose.tracker.registration import register_to_map, subsample_indices
-from evpose.tracker.step_result import StepDebug, StepResult, TrackStatus
+from evpose.tracker.step_result import StepResult, TrackStatus, step_debug
 from evpose.tracker.track_hold import ACQUIRE_UPDATES, TrackHold  # noqa: F401 (ACQUIRE_UPDATES re-exported)
 from evpose.tracker.modes import MotionComponents
 from evpose.tracker.visible_map import VisibleMap, projected_bounds, visible_points
@@ -113,6 +114,9 @@ class Tracker:
         judged by their agreement with the motion prediction instead of being a lost track."""
         if self._weak_test:
             self._registration = dataclasses.replace(rc, min_inlier_ratio=rc.weak_inlier_ratio)
+        self._normal_only = (not self.components.drives_pose and float(rc.normal_gradient_min_pixel_mrad) > 0
+                             and 1e3 / float(self.K[0, 0]) >= float(rc.normal_gradient_min_pixel_mrad))
+        """Registration reads the field along the points' edge normals only (``normal_gradient_min_pixel_mrad``)."""
         vm = config.visible_map
         self._wall_feet = (wall_foot_mask(contour_map, vm.wall_inward_m, vm.wall_radius_m, vm.wall_min_height_m, vm.wall_max_height_m)
                            if (vm.fused_wall_occlusion if self.components.drives_pose else vm.wall_occlusion) else None)
@@ -137,7 +141,7 @@ class Tracker:
         self._pose: np.ndarray | None = None
         self._t_us: int | None = None
         self._steps = 0
-        self._ego_history = (np.empty(0), np.empty(0), np.empty(0, np.int64))
+        self._ego_history = empty_ego_history()
         """Recent noise-filtered events (ideal x, y, t us) the ego-motion filter judges new ones against."""
 
     # ------------------------------------------------------------------ state
@@ -243,7 +247,8 @@ class Tracker:
         n_ego_removed = 0
         if ego is not None and self._pose is not None and len(events):
             t0 = time.perf_counter()
-            keep_ego = self._ego_motion_keep(events, keep, until)
+            keep_ego, self._ego_history = ego_motion_keep(self.components, self.calibration, self._points,
+                                                          self._ego_history, events, keep, until)
             n_ego_removed = int(np.count_nonzero(keep & ~keep_ego))
             keep &= keep_ego
             timings["ego_motion"] = _ms(t0)
@@ -354,10 +359,11 @@ class Tracker:
                 # points shown both polarities (the buffer zone) further still (``fused_buffer_trail_px``).
                 p_ = np.asarray(polarity)
                 trail = np.where(p_ < 0, 0.5 * split, np.where(p_ > 0, -0.5 * split, both))
-            tangents = np.take(self._tangents, used, axis=0) if self._registration.lag_floor_px > 0 or trail is not None else None
+            with_tangents = self._registration.lag_floor_px > 0 or trail is not None or self._normal_only
+            tangents = np.take(self._tangents, used, axis=0) if with_tangents else None
             reg = register_to_map(levels, pts, predicted, self.K, self._registration, field_polarity, twist_per_s=twist,
                                   prior_information=prior_info, prior_residual_sigma=self.config.motion_filter.prior_residual_sigma,
-                                  tangents_world=tangents, trail_offsets_px=trail)
+                                  tangents_world=tangents, trail_offsets_px=trail, normal_only=self._normal_only)
             if self.polarity_selector is not None and hasattr(self.polarity_selector, "registration_covariance"):
                 # Points the polarity filter dropped (no events in their patch) still count in the residual variance.
                 reg.covariance = self.polarity_selector.registration_covariance(reg, self._registration)
@@ -462,38 +468,10 @@ class Tracker:
         if debug and motion is not None and t_prev is not None:
             result.imu_poses = motion.fusion.imu_rate_poses(t_prev, until)
         if debug:
-            result.debug = self._debug(until, events, keep, visible, used, reg, polarity)
+            result.debug = step_debug(self.time_surface, self.distance_field, until, events, keep, visible, used, reg, polarity)
         return result
 
     # ---------------------------------------------------------------- helpers
-    def _ego_motion_keep(self, events: EventArray, keep: np.ndarray, until: int) -> np.ndarray:
-        """Keep-mask of the ego-motion filter over this step's events (only noise-filtered ones are judged)."""
-        state = self.components.motion.fusion.predict(until)
-        omega = np.zeros(3) if state.omega_cam is None else state.omega_cam
-        x = events.x.astype(np.float64)
-        y = events.y.astype(np.float64)
-        if self.calibration.dist:
-            xy = self.calibration.undistortion_table[events.y, events.x].astype(np.float64)
-            x, y = xy[:, 0], xy[:, 1]
-        out = np.ones(len(events), bool)
-        idx = np.flatnonzero(keep)
-        ego = self.components.ego_motion
-        hx, hy, ht = self._ego_history
-        # A 5 ms batch is too short for the consistency test: judge it against the last history_us of events too.
-        horizon = int(ego.config.history_us)
-        first = int(np.searchsorted(ht, until - horizon, side="left")) if horizon > 0 else ht.size
-        hx, hy, ht = hx[first:], hy[first:], ht[first:]
-        ax = np.concatenate([hx, x[idx]])
-        ay = np.concatenate([hy, y[idx]])
-        at = np.concatenate([ht, events.t[idx].astype(np.int64)])
-        if idx.size:
-            out[idx] = ego.filter(
-                ax, ay, at, state.T_world_cam, omega, state.velocity_world, self.K,
-                self.width, self.height, points_world=self._points, t_ref_us=until, n_context=ht.size,
-            )
-        self._ego_history = (ax, ay, at) if horizon > 0 else self._ego_history
-        return out
-
     def _field_box(self, pts: np.ndarray, T_world_cam: np.ndarray, coarse: bool = False) -> tuple[int, int, int, int] | None:
         """Row/column box around the projected points plus the margin and blur radius; None = whole image."""
         if pts.shape[0] == 0:
@@ -506,25 +484,3 @@ class Tracker:
         r0 = int(np.floor(vmin)) - pad
         r1 = int(np.ceil(vmax)) + pad + 1
         return (max(r0, 0), min(r1, self.height), max(c0, 0), min(c1, self.width))
-
-    def _debug(self, until, events, keep, visible, used, reg, polarity) -> StepDebug:
-        m = used.size
-        extra = {}
-        for p in (1, -1):
-            slot = 1 if p > 0 else 2
-            if slot in self.distance_field.slots_ready:
-                extra[f"tdf_{'positive' if p > 0 else 'negative'}"] = self.distance_field.image(p)
-        return StepDebug(
-            ts_positive=self.time_surface.image(until, 1),
-            ts_negative=self.time_surface.image(until, -1),
-            tdf=self.distance_field.image(0),
-            visible_index=visible.astype(np.int64),
-            point_index=used.astype(np.int64),
-            projected_uv=reg.uv if reg is not None else np.full((m, 2), np.nan, np.float32),
-            residuals=reg.residuals if reg is not None else np.ones(m, np.float32),
-            weights=reg.weights if reg is not None else np.zeros(m, np.float32),
-            predicted_polarity=np.zeros(m, np.int8) if polarity is None else np.asarray(polarity, np.int8),
-            events_kept=events[keep],
-            events_removed=events[~keep],
-            extra=extra,
-        )

@@ -73,7 +73,7 @@ def test_registration_jacobian_matches_finite_differences_on_a_smooth_field(scen
         H, b = np.zeros((6, 6)), np.zeros(6)
         out = reg._linearise(P, slots, np.ascontiguousarray(Tcw[:3, :3]), np.ascontiguousarray(Tcw[:3, 3]), cal.fx, cal.fy, cal.cx, cal.cy,
                              f.value, f.grad_u, f.grad_v, f.box, False, 0, 1.0, 1.0, H, b, np.empty(m), np.empty(m), np.empty((m, 2)),
-                             reg._NO_TANGENTS, reg._NO_TWIST, 0.0, 0.0, reg._NO_EXTRA)
+                             reg._NO_TANGENTS, reg._NO_TWIST, 0.0, 0.0, reg._NO_EXTRA, False)
         return out[0], b
 
     _, b = lin(T_gt)
@@ -242,7 +242,7 @@ def test_lag_floor_samples_each_point_behind_its_projection_against_its_image_mo
         H, b, res = np.zeros((6, 6)), np.zeros(6), np.empty(m)
         reg._linearise(P, np.zeros(m, np.int8), np.eye(3), np.zeros(3), cal.fx, cal.fy, cal.cx, cal.cy, field.value, field.grad_u,
                        field.grad_v, field.box, False, 0, 1.0, 1.0, H, b, res, np.empty(m), np.empty((m, 2)), tangents, twist, lag_s,
-                       floor_px, reg._NO_EXTRA)
+                       floor_px, reg._NO_EXTRA, False)
         return res
 
     # The point reads the field that far behind its projection, where the minimum is.
@@ -275,8 +275,33 @@ def test_trail_offsets_move_each_point_behind_or_ahead_of_the_lag_model(scene):
         res = np.empty(m)
         reg._linearise(P, np.zeros(m, np.int8), np.eye(3), np.zeros(3), cal.fx, cal.fy, cal.cx, cal.cy, field.value, field.grad_u,
                        field.grad_v, field.box, False, 0, 1.0, 1.0, np.zeros((6, 6)), np.zeros(6), res, np.empty(m), np.empty((m, 2)),
-                       tangents, twist, 0.0, 0.0, np.full(m, extra))
+                       tangents, twist, 0.0, 0.0, np.full(m, extra), False)
         return res
 
     assert np.allclose(residuals(_line_field(cal, cal.cx + 0.5), 0.5), 0.0, atol=1e-9)  # behind: +u
     assert np.allclose(residuals(_line_field(cal, cal.cx - 0.5), -0.5), 0.0, atol=1e-9)  # negative: ahead
+
+
+@pytest.mark.parametrize("second_order", [False, True])
+def test_normal_only_ignores_the_field_gradient_along_each_points_edge(scene, second_order):
+    _, _, _, cal, _ = scene
+    ys = np.linspace(-0.2, 0.2, 7)
+    P = np.ascontiguousarray(np.c_[np.full_like(ys, 0.01), ys, np.full_like(ys, 2.0)])
+    tangents = np.ascontiguousarray(np.tile([0.0, 1.0, 0.0], (ys.size, 1)))  # vertical edges: normal along u
+    m = P.shape[0]
+
+    def normal_equations(field, normal_only):
+        H, b = np.zeros((6, 6)), np.zeros(6)
+        reg._linearise(P, np.zeros(m, np.int8), np.eye(3), np.zeros(3), cal.fx, cal.fy, cal.cx, cal.cy, field.value, field.grad_u,
+                       field.grad_v, field.box, second_order, 0, 1.0, 1.0, H, b, np.empty(m), np.empty(m), np.empty((m, 2)),
+                       tangents, reg._NO_TWIST, 0.0, 0.0, reg._NO_EXTRA, normal_only)
+        return H, b
+
+    clean = _line_field(cal, cal.cx - 1.0)
+    scattered = _line_field(cal, cal.cx - 1.0)
+    scattered.grad_v[0] = 0.05  # a gradient along the edge (the events' scatter), which normal-only must not see
+    H0, b0 = normal_equations(clean, False)
+    H1, b1 = normal_equations(scattered, True)
+    H2, b2 = normal_equations(scattered, False)
+    assert np.allclose(H1, H0, atol=1e-12) and np.allclose(b1, b0, atol=1e-12)
+    assert not np.allclose(b2, b0, atol=1e-6)

@@ -40,7 +40,7 @@ def test_linearise_at_a_gtsam_pose_matrix_equals_linearise_with_contiguous_rotat
     f.box[:] = (0, h, 0, w)
     pts = np.c_[rng.uniform(-1, 1, (300, 2)), rng.uniform(2, 4, 300)]
     slots = np.zeros(300, np.int8)
-    off = (reg._NO_TANGENTS, reg._NO_TWIST, 0.0, 0.0, reg._NO_EXTRA)  # no lag floor
+    off = (reg._NO_TANGENTS, reg._NO_TWIST, 0.0, 0.0, reg._NO_EXTRA, False)  # no lag floor, both gradient directions
     T_cw = gtsam.Pose3(gtsam.Rot3.Rodrigues(0.01, -0.02, 0.03), np.array([0.05, -0.02, 0.1])).inverse().matrix()
     for second_order in (False, True):
         a = [np.zeros((6, 6)), np.zeros(6), np.empty(300), np.empty(300), np.empty((300, 2))]

@@ -188,3 +188,20 @@ def test_a_lost_track_stays_lost_or_needs_regain_updates_strict_registrations_in
     assert first_ok >= 3 and statuses[first_ok - 3:first_ok] == [TrackStatus.LOST] * 3
     assert all("re-acquiring" in r.reason for r in res[first_ok - 3:first_ok])
     assert all(r.status is TrackStatus.OK for r in res[first_ok:])
+
+
+def test_normal_only_gradient_applies_only_when_a_pixel_subtends_the_threshold(scene):
+    rec, cmap = scene
+    pixel_mrad = 1e3 / rec.calibration.fx
+    configs = {"on": 0.9 * pixel_mrad, "above": 1.1 * pixel_mrad, "never": 0.0}
+    trackers = {}
+    for name, mrad in configs.items():
+        cfg = TrackerConfig()
+        cfg.registration.normal_gradient_min_pixel_mrad = mrad
+        trackers[name] = started(rec, cmap, cfg)
+    assert [tr._normal_only for tr in trackers.values()] == [True, False, False]
+    r = {name: run(tr, rec, 0, 30) for name, tr in trackers.items()}
+    assert all(x.status is TrackStatus.OK for x in r["on"])
+    # (The generated map has no edge directions, so "on" reads both directions too: the kernel's own test checks
+    # the projection.)
+    assert all(np.array_equal(a.pose, b.pose) for a, b in zip(r["above"], r["never"]))
