@@ -61,8 +61,11 @@ class DiskCacheConfig:
     """Cache folder; None: ``$XDG_CACHE_HOME/evpose/viewer`` (``~/.cache/evpose/viewer``). Never inside a data folder."""
     budget_mb: float = field(default=2048.0, metadata={"min": 64.0, "max": 65536.0, "step": 64.0, "unit": "MB"})
     """Most disk space all entries together may use; the least recently used go first, MB."""
-    chunk_steps: int = field(default=200, metadata={"min": 10, "max": 10000, "step": 10, "unit": "steps"})
-    """Steps per file (written once the run-ahead has passed all of them), steps."""
+    chunk_steps: int = field(default=100, metadata={"min": 10, "max": 10000, "step": 10, "unit": "steps"})
+    """Steps per file (written once the run-ahead has passed all of them), steps. An exact seek in a new opening
+    replays at most this many steps from the snapshot on disk before it: with 200 (1 s at 200 Hz) an exact seek at
+    3.8 s into the prepared 4 s demo took 1.05-1.13 s on the session-10 machine (6.1-7.3 ms per plain step, load
+    0.9; ``python -m app.bench --only far_seek``, ``exact_prepared``), so 100."""
     snapshots: bool = True
     """Also store an engine snapshot at each chunk's end, so a seek past what the run-ahead has computed in this
     opening resumes from the farthest one on disk instead of step 0 (10 s landing, disk holding its first 5 s: seek
