@@ -113,9 +113,9 @@ def test_predict_and_imu_rate_poses_follow_the_truth_without_changing_the_state(
     assert np.max(np.linalg.norm(traj.position - truth.position, axis=1)) < 0.005
 
 
-def test_snapshot_restore_reproduces_the_run_bit_for_bit(calibration):
-    m = _noisy_motion(0.5)
-    f = _start(m, calibration)
+def _run_restore_and_rerun(f, m, calibration, clear_journal: bool = False):
+    """Updates 0-39 (one without a registration), a snapshot, updates 40-59, a restore and updates 40-59 again:
+    (first, second) results of 40-59."""
     times = m.config.t0_us + np.arange(5000, 500_000, 5000)
     _, regs, cov = noisy_registrations(m, calibration.T_cam_imu, times, 0.002, np.radians(0.1), seed=7)
     for k in range(40):
@@ -123,7 +123,14 @@ def test_snapshot_restore_reproduces_the_run_bit_for_bit(calibration):
     snap = f.snapshot()
     first = [f.update(int(times[k]), regs[k], cov) for k in range(40, 60)]
     f.restore(snap)
-    second = [f.update(int(times[k]), regs[k], cov) for k in range(40, 60)]
+    if clear_journal:
+        f.smoother.journal = []
+    return first, [f.update(int(times[k]), regs[k], cov) for k in range(40, 60)]
+
+
+def test_snapshot_restore_reproduces_the_run_bit_for_bit(calibration):
+    m = _noisy_motion(0.5)
+    first, second = _run_restore_and_rerun(_start(m, calibration), m, calibration)
     for a, b in zip(first, second):
         assert np.array_equal(a.T_world_cam, b.T_world_cam) and np.array_equal(a.gyro_bias, b.gyro_bias)
         assert np.array_equal(a.covariance, b.covariance)
@@ -352,15 +359,7 @@ def test_ar1_error_models_restore_bit_for_bit_and_serialise(model, calibration):
 
     m = _noisy_motion(0.5)
     f = _start(m, calibration, FusionConfig(registration_error_model=RegistrationErrorModel(model)))
-    times = m.config.t0_us + np.arange(5000, 500_000, 5000)
-    _, regs, cov = noisy_registrations(m, calibration.T_cam_imu, times, 0.002, np.radians(0.1), seed=7)
-    for k in range(40):
-        f.update(int(times[k]), None if k == 30 else regs[k], cov)
-    snap = f.snapshot()
-    first = [f.update(int(times[k]), regs[k], cov) for k in range(40, 60)]
-    f.restore(snap)
-    f.smoother.journal = []
-    second = [f.update(int(times[k]), regs[k], cov) for k in range(40, 60)]
+    first, second = _run_restore_and_rerun(f, m, calibration, clear_journal=True)
     for a, b in zip(first, second):
         assert np.array_equal(a.T_world_cam, b.T_world_cam) and np.array_equal(a.covariance, b.covariance)
     # The disk snapshots store the smoother's journal as gtsam-serialised graphs: the AR(1) factors must survive it.
