@@ -212,24 +212,9 @@ def test_registration_covariance_scale_equals_feeding_the_scaled_covariance(cali
 def test_scaled_registration_covariance_lets_the_imu_smooth_correlated_registration_errors(calibration):
     # Registrations whose error wanders slowly (0.2 s correlation) plus a third as much white noise: a filter that
     # believes each covariance follows the noise; the scaled one lets the gyro average it out.
-    from scipy.spatial.transform import Rotation
-
     m = _noisy_motion(2.0)
     times = m.config.t0_us + np.arange(5000, 2_000_000, 5000)
-    gt = m.camera_trajectory(times, calibration.T_cam_imu)
-    rng = np.random.default_rng(5)
-    a = np.exp(-1.0 / 40.0)
-    off = np.zeros(6)
-    regs = []
-    for k in range(len(gt)):
-        sig = np.array([np.radians(0.3)] * 3 + [0.005] * 3)
-        off = a * off + np.sqrt(1 - a * a) * rng.normal(0, 1, 6) * sig
-        e = off + rng.normal(0, 1, 6) * sig / 3
-        T = gt.matrix(k)
-        T[:3, :3] = T[:3, :3] @ Rotation.from_rotvec(e[:3]).as_matrix()
-        T[:3, 3] += T[:3, :3] @ e[3:]
-        regs.append(T)
-    cov = np.diag([np.radians(0.3) ** 2] * 3 + [0.005**2] * 3)
+    gt, regs, cov = _ar1_registrations(m, calibration, times, np.exp(-1.0 / 40.0), seed=5, white_ratio=1 / 3)
     rot = {}
     for scale in (1.0, 30.0):
         f = _start(m, calibration, FusionConfig(registration_covariance_scale=scale))
@@ -315,8 +300,9 @@ def test_cached_imu_prediction_equals_a_fresh_one_and_follows_new_imu_samples(ca
     assert updated is not held and not np.array_equal(updated.pose().matrix(), held.pose().matrix())
 
 
-def _ar1_registrations(m, calibration, times, rho, seed=5):
-    """Registrations whose error is AR(1) per update (coefficient ``rho``) plus a little white noise."""
+def _ar1_registrations(m, calibration, times, rho, seed=5, white_ratio=0.1):
+    """Registrations whose error is AR(1) per update (coefficient ``rho``) plus white noise of ``white_ratio`` times
+    its standard deviation."""
     from scipy.spatial.transform import Rotation
 
     gt = m.camera_trajectory(times, calibration.T_cam_imu)
@@ -326,7 +312,7 @@ def _ar1_registrations(m, calibration, times, rho, seed=5):
     regs = []
     for k in range(len(gt)):
         off = rho * off + np.sqrt(1 - rho * rho) * rng.normal(0, 1, 6) * sig
-        e = off + rng.normal(0, 1, 6) * sig / 10
+        e = off + rng.normal(0, 1, 6) * sig * white_ratio
         T = gt.matrix(k)
         T[:3, :3] = T[:3, :3] @ Rotation.from_rotvec(e[:3]).as_matrix()
         T[:3, 3] += T[:3, :3] @ e[3:]
