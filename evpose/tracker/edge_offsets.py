@@ -72,7 +72,8 @@ class EdgeOffsetConfig:
     gauge_painted: bool = True
     """Take the pose-like part fitted on the other points out of the painted-edge refiner's steps too
     (:mod:`evpose.tracker.map_refinement`; it keeps the painted points, whose map error needs its fast start).
-    Seeds 0-3 / 4-7 at 240x180 without it: 14.65 / 15.09 mm (13.80 / 14.60 with it)."""
+    Its steps bring the field to zero (Gauss-Newton, mostly clipped), not to the minimum, so this takes out only
+    roughly the pose-like part. Seeds 0-3 / 4-7 at 240x180 without it: 14.65 / 15.09 mm (13.80 / 14.60 with it)."""
     max_offset_m: float = field(default=0.05, metadata={"min": 0.0, "max": 0.5, "step": 0.005, "unit": "m"})
     """Largest distance a point may move from the map's position, metres."""
     inlier_threshold: float = field(default=0.7, metadata={"min": 0.05, "max": 1.0, "step": 0.01, "unit": "TDF"})

@@ -1,6 +1,5 @@
-"""Gauge-free online edge offsets: a pose-like disagreement between map and field is not learned (nor, given the
-fit, by the painted-edge refiner), one edge's own offset is; the tracker runs it only in plain ``stpe`` on coarse
-sensors and restores it bit-identically."""
+"""Gauge-free online edge offsets: a pose-like disagreement between map and field is not learned, one edge's own
+offset is; the tracker runs it only in plain ``stpe`` on coarse sensors and restores it bit-identically."""
 
 import numpy as np
 from tracker_synthetic import box_edges, generate
@@ -10,7 +9,6 @@ from evpose.core.contour_map import ContourMap
 from evpose.frontend.distance_field import DistanceFieldConfig, TemporalDistanceField
 from evpose.tracker.config import TrackerConfig, TrackerMode
 from evpose.tracker.edge_offsets import EdgeOffsetConfig, EdgeOffsetLearner
-from evpose.tracker.map_refinement import MapRefinementConfig, PaintedEdgeRefiner
 from evpose.tracker.modes import MotionComponents
 from evpose.tracker.tracker import Tracker
 
@@ -116,27 +114,6 @@ def test_points_whose_offset_exceeds_the_clip_or_whose_edge_did_not_fire_take_no
     far = TemporalDistanceField(DistanceFieldConfig(), W, H)  # reads 1 everywhere: no edge fired
     far.box[:] = (0, H, 0, W)
     assert learner_for(cmap).update(np.array(cmap.points), np.arange(len(cmap)), far, DOWN, K) == 0
-
-
-def test_the_painted_refiner_given_the_fit_does_not_learn_the_pose_like_part_either():
-    grid = grid_map()
-    first = np.arange(len(grid)) < 21
-    sign = np.where(first, 1, 0).astype(np.int8)  # the first x line painted: the refiner's, not the learner's
-    cmap = ContourMap.from_points(grid.points, edge_normal=grid.edge_normal, plane_normal=grid.plane_normal,
-                                  brightness_sign=sign, curvature=np.zeros(len(grid)))
-    fld = grid_field(0.4, 0.3)
-    tangents = np.cross(cmap.plane_normal, cmap.edge_normal)
-    learner = EdgeOffsetLearner(EdgeOffsetConfig(), cmap.points, cmap.edge_normal, tangents, skip=first)
-    moved = {}
-    for gauged in (False, True):
-        refiner = PaintedEdgeRefiner(MapRefinementConfig(gain=1.0, first_updates=0), cmap)
-        pts = np.array(cmap.points)
-        for _ in range(10):
-            learner.update(np.array(cmap.points), np.arange(len(cmap)), fld, DOWN, K)
-            refiner.update(pts, fld, DOWN, K, learner.last_fit if gauged else None)
-        moved[gauged] = np.abs(refiner.offsets).max()
-    assert moved[False] > 0.004  # follows the 0.4 px (8 mm) shift (until the slope falls below its min_gradient)
-    assert moved[True] < 0.1 * moved[False]
 
 
 def _box_map() -> ContourMap:
