@@ -195,6 +195,11 @@ class EdgeOffsetLearner:
         """The last update's pose-like part of the offsets (right-perturbation tangent, rotation then translation),
         NaN when there was none (too few points): what the painted-edge refiner should not learn either."""
 
+    @property
+    def owned(self) -> int:
+        """How many map points this learner may move (a known edge normal and direction, not another refiner's)."""
+        return int(np.count_nonzero(self._owned))
+
     def update(self, points: np.ndarray, used: np.ndarray, field_, T_world_cam_field: np.ndarray, K: np.ndarray) -> int:
         """Learn from one update's field (combined slot) at the pose it shows (lag included) over the registered map
         points ``used`` (indices into ``points``), moving them in ``points``; returns how many moved."""

@@ -145,7 +145,9 @@ class Tracker:
                              if eo.enabled and not self.components.drives_pose and polarity_selector is None
                              and 1e3 / float(self.K[0, 0]) >= float(eo.min_pixel_mrad) else None)
         """Gauge-free online offsets of the registered points (:mod:`evpose.tracker.edge_offsets`; ``stpe`` on coarse
-        sensors), None when off."""
+        sensors), None when off or when the map knows no point's edge direction (its lag then stays the config's)."""
+        if self.edge_offsets is not None and self.edge_offsets.owned == 0:
+            self.edge_offsets = None
         if self.edge_offsets is not None and float(eo.field_lag_ms) > 0:
             self._registration = dataclasses.replace(self._registration, field_lag_ms=float(eo.field_lag_ms))
         self._pose: np.ndarray | None = None

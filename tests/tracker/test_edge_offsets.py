@@ -144,6 +144,10 @@ def test_the_tracker_learns_offsets_only_in_stpe_on_coarse_sensors_and_restores_
     assert Tracker(TrackerConfig(), cmap, rec.calibration, components=MotionComponents(drives_pose=True)).edge_offsets is None
     assert Tracker(TrackerConfig(), cmap, rec.calibration, polarity_selector=lambda T, t, idx: None).edge_offsets is None
     assert started(min_pixel_mrad=10.0).edge_offsets is None
+    bare = ContourMap.from_points(cmap.points)  # no edge directions: nothing to learn, and the config's lag stays
+    tr = Tracker(TrackerConfig(), bare, rec.calibration)
+    assert tr.edge_offsets is None and tr._registration.field_lag_ms == TrackerConfig().registration.field_lag_ms
+    assert started()._registration.field_lag_ms == EdgeOffsetConfig().field_lag_ms
     straight = run(started(), 0, 14)
     assert any(r.counts.get("points_offset", 0) > 0 for r in straight)
     tr = started()
