@@ -119,7 +119,7 @@ def painted_points(contour_map: ContourMap, max_curvature: float) -> np.ndarray:
 
 @nb.njit(cache=True)
 def _refine_kernel(points, idx, base, normals, offsets, seen, R_cw, t_cw, fx, fy, cx, cy, value, grad_u, grad_v, box,
-                   gain, max_offset, clip_px, thr, min_grad, first_updates):
+                   gain, max_offset, clip_px, thr, min_grad, first_updates, gauge, use_gauge):
     """One update of every painted point's offset, written into ``points`` (rows ``idx``); returns how many moved."""
     r0, r1, c0, c1 = box[0], box[1], box[2], box[3]
     moved = 0
@@ -150,6 +150,19 @@ def _refine_kernel(points, idx, base, normals, offsets, seen, R_cw, t_cw, fx, fy
         if f >= thr or abs(gn) < min_grad:
             continue
         step = -f * gn / (gn * gn + 0.01)
+        if use_gauge:
+            # Take out the pose-like part of this update's offsets, measured on the other edges (``gauge``, see
+            # evpose.tracker.edge_offsets): the map must not learn the pose's error.
+            ju = du / L
+            jv = dv / L
+            iz = 1.0 / Z
+            pux = fx * iz
+            puz = -fx * X * iz * iz
+            pvy = fy * iz
+            pvz = -fy * Y * iz * iz
+            step -= (gauge[0] * (ju * (-puz * Y) + jv * (pvy * Z - pvz * Y)) + gauge[1] * (ju * (puz * X - pux * Z) + jv * (pvz * X))
+                     + gauge[2] * (ju * (pux * Y) + jv * (-pvy * X)) + gauge[3] * (ju * (-pux)) + gauge[4] * (jv * (-pvy))
+                     + gauge[5] * (ju * (-puz) + jv * (-pvz)))
         step = min(max(step, -clip_px), clip_px)
         seen[j] += 1
         g = gain
@@ -161,6 +174,10 @@ def _refine_kernel(points, idx, base, normals, offsets, seen, R_cw, t_cw, fx, fy
             points[i, k] = base[j, k] + offsets[j] * normals[j, k]
         moved += 1
     return moved
+
+
+_NO_GAUGE = np.zeros(6)
+"""Placeholder gauge handed to :func:`_refine_kernel` when there is none (never read)."""
 
 
 class PaintedEdgeRefiner:
@@ -189,8 +206,9 @@ class PaintedEdgeRefiner:
         """(N,) bool over the map's points: painted points registration should skip for now, or None if none is."""
         return self._held if self.index.size and int(self.config.register_after_updates) > 0 and self._held[self.index].any() else None
 
-    def update(self, points: np.ndarray, field_, T_world_cam_field: np.ndarray, K: np.ndarray) -> int:
-        """Refine with one update's field (combined slot), the pose it shows (lag included); returns the points moved."""
+    def update(self, points: np.ndarray, field_, T_world_cam_field: np.ndarray, K: np.ndarray, gauge: np.ndarray | None = None) -> int:
+        """Refine with one update's field (combined slot), the pose it shows (lag included); returns the points moved.
+        ``gauge`` (6,): a pose change (right-perturbation tangent) whose image motion is taken out of every step."""
         if self.index.size == 0 or not self.config.enabled or self.config.gain <= 0:
             return 0
         T_cw = np.linalg.inv(np.asarray(T_world_cam_field, dtype=np.float64))
@@ -198,7 +216,8 @@ class PaintedEdgeRefiner:
         moved = int(_refine_kernel(points, self.index, self._base, self._normals, self.offsets, self.seen, np.ascontiguousarray(T_cw[:3, :3]),
                                   np.ascontiguousarray(T_cw[:3, 3]), float(K[0, 0]), float(K[1, 1]), float(K[0, 2]), float(K[1, 2]),
                                   field_.value, field_.grad_u, field_.grad_v, field_.box, float(c.gain), float(c.max_offset_m),
-                                  float(c.step_clip_px), float(c.inlier_threshold), float(c.min_gradient), int(c.first_updates)))
+                                  float(c.step_clip_px), float(c.inlier_threshold), float(c.min_gradient), int(c.first_updates),
+                                  _NO_GAUGE if gauge is None else np.ascontiguousarray(gauge, dtype=np.float64), gauge is not None))
         if moved:
             self._update_held()
         return moved

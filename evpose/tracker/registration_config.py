@@ -234,6 +234,9 @@ class RegistrationConfig:
     346x260 / 240x180, crowded points skipped: 21.79 / 28.49 -> 21.99 / 29.92 mm with 0.3 px, 23.8 / 36.1 mm with
     0.55 px at 2.5 px crowding): the Kalman filter's twist gets the motion direction of slow points wrong. Session 7
     (rebuilt maps, crowding 2.08 px at 240x180): 0 / 0.3 / 0.45 px 15.82 / 22.21, 16.01 / 23.04, 17.09 / 26.51 mm.
+    Session 11, ``stpe`` at 240x180 with the normal-only gradients (seeds 0-3, 16.80 mm): a constant trail on every
+    point (no floor) of +0.1 / +0.2 / -0.1 px gave 19.94 / 26.81 / 18.70 mm (with ``field_lag_ms`` 5.5: 19.30 / 26.18
+    at +0.1 / +0.2), though at the truth the field's minimum sits 0.09 px further behind than the lag model says.
     A trail growing with the distance from the image centre (the from-truth offsets trail 0.28-0.35 px x r^2 more
     at the border, r = distance / focal length, both resolutions), ``0.3 (r^2 - 0.25)`` px: 16.30 / 22.96 mm."""
     fused_lag_floor_px: float = field(default=0.45, metadata={"min": 0.0, "max": 3.0, "step": 0.05, "unit": "px"})

@@ -39,6 +39,7 @@ from evpose.fusion.aligned_surface import AlignedTimeSurface
 from evpose.tracker.config import MotionModel, TrackerConfig
 from evpose.tracker.crowding import crowded_points
 from evpose.tracker.ego_motion_events import ego_motion_keep, empty_ego_history
+from evpose.tracker.edge_offsets import EdgeOffsetLearner
 from evpose.tracker.map_refinement import PaintedEdgeRefiner
 from evpose.tracker.motion_filter import ConstantVelocityKalman
 from evpose.tracker.predictor import ConstantPosePredictor, ConstantVelocityPredictor, MotionPredictor
@@ -138,6 +139,17 @@ class Tracker:
                 predictor = ConstantVelocityPredictor(window_us=int(round(float(config.velocity_window_ms) * 1e3)))
         self.predictor = predictor
         self.polarity_selector = polarity_selector
+        eo = config.edge_offsets
+        self.edge_offsets = (EdgeOffsetLearner(eo, self._points, contour_map.edge_normal, self._tangents,
+                                               None if self.refiner is None else self._painted_mask())
+                             if eo.enabled and not self.components.drives_pose and polarity_selector is None
+                             and 1e3 / float(self.K[0, 0]) >= float(eo.min_pixel_mrad) else None)
+        """Gauge-free online offsets of the registered points (:mod:`evpose.tracker.edge_offsets`; ``stpe`` on coarse
+        sensors), None when off or when the map knows no point's edge direction (its lag then stays the config's)."""
+        if self.edge_offsets is not None and self.edge_offsets.owned == 0:
+            self.edge_offsets = None
+        if self.edge_offsets is not None and float(eo.field_lag_ms) > 0:
+            self._registration = dataclasses.replace(self._registration, field_lag_ms=float(eo.field_lag_ms))
         self._pose: np.ndarray | None = None
         self._t_us: int | None = None
         self._steps = 0
@@ -199,6 +211,7 @@ class Tracker:
             "acquisition": hold[0],
             "tracking": hold[1],
             "map_refinement": None if self.refiner is None else self.refiner.snapshot(),
+            "edge_offsets": None if self.edge_offsets is None else self.edge_offsets.snapshot(),
         }
 
     def restore(self, state: dict) -> None:
@@ -218,6 +231,9 @@ class Tracker:
         if self.refiner is not None and state.get("map_refinement") is not None:
             self.refiner.restore(state["map_refinement"])
             self.refiner.apply(self._points)
+        if self.edge_offsets is not None and state.get("edge_offsets") is not None:
+            self.edge_offsets.restore(state["edge_offsets"])
+            self.edge_offsets.apply(self._points)
 
     def _side_motion(self):
         """The fusion backend when it runs beside (not as) the predictor, as in ``stpe+filter``."""
@@ -428,15 +444,25 @@ class Tracker:
             status, reason = self.hold.regain(status, reason, ok and not weak)
         if status is TrackStatus.LOST:
             self.hold.never_lost = False
+        if self.edge_offsets is not None:
+            self.edge_offsets.last_fit[:] = np.nan
+        if self.edge_offsets is not None and status is TrackStatus.OK and field_polarity is None and self.hold.never_lost:
+            # As the refiner below (which takes this update's pose-like fit out of its own steps), from the pose the
+            # field shows, only while the track was never lost (a wrong lock must not be learned).
+            t0 = time.perf_counter()
+            T_field = self._field_pose(twist)
+            counts["points_offset"] = self.edge_offsets.update(self._points, used, levels[-1], T_field, self.K)
+            timings["edge_offsets"] = _ms(t0)
         if self.refiner is not None and status is TrackStatus.OK and field_polarity is None and self.hold.never_lost:
             # Registration read slot 0. A regained track may be a wrong lock the map would learn, so only a track
             # never lost since its start refines (indoor demo, stpe: refining after regains 192 -> 861 mm ATE).
             # Painted edges move towards where this update's events put them, seen from the pose the field shows.
             t0 = time.perf_counter()
-            lag = float(self._registration.field_lag_ms) * 1e-3
-            T_field = self._pose if twist is None or lag <= 0 else (
-                gtsam.Pose3(self._pose).compose(gtsam.Pose3.Expmap(-np.asarray(twist, dtype=np.float64) * lag)).matrix())
-            counts["points_refined"] = self.refiner.update(self._points, levels[-1], T_field, self.K)
+            T_field = self._field_pose(twist)
+            gauge = None
+            if self.edge_offsets is not None and self.config.edge_offsets.gauge_painted and np.all(np.isfinite(self.edge_offsets.last_fit)):
+                gauge = self.edge_offsets.last_fit
+            counts["points_refined"] = self.refiner.update(self._points, levels[-1], T_field, self.K, gauge)
             timings["map_refinement"] = _ms(t0)
         if self.polarity_selector is not None and hasattr(self.polarity_selector, "observe") and polarity is not None:
             # Label this step's events against the prediction (reports, viewer) and learn point signs from them.
@@ -472,6 +498,19 @@ class Tracker:
         return result
 
     # ---------------------------------------------------------------- helpers
+    def _field_pose(self, twist: np.ndarray | None) -> np.ndarray:
+        """The current pose moved back by the field's lag along ``twist``: the pose this update's field shows."""
+        lag = float(self._registration.field_lag_ms) * 1e-3
+        if twist is None or lag <= 0:
+            return self._pose
+        return gtsam.Pose3(self._pose).compose(gtsam.Pose3.Expmap(-np.asarray(twist, dtype=np.float64) * lag)).matrix()
+
+    def _painted_mask(self) -> np.ndarray:
+        """(N,) bool over the map: the points the painted-edge refiner owns."""
+        mask = np.zeros(self._points.shape[0], dtype=np.bool_)
+        mask[self.refiner.index] = True
+        return mask
+
     def _field_box(self, pts: np.ndarray, T_world_cam: np.ndarray, coarse: bool = False) -> tuple[int, int, int, int] | None:
         """Row/column box around the projected points plus the margin and blur radius; None = whole image."""
         if pts.shape[0] == 0:

@@ -65,6 +65,25 @@ def test_a_displaced_painted_edge_moves_onto_the_edge_the_field_shows():
     assert np.array_equal(pts[:, 1:], cmap.points[:, 1:])  # only along the normal
 
 
+def test_a_step_the_given_pose_change_explains_is_not_taken():
+    # A camera translation along world x of t moves the points by -F t / 2 = -50 t px: with the step the refiner
+    # measures without a gauge (1 px right of the field's edge), the gauge that explains it all, or half of it.
+    cfg = MapRefinementConfig(gain=1.0, step_clip_px=5.0, first_updates=0)
+    cmap, fld = painted_line(0.02), line_field((W - 1) / 2)
+
+    def offsets(gauge):
+        refiner = PaintedEdgeRefiner(cfg, cmap)
+        refiner.update(np.array(cmap.points), fld, DOWN, K, gauge)
+        return refiner.offsets
+
+    free = offsets(None)
+    assert np.all(free < -0.01)  # towards the edge (1 px = 2 cm)
+    step_px = free[0] * 50.0
+    gauge = np.array([0.0, 0.0, 0.0, -step_px / 50.0, 0.0, 0.0])
+    assert np.abs(offsets(gauge)).max() < 1e-9
+    assert np.allclose(offsets(0.5 * gauge), 0.5 * free)
+
+
 def test_offsets_stay_within_max_offset_and_points_without_events_do_not_move():
     cmap = painted_line(0.3)  # 15 px from the edge: the field reads 1 there, nothing to refine against
     refiner = PaintedEdgeRefiner(MapRefinementConfig(gain=1.0), cmap)
