@@ -47,7 +47,7 @@ from evpose.tracker.step_result import StepResult, TrackStatus, step_debug
 from evpose.tracker.track_hold import ACQUIRE_UPDATES, TrackHold  # noqa: F401 (ACQUIRE_UPDATES re-exported)
 from evpose.tracker.modes import MotionComponents
 from evpose.tracker.visible_map import VisibleMap, projected_bounds, visible_points
-from evpose.tracker.wall_occlusion import hidden_by_walls, wall_foot_mask
+from evpose.tracker.wall_occlusion import visible_over_walls, wall_foot_mask
 
 PolaritySelector = Callable[[np.ndarray, int, np.ndarray], "np.ndarray | None"]
 """``(T_world_cam_predicted, t_us, map_point_indices) -> int8 polarity per point (+1/-1/0) or None (all combined)``."""
@@ -273,7 +273,7 @@ class Tracker:
         visible = self.visible_map.visible(predicted, self.config.visible_map)
         if self._wall_feet is not None and visible.size:
             # Feet seen over their wall read the rim's events (see evpose.tracker.wall_occlusion).
-            visible = visible[~hidden_by_walls(self._points, self._edge_normals, self._wall_feet, visible, predicted[:3, 3])]
+            visible = visible_over_walls(self._points, self._edge_normals, self._wall_feet, visible, predicted[:3, 3])
         # Painted points the refiner has not yet placed would pull the pose towards their map error. Only where
         # the field shows every event: T_align (polarity filter) shows the used points' patches alone.
         held = None if self.refiner is None or self.polarity_selector is not None else self.refiner.held_out()
