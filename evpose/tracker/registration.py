@@ -29,7 +29,8 @@ import numpy as np
 
 from evpose.frontend.distance_field import TemporalDistanceField, polarity_slots
 from evpose.tracker.registration_kernels import (  # noqa: F401 (_rho_weight, _linearise, _damped_step re-exported)
-    _NO_EXTRA, _NO_PRIOR_TERMS, _NO_TANGENTS, _NO_TWIST, _damped_step, _linearise, _linearise_at, _lm_step, _rho_weight)
+    _NO_EXTRA, _NO_PRIOR_TERMS, _NO_TANGENTS, _NO_TWIST, _damped_step, _linearise, _linearise_at, _lm_step, _rho_weight,
+    _polarity_trail_kernel, _strided_kernel)
 from evpose.tracker.registration_config import RegistrationConfig, ResidualVariance, RobustLoss  # noqa: F401 (re-exported)
 
 _LOSS_ID = {RobustLoss.L2: 0, RobustLoss.HUBER: 1, RobustLoss.CAUCHY: 2, RobustLoss.TUKEY: 3}
@@ -66,6 +67,25 @@ def subsample_indices(n: int, max_points: int) -> np.ndarray:
         return np.arange(n, dtype=np.int64)
     return np.floor(np.arange(max_points) * (n / max_points)).astype(np.int64)
 
+
+def strided_subset(values: np.ndarray, max_points: int) -> np.ndarray:
+    """``values[subsample_indices(values.size, max_points)]`` (int64 ``values``), in one compiled pass."""
+    values = np.ascontiguousarray(values, dtype=np.int64)
+    if values.shape[0] <= max_points:
+        return values.copy()
+    out = np.empty(int(max_points), dtype=np.int64)
+    _strided_kernel(values, out)
+    return out
+
+
+
+def polarity_trail(polarity: np.ndarray, off: float, on: float, both: float) -> np.ndarray:
+    """float64 per point: ``off`` where ``polarity`` < 0, ``on`` where > 0, ``both`` where 0 (the nested ``np.where``
+    of the per-point trail, one compiled pass)."""
+    p = np.ascontiguousarray(polarity)
+    out = np.empty(p.shape[0])
+    _polarity_trail_kernel(p, float(off), float(on), float(both), out)
+    return out
 
 def _prior_terms(pose: gtsam.Pose3, prior):
     """(cost, gradient, information) of the pose prior at ``pose`` (right-perturbation tangent), or None for no prior."""

@@ -282,6 +282,23 @@ def _lm_step(H, b, prior_H, prior_b, with_prior, lam):
     return step, True
 
 
+
+@nb.njit(cache=True)
+def _strided_kernel(values, out):
+    """``out[i] = values[floor(i * (n / m))]`` for the m = ``out.shape[0]`` of n = ``values.shape[0]``: the evenly strided
+    subset of :func:`~evpose.tracker.registration.subsample_indices` (the same float64 products and floors), gathered."""
+    r = values.shape[0] / out.shape[0]
+    for i in range(out.shape[0]):
+        out[i] = values[np.int64(np.floor(i * r))]
+
+
+@nb.njit(cache=True)
+def _polarity_trail_kernel(polarity, off, on, both, out):
+    """``out[i]`` = ``off`` / ``on`` / ``both`` for a negative / positive / zero ``polarity[i]``."""
+    for i in range(polarity.shape[0]):
+        p = polarity[i]
+        out[i] = off if p < 0 else (on if p > 0 else both)
+
 _NO_PRIOR_TERMS = (np.zeros((6, 6)), np.zeros(6))
 """Placeholders handed to :func:`_lm_step` when there is no prior (never read)."""
 
