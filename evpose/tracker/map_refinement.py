@@ -32,6 +32,7 @@ import numpy as np
 from evpose.core.contour_map import ContourMap
 from evpose.frontend.distance_field import _bilinear_weights
 from evpose.tracker.camera_point import camera_point
+from evpose.tracker.lapack_calls import inv
 
 
 @dataclass
@@ -211,7 +212,7 @@ class PaintedEdgeRefiner:
         ``gauge`` (6,): a pose change (right-perturbation tangent) whose image motion is taken out of every step."""
         if self.index.size == 0 or not self.config.enabled or self.config.gain <= 0:
             return 0
-        T_cw = np.linalg.inv(np.asarray(T_world_cam_field, dtype=np.float64))
+        T_cw = inv(np.asarray(T_world_cam_field, dtype=np.float64))
         c = self.config
         moved = int(_refine_kernel(points, self.index, self._base, self._normals, self.offsets, self.seen, np.ascontiguousarray(T_cw[:3, :3]),
                                   np.ascontiguousarray(T_cw[:3, 3]), float(K[0, 0]), float(K[1, 1]), float(K[0, 2]), float(K[1, 2]),

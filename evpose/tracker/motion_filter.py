@@ -27,6 +27,7 @@ import gtsam
 import numba as nb
 import numpy as np
 
+from evpose.tracker.lapack_calls import eigh as _eigh, inv as _inv, solve as _solve
 # The settings live in their own module; re-exported here, where they were (imports and docs name them here).
 from evpose.tracker.motion_filter_config import MotionFilterConfig, VelocityFrame  # noqa: F401
 
@@ -104,12 +105,13 @@ def stretch_weak_directions(cov: np.ndarray, exponent: float) -> np.ndarray:
     rotation and translation units do not matter) raised to ``l (l / l_min)^exponent``: the best determined
     combination keeps its variance, weaker ones grow the more, the weaker they are (see
     ``MotionFilterConfig.measurement_anisotropy``). A diagonal covariance comes back unchanged."""
-    d = np.sqrt(np.maximum(np.diag(cov), 1e-300))
-    scale = np.outer(d, d)
-    lam, V = np.linalg.eigh(cov / scale)
+    d = np.sqrt(np.maximum(cov.diagonal(), 1e-300))
+    scale = d[:, None] * d[None, :]  # np.outer's own expression, without its wrapper
+    lam, V = _eigh(cov / scale)
     lam = np.maximum(lam, 1e-12)
     out = (V * (lam * (lam / lam[0]) ** float(exponent))) @ V.T * scale
     return 0.5 * (out + out.T)
+
 
 
 class ConstantVelocityKalman:
@@ -188,7 +190,7 @@ class ConstantVelocityKalman:
     def prior_information(self, t_us: int) -> np.ndarray:
         """(6, 6) inverse covariance of the predicted pose at ``t_us`` (for the registration's prior)."""
         _, P = self._propagate(t_us)
-        return np.linalg.inv(P[:6, :6])
+        return _inv(P[:6, :6])
 
     def covariance(self) -> np.ndarray:
         """(6, 6) covariance of the pose (body frame, rotation then translation)."""
@@ -286,7 +288,7 @@ class ConstantVelocityKalman:
         self._T, self._P = T_pred, P
         self._motion_cache = None
         self.last_fused = False
-        if covariance is None or not np.all(np.isfinite(covariance)):
+        if covariance is None or not np.isfinite(covariance).all():
             return T_pred.copy()
         R = 0.5 * (covariance + covariance.T) * float(self.config.measurement_covariance_scale)
         if float(self.config.measurement_anisotropy) > 0:
@@ -294,7 +296,7 @@ class ConstantVelocityKalman:
         y = gtsam.Pose3.Logmap(gtsam.Pose3(T_pred).between(gtsam.Pose3(np.asarray(T_measured, dtype=np.float64))))
         S = P[:6, :6] + R
         try:
-            sol = np.linalg.solve(S, np.column_stack([y, P[:6, :]]))
+            sol = _solve(S, np.concatenate((y[:, None], P[:6, :]), axis=1))  # np.column_stack's result
         except np.linalg.LinAlgError:
             return T_pred.copy()
         S_inv_y = sol[:, 0]

@@ -29,7 +29,8 @@ import numpy as np
 
 from evpose.frontend.distance_field import TemporalDistanceField, polarity_slots
 from evpose.tracker.registration_kernels import (  # noqa: F401 (_rho_weight, _linearise, _damped_step re-exported)
-    _NO_EXTRA, _NO_PRIOR_TERMS, _NO_TANGENTS, _NO_TWIST, _damped_step, _linearise, _linearise_at, _lm_step, _rho_weight)
+    _NO_EXTRA, _NO_PRIOR_TERMS, _NO_TANGENTS, _NO_TWIST, _damped_step, _linearise, _linearise_at, _lm_step, _rho_weight,
+    _polarity_trail_kernel, _strided_kernel)
 from evpose.tracker.registration_config import RegistrationConfig, ResidualVariance, RobustLoss  # noqa: F401 (re-exported)
 
 _LOSS_ID = {RobustLoss.L2: 0, RobustLoss.HUBER: 1, RobustLoss.CAUCHY: 2, RobustLoss.TUKEY: 3}
@@ -66,6 +67,25 @@ def subsample_indices(n: int, max_points: int) -> np.ndarray:
         return np.arange(n, dtype=np.int64)
     return np.floor(np.arange(max_points) * (n / max_points)).astype(np.int64)
 
+
+def strided_subset(values: np.ndarray, max_points: int) -> np.ndarray:
+    """``values[subsample_indices(values.size, max_points)]`` (int64 ``values``), in one compiled pass."""
+    values = np.ascontiguousarray(values, dtype=np.int64)
+    if values.shape[0] <= max_points:
+        return values.copy()
+    out = np.empty(int(max_points), dtype=np.int64)
+    _strided_kernel(values, out)
+    return out
+
+
+
+def polarity_trail(polarity: np.ndarray, off: float, on: float, both: float) -> np.ndarray:
+    """float64 per point: ``off`` where ``polarity`` < 0, ``on`` where > 0, ``both`` where 0 (the nested ``np.where``
+    of the per-point trail, one compiled pass)."""
+    p = np.ascontiguousarray(polarity)
+    out = np.empty(p.shape[0])
+    _polarity_trail_kernel(p, float(off), float(on), float(both), out)
+    return out
 
 def _prior_terms(pose: gtsam.Pose3, prior):
     """(cost, gradient, information) of the pose prior at ``pose`` (right-perturbation tangent), or None for no prior."""
@@ -226,14 +246,14 @@ def register_to_map(
     lag = gtsam.Pose3()
     if twist_per_s is not None and config.field_lag_ms > 0:
         xi = np.asarray(twist_per_s, dtype=np.float64).reshape(6)
-        if np.all(np.isfinite(xi)):
+        if np.isfinite(xi).all():  # the method: np.all's Python wrapper costs more than the test
             lag = gtsam.Pose3.Expmap(xi * (float(config.field_lag_ms) * 1e-3))
     lag_inv = lag.inverse()
     pose = pose.compose(lag_inv)
     floor = None
     if (config.lag_floor_px > 0 or trail_offsets_px is not None) and tangents_world is not None and twist_per_s is not None and m:
         xi = np.ascontiguousarray(twist_per_s, dtype=np.float64).reshape(6)
-        if np.all(np.isfinite(xi)):
+        if np.isfinite(xi).all():
             extra = _NO_EXTRA if trail_offsets_px is None else np.ascontiguousarray(trail_offsets_px, dtype=np.float64).reshape(m)
             floor = (np.ascontiguousarray(tangents_world, dtype=np.float64).reshape(m, 3), xi,
                      float(config.field_lag_ms) * 1e-3, float(config.lag_floor_px), extra)
@@ -243,7 +263,7 @@ def register_to_map(
         z = np.zeros(0, np.float32)
         return RegistrationResult(pose.compose(lag).matrix(), False, "no map points to register", None, 0, 0, 0, 0.0, z, z, np.zeros((0, 2), np.float32))
     prior = None
-    if prior_information is not None and not np.any(prior_information):
+    if prior_information is not None and not np.asarray(prior_information).any():
         pass  # an all-zero information matrix: no prior at all (the caller fuses the prediction itself)
     elif prior_information is not None:
         sig = float(config.prior_residual_sigma if prior_residual_sigma is None else prior_residual_sigma)
@@ -272,10 +292,10 @@ def register_to_map(
         return result(False, f"only {inside} map points project into the image (need {config.min_points})", None)
     if inl < config.min_inlier_ratio * inside:
         return result(False, f"only {inl} of {inside} map points lie on recent events (TDF < {thr:g})", None)
-    if not np.all(np.isfinite(H)):
+    if not np.isfinite(H).all():
         return result(False, "registration produced non-finite values", None)
-    d = np.sqrt(np.maximum(np.diag(H), 1e-300))
-    eig = _eigvalsh(H / np.outer(d, d))
+    d = np.sqrt(np.maximum(H.diagonal(), 1e-300))
+    eig = _eigvalsh(H / (d[:, None] * d[None, :]))  # np.outer's own expression, without its wrapper
     if not eig[0] > 0 or eig[-1] / eig[0] > config.max_condition:  # not > 0: also NaN from a failed solver
         return result(False, "degenerate geometry: the visible map does not constrain all 6 degrees of freedom", None)
     # Points reading TDF ~1 (their edge did not fire) add nothing to H but w r^2 ~ w each: counted in the residual

@@ -37,18 +37,18 @@ from evpose.frontend.time_surface import SeparatedTimeSurface
 from evpose.fusion import aligned_field
 from evpose.fusion.aligned_surface import AlignedTimeSurface
 from evpose.tracker.config import MotionModel, TrackerConfig
-from evpose.tracker.crowding import crowded_points
+from evpose.tracker.crowding import uncrowded
 from evpose.tracker.ego_motion_events import ego_motion_keep, empty_ego_history
 from evpose.tracker.edge_offsets import EdgeOffsetLearner
 from evpose.tracker.map_refinement import PaintedEdgeRefiner
 from evpose.tracker.motion_filter import ConstantVelocityKalman
 from evpose.tracker.predictor import ConstantPosePredictor, ConstantVelocityPredictor, MotionPredictor
-from evpose.tracker.registration import register_to_map, subsample_indices
+from evpose.tracker.registration import polarity_trail, register_to_map, strided_subset
 from evpose.tracker.step_result import StepResult, TrackStatus, step_debug
 from evpose.tracker.track_hold import ACQUIRE_UPDATES, TrackHold  # noqa: F401 (ACQUIRE_UPDATES re-exported)
 from evpose.tracker.modes import MotionComponents
 from evpose.tracker.visible_map import VisibleMap, projected_bounds, visible_points
-from evpose.tracker.wall_occlusion import hidden_by_walls, wall_foot_mask
+from evpose.tracker.wall_occlusion import visible_over_walls, wall_foot_mask
 
 PolaritySelector = Callable[[np.ndarray, int, np.ndarray], "np.ndarray | None"]
 """``(T_world_cam_predicted, t_us, map_point_indices) -> int8 polarity per point (+1/-1/0) or None (all combined)``."""
@@ -289,7 +289,7 @@ class Tracker:
         visible = self.visible_map.visible(predicted, self.config.visible_map)
         if self._wall_feet is not None and visible.size:
             # Feet seen over their wall read the rim's events (see evpose.tracker.wall_occlusion).
-            visible = visible[~hidden_by_walls(self._points, self._edge_normals, self._wall_feet, visible, predicted[:3, 3])]
+            visible = visible_over_walls(self._points, self._edge_normals, self._wall_feet, visible, predicted[:3, 3])
         # Painted points the refiner has not yet placed would pull the pose towards their map error. Only where
         # the field shows every event: T_align (polarity filter) shows the used points' patches alone.
         held = None if self.refiner is None or self.polarity_selector is not None else self.refiner.held_out()
@@ -298,14 +298,15 @@ class Tracker:
             ready = ~held[visible]
             if 2 * int(np.count_nonzero(ready)) >= visible.size:  # else the painted points are the map: keep them
                 candidates = visible[ready]
-        used = candidates[subsample_indices(candidates.size, int(self.config.registration.max_points))]
-        pts = np.take(self._points, used, axis=0)  # the rows of ``used``; 3x cheaper than fancy indexing
+        used = strided_subset(candidates, int(self.config.registration.max_points))
         vm = self.config.visible_map
+        used_tangents = None  # the rows of ``used`` of ``_tangents`` once gathered
         if vm.crowded_radius_px > 0 and used.size:
             # Another edge's TDF overlaps theirs: their minimum is not their edge's (see evpose.tracker.crowding).
-            alone = ~crowded_points(pts, np.take(self._tangents, used, axis=0), predicted, self.K, vm.crowded_radius_px,
-                                    vm.crowded_tolerance_px)
-            used, pts = used[alone], pts[alone]
+            used, pts, used_tangents = uncrowded(self._points, self._tangents, used, predicted, self.K, vm.crowded_radius_px,
+                                                 vm.crowded_tolerance_px)
+        else:
+            pts = np.take(self._points, used, axis=0)  # the rows of ``used``; 3x cheaper than fancy indexing
         roi = self._field_box(pts, predicted)
         timings["culling"] = _ms(t0)
         counts.update(points_visible=int(visible.size), points_used=int(used.size))
@@ -329,6 +330,7 @@ class Tracker:
                 if with_events is not None:
                     # Points whose patch shows no recent event of their polarity cannot pull the pose: skip them.
                     used, pts, polarity = used[with_events], pts[with_events], polarity[with_events]
+                    used_tangents = None
                 counts["points_registered"] = int(used.size)
             timings["polarity_align"] = _ms(t1)
         # --- end polarity event filter
@@ -373,10 +375,10 @@ class Tracker:
             if (split != 0 or both != 0) and self.components.drives_pose and polarity is not None:
                 # OFF points' fields trail further than ON points' (see ``fused_polarity_trail_px``), and those of
                 # points shown both polarities (the buffer zone) further still (``fused_buffer_trail_px``).
-                p_ = np.asarray(polarity)
-                trail = np.where(p_ < 0, 0.5 * split, np.where(p_ > 0, -0.5 * split, both))
+                trail = polarity_trail(polarity, 0.5 * split, -0.5 * split, both)
             with_tangents = self._registration.lag_floor_px > 0 or trail is not None or self._normal_only
-            tangents = np.take(self._tangents, used, axis=0) if with_tangents else None
+            tangents = ((used_tangents if used_tangents is not None else np.take(self._tangents, used, axis=0))
+                        if with_tangents else None)
             reg = register_to_map(levels, pts, predicted, self.K, self._registration, field_polarity, twist_per_s=twist,
                                   prior_information=prior_info, prior_residual_sigma=self.config.motion_filter.prior_residual_sigma,
                                   tangents_world=tangents, trail_offsets_px=trail, normal_only=self._normal_only)

@@ -285,11 +285,14 @@ class VisibleMap:
         if self._cache is None:
             return False
         T0, _, zmin = self._cache
-        R_rel = T0[:3, :3].T @ T_world_cam[:3, :3]
-        # math on Python floats: this runs every update, and numpy's scalar clip/arccos cost 3 us more.
-        angle = math.acos(min(max((float(np.trace(R_rel)) - 1.0) / 2.0, -1.0), 1.0))
-        dist = float(np.linalg.norm(T_world_cam[:3, 3] - T0[:3, 3]))
-        f = max(self.K[0, 0], self.K[1, 1])
+        # All on Python floats: this runs every update, where a 3x3 product, np.trace and np.linalg.norm cost ~30 us
+        # (cold, in a run). The test has slack (1.5x the angle), so its rounding cannot change which points are
+        # visible, only, at a border case, whether the superset is rebuilt (the result is the same either way).
+        a, b = T0.tolist(), np.asarray(T_world_cam, dtype=np.float64).tolist()
+        trace = sum(a[i][j] * b[i][j] for i in range(3) for j in range(3))  # trace(R0^T R)
+        angle = math.acos(min(max((trace - 1.0) / 2.0, -1.0), 1.0))
+        dist = math.sqrt(sum((b[i][3] - a[i][3]) ** 2 for i in range(3)))
+        f = max(float(self.K[0, 0]), float(self.K[1, 1]))
         if dist >= zmin:
             return False
         # Worst-case image motion: rotation moves every point by <= f * angle (small angles, with slack),

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import hashlib
 
+import numba as nb
 import numpy as np
 
 from evpose.core.contour_map import ContourMap
@@ -81,3 +82,29 @@ def hidden_by_walls(points: np.ndarray, edge_normal: np.ndarray, feet: np.ndarra
     rows = index[sel]
     out[sel] = np.einsum("ij,ij->i", np.asarray(camera_centre, dtype=np.float64)[None, :] - points[rows], edge_normal[rows]) > 0.0
     return out
+
+
+@nb.njit(cache=True)
+def _unhidden_kernel(points, edge_normal, feet, index, c0, c1, c2, out):
+    """``index`` without the wall feet seen over their wall from (c0, c1, c2), in order, into ``out``; returns the count.
+    The test is :func:`hidden_by_walls`' (its einsum sums the three products in this order)."""
+    n = 0
+    for k in range(index.shape[0]):
+        i = index[k]
+        if feet[i] and (c0 - points[i, 0]) * edge_normal[i, 0] + (c1 - points[i, 1]) * edge_normal[i, 1] \
+                + (c2 - points[i, 2]) * edge_normal[i, 2] > 0.0:
+            continue
+        out[n] = i
+        n += 1
+    return n
+
+
+def visible_over_walls(points: np.ndarray, edge_normal: np.ndarray, feet: np.ndarray, index: np.ndarray,
+                       camera_centre: np.ndarray) -> np.ndarray:
+    """``index[~hidden_by_walls(...)]`` in one compiled pass (float64 C-ordered ``points`` / ``edge_normal``): the
+    tracker culls with it every update, where the ten small numpy calls of that expression cost ~90 us in a run."""
+    out = np.empty(index.shape[0], dtype=np.int64)
+    c = np.asarray(camera_centre, dtype=np.float64)
+    n = _unhidden_kernel(points, edge_normal, feet, np.ascontiguousarray(index, dtype=np.int64), float(c[0]), float(c[1]),
+                         float(c[2]), out)
+    return out[:n]
