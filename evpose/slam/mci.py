@@ -6,6 +6,12 @@ events are moved to the window's reference time (its last timestamp, or
 sampled once per time slice. A Sim(2) motion and an SE(3) motion seen through a
 fronto-parallel plane at one depth are both pixel homographies, so one splat
 kernel renders them all.
+
+An 8-DoF homography fitted to the tracks (RANSAC, 1.5 px) as H2, its per-slice
+powers by matrix exponential, made the simulated landing worse (event-only,
+seeds 0-11, reference fraction 1.0: mean ATE 3.16 -> 5.43 %, tracked at least
+68.6 %): over the few pixels of motion a window spans, its projective terms
+follow the track noise.
 """
 
 from __future__ import annotations

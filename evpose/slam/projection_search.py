@@ -57,7 +57,10 @@ class ProjectionSearchConfig:
     """KLT matcher: the newest this many keyframes of the local window are source views, tried newest first until the
     point is found (0: all of them; an edge's events depend on the motion, so an older view may look more like the
     current MCI). On landing seeds 0-23 (event-only) all gave a mean ATE of 2.63 % (median 2.53), 3 gave 3.07 %
-    (median 2.93), 1 3.03 % (median 2.50), keyframes."""
+    (median 2.93), 1 3.03 % (median 2.50), keyframes. Searching the points of the newest 12 / 15 keyframes instead of
+    ``TrackingConfig.local_window`` (their MCIs kept as sources; session 11, landing seeds 0-11, 60 runs with
+    ``MciConfig.reference_fraction`` 1.0): mean ATE 3.34 -> 3.06 / 3.32 %, 9 -> 13 / 10 of 60 within 2 %, paired
+    -0.28 +- 0.21 points (12), at 4-8 ms more CPU per MCI; not kept."""
     patch_px: int = field(default=11, metadata={"min": 5, "max": 31, "step": 2, "unit": "px"})
     """Side of the template cut around a point's observation in its keyframe MCI, pixels (odd)."""
     radius_px: int = field(default=6, metadata={"min": 1, "max": 30, "step": 1, "unit": "px"})

@@ -125,3 +125,28 @@ def test_mci_reference_fraction_warps_events_to_that_time_and_stamps_it():
             c = np.array([(patch * xx).sum(), (patch * yy).sum()]) / patch.sum() + [iu, iv]
             errs.append(np.linalg.norm(c - [u, w]))
         assert np.median(errs) < 0.3
+
+
+def test_a_wrong_warp_rate_blurs_a_mid_window_mci_in_place_but_shifts_an_end_window_one():
+    # Tracks that under-report the motion by a quarter (as a warp model that misses part of the flow would): warped to
+    # the window's end, every event lands short of where its point is then, one way; warped to the middle, the errors
+    # of early and late events cancel.
+    v = np.array([200.0, -100.0])  # px/s: 8 px and -4 px over the window
+    rw, p0 = _translating_window(v)
+    rw.cur_pts = (rw.ref_pts + 0.75 * (rw.cur_pts - rw.ref_pts)).astype(np.float32)
+    t0, t1 = int(rw.t[0]), int(rw.t[-1])
+    offsets = {}
+    for frac in (1.0, 0.5):
+        res = MciGenerator(MciConfig(reference_fraction=frac, use_pose_prior=False, use_map_depth=False), EventImageConfig(), K, W, H).generate(rw)
+        expect = p0 + v * res.t_us / 1e6
+        errs = []
+        for u, w in expect:
+            iu, iv = int(round(u)), int(round(w))
+            patch = res.image[iv - 4:iv + 5, iu - 4:iu + 5].astype(np.float64)
+            yy, xx = np.mgrid[-4:5, -4:5]
+            c = np.array([(patch * xx).sum(), (patch * yy).sum()]) / patch.sum() + [iu, iv]
+            errs.append(np.linalg.norm(c - [u, w]))
+        offsets[frac] = float(np.median(errs))
+    assert t0 < t1
+    assert offsets[1.0] > 0.7  # a quarter of 8.9 px over half the window: about 1.1 px
+    assert offsets[0.5] < 0.35

@@ -116,6 +116,12 @@ def test_each_mode_warps_its_mcis_to_its_own_reference_fraction():
     assert cfg.mci.reference_fraction == 0.5  # the caller's config is not changed
 
 
+def test_event_only_mcis_default_to_the_middle_of_their_window_and_event_inertial_ones_to_its_end():
+    rec = make_recording(duration_s=0.05)
+    assert EventSlam(SlamConfig(), rec.calibration).mci_gen.cfg.reference_fraction == 0.5
+    assert EventSlam(SlamConfig(mode=SlamMode.EVENT_INERTIAL), rec.calibration, rec.imu).mci_gen.cfg.reference_fraction == 1.0
+
+
 def test_snapshot_and_restore_replay_identically():
     rec = make_recording(duration_s=1.0, speed=1.5, seed=9)
     slam = EventSlam(SlamConfig(), rec.calibration)
