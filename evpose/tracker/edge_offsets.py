@@ -35,12 +35,12 @@ import numpy as np
 
 from evpose.frontend.distance_field import bilinear_curvature_from_value, bilinear_sample
 from evpose.tracker.camera_point import camera_point
-from evpose.tracker.registration_kernels import _damped_step, _projected_normal
+from evpose.tracker.registration_kernels import _NO_EXTRA, _NO_TWIST, _damped_step, _floor_shift, _projected_normal
 
 
 @dataclass
 class EdgeOffsetConfig:
-    """Gauge-free online offsets of the registered points (``stpe`` without the polarity filter, coarse sensors)."""
+    """Gauge-free online offsets of the registered points (all modes, coarse sensors)."""
 
     enabled: bool = True
     """Learn per-point offsets along the edge normals with the pose's gauge projected out (see the module).
@@ -48,6 +48,33 @@ class EdgeOffsetConfig:
     ``stpe``, 2 s landing from ground truth, built map, 240x180 (the only resolution it runs at by default, see
     ``min_pixel_mrad``), mean ATE / ARE of seeds 0-3 and 4-7: off 16.80 / 0.250 and 17.95 mm / 0.236 deg; on (with
     its ``field_lag_ms``) 13.80 / 0.224 and 14.60 mm / 0.220 deg, no update lost."""
+    stpe_filter: bool = True
+    """Also in ``stpe+filter``, from the field registration reads there (``T_align``: the used points' patches).
+
+    2 s landing from ground truth, built map, mean ATE seeds 0-3 / 4-7. 240x180 (on, with
+    ``stpe_filter_field_lag_ms`` 5.5): 18.71 / 17.37 -> 15.85 / 14.20 mm. 346x260 (off: ``min_pixel_mrad``): with
+    registration's 4.5 ms lag 14.78 / 12.56 -> 13.58 / 12.55 mm, with 5.0 ms 13.84 / 12.45 mm: too little on 4-7."""
+    stpe_filter_field_lag_ms: float = field(default=5.5, metadata={"min": 0.0, "max": 50.0, "step": 0.1, "unit": "ms"})
+    """``registration.field_lag_ms`` in ``stpe+filter`` while the offsets are learned (0 = keep that), milliseconds.
+
+    240x180 seeds 0-3: 4.5 / 5.0 / 5.5 / 6.0 ms gave 16.62 / 16.34 / 15.85 / 16.19 mm (seeds 4-7: 5.0 14.86, 5.5
+    14.20 mm); 5.5 without the learner 18.83 mm. ``gain`` 0.3 / 0.7 at 5.5: 16.37 / 16.01, ``step_clip_px`` 0.8:
+    16.45 mm."""
+    full: bool = True
+    """Also in ``full``, from ``T_align``'s field and where registration samples it (its lag floor and polarity
+    trail, :func:`evpose.tracker.registration_kernels._floor_shift`; sampled at the projection instead: 240x180
+    seeds 0-3 8.50 mm at 5.0 ms).
+
+    Mean ATE seeds 0-3 / 4-7 (fused output). 240x180 (on, ``full_field_lag_ms`` 5.0): 9.40 / 11.38 -> 8.11 /
+    10.46 mm. 346x260 (off: ``min_pixel_mrad``): at registration's 4.5 ms 7.77 -> 7.90 mm (``gain`` 0.25 7.76,
+    without ``gauge_painted`` 7.86), at 4.0 ms 7.42 / 8.30 mm (base 7.77 / 7.95), at 3.5 ms 7.64 / 8.48 mm, at
+    5.0 ms 8.83 mm (seeds 0-3); registration's lag alone at 4.0 ms 7.82 mm."""
+    full_field_lag_ms: float = field(default=5.0, metadata={"min": 0.0, "max": 50.0, "step": 0.1, "unit": "ms"})
+    """``registration.field_lag_ms`` in ``full`` while the offsets are learned (0 = keep that), milliseconds.
+
+    240x180 seeds 0-3: 4.5 / 4.75 / 5.0 / 5.25 / 5.5 / 6.0 ms gave 8.39 / 8.15 / 8.11 / 8.47 / 9.12 / 10.30 mm (seeds
+    4-7: 4.75 11.00, 5.0 10.46 mm); 5.0 without the learner 9.23 mm. At 5.0 ``gain`` 0.25 / 0.3 / 0.7 gave 8.74 /
+    8.39 / 8.15 mm (0.7 on 4-7: 10.62), ``step_clip_px`` 0.8 8.23 mm."""
     min_pixel_mrad: float = field(default=5.0, metadata={"min": 0.0, "max": 100.0, "step": 0.1, "unit": "mrad"})
     """Only when one pixel subtends at least this angle (``1 / fx``), milliradians (0 = any sensor).
 
@@ -92,15 +119,20 @@ class EdgeOffsetConfig:
 
 @nb.njit(cache=True)
 def _offset_kernel(points, idx, base, normals, tangents, offsets, R_cw, t_cw, fx, fy, cx, cy, value, grad_u, grad_v, box,
-                   gain, clip_px, max_offset, thr, min_a, min_pxm, obs, pxm, jac, ok, fit_out):
+                   gain, clip_px, max_offset, thr, min_a, min_pxm, twist, lag_s, floor_px, extra, obs, pxm, jac, ok, fit_out):
     """One update: the Newton offsets (pixels) of the points ``idx`` along their image normals, their weighted 6-DoF
     fit (written to ``fit_out``, NaN if there are too few points) taken out, ``gain`` of the rest added to
-    ``offsets`` (metres along ``normals``) and written into ``points``; returns how many moved. ``obs``, ``pxm``
-    (M,), ``jac`` (M, 6) and ``ok`` (M,) are scratch."""
+    ``offsets`` (metres along ``normals``) and written into ``points``; returns how many moved. ``floor_px`` > 0 or
+    a non-empty ``extra`` (M,) samples each point's field where registration does (the lag floor's and the per-point
+    trail's shift, :func:`evpose.tracker.registration_kernels._floor_shift`, with ``twist`` (6,) and ``lag_s``).
+    ``obs``, ``pxm`` (M,), ``jac`` (M, 6) and ``ok`` (M,) are scratch."""
     m = idx.shape[0]
     H = np.zeros((6, 6))
     b = np.zeros(6)
     n_ok = 0
+    shifted = floor_px > 0.0 or extra.shape[0] > 0
+    Ju = np.zeros(6)
+    Jv = np.zeros(6)
     for r in range(6):
         fit_out[r] = np.nan
     for j in range(m):
@@ -115,10 +147,34 @@ def _offset_kernel(points, idx, base, normals, tangents, offsets, R_cw, t_cw, fx
         nu, nv = _projected_normal(tangents, j, R_cw, X, Y, Z, fx, fy)
         if nu == 0.0 and nv == 0.0:
             continue
-        f, fu, fv, inside = bilinear_sample(value, grad_u, grad_v, box, np.int64(0), u, v)
+        # d u / dX, d u / dZ, d v / dY, d v / dZ: the image rows below (and the shift's image velocity).
+        pux = fx * iz
+        puz = -fx * X * iz * iz
+        pvy = fy * iz
+        pvz = -fy * Y * iz * iz
+        us = u
+        vs = v
+        if shifted:
+            # Registration reads this point's field behind its projection (the fused modes' lag floor and
+            # polarity trail): the offset to learn is the one from there.
+            Ju[0] = -puz * Y
+            Ju[1] = puz * X - pux * Z
+            Ju[2] = pux * Y
+            Ju[3] = -pux
+            Ju[5] = -puz
+            Jv[0] = pvy * Z - pvz * Y
+            Jv[1] = pvz * X
+            Jv[2] = -pvy * X
+            Jv[4] = -pvy
+            Jv[5] = -pvz
+            du, dv = _floor_shift(tangents, j, R_cw, X, Y, Z, fx, fy, Ju, Jv, twist, lag_s, floor_px,
+                                  extra[j] if extra.shape[0] else 0.0)
+            us += du
+            vs += dv
+        f, fu, fv, inside = bilinear_sample(value, grad_u, grad_v, box, np.int64(0), us, vs)
         if not inside or f >= thr:
             continue
-        huu, huv, hvv = bilinear_curvature_from_value(value, box, np.int64(0), u, v)
+        huu, huv, hvv = bilinear_curvature_from_value(value, box, np.int64(0), us, vs)
         gn = fu * nu + fv * nv
         a = gn * gn + f * (nu * nu * huu + 2.0 * nu * nv * huv + nv * nv * hvv)
         if a < min_a:
@@ -136,10 +192,6 @@ def _offset_kernel(points, idx, base, normals, tangents, offsets, R_cw, t_cw, fx
             continue
         # Rows of d(u, v)/d xi projected on the normal (right perturbation, rotation then translation), as in
         # evpose.tracker.registration_kernels._linearise.
-        pux = fx * iz
-        puz = -fx * X * iz * iz
-        pvy = fy * iz
-        pvz = -fy * Y * iz * iz
         jac[j, 0] = nu * (-puz * Y) + nv * (pvy * Z - pvz * Y)
         jac[j, 1] = nu * (puz * X - pux * Z) + nv * (pvz * X)
         jac[j, 2] = nu * (pux * Y) + nv * (-pvy * X)
@@ -206,14 +258,30 @@ class EdgeOffsetLearner:
         """How many map points this learner may move (a known edge normal and direction, not another refiner's)."""
         return int(np.count_nonzero(self._owned))
 
-    def update(self, points: np.ndarray, used: np.ndarray, field_, T_world_cam_field: np.ndarray, K: np.ndarray) -> int:
+    def update(self, points: np.ndarray, used: np.ndarray, field_, T_world_cam_field: np.ndarray, K: np.ndarray,
+               twist: np.ndarray | None = None, lag_s: float = 0.0, floor_px: float = 0.0,
+               trail_px: np.ndarray | None = None) -> int:
         """Learn from one update's field (combined slot) at the pose it shows (lag included) over the registered map
-        points ``used`` (indices into ``points``), moving them in ``points``; returns how many moved."""
+        points ``used`` (indices into ``points``), moving them in ``points``; returns how many moved.
+
+        Registration's sampling shift (its lag floor ``floor_px`` and the points' ``trail_px`` (as ``used``), with
+        ``twist`` the body twist per second and ``lag_s`` the lag the field pose carries) is applied when ``twist``
+        is given and one of them is set: the offsets are then measured from where registration reads the field."""
         c = self.config
-        idx = np.ascontiguousarray(used[self._owned[used]], dtype=np.int64)
+        keep = self._owned[used]
+        idx = np.ascontiguousarray(used[keep], dtype=np.int64)
         if idx.size == 0:
             self.last_fit[:] = np.nan
             return 0
+        xi, extra, floor = _NO_TWIST, _NO_EXTRA, 0.0
+        if twist is not None and (floor_px > 0 or trail_px is not None):
+            xi = np.ascontiguousarray(twist, dtype=np.float64).reshape(6)
+            if np.all(np.isfinite(xi)):
+                floor = float(floor_px)
+                if trail_px is not None:
+                    extra = np.ascontiguousarray(np.asarray(trail_px, dtype=np.float64)[keep])
+            else:
+                xi = _NO_TWIST
         T_cw = np.linalg.inv(np.asarray(T_world_cam_field, dtype=np.float64))
         m = idx.size
         return int(_offset_kernel(points, idx, self._base, np.ascontiguousarray(self._normals[idx]),
@@ -221,7 +289,7 @@ class EdgeOffsetLearner:
                                   np.ascontiguousarray(T_cw[:3, 3]), float(K[0, 0]), float(K[1, 1]), float(K[0, 2]), float(K[1, 2]),
                                   field_.value, field_.grad_u, field_.grad_v, field_.box, float(c.gain), float(c.step_clip_px),
                                   float(c.max_offset_m), float(c.inlier_threshold), float(c.min_curvature), float(c.min_px_per_m),
-                                  np.empty(m), np.empty(m), np.empty((m, 6)), np.empty(m, np.bool_), self.last_fit))
+                                  xi, float(lag_s), floor, extra, np.empty(m), np.empty(m), np.empty((m, 6)), np.empty(m, np.bool_), self.last_fit))
 
     def apply(self, points: np.ndarray) -> None:
         """Write the current offsets into ``points`` (after a restore), for the points this learner owns."""

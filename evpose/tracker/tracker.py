@@ -140,16 +140,19 @@ class Tracker:
         self.predictor = predictor
         self.polarity_selector = polarity_selector
         eo = config.edge_offsets
+        for_mode = eo.full if self.components.drives_pose else eo.stpe_filter if polarity_selector is not None else True
         self.edge_offsets = (EdgeOffsetLearner(eo, self._points, contour_map.edge_normal, self._tangents,
                                                None if self.refiner is None else self._painted_mask())
-                             if eo.enabled and not self.components.drives_pose and polarity_selector is None
-                             and 1e3 / float(self.K[0, 0]) >= float(eo.min_pixel_mrad) else None)
-        """Gauge-free online offsets of the registered points (:mod:`evpose.tracker.edge_offsets`; ``stpe`` on coarse
-        sensors), None when off or when the map knows no point's edge direction (its lag then stays the config's)."""
+                             if eo.enabled and for_mode and 1e3 / float(self.K[0, 0]) >= float(eo.min_pixel_mrad) else None)
+        """Gauge-free online offsets of the registered points (:mod:`evpose.tracker.edge_offsets`; every mode has its
+        own switch and lag; coarse sensors only), None when off or when the map knows no point's edge direction (its lag
+        then stays the config's)."""
         if self.edge_offsets is not None and self.edge_offsets.owned == 0:
             self.edge_offsets = None
-        if self.edge_offsets is not None and float(eo.field_lag_ms) > 0:
-            self._registration = dataclasses.replace(self._registration, field_lag_ms=float(eo.field_lag_ms))
+        lag_ms = float(eo.full_field_lag_ms if self.components.drives_pose
+                       else eo.stpe_filter_field_lag_ms if polarity_selector is not None else eo.field_lag_ms)
+        if self.edge_offsets is not None and lag_ms > 0:
+            self._registration = dataclasses.replace(self._registration, field_lag_ms=lag_ms)
         self._pose: np.ndarray | None = None
         self._t_us: int | None = None
         self._steps = 0
@@ -353,6 +356,7 @@ class Tracker:
         t0 = time.perf_counter()
         weak = False
         twist = None
+        trail = None
         if used.size < self.config.registration.min_points:
             reg = None
             reason = f"only {visible.size} map points in view at the predicted pose (need {self.config.registration.min_points})"
@@ -369,7 +373,6 @@ class Tracker:
                 # The filter fuses the prediction itself; the registration's isotropic prior would count it twice
                 # (all-zero information = no prior), unless the filter's own covariance is asked to act as the prior.
                 prior_info = self.predictor.prior_information(until) if self.config.motion_filter.prior_in_registration else _NO_PRIOR
-            trail = None
             split = float(self.config.registration.fused_polarity_trail_px)
             both = float(self.config.registration.fused_buffer_trail_px)
             if (split != 0 or both != 0) and self.components.drives_pose and polarity is not None:
@@ -453,7 +456,10 @@ class Tracker:
             # field shows, only while the track was never lost (a wrong lock must not be learned).
             t0 = time.perf_counter()
             T_field = self._field_pose(twist)
-            counts["points_offset"] = self.edge_offsets.update(self._points, used, levels[-1], T_field, self.K)
+            # Measured where registration read the field (the fused modes' lag floor and polarity trail).
+            counts["points_offset"] = self.edge_offsets.update(self._points, used, levels[-1], T_field, self.K, twist,
+                                                               float(self._registration.field_lag_ms) * 1e-3,
+                                                               float(self._registration.lag_floor_px), trail)
             timings["edge_offsets"] = _ms(t0)
         if self.refiner is not None and status is TrackStatus.OK and field_polarity is None and self.hold.never_lost:
             # Registration read slot 0. A regained track may be a wrong lock the map would learn, so only a track

@@ -1,5 +1,6 @@
 """Gauge-free online edge offsets: a pose-like disagreement between map and field is not learned, one edge's own
-offset is; the tracker runs it only in plain ``stpe`` on coarse sensors and restores it bit-identically."""
+offset is; offsets are measured where registration samples the field; the tracker runs it on coarse sensors in each
+mode whose switch is on (the filter modes from ``T_align``) and restores it bit-identically."""
 
 import numpy as np
 from tracker_synthetic import box_edges, generate
@@ -106,6 +107,32 @@ def test_one_edge_displaced_against_the_others_moves_until_only_a_pose_like_disa
     assert np.linalg.norm(learner.last_fit) > 1e-3
 
 
+def test_offsets_are_measured_where_registration_reads_the_field():
+    # The first x line is mapped 0.5 px right of its field, and registration reads its field 0.5 px behind it
+    # (a per-point trail, as the fused modes' polarity trail): from there the field is at its minimum.
+    cmap = grid_map(shift_first_m=0.01)
+    first = np.arange(len(cmap)) < 21
+    trail = np.where(first, 0.5, 0.0)
+    still = np.zeros(6)  # no motion: the trail points along the image normal (+u for the x lines)
+    learner = learner_for(cmap, gain=0.5)
+    pts = np.array(cmap.points)
+    for _ in range(20):
+        assert learner.update(pts, np.arange(len(cmap)), grid_field(), DOWN, K, still, 0.0045, 0.0, trail) == len(cmap)
+    assert np.abs(learner.offsets).max() < 2e-4  # nothing to learn (the same map without the trail: < -0.004 m)
+    # A lag floor with no motion reads every line's field 0.5 px behind it: a camera shift, nothing to learn either.
+    learner = learner_for(cmap, gain=0.5)
+    pts = np.array(cmap.points)
+    for _ in range(20):
+        learner.update(pts, np.arange(len(cmap)), grid_field(), DOWN, K, still, 0.0045, 0.5, trail)
+    assert np.abs(learner.offsets).max() < 2e-4
+    # Without the twist there is no shift (as in registration): the first line's displacement is learned.
+    learner = learner_for(cmap, gain=0.5)
+    pts = np.array(cmap.points)
+    for _ in range(20):
+        learner.update(pts, np.arange(len(cmap)), grid_field(), DOWN, K, None, 0.0045, 0.5, trail)
+    assert np.all(learner.offsets[first] < -0.004)
+
+
 def test_points_whose_offset_exceeds_the_clip_or_whose_edge_did_not_fire_take_no_part():
     cmap = grid_map()
     learner = learner_for(cmap, step_clip_px=0.2)
@@ -120,7 +147,7 @@ def _box_map() -> ContourMap:
     return true_edge_map(box_edges(), 0.01)[0]
 
 
-def test_the_tracker_learns_offsets_only_in_stpe_on_coarse_sensors_and_restores_them_bit_identically():
+def test_the_tracker_learns_offsets_only_on_coarse_sensors_with_each_modes_switch_and_restores_them_bit_identically():
     rec, _, _ = generate(duration_s=0.2, seed=1)
     cmap = _box_map()
     assert 1e3 / rec.calibration.K[0, 0] >= EdgeOffsetConfig().min_pixel_mrad  # 240 px over 100 deg: a coarse sensor
@@ -140,9 +167,15 @@ def test_the_tracker_learns_offsets_only_in_stpe_on_coarse_sensors_and_restores_
             t0 += 5_000
         return out
 
-    # Neither where a fusion drives the pose nor behind the polarity filter (its field shows the used points' patches).
-    assert Tracker(TrackerConfig(), cmap, rec.calibration, components=MotionComponents(drives_pose=True)).edge_offsets is None
-    assert Tracker(TrackerConfig(), cmap, rec.calibration, polarity_selector=lambda T, t, idx: None).edge_offsets is None
+    # Where a fusion drives the pose and behind the polarity filter each mode has its own switch and lag.
+    off = TrackerConfig()
+    off.edge_offsets.full = off.edge_offsets.stpe_filter = False
+    assert Tracker(off, cmap, rec.calibration, components=MotionComponents(drives_pose=True)).edge_offsets is None
+    assert Tracker(off, cmap, rec.calibration, polarity_selector=lambda T, t, idx: None).edge_offsets is None
+    fused = Tracker(TrackerConfig(), cmap, rec.calibration, components=MotionComponents(drives_pose=True))
+    assert fused.edge_offsets is not None and fused._registration.field_lag_ms == EdgeOffsetConfig().full_field_lag_ms
+    filtered = Tracker(TrackerConfig(), cmap, rec.calibration, polarity_selector=lambda T, t, idx: None)
+    assert filtered._registration.field_lag_ms == EdgeOffsetConfig().stpe_filter_field_lag_ms
     assert started(min_pixel_mrad=10.0).edge_offsets is None
     bare = ContourMap.from_points(cmap.points)  # no edge directions: nothing to learn, and the config's lag stays
     tr = Tracker(TrackerConfig(), bare, rec.calibration)
@@ -159,3 +192,28 @@ def test_the_tracker_learns_offsets_only_in_stpe_on_coarse_sensors_and_restores_
     for x, y in zip(straight[7:], replay):
         assert np.array_equal(x.pose, y.pose) and x.counts == y.counts
     assert np.array_equal(cmap.points, _box_map().points)  # the map itself is never moved
+
+
+def test_in_the_filter_modes_the_offsets_are_learned_from_t_align_with_their_own_switch_and_lag(sim_landing_small):
+    import dataclasses
+
+    from evpose.tracker.session import TrackingSession
+
+    rec = sim_landing_small.recording
+    rec = dataclasses.replace(rec, events=rec.events.time_window(int(rec.events.t[0]), int(rec.events.t[0]) + 300_000))
+    cmap = true_edge_map(sim_landing_small.edges, 0.02)[0]
+    for mode, switch in ((TrackerMode.STPE_FILTER, "stpe_filter"), (TrackerMode.FULL, "full")):
+        cfg = TrackerConfig(mode=mode)
+        cfg.edge_offsets.min_pixel_mrad = 0.0
+        setattr(cfg.edge_offsets, switch, False)
+        assert TrackingSession(rec, cmap, cfg).tracker.edge_offsets is None  # its own switch
+        setattr(cfg.edge_offsets, switch, True)
+        setattr(cfg.edge_offsets, f"{switch}_field_lag_ms", 5.2)
+        s = TrackingSession(rec, cmap, cfg)
+        assert s.tracker._registration.field_lag_ms == 5.2  # the mode's own lag while learning, not stpe's
+        s.run()
+        # Registration read T_align (one field, the used points' patches): the learner reads the same field.
+        learned = [r for r in s.results if r.counts.get("points_offset", 0) > 0]
+        assert learned and all("events_outside_patches" in r.counts for r in learned)
+        assert np.any(s.tracker.edge_offsets.offsets != 0)
+        assert np.array_equal(cmap.points, true_edge_map(sim_landing_small.edges, 0.02)[0].points)  # never the map
