@@ -3,7 +3,7 @@ offset is; offsets are measured where registration samples the field; the tracke
 mode whose switch is on (the filter modes from ``T_align``) and restores it bit-identically."""
 
 import numpy as np
-from tracker_synthetic import box_edges, generate
+from tracker_synthetic import assert_restore_replays_bit_identically, box_edges, generate
 
 from evpose.bench.registration_bias import true_edge_map
 from evpose.core.contour_map import ContourMap
@@ -160,13 +160,6 @@ def test_the_tracker_learns_offsets_only_on_coarse_sensors_with_each_modes_switc
         tr.start(rec.ground_truth.matrix(0), int(rec.ground_truth.t[0]))
         return tr
 
-    def run(tr, t0, n):
-        out = []
-        for _ in range(n):
-            out.append(tr.step(t0 + 5_000, rec.events.time_window(t0, t0 + 5_000)))
-            t0 += 5_000
-        return out
-
     # Where a fusion drives the pose and behind the polarity filter each mode has its own switch and lag.
     off = TrackerConfig()
     off.edge_offsets.full = off.edge_offsets.stpe_filter = False
@@ -181,16 +174,8 @@ def test_the_tracker_learns_offsets_only_on_coarse_sensors_with_each_modes_switc
     tr = Tracker(TrackerConfig(), bare, rec.calibration)
     assert tr.edge_offsets is None and tr._registration.field_lag_ms == TrackerConfig().registration.field_lag_ms
     assert started()._registration.field_lag_ms == EdgeOffsetConfig().field_lag_ms
-    straight = run(started(), 0, 14)
+    straight = assert_restore_replays_bit_identically(started, rec.events)
     assert any(r.counts.get("points_offset", 0) > 0 for r in straight)
-    tr = started()
-    run(tr, 0, 7)
-    snap = tr.snapshot()
-    run(tr, 7 * 5_000, 4)
-    tr.restore(snap)
-    replay = run(tr, 7 * 5_000, 7)
-    for x, y in zip(straight[7:], replay):
-        assert np.array_equal(x.pose, y.pose) and x.counts == y.counts
     assert np.array_equal(cmap.points, _box_map().points)  # the map itself is never moved
 
 

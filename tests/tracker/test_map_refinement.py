@@ -3,7 +3,7 @@ and bit-identical snapshot/restore inside the tracker."""
 
 import numpy as np
 import pytest
-from tracker_synthetic import generate
+from tracker_synthetic import assert_restore_replays_bit_identically, generate
 
 from evpose.core.contour_map import ContourMap
 from evpose.frontend.distance_field import DistanceFieldConfig, TemporalDistanceField
@@ -116,23 +116,8 @@ def test_tracker_refines_a_copy_of_the_map_and_restores_it_bit_identically(paint
         tr.start(rec.ground_truth.matrix(0), int(rec.ground_truth.t[0]))
         return tr
 
-    def run(tr, t0, n):
-        out = []
-        for _ in range(n):
-            out.append(tr.step(t0 + 5_000, rec.events.time_window(t0, t0 + 5_000)))
-            t0 += 5_000
-        return out
-
-    straight = run(started(), 0, 14)
+    straight = assert_restore_replays_bit_identically(started, rec.events)
     assert any(r.counts.get("points_refined", 0) > 0 for r in straight)
-    tr = started()
-    run(tr, 0, 7)
-    snap = tr.snapshot()
-    run(tr, 7 * 5_000, 4)
-    tr.restore(snap)
-    replay = run(tr, 7 * 5_000, 7)
-    for x, y in zip(straight[7:], replay):
-        assert np.array_equal(x.pose, y.pose) and x.counts == y.counts
     assert np.array_equal(cmap.points, before)  # the map itself is never moved
 
 

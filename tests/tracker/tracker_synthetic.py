@@ -111,3 +111,28 @@ def generate(duration_s: float = 0.4, width: int = 240, height: int = 180, noise
     cmap = ContourMap.from_points(sample_edges(edges, 0.01))
     rec = Recording(events=events, ground_truth=gt, calibration=cal, metadata={"generator": "tests/tracker/tracker_synthetic.py"})
     return rec, cmap, signal[order]
+
+
+def step_windows(tracker, events: EventArray, t0_us: int, n: int, window_us: int = 5_000) -> list:
+    """``n`` tracker steps of ``window_us`` each from ``t0_us``, fed the events of each window; their results."""
+    out = []
+    for _ in range(n):
+        out.append(tracker.step(t0_us + window_us, events.time_window(t0_us, t0_us + window_us)))
+        t0_us += window_us
+    return out
+
+
+def assert_restore_replays_bit_identically(started, events: EventArray, n_before: int = 7, n_detour: int = 4, n_after: int = 7) -> list:
+    """A straight run of ``started()`` against one that snapshots after ``n_before`` steps, runs ``n_detour`` more,
+    restores and replays: the replayed steps give the same poses and counts. Returns the straight run's results."""
+    w = 5_000
+    straight = step_windows(started(), events, 0, n_before + n_after)
+    tr = started()
+    step_windows(tr, events, 0, n_before)
+    snap = tr.snapshot()
+    step_windows(tr, events, n_before * w, n_detour)
+    tr.restore(snap)
+    replay = step_windows(tr, events, n_before * w, n_after)
+    for x, y in zip(straight[n_before:], replay):
+        assert np.array_equal(x.pose, y.pose) and x.counts == y.counts
+    return straight
