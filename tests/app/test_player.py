@@ -87,6 +87,32 @@ def test_play_to_the_end_stops_or_loops(bar_recording):
         p.stop()
 
 
+def test_the_end_is_drawn_paused_and_each_play_has_its_own_real_time_factor(bar_recording):
+    seen = []
+    holder = []
+    p = Player(lambda cfg: EventsOnlyEngine(bar_recording, cfg), lambda f, e: seen.append(holder[0].stats()))
+    holder.append(p)
+    try:
+        p.set_speed(10.0)
+        p.play()
+        p.wait_idle()
+        deadline = time.time() + 10
+        while p.state == PlayState.PLAYING and time.time() < deadline:
+            time.sleep(0.02)
+        p.wait_idle()
+        # The last drawing (what every tab's status line shows) is of the paused player.
+        assert seen[-1]["state"] == "paused" and seen[-1]["t_us"] >= bar_recording.t_end_us
+        assert seen[-1]["real_time_factor"] > 0
+        p.seek(bar_recording.t_start_us)
+        p.wait_idle()
+        p.play()
+        p.pause()
+        p.wait_idle()
+        assert p.stats()["real_time_factor"] == 0.0  # nothing played since this play began
+    finally:
+        p.stop()
+
+
 def test_rapid_parameter_changes_are_coalesced_into_one_rebuild(bar_recording):
     p, frames = _player(bar_recording, coalesce_s=0.3)
     try:
