@@ -65,6 +65,8 @@ class ViewerApp:
         self.overlay = OverlayColour.RESIDUAL
         self.stage = Stage.TDF
         self.last_frame: Frame | None = None
+        self._open_displays: tuple[str, str] | None = None
+        """(recording, map) dropdown values of what is open."""
         self._select_lock = threading.Lock()
         self._cloud_lock = threading.Lock()
         self._cloud_entry: DataEntry | None = None
@@ -240,9 +242,14 @@ class ViewerApp:
         except EvposeError as exc:
             self.rec_info.content = f"**Cannot open:** {exc}\n\n" + self._scan_note()
             self._notify("cannot open", str(exc), "red")
+            if self._open_displays is not None:  # the dropdowns name what is still shown, not the refused file
+                self.rec_dropdown.value, self.map_dropdown.value = self._open_displays
             return False
         self.rec_dropdown.value = entry.display
         self.map_dropdown.value = map_entry.display if map_entry is not None else NO_MAP
+        self._open_displays = (self.rec_dropdown.value, self.map_dropdown.value)
+        # Until its first step is drawn (a first step loads the compiled kernels: 0.3 s, a minute on a cold cache).
+        self.status.content = f"_opening `{entry.label}`: computing its first step..._"
         s = recording.summary()
         self.rec_info.content = (f"`{entry.label}`: {s['events']:,} events, {s['duration_s']:.2f} s, "
                                  f"{s['sensor_size']}; map: {map_entry.label if map_entry else 'none'}"
