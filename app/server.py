@@ -22,6 +22,7 @@ from app.engine import Engine
 from app.engine_factory import MODES, NO_MAP_NOTE, engine_factory
 from app.export import export_action, write_config
 from app.frame import Frame
+from app.hotkeys import SliderKeyGuard, bind_hotkeys
 from app.layout_gui import LayoutGui
 from app.layouts import Layout
 from app.panels import SLAM_PANELS, OverlayColour, panel_images
@@ -77,6 +78,8 @@ class ViewerApp:
         """Opening whose cloud has been read (-1: none)."""
         self.frames_published = 0
         self._last_slow = 0.0
+        self.key_guard = SliderKeyGuard()
+        """Arrow/Home shortcuts pressed on a focused slider move the slider only (app/hotkeys.py)."""
         self._build_main_panel()
         self.warm_up = WarmUp(cfg.disk_cache, cfg.frame_cache, lambda md: setattr(self.warm_info, "content", md),
                               cfg.warm_up, busy=self._player_busy)
@@ -165,15 +168,14 @@ class ViewerApp:
         self.param_buttons.on_click(lambda e: self._param_action(e.target.value))
 
     def _bind_hotkeys(self) -> None:
-        g = self.gui
-        for label, key, fn in (("play / pause", "space", lambda: self.player and self.player.toggle()),
-                               ("step forward", "arrowright", lambda: self.player and self.player.step_forward()),
-                               ("step back", "arrowleft", lambda: self.player and self.player.step_back()),
-                               ("faster", "arrowup", lambda: self._nudge_speed(2.0)),
-                               ("slower", "arrowdown", lambda: self._nudge_speed(0.5)),
-                               ("to start", "home", lambda: self.player and self.player.seek(self.player.engine.t_start_us))):
-            cmd = g.add_command(label, hotkey=key)
-            cmd.on_trigger(lambda e, fn=fn: fn())
+        self.key_guard.watch([self.time_slider, self.speed_slider])
+        bind_hotkeys(self.gui, (("play / pause", "space", lambda: self.player and self.player.toggle()),
+                                ("step forward", "arrowright", lambda: self.player and self.player.step_forward()),
+                                ("step back", "arrowleft", lambda: self.player and self.player.step_back()),
+                                ("faster", "arrowup", lambda: self._nudge_speed(2.0)),
+                                ("slower", "arrowdown", lambda: self._nudge_speed(0.5)),
+                                ("to start", "home", lambda: self.player and self.player.seek(self.player.engine.t_start_us))),
+                     self.key_guard)
 
     # ------------------------------------------------------------------ data
     def refresh_entries(self) -> None:
@@ -357,6 +359,7 @@ class ViewerApp:
             self.config_gui.remove()
         with self.params_tab:
             self.config_gui = ConfigGui(self.gui, engine.config, self._config_changed)
+        self.key_guard.watch(h for h in self.config_gui.handles.values() if isinstance(h, viser.GuiSliderHandle))
         note = engine.explanation or f"{type(engine.config).__name__}: changes re-run the tracker."
         self.param_info.content = note
 
