@@ -366,6 +366,23 @@ class DiskSnapshotsMixin:
         return True
 
     def flush_disk_snapshots(self) -> None:
-        """Write every queued disk snapshot now (waiting for their encoding): before an engine is let go."""
+        """Write every queued disk snapshot now, waiting for their encoding."""
         while self._flush_disk_snapshot():
             pass
+
+    def release(self) -> None:
+        """The engine is let go (another recording or configuration): its queued disk snapshots are written by the
+        encoder thread once encoded, in order, without holding up the player (nothing else uses this disk entry)."""
+        queue, self._disk_queue = self._disk_queue, []
+        if queue and self.disk is not None:
+            d = self.disk
+
+            def write_all():
+                for n, _, job in queue:
+                    try:
+                        header, body, _ = job.result()
+                    except Exception:  # not picklable: no disk snapshots (as _flush_disk_snapshot)
+                        return
+                    d.write_snapshot(n, header, body)
+
+            encoder().submit(write_all)  # one worker: runs after their encodings

@@ -324,7 +324,8 @@ class Player:
             self.loop = cmd[1]
         elif kind == "load":
             self.state = PlayState.PAUSED
-            self.engine = cmd[1](cmd[2])
+            old, self.engine = self.engine, cmd[1](cmd[2])
+            old.release()
             self._factory = cmd[1]
             self.last_frame = None
             self._play_stats = [0.0, 0]
@@ -348,7 +349,8 @@ class Player:
         except Exception as exc:
             self._on_error(f"configuration rejected: {exc}")
             return
-        self.engine = engine
+        self.engine, old = engine, self.engine
+        old.release()
         self._prefetching = self.pc.prefetch
         self.config_applies += 1
         self._on_engine(engine)

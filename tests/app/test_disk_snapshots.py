@@ -181,3 +181,21 @@ def test_disk_snapshots_are_encoded_off_the_players_thread_and_written_in_order(
     assert written == [0, 1, 2, 3] and sorted(eng.disk.snapshots_written) == [0, 1, 2, 3]
     assert len(threads) == 4 and threading.get_ident() not in threads
     assert eng.disk_snapshot_cpu_s > 0 and not eng._disk_queue
+
+
+def test_snapshots_a_catch_up_queued_are_still_written_when_the_engine_is_let_go(squares_scene, tmp_path, pair_files,
+                                                                                headless):
+    from app.disk_snapshots import encoder
+
+    eng = _engine(squares_scene, tmp_path, pair_files)
+    eng.seek(eng.t_start_us)
+    t = headless[85].t_us
+    while not eng.catch_up(t, 10, exact=True):
+        pass
+    queued = [q[0] for q in eng._disk_queue]
+    assert queued == [0, 1, 2, 3] and not eng.disk.snapshots_written  # a seek does not wait for their writing
+    eng.release()  # another recording opened: the encoder thread writes them
+    encoder().submit(lambda: None).result(60)
+    assert sorted(eng.disk.snapshots_written) == queued
+    again = _engine(squares_scene, tmp_path, pair_files)
+    assert again.disk.snapshot_chunks() == queued

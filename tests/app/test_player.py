@@ -307,3 +307,24 @@ def test_a_new_seek_replaces_a_catch_up_and_pause_cancels_one(squares_scene):
         assert p.call(lambda e: e.frontier).result(10) < 90
     finally:
         p.stop()
+
+
+def test_an_engine_the_player_lets_go_is_released(bar_recording):
+    released = []
+
+    class Recorded(EventsOnlyEngine):
+        def release(self):
+            released.append(self)
+
+    made = []
+    factory = lambda cfg: made.append(Recorded(bar_recording, cfg)) or made[-1]  # noqa: E731
+    p = Player(factory, lambda f, e: None, player_config=PlayerConfig(coalesce_s=0.0))
+    try:
+        p.step_forward()
+        p.set_config(EventsViewConfig(window_us=10_000))  # a new configuration: a new engine
+        p.wait_idle()
+        p.load(factory)  # another recording
+        p.wait_idle()
+        assert released == made[:2] and p.engine is made[2]
+    finally:
+        p.stop()
