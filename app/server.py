@@ -101,7 +101,8 @@ class ViewerApp:
         with g.add_folder("Recording"):
             self.rec_dropdown = g.add_dropdown("recording", ["(none found)"], hint="Recordings under the --data folders")
             self.map_dropdown = g.add_dropdown("map", [NO_MAP], hint="Contour map to track against")
-            self.mode_dropdown = g.add_dropdown("mode", list(MODES), initial_value=MODES[0], hint="tracking: EV-Pose against the map; slam: map-free event SLAM")
+            # Not "mode": the tracker's own mode (full / stpe / stpe+filter) has that label in the Parameters panel.
+            self.mode_dropdown = g.add_dropdown("viewer mode", list(MODES), initial_value=MODES[0], hint="tracking: EV-Pose against the map; slam: map-free event SLAM")
             self.rescan_button = g.add_button("rescan data folders")
             self.rec_info = g.add_markdown("")
             self.warm_info = g.add_markdown("")

@@ -96,6 +96,9 @@ def test_recording_with_its_map_runs_the_tracker_and_exports_a_trajectory(viewer
     assert viewer.last_frame.index == 5 and viewer.last_frame.status == "ok"
     assert "TrackerConfig" in viewer.param_info.content or viewer.config_gui is not None
     assert ("registration", "robust_scale") in viewer.config_gui.handles
+    # The viewer's tracking/SLAM switch and the tracker's own mode field are told apart by their labels.
+    labels = [h.label for h in viewer.config_gui.handles.values()]
+    assert "mode" in labels and viewer.mode_dropdown.label not in labels
     path = viewer.export("trajectory")
     assert path is not None and len([ln for ln in path.read_text().splitlines() if not ln.startswith("#")]) == 6
     assert viewer.export("config").read_text().startswith("mode:")
