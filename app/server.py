@@ -105,7 +105,6 @@ class ViewerApp:
             self.mode_dropdown = g.add_dropdown("viewer mode", list(MODES), initial_value=MODES[0], hint="tracking: EV-Pose against the map; slam: map-free event SLAM")
             self.rescan_button = g.add_button("rescan data folders")
             self.rec_info = g.add_markdown("")
-            self.warm_info = g.add_markdown("")
         with g.add_folder("Playback"):
             self.play_button = g.add_button("play / pause (space)")
             self.step_buttons = g.add_button_group("step", ["< back", "forward >"])
@@ -113,6 +112,8 @@ class ViewerApp:
             self.speed_slider = g.add_slider("speed [x]", min=0.1, max=10.0, step=0.1, initial_value=1.0)
             self.loop_box = g.add_checkbox("loop", False)
             self.status = g.add_markdown("_no recording loaded_")
+        # Below the playback controls: one line or more per recording found, it pushed them off a 900 px screen.
+        self.warm_info = g.add_markdown("")
         with g.add_folder("3D view", expand_by_default=False):
             self.toggle_boxes = {}
             for name in ("contour_map", "raw_cloud", "ground_truth", "registration", "fused", "imu_poses", "frustum", "follow", "slam_aligned"):

@@ -60,6 +60,11 @@ def test_corrupt_file_is_listed_with_its_reason_and_cannot_crash_the_server(view
     assert viewer.rec_dropdown.value == viewer._open_displays[0] != bad.display
 
 
+def test_the_playback_controls_come_before_the_list_of_prepared_recordings(viewer):
+    # The list grows with the recordings found; above the controls it pushed them off the screen.
+    assert viewer.rec_info.order < viewer.play_button.order < viewer.status.order < viewer.warm_info.order
+
+
 def test_the_status_says_a_recording_is_opening_until_its_first_step_is_drawn(viewer):
     gate = threading.Event()
     viewer.player.call(lambda engine: gate.wait(20))  # the worker busy, as with a first step loading its kernels
