@@ -40,6 +40,8 @@ __all__ = ["AppConfig", "ViewerApp"]
 NO_MAP = "(no map: events only)"
 TOGGLE_HINTS = {"slam_aligned": "SLAM mode: place each map on the ground truth (Sim(3), evo's Umeyama); untick for the maps' own frames"}
 """Hover text of the 3D view's checkboxes that need more than their name."""
+OPENING = "_opening "
+"""How the status line starts while a recording's first step is computed."""
 SLOW_REFRESH_S = 0.25
 """While playing, plots and trajectory polylines refresh at most this often, seconds."""
 
@@ -253,7 +255,7 @@ class ViewerApp:
         self.map_dropdown.value = map_entry.display if map_entry is not None else NO_MAP
         self._open_displays = (self.rec_dropdown.value, self.map_dropdown.value)
         # Until its first step is drawn (a first step loads the compiled kernels: 0.3 s, a minute on a cold cache).
-        self.status.content = f"_opening `{entry.label}`: computing its first step..._"
+        self.status.content = f"{OPENING}`{entry.label}`: computing its first step..._"
         s = recording.summary()
         self.rec_info.content = (f"`{entry.label}`: {s['events']:,} events, {s['duration_s']:.2f} s, "
                                  f"{s['sensor_size']}; map: {map_entry.label if map_entry else 'none'}"
@@ -273,7 +275,7 @@ class ViewerApp:
         if self.player is None:
             reset_view()
             self.player = Player(factory, self._on_frame, player_config=self.cfg.player,
-                                 on_error=lambda m: self._notify("viewer", m, "red"),
+                                 on_error=self._player_error,
                                  on_engine=self._rebuild_config_gui, on_progress=self._on_progress)
             self._rebuild_config_gui(self.player.engine)
             self.player.seek(recording.t_start_us)
@@ -285,6 +287,11 @@ class ViewerApp:
             self._cloud_entry, self._cloud_generation = map_entry, self._cloud_generation + 1
         self._ensure_cloud()
         return True
+
+    def _player_error(self, message: str) -> None:
+        self._notify("viewer", message, "red")
+        if self.status.content.startswith(OPENING):  # the first step failed: no frame will replace the note
+            self.status.content = f"**could not show its first step:** {message}"
 
     def _player_busy(self) -> bool:
         """Playing, computing a seek or running ahead: the warm-up holds still, so it takes no core from the player."""

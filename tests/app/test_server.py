@@ -77,6 +77,20 @@ def test_the_status_says_a_recording_is_opening_until_its_first_step_is_drawn(vi
     assert "step 0" in viewer.status.content and "opening" not in viewer.status.content
 
 
+def test_a_first_step_that_fails_is_said_in_the_status_line(viewer, monkeypatch):
+    def failing(self):
+        raise RuntimeError("boom")
+
+    monkeypatch.setattr(EventsOnlyEngine, "step", failing)
+    assert viewer.select(next(e.display for e in viewer.entries if e.path.name == "bar.h5"), NO_MAP)
+    viewer.player.wait_idle()
+    assert "could not show its first step" in viewer.status.content and "boom" in viewer.status.content
+    monkeypatch.undo()
+    viewer.select(next(e.display for e in viewer.entries if e.path.name == "squares.h5"))
+    viewer.player.wait_idle()
+    assert "step 0" in viewer.status.content
+
+
 def test_a_layout_that_shows_the_teaching_panel_draws_the_shown_step_into_it(viewer):
     assert viewer.apply_layout_name("debug") and not viewer.panels["teaching"].visible
     viewer.select(next(e.display for e in viewer.entries if e.path.name == "squares.h5"))
