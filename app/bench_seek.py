@@ -69,8 +69,11 @@ def _prepare_half(rec, cmap, maker, fraction: float = 0.5) -> dict:
         pass
     while fraction >= 1 and eng.prefetch(25):  # to the end, and the frames a catch-up skipped
         pass
+    eng.flush_disk_snapshots()  # the last ones may still be on the encoder thread
     cpu = time.thread_time() - c0
+    # Encoding runs on the encoder thread: its CPU relative to the run-ahead's, and what writing costs the run-ahead.
     return {"wall_s": time.perf_counter() - w0, "cpu_s": cpu, "snapshot_cpu_share": eng.disk_snapshot_cpu_s / cpu,
+            "snapshot_write_cpu_share": eng.disk_snapshot_write_cpu_s / cpu,
             "steps": eng.frontier,
             "half_steps": half, "loadavg_1min": [load0, os.getloadavg()[0]], "dir": eng.disk.dir,
             "step_us": eng.step_us, "chunk_steps": c}

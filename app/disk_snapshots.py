@@ -39,8 +39,10 @@ VERSION = 2
 LEVEL = 1
 """zlib level: 1 packs a snapshot of the 10 s landing 3.7 -> 1.0 MB in 40 ms (level 6 saves ~20 % more, 4x slower)."""
 MAX_QUEUED = 8
-"""Disk snapshots waiting to be written beyond which the oldest is written at once (~4.6 MB each in memory on the
-10 s landing: a long catch-up must not hold them all)."""
+"""Disk snapshots waiting to be written beyond which the oldest is written at once, waiting for its encoding if need be
+(~4.6 MB each in memory until encoded, ~1 MB after, on the 10 s landing: a long catch-up must not hold them all)."""
+_ENCODER = None
+"""The one thread that encodes disk snapshots for every engine of this process (:func:`encoder`)."""
 _GRAPHS = ("update", "rebase")
 """Journal entries ``(name, graph, values, timestamps)`` whose graph and values are stored in gtsam's serialisation."""
 _SMOOTHER = "__smoother_from_journal__"
@@ -111,6 +113,32 @@ def encode(step: int, snapshot, segments: dict[str, list]) -> tuple[bytes, bytes
     header = pickle.dumps({"version": VERSION, "step": int(step), "journal": _encode_segments(segments),
                            "rebased": rebased}, protocol=pickle.HIGHEST_PROTOCOL)
     return header, body
+
+
+def encoder():
+    """The encoding thread: the player's thread only takes a snapshot and, later, writes the encoded bytes.
+
+    Encoding is 80-85 % zlib, which releases the GIL, so it runs on the machine's other core beside the tracker's
+    steps. Measured on the first opening's far seek of the 10 s landing (catch-up of 1893 steps, disk cache on,
+    4 alternated pairs in separate processes, load 10-14, /tmp/s12/viewer/split_catchup.py): the player thread's CPU
+    outside the tracker's steps and in-memory snapshots went 0.49-0.54 s -> 0.14-0.15 s (of 6.7-9.3 s; the tracker's
+    own steps are the rest), poses bit-identical; the process's other threads spent 0.64-0.70 s meanwhile (encoding
+    0.32-0.37 s of it)."""
+    global _ENCODER
+    if _ENCODER is None:
+        from concurrent.futures import ThreadPoolExecutor
+
+        _ENCODER = ThreadPoolExecutor(max_workers=1, thread_name_prefix="evpose-snapshot-encoder")
+    return _ENCODER
+
+
+def encode_timed(step: int, snapshot, segments: dict[str, list]) -> tuple[bytes, bytes, float]:
+    """:func:`encode` and the CPU seconds it took on its thread."""
+    import time
+
+    c0 = time.thread_time()
+    header, body = encode(step, snapshot, segments)
+    return header, body, time.thread_time() - c0
 
 
 def read_header(path) -> dict:
@@ -202,13 +230,15 @@ class DiskSnapshotsMixin:
     _disk_restore_s = 0.0
     """Running estimate of one disk restore (read, unpickle, journal replay since the last re-base), seconds."""
     _disk_queue: list
+    """Disk snapshots taken but not written yet: (n, step, future of their encoding)."""
     _disk_adopted: dict
+    """id(session) -> step of the last disk snapshot it was given."""
     _disk_job = None
     """A disk restore under way in slices (a catch-up's): [session, step, loader generator, seconds so far]."""
     disk_snapshot_cpu_s = 0.0
-    """Thread CPU spent encoding and writing disk snapshots so far, seconds (what they add to the run-ahead)."""
-    """id(session) -> step of the last disk snapshot it was given."""
-    """Disk snapshots taken but not written yet: (n, step, session snapshot, journal segments)."""
+    """CPU spent encoding the disk snapshots written so far, seconds (on the :func:`encoder` thread)."""
+    disk_snapshot_write_cpu_s = 0.0
+    """The player thread's CPU spent writing them, seconds (what they still cost the run-ahead)."""
 
     def _disk_base(self, k: int) -> int:
         """Step count of the farthest disk snapshot at or before step ``k`` whose steps before it all have their
@@ -285,10 +315,10 @@ class DiskSnapshotsMixin:
         return True
 
     def _write_disk_snapshot(self, s, defer: bool = False) -> None:
-        """After a run-ahead step: at a chunk end, take the fusion journal segment and write the snapshot there if
-        the disk wants it (every earlier one present or queued, not past the last step). ``defer`` (a catch-up):
-        queue it for :meth:`_flush_disk_snapshot` in idle time instead (encoding one costs ~0.08 s of CPU on the
-        10 s landing, which a far seek should not wait for)."""
+        """After a run-ahead step: at a chunk end, take the fusion journal segment and, if the disk wants the snapshot
+        there (every earlier one present or queued, not past the last step), hand it to the :func:`encoder` thread;
+        then write the queued ones already encoded, in order. ``defer`` (a catch-up): write none now (idle time does,
+        :meth:`_flush_disk_snapshot`), unless more than ``MAX_QUEUED`` wait."""
         c = self.disk.chunk_steps
         k = s.step_count
         if k % c or not self.disk.config.snapshots:
@@ -304,21 +334,24 @@ class DiskSnapshotsMixin:
             return
         if k not in s.snapshot_steps:
             s.take_snapshot()
-        self._disk_queue.append((n, k, s.snapshot_at(k), segments))  # snapshots are never changed once taken
-        if not defer or len(self._disk_queue) > MAX_QUEUED:
+        # Snapshots are never changed once taken and the segments were taken out of the journals: the thread only reads.
+        self._disk_queue.append((n, k, encoder().submit(encode_timed, k, s.snapshot_at(k), segments)))
+        while len(self._disk_queue) > MAX_QUEUED:
+            self._flush_disk_snapshot()
+        while not defer and self._disk_queue and self._disk_queue[0][2].done():
             self._flush_disk_snapshot()
 
-    def _flush_disk_snapshot(self) -> bool:
-        """Encode and write the oldest queued disk snapshot; False if none was queued."""
-        if not self._disk_queue:
+    def _flush_disk_snapshot(self, block: bool = True) -> bool:
+        """Write the oldest queued disk snapshot, waiting for its encoding (``block``) or only if it is encoded;
+        False if none was written."""
+        if not self._disk_queue or not (block or self._disk_queue[0][2].done()):
             return False
         import time
 
-        c0 = time.thread_time()
-        n, k, snap, segments = self._disk_queue.pop(0)
+        n, k, job = self._disk_queue.pop(0)
         d = self.disk
         try:
-            header, body = encode(k, snap, segments)
+            header, body, cpu_s = job.result()
         except Exception as exc:  # a configuration whose state cannot be pickled: no disk snapshots, no failure
             d.snapshots_written.update(range(n, self.n_steps // d.chunk_steps + 1))
             self._disk_queue.clear()
@@ -326,6 +359,30 @@ class DiskSnapshotsMixin:
 
             warnings.warn(f"engine snapshots are not stored on disk: {exc!r}", RuntimeWarning, stacklevel=2)
             return True
+        c0 = time.thread_time()
         d.write_snapshot(n, header, body)
-        self.disk_snapshot_cpu_s += time.thread_time() - c0
+        self.disk_snapshot_cpu_s += cpu_s
+        self.disk_snapshot_write_cpu_s += time.thread_time() - c0
         return True
+
+    def flush_disk_snapshots(self) -> None:
+        """Write every queued disk snapshot now, waiting for their encoding."""
+        while self._flush_disk_snapshot():
+            pass
+
+    def release(self) -> None:
+        """The engine is let go (another recording or configuration): its queued disk snapshots are written by the
+        encoder thread once encoded, in order, without holding up the player (nothing else uses this disk entry)."""
+        queue, self._disk_queue = self._disk_queue, []
+        if queue and self.disk is not None:
+            d = self.disk
+
+            def write_all():
+                for n, _, job in queue:
+                    try:
+                        header, body, _ = job.result()
+                    except Exception:  # not picklable: no disk snapshots (as _flush_disk_snapshot)
+                        return
+                    d.write_snapshot(n, header, body)
+
+            encoder().submit(write_all)  # one worker: runs after their encodings

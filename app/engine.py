@@ -96,6 +96,9 @@ class Engine(ABC):
         """(media seconds reached, media seconds of the target) of a catch-up towards ``t_us``, from the start."""
         return ((self.current_t_us - self.t_start_us) / 1e6, (int(t_us) - self.t_start_us) / 1e6)
 
+    def release(self) -> None:
+        """Called once the player lets this engine go (another recording or configuration): finish background work."""
+
     def trajectory(self) -> Trajectory:
         """Estimated poses of the steps so far (steps without a pose are left out)."""
         rows = [(s.t_us, s.pose) for s in self.history if s.pose is not None]

@@ -40,12 +40,28 @@ def write_config(config, path: str | Path) -> Path:
     return Path(path)
 
 
-def write_png(rgb: np.ndarray, path: str | Path) -> Path:
+BACKGROUND_LIGHT = (255, 255, 255)
+BACKGROUND_DARK = (16, 17, 19)
+"""The 3D view's background in viser's light and dark themes (white; Mantine's dark[9])."""
+
+
+def over_background(img: np.ndarray, background=BACKGROUND_LIGHT) -> np.ndarray:
+    """An RGB image of ``img``; an RGBA one is composited over ``background`` (a PNG render has a transparent
+    background: its alpha dropped, the exported view came out black behind a white grid)."""
+    img = np.asarray(img)
+    if img.ndim != 3 or img.shape[2] != 4:
+        return np.ascontiguousarray(img[..., :3])
+    a = img[..., 3:4].astype(np.float32) / 255.0
+    out = img[..., :3].astype(np.float32) * a + np.asarray(background, np.float32) * (1.0 - a)
+    return np.clip(np.rint(out), 0, 255).astype(np.uint8)
+
+
+def write_png(rgb: np.ndarray, path: str | Path, background=BACKGROUND_LIGHT) -> Path:
     import imageio.v3 as iio
 
     path = Path(path)
     with atomic_path(path) as tmp:
-        iio.imwrite(tmp, np.ascontiguousarray(rgb[..., :3]), extension=".png")
+        iio.imwrite(tmp, over_background(rgb, background), extension=".png")
     return path
 
 
@@ -89,7 +105,8 @@ def export_action(app, what: str, client=None, gif_frames: int = 16) -> Path:
     client = _render_client(app, client)
     if what == "screenshot":
         img = client.get_render(height=540, width=960, transport_format="png", timeout=20.0)
-        return write_png(img, out_dir / stamped_name("screenshot", ".png"))
+        dark = app.layout is not None and app.layout.dark_mode
+        return write_png(img, out_dir / stamped_name("screenshot", ".png"), BACKGROUND_DARK if dark else BACKGROUND_LIGHT)
     if what == "GIF":
         frames = []
         was_playing = app.player.state.value == "playing"

@@ -91,6 +91,7 @@ class LayoutGui:
         self._place(set(PANELS))
         if layout.name in self.dropdown.options:
             self.dropdown.value = layout.name
+        self._on_shown()  # panels hidden until now (e.g. teaching) were not drawn: draw the shown step into them
 
     def _place(self, touched: set[str]) -> None:
         """Send placement commands for the touched panels, those whose shown dock changed, and everything stacked on those."""

@@ -74,7 +74,8 @@ class Player:
         self._last_publish = 0.0
         self._draw_s = 0.0
         self._unpublished: Frame | None = None
-        self._play_stats = [0.0, 0]  # wall seconds and media microseconds spent playing
+        self._play_stats = [0.0, 0]
+        """Wall seconds and media microseconds of the current (or last) play, since play was pressed."""
         self._last_advance_wall: float | None = None
         self._prefetching = self.pc.prefetch
         self._catch_up: CatchUp | None = None
@@ -287,6 +288,7 @@ class Player:
                 self._publish(self._timed_seek(self.engine.t_start_us) if self.last_frame else self.engine.step())
             self.state = PlayState.PLAYING
             self._last_advance_wall = None
+            self._play_stats = [0.0, 0]  # the real-time factor shown is this play's
             self._reanchor()
         elif kind == "pause" or kind == "toggle":
             self.state = PlayState.PAUSED
@@ -322,9 +324,11 @@ class Player:
             self.loop = cmd[1]
         elif kind == "load":
             self.state = PlayState.PAUSED
-            self.engine = cmd[1](cmd[2])
+            old, self.engine = self.engine, cmd[1](cmd[2])
+            old.release()
             self._factory = cmd[1]
             self.last_frame = None
+            self._play_stats = [0.0, 0]
             self._prefetching = self.pc.prefetch
             self._on_engine(self.engine)
             self._publish(self.engine.step())
@@ -345,7 +349,8 @@ class Player:
         except Exception as exc:
             self._on_error(f"configuration rejected: {exc}")
             return
-        self.engine = engine
+        self.engine, old = engine, self.engine
+        old.release()
         self._prefetching = self.pc.prefetch
         self.config_applies += 1
         self._on_engine(engine)
@@ -443,12 +448,14 @@ class Player:
                 self._on_error(f"step failed: {exc}")
                 return
             if self._ready is None:
-                self._flush_unpublished()
                 if self.loop:
+                    self._flush_unpublished()
                     self._publish(self._timed_seek(self.engine.t_start_us))
                     self._reanchor()
                 else:
+                    # The end: drawn once more, paused, or every tab's status line would still say "playing".
                     self.state = PlayState.PAUSED
+                    self._publish(self._unpublished if self._unpublished is not None else self.last_frame)
                 return
         now = time.monotonic()
         due = self._due(self._ready)

@@ -22,6 +22,7 @@ from app.engine import Engine
 from app.engine_factory import MODES, NO_MAP_NOTE, engine_factory
 from app.export import export_action, write_config
 from app.frame import Frame
+from app.hotkeys import SliderKeyGuard, bind_hotkeys
 from app.layout_gui import LayoutGui
 from app.layouts import Layout
 from app.panels import SLAM_PANELS, OverlayColour, panel_images
@@ -39,6 +40,8 @@ __all__ = ["AppConfig", "ViewerApp"]
 NO_MAP = "(no map: events only)"
 TOGGLE_HINTS = {"slam_aligned": "SLAM mode: place each map on the ground truth (Sim(3), evo's Umeyama); untick for the maps' own frames"}
 """Hover text of the 3D view's checkboxes that need more than their name."""
+OPENING = "_opening "
+"""How the status line starts while a recording's first step is computed."""
 SLOW_REFRESH_S = 0.25
 """While playing, plots and trajectory polylines refresh at most this often, seconds."""
 
@@ -65,6 +68,8 @@ class ViewerApp:
         self.overlay = OverlayColour.RESIDUAL
         self.stage = Stage.TDF
         self.last_frame: Frame | None = None
+        self._open_displays: tuple[str, str] | None = None
+        """(recording, map) dropdown values of what is open."""
         self._select_lock = threading.Lock()
         self._cloud_lock = threading.Lock()
         self._cloud_entry: DataEntry | None = None
@@ -75,6 +80,8 @@ class ViewerApp:
         """Opening whose cloud has been read (-1: none)."""
         self.frames_published = 0
         self._last_slow = 0.0
+        self.key_guard = SliderKeyGuard()
+        """Arrow/Home shortcuts pressed on a focused slider move the slider only (app/hotkeys.py)."""
         self._build_main_panel()
         self.warm_up = WarmUp(cfg.disk_cache, cfg.frame_cache, lambda md: setattr(self.warm_info, "content", md),
                               cfg.warm_up, busy=self._player_busy)
@@ -96,10 +103,10 @@ class ViewerApp:
         with g.add_folder("Recording"):
             self.rec_dropdown = g.add_dropdown("recording", ["(none found)"], hint="Recordings under the --data folders")
             self.map_dropdown = g.add_dropdown("map", [NO_MAP], hint="Contour map to track against")
-            self.mode_dropdown = g.add_dropdown("mode", list(MODES), initial_value=MODES[0], hint="tracking: EV-Pose against the map; slam: map-free event SLAM")
+            # Not "mode": the tracker's own mode (full / stpe / stpe+filter) has that label in the Parameters panel.
+            self.mode_dropdown = g.add_dropdown("viewer mode", list(MODES), initial_value=MODES[0], hint="tracking: EV-Pose against the map; slam: map-free event SLAM")
             self.rescan_button = g.add_button("rescan data folders")
             self.rec_info = g.add_markdown("")
-            self.warm_info = g.add_markdown("")
         with g.add_folder("Playback"):
             self.play_button = g.add_button("play / pause (space)")
             self.step_buttons = g.add_button_group("step", ["< back", "forward >"])
@@ -107,6 +114,8 @@ class ViewerApp:
             self.speed_slider = g.add_slider("speed [x]", min=0.1, max=10.0, step=0.1, initial_value=1.0)
             self.loop_box = g.add_checkbox("loop", False)
             self.status = g.add_markdown("_no recording loaded_")
+        # Below the playback controls: one line or more per recording found, it pushed them off a 900 px screen.
+        self.warm_info = g.add_markdown("")
         with g.add_folder("3D view", expand_by_default=False):
             self.toggle_boxes = {}
             for name in ("contour_map", "raw_cloud", "ground_truth", "registration", "fused", "imu_poses", "frustum", "follow", "slam_aligned"):
@@ -163,15 +172,14 @@ class ViewerApp:
         self.param_buttons.on_click(lambda e: self._param_action(e.target.value))
 
     def _bind_hotkeys(self) -> None:
-        g = self.gui
-        for label, key, fn in (("play / pause", "space", lambda: self.player and self.player.toggle()),
-                               ("step forward", "arrowright", lambda: self.player and self.player.step_forward()),
-                               ("step back", "arrowleft", lambda: self.player and self.player.step_back()),
-                               ("faster", "arrowup", lambda: self._nudge_speed(2.0)),
-                               ("slower", "arrowdown", lambda: self._nudge_speed(0.5)),
-                               ("to start", "home", lambda: self.player and self.player.seek(self.player.engine.t_start_us))):
-            cmd = g.add_command(label, hotkey=key)
-            cmd.on_trigger(lambda e, fn=fn: fn())
+        self.key_guard.watch([self.time_slider, self.speed_slider])
+        bind_hotkeys(self.gui, (("play / pause", "space", lambda: self.player and self.player.toggle()),
+                                ("step forward", "arrowright", lambda: self.player and self.player.step_forward()),
+                                ("step back", "arrowleft", lambda: self.player and self.player.step_back()),
+                                ("faster", "arrowup", lambda: self._nudge_speed(2.0)),
+                                ("slower", "arrowdown", lambda: self._nudge_speed(0.5)),
+                                ("to start", "home", lambda: self.player and self.player.seek(self.player.engine.t_start_us))),
+                     self.key_guard)
 
     # ------------------------------------------------------------------ data
     def refresh_entries(self) -> None:
@@ -240,9 +248,14 @@ class ViewerApp:
         except EvposeError as exc:
             self.rec_info.content = f"**Cannot open:** {exc}\n\n" + self._scan_note()
             self._notify("cannot open", str(exc), "red")
+            if self._open_displays is not None:  # the dropdowns name what is still shown, not the refused file
+                self.rec_dropdown.value, self.map_dropdown.value = self._open_displays
             return False
         self.rec_dropdown.value = entry.display
         self.map_dropdown.value = map_entry.display if map_entry is not None else NO_MAP
+        self._open_displays = (self.rec_dropdown.value, self.map_dropdown.value)
+        # Until its first step is drawn (a first step loads the compiled kernels: 0.3 s, a minute on a cold cache).
+        self.status.content = f"{OPENING}`{entry.label}`: computing its first step..._"
         s = recording.summary()
         self.rec_info.content = (f"`{entry.label}`: {s['events']:,} events, {s['duration_s']:.2f} s, "
                                  f"{s['sensor_size']}; map: {map_entry.label if map_entry else 'none'}"
@@ -262,7 +275,7 @@ class ViewerApp:
         if self.player is None:
             reset_view()
             self.player = Player(factory, self._on_frame, player_config=self.cfg.player,
-                                 on_error=lambda m: self._notify("viewer", m, "red"),
+                                 on_error=self._player_error,
                                  on_engine=self._rebuild_config_gui, on_progress=self._on_progress)
             self._rebuild_config_gui(self.player.engine)
             self.player.seek(recording.t_start_us)
@@ -274,6 +287,11 @@ class ViewerApp:
             self._cloud_entry, self._cloud_generation = map_entry, self._cloud_generation + 1
         self._ensure_cloud()
         return True
+
+    def _player_error(self, message: str) -> None:
+        self._notify("viewer", message, "red")
+        if self.status.content.startswith(OPENING):  # the first step failed: no frame will replace the note
+            self.status.content = f"**could not show its first step:** {message}"
 
     def _player_busy(self) -> bool:
         """Playing, computing a seek or running ahead: the warm-up holds still, so it takes no core from the player."""
@@ -350,6 +368,7 @@ class ViewerApp:
             self.config_gui.remove()
         with self.params_tab:
             self.config_gui = ConfigGui(self.gui, engine.config, self._config_changed)
+        self.key_guard.watch(h for h in self.config_gui.handles.values() if isinstance(h, viser.GuiSliderHandle))
         note = engine.explanation or f"{type(engine.config).__name__}: changes re-run the tracker."
         self.param_info.content = note
 

@@ -459,8 +459,8 @@ class TrackerEngine(DiskSnapshotsMixin, Engine):
         if self._ahead is None:
             self._ahead = self._new_ahead()
         s = self._ahead
-        if self.disk is not None and self._flush_disk_snapshot():
-            return True  # one queued disk snapshot per call: a command waits at most one write
+        if self.disk is not None and self._flush_disk_snapshot(block=s.done):
+            return True  # one queued disk snapshot per call: a command waits at most one write (and at the end its encoding)
         if s.done:
             return self._backfill(budget_steps)
         if s.step_count < self._disk_steps:

@@ -97,6 +97,7 @@ def prepare_pair(recording, contour_map, paths: tuple[Path, Path], disk, frames=
         if on_progress is not None:
             on_progress(engine.frontier / max(n, 1))
         if keep_going is not None and not keep_going():
+            engine.flush_disk_snapshots()  # those taken are encoded by now or soon: keep them
             return PrepareResult(n, True, time.perf_counter() - t0, False)
     if engine.disk.error:
         raise InputError(engine.disk.dir, engine.disk.error)

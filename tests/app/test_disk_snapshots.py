@@ -33,6 +33,7 @@ def _prepare_part(scene, tmp_path, files, steps):
     eng.step()
     while eng.frontier < steps:
         eng.prefetch(1)
+    eng.flush_disk_snapshots()  # those taken on the way, encoded on their own thread
     return eng
 
 
@@ -71,6 +72,8 @@ def test_a_far_seek_restores_the_farthest_disk_snapshot_and_equals_the_headless_
     # The run-ahead jumped to step 40 and queued the later snapshots (a seek does not wait for their writing); idle
     # time writes them, and their replay equals the headless run too.
     assert sorted(second.disk.snapshots_written) == [0, 1] and [q[0] for q in second._disk_queue] == [2, 3]
+    for _, _, encoding in second._disk_queue:
+        encoding.result(60)  # encoded on the encoder thread meanwhile
     second.prefetch(1)
     second.prefetch(1)
     assert sorted(second.disk.snapshots_written) == [0, 1, 2, 3]
@@ -161,3 +164,38 @@ def test_a_restore_replays_only_the_journal_since_the_smoothers_last_re_base_at_
         assert len(set(replayed)) == 1 and 0 < replayed[0] < 30
     else:  # every entry since step 0: a chunk's worth more for each snapshot further in
         assert replayed == [replayed[0] * (n + 1) for n in range(4)] and replayed[0] > 30
+
+
+def test_disk_snapshots_are_encoded_off_the_players_thread_and_written_in_order(squares_scene, tmp_path, pair_files,
+                                                                                monkeypatch):
+    import threading
+
+    import app.disk_snapshots as ds
+
+    threads, written = [], []
+    encode = ds.encode
+    monkeypatch.setattr(ds, "encode", lambda *a: threads.append(threading.get_ident()) or encode(*a))
+    write = DiskCache.write_snapshot
+    monkeypatch.setattr(DiskCache, "write_snapshot", lambda self, n, h, b: written.append(n) or write(self, n, h, b))
+    eng = _prepare_part(squares_scene, tmp_path, pair_files, 85)
+    assert written == [0, 1, 2, 3] and sorted(eng.disk.snapshots_written) == [0, 1, 2, 3]
+    assert len(threads) == 4 and threading.get_ident() not in threads
+    assert eng.disk_snapshot_cpu_s > 0 and not eng._disk_queue
+
+
+def test_snapshots_a_catch_up_queued_are_still_written_when_the_engine_is_let_go(squares_scene, tmp_path, pair_files,
+                                                                                headless):
+    from app.disk_snapshots import encoder
+
+    eng = _engine(squares_scene, tmp_path, pair_files)
+    eng.seek(eng.t_start_us)
+    t = headless[85].t_us
+    while not eng.catch_up(t, 10, exact=True):
+        pass
+    queued = [q[0] for q in eng._disk_queue]
+    assert queued == [0, 1, 2, 3] and not eng.disk.snapshots_written  # a seek does not wait for their writing
+    eng.release()  # another recording opened: the encoder thread writes them
+    encoder().submit(lambda: None).result(60)
+    assert sorted(eng.disk.snapshots_written) == queued
+    again = _engine(squares_scene, tmp_path, pair_files)
+    assert again.disk.snapshot_chunks() == queued

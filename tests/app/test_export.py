@@ -26,3 +26,18 @@ def test_config_png_and_gif_exports(tmp_path):
     assert np.array_equal(iio.imread(write_png(img, tmp_path / "s.png")), img)
     gif = iio.imread(write_gif([img, 255 - img, img], tmp_path / "v.gif"), index=None)
     assert gif.shape[0] == 3
+
+
+def test_a_transparent_render_is_exported_over_the_views_background_not_black(tmp_path):
+    import imageio.v3 as iio
+
+    from app.export import BACKGROUND_DARK
+
+    rgba = np.zeros((4, 6, 4), np.uint8)  # what the browser's PNG render gives where nothing is drawn
+    rgba[1, 1] = (200, 0, 0, 255)  # a drawn pixel stays as drawn
+    rgba[2, 2] = (0, 0, 255, 128)  # half covered: blended
+    light = iio.imread(write_png(rgba, tmp_path / "light.png"))
+    assert light.shape == (4, 6, 3) and (light[0, 0] == 255).all() and tuple(light[1, 1]) == (200, 0, 0)
+    assert tuple(light[2, 2]) == (127, 127, 255)
+    dark = iio.imread(write_png(rgba, tmp_path / "dark.png", BACKGROUND_DARK))
+    assert tuple(dark[0, 0]) == BACKGROUND_DARK

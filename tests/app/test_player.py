@@ -87,6 +87,32 @@ def test_play_to_the_end_stops_or_loops(bar_recording):
         p.stop()
 
 
+def test_the_end_is_drawn_paused_and_each_play_has_its_own_real_time_factor(bar_recording):
+    seen = []
+    holder = []
+    p = Player(lambda cfg: EventsOnlyEngine(bar_recording, cfg), lambda f, e: seen.append(holder[0].stats()))
+    holder.append(p)
+    try:
+        p.set_speed(10.0)
+        p.play()
+        p.wait_idle()
+        deadline = time.time() + 10
+        while p.state == PlayState.PLAYING and time.time() < deadline:
+            time.sleep(0.02)
+        p.wait_idle()
+        # The last drawing (what every tab's status line shows) is of the paused player.
+        assert seen[-1]["state"] == "paused" and seen[-1]["t_us"] >= bar_recording.t_end_us
+        assert seen[-1]["real_time_factor"] > 0
+        p.seek(bar_recording.t_start_us)
+        p.wait_idle()
+        p.play()
+        p.pause()
+        p.wait_idle()
+        assert p.stats()["real_time_factor"] == 0.0  # nothing played since this play began
+    finally:
+        p.stop()
+
+
 def test_rapid_parameter_changes_are_coalesced_into_one_rebuild(bar_recording):
     p, frames = _player(bar_recording, coalesce_s=0.3)
     try:
@@ -279,5 +305,26 @@ def test_a_new_seek_replaces_a_catch_up_and_pause_cancels_one(squares_scene):
         assert [(f.index, f.preview) for f in frames][:2] == [(0, False), (88, True)]
         assert p.last_catch_up["outcome"] == "cancelled" and frames[-1].index == 0 and not frames[-1].preview
         assert p.call(lambda e: e.frontier).result(10) < 90
+    finally:
+        p.stop()
+
+
+def test_an_engine_the_player_lets_go_is_released(bar_recording):
+    released = []
+
+    class Recorded(EventsOnlyEngine):
+        def release(self):
+            released.append(self)
+
+    made = []
+    factory = lambda cfg: made.append(Recorded(bar_recording, cfg)) or made[-1]  # noqa: E731
+    p = Player(factory, lambda f, e: None, player_config=PlayerConfig(coalesce_s=0.0))
+    try:
+        p.step_forward()
+        p.set_config(EventsViewConfig(window_us=10_000))  # a new configuration: a new engine
+        p.wait_idle()
+        p.load(factory)  # another recording
+        p.wait_idle()
+        assert released == made[:2] and p.engine is made[2]
     finally:
         p.stop()

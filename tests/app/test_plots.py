@@ -33,4 +33,15 @@ def test_series_cover_a_bounded_window_of_the_latest_steps(bar_recording):
         assert all(len(d) == 25 for d in data)
     assert series["latency per module [ms]"][0] == ("registration", "total")
     assert np.allclose(series["share filtered"][1][1], 40.0)
-    assert np.allclose(series["events per second"][1][1], 100 / 0.01)
+    assert np.allclose(series["events per second"][1][1], 100 / 0.01 / 1e3)
+
+
+def test_the_first_steps_one_time_start_up_is_left_out_of_the_latency_plot(bar_recording):
+    gt = bar_recording.ground_truth
+    hist = _history(gt, 5)
+    hist[0].timings_ms["total"] = 30_000.0  # the first step loading its compiled kernels
+    (labels, data) = plot_series(hist, gt)["latency per module [ms]"]
+    total = data[1 + labels.index("total")]
+    assert np.isnan(total[0]) and np.allclose(total[1:], 2.0)
+    later = plot_series(hist[1:], gt)["latency per module [ms]"][1]
+    assert not np.isnan(later[1]).any()  # a window starting later keeps all its steps

@@ -73,3 +73,16 @@ def test_map_colours_from_a_grey_base_equal_the_plain_ones():
     base = np.tile(GREY, (10, 1))
     a, b = map_colours(10, f), map_colours(10, f, base)
     assert np.array_equal(a, b) and np.all(base == GREY)
+
+
+def test_far_map_points_are_sent_at_full_precision_without_overflow(scene):
+    import warnings
+
+    from evpose.core.contour_map import ContourMap
+
+    pts = np.array([[0.0, 0.0, 0.0], [1e5, 2.0, 0.0], [0.123456, 10.004, 0.0]])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # float16 would overflow at 1e5 ("overflow encountered in cast")
+        scene.load(ContourMap.from_points(pts), None, None, None)
+    sent = np.asarray(scene._nodes["map"].points)
+    assert sent.dtype == np.float32 and np.allclose(sent, pts, rtol=1e-6)

@@ -1,6 +1,7 @@
 """The viewer without a browser: data handling, bad input, the port check, exports."""
 
 import socket
+import threading
 import time
 
 import pytest
@@ -51,9 +52,56 @@ def test_port_in_use_gives_one_clear_line(capsys):
 def test_corrupt_file_is_listed_with_its_reason_and_cannot_crash_the_server(viewer):
     assert "corrupt.h5" in viewer.rec_info.content and "Unreadable" in viewer.rec_info.content
     bad = next(e for e in viewer.entries if e.path.name == "corrupt.h5")
+    viewer.rec_dropdown.value = bad.display  # as the browser's dropdown does when the user picks it
     assert viewer.select(bad.display) is False
     assert "Cannot open" in viewer.rec_info.content
     assert viewer.player is not None and viewer.player._thread.is_alive()
+    # The dropdown names the recording still shown, not the refused file.
+    assert viewer.rec_dropdown.value == viewer._open_displays[0] != bad.display
+
+
+def test_the_playback_controls_come_before_the_list_of_prepared_recordings(viewer):
+    # The list grows with the recordings found; above the controls it pushed them off the screen.
+    assert viewer.rec_info.order < viewer.play_button.order < viewer.status.order < viewer.warm_info.order
+
+
+def test_the_status_says_a_recording_is_opening_until_its_first_step_is_drawn(viewer):
+    gate = threading.Event()
+    viewer.player.call(lambda engine: gate.wait(20))  # the worker busy, as with a first step loading its kernels
+    try:
+        assert viewer.select(next(e.display for e in viewer.entries if e.path.name == "bar.h5"), NO_MAP)
+        assert "opening" in viewer.status.content and "bar.h5" in viewer.status.content
+    finally:
+        gate.set()
+    viewer.player.wait_idle()
+    assert "step 0" in viewer.status.content and "opening" not in viewer.status.content
+
+
+def test_a_first_step_that_fails_is_said_in_the_status_line(viewer, monkeypatch):
+    def failing(self):
+        raise RuntimeError("boom")
+
+    monkeypatch.setattr(EventsOnlyEngine, "step", failing)
+    assert viewer.select(next(e.display for e in viewer.entries if e.path.name == "bar.h5"), NO_MAP)
+    viewer.player.wait_idle()
+    assert "could not show its first step" in viewer.status.content and "boom" in viewer.status.content
+    monkeypatch.undo()
+    viewer.select(next(e.display for e in viewer.entries if e.path.name == "squares.h5"))
+    viewer.player.wait_idle()
+    assert "step 0" in viewer.status.content
+
+
+def test_a_layout_that_shows_the_teaching_panel_draws_the_shown_step_into_it(viewer):
+    assert viewer.apply_layout_name("debug") and not viewer.panels["teaching"].visible
+    viewer.select(next(e.display for e in viewer.entries if e.path.name == "squares.h5"))
+    viewer.player.step_forward()
+    viewer.player.wait_idle()
+    blank = viewer.teaching_image.image.copy()
+    assert viewer.apply_layout_name("teaching")
+    viewer.player.wait_idle()
+    assert viewer.teaching_image.image.shape != blank.shape  # the live image, not the placeholder
+    assert "Press play" not in viewer.teaching_text.content
+    viewer.apply_layout_name("debug")
 
 
 def test_recording_with_its_map_runs_the_tracker_and_exports_a_trajectory(viewer):
@@ -67,6 +115,9 @@ def test_recording_with_its_map_runs_the_tracker_and_exports_a_trajectory(viewer
     assert viewer.last_frame.index == 5 and viewer.last_frame.status == "ok"
     assert "TrackerConfig" in viewer.param_info.content or viewer.config_gui is not None
     assert ("registration", "robust_scale") in viewer.config_gui.handles
+    # The viewer's tracking/SLAM switch and the tracker's own mode field are told apart by their labels.
+    labels = [h.label for h in viewer.config_gui.handles.values()]
+    assert "mode" in labels and viewer.mode_dropdown.label not in labels
     path = viewer.export("trajectory")
     assert path is not None and len([ln for ln in path.read_text().splitlines() if not ln.startswith("#")]) == 6
     assert viewer.export("config").read_text().startswith("mode:")

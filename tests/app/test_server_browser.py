@@ -133,6 +133,16 @@ def test_moving_a_parameter_reruns_the_tracker(page, viewer):
     viewer.player.wait_idle()
     assert applies < viewer.player.config_applies <= applies + 3
     assert not np.array_equal(viewer.image_handles["SP-TS positive"].image, img)
+    # An arrow key on the focused slider moves the slider only, not also the player (its step shortcut).
+    # Deliberate presses: the headless software renderer delays the browser's throttled updates of quick ones.
+    viewer.player.wait_idle()
+    shown = viewer.last_frame.index
+    for want in (12.5, 12.0):
+        page.keyboard.press("ArrowLeft")
+        wait_for(lambda: viewer.player.engine.config.time_surface.eta_ms == want, timeout=30, what="slider moved by its key")
+        time.sleep(0.4)  # past the key guard's window
+    viewer.player.wait_idle()
+    assert viewer.last_frame.index == shown
 
 
 def test_switch_layout_and_the_3d_canvas_is_not_blank(page, viewer, tmp_path):
