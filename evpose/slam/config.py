@@ -333,7 +333,8 @@ class TrackingConfig:
     52.1 -> 80.2 % (min 50.4 -> 77.6), 11-15 -> 3-5 maps; seeds 4-7 10.28 -> 10.80 % (9.51 / 15.13 / 9.90 / 6.59 ->
     10.88 / 9.65 / 7.52 / 15.16), tracked 53.0 -> 82.5 % (min 49.6 -> 73.5); landing seeds 0-11 mean 2.53 -> 2.53 % (only
     seed 4 2.36 -> 3.34 and seed 7 5.59 -> 4.54 % changed, 5 of 12 within 2 % either way), tracked at least 88.5 ->
-    96.5 %. Indoor seeds 0-3: 0.3 -> 9.27 % / 75.0 %, 0.5 -> 7.88 / 82.8, 0.6 -> 10.19 / 93.1; with 0.4, ``min_inliers``
+    96.5 %; per-MCI main-thread CPU (indoor seed 0, the two alternated twice in one process) 21.4 -> 21.0 ms median;
+    event-inertial runs unchanged. Indoor seeds 0-3: 0.3 -> 9.27 % / 75.0 %, 0.5 -> 7.88 / 82.8, 0.6 -> 10.19 / 93.1; with 0.4, ``min_inliers``
     16 -> 6.51 / 70.4, ``coast_span_s`` 0.06 -> 8.20 / 77.1, ``max_rotation_disagreement_deg`` 2 -> 7.04 / 66.9,
     ``refit_disagreement_deg`` 5 -> 6.54 / 77.4 (min 66.7), ``FeatureConfig.min_support_ratio`` 2 -> 10.32 / 74.4.
     Re-joining the lost map with the next two-view map (the event-inertial :mod:`evpose.slam.map_rejoin`, rotation
