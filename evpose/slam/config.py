@@ -348,7 +348,10 @@ class TrackingConfig:
     tracked points (fewer than ``min_inliers``), not on a PnP failure (a running coast going on through either):
     landing changes only seeds 7 and 17 (5.59 -> 4.54, 5.90 -> 9.53 %), indoor seeds 0-3 8.16 % / 69.9 %, 4-7
     11.48 / 78.6 (not kept). A prior on each tracked MCI's rotation towards the held rate's prediction (sigma 0.3 /
-    1 deg, refined as the gyro prior is): indoor seeds 0-3 10.45 / 80.1 and 13.22 / 83.3 (not kept)."""
+    1 deg, refined as the gyro prior is): indoor seeds 0-3 10.45 / 80.1 and 13.22 / 83.3 (not kept). Coasting without
+    keyframes at the coasted poses (no points triangulated from predicted poses): indoor seeds 0-3 7.27 / 68.6 (15 maps
+    on seed 3), landing seeds 4 / 7 / 12 / 17 / 20 / 21 3.34 / 5.55 / 3.88 / 7.57 / 2.36 / 6.72 % (with keyframes 3.34 /
+    4.54 / 1.69 / 9.53 / 4.83 / 6.72; without coasting 2.36 / 5.59 / 2.71 / 5.90 / 2.37 / 6.07; not kept)."""
     coast_drop_unconfirmed: bool = False
     """Event-only coasting: when a coast ends in a loss, the coasted poses are removed from the map's trajectory (no MCI
     confirmed them); off keeps them. Indoor seeds 0-3, ``coast_s`` 0.4: on -> ATE 9.02 %, tracked 49.1 % (off: 10.21 %,
