@@ -351,7 +351,11 @@ class TrackingConfig:
     1 deg, refined as the gyro prior is): indoor seeds 0-3 10.45 / 80.1 and 13.22 / 83.3 (not kept). Coasting without
     keyframes at the coasted poses (no points triangulated from predicted poses): indoor seeds 0-3 7.27 / 68.6 (15 maps
     on seed 3), landing seeds 4 / 7 / 12 / 17 / 20 / 21 3.34 / 5.55 / 3.88 / 7.57 / 2.36 / 6.72 % (with keyframes 3.34 /
-    4.54 / 1.69 / 9.53 / 4.83 / 6.72; without coasting 2.36 / 5.59 / 2.71 / 5.90 / 2.37 / 6.07; not kept)."""
+    4.54 / 1.69 / 9.53 / 4.83 / 6.72; without coasting 2.36 / 5.59 / 2.71 / 5.90 / 2.37 / 6.07; not kept). What the
+    indoor ATE left is made of: the visually tracked maps' rotation drifts (camera turn from a map's first pose, against
+    the truth's) 13-15 deg within about a second even on the best-tracked map (seed 0's last map: 12.8 deg over 0.91 s
+    without coasting, 15.4 deg over 1.02 s with; seeds 4 / 7: 15.2 / 17.7 deg), against 4.8 deg over 2.9 s on landing
+    seed 0: sideways motion past walls trades yaw for translation."""
     coast_drop_unconfirmed: bool = False
     """Event-only coasting: when a coast ends in a loss, the coasted poses are removed from the map's trajectory (no MCI
     confirmed them); off keeps them. Indoor seeds 0-3, ``coast_s`` 0.4: on -> ATE 9.02 %, tracked 49.1 % (off: 10.21 %,
