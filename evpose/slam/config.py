@@ -107,7 +107,12 @@ class FeatureConfig:
     """A corner needs at least this multiple of the image's mean event count per ``support_window_px`` square around it
     (isolated noise events look like corners; 0 disables the test), ratio. On the indoor room most of the 150 tracks sit
     on noise events in sparse stretches (KLT keeps 1-9 % of them per MCI there), yet event-only seeds 0-3 got worse
-    with the test: 2 / 4 / 8 -> ATE 11.99 / 19.64 / 10.80 %, tracked 51.2 / 45.8 / 38.5 % (off: 8.57 %, 52.4 %)."""
+    with the test: 2 / 4 / 8 -> ATE 11.99 / 19.64 / 10.80 %, tracked 51.2 / 45.8 / 38.5 % (off: 8.57 %, 52.4 %).
+    Dropping the noise events themselves before window selection (session 12, the front end's consistency filter,
+    :class:`evpose.frontend.noise_filter.ConsistencyNoiseFilter`, not kept): seeds 0, 1 without coasting, 5 / 10 ms ->
+    ATE 9.82 -> 10.73 / 14.36 %, tracked 53.2 -> 40.9 / 39.6 % (the filtered blank-wall stretches fall below
+    ``min_event_rate`` and give no MCI, and the room's edges alone leave 20-50 tracks); seeds 0-3 with
+    ``TrackingConfig.coast_s`` 0.4: 6.84 -> 12.29 %, 80.2 -> 47.2 % (with ``min_event_rate`` 0.1: 11.35 / 57.3)."""
     support_window_px: int = field(default=7, metadata={"min": 3, "max": 31, "step": 2, "unit": "px"})
     """Side of the square the support test counts events in, pixels (odd)."""
     klt_window_px: int = field(default=23, metadata={"min": 5, "max": 51, "step": 2, "unit": "px"})
@@ -314,21 +319,49 @@ class TrackingConfig:
     (median 2.52, worst 7.21, 4 within 2 %) against 3.01 % (2.52, 5.88, 10); the scale drift it targets fell on some
     seeds (seed 9: 0.5 s pieces 258 -> 28 % apart, ATE 5.37 -> 1.77 %) and the outcome of others swung the other way.
     Seeds 0-4, 8-15: 0.1 -> 2.96 %, 0.4 -> 3.03 %, 0.2 with ``ba_fixed_keyframes`` 2 -> 3.48 % (base 3.19). Off."""
-    coast_s: float = field(default=0.0, metadata={"min": 0.0, "max": 2.0, "step": 0.01, "unit": "s"})
+    coast_s: float = field(default=0.4, metadata={"min": 0.0, "max": 2.0, "step": 0.01, "unit": "s"})
     """Event-only: longest stretch a map coasts through visual failures, its pose predicted by its own recent rotation
     rate and camera-frame velocity (:mod:`evpose.slam.event_coasting`), before it is given up (0: lost at once),
-    seconds. Event-inertial maps use ``InertialConfig.coast_s``. Indoor room, seeds 0-3 (default: ATE 8.57 %, tracked
-    52.4 %): 0.1 -> 12.14 % / 68.5 %, 0.2 -> 11.97 / 70.3, 0.4 -> 10.21 / 77.6; 0.4 with ``max_rotation_disagreement_deg``
-    2 -> 9.29 / 73.1. Seeds 0-7 (default 10.75 % / 51.0 %, tracked at least 45.2 %): 0.4 -> 10.90 / 76.7 (min 70.7);
-    with that gate -> 9.19 / 74.2 (min 60.7), better than the default on both figures, but not a default: landing
-    seeds 0-7 (default 2.41 %) went to 3.15 % with 0.4 and 5.59 % with the pair (the gate refuses its wider
-    baselines). The coasted stretches that end in a loss carry most of the added error (seed 0: 0.19 s coasted
-    at 100 deg/s, 0.43 m ATE over that map). Searching the map's points 6 / 12 px around the coasted pose's projection
-    before pose estimation: 13.56 / 68.6 and 13.31 / 79.8 (with the gate above; not kept)."""
+    seconds. Event-inertial maps use ``InertialConfig.coast_s``. Session 10 (``MciConfig.reference_fraction`` 1.0),
+    indoor room, seeds 0-3 (0: ATE 8.57 %, tracked 52.4 %): 0.1 -> 12.14 % / 68.5 %, 0.2 -> 11.97 / 70.3, 0.4 -> 10.21 /
+    77.6; 0.4 with ``max_rotation_disagreement_deg`` 2 -> 9.29 / 73.1; seeds 0-7 (0: 10.75 % / 51.0 %): 0.4 -> 10.90 /
+    76.7, with that gate 9.19 / 74.2; landing seeds 0-7 2.41 -> 3.15 % (0.4), 5.59 % (the pair: the gate refuses the
+    landing's wider baselines). Searching the map's points 6 / 12 px around the coasted pose's projection before pose
+    estimation: 13.56 / 68.6 and 13.31 / 79.8 (with the gate; not kept). Session 12, with ``reference_fraction`` 0.5
+    (``/tmp/s12/slamin/exp.py``: ``run_slam`` + ``atlas_metrics`` as ``landing_seed_spread``), 0 -> 0.4, the default
+    since: indoor seeds 0-3 mean ATE 10.94 -> 6.84 % (7.46 / 12.19 / 14.63 / 9.48 -> 6.16 / 6.16 / 8.62 / 6.41), tracked
+    52.1 -> 80.2 % (min 50.4 -> 77.6), 11-15 -> 3-5 maps; seeds 4-7 10.28 -> 10.80 % (9.51 / 15.13 / 9.90 / 6.59 ->
+    10.88 / 9.65 / 7.52 / 15.16), tracked 53.0 -> 82.5 % (min 49.6 -> 73.5); landing seeds 0-11 mean 2.53 -> 2.53 % (only
+    seed 4 2.36 -> 3.34 and seed 7 5.59 -> 4.54 % changed, 5 of 12 within 2 % either way), tracked at least 88.5 ->
+    96.5 %; per-MCI main-thread CPU (indoor seed 0, the two alternated twice in one process) 21.4 -> 21.0 ms median;
+    event-inertial runs unchanged. Indoor seeds 0-3: 0.3 -> 9.27 % / 75.0 %, 0.5 -> 7.88 / 82.8, 0.6 -> 10.19 / 93.1; with 0.4, ``min_inliers``
+    16 -> 6.51 / 70.4, ``coast_span_s`` 0.06 -> 8.20 / 77.1, ``max_rotation_disagreement_deg`` 2 -> 7.04 / 66.9,
+    ``refit_disagreement_deg`` 5 -> 6.54 / 77.4 (min 66.7), ``FeatureConfig.min_support_ratio`` 2 -> 10.32 / 74.4.
+    Re-joining the lost map with the next two-view map (the event-inertial :mod:`evpose.slam.map_rejoin`, rotation
+    from the lost map's rate) within 0.3 s: 14.64 / 84.6 (not kept). Indoors the coasted poses are no worse than the
+    visual ones: in seed 0's map across the single-edge stretch (0.84-1.57 s, 93 coasted MCIs) they are 0.052 m RMS
+    off after alignment, the 20 visually tracked ones 0.113 m. More landing seeds (12-18, 20-23; 19 not simulated):
+    coasting changed seeds 12 (2.71 -> 1.69 %, one map), 17 (5.90 -> 9.53 %), 20 (2.37 -> 4.83 %) and 21 (6.07 ->
+    6.72 %): over the 23 seeds mean 2.83 -> 3.08 %, 7 -> 8 within 2 %. A landing map coasted across a spiral corner
+    continues as one map whose two parts one similarity no longer aligns (seed 20: the error grows from 0.04 to 1.16 m
+    after the coast), where losing it gave two maps aligned each on its own. Starting a coast only on a map starved of
+    tracked points (fewer than ``min_inliers``), not on a PnP failure (a running coast going on through either):
+    landing changes only seeds 7 and 17 (5.59 -> 4.54, 5.90 -> 9.53 %), indoor seeds 0-3 8.16 % / 69.9 %, 4-7
+    11.48 / 78.6 (not kept). A prior on each tracked MCI's rotation towards the held rate's prediction (sigma 0.3 /
+    1 deg, refined as the gyro prior is): indoor seeds 0-3 10.45 / 80.1 and 13.22 / 83.3 (not kept). Coasting without
+    keyframes at the coasted poses (no points triangulated from predicted poses): indoor seeds 0-3 7.27 / 68.6 (15 maps
+    on seed 3), landing seeds 4 / 7 / 12 / 17 / 20 / 21 3.34 / 5.55 / 3.88 / 7.57 / 2.36 / 6.72 % (with keyframes 3.34 /
+    4.54 / 1.69 / 9.53 / 4.83 / 6.72; without coasting 2.36 / 5.59 / 2.71 / 5.90 / 2.37 / 6.07; not kept). What the
+    indoor ATE left is made of: the visually tracked maps' rotation drifts (camera turn from a map's first pose, against
+    the truth's) 13-15 deg within about a second even on the best-tracked map (seed 0's last map: 12.8 deg over 0.91 s
+    without coasting, 15.4 deg over 1.02 s with; seeds 4 / 7: 15.2 / 17.7 deg), against 4.8 deg over 2.9 s on landing
+    seed 0: sideways motion past walls trades yaw for translation."""
     coast_drop_unconfirmed: bool = False
     """Event-only coasting: when a coast ends in a loss, the coasted poses are removed from the map's trajectory (no MCI
     confirmed them); off keeps them. Indoor seeds 0-3, ``coast_s`` 0.4: on -> ATE 9.02 %, tracked 49.1 % (off: 10.21 %,
-    77.6 %): most coasts there end in a loss."""
+    77.6 %): most coasts there end in a loss. Session 12 (``reference_fraction`` 0.5): indoor seeds 0-3 6.84 -> 9.38 %,
+    80.2 -> 52.4 %; landing seeds 4 / 7 / 20 / 21 3.34 / 4.54 / 4.83 / 6.72 -> 2.16 / 4.54 / 4.83 / 7.19 % (tracked
+    96.5 -> 83.8 % on seed 4)."""
     coast_span_s: float = field(default=0.03, metadata={"min": 0.005, "max": 0.5, "step": 0.005, "unit": "s"})
     """Event-only coasting: the rotation rate and velocity held are means over the newest poses spanning this long, s."""
     ba_iterations: int = field(default=10, metadata={"min": 0, "max": 100, "step": 1, "unit": "iterations"})

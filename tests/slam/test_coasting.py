@@ -80,8 +80,12 @@ def test_c2_coasts_a_map_without_imu_initialisation_instead_of_opening_a_new_one
     assert status0 is SlamStatus.LOST and pose0 is None and m0.lost_reason == "no tracks"
 
 
-def test_event_only_mode_never_coasts(early_map):
-    slam = EventSlam(SlamConfig(), early_map.calibration)
+def test_event_only_mode_never_coasts_on_the_gyro(early_map):
+    # Event-only maps coast on their own motion (TrackingConfig.coast_s, tests/slam/test_event_coasting.py), never on
+    # a gyro rotation, and without that coasting they are lost.
+    cfg = SlamConfig()
+    cfg.tracking.coast_s = 0.0
+    slam = EventSlam(cfg, early_map.calibration)
     slam.step(early_map.events)
     m = slam.atlas.active
     mci = SimpleNamespace(t_us=m.traj_t[-1] + 8000, image8=None)

@@ -40,9 +40,10 @@ def early_map():
     return make_recording(duration_s=0.4, speed=1.5, seed=7, shake=0.08)
 
 
-def _fail(rec, coast_s: float, after_us: int, drop: bool = False):
+def _fail(rec, coast_s: float | None, after_us: int, drop: bool = False):
     cfg = SlamConfig()
-    cfg.tracking.coast_s = coast_s
+    if coast_s is not None:
+        cfg.tracking.coast_s = coast_s
     cfg.tracking.coast_drop_unconfirmed = drop
     slam = EventSlam(cfg, rec.calibration)
     slam.step(rec.events)
@@ -52,8 +53,8 @@ def _fail(rec, coast_s: float, after_us: int, drop: bool = False):
     return slam, m, slam._bridge_or_lose(mci, "no tracks")
 
 
-def test_event_only_map_coasts_instead_of_opening_a_new_one(early_map):
-    slam, m, (status, reason, pose, keyframe) = _fail(early_map, 0.4, 8000)
+def test_event_only_map_coasts_instead_of_opening_a_new_one_by_default(early_map):
+    slam, m, (status, reason, pose, keyframe) = _fail(early_map, None, 8000)
     assert status is SlamStatus.COASTING and "coasted" in reason and pose is not None and keyframe
     assert slam.atlas.active is m and m.traj_t[-1] == m.keyframes[-1].t_us
 
@@ -66,3 +67,4 @@ def test_a_coast_longer_than_coast_s_loses_the_map_and_can_drop_its_unconfirmed_
         status, _, pose, _ = slam._bridge_or_lose(mci, "still no tracks")
         assert status is SlamStatus.LOST and pose is None and slam.atlas.active is not m
         assert len(m.traj_t) == (n - 1 if drop else n)
+
