@@ -6,11 +6,11 @@ PIP ?= $(PYTHON) -m pip
 
 install:
 	bash scripts/setup_system.sh
-	$(PIP) install -q -e .
+	$(PIP) install -q -c constraints.txt -e .
 
 install-test:
 	bash scripts/setup_system.sh
-	$(PIP) install -q -e ".[test]"
+	$(PIP) install -q -c constraints.txt -e ".[test]"
 
 demo: install
 	$(PYTHON) -m evpose.cli.main app --data demo_data maps
