@@ -15,13 +15,16 @@ does not explain (gauge-free, as :mod:`evpose.tracker.edge_offsets` does with th
 the events read.
 
 Measured (2 s moderate landing from ground truth, built map, ``full``, mean ATE mm of seeds 0-3 / 4-7 at 346x260 and
-240x180): the field alone 7.77 / 7.95 and 8.11 / 10.46; with these defaults 6.28 / 5.84 and 7.38 / 8.54 (smoothed
-offline 3.3 / 2.9 and 4.4 / 5.9 against 4.3 / 3.8 and 5.5 / 7.8). Bundled 346x260 demos (``evpose eval --align none``,
-ATE RMSE): ``landing`` 15.81 -> 10.85 mm, ``landing_fast`` 23.81 -> 7.98 mm, ``landing_dynamic`` 15.64 -> 7.61 mm
-(replacing instead of combining). Where the gain comes from, 346x260 seed 0: with the simulator's true edges as the
-map, replacing the field's pose by the events' (no offsets, no masks) took ``full`` from 8.46 to 6.14 mm (seeds 0-3
-7.30 -> 6.19 mm), and the events' fused error has no mean left (0.04 / 0.14 / 0.43 mm per camera axis against
--1.48 / -2.62 / 3.86 mm); on the built map the same gave 16.1 mm until the painted points were left out.
+240x180): the field alone 7.77 / 7.95 and 8.11 / 10.46 (smoothed offline 4.26 / 3.75 and 5.48 / 7.82); with these
+defaults 6.38 / 5.91 and 7.25 / 8.49 (smoothed 4.12 / 2.94 and 4.52 / 5.98), ARE 0.066 / 0.068 and 0.076 / 0.088 deg
+(was 0.077 / 0.081 and 0.093 / 0.105), no update lost. Bundled 346x260 demos (``evpose eval --align none``, ATE RMSE):
+``landing`` 15.81 -> 9.71 mm, ``landing_fast`` 23.81 -> 18.20 mm, ``landing_dynamic`` 15.64 -> 12.27 mm (with a 3 px
+association radius 9.42 / 14.28 / 11.61 mm). Where the gain comes from, 346x260: with the simulator's true edges as
+the map, replacing the field's pose by the events' (no offsets, no masks, 3 px) took ``full`` seeds 0-3 from 7.30
+to 6.19 mm (seed 0 8.46 -> 6.14), and the fused error's mean per camera axis went from -1.48 / -2.62 / 3.86 to 0.04 /
+0.14 / 0.43 mm (seed 0); on the built map the same gave 16.1 mm (seed 0) until the painted points were left out.
+CPU: ~0.5 ms per update at 346x260 (the nearest-point grid ~0.06 ms hot, each of the 4 passes over ~1000 events
+~0.03 ms hot, the rest Python and memory traffic).
 """
 
 from __future__ import annotations
@@ -46,19 +49,24 @@ class EventRegistrationConfig:
     """Combine the events' pose with the field registration's by their covariances (information-weighted, in the
     field pose's tangent space); False = replace it. Replacing (seeds 0-3 / 4-7): 6.08 / 5.78 mm at 346x260 but
     8.90 mm (seeds 0-3) at 240x180, where the events hold the depth along the optical axis poorly (seed 1: 9.1 mm
-    RMS against the field's 3.3); combined 6.28 / 5.84 and 7.38 / 8.54 mm. The field's covariance scaled 3 / 10x
-    before combining: 6.02 / 5.53, 5.81 / 5.59 mm at 346x260 but 7.45 / 9.48, 7.78 / 10.41 mm at 240x180."""
+    RMS against the field's 3.3); combined 6.28 / 5.84 and 7.38 / 8.54 mm (3 px association radius). The field's
+    covariance scaled 3 / 10x before combining: 6.02 / 5.53, 5.81 / 5.59 mm at 346x260 but 7.45 / 9.48, 7.78 / 10.41 mm
+    at 240x180. Replacing, the 4 s demos: 10.85 / 7.98 / 7.61 mm (``landing`` / ``fast`` / ``dynamic``)."""
     covariance_scale: float = field(default=300.0, metadata={"min": 0.001, "max": 100000.0, "step": 1.0, "unit": "ratio"})
     """Factor on the events' covariance ``(J^T W J)^-1 sigma^2`` (``sigma^2`` their weighted residual variance), ratio.
 
     A step's ~1000 events claim ~0.01 px but share the map's slowly learned errors from update to update. Seeds
-    0-3, 346x260, replacing: 1 / 3 / 10 / 30 / 100 / 300 / 1000 / 3000 gave 16.1 (seed 0) / 8.07 / 7.37 / 6.94 / 6.36
-    / 6.08 / 6.02 / 7.04 mm (seeds 4-7 at 300 / 1000: 5.78 / 7.16); 240x180 30 / 100 / 300 / 1000: 9.56 / 8.76 /
-    8.90 / 10.36 mm; combined at 240x180 100 / 300 / 1000: 7.71 / 7.38 / 7.74 mm, at 346x260 30 / 100 / 300:
-    6.62 / 6.32 / 6.28 mm."""
-    association_radius_px: float = field(default=3.0, metadata={"min": 0.5, "max": 10.0, "step": 0.5, "unit": "px"})
-    """An event is associated with the nearest used map point projected within this distance, pixels (346x260,
-    replacing, seeds 0-3: 2 px 6.11 mm against 6.08)."""
+    0-3, 346x260, replacing (3 px association radius): 1 / 3 / 10 / 30 / 100 / 300 / 1000 / 3000 gave 16.1 (seed 0)
+    / 8.07 / 7.37 / 6.94 / 6.36 / 6.08 / 6.02 / 7.04 mm (seeds 4-7 at 300 / 1000: 5.78 / 7.16); 240x180 30 / 100 /
+    300 / 1000: 9.56 / 8.76 / 8.90 / 10.36 mm; combined at 240x180 100 / 300 / 1000: 7.71 / 7.38 / 7.74 mm, at
+    346x260 30 / 100 / 300: 6.62 / 6.32 / 6.28 mm."""
+    association_radius_px: float = field(default=2.0, metadata={"min": 0.5, "max": 10.0, "step": 0.5, "unit": "px"})
+    """An event is associated with the nearest used map point projected within this distance, pixels.
+
+    3 px (the other figures in this class): seeds 0-3 / 4-7 6.28 / 5.84 mm at 346x260, 7.38 / 8.54 mm at 240x180,
+    the demos 9.42 / 14.28 / 11.61 mm, but ~0.15 ms more CPU per update and the EKF backend level with the graph
+    (346x260 seeds 0-3 6.28 / 0.0677 deg against the graph's 6.28 / 0.0684); 2 px 6.38 / 5.91, 7.25 / 8.49 mm
+    (EKF 6.58 / 6.00, 7.31 / 8.54 mm). Replacing, 346x260 seeds 0-3: 2 / 3 px 6.11 / 6.08 mm."""
     gate_px: float = field(default=1.5, metadata={"min": 0.1, "max": 10.0, "step": 0.1, "unit": "px"})
     """Events farther than this from their point's edge line (at the current pose) take no part, pixels (2 px: 6.34
     mm against 6.08; seed 0 without the painted mask 0.7 / 1.0 px: 17.7 / 16.1 mm against 16.1)."""
@@ -76,7 +84,8 @@ class EventRegistrationConfig:
     off_lead_px: float = field(default=-0.17, metadata={"min": -2.0, "max": 2.0, "step": 0.01, "unit": "px"})
     """As ``on_lead_px`` for OFF events, pixels."""
     iterations: int = field(default=3, metadata={"min": 1, "max": 20, "step": 1, "unit": "iterations"})
-    """Gauss-Newton steps on one association, iterations (2: 6.03 mm against 6.08, replacing, 346x260)."""
+    """Gauss-Newton steps on one association, iterations (2: 6.03 mm against 6.08, replacing, 346x260 (3 px); combined
+    (2 px): 6.44 / 5.92 and 7.26 / 8.55 mm, ~0.03 ms less)."""
     prior_residual_px: float = field(default=0.5, metadata={"min": 0.0, "max": 10.0, "step": 0.05, "unit": "px"})
     """Typical distance of one event from its edge, which converts registration's isotropic pose prior (``prior_*``,
     towards the prediction) into the events' units; 0 = no prior, pixels (0: 6.23 mm against 6.08)."""
@@ -85,7 +94,7 @@ class EventRegistrationConfig:
     skip_painted: bool = True
     """Leave the map's painted (albedo) edges out: the built map has them ~10 mm off (936 of its 979 painted points
     more than 1.5 mm from the true edge, seed 0), which the field's smoothing and robust loss tolerate but the
-    events do not (346x260 seeds 0-3, replacing: 9.99 mm with them against 6.08)."""
+    events do not (346x260 seeds 0-3, replacing, 3 px association radius: 9.99 mm with them against 6.08)."""
     skip_wall_feet: bool = True
     """Leave the points at the foot of a wall out (:mod:`evpose.tracker.wall_occlusion`): seen over the wall they
     take the rim's events (6.32 mm with them against 6.08)."""
@@ -125,9 +134,10 @@ class EventRegistration:
             self._tangents[np.asarray(skip, np.bool_)] = 0.0  # no edge direction: such points take no events
         self.offsets = np.zeros(self._base.shape[0])
         """Learned offset of each map point along its unit edge normal, metres."""
-        self._tag = np.zeros((int(height), int(width)), np.int64)
-        self._dist2 = np.zeros((int(height), int(width)), np.float64)
-        self._owner = np.zeros((int(height), int(width)), np.int64)
+        # The nearest-point grid: a pixel's owner counts only when tagged with the current generation (no reset).
+        self._tag = np.zeros((int(height), int(width)), np.int32)
+        self._dist2 = np.zeros((int(height), int(width)), np.float32)
+        self._owner = np.zeros((int(height), int(width)), np.int32)
         self._gen = 0
         self._last = None
         self.last_events = 0
@@ -153,11 +163,13 @@ class EventRegistration:
         self._last = None
         fx, fy, cx, cy = float(K[0, 0]), float(K[1, 1]), float(K[0, 2]), float(K[1, 2])
         used = np.ascontiguousarray(used, np.int64)
-        pts = np.ascontiguousarray(self.points[used])
-        tg = np.ascontiguousarray(self._tangents[used])
+        pts = np.take(self.points, used, axis=0)
+        tg = np.take(self._tangents, used, axis=0)
         pol = np.zeros(0, np.int8) if polarity is None else np.ascontiguousarray(polarity, np.int8)
         xi = np.zeros(6) if twist is None or not np.isfinite(twist).all() else np.ascontiguousarray(twist, np.float64)
-        self._gen += 1
+        self._gen = self._gen + 1 if self._gen < 2**31 - 1 else 1
+        if self._gen == 1:
+            self._tag.fill(0)
         T = np.asarray(T_world_cam, np.float64)
         R_cw = np.ascontiguousarray(T[:3, :3].T)
         t_cw = -R_cw @ T[:3, 3]

@@ -31,7 +31,7 @@ def _mark_owners(points, R_cw, t_cw, fx, fy, cx, cy, radius, gen, tag, dist2, ow
             dy = yy - v
             for xx in range(max(cu - rad, 0), min(cu + rad + 1, w)):
                 dx = xx - u
-                d = dx * dx + dy * dy
+                d = np.float32(dx * dx + dy * dy)
                 if d <= r2 and (tag[yy, xx] != gen or d < dist2[yy, xx]):
                     tag[yy, xx] = gen
                     dist2[yy, xx] = d
