@@ -23,8 +23,9 @@ association radius 9.42 / 14.28 / 11.61 mm). Where the gain comes from, 346x260:
 the map, replacing the field's pose by the events' (no offsets, no masks, 3 px) took ``full`` seeds 0-3 from 7.30
 to 6.19 mm (seed 0 8.46 -> 6.14), and the fused error's mean per camera axis went from -1.48 / -2.62 / 3.86 to 0.04 /
 0.14 / 0.43 mm (seed 0); on the built map the same gave 16.1 mm (seed 0) until the painted points were left out.
-CPU: ~0.5 ms per update at 346x260 (the nearest-point grid ~0.06 ms hot, each of the 4 passes over ~1000 events
-~0.03 ms hot, the rest Python and memory traffic).
+CPU at 346x260 (seed 0, thread time, load ~7): 0.58 ms median per update in a run (0.3 ms called again and again on
+one update's inputs: the association, each of the 4 passes over ~900 events ~0.03 ms, the rest Python), the learning
+0.05 ms; the whole ``full`` update 3.4-4.7 -> 4.4-6.0 ms median (3 alternated rounds, same process).
 """
 
 from __future__ import annotations
@@ -34,7 +35,7 @@ from dataclasses import dataclass, field
 import gtsam
 import numpy as np
 
-from evpose.tracker.event_registration_kernels import _associate, _damped_step, _learn_offsets, _linearise_events, _mark_owners
+from evpose.tracker.event_registration_kernels import _associate_nearest, _damped_step, _learn_offsets, _linearise_events
 
 
 @dataclass
@@ -134,11 +135,7 @@ class EventRegistration:
             self._tangents[np.asarray(skip, np.bool_)] = 0.0  # no edge direction: such points take no events
         self.offsets = np.zeros(self._base.shape[0])
         """Learned offset of each map point along its unit edge normal, metres."""
-        # The nearest-point grid: a pixel's owner counts only when tagged with the current generation (no reset).
-        self._tag = np.zeros((int(height), int(width)), np.int32)
-        self._dist2 = np.zeros((int(height), int(width)), np.float32)
-        self._owner = np.zeros((int(height), int(width)), np.int32)
-        self._gen = 0
+        self._width, self._height = int(width), int(height)
         self._last = None
         self.last_events = 0
         """Events associated with a point at the last :meth:`refine`."""
@@ -167,15 +164,12 @@ class EventRegistration:
         tg = np.take(self._tangents, used, axis=0)
         pol = np.zeros(0, np.int8) if polarity is None else np.ascontiguousarray(polarity, np.int8)
         xi = np.zeros(6) if twist is None or not np.isfinite(twist).all() else np.ascontiguousarray(twist, np.float64)
-        self._gen = self._gen + 1 if self._gen < 2**31 - 1 else 1
-        if self._gen == 1:
-            self._tag.fill(0)
         T = np.asarray(T_world_cam, np.float64)
         R_cw = np.ascontiguousarray(T[:3, :3].T)
         t_cw = -R_cw @ T[:3, 3]
-        _mark_owners(pts, R_cw, t_cw, fx, fy, cx, cy, float(c.association_radius_px), self._gen, self._tag, self._dist2, self._owner)
         assoc = np.empty(ex.shape[0], np.int64)
-        self.last_events = int(_associate(ex, ey, ep, self._gen, self._tag, self._owner, pol, assoc))
+        self.last_events = int(_associate_nearest(pts, R_cw, t_cw, fx, fy, cx, cy, float(c.association_radius_px), self._width,
+                                                  self._height, ex, ey, ep, pol, assoc))
         if self.last_events < int(c.min_events):
             return None
         H, b = np.zeros((6, 6)), np.zeros(6)
