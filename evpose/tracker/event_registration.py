@@ -72,8 +72,11 @@ class EventRegistrationConfig:
     """Events farther than this from their point's edge line (at the current pose) take no part, pixels (2 px: 6.34
     mm against 6.08; seed 0 without the painted mask 0.7 / 1.0 px: 17.7 / 16.1 mm against 16.1)."""
     huber_px: float = field(default=0.5, metadata={"min": 0.01, "max": 10.0, "step": 0.05, "unit": "px"})
-    """Huber scale on the events' distances, pixels (0.3: 6.04 mm against 6.08; at 240x180 with a 1 px gate 8.21
-    against 8.76 mm, replacing with ``covariance_scale`` 100)."""
+    """Huber scale on the events' distances, pixels (0.3: 6.04 mm against 6.08, replacing, 3 px association radius).
+
+    With ``gate_px`` 1.0 (combined, 2 px): seeds 0-3 / 4-7 6.29 / 5.59 mm at 346x260 and 7.25 / 8.30 mm at 240x180
+    (ARE 0.062 / 0.066, 0.072 / 0.086 deg), the demos 9.47 / 16.84 / 12.35 mm, but the EKF backend then beats the
+    graph at 240x180 (7.22 / 8.18 mm, ARE 0.073 / 0.085 deg): not kept."""
     on_lead_px: float = field(default=0.0, metadata={"min": -2.0, "max": 2.0, "step": 0.01, "unit": "px"})
     """How far ahead of its edge along the edge's image motion an ON event fires (negative: behind), pixels.
 
