@@ -107,7 +107,9 @@ class FusionConfig:
     biases at the start, held tight, 5.39 / 7.27 mm, and the rotation held exact too 5.37 / 7.69 mm; each state's
     estimate 8 / 20 / 40 / 100 updates later (a lagged output) 7.36 / 6.70 / 5.89 / 4.99, 9.16 / 8.73 / 8.26 /
     7.87 mm: even the offline smoother (4.3 / 7.3 mm) misses 5 mm at 240x180, so the target needs better
-    registrations (with the simulator's true edges as the map, ``full`` 7.30 / 8.80 mm: not the map's), ratio."""
+    registrations (with the simulator's true edges as the map, ``full`` 7.30 / 8.80 mm: not the map's). Session 12,
+    the field's registrations combined with the events' (:mod:`evpose.tracker.event_registration`, which scales its
+    own covariance; seeds 0-3 6.38 / 7.25 mm): 10 / 100 gave 6.57 / 8.04, 6.37 / 7.80 mm, ratio."""
     registration_error_model: RegistrationErrorModel = RegistrationErrorModel.WHITE
     """Time structure of the registration errors the factor graph assumes (the EKF always takes them as white).
     Session 10, closed loop, ATE mm 346x260 / 240x180 (white: seeds 0-3 7.77 / 9.40, seeds 4-7 7.95 / 11.37, demo

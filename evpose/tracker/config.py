@@ -20,6 +20,7 @@ from evpose.fusion.ego_motion import EgoMotionConfig
 from evpose.fusion.polarity_config import PolarityFilterConfig
 from evpose.io.config_file import config_from_dict, config_to_dict, read_config, write_config  # noqa: F401 - re-exported
 from evpose.tracker.edge_offsets import EdgeOffsetConfig
+from evpose.tracker.event_registration import EventRegistrationConfig
 from evpose.tracker.map_refinement import MapRefinementConfig
 from evpose.tracker.motion_filter_config import MotionFilterConfig
 from evpose.tracker.registration_config import RegistrationConfig
@@ -82,6 +83,8 @@ class TrackerConfig:
     """Online refinement of the map's painted edges (``stpe`` mode)."""
     edge_offsets: EdgeOffsetConfig = field(default_factory=EdgeOffsetConfig)
     """Gauge-free online offsets of every registered point along its edge normal (``stpe`` on coarse sensors)."""
+    event_registration: EventRegistrationConfig = field(default_factory=EventRegistrationConfig)
+    """Refinement of the fused modes' registrations on the step's events at their own timestamps (``full``)."""
     polarity: PolarityFilterConfig = field(default_factory=PolarityFilterConfig)
     """Motion-instructed polarity filter (``stpe+filter`` and ``full``)."""
     fusion: FusionConfig = field(default_factory=FusionConfig)

@@ -68,7 +68,9 @@ class EdgeOffsetConfig:
     Mean ATE seeds 0-3 / 4-7 (fused output). 240x180 (on, ``full_field_lag_ms`` 5.0): 9.40 / 11.38 -> 8.11 /
     10.46 mm. 346x260 (off: ``min_pixel_mrad``): at registration's 4.5 ms 7.77 -> 7.90 mm (``gain`` 0.25 7.76,
     without ``gauge_painted`` 7.86), at 4.0 ms 7.42 / 8.30 mm (base 7.77 / 7.95), at 3.5 ms 7.64 / 8.48 mm, at
-    5.0 ms 8.83 mm (seeds 0-3); registration's lag alone at 4.0 ms 7.82 mm."""
+    5.0 ms 8.83 mm (seeds 0-3); registration's lag alone at 4.0 ms 7.82 mm. Session 12, with the events registered
+    (:mod:`evpose.tracker.event_registration`; 6.38 / 7.25 mm at 346x260 / 240x180, seeds 0-3): on at 346x260 too,
+    ``full_field_lag_ms`` 5.0 / 4.0, 6.96 / 6.48 mm; off at 240x180 7.55 mm."""
     full_field_lag_ms: float = field(default=5.0, metadata={"min": 0.0, "max": 50.0, "step": 0.1, "unit": "ms"})
     """``registration.field_lag_ms`` in ``full`` while the offsets are learned (0 = keep that), milliseconds.
 

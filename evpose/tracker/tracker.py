@@ -40,6 +40,7 @@ from evpose.tracker.config import MotionModel, TrackerConfig
 from evpose.tracker.crowding import uncrowded
 from evpose.tracker.ego_motion_events import ego_motion_keep, empty_ego_history
 from evpose.tracker.edge_offsets import EdgeOffsetLearner
+from evpose.tracker.event_registration import event_registration_for
 from evpose.tracker.map_refinement import PaintedEdgeRefiner
 from evpose.tracker.motion_filter import ConstantVelocityKalman
 from evpose.tracker.predictor import ConstantPosePredictor, ConstantVelocityPredictor, MotionPredictor
@@ -153,6 +154,10 @@ class Tracker:
                        else eo.stpe_filter_field_lag_ms if polarity_selector is not None else eo.field_lag_ms)
         if self.edge_offsets is not None and lag_ms > 0:
             self._registration = dataclasses.replace(self._registration, field_lag_ms=lag_ms)
+        self.event_registration = (event_registration_for(config, contour_map, self._tangents, w, h)
+                                   if config.event_registration.enabled and self.components.drives_pose else None)
+        """The fused modes' registration of the step's events at their own timestamps
+        (:mod:`evpose.tracker.event_registration`), None when off."""
         self._pose: np.ndarray | None = None
         self._t_us: int | None = None
         self._steps = 0
@@ -215,6 +220,7 @@ class Tracker:
             "tracking": hold[1],
             "map_refinement": None if self.refiner is None else self.refiner.snapshot(),
             "edge_offsets": None if self.edge_offsets is None else self.edge_offsets.snapshot(),
+            "event_registration": None if self.event_registration is None else self.event_registration.snapshot(),
         }
 
     def restore(self, state: dict) -> None:
@@ -237,6 +243,8 @@ class Tracker:
         if self.edge_offsets is not None and state.get("edge_offsets") is not None:
             self.edge_offsets.restore(state["edge_offsets"])
             self.edge_offsets.apply(self._points)
+        if self.event_registration is not None and state.get("event_registration") is not None:
+            self.event_registration.restore(state["event_registration"])
 
     def _side_motion(self):
         """The fusion backend when it runs beside (not as) the predictor, as in ``stpe+filter``."""
@@ -388,6 +396,12 @@ class Tracker:
             if self.polarity_selector is not None and hasattr(self.polarity_selector, "registration_covariance"):
                 # Points the polarity filter dropped (no events in their patch) still count in the residual variance.
                 reg.covariance = self.polarity_selector.registration_covariance(reg, self._registration)
+            if self.event_registration is not None and reg.success:
+                t1 = time.perf_counter()
+                counts["events_registered"] = int(self.event_registration.refine_registration(
+                    reg, used, polarity, events, keep, until, twist, self.K, self.calibration, predicted,
+                    self._registration)) * self.event_registration.last_events
+                timings["event_registration"] = _ms(t1)
             reason = reg.reason
             if self._weak_test and reg.success and reg.inliers < float(self.config.registration.min_inlier_ratio) * reg.points_used:
                 weak = True
@@ -451,6 +465,10 @@ class Tracker:
             self.hold.never_lost = False
         if self.edge_offsets is not None:
             self.edge_offsets.last_fit[:] = np.nan
+        if self.event_registration is not None and status is TrackStatus.OK and self.hold.never_lost and counts.get("events_registered"):
+            # Only what an accepted update's events say, and only while the track was never lost (a wrong lock must not
+            # be learned).
+            counts["points_event_offset"] = self.event_registration.learn()
         if self.edge_offsets is not None and status is TrackStatus.OK and field_polarity is None and self.hold.never_lost:
             # As the refiner below (which takes this update's pose-like fit out of its own steps), from the pose the
             # field shows, only while the track was never lost (a wrong lock must not be learned).

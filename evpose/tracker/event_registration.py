@@ -1,0 +1,273 @@
+"""Registration of the step's events themselves against the projected map edges, each at its own timestamp (``full``).
+
+The time surface's distance-field minimum trails a moving edge by a speed-dependent amount, and what
+:mod:`evpose.tracker.registration` leaves of that trail (0.1-0.3 px, shared by whole edges and slow) is what the
+fusion turns into tilt-vs-sideways error. An event has no such lag: it fired when the edge crossed its pixel. Here
+each kept event of the step is associated with the nearest used map point (projected at the field registration's
+pose, within ``association_radius_px``, of a polarity the point may fire), and its residual is its signed distance
+along the point's projected edge normal from the point's projection *at the event's timestamp* (the pose moved back
+along the motion twist). A few robust Gauss-Newton steps from the field registration's pose (which gave the basin)
+find the events' own optimum, which is combined with the field registration by their covariances.
+
+The events read the map without the field's smoothing, so the map's own errors show: painted edges (~10 mm off in
+the built map) and wall feet are left out, and the other points slide along their edge normals by what a pose change
+does not explain (gauge-free, as :mod:`evpose.tracker.edge_offsets` does with the field), in a copy of the map only
+the events read.
+
+Measured (2 s moderate landing from ground truth, built map, ``full``, mean ATE mm of seeds 0-3 / 4-7 at 346x260 and
+240x180): the field alone 7.77 / 7.95 and 8.11 / 10.46 (smoothed offline 4.26 / 3.75 and 5.48 / 7.82); with these
+defaults 6.38 / 5.91 and 7.25 / 8.49 (smoothed 4.12 / 2.94 and 4.52 / 5.98), ARE 0.066 / 0.068 and 0.076 / 0.088 deg
+(was 0.077 / 0.081 and 0.093 / 0.105), no update lost. Bundled 346x260 demos (``evpose eval --align none``, ATE RMSE):
+``landing`` 15.81 -> 9.71 mm, ``landing_fast`` 23.81 -> 18.20 mm, ``landing_dynamic`` 15.64 -> 12.27 mm (with a 3 px
+association radius 9.42 / 14.28 / 11.61 mm). Where the gain comes from, 346x260: with the simulator's true edges as
+the map, replacing the field's pose by the events' (no offsets, no masks, 3 px) took ``full`` seeds 0-3 from 7.30
+to 6.19 mm (seed 0 8.46 -> 6.14), and the fused error's mean per camera axis went from -1.48 / -2.62 / 3.86 to 0.04 /
+0.14 / 0.43 mm (seed 0); on the built map the same gave 16.1 mm (seed 0) until the painted points were left out.
+CPU at 346x260 (seed 0, thread time, load ~7): 0.58 ms median per update in a run (0.3 ms called again and again on
+one update's inputs: the association, each of the 4 passes over ~900 events ~0.03 ms, the rest Python), the learning
+0.05 ms; the whole ``full`` update 3.4-4.7 -> 4.4-6.0 ms median (3 alternated rounds, same process).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import gtsam
+import numpy as np
+
+from evpose.tracker.event_registration_kernels import _associate_nearest, _damped_step, _learn_offsets, _linearise_events
+
+
+@dataclass
+class EventRegistrationConfig:
+    """Events registered at their own timestamps, combined with the fused modes' field registration (see the module)."""
+
+    enabled: bool = True
+    """Register the step's events in ``full`` (the fusion's twist moves each map point to its event's time).
+
+    Off: the field registration alone (7.77 / 7.95 and 8.11 / 10.46 mm, see the module)."""
+    combine: bool = True
+    """Combine the events' pose with the field registration's by their covariances (information-weighted, in the
+    field pose's tangent space); False = replace it. Replacing (seeds 0-3 / 4-7): 6.08 / 5.78 mm at 346x260 but
+    8.90 mm (seeds 0-3) at 240x180, where the events hold the depth along the optical axis poorly (seed 1: 9.1 mm
+    RMS against the field's 3.3); combined 6.28 / 5.84 and 7.38 / 8.54 mm (3 px association radius). The field's
+    covariance scaled 3 / 10x before combining: 6.02 / 5.53, 5.81 / 5.59 mm at 346x260 but 7.45 / 9.48, 7.78 / 10.41 mm
+    at 240x180. Replacing, the 4 s demos: 10.85 / 7.98 / 7.61 mm (``landing`` / ``fast`` / ``dynamic``)."""
+    covariance_scale: float = field(default=300.0, metadata={"min": 0.001, "max": 100000.0, "step": 1.0, "unit": "ratio"})
+    """Factor on the events' covariance ``(J^T W J)^-1 sigma^2`` (``sigma^2`` their weighted residual variance), ratio.
+
+    A step's ~1000 events claim ~0.01 px but share the map's slowly learned errors from update to update. Seeds
+    0-3, 346x260, replacing (3 px association radius): 1 / 3 / 10 / 30 / 100 / 300 / 1000 / 3000 gave 16.1 (seed 0)
+    / 8.07 / 7.37 / 6.94 / 6.36 / 6.08 / 6.02 / 7.04 mm (seeds 4-7 at 300 / 1000: 5.78 / 7.16); 240x180 30 / 100 /
+    300 / 1000: 9.56 / 8.76 / 8.90 / 10.36 mm; combined at 240x180 100 / 300 / 1000: 7.71 / 7.38 / 7.74 mm, at
+    346x260 30 / 100 / 300: 6.62 / 6.32 / 6.28 mm."""
+    association_radius_px: float = field(default=2.0, metadata={"min": 0.5, "max": 10.0, "step": 0.5, "unit": "px"})
+    """An event is associated with the nearest used map point projected within this distance, pixels.
+
+    3 px (the other figures in this class): seeds 0-3 / 4-7 6.28 / 5.84 mm at 346x260, 7.38 / 8.54 mm at 240x180,
+    the demos 9.42 / 14.28 / 11.61 mm, but ~0.15 ms more CPU per update and the EKF backend level with the graph
+    (346x260 seeds 0-3 6.28 / 0.0677 deg against the graph's 6.28 / 0.0684); 2 px 6.38 / 5.91, 7.25 / 8.49 mm
+    (EKF 6.58 / 6.00, 7.31 / 8.54 mm). Replacing, 346x260 seeds 0-3: 2 / 3 px 6.11 / 6.08 mm."""
+    gate_px: float = field(default=1.5, metadata={"min": 0.1, "max": 10.0, "step": 0.1, "unit": "px"})
+    """Events farther than this from their point's edge line (at the current pose) take no part, pixels (2 px: 6.34
+    mm against 6.08; seed 0 without the painted mask 0.7 / 1.0 px: 17.7 / 16.1 mm against 16.1)."""
+    huber_px: float = field(default=0.5, metadata={"min": 0.01, "max": 10.0, "step": 0.05, "unit": "px"})
+    """Huber scale on the events' distances, pixels (0.3: 6.04 mm against 6.08, replacing, 3 px association radius).
+
+    With ``gate_px`` 1.0 (combined, 2 px): seeds 0-3 / 4-7 6.29 / 5.59 mm at 346x260 and 7.25 / 8.30 mm at 240x180
+    (ARE 0.062 / 0.066, 0.072 / 0.086 deg), the demos 9.47 / 16.84 / 12.35 mm, but the EKF backend then beats the
+    graph at 240x180 (7.22 / 8.18 mm, ARE 0.073 / 0.085 deg): not kept."""
+    on_lead_px: float = field(default=0.0, metadata={"min": -2.0, "max": 2.0, "step": 0.01, "unit": "px"})
+    """How far ahead of its edge along the edge's image motion an ON event fires (negative: behind), pixels.
+
+    Simulated landing (seed 0, the simulator's true edges, at the truth, events of 5 ms), 346x260 / 240x180: ON -0.01
+    / -0.02 px, OFF -0.17 / -0.17 px (a pixel's log response: crossing from bright to dark its events come late), no
+    trend with the event's age beyond 0.05 px over 0-5 ms: no lag. Against the built map the same events read ON
+    +0.21, OFF -0.16 px and spread by 0.60 px instead of 0.34 px (the map's own errors). 346x260 seeds 0-3,
+    replacing: ON +0.1 6.43 mm, OFF 0 / -0.25 7.33 / 6.18 mm against 6.08."""
+    off_lead_px: float = field(default=-0.17, metadata={"min": -2.0, "max": 2.0, "step": 0.01, "unit": "px"})
+    """As ``on_lead_px`` for OFF events, pixels."""
+    iterations: int = field(default=3, metadata={"min": 1, "max": 20, "step": 1, "unit": "iterations"})
+    """Gauss-Newton steps on one association, iterations (2: 6.03 mm against 6.08, replacing, 346x260 (3 px); combined
+    (2 px): 6.44 / 5.92 and 7.26 / 8.55 mm, ~0.03 ms less)."""
+    prior_residual_px: float = field(default=0.5, metadata={"min": 0.0, "max": 10.0, "step": 0.05, "unit": "px"})
+    """Typical distance of one event from its edge, which converts registration's isotropic pose prior (``prior_*``,
+    towards the prediction) into the events' units; 0 = no prior, pixels (0: 6.23 mm against 6.08)."""
+    min_events: int = field(default=100, metadata={"min": 6, "max": 100000, "step": 10, "unit": "events"})
+    """Fewer associated events than this: the field registration stands alone, events."""
+    skip_painted: bool = True
+    """Leave the map's painted (albedo) edges out: the built map has them ~10 mm off (936 of its 979 painted points
+    more than 1.5 mm from the true edge, seed 0), which the field's smoothing and robust loss tolerate but the
+    events do not (346x260 seeds 0-3, replacing, 3 px association radius: 9.99 mm with them against 6.08)."""
+    skip_wall_feet: bool = True
+    """Leave the points at the foot of a wall out (:mod:`evpose.tracker.wall_occlusion`): seen over the wall they
+    take the rim's events (6.32 mm with them against 6.08)."""
+    offset_gain: float = field(default=0.3, metadata={"min": 0.0, "max": 1.0, "step": 0.01, "unit": "ratio"})
+    """Share of each update's gauge-free per-point offset (its events' mean distance from its edge line, the part a
+    pose change explains taken out) that the events' copy of the map moves by (0 = the map as built), ratio.
+
+    346x260 seeds 0-3, replacing, ``covariance_scale`` 300: 0.1 / 0.3 / 0.5 gave 6.26 / 6.08 / 6.15 mm; 240x180
+    (``covariance_scale`` 100) 0 (the map the field reads, with its own offsets) / 0.1 / 0.3 / 0.6: 8.56 / 9.05 /
+    8.76 / 8.80 mm. Seed 0 at 346x260 with an oracle mask (only points within 1.5 mm of the true edges): 8.19 ->
+    6.26 mm. Points rejected instead (by their events' mean distance, per update or averaged): no better."""
+    offset_min_weight: float = field(default=3.0, metadata={"min": 0.5, "max": 100.0, "step": 0.5, "unit": "events"})
+    """A point learns only from an update where its events' robust weights sum to at least this, events."""
+    offset_clip_px: float = field(default=1.0, metadata={"min": 0.05, "max": 5.0, "step": 0.05, "unit": "px"})
+    """A point whose events' mean distance is larger than this takes no part in that update, pixels (0.5: 6.12 mm
+    against 6.08)."""
+    offset_max_m: float = field(default=0.05, metadata={"min": 0.0, "max": 0.5, "step": 0.005, "unit": "m"})
+    """Largest distance a point may move from the map's position, metres."""
+
+
+class EventRegistration:
+    """Registers the step's events (see the module); its state is the learned per-point offsets."""
+
+    def __init__(self, config: EventRegistrationConfig, width: int, height: int, points: np.ndarray, tangents: np.ndarray,
+                 edge_normal: np.ndarray, skip: np.ndarray | None = None):
+        """``points`` (N, 3) the map (copied), ``tangents`` (N, 3) its unit edge directions and ``edge_normal`` (N, 3)
+        its edge normals (zero = unknown: such points take no events), ``skip`` (N,) bool points left out."""
+        self.config = config
+        self._base = np.array(points, dtype=np.float64, order="C")
+        self.points = self._base.copy()
+        """The map the events are registered against: the built map plus the learned offsets."""
+        n = np.asarray(edge_normal, dtype=np.float64)
+        self._normals = np.ascontiguousarray(n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12))
+        self._tangents = np.array(tangents, dtype=np.float64, order="C")
+        self._tangents[~np.any(n != 0, axis=1)] = 0.0
+        if skip is not None:
+            self._tangents[np.asarray(skip, np.bool_)] = 0.0  # no edge direction: such points take no events
+        self.offsets = np.zeros(self._base.shape[0])
+        """Learned offset of each map point along its unit edge normal, metres."""
+        self._width, self._height = int(width), int(height)
+        self._last = None
+        self.last_events = 0
+        """Events associated with a point at the last :meth:`refine`."""
+
+    def snapshot(self) -> np.ndarray:
+        return np.copy(self.offsets)
+
+    def restore(self, state: np.ndarray) -> None:
+        self.offsets = np.copy(state)
+        self.points = self._base + self.offsets[:, None] * self._normals
+        self._last = None
+
+    def refine(self, T_world_cam: np.ndarray, used: np.ndarray, polarity: np.ndarray | None, ex: np.ndarray, ey: np.ndarray,
+               et: np.ndarray, ep: np.ndarray, t_us: int, twist: np.ndarray | None, K: np.ndarray,
+               prior: tuple[np.ndarray, np.ndarray] | None) -> tuple[np.ndarray, np.ndarray] | None:
+        """(pose, covariance) of the events (ideal pixels ``ex``, ``ey``, times ``et`` us, polarities ``ep``) against the
+        map points ``used`` (indices) starting from ``T_world_cam`` (the pose at ``t_us``); ``polarity`` (as ``used``)
+        the polarity each point may fire (+1 / -1 / 0 both; None = any), ``twist`` the body twist per second (gtsam
+        order), ``prior`` = (T_prior, information of the body tangent in squared pixels) or None. None when too few
+        events associate or the system is singular."""
+        c = self.config
+        self._last = None
+        fx, fy, cx, cy = float(K[0, 0]), float(K[1, 1]), float(K[0, 2]), float(K[1, 2])
+        used = np.ascontiguousarray(used, np.int64)
+        pts = np.take(self.points, used, axis=0)
+        tg = np.take(self._tangents, used, axis=0)
+        pol = np.zeros(0, np.int8) if polarity is None else np.ascontiguousarray(polarity, np.int8)
+        xi = np.zeros(6) if twist is None or not np.isfinite(twist).all() else np.ascontiguousarray(twist, np.float64)
+        T = np.asarray(T_world_cam, np.float64)
+        R_cw = np.ascontiguousarray(T[:3, :3].T)
+        t_cw = -R_cw @ T[:3, 3]
+        assoc = np.empty(ex.shape[0], np.int64)
+        self.last_events = int(_associate_nearest(pts, R_cw, t_cw, fx, fy, cx, cy, float(c.association_radius_px), self._width,
+                                                  self._height, ex, ey, ep, pol, assoc))
+        if self.last_events < int(c.min_events):
+            return None
+        H, b = np.zeros((6, 6)), np.zeros(6)
+        sw, swr = np.empty(used.size), np.empty(used.size)
+        pose = gtsam.Pose3(T)
+        info = None
+        if prior is not None:
+            T_p, info = gtsam.Pose3(prior[0]), prior[1]
+        args = (float(c.on_lead_px), float(c.off_lead_px), float(c.huber_px), float(c.gate_px), H, b, sw, swr)
+        n_it = int(c.iterations)
+        for it in range(n_it + 1):
+            m = pose.matrix()
+            R_cw = np.ascontiguousarray(m[:3, :3].T)
+            t_cw = -R_cw @ m[:3, 3]
+            _, n_used, swr2 = _linearise_events(ex, ey, et, ep, assoc, pts, tg, R_cw, t_cw, fx, fy, cx, cy, xi, int(t_us), *args)
+            if n_used < int(c.min_events):
+                return None
+            if it == n_it:
+                break  # the last pass measures the covariance and the points' distances at the final pose
+            Hs, bs = H, b
+            if info is not None:
+                e = gtsam.Pose3.Logmap(T_p.between(pose))
+                Hs, bs = H + info, b + info @ e
+            delta = _damped_step(Hs, bs, 0.0)
+            if not np.isfinite(delta).all():
+                return None
+            pose = pose.compose(gtsam.Pose3.Expmap(delta))
+        Hf = H + info if info is not None else H
+        if not np.linalg.eigvalsh(0.5 * (Hf + Hf.T))[0] > 0:
+            return None
+        cov = np.linalg.inv(Hf) * (swr2 / max(n_used - 6, 1)) * float(c.covariance_scale)
+        self._last = (used, sw, swr, R_cw, t_cw, (fx, fy, cx, cy))
+        return pose.matrix(), 0.5 * (cov + cov.T)
+
+    def learn(self) -> int:
+        """Move the points of the last successful :meth:`refine` by ``offset_gain`` of their gauge-free offsets;
+        returns how many moved. Call only when the track accepted that update."""
+        c = self.config
+        if self._last is None or not float(c.offset_gain) > 0:
+            return 0
+        used, sw, swr, R_cw, t_cw, (fx, fy, cx, cy) = self._last
+        self._last = None
+        return int(_learn_offsets(used, sw, swr, float(c.offset_min_weight), self.points, self._base, self._normals, self._tangents,
+                                  self.offsets, R_cw, t_cw, fx, fy, cx, cy, float(c.offset_gain), float(c.offset_clip_px),
+                                  float(c.offset_max_m), 5.0, np.full(6, np.nan)))
+
+    def refine_registration(self, reg, used: np.ndarray, polarity: np.ndarray | None, events, keep: np.ndarray, t_us: int,
+                            twist: np.ndarray | None, K: np.ndarray, calibration, predicted: np.ndarray, registration_config) -> bool:
+        """Update the successful :class:`~evpose.tracker.registration.RegistrationResult` ``reg`` in place with the step's
+        kept events (``events[keep]``), registration's isotropic prior towards ``predicted`` converted into the events'
+        units; returns whether it did (else ``reg`` is left as it was)."""
+        c = self.config
+        self._last = None
+        idx = np.flatnonzero(keep)
+        if idx.size < int(c.min_events):
+            self.last_events = 0
+            return False
+        if calibration.dist:
+            xy = calibration.undistortion_table[events.y[idx], events.x[idx]].astype(np.float64)
+            ex, ey = np.ascontiguousarray(xy[:, 0]), np.ascontiguousarray(xy[:, 1])
+        else:
+            ex, ey = events.x[idx].astype(np.float64), events.y[idx].astype(np.float64)
+        prior = None
+        rc = registration_config
+        s = float(c.prior_residual_px)
+        if s > 0 and rc.prior_translation_m > 0 and rc.prior_rotation_deg > 0:
+            s_r = np.radians(float(rc.prior_rotation_deg))
+            prior = (predicted, np.diag([1 / s_r**2] * 3 + [1 / float(rc.prior_translation_m) ** 2] * 3) * s**2)
+        out = self.refine(reg.T_world_cam, used, polarity, ex, ey, events.t[idx].astype(np.int64), events.p[idx].astype(np.int8),
+                          t_us, twist, K, prior)
+        if out is None:
+            return False
+        if c.combine and reg.covariance is not None:
+            T_f = gtsam.Pose3(reg.T_world_cam)
+            e = gtsam.Pose3.Logmap(T_f.between(gtsam.Pose3(out[0])))
+            I_f = np.linalg.inv(reg.covariance)
+            I_e = np.linalg.inv(out[1])
+            P = np.linalg.inv(I_f + I_e)
+            reg.T_world_cam = T_f.compose(gtsam.Pose3.Expmap(P @ (I_e @ e))).matrix()
+            reg.covariance = 0.5 * (P + P.T)
+        else:
+            reg.T_world_cam, reg.covariance = out
+        return True
+
+
+def event_registration_for(config, contour_map, tangents: np.ndarray, width: int, height: int) -> EventRegistration:
+    """The :class:`EventRegistration` of a :class:`~evpose.tracker.config.TrackerConfig` over ``contour_map`` (its
+    painted points and wall feet left out as ``config.event_registration`` says), ``tangents`` its unit edge directions."""
+    from evpose.tracker.map_refinement import painted_points
+    from evpose.tracker.wall_occlusion import wall_foot_mask
+
+    er, vm = config.event_registration, config.visible_map
+    skip = np.zeros(len(contour_map), np.bool_)
+    if er.skip_painted:
+        skip[painted_points(contour_map, float(config.map_refinement.max_curvature))] = True
+    if er.skip_wall_feet:
+        skip |= wall_foot_mask(contour_map, vm.wall_inward_m, vm.wall_radius_m, vm.wall_min_height_m, vm.wall_max_height_m)
+    return EventRegistration(er, width, height, contour_map.points, tangents, contour_map.edge_normal, skip)
