@@ -46,9 +46,10 @@ from evpose.tracker.motion_filter import ConstantVelocityKalman
 from evpose.tracker.predictor import ConstantPosePredictor, ConstantVelocityPredictor, MotionPredictor
 from evpose.tracker.registration import polarity_trail, register_to_map, strided_subset
 from evpose.tracker.step_result import StepResult, TrackStatus, step_debug
+from evpose.tracker.stpe_pose import stpe_pose
 from evpose.tracker.track_hold import ACQUIRE_UPDATES, TrackHold  # noqa: F401 (ACQUIRE_UPDATES re-exported)
 from evpose.tracker.modes import MotionComponents
-from evpose.tracker.visible_map import VisibleMap, projected_bounds, visible_points
+from evpose.tracker.visible_map import VisibleMap, field_box, visible_points
 from evpose.tracker.wall_occlusion import visible_over_walls, wall_foot_mask
 
 PolaritySelector = Callable[[np.ndarray, int, np.ndarray], "np.ndarray | None"]
@@ -431,33 +432,12 @@ class Tracker:
             status = TrackStatus.OK if ok and not fused.degraded else TrackStatus.DEGRADED
             if status is TrackStatus.DEGRADED and ok:
                 reason = "IMU dead reckoning: the fusion backend ignores registrations"
-        elif isinstance(self.predictor, ConstantVelocityKalman):
-            # Registrations are measurements: the filter weighs them against the motion model.
-            if ok and weak:
-                # Few inliers: only a registration that agrees with the motion model keeps the track.
-                gate = float(self.config.motion_filter.weak_gate_sigma)
-                self._pose = self.predictor.correct(until, reg.T_world_cam, reg.covariance, gate_sigma=gate)
-                status = TrackStatus.OK if self.predictor.last_fused else TrackStatus.LOST
-                if not self.predictor.last_fused:
-                    reason = (f"only {reg.inliers} of {reg.points_used} map points lie on recent events and the registration is "
-                              f"{self.predictor.last_innovation_sigma:.1f} sigma from the motion model (need {gate:g})")
-            elif ok:
-                self._pose = self.predictor.correct(until, reg.T_world_cam, reg.covariance)
-                status = TrackStatus.OK if self.predictor.last_fused else TrackStatus.DEGRADED
-                if not self.predictor.last_fused:
-                    reason = f"registration {self.predictor.last_innovation_sigma:.1f} sigma from the motion model: not fused"
-            else:
-                self._pose = self.predictor.coast(until)
-                status = TrackStatus.LOST
-            covariance = self.predictor.covariance()
-        elif ok:
-            self._pose = reg.T_world_cam.copy()
-            self.predictor.update(until, self._pose)
-            status = TrackStatus.OK
         else:
-            # Keep coasting on the prediction so the next update can recover.
-            self._pose = predicted.copy()
-            status = TrackStatus.LOST
+            # Registrations are measurements (Kalman filter) or copied into the track: see evpose.tracker.stpe_pose.
+            self._pose, status, reason, kalman_cov = stpe_pose(self.predictor, self.config.motion_filter, until, reg, ok, weak,
+                                                               predicted, reason)
+            if kalman_cov is not None:
+                covariance = kalman_cov
         self._t_us = until
         if self._weak_test:
             status, reason = self.hold.regain(status, reason, ok and not weak)
@@ -538,14 +518,6 @@ class Tracker:
         return mask
 
     def _field_box(self, pts: np.ndarray, T_world_cam: np.ndarray, coarse: bool = False) -> tuple[int, int, int, int] | None:
-        """Row/column box around the projected points plus the margin and blur radius; None = whole image."""
-        if pts.shape[0] == 0:
-            return (0, 0, 0, 0)
-        umin, umax, vmin, vmax = projected_bounds(pts, T_world_cam, self.K)
+        """The rows/columns of the field this update needs (:func:`~evpose.tracker.visible_map.field_box`)."""
         blur = int(self.config.distance_field.coarse_blur_px if coarse else self.config.distance_field.blur_px)
-        pad = int(self.config.field_margin_px) + blur
-        c0 = int(np.floor(umin)) - pad
-        c1 = int(np.ceil(umax)) + pad + 1
-        r0 = int(np.floor(vmin)) - pad
-        r1 = int(np.ceil(vmax)) + pad + 1
-        return (max(r0, 0), min(r1, self.height), max(c0, 0), min(c1, self.width))
+        return field_box(pts, T_world_cam, self.K, int(self.config.field_margin_px) + blur, self.width, self.height)

@@ -173,6 +173,20 @@ def projected_bounds(points_world: np.ndarray, T_world_cam: np.ndarray, K: np.nd
     return _bounds_kernel(pts, R_cw, t_cw, float(K[0, 0]), float(K[1, 1]), float(K[0, 2]), float(K[1, 2]))
 
 
+def field_box(points_world: np.ndarray, T_world_cam: np.ndarray, K: np.ndarray, pad: int, width: int,
+              height: int) -> tuple[int, int, int, int]:
+    """(row 0, row 1, column 0, column 1) of the box around the projected points widened by ``pad`` pixels (the
+    field's margin and blur radius), clipped to the sensor: the only part of the distance field an update reads."""
+    if points_world.shape[0] == 0:
+        return (0, 0, 0, 0)
+    umin, umax, vmin, vmax = projected_bounds(points_world, T_world_cam, K)
+    c0 = int(np.floor(umin)) - pad
+    c1 = int(np.ceil(umax)) + pad + 1
+    r0 = int(np.floor(vmin)) - pad
+    r1 = int(np.ceil(vmax)) + pad + 1
+    return (max(r0, 0), min(r1, height), max(c0, 0), min(c1, width))
+
+
 BLOCK_POINTS = 64
 """Consecutive map points per bounding sphere of the block-wise superset cull (contour maps store neighbours
 together: on the simulated landing 64 points span a 0.3 m sphere, median)."""
