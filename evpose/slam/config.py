@@ -353,7 +353,10 @@ class TrackingConfig:
     constant-rate prediction as a 0.5 deg prior of every MCI's pose (PnP refined like the gyro prior) was worse: 54
     runs +0.24 +- 0.22 points (21 of 54 within 2 %); with the BA factor at 40: defaults 2.75 %. Both factors with
     ``min_observations`` 3 and ``keyframe_displacement_px`` 14: 25 runs -0.09 +- 0.26 (rotation error 0.99 deg).
-    Off, degrees per second."""
+    Starting each MCI's pose estimate at the last pose's rotation (translation still extrapolated), in case the
+    extrapolated rotation rate carried the bias from step to step along the weakly observed direction: seeds 1, 2, 3,
+    10 4.63 / 2.66 / 3.06 / 2.33 -> 2.07 / 1.62 / 1.47 / 2.91 %, but over the 60 runs +0.05 +- 0.15 points (29 of 60
+    within 2 %). Off, degrees per second."""
     coast_s: float = field(default=0.0, metadata={"min": 0.0, "max": 2.0, "step": 0.01, "unit": "s"})
     """Event-only: longest stretch a map coasts through visual failures, its pose predicted by its own recent rotation
     rate and camera-frame velocity (:mod:`evpose.slam.event_coasting`), before it is given up (0: lost at once),
