@@ -23,7 +23,8 @@ class BaReport:
 
 def local_bundle_adjustment(m: SlamMap, K: np.ndarray, window: int, iterations: int, huber_px: float, n_fixed: int = 1,
                             rotation_priors: dict | None = None, rotation_sigma_rad: float = 1e-3, scale_anchor: float = 0.0,
-                            rotation_sigmas_rad: dict | None = None, velocity_sigma_ratio: float = 0.0) -> BaReport:
+                            rotation_sigmas_rad: dict | None = None, velocity_sigma_ratio: float = 0.0,
+                            rotation_rate_sigma_rad_s: float = 0.0) -> BaReport:
     """Optimise the last ``window`` keyframes of ``m`` and the points they see, in place.
 
     The ``n_fixed`` oldest keyframes of the window (two while the map has only
@@ -37,7 +38,8 @@ def local_bundle_adjustment(m: SlamMap, K: np.ndarray, window: int, iterations: 
     keyframes of the window at its value before the optimisation, with that sigma relative to the distance: with one
     fixed keyframe the monocular scale is a gauge freedom the solver may slide along.
     ``velocity_sigma_ratio`` > 0 adds constant-velocity factors between consecutive keyframes
-    (:mod:`evpose.slam.motion_prior`), that share of the speed as sigma.
+    (:mod:`evpose.slam.motion_prior`), that share of the speed as sigma; ``rotation_rate_sigma_rad_s`` > 0 adds
+    constant-rotation-rate factors with that sigma, rad/s.
     """
     import gtsam
     from gtsam.symbol_shorthand import L, X
@@ -95,6 +97,10 @@ def local_bundle_adjustment(m: SlamMap, K: np.ndarray, window: int, iterations: 
 
         # The keyframe before the window, when it sees the window's points, ties the first free velocity to the past.
         add_velocity_factors(graph, m.keyframes[-(window + 1):], used_kfs, in_window - fixed_ids, velocity_sigma_ratio)
+    if rotation_rate_sigma_rad_s > 0:
+        from evpose.slam.motion_prior import add_rotation_rate_factors
+
+        add_rotation_rate_factors(graph, m.keyframes[-(window + 1):], used_kfs, in_window - fixed_ids, rotation_rate_sigma_rad_s)
     params = gtsam.LevenbergMarquardtParams()
     params.setMaxIterations(int(iterations))
     e0 = graph.error(values)

@@ -12,7 +12,11 @@ projection: keyframe and MCI are tens of pixels apart, and a backward pass
 started at the forward result converged for about 2 % of the candidates (16 %
 with the guided start, landing seed 0). An edge makes events only when it moves
 across itself, so a point missing in the newest keyframe's view is tried from
-older ones.
+older ones. Session 12, landing seed 2: of 5764 KLT candidates 14 % passed the
+forward-backward check and 2.7 % landed within the 3 px radius (median distance of the passing ones 5.6 px); about 110 map points project into each MCI,
+77 of them seen in the local window, and 39 are tracked. Warping each keyframe MCI into the current view first (by
+the homography of the plane fitted to its points) left that unchanged (13 %, 2.6 %), so rotation and scale change
+between the views are not what stops KLT there.
 """
 
 from __future__ import annotations

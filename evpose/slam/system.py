@@ -438,7 +438,8 @@ class EventSlam(GyroAids, VisualFailureHandling):
                                     # Event-inertial maps get their scale from the IMU initialisation; anchoring the visual
                                     # scale before it made E-I-C2 worse (TrackingConfig.ba_scale_anchor).
                                     scale_anchor=tc.ba_scale_anchor if self.imu is None else 0.0,
-                                    velocity_sigma_ratio=tc.ba_velocity_prior if self.imu is None else 0.0)
+                                    velocity_sigma_ratio=tc.ba_velocity_prior if self.imu is None else 0.0,
+                                    rotation_rate_sigma_rad_s=np.radians(tc.ba_rotation_rate_prior_deg_s) if self.imu is None else 0.0)
         cull_points(m, self.K, fe.track_to_point, tc)
         # BA moved the newest keyframe: the trajectory's last pose follows it.
         m.add_pose(t_us, m.keyframes[-1].T_wc)

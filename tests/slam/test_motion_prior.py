@@ -3,7 +3,7 @@ from scipy.spatial.transform import Rotation
 
 from evpose.slam.atlas import Keyframe
 from evpose.slam.bundle_adjustment import local_bundle_adjustment
-from evpose.slam.motion_prior import add_velocity_factors, velocity_residual
+from evpose.slam.motion_prior import add_rotation_rate_factors, add_velocity_factors, rotation_rate_residual, velocity_residual
 
 from tests.slam.test_bundle_adjustment import K, _map
 
@@ -82,6 +82,80 @@ def test_local_ba_with_velocity_prior_still_fits_a_constant_velocity_map():
     m, X, true_T = _map(n_kf=5)
     before = np.mean([np.linalg.norm(kf.T_wc[:3, 3] - T[:3, 3]) for kf, T in zip(m.keyframes, true_T)])
     rep = local_bundle_adjustment(m, K, window=5, iterations=20, huber_px=2.0, n_fixed=2, velocity_sigma_ratio=0.1)
+    after = np.mean([np.linalg.norm(kf.T_wc[:3, 3] - T[:3, 3]) for kf, T in zip(m.keyframes, true_T)])
+    assert rep.final_error < 0.1 * rep.initial_error
+    assert after < 0.5 * before
+
+
+def _rate_graph(kfs, sigma=0.5):
+    import gtsam
+    from gtsam.symbol_shorthand import X
+
+    graph, values = gtsam.NonlinearFactorGraph(), gtsam.Values()
+    for kf in kfs:
+        values.insert(X(kf.id), gtsam.Pose3(kf.T_wc))
+    n = add_rotation_rate_factors(graph, kfs, {kf.id for kf in kfs}, {kfs[-1].id}, sigma)
+    return graph, values, n
+
+
+def test_rotation_rate_factor_jacobians_match_finite_differences():
+    import gtsam
+    from gtsam.symbol_shorthand import X
+
+    kfs = [Keyframe(0, 0, _pose([0.1, -0.2, 0.3], [0, 0, 0])), Keyframe(1, 40_000, _pose([0.13, -0.18, 0.31], [0.1, 0.02, 0.0])),
+           Keyframe(2, 100_000, _pose([0.15, -0.17, 0.35], [0.3, 0.01, -0.05]))]
+    graph, values, n = _rate_graph(kfs)
+    assert n == 1
+    f = graph.at(0)
+    e0 = f.unwhitenedError(values)
+    A, b = graph.linearize(values).jacobian()
+    scale = np.linalg.norm(e0) / max(np.linalg.norm(b), 1e-12)
+    eps = 1e-6
+    for i, kf in enumerate(kfs):
+        for d in range(6):
+            delta = np.zeros(6)
+            delta[d] = eps
+            v2 = gtsam.Values(values)
+            v2.update(X(kf.id), values.atPose3(X(kf.id)).retract(delta))
+            num = (f.unwhitenedError(v2) - e0) / eps
+            # First-order inverse right Jacobians: exact enough for rotations a few degrees apart.
+            np.testing.assert_allclose(A[:, 6 * i + d] * scale, num, atol=0.02 * np.abs(num).max() + 1e-6)
+
+
+def test_rotation_rate_factor_pulls_a_rate_jump_back_to_constant_rate():
+    import gtsam
+    from gtsam.symbol_shorthand import X
+
+    # Two fixed keyframes turning 1 deg per 50 ms about x; the third turned 3 deg (a rotation collapse) under a loose prior.
+    kfs = [Keyframe(k, 50_000 * k, _pose([np.radians(k), 0, 0], [0.1 * k, 0, 0])) for k in range(3)]
+    kfs[2].T_wc[:3, :3] = Rotation.from_rotvec([np.radians(1 + 3), 0, 0]).as_matrix()
+    graph, values, _ = _rate_graph(kfs, sigma=np.radians(5.0))
+    tight, loose = gtsam.noiseModel.Isotropic.Sigma(6, 1e-6), gtsam.noiseModel.Isotropic.Sigma(6, 1.0)
+    for kf in kfs:
+        graph.add(gtsam.PriorFactorPose3(X(kf.id), gtsam.Pose3(kf.T_wc), tight if kf.id < 2 else loose))
+    out = gtsam.LevenbergMarquardtOptimizer(graph, values, gtsam.LevenbergMarquardtParams()).optimize()
+    angle = Rotation.from_matrix(out.atPose3(X(2)).rotation().matrix()).as_rotvec()
+    np.testing.assert_allclose(angle, [np.radians(2), 0, 0], atol=np.radians(0.05))
+    # The translation is left to the other factors.
+    assert abs(out.atPose3(X(2)).translation()[0] - 0.2) < 1e-3
+    R = [Rotation.from_rotvec([np.radians(k), 0, 0]).as_matrix() for k in range(3)]
+    np.testing.assert_allclose(rotation_rate_residual(*R, 0.05, 0.05), 0.0, atol=1e-12)
+
+
+def test_rotation_rate_factors_skip_long_gaps_and_all_fixed_triples():
+    import gtsam
+
+    kfs = [Keyframe(k, 50_000 * k, _pose([0.01 * k, 0, 0], [0.1 * k, 0, 0])) for k in range(4)]
+    kfs[3].t_us = kfs[2].t_us + 2_000_000
+    graph = gtsam.NonlinearFactorGraph()
+    assert add_rotation_rate_factors(graph, kfs, {0, 1, 2, 3}, {2, 3}, 0.5) == 1
+    assert add_rotation_rate_factors(graph, kfs, {0, 1, 2, 3}, set(), 0.5) == 0
+
+
+def test_local_ba_with_rotation_rate_prior_still_fits_a_constant_motion_map():
+    m, X, true_T = _map(n_kf=5)
+    before = np.mean([np.linalg.norm(kf.T_wc[:3, 3] - T[:3, 3]) for kf, T in zip(m.keyframes, true_T)])
+    rep = local_bundle_adjustment(m, K, window=5, iterations=20, huber_px=2.0, n_fixed=2, rotation_rate_sigma_rad_s=np.radians(40))
     after = np.mean([np.linalg.norm(kf.T_wc[:3, 3] - T[:3, 3]) for kf, T in zip(m.keyframes, true_T)])
     assert rep.final_error < 0.1 * rep.initial_error
     assert after < 0.5 * before
