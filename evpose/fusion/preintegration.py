@@ -56,6 +56,8 @@ class ImuBuffer:
         self._view: ImuSamples = ImuSamples.empty()
         self.version = next(_VERSIONS)
         """Changes whenever the buffered samples change, unique across buffers (keys caches of integrals over them)."""
+        self._measured: tuple | None = None
+        """(version, integer time, acc, gyro) of the last integer-time :meth:`measurement_at` (read-only arrays)."""
 
     def add(self, imu: ImuSamples) -> None:
         """Append samples given on the IMU clock; samples not newer than the last one kept are ignored (overlapping chunks)."""
@@ -112,15 +114,23 @@ class ImuBuffer:
         self.version = next(_VERSIONS)
 
     def measurement_at(self, t_us: float) -> tuple[np.ndarray, np.ndarray]:
-        """Linearly interpolated (acc, gyro) at a time; held constant outside the buffered span."""
+        """Linearly interpolated (acc, gyro) at a time; held constant outside the buffered span (read-only arrays at an
+        integer time: they are kept for the next call)."""
         s = self.samples
         if len(s) == 0:
             return np.zeros(3), np.zeros(3)
         if isinstance(t_us, (int, np.integer)):
-            # Every update asks twice (prediction and new state): one compiled call for the numpy lines below,
-            # the same operations on the same values (integer time difference, then one float division).
+            # Every update asks twice for the same time (prediction and new state): the last answer is kept (read-only,
+            # a pure function of the samples and the time); else one compiled call for the numpy lines below, the
+            # same operations on the same values (integer time difference, then one float division).
+            last = self._measured
+            if last is not None and last[0] == self.version and last[1] == t_us:
+                return last[2], last[3]
             acc, gyro = np.empty(3), np.empty(3)
             _measurement_kernel(s.t, s.acc, s.gyro, np.int64(t_us), acc, gyro)
+            acc.setflags(write=False)
+            gyro.setflags(write=False)
+            self._measured = (self.version, int(t_us), acc, gyro)
             return acc, gyro
         i = int(np.searchsorted(s.t, t_us, side="right"))
         if i <= 0:
