@@ -99,6 +99,9 @@ def usable_pose(T: np.ndarray | None) -> np.ndarray | None:
     return T if np.isfinite(T).all() else None
 
 
+_X, _V, _B = (ord(c) << 56 for c in "xvb")
+"""gtsam ``Symbol`` keys of index 0 of the pose, velocity and bias states (tests check them against gtsam's)."""
+
 _ESTIMATORS: dict = {}
 
 
@@ -169,8 +172,9 @@ class FactorGraphFusion:
         return self.index >= 0
 
     def _keys(self, i: int):
-        X, V, B = self._gtsam.symbol_shorthand.X, self._gtsam.symbol_shorthand.V, self._gtsam.symbol_shorthand.B
-        return X(i), V(i), B(i)
+        # gtsam's ``symbol_shorthand.X(i)`` etc. (``Symbol``: the character in the top byte, the index below), without
+        # three pybind calls per use.
+        return _X | i, _V | i, _B | i
 
     def _new_smoother(self):
         gtsam = self._gtsam
