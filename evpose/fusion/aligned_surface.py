@@ -130,19 +130,26 @@ def _select_times(touched, n, tag, owner, last_on, last_off, last_comb, recent_u
     pixel reads NEVER); ``has_events[k]`` is set when a pixel point ``k`` owns holds an accepted event at or after
     ``recent_us``. A compact list, not an image: the distance field reads it directly
     (:mod:`evpose.fusion.aligned_field`), and :meth:`AlignedTimeSurface.last_of` scatters it only when asked."""
+    # Flat views and one unsigned offset per pixel (no 2-D index arithmetic with negative-index wrap per array read):
+    # the same reads, ~45 % less time with the maps out of cache (session 12, 20 demo steps: 320-350 -> 175 us).
+    width = np.uint64(tag.shape[1])
+    tag_flat = tag.reshape(-1)
+    owner_flat = owner.reshape(-1)
+    on_flat = last_on.reshape(-1)
+    off_flat = last_off.reshape(-1)
+    comb_flat = last_comb.reshape(-1)
     for i in range(n):
-        r = touched[i, 0]
-        c = touched[i, 1]
-        a = tag[r, c] & 3
+        p = np.uint64(touched[i, 0]) * width + np.uint64(touched[i, 1])
+        a = tag_flat[p] & 3
         if a == 1:
-            t = last_on[r, c]
+            t = on_flat[p]
         elif a == 2:
-            t = last_off[r, c]
+            t = off_flat[p]
         else:
-            t = last_comb[r, c]
+            t = comb_flat[p]
         times[i] = t
         if t >= recent_us:
-            has_events[owner[r, c]] = True
+            has_events[owner_flat[p]] = True
 
 
 @nb.njit(cache=True)
