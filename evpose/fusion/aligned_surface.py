@@ -89,6 +89,15 @@ def _mark_patches(points, R_cw, t_cw, fx, fy, cx, cy, polarity, radius, box, gen
     n = 0
     rad = int(np.ceil(radius))
     r2 = radius * radius
+    # Flat views with unsigned offsets (no negative-index wrap per access), each pixel's tag read once, and the
+    # squared column offsets of a point computed once for its rows: the same values (``dx * dx + dy * dy``, the same
+    # products and sum) and the same writes in the same order, ~15 % less time (session 12).
+    width = tag.shape[1]
+    tag_flat = tag.reshape(-1)
+    dist2_flat = dist2.reshape(-1)
+    owner_flat = owner.reshape(-1)
+    gen_bits = np.uint16(gen << 2)
+    dxx = np.empty(2 * rad + 1)
     for k in range(points.shape[0]):
         X = R_cw[0, 0] * points[k, 0] + R_cw[0, 1] * points[k, 1] + R_cw[0, 2] * points[k, 2] + t_cw[0]
         Y = R_cw[1, 0] * points[k, 0] + R_cw[1, 1] * points[k, 1] + R_cw[1, 2] * points[k, 2] + t_cw[1]
@@ -100,27 +109,38 @@ def _mark_patches(points, R_cw, t_cw, fx, fy, cx, cy, polarity, radius, box, gen
         if not (u > c0 - radius - 1 and u < c1 + radius and v > r0 - radius - 1 and v < r1 + radius):
             continue
         flag = np.uint16(1) if polarity[k] > 0 else (np.uint16(2) if polarity[k] < 0 else np.uint16(3))
+        new_tag = np.uint16(gen_bits | flag)
         cu = int(np.floor(u + 0.5))
         cv = int(np.floor(v + 0.5))
+        x0 = max(cu - rad, c0)
+        x1 = min(cu + rad + 1, c1)
+        for xx in range(x0, x1):
+            dx = xx - u
+            dxx[xx - x0] = dx * dx
         for yy in range(max(cv - rad, r0), min(cv + rad + 1, r1)):
             dy = yy - v
-            for xx in range(max(cu - rad, c0), min(cu + rad + 1, c1)):
-                dx = xx - u
-                d = np.float32(dx * dx + dy * dy)
+            dyy = dy * dy
+            row = np.uint64(yy * width)
+            for xx in range(x0, x1):
+                d = np.float32(dxx[xx - x0] + dyy)
                 if d <= r2:
-                    if (tag[yy, xx] >> 2) != gen:  # first patch on this pixel in this step: it was empty
+                    p = row + np.uint64(xx)
+                    t = tag_flat[p]
+                    if (t >> 2) != gen:  # first patch on this pixel in this step: it was empty
                         touched[n, 0] = yy
                         touched[n, 1] = xx
                         n += 1
-                        dist2[yy, xx] = d
-                        tag[yy, xx] = (gen << 2) | flag
-                        owner[yy, xx] = k
-                    elif d < dist2[yy, xx]:
-                        dist2[yy, xx] = d
-                        tag[yy, xx] = (gen << 2) | flag
-                        owner[yy, xx] = k
-                    elif d == dist2[yy, xx]:
-                        tag[yy, xx] |= flag  # equidistant points of both polarities: keep both
+                        dist2_flat[p] = d
+                        tag_flat[p] = new_tag
+                        owner_flat[p] = k
+                    else:
+                        before = dist2_flat[p]
+                        if d < before:
+                            dist2_flat[p] = d
+                            tag_flat[p] = new_tag
+                            owner_flat[p] = k
+                        elif d == before:
+                            tag_flat[p] = t | flag  # equidistant points of both polarities: keep both
     return n
 
 
