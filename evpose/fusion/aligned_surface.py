@@ -227,6 +227,9 @@ def _judge_events(x, y, p, keep, width, lut, gen, tag, owner, dist2, box, polari
     outside = 0
     wrong = 0
     height = tag.shape[0]
+    tag_flat = tag.reshape(-1)  # flat views: one offset per pixel, as in _select_times
+    owner_flat = owner.reshape(-1)
+    dist2_flat = dist2.reshape(-1)
     m = 0
     for i in range(x.shape[0]):
         if not keep[i]:
@@ -240,14 +243,15 @@ def _judge_events(x, y, p, keep, width, lut, gen, tag, owner, dist2, box, polari
         n += 1
         r = j // width
         c = j - r * width
-        if not (box[0] <= r < box[1] and box[2] <= c < box[3] and r < height and (tag[r, c] >> 2) == gen):
+        q = np.uint64(j)  # the pixel's offset in the flat views (``j`` is row * width + column)
+        if not (box[0] <= r < box[1] and box[2] <= c < box[3] and r < height and (tag_flat[q] >> 2) == gen):
             outside += 1
             continue
-        a = tag[r, c] & 3
+        a = tag_flat[q] & 3
         if (a == 1 and p[i] < 0) or (a == 2 and p[i] > 0):
             wrong += 1
-        k = owner[r, c]
-        if k >= 0 and dist2[r, c] <= r2:
+        k = owner_flat[q]
+        if k >= 0 and dist2_flat[q] <= r2:
             out_point[m - 1] = k
             out_label[m - 1] = 1 if (polarity[k] == 0 or polarity[k] == p[i]) else 0
             score[k] += p[i]
