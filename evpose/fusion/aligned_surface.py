@@ -46,6 +46,13 @@ record per pixel instead of the three arrays (0.98x), points sorted by image row
 instead of the square (1.41x, slower), 2 MB pages for every array (0.99x), a branch-free selection (0.95x), per-
 pixel slots into compact per-update arrays (marking 1.00x, selecting 0.80x: 45 us). Session 11, ``full`` seed 0,
 in a run: selecting by a scan of the box's tags row by row (the maps then read in row order) 112-149 -> 173 us.
+Session 12 (demo ``full``, kernels timed on captured inputs after 48 MB of other traffic, outputs compared): flat
+views with one unsigned offset per pixel (no 2-D index arithmetic with negative-index wrap per access) took
+``_select_times`` 294-307 -> 165-170 us, ``_mark_patches`` 439-473 -> 370-418 us (with the squared column offsets
+computed once per point), ``_judge_events`` 69-84 -> 58-76 us; not kept: ``_mark_patches`` visiting only each row's
+columns within the radius (a square root per row) 236-243 -> 272-280 us hot (slower), the same flat views in
+:func:`~evpose.fusion.aligned_field._sparse_tdf` (82-91 -> 78-86 us) and in the noise filter (4.8 -> 5.6 us per
+600 events hot, slower).
 """
 
 from __future__ import annotations
