@@ -51,8 +51,7 @@ views with one unsigned offset per pixel (no 2-D index arithmetic with negative-
 ``_select_times`` 294-307 -> 165-170 us, ``_mark_patches`` 439-473 -> 370-418 us (with the squared column offsets
 computed once per point), ``_judge_events`` 69-84 -> 58-76 us; not kept: ``_mark_patches`` visiting only each row's
 columns within the radius (a square root per row) 236-243 -> 272-280 us hot (slower), the same flat views in
-:func:`~evpose.fusion.aligned_field._sparse_tdf` (82-91 -> 78-86 us) and in the noise filter (4.8 -> 5.6 us per
-600 events hot, slower).
+:func:`~evpose.fusion.aligned_field._sparse_tdf` (82-91 -> 78-86 us: one array, written at each pixel once).
 """
 
 from __future__ import annotations
