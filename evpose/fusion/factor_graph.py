@@ -27,6 +27,7 @@ optimisation, so a large correction is accepted at once (re-acquisition).
 
 from __future__ import annotations
 
+import numba as nb
 import numpy as np
 
 from evpose.core.camera import CameraCalibration
@@ -45,17 +46,39 @@ def registration_covariance(config: FusionConfig, covariance_6x6: np.ndarray | N
     A missing, non-finite or non-positive-definite covariance (a degenerate
     registration Hessian) falls back to the configured default sigmas.
     """
-    cov = None
+    floor = _covariance_floor(config.registration_min_sigma)
     if covariance_6x6 is not None:
-        c = np.asarray(covariance_6x6, dtype=np.float64).reshape(6, 6)
-        c = 0.5 * (c + c.T)
-        if np.isfinite(c).all() and _positive_definite(c):
-            # correlated errors: see the config field
-            cov = c * float(config.registration_covariance_scale if scale is None else scale)
-    if cov is None:  # built only when used (every update pays for this function)
-        sr, st = config.registration_default_sigma_rot, config.registration_default_sigma_trans
-        cov = np.diag([sr * sr] * 3 + [st * st] * 3)
-    return cov + _covariance_floor(config.registration_min_sigma)
+        c = np.empty((6, 6))
+        # ``0.5 * (c + c.T)`` and its finiteness in one compiled pass (the same operations, fewer numpy calls).
+        if _symmetrised(np.asarray(covariance_6x6, dtype=np.float64).reshape(6, 6), c) and _positive_definite(c):
+            # correlated errors: see the config field; ``c * scale + floor``, element by element as numpy does it
+            return _scaled_plus(c, float(config.registration_covariance_scale if scale is None else scale), floor)
+    # built only when used (every update pays for this function)
+    sr, st = config.registration_default_sigma_rot, config.registration_default_sigma_trans
+    return np.diag([sr * sr] * 3 + [st * st] * 3) + floor
+
+
+@nb.njit(cache=True)
+def _symmetrised(c, out):
+    """``out = 0.5 * (c + c.T)`` (6, 6); whether every element is finite."""
+    finite = True
+    for i in range(6):
+        for j in range(6):
+            v = 0.5 * (c[i, j] + c[j, i])
+            out[i, j] = v
+            if not np.isfinite(v):
+                finite = False
+    return finite
+
+
+@nb.njit(cache=True)
+def _scaled_plus(c, scale, floor):
+    """``c * scale + floor`` (6, 6) as a new array."""
+    out = np.empty((6, 6))
+    for i in range(6):
+        for j in range(6):
+            out[i, j] = c[i, j] * scale + floor[i, j]
+    return out
 
 
 def _positive_definite(c: np.ndarray) -> bool:
@@ -98,6 +121,9 @@ def usable_pose(T: np.ndarray | None) -> np.ndarray | None:
     T = np.asarray(T, dtype=np.float64).reshape(4, 4)
     return T if np.isfinite(T).all() else None
 
+
+_X, _V, _B = (ord(c) << 56 for c in "xvb")
+"""gtsam ``Symbol`` keys of index 0 of the pose, velocity and bias states (tests check them against gtsam's)."""
 
 _ESTIMATORS: dict = {}
 
@@ -169,8 +195,9 @@ class FactorGraphFusion:
         return self.index >= 0
 
     def _keys(self, i: int):
-        X, V, B = self._gtsam.symbol_shorthand.X, self._gtsam.symbol_shorthand.V, self._gtsam.symbol_shorthand.B
-        return X(i), V(i), B(i)
+        # gtsam's ``symbol_shorthand.X(i)`` etc. (``Symbol``: the character in the top byte, the index below), without
+        # three pybind calls per use.
+        return _X | i, _V | i, _B | i
 
     def _new_smoother(self):
         gtsam = self._gtsam

@@ -355,3 +355,12 @@ def test_ar1_error_models_restore_bit_for_bit_and_serialise(model, calibration):
         back = gtsam.NonlinearFactorGraph()
         back.deserialize(g.serialize())
         assert back.size() == g.size() and back.equals(g, 1e-12)
+
+
+def test_state_keys_are_gtsam_symbols():
+    import gtsam
+
+    f = FactorGraphFusion(FusionConfig())
+    sh = gtsam.symbol_shorthand
+    for i in (0, 1, 7, 123456):
+        assert f._keys(i) == (sh.X(i), sh.V(i), sh.B(i))

@@ -146,3 +146,15 @@ def test_pieces_of_a_single_sample_buffer_hold_it():
     buf.add(ImuSamples.from_arrays(np.array([5000]), [[1.0, 2.0, 3.0]], [[0.1, 0.2, 0.3]]))
     dts, acc, gyro = buf.pieces(1000, 9000)
     assert np.array_equal(dts, [0.004, 0.004]) and np.array_equal(acc, [[1.0, 2.0, 3.0]] * 2) and np.array_equal(gyro, [[0.1, 0.2, 0.3]] * 2)
+
+
+def test_measurement_at_an_integer_time_is_kept_read_only_until_the_samples_change():
+    buf = ImuBuffer()
+    t = np.arange(0, 10_000, 2000, dtype=np.int64)
+    buf.add(ImuSamples.from_arrays(t, np.arange(15.0).reshape(5, 3), -np.arange(15.0).reshape(5, 3)))
+    acc, gyro = buf.measurement_at(3000)
+    assert np.array_equal(acc, [4.5, 5.5, 6.5]) and not acc.flags.writeable and not gyro.flags.writeable
+    assert buf.measurement_at(3000)[0] is acc
+    buf.add(ImuSamples.from_arrays(np.array([10_000]), np.zeros((1, 3)), np.zeros((1, 3))))
+    again, _ = buf.measurement_at(3000)
+    assert again is not acc and np.array_equal(again, acc)
