@@ -39,6 +39,7 @@ from evpose.slam.features import FrontendTracks, detect_features, track_features
 from evpose.slam.inertial import InertialConfiguration, imu_init_due, initialize_imu
 from evpose.slam.inertial_bridge import predict_camera_pose
 from evpose.slam.inertial_ba import InertialState, inertial_local_bundle_adjustment
+from evpose.slam.inertial_trajectory import carry_relative_scale, keyframe_positions
 from evpose.slam.initialization import initialize_two_view
 from evpose.slam.map_rejoin import RejoinCandidate, merge_into, rejoin_similarity
 from evpose.slam.local_map import cull_points, insert_keyframe, need_keyframe, triangulate_new_points
@@ -315,12 +316,15 @@ class EventSlam(GyroAids, VisualFailureHandling):
             m.inertial = InertialState({kfs[k].id: v for k, v in zip(res.used, res.velocities)}, np.zeros(3), res.gyro_bias.copy())
             ic, tc = self.cfg.inertial, self.cfg.tracking
             if ic.inertial_ba and ic.full_ba_after_init:
+                before = keyframe_positions(m) if ic.carry_mci_scale else None
                 # One inertial BA over every keyframe (as ORB-SLAM3 does after its initialisation): the IMU now
                 # corrects the whole visual map, not only the next local window.
                 inertial_local_bundle_adjustment(m, m.inertial, self.K, self.imu, self.calib.T_cam_imu, self.calib.time_offset_us,
                                                  len(m.keyframes), tc.ba_iterations, tc.ba_huber_px, ic.acc_noise, ic.gyro_noise,
                                                  ic.acc_bias_sigma, ic.gyro_bias_sigma, ic.velocity_from_imu,
                                              velocity_prior_sigma=ic.ba_velocity_prior_sigma, min_span_s=ic.ba_min_span_s, span_keyframes=ic.ba_span_keyframes)
+                if before is not None:
+                    carry_relative_scale(m, before)
             self._reanchor_rotations(m)
 
     # ------------------------------------------------------------- tracking
@@ -420,6 +424,7 @@ class EventSlam(GyroAids, VisualFailureHandling):
             if self._matcher() is SearchMatcher.KLT:
                 keep_keyframe_image(m, kf, img8, tc.local_window)
         ic = self.cfg.inertial
+        before = keyframe_positions(m) if adjust and self.imu is not None and ic.carry_mci_scale else None
         if not adjust:
             pass
         elif m.imu_initialised and ic.inertial_ba:
@@ -440,6 +445,8 @@ class EventSlam(GyroAids, VisualFailureHandling):
                                     scale_anchor=tc.ba_scale_anchor if self.imu is None else 0.0,
                                     velocity_sigma_ratio=tc.ba_velocity_prior if self.imu is None else 0.0,
                                     rotation_rate_sigma_rad_s=np.radians(tc.ba_rotation_rate_prior_deg_s) if self.imu is None else 0.0)
+        if before is not None:
+            carry_relative_scale(m, before)
         cull_points(m, self.K, fe.track_to_point, tc)
         # BA moved the newest keyframe: the trajectory's last pose follows it.
         m.add_pose(t_us, m.keyframes[-1].T_wc)
@@ -455,9 +462,13 @@ class EventSlam(GyroAids, VisualFailureHandling):
     def _refine_scale(self, m: SlamMap) -> None:
         """Re-solve scale and gravity over all keyframes of a metric map, once (:mod:`evpose.slam.scale_refinement`)."""
         tc = self.cfg.tracking
-        self.last_scale_refinement = refine_map_scale(m, self.K, self.imu, self.calib.T_cam_imu, self.calib.time_offset_us,
-                                                      self.cfg.inertial, tc.ba_iterations, tc.ba_huber_px)
-        if self.last_scale_refinement.ok:
+        before = keyframe_positions(m)
+        res = self.last_scale_refinement = refine_map_scale(m, self.K, self.imu, self.calib.T_cam_imu, self.calib.time_offset_us,
+                                                            self.cfg.inertial, tc.ba_iterations, tc.ba_huber_px)
+        if res.ok:
+            if self.cfg.inertial.carry_mci_scale:
+                # The similarity already scaled the relative poses; what is left is the BA's reshaping.
+                carry_relative_scale(m, {k: res.scale * (res.R_align @ p) for k, p in before.items()})
             self._reanchor_rotations(m)
 
     def _imu_prediction(self, t_us: int) -> np.ndarray | None:
