@@ -25,7 +25,29 @@ to 6.19 mm (seed 0 8.46 -> 6.14), and the fused error's mean per camera axis wen
 0.14 / 0.43 mm (seed 0); on the built map the same gave 16.1 mm (seed 0) until the painted points were left out.
 CPU at 346x260 (seed 0, thread time, load ~7): 0.58 ms median per update in a run (0.3 ms called again and again on
 one update's inputs: the association, each of the 4 passes over ~900 events ~0.03 ms, the rest Python), the learning
-0.05 ms; the whole ``full`` update 3.4-4.7 -> 4.4-6.0 ms median (3 alternated rounds, same process).
+0.05 ms; the whole ``full`` update 3.4-4.7 -> 4.4-6.0 ms median (3 alternated rounds, same process). Hot, one
+update's inputs called again and again (seed 0, 865 points, 1265 events, 938 associated): association 33 us, each
+pass 26 us, ~400 us per call over 200 consecutive updates: the rest is Python and gtsam around 5 numba calls.
+
+What limits it now (session 12, ``full`` 346x260 seeds 0-3 unless said, 6.38 mm with these defaults; oracles from
+the simulator's true edges, ``/tmp/s12/fullacc2/oracle.py``): the events' copy of the map moved along each point's
+edge normal onto the true edges (painted points then included) gives 5.74 mm combined and 4.77 mm (ARE 0.053 deg)
+with the events' pose replacing the field's; only its points more than 1 mm off so moved (9 % of them), replacing,
+4.94 mm; only the painted ones, combined, 6.14 mm; at 240x180 6.45 combined / 5.88 replacing (against 7.25). So
+the events' map sets the limit, and the offsets learned online do not find it: on the horizontal surfaces' points
+they moved, the learned offsets correlate 0.43-0.48 with the true ones and cut their RMS only 1.56 -> 1.47 mm
+(seed 0, end of the run; gain 0.05: 0.47, 1.55 -> 1.40 mm); counting the vertical faces' rims too, whose edge
+normal lies nearly along the view ray, 0.13-0.15 and 2.5 -> 4.9 mm: those slide by centimetres and stop pulling,
+which helps (learning only where a move along the normal shifts the image by at least 30 / 100 px/m instead of
+the kernel's 5: 6.70 / 6.86 mm). Not better either: the offsets pooled, each update, over the points of the same
+region with parallel edge normals within 3 / 6 / 12 cm (6.50 / 6.27 / 6.62 mm; 6 cm with gain 0.1 6.46); the
+vertical faces' rims or vertical edges left out of the events (6.83 / 6.43 mm); the painted points entering the
+events at the field refiner's positions (:mod:`evpose.tracker.map_refinement`, 4 mm RMS from the truth after
+~40 updates against 11 mm as built) once refined in 10 / 30 updates (6.34 / 6.29 mm); the factor graph's AR(1)
+registration error model (``fusion.registration_error_model`` ``ar1_whitened``, rho 0.95, innovation scale 0.5,
+between scale 3): 5.72 mm (ARE 0.059) but seeds 4-7 6.18 against 5.91 and 240x180 7.23 against 7.25. Nor does
+the factor graph gain on the EKF once the map is right: on the oracle map the EKF gives 5.71 mm combined (graph
+5.74) and 4.78 replacing (graph 4.77): either backend passes the registrations' slow error through.
 """
 
 from __future__ import annotations
@@ -52,7 +74,9 @@ class EventRegistrationConfig:
     8.90 mm (seeds 0-3) at 240x180, where the events hold the depth along the optical axis poorly (seed 1: 9.1 mm
     RMS against the field's 3.3); combined 6.28 / 5.84 and 7.38 / 8.54 mm (3 px association radius). The field's
     covariance scaled 3 / 10x before combining: 6.02 / 5.53, 5.81 / 5.59 mm at 346x260 but 7.45 / 9.48, 7.78 / 10.41 mm
-    at 240x180. Replacing, the 4 s demos: 10.85 / 7.98 / 7.61 mm (``landing`` / ``fast`` / ``dynamic``)."""
+    at 240x180. Replacing, the 4 s demos: 10.85 / 7.98 / 7.61 mm (``landing`` / ``fast`` / ``dynamic``). Replacing with
+    a 2 px association radius, 346x260 seeds 0-3 / 4-7: 6.11 / 5.81 mm (ARE 0.070 / 0.072 deg against 0.066 / 0.068),
+    but the EKF backend then beats the graph (6.06 / 5.72 mm)."""
     covariance_scale: float = field(default=300.0, metadata={"min": 0.001, "max": 100000.0, "step": 1.0, "unit": "ratio"})
     """Factor on the events' covariance ``(J^T W J)^-1 sigma^2`` (``sigma^2`` their weighted residual variance), ratio.
 
@@ -111,10 +135,11 @@ class EventRegistrationConfig:
     8.76 / 8.80 mm. Seed 0 at 346x260 with an oracle mask (only points within 1.5 mm of the true edges): 8.19 ->
     6.26 mm. Points rejected instead (by their events' mean distance, per update or averaged): no better."""
     offset_min_weight: float = field(default=3.0, metadata={"min": 0.5, "max": 100.0, "step": 0.5, "unit": "events"})
-    """A point learns only from an update where its events' robust weights sum to at least this, events."""
+    """A point learns only from an update where its events' robust weights sum to at least this, events (1.5: 6.32 mm
+    against 6.38, 346x260 seeds 0-3, within the seeds' spread)."""
     offset_clip_px: float = field(default=1.0, metadata={"min": 0.05, "max": 5.0, "step": 0.05, "unit": "px"})
     """A point whose events' mean distance is larger than this takes no part in that update, pixels (0.5: 6.12 mm
-    against 6.08)."""
+    against 6.08; 2.0: 6.43 mm against 6.38, combined, 2 px association radius)."""
     offset_max_m: float = field(default=0.05, metadata={"min": 0.0, "max": 0.5, "step": 0.005, "unit": "m"})
     """Largest distance a point may move from the map's position, metres."""
 
