@@ -22,6 +22,19 @@ def velocity_residual(p0: np.ndarray, p1: np.ndarray, p2: np.ndarray, dt0: float
     return (p2 - p1) / dt1 - (p1 - p0) / dt0
 
 
+def keyframe_triples(kfs: list, present: set, free: set, max_gap_s: float):
+    """Consecutive keyframe triples ``(a, b, c, dt0, dt1)`` of ``kfs`` that a motion factor may join: all three in
+    ``present``, one at least in ``free``, both gaps (seconds) positive and at most ``max_gap_s`` (the motion over a
+    longer gap is not one velocity or rotation rate)."""
+    for a, b, c in zip(kfs[:-2], kfs[1:-1], kfs[2:]):
+        ids = {a.id, b.id, c.id}
+        if not ids <= present or not ids & free:
+            continue
+        dt0, dt1 = (b.t_us - a.t_us) / 1e6, (c.t_us - b.t_us) / 1e6
+        if 0 < dt0 <= max_gap_s and 0 < dt1 <= max_gap_s:
+            yield a, b, c, dt0, dt1
+
+
 def add_velocity_factors(graph, kfs: list, present: set, free: set, sigma_ratio: float, max_gap_s: float = 0.5) -> int:
     """Add one constant-velocity factor per triple of consecutive keyframes of ``kfs`` (all in ``present``, the graph's
     pose variables, one at least in ``free``); returns how many.
@@ -33,12 +46,7 @@ def add_velocity_factors(graph, kfs: list, present: set, free: set, sigma_ratio:
     from gtsam.symbol_shorthand import X
 
     n = 0
-    for a, b, c in zip(kfs[:-2], kfs[1:-1], kfs[2:]):
-        if not {a.id, b.id, c.id} <= present or not ({a.id, b.id, c.id} & free):
-            continue
-        dt0, dt1 = (b.t_us - a.t_us) / 1e6, (c.t_us - b.t_us) / 1e6
-        if not (0 < dt0 <= max_gap_s and 0 < dt1 <= max_gap_s):
-            continue
+    for a, b, c, dt0, dt1 in keyframe_triples(kfs, present, free, max_gap_s):
         p0, p1, p2 = (k.T_wc[:3, 3] for k in (a, b, c))
         speed = 0.5 * (np.linalg.norm(p1 - p0) / dt0 + np.linalg.norm(p2 - p1) / dt1)
         if not speed > 0:
@@ -86,12 +94,7 @@ def add_rotation_rate_factors(graph, kfs: list, present: set, free: set, sigma_r
     noise = gtsam.noiseModel.Robust.Create(gtsam.noiseModel.mEstimator.Huber.Create(2.0),
                                            gtsam.noiseModel.Isotropic.Sigma(3, sigma_rad_s))
     n = 0
-    for a, b, c in zip(kfs[:-2], kfs[1:-1], kfs[2:]):
-        if not {a.id, b.id, c.id} <= present or not ({a.id, b.id, c.id} & free):
-            continue
-        dt0, dt1 = (b.t_us - a.t_us) / 1e6, (c.t_us - b.t_us) / 1e6
-        if not (0 < dt0 <= max_gap_s and 0 < dt1 <= max_gap_s):
-            continue
+    for a, b, c, dt0, dt1 in keyframe_triples(kfs, present, free, max_gap_s):
         graph.add(gtsam.CustomFactor(noise, [X(a.id), X(b.id), X(c.id)], _rate_error(dt0, dt1)))
         n += 1
     return n

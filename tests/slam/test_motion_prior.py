@@ -15,28 +15,30 @@ def _pose(rotvec, t):
     return T
 
 
-def _graph(kfs, sigma_ratio=0.1):
+def _graph(kfs, sigma_ratio=0.1, add=add_velocity_factors):
+    """The keyframes' poses as values and ``add``'s motion factors over them, the newest keyframe free."""
     import gtsam
     from gtsam.symbol_shorthand import X
 
     graph, values = gtsam.NonlinearFactorGraph(), gtsam.Values()
     for kf in kfs:
         values.insert(X(kf.id), gtsam.Pose3(kf.T_wc))
-    n = add_velocity_factors(graph, kfs, {kf.id for kf in kfs}, {kfs[-1].id}, sigma_ratio)
+    n = add(graph, kfs, {kf.id for kf in kfs}, {kfs[-1].id}, sigma_ratio)
     return graph, values, n
 
 
-def test_velocity_factor_jacobians_match_finite_differences():
+def _check_jacobians(graph, values, kfs, atol):
+    """The linearised graph's single factor's columns against finite differences of its unwhitened error, with
+    ``atol(num)`` the tolerance for a numeric column ``num``."""
     import gtsam
     from gtsam.symbol_shorthand import X
 
-    kfs = [Keyframe(0, 0, _pose([0.1, -0.2, 0.3], [0, 0, 0])), Keyframe(1, 40_000, _pose([0.2, 0.1, -0.1], [0.1, 0.02, 0.0])),
-           Keyframe(2, 100_000, _pose([-0.3, 0.2, 0.1], [0.3, 0.01, -0.05]))]
-    graph, values, n = _graph(kfs)
-    assert n == 1
-    lin = graph.linearize(values)
-    A, b = lin.jacobian()
-    # Whitened: rows = residual / sigma; columns = the three poses' tangent spaces in key order.
+    f = graph.at(0)
+    e0 = f.unwhitenedError(values)
+    A, b = graph.linearize(values).jacobian()
+    # Whitened: rows = residual / sigma; columns = the three poses' tangent spaces in key order. The linearisation
+    # scales rows and right-hand side alike (sigma and Huber weight): undo it with |e| / |b|.
+    scale = np.linalg.norm(e0) / max(np.linalg.norm(b), 1e-12)
     eps = 1e-6
     for i, kf in enumerate(kfs):
         for d in range(6):
@@ -44,11 +46,16 @@ def test_velocity_factor_jacobians_match_finite_differences():
             delta[d] = eps
             v2 = gtsam.Values(values)
             v2.update(X(kf.id), values.atPose3(X(kf.id)).retract(delta))
-            num = (graph.at(0).unwhitenedError(v2) - graph.at(0).unwhitenedError(values)) / eps
-            # The linearisation scales rows and right-hand side alike (sigma and Huber weight): undo it with |e| / |b|.
-            scale = np.linalg.norm(graph.at(0).unwhitenedError(values)) / max(np.linalg.norm(b), 1e-12)
-            col = A[:, 6 * i + d] * scale
-            np.testing.assert_allclose(col, num, atol=1e-4)
+            num = (f.unwhitenedError(v2) - e0) / eps
+            np.testing.assert_allclose(A[:, 6 * i + d] * scale, num, atol=atol(num))
+
+
+def test_velocity_factor_jacobians_match_finite_differences():
+    kfs = [Keyframe(0, 0, _pose([0.1, -0.2, 0.3], [0, 0, 0])), Keyframe(1, 40_000, _pose([0.2, 0.1, -0.1], [0.1, 0.02, 0.0])),
+           Keyframe(2, 100_000, _pose([-0.3, 0.2, 0.1], [0.3, 0.01, -0.05]))]
+    graph, values, n = _graph(kfs)
+    assert n == 1
+    _check_jacobians(graph, values, kfs, lambda num: 1e-4)
 
 
 def test_velocity_factor_pulls_a_speed_jump_back_to_constant_velocity():
@@ -88,38 +95,16 @@ def test_local_ba_with_velocity_prior_still_fits_a_constant_velocity_map():
 
 
 def _rate_graph(kfs, sigma=0.5):
-    import gtsam
-    from gtsam.symbol_shorthand import X
-
-    graph, values = gtsam.NonlinearFactorGraph(), gtsam.Values()
-    for kf in kfs:
-        values.insert(X(kf.id), gtsam.Pose3(kf.T_wc))
-    n = add_rotation_rate_factors(graph, kfs, {kf.id for kf in kfs}, {kfs[-1].id}, sigma)
-    return graph, values, n
+    return _graph(kfs, sigma, add_rotation_rate_factors)
 
 
 def test_rotation_rate_factor_jacobians_match_finite_differences():
-    import gtsam
-    from gtsam.symbol_shorthand import X
-
     kfs = [Keyframe(0, 0, _pose([0.1, -0.2, 0.3], [0, 0, 0])), Keyframe(1, 40_000, _pose([0.13, -0.18, 0.31], [0.1, 0.02, 0.0])),
            Keyframe(2, 100_000, _pose([0.15, -0.17, 0.35], [0.3, 0.01, -0.05]))]
     graph, values, n = _rate_graph(kfs)
     assert n == 1
-    f = graph.at(0)
-    e0 = f.unwhitenedError(values)
-    A, b = graph.linearize(values).jacobian()
-    scale = np.linalg.norm(e0) / max(np.linalg.norm(b), 1e-12)
-    eps = 1e-6
-    for i, kf in enumerate(kfs):
-        for d in range(6):
-            delta = np.zeros(6)
-            delta[d] = eps
-            v2 = gtsam.Values(values)
-            v2.update(X(kf.id), values.atPose3(X(kf.id)).retract(delta))
-            num = (f.unwhitenedError(v2) - e0) / eps
-            # First-order inverse right Jacobians: exact enough for rotations a few degrees apart.
-            np.testing.assert_allclose(A[:, 6 * i + d] * scale, num, atol=0.02 * np.abs(num).max() + 1e-6)
+    # First-order inverse right Jacobians: exact enough for rotations a few degrees apart.
+    _check_jacobians(graph, values, kfs, lambda num: 0.02 * np.abs(num).max() + 1e-6)
 
 
 def test_rotation_rate_factor_pulls_a_rate_jump_back_to_constant_rate():
