@@ -59,7 +59,7 @@ import numpy as np
 
 from evpose.tracker.event_registration_kernels import _associate_nearest, _kept_events, _learn_offsets, _linearise_events
 from evpose.tracker.lapack_calls import inv
-from evpose.tracker.registration import _eigvalsh, _isotropic_information
+from evpose.tracker.registration import _eigvalsh, _inv, _isotropic_information
 from evpose.tracker.registration_kernels import _lm_step
 
 _NO_POLARITY = np.zeros(0, np.int8)
@@ -244,7 +244,7 @@ class EventRegistration:
         Hf = H + info if info is not None else H
         if not _eigvalsh(0.5 * (Hf + Hf.T))[0] > 0:
             return None
-        cov = inv(Hf) * (swr2 / max(n_used - 6, 1)) * float(c.covariance_scale)
+        cov = _inv(Hf) * (swr2 / max(n_used - 6, 1)) * float(c.covariance_scale)
         self._last = (used, sw, swr, R_cw, t_cw, (fx, fy, cx, cy))
         return pose.matrix(), 0.5 * (cov + cov.T)
 
@@ -285,9 +285,9 @@ class EventRegistration:
         if c.combine and reg.covariance is not None:
             T_f = gtsam.Pose3(reg.T_world_cam)
             e = gtsam.Pose3.Logmap(T_f.between(gtsam.Pose3(out[0])))
-            I_f = inv(reg.covariance)
-            I_e = inv(out[1])
-            P = inv(I_f + I_e)
+            I_f = inv(reg.covariance)  # a singular one raises as np.linalg.inv
+            I_e = _inv(out[1])  # positive definite (checked above), as the sum below
+            P = _inv(I_f + I_e)
             reg.T_world_cam = T_f.compose(gtsam.Pose3.Expmap(P @ (I_e @ e))).matrix()
             reg.covariance = 0.5 * (P + P.T)
         else:
