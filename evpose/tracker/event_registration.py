@@ -27,7 +27,11 @@ CPU at 346x260 (seed 0, thread time, load ~7): 0.58 ms median per update in a ru
 one update's inputs: the association, each of the 4 passes over ~900 events ~0.03 ms, the rest Python), the learning
 0.05 ms; the whole ``full`` update 3.4-4.7 -> 4.4-6.0 ms median (3 alternated rounds, same process). Hot, one
 update's inputs called again and again (seed 0, 865 points, 1265 events, 938 associated): association 33 us, each
-pass 26 us, ~400 us per call over 200 consecutive updates: the rest is Python and gtsam around 5 numba calls.
+pass 26 us, ~400 us per call over 200 consecutive updates: the rest is Python and gtsam around 5 numba calls. Session 13
+(bit-identical: the kept events gathered and the associated ones compacted in the kernels, no numpy gathers, the
+damped step, inverses and eigenvalues without numpy's wrappers, the association's test by selects): the 393 calls of
+seed 0 at 346x260 replayed with their learning, CPU per call 0.40-0.44 -> 0.34-0.35 ms median; in a run the
+association 86 us, the passes 36 / 33 / 28 / 26 us, the learning 20 us (thread time, load ~4).
 
 What limits it now (session 12, ``full`` 346x260 seeds 0-3 unless said, 6.38 mm with these defaults; oracles from
 the simulator's true edges, ``/tmp/s12/fullacc2/oracle.py``): the events' copy of the map moved along each point's
