@@ -52,7 +52,10 @@ class RegistrationConfig:
     not the sub-pixel phase of the edge either (mean offset flat over the phase): more points do not average it. Session 9, ``full``, seeds 0-3, 346x260 /
     240x180: 600 points 8.21 / 9.78 mm against 7.78 / 9.40 (~0.5 ms less CPU per update, unpaired); registering no
     buffer-zone point (no geometric polarity; ~30 % of the used points) 9.40 (without their ``T_align`` patches) /
-    9.11 mm (with them) at 346x260: the points are what ``full``'s accuracy rests on, not kept."""
+    9.11 mm (with them) at 346x260: the points are what ``full``'s accuracy rests on, not kept. Session 13, ``full``
+    with the event registration, seeds 0-3 / 4-7: 700 / 800 points 6.69 / 6.07 and 6.60 / 5.94 mm at 346x260, 7.43 /
+    9.11 and 7.49 / 8.89 mm at 240x180, against 6.38 / 5.91 and 7.25 / 8.49 mm with 1000 (~0.3-0.5 ms less CPU per
+    update at 700, unpaired): not changed."""
 
     second_order: bool = True
     """Newton steps using the TDF's curvature (points on the TDF minimum still constrain the pose) instead of Gauss-Newton.
