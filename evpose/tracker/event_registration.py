@@ -27,7 +27,11 @@ CPU at 346x260 (seed 0, thread time, load ~7): 0.58 ms median per update in a ru
 one update's inputs: the association, each of the 4 passes over ~900 events ~0.03 ms, the rest Python), the learning
 0.05 ms; the whole ``full`` update 3.4-4.7 -> 4.4-6.0 ms median (3 alternated rounds, same process). Hot, one
 update's inputs called again and again (seed 0, 865 points, 1265 events, 938 associated): association 33 us, each
-pass 26 us, ~400 us per call over 200 consecutive updates: the rest is Python and gtsam around 5 numba calls.
+pass 26 us, ~400 us per call over 200 consecutive updates: the rest is Python and gtsam around 5 numba calls. Session 13
+(bit-identical: the kept events gathered and the associated ones compacted in the kernels, no numpy gathers, the
+damped step, inverses and eigenvalues without numpy's wrappers, the association's test by selects): the 393 calls of
+seed 0 at 346x260 replayed with their learning, CPU per call 0.40-0.44 -> 0.34-0.35 ms median; in a run the
+association 86 us, the passes 36 / 33 / 28 / 26 us, the learning 20 us (thread time, load ~4).
 
 What limits it now (session 12, ``full`` 346x260 seeds 0-3 unless said, 6.38 mm with these defaults; oracles from
 the simulator's true edges, ``/tmp/s12/fullacc2/oracle.py``): the events' copy of the map moved along each point's
@@ -57,7 +61,15 @@ from dataclasses import dataclass, field
 import gtsam
 import numpy as np
 
-from evpose.tracker.event_registration_kernels import _associate_nearest, _damped_step, _learn_offsets, _linearise_events
+from evpose.tracker.event_registration_kernels import _associate_nearest, _kept_events, _learn_offsets, _linearise_events
+from evpose.tracker.lapack_calls import inv
+from evpose.tracker.registration import _eigvalsh, _inv, _isotropic_information
+from evpose.tracker.registration_kernels import _lm_step
+
+_NO_POLARITY = np.zeros(0, np.int8)
+_NO_TWIST = np.zeros(6)
+_NO_TABLE = np.zeros((0, 0, 2), np.float32)
+"""Placeholders of the kernels' optional inputs (never written)."""
 
 
 @dataclass
@@ -184,51 +196,59 @@ class EventRegistration:
         the polarity each point may fire (+1 / -1 / 0 both; None = any), ``twist`` the body twist per second (gtsam
         order), ``prior`` = (T_prior, information of the body tangent in squared pixels) or None. None when too few
         events associate or the system is singular."""
+        events = (np.array(ex, np.float64), np.array(ey, np.float64), np.array(et, np.int64), np.array(ep, np.int8))
+        return self._refine(T_world_cam, used, polarity, events, len(events[0]), t_us, twist, K, prior)
+
+    def _refine(self, T_world_cam, used, polarity, events, n_events, t_us, twist, K, prior):
+        """:meth:`refine` of the first ``n_events`` of ``events`` = (ex, ey, et, ep), which it reorders in place."""
         c = self.config
         self._last = None
         fx, fy, cx, cy = float(K[0, 0]), float(K[1, 1]), float(K[0, 2]), float(K[1, 2])
         used = np.ascontiguousarray(used, np.int64)
-        pts = np.take(self.points, used, axis=0)
-        tg = np.take(self._tangents, used, axis=0)
-        pol = np.zeros(0, np.int8) if polarity is None else np.ascontiguousarray(polarity, np.int8)
-        xi = np.zeros(6) if twist is None or not np.isfinite(twist).all() else np.ascontiguousarray(twist, np.float64)
+        m = used.size
+        pts, tg = np.empty((m, 3)), np.empty((m, 3))
+        pol = _NO_POLARITY if polarity is None else np.ascontiguousarray(polarity, np.int8)
+        xi = _NO_TWIST if twist is None or not np.isfinite(twist).all() else np.ascontiguousarray(twist, np.float64)
         T = np.asarray(T_world_cam, np.float64)
         R_cw = np.ascontiguousarray(T[:3, :3].T)
         t_cw = -R_cw @ T[:3, 3]
-        assoc = np.empty(ex.shape[0], np.int64)
-        self.last_events = int(_associate_nearest(pts, R_cw, t_cw, fx, fy, cx, cy, float(c.association_radius_px), self._width,
-                                                  self._height, ex, ey, ep, pol, assoc))
-        if self.last_events < int(c.min_events):
+        ex, ey, et, ep = events
+        assoc = np.empty(n_events, np.int64)
+        # The associated events first, in order (the others took no part in the sums below).
+        n = self.last_events = int(_associate_nearest(self.points, self._tangents, used, R_cw, t_cw, fx, fy, cx, cy,
+                                                      float(c.association_radius_px), self._width, self._height, n_events,
+                                                      ex, ey, et, ep, pol, pts, tg, assoc))
+        if n < int(c.min_events):
             return None
         H, b = np.zeros((6, 6)), np.zeros(6)
-        sw, swr = np.empty(used.size), np.empty(used.size)
+        sw, swr = np.empty(m), np.empty(m)
         pose = gtsam.Pose3(T)
         info = None
         if prior is not None:
             T_p, info = gtsam.Pose3(prior[0]), prior[1]
         args = (float(c.on_lead_px), float(c.off_lead_px), float(c.huber_px), float(c.gate_px), H, b, sw, swr)
         n_it = int(c.iterations)
+        t_ref = int(t_us)
         for it in range(n_it + 1):
-            m = pose.matrix()
-            R_cw = np.ascontiguousarray(m[:3, :3].T)
-            t_cw = -R_cw @ m[:3, 3]
-            _, n_used, swr2 = _linearise_events(ex, ey, et, ep, assoc, pts, tg, R_cw, t_cw, fx, fy, cx, cy, xi, int(t_us), *args)
+            mat = pose.matrix()
+            R_cw = np.ascontiguousarray(mat[:3, :3].T)
+            t_cw = -R_cw @ mat[:3, 3]
+            _, n_used, swr2 = _linearise_events(n, ex, ey, et, ep, assoc, pts, tg, R_cw, t_cw, fx, fy, cx, cy, xi, t_ref, *args)
             if n_used < int(c.min_events):
                 return None
             if it == n_it:
                 break  # the last pass measures the covariance and the points' distances at the final pose
-            Hs, bs = H, b
-            if info is not None:
-                e = gtsam.Pose3.Logmap(T_p.between(pose))
-                Hs, bs = H + info, b + info @ e
-            delta = _damped_step(Hs, bs, 0.0)
-            if not np.isfinite(delta).all():
+            if info is not None:  # H + info, b + info e, the damped solve and its finiteness test in one call
+                delta, finite = _lm_step(H, b, info, info @ gtsam.Pose3.Logmap(T_p.between(pose)), True, 0.0)
+            else:
+                delta, finite = _lm_step(H, b, H, b, False, 0.0)
+            if not finite:
                 return None
             pose = pose.compose(gtsam.Pose3.Expmap(delta))
         Hf = H + info if info is not None else H
-        if not np.linalg.eigvalsh(0.5 * (Hf + Hf.T))[0] > 0:
+        if not _eigvalsh(0.5 * (Hf + Hf.T))[0] > 0:
             return None
-        cov = np.linalg.inv(Hf) * (swr2 / max(n_used - 6, 1)) * float(c.covariance_scale)
+        cov = _inv(Hf) * (swr2 / max(n_used - 6, 1)) * float(c.covariance_scale)
         self._last = (used, sw, swr, R_cw, t_cw, (fx, fy, cx, cy))
         return pose.matrix(), 0.5 * (cov + cov.T)
 
@@ -251,31 +271,27 @@ class EventRegistration:
         units; returns whether it did (else ``reg`` is left as it was)."""
         c = self.config
         self._last = None
-        idx = np.flatnonzero(keep)
-        if idx.size < int(c.min_events):
+        n_all = len(events)
+        buffers = (np.empty(n_all), np.empty(n_all), np.empty(n_all, np.int64), np.empty(n_all, np.int8))
+        table = calibration.undistortion_table if calibration.dist else _NO_TABLE
+        n_kept = int(_kept_events(keep, events.x, events.y, events.t, events.p, table, *buffers))
+        if n_kept < int(c.min_events):
             self.last_events = 0
             return False
-        if calibration.dist:
-            xy = calibration.undistortion_table[events.y[idx], events.x[idx]].astype(np.float64)
-            ex, ey = np.ascontiguousarray(xy[:, 0]), np.ascontiguousarray(xy[:, 1])
-        else:
-            ex, ey = events.x[idx].astype(np.float64), events.y[idx].astype(np.float64)
         prior = None
         rc = registration_config
         s = float(c.prior_residual_px)
         if s > 0 and rc.prior_translation_m > 0 and rc.prior_rotation_deg > 0:
-            s_r = np.radians(float(rc.prior_rotation_deg))
-            prior = (predicted, np.diag([1 / s_r**2] * 3 + [1 / float(rc.prior_translation_m) ** 2] * 3) * s**2)
-        out = self.refine(reg.T_world_cam, used, polarity, ex, ey, events.t[idx].astype(np.int64), events.p[idx].astype(np.int8),
-                          t_us, twist, K, prior)
+            prior = (predicted, _isotropic_information(float(rc.prior_rotation_deg), float(rc.prior_translation_m), s))
+        out = self._refine(reg.T_world_cam, used, polarity, buffers, n_kept, t_us, twist, K, prior)
         if out is None:
             return False
         if c.combine and reg.covariance is not None:
             T_f = gtsam.Pose3(reg.T_world_cam)
             e = gtsam.Pose3.Logmap(T_f.between(gtsam.Pose3(out[0])))
-            I_f = np.linalg.inv(reg.covariance)
-            I_e = np.linalg.inv(out[1])
-            P = np.linalg.inv(I_f + I_e)
+            I_f = inv(reg.covariance)  # a singular one raises as np.linalg.inv
+            I_e = _inv(out[1])  # positive definite (checked above), as the sum below
+            P = _inv(I_f + I_e)
             reg.T_world_cam = T_f.compose(gtsam.Pose3.Expmap(P @ (I_e @ e))).matrix()
             reg.covariance = 0.5 * (P + P.T)
         else:

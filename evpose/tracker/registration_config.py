@@ -52,7 +52,10 @@ class RegistrationConfig:
     not the sub-pixel phase of the edge either (mean offset flat over the phase): more points do not average it. Session 9, ``full``, seeds 0-3, 346x260 /
     240x180: 600 points 8.21 / 9.78 mm against 7.78 / 9.40 (~0.5 ms less CPU per update, unpaired); registering no
     buffer-zone point (no geometric polarity; ~30 % of the used points) 9.40 (without their ``T_align`` patches) /
-    9.11 mm (with them) at 346x260: the points are what ``full``'s accuracy rests on, not kept."""
+    9.11 mm (with them) at 346x260: the points are what ``full``'s accuracy rests on, not kept. Session 13, ``full``
+    with the event registration, seeds 0-3 / 4-7: 700 / 800 points 6.69 / 6.07 and 6.60 / 5.94 mm at 346x260, 7.43 /
+    9.11 and 7.49 / 8.89 mm at 240x180, against 6.38 / 5.91 and 7.25 / 8.49 mm with 1000 (~0.3-0.5 ms less CPU per
+    update at 700, unpaired): not changed."""
 
     second_order: bool = True
     """Newton steps using the TDF's curvature (points on the TDF minimum still constrain the pose) instead of Gauss-Newton.
@@ -84,7 +87,10 @@ class RegistrationConfig:
     2 17.94 mm."""
     max_iterations: int = field(default=10, metadata={"min": 1, "max": 100, "step": 1, "unit": "iterations"})
     """Levenberg-Marquardt iterations per step, at most. (Session 9, ``full`` seeds 0-3: 1 instead of the median 2
-    gave 8.35 / 9.36 mm against 7.77 / 9.40 at 346x260 / 240x180, 0.1-0.15 ms less registration CPU: not kept.)"""
+    gave 8.35 / 9.36 mm against 7.77 / 9.40 at 346x260 / 240x180, 0.1-0.15 ms less registration CPU: not kept.
+    Session 13, ``full`` with the event registration after it, mean ATE of seeds 0-3 / 4-7: 1 gave 6.43 / 5.86 mm at
+    346x260 and 7.40 / 8.97 at 240x180, 2 gave 6.38 / 5.89 and 7.49 / 8.56, against 6.38 / 5.91 and 7.25 / 8.49 mm
+    (mean iterations per update 2.4 / 2.7 -> 1.6 with 2): not kept.)"""
     robust_loss: RobustLoss = RobustLoss.HUBER
     """Robust loss on the residual."""
     robust_scale: float = field(default=0.3, metadata={"min": 0.01, "max": 2.0, "step": 0.01, "unit": "TDF"})
