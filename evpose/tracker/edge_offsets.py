@@ -35,7 +35,8 @@ import numpy as np
 
 from evpose.frontend.distance_field import bilinear_curvature_from_value, bilinear_sample
 from evpose.tracker.camera_point import camera_point
-from evpose.tracker.registration_kernels import _NO_EXTRA, _NO_TWIST, _damped_step, _floor_shift, _projected_normal
+from evpose.tracker.offset_fit import add_offset_row, apply_offset_fit, normal_px_per_m
+from evpose.tracker.registration_kernels import _NO_EXTRA, _NO_TWIST, _floor_shift, _projected_normal
 
 
 @dataclass
@@ -184,53 +185,15 @@ def _offset_kernel(points, idx, base, normals, tangents, offsets, R_cw, t_cw, fx
         o = -f * gn / a  # the Newton step on 0.5 f^2 along the normal, as registration takes it
         if abs(o) > clip_px:
             continue
-        # Image displacement along the normal per metre along the map's edge normal (its sign orients the two).
-        ex, ey, ez = normals[j, 0], normals[j, 1], normals[j, 2]
-        dX = R_cw[0, 0] * ex + R_cw[0, 1] * ey + R_cw[0, 2] * ez
-        dY = R_cw[1, 0] * ex + R_cw[1, 1] * ey + R_cw[1, 2] * ez
-        dZ = R_cw[2, 0] * ex + R_cw[2, 1] * ey + R_cw[2, 2] * ez
-        p = (fx * (dX * Z - X * dZ) * nu + fy * (dY * Z - Y * dZ) * nv) * iz * iz
+        p = normal_px_per_m(normals, j, R_cw, X, Y, Z, iz, nu, nv, fx, fy)
         if abs(p) < min_pxm:
             continue
-        # Rows of d(u, v)/d xi projected on the normal (right perturbation, rotation then translation), as in
-        # evpose.tracker.registration_kernels._linearise.
-        jac[j, 0] = nu * (-puz * Y) + nv * (pvy * Z - pvz * Y)
-        jac[j, 1] = nu * (puz * X - pux * Z) + nv * (pvz * X)
-        jac[j, 2] = nu * (pux * Y) + nv * (-pvy * X)
-        jac[j, 3] = nu * (-pux)
-        jac[j, 4] = nv * (-pvy)
-        jac[j, 5] = nu * (-puz) + nv * (-pvz)
+        add_offset_row(H, b, jac, j, o, nu, nv, X, Y, Z, pux, puz, pvy, pvz)
         obs[j] = o
         pxm[j] = p
         ok[j] = True
         n_ok += 1
-        for r in range(6):
-            b[r] += jac[j, r] * o
-            for c in range(6):
-                H[r, c] += jac[j, r] * jac[j, c]
-    if n_ok < 12:
-        return 0
-    # The pose change that best explains the offsets (a tiny relative damping keeps the valley's fit finite).
-    delta = _damped_step(H, -b, 1e-6)
-    for r in range(6):
-        if not np.isfinite(delta[r]):
-            return 0
-    for r in range(6):
-        fit_out[r] = delta[r]
-    moved = 0
-    for j in range(m):
-        if not ok[j]:
-            continue
-        i = idx[j]
-        rest = obs[j]
-        for r in range(6):
-            rest -= jac[j, r] * delta[r]
-        off = offsets[i] + gain * rest / pxm[j]
-        offsets[i] = min(max(off, -max_offset), max_offset)
-        for k in range(3):
-            points[i, k] = base[i, k] + offsets[i] * normals[j, k]
-        moved += 1
-    return moved
+    return apply_offset_fit(H, b, n_ok, ok, idx, obs, pxm, jac, offsets, points, base, normals, True, gain, max_offset, fit_out)
 
 
 class EdgeOffsetLearner:

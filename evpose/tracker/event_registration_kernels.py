@@ -15,7 +15,8 @@ import numba as nb
 import numpy as np
 
 from evpose.tracker.camera_point import camera_point
-from evpose.tracker.registration_kernels import _damped_step, _projected_normal, _rho_weight
+from evpose.tracker.offset_fit import add_offset_row, apply_offset_fit, normal_px_per_m
+from evpose.tracker.registration_kernels import _projected_normal, _rho_weight
 
 
 @nb.njit(cache=True)
@@ -220,50 +221,16 @@ def _learn_offsets(idx, sw, swr, min_weight, points, base, normals, tangents, of
         nu, nv = _projected_normal(tangents, i, R_cw, X, Y, Z, fx, fy)
         if nu == 0.0 and nv == 0.0:
             continue
-        ex, ey, ez = normals[i, 0], normals[i, 1], normals[i, 2]
-        dX = R_cw[0, 0] * ex + R_cw[0, 1] * ey + R_cw[0, 2] * ez
-        dY = R_cw[1, 0] * ex + R_cw[1, 1] * ey + R_cw[1, 2] * ez
-        dZ = R_cw[2, 0] * ex + R_cw[2, 1] * ey + R_cw[2, 2] * ez
-        p = (fx * (dX * Z - X * dZ) * nu + fy * (dY * Z - Y * dZ) * nv) * iz * iz
+        p = normal_px_per_m(normals, i, R_cw, X, Y, Z, iz, nu, nv, fx, fy)
         if abs(p) < min_pxm:
             continue
         pux = fx * iz
         puz = -fx * X * iz * iz
         pvy = fy * iz
         pvz = -fy * Y * iz * iz
-        jac[j, 0] = nu * (-puz * Y) + nv * (pvy * Z - pvz * Y)
-        jac[j, 1] = nu * (puz * X - pux * Z) + nv * (pvz * X)
-        jac[j, 2] = nu * (pux * Y) + nv * (-pvy * X)
-        jac[j, 3] = nu * (-pux)
-        jac[j, 4] = nv * (-pvy)
-        jac[j, 5] = nu * (-puz) + nv * (-pvz)
+        add_offset_row(H, b, jac, j, o, nu, nv, X, Y, Z, pux, puz, pvy, pvz)
         obs[j] = o
         pxm[j] = p
         ok[j] = True
         n_ok += 1
-        for r in range(6):
-            b[r] += jac[j, r] * o
-            for c in range(6):
-                H[r, c] += jac[j, r] * jac[j, c]
-    if n_ok < 12:
-        return 0
-    delta = _damped_step(H, -b, 1e-6)
-    for r in range(6):
-        if not np.isfinite(delta[r]):
-            return 0
-    for r in range(6):
-        fit_out[r] = delta[r]
-    moved = 0
-    for j in range(m):
-        if not ok[j]:
-            continue
-        i = idx[j]
-        rest = obs[j]
-        for r in range(6):
-            rest -= jac[j, r] * delta[r]
-        off = offsets[i] + gain * rest / pxm[j]
-        offsets[i] = min(max(off, -max_offset), max_offset)
-        for k in range(3):
-            points[i, k] = base[i, k] + offsets[i] * normals[i, k]
-        moved += 1
-    return moved
+    return apply_offset_fit(H, b, n_ok, ok, idx, obs, pxm, jac, offsets, points, base, normals, False, gain, max_offset, fit_out)
