@@ -75,6 +75,9 @@ def live_facts(stage: Stage, frame: Frame | None) -> str:
         return "_Press play or step to see live figures._"
     c = frame.counts
     t = f"At t = {frame.t_us / 1e6:.3f} s (step {frame.index}): "
+    if frame.slam is not None:
+        return t + ("SLAM mode runs no map-based tracking, so this stage is not computed; SLAM's own images (tiny "
+                    "frame, motion-compensated image with its tracked features) are in the images panel's SLAM tab.")
     if stage == Stage.EVENTS:
         n_in = c.get("events_in", len(frame.events_kept) + len(frame.events_removed))
         kept = c.get("events_kept", len(frame.events_kept))
