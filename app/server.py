@@ -92,6 +92,7 @@ class ViewerApp:
         self.refresh_entries()
         self.apply_layout_name(cfg.layout)
         self._bind_hotkeys()
+        self.server.on_client_connect(lambda _client: self.layout_gui.client_connected())
         recs = [e for e in self.entries if e.kind == EntryKind.RECORDING and e.error is None]
         if recs:
             # Open on the shortest-named landing recording (the showcase) when there is one, else the first found.

@@ -214,6 +214,17 @@ def test_shipped_layouts_leave_the_3d_view_room_without_overlapping_panels_in_na
                 wait_for(lambda: not overlaps() and canvas() >= MIN_VIEW_PX - 15, timeout=10,
                          what=f"{name} at {width} px: no panels overlapping, 3D view >= {MIN_VIEW_PX} px",
                          detail=lambda: f"overlapping {overlaps()}, view {canvas()}, boxes {boxes()}")
+        # A tab opened afterwards gets the widths too (sent with its placement on connecting, they were dropped).
+        choose(page, "layout", "debug")
+        wait_for(lambda: viewer.layout.name == "debug", what="debug layout")
+        other = page.context.browser.new_page(viewport={"width": 1280, "height": 900})
+        try:
+            other.goto(f"http://127.0.0.1:{viewer.cfg.port}")
+            other.get_by_text("SP-TS positive").first.wait_for(timeout=30_000)
+            view = lambda: other.locator("canvas").first.bounding_box()["width"]
+            wait_for(lambda: view() >= MIN_VIEW_PX - 15, timeout=10, what="a new tab's 3D view", detail=view)
+        finally:
+            other.close()
     finally:
         page.set_viewport_size({"width": 1400, "height": 900})
 
