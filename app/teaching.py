@@ -103,4 +103,5 @@ def live_facts(stage: Stage, frame: Frame | None) -> str:
 
 
 def teaching_markdown(stage: Stage, frame: Frame | None) -> str:
-    return f"### {stage.value}\n\n{EXPLANATIONS[stage]}\n\n**Now:** {live_facts(stage, frame)}\n\n_Image: {STAGE_PANEL[stage]}_"
+    image = "" if frame is not None and frame.slam is not None else f"\n\n_Image: {STAGE_PANEL[stage]}_"  # SLAM: none shown
+    return f"### {stage.value}\n\n{EXPLANATIONS[stage]}\n\n**Now:** {live_facts(stage, frame)}{image}"

@@ -93,7 +93,7 @@ def test_only_the_modes_own_image_panels_are_shown_and_teaching_says_slam_runs_n
     viewer.player.wait_idle()
     viewer.layout_gui.set_visible("teaching", True)
     viewer.player.wait_idle()
-    assert "SLAM mode runs no map-based tracking" in viewer.teaching_text.content
+    assert "SLAM mode runs no map-based tracking" in viewer.teaching_text.content and "_Image:" not in viewer.teaching_text.content
     viewer.set_mode("tracking")
     viewer.player.step_forward()
     viewer.player.wait_idle()
