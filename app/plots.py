@@ -135,6 +135,10 @@ def plot_series(history: list[StepSummary], gt: Trajectory | None, window: int =
     return out
 
 
+NICE_MULTIPLES = (1.0, 1.2, 1.5, 2.0, 2.5, 3.0, 4.0, 5.0, 6.0, 8.0)
+"""Round tops of a y range, times a power of ten (1-2-5 alone left half the plot empty above 101 cm: range 0-220)."""
+
+
 def y_range(ys: tuple[np.ndarray, ...]) -> tuple[float, float]:
     """The y-axis range a plot is drawn with: from 0 (or the lowest value) to 10 % above a round number just above
     the highest (the round number's tick label, drawn at the very top, was cut in half).
@@ -150,7 +154,7 @@ def y_range(ys: tuple[np.ndarray, ...]) -> tuple[float, float]:
     if span <= 0:
         return lo, lo + 1.1
     step = 10.0 ** np.floor(np.log10(span))
-    nice = next((m * step for m in (1.0, 2.0, 2.5, 5.0) if span <= m * step * (1 + 1e-12)), 10.0 * step)
+    nice = next((m * step for m in NICE_MULTIPLES if span <= m * step * (1 + 1e-12)), 10.0 * step)
     return lo, lo + 1.1 * nice
 
 

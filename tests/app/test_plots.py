@@ -129,7 +129,7 @@ def test_a_plot_with_nothing_to_draw_is_replaced_in_place_by_its_reason_and_come
     assert next(o for kind, o, h in gui.added if h is note) == order  # the reason takes the plot's place
     view.update(_history(gt, 10, offset=0.03), gt)
     assert pose_plot.visible and not note.visible and np.allclose(pose_plot.data[1], 3.0)
-    assert np.allclose(pose_plot.scales["y"]["range"], (0.0, 5.5))  # 3 cm: 10 % over a round 5, set here (see y_range)
+    assert np.allclose(pose_plot.scales["y"]["range"], (0.0, 4.4))  # 3 cm: 10 % over a round 4, set here (see y_range)
     view.remove()
     assert pose_plot.removed and note.removed and not view.handles and not view.notes
 
@@ -137,6 +137,7 @@ def test_a_plot_with_nothing_to_draw_is_replaced_in_place_by_its_reason_and_come
 def test_y_ranges_are_round_cover_every_value_and_ignore_the_nans_uplot_could_not_range():
     assert np.allclose(y_range((np.array([np.nan, 0.2, 1.9]), np.array([np.nan, np.nan, 0.5]))), (0.0, 2.2))
     assert np.allclose(y_range((np.array([np.nan, 120.0, 230.0]),)), (0.0, 275.0))
+    assert np.allclose(y_range((np.array([101.0]),)), (0.0, 132.0))  # 1.2 x 100 x 1.1
     assert np.allclose(y_range((np.array([np.nan, np.nan]),)), (0.0, 1.1))
     lo, hi = y_range((np.array([-3.0, 7.0]),))
     assert lo == -3.0 and hi >= 7.0
