@@ -253,7 +253,8 @@ class ViewerApp:
                                  f"{s['sensor_size']}; map: {map_entry.label if map_entry else 'none'}"
                                  + ("" if cmap is not None or self.mode == "slam" else f"\n\n_{NO_MAP_NOTE}_") + "\n\n" + self._scan_note())
         self.warm_up.opened(path if self.mode == "tracking" and cmap is not None else None)
-        self.time_slider.max = max(0.001, (recording.t_end_us - recording.t_start_us) / 1e6)
+        # Whole milliseconds, the slider's step: the end label read "3.999952" (engines clip a seek past the end).
+        self.time_slider.max = max(0.001, round((recording.t_end_us - recording.t_start_us) / 1e6, 3))
         factory = engine_factory(recording, cmap, self.mode, self.cfg.frame_cache, self.cfg.disk_cache,
                                  (path, map_entry.path) if map_entry is not None else None)
 
