@@ -175,7 +175,8 @@ def empty_reasons(series: dict[str, tuple[tuple[str, ...], tuple[np.ndarray, ...
         elif name.startswith("latency"):
             why = "the steps a seek went past were not timed; play or step forward to time them."
         elif note and all(s.pose is None for s in history[-WINDOW_STEPS:]):
-            why = f"no poses in this view. {note}"
+            # The whole explanation once, under the first plot it empties.
+            why = f"no poses in this view. {note}" if name in (POSE_ERROR, SLAM_POSE_ERROR) else "no registration in this view (see pose error)."
         elif name == SLAM_POSE_ERROR:
             why = ("no SLAM position aligned to the ground truth in these steps (a map is aligned once it has "
                    "3 poses inside the ground truth's time span; before that SLAM is initialising).")
