@@ -103,6 +103,22 @@ class DataRoots:
         return DataEntry(kind, resolved, f"{root.name}/{path.relative_to(root)}", probe(kind, resolved))
 
 
+def scan_note(entries: list[DataEntry], roots: DataRoots, cache_note: str = "") -> str:
+    """What a scan found, in words: counts, missing roots, why the disk cache is off, and every unreadable file with its reason."""
+    recs = [e for e in entries if e.kind == EntryKind.RECORDING]
+    maps = [e for e in entries if e.kind == EntryKind.MAP]
+    bad = [e for e in entries if e.error]
+    note = f"{len(recs)} recordings, {len(maps)} maps under " + ", ".join(f"`{r}`" for r in roots.roots)
+    missing = [r for r in roots.roots if not r.is_dir()]
+    if missing:
+        note += "\n\n" + "; ".join(f"`{r}` does not exist" for r in missing)
+    if cache_note:
+        note += f"\n\n_{cache_note}_"
+    if bad:
+        note += "\n\n**Unreadable:**\n" + "\n".join(f"- `{e.label}`: {e.error}" for e in bad)
+    return note
+
+
 def probe(kind: EntryKind, path: Path) -> str | None:
     """Cheap readability check: the reason a file cannot be read, or None."""
     try:

@@ -148,6 +148,13 @@ class LayoutGui:
                 self._timer.daemon = True
                 self._timer.start()
 
+    def client_connected(self) -> None:
+        """Send the edges' widths again shortly after a tab connects: the placement it is sent on connecting arrives
+        with its width in one update, which the browser drops (as for a move, see _size_edges), so a tab opened after
+        the layout was applied showed the debug layout's left edge 620 px wide instead of 580 (its 3D view 307 px)."""
+        if self.layout is not None and self.shown_docks:
+            self._size_edges({"left", "right"})
+
     def stop(self) -> None:
         with self._timer_lock:
             if self._timer is not None:

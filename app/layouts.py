@@ -28,6 +28,11 @@ CONTROL_PANEL_PX = 320
 """Width of viser's main control panel at control_width='medium' (20 em x 16 px); it is always docked left."""
 DEFAULT_COLUMN_PX = 300
 """Width viser gives a newly docked column (its DEFAULT_REGION_PX)."""
+NARROW_WINDOW_PX = 1280
+"""Narrowest browser window the shipped layouts are made for, CSS pixels (a common laptop width)."""
+MIN_VIEW_PX = 360
+"""Width of 3D view every shipped layout leaves in a NARROW_WINDOW_PX window, CSS pixels. Session 12's debug layout
+left 220 px (a sliver), and compare's floating images (360 px) covered its 260 px view and overlapped the plots."""
 
 
 def dock_choices(name: str) -> list[str]:
@@ -183,6 +188,11 @@ class Layout:
                 widths = [self.panels[p].width for p in members if self.panels[p].width]
                 totals[shown[root]] += widths[0] if widths else DEFAULT_COLUMN_PX
         return totals
+
+    def view_width(self, window_px: int) -> int:
+        """Width the 3D view keeps in a browser window this wide, CSS pixels: the window less both docked edges."""
+        widths = self.region_widths()
+        return window_px - widths["left"] - widths["right"]
 
 
 def layout_path(name: str, directory: Path = LAYOUT_DIR) -> Path:

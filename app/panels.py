@@ -94,6 +94,10 @@ def events_image(kept: EventArray, removed: EventArray, width: int, height: int)
     return upscale(rgb)
 
 
+TRACKER_PANELS = ("SP-TS positive", "SP-TS negative", "TDF + map points", "events kept / removed")
+"""The Images tab's panels (tracking mode and the events-only view)."""
+SLAM_PLACEHOLDER = "_SLAM mode shows here (Recording > viewer mode: slam)._"
+IMAGES_IN_SLAM_MODE = "_SLAM mode: its images are in the **SLAM** tab (the tracker's time surfaces are not made)._"
 SLAM_PANELS = ("tiny frame", "MCI + tracked features", "events (SLAM)")
 """Image panels of SLAM mode (the tracking panels' images do not exist there)."""
 

@@ -16,7 +16,7 @@ import numpy as np
 import viser
 
 from app.app_config import AppConfig, cache_inside_data, check_port_free
-from app.browser import DataEntry, DataRoots, EntryKind, guess_map_for, load_cloud, load_map, load_recording
+from app.browser import DataEntry, DataRoots, EntryKind, guess_map_for, load_cloud, load_map, load_recording, scan_note
 from app.config_gui import ConfigGui, load_config_file
 from app.engine import Engine
 from app.engine_factory import MODES, NO_MAP_NOTE, engine_factory
@@ -25,9 +25,9 @@ from app.frame import Frame
 from app.hotkeys import SliderKeyGuard, bind_hotkeys
 from app.layout_gui import LayoutGui
 from app.layouts import Layout
-from app.panels import SLAM_PANELS, OverlayColour, panel_images
+from app.panels import IMAGES_IN_SLAM_MODE, SLAM_PANELS, SLAM_PLACEHOLDER, TRACKER_PANELS, OverlayColour, panel_images
 from app.player import Player, PlayState, RerunFrom
-from app.plots import PlotsView
+from app.plots import PlotsView, plot_context
 from app.scene import SceneView
 from app.slam_engine import slam_markdown
 from app.status import status_markdown
@@ -79,6 +79,8 @@ class ViewerApp:
         self._cloud_read = -1
         """Opening whose cloud has been read (-1: none)."""
         self.frames_published = 0
+        self._slam_panels_shown: bool | None = None
+        """Whether the image panels shown are SLAM mode's (None: none drawn yet)."""
         self._last_slow = 0.0
         self.key_guard = SliderKeyGuard()
         """Arrow/Home shortcuts pressed on a focused slider move the slider only (app/hotkeys.py)."""
@@ -90,6 +92,7 @@ class ViewerApp:
         self.refresh_entries()
         self.apply_layout_name(cfg.layout)
         self._bind_hotkeys()
+        self.server.on_client_connect(lambda _client: self.layout_gui.client_connected())
         recs = [e for e in self.entries if e.kind == EntryKind.RECORDING and e.error is None]
         if recs:
             # Open on the shortest-named landing recording (the showcase) when there is one, else the first found.
@@ -149,10 +152,10 @@ class ViewerApp:
         self.panels["images"] = p = g.add_panel()
         blank = np.zeros((48, 64, 3), np.uint8)
         with p.add_tab("Images"):
-            self.image_handles = {name: g.add_image(blank, label=name, format="jpeg", jpeg_quality=85)
-                                  for name in ("SP-TS positive", "SP-TS negative", "TDF + map points", "events kept / removed")}
+            self.images_note = g.add_markdown(IMAGES_IN_SLAM_MODE, visible=False)
+            self.image_handles = {name: g.add_image(blank, label=name, format="jpeg", jpeg_quality=85) for name in TRACKER_PANELS}
         with p.add_tab("SLAM"):
-            self.slam_info = g.add_markdown("_SLAM mode shows here (Recording > mode: slam)._")
+            self.slam_info = g.add_markdown(SLAM_PLACEHOLDER)
             self.image_handles.update({name: g.add_image(blank, label=name, format="jpeg", jpeg_quality=85) for name in SLAM_PANELS})
         self.panels["plots"] = p = g.add_panel()
         self.plots = PlotsView(g, p.add_tab("Plots"))
@@ -192,18 +195,7 @@ class ViewerApp:
         self.warm_up.start(self.entries)
 
     def _scan_note(self) -> str:
-        recs = [e for e in self.entries if e.kind == EntryKind.RECORDING]
-        maps = [e for e in self.entries if e.kind == EntryKind.MAP]
-        bad = [e for e in self.entries if e.error]
-        note = f"{len(recs)} recordings, {len(maps)} maps under " + ", ".join(f"`{r}`" for r in self.roots.roots)
-        missing = [r for r in self.roots.roots if not r.is_dir()]
-        if missing:
-            note += "\n\n" + "; ".join(f"`{r}` does not exist" for r in missing)
-        if self.cache_note:
-            note += f"\n\n_{self.cache_note}_"
-        if bad:
-            note += "\n\n**Unreadable:**\n" + "\n".join(f"- `{e.label}`: {e.error}" for e in bad)
-        return note
+        return scan_note(self.entries, self.roots, self.cache_note)
 
     def _entry(self, display: str) -> DataEntry | None:
         for e in self.entries:
@@ -261,7 +253,8 @@ class ViewerApp:
                                  f"{s['sensor_size']}; map: {map_entry.label if map_entry else 'none'}"
                                  + ("" if cmap is not None or self.mode == "slam" else f"\n\n_{NO_MAP_NOTE}_") + "\n\n" + self._scan_note())
         self.warm_up.opened(path if self.mode == "tracking" and cmap is not None else None)
-        self.time_slider.max = max(0.001, (recording.t_end_us - recording.t_start_us) / 1e6)
+        # Whole milliseconds, the slider's step: the end label read "3.999952" (engines clip a seek past the end).
+        self.time_slider.max = max(0.001, round((recording.t_end_us - recording.t_start_us) / 1e6, 3))
         factory = engine_factory(recording, cmap, self.mode, self.cfg.frame_cache, self.cfg.disk_cache,
                                  (path, map_entry.path) if map_entry is not None else None)
 
@@ -336,21 +329,40 @@ class ViewerApp:
         slow = self.player is None or self.player.state != PlayState.PLAYING or now - self._last_slow >= SLOW_REFRESH_S
         history = engine.history if slow else []
         with self.server.atomic():
+            self._show_mode_panels(frame.slam is not None)
             for name, img in imgs.items() if show_images else ():
                 self.image_handles[name].image = img
             self.scene.update(frame, history if slow else None)
             if slow:
                 self._last_slow = now
-                self.plots.update(history, self.recording.ground_truth if self.recording is not None else None)
+                self.plots.update(history, self.recording.ground_truth if self.recording is not None else None,
+                                  *plot_context(frame, engine))
             if frame.slam is not None:
                 self.slam_info.content = slam_markdown(frame, self.scene.toggles.slam_aligned)
-            if show_teaching and STAGE_PANEL[self.stage] in imgs:
+            if show_teaching and (STAGE_PANEL[self.stage] in imgs or frame.slam is not None):
+                # SLAM mode: the stages are the tracker's, which is not running; the text says so (no live image).
                 self.teaching_text.content = teaching_markdown(self.stage, frame)
-                self.teaching_image.image = imgs[STAGE_PANEL[self.stage]]
+                if frame.slam is None:
+                    self.teaching_image.image = imgs[STAGE_PANEL[self.stage]]
             self.time_slider.value = round((frame.t_us - engine.t_start_us) / 1e6, 3)
             self.status.content = status_markdown(frame, engine, self.player.stats() if self.player else {})
         self.frames_published += 1
         self.last_frame = frame  # last, so whoever sees it also sees everything drawn for it
+
+    def _show_mode_panels(self, slam: bool) -> None:
+        """Show the image panels of the mode the frames come from and hide the other mode's, which would stay
+        frozen at the last step of that mode (the tracker's time surfaces seen beside SLAM's, as if they were live)."""
+        if slam == self._slam_panels_shown:
+            return
+        self._slam_panels_shown = slam
+        self.images_note.visible = slam
+        self.teaching_image.visible = not slam
+        for name in TRACKER_PANELS:
+            self.image_handles[name].visible = not slam
+        for name in SLAM_PANELS:
+            self.image_handles[name].visible = slam
+        if not slam:
+            self.slam_info.content = SLAM_PLACEHOLDER
 
     def _on_progress(self, engine: Engine) -> None:
         # While paused the run-ahead advances without new frames: refresh the status line alone.

@@ -198,7 +198,10 @@ def slam_markdown(frame: Frame, aligned: bool = True) -> str:
     with_pt = 0 if v.feature_has_point is None else int(np.count_nonzero(v.feature_has_point))
     n_pts = 0 if v.map_points is None else len(v.map_points)
     n_kf = 0 if v.keyframe_poses is None else len(v.keyframe_poses)
-    return (f"map {v.map_id}: {n_pts} points, {n_kf} keyframes{' (keyframe inserted)' if v.keyframe else ''}\n\n"
+    # Before the first map its id is -1: "map -1: 0 points" read like a broken map.
+    head = (f"map {v.map_id}: {n_pts} points, {n_kf} keyframes{' (keyframe inserted)' if v.keyframe else ''}" if v.map_id >= 0
+            else "no map yet: SLAM starts its first one with a two-view initialisation from the tracked features")
+    return (f"{head}\n\n"
             f"MCI{'' if v.mci_t_us is None else f' at {v.mci_t_us / 1e6:.3f} s'} hypothesis scores (mean local STD): {scores or 'no MCI yet'}\n\n"
             f"tracked features: {n_feat} ({with_pt} with a map point; green with, yellow without)"
             + (f"\n\n{note}" if (note := alignment_note(v.atlas, aligned, v.has_ground_truth)) else ""))

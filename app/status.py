@@ -36,8 +36,9 @@ def status_markdown(frame: Frame, engine: Engine, stats: dict) -> str:
     """Markdown of the status line under the playback controls."""
     text = (f"t = {frame.t_us / 1e6:.3f} s, step {frame.index}, **{frame.status}**"
             + (f" ({frame.reason})" if frame.reason and frame.status != "events only" else "")
-            + f"\n\n{stats.get('state', '')} at {stats.get('speed', 1):.1f}x, "
-            f"real-time factor {stats.get('real_time_factor', 0):.2f}")
+            + f"\n\n{stats.get('state', '')} at {stats.get('speed', 1):.1f}x")
+    if stats.get("real_time_factor", 0) > 0:  # 0 until something is played: "real-time factor 0.00" read as a stall
+        text += f", real-time factor {stats['real_time_factor']:.2f}"
     catching = stats.get("catching_up")
     if catching is not None:
         shown = ("the images are already the target's time surfaces; its pose and map overlay follow" if frame.preview

@@ -75,6 +75,9 @@ def live_facts(stage: Stage, frame: Frame | None) -> str:
         return "_Press play or step to see live figures._"
     c = frame.counts
     t = f"At t = {frame.t_us / 1e6:.3f} s (step {frame.index}): "
+    if frame.slam is not None:
+        return t + ("SLAM mode runs no map-based tracking, so this stage is not computed; SLAM's own images (tiny "
+                    "frame, motion-compensated image with its tracked features) are in the images panel's SLAM tab.")
     if stage == Stage.EVENTS:
         n_in = c.get("events_in", len(frame.events_kept) + len(frame.events_removed))
         kept = c.get("events_kept", len(frame.events_kept))
@@ -100,4 +103,5 @@ def live_facts(stage: Stage, frame: Frame | None) -> str:
 
 
 def teaching_markdown(stage: Stage, frame: Frame | None) -> str:
-    return f"### {stage.value}\n\n{EXPLANATIONS[stage]}\n\n**Now:** {live_facts(stage, frame)}\n\n_Image: {STAGE_PANEL[stage]}_"
+    image = "" if frame is not None and frame.slam is not None else f"\n\n_Image: {STAGE_PANEL[stage]}_"  # SLAM: none shown
+    return f"### {stage.value}\n\n{EXPLANATIONS[stage]}\n\n**Now:** {live_facts(stage, frame)}{image}"

@@ -4,8 +4,9 @@ import json
 
 import pytest
 
-from app.layouts import (CONTROL_PANEL_PX, DEFAULT_COLUMN_PX, LAYOUT_DIR, MAX_WIDTH, MIN_WIDTH, Layout, check_width, dock_choices,
-                         layout_path, list_layouts, load_layout, save_layout)
+from app.layout_gui import FLOAT_AT, FLOAT_DEFAULT
+from app.layouts import (CONTROL_PANEL_PX, DEFAULT_COLUMN_PX, LAYOUT_DIR, MAX_WIDTH, MIN_VIEW_PX, MIN_WIDTH, NARROW_WINDOW_PX, Layout,
+                         check_width, dock_choices, layout_path, list_layouts, load_layout, save_layout)
 from evpose.errors import InputError
 
 
@@ -86,12 +87,24 @@ def test_placements_put_anchors_first_and_panels_on_a_hidden_or_floating_anchor_
 
 
 def test_edge_widths_sum_the_columns_docked_there():
-    lay = _debug()  # right: images 420 with plots stacked in its column; left: main panel + parameters 320
-    assert lay.region_widths() == {"left": CONTROL_PANEL_PX + 320, "right": 420}
+    lay = _debug()  # right: images with plots stacked in its column; left: main panel + parameters
+    images, params = lay.panels["images"].width, lay.panels["parameters"].width
+    assert lay.region_widths() == {"left": CONTROL_PANEL_PX + params, "right": images}
     lay = lay.with_dock("images", "left")
-    assert lay.region_widths() == {"left": CONTROL_PANEL_PX + 320 + 420, "right": 0}
+    assert lay.region_widths() == {"left": CONTROL_PANEL_PX + params + images, "right": 0}
+    assert lay.view_width(1400) == 1400 - CONTROL_PANEL_PX - params - images
     lay.panels["images"].width = None
-    assert lay.region_widths()["left"] == CONTROL_PANEL_PX + 320 + DEFAULT_COLUMN_PX
+    assert lay.region_widths()["left"] == CONTROL_PANEL_PX + params + DEFAULT_COLUMN_PX
+
+
+def test_shipped_layouts_leave_the_3d_view_room_in_a_narrow_window_and_float_inside_it():
+    for name, lay in list_layouts(LAYOUT_DIR).items():
+        view = lay.view_width(NARROW_WINDOW_PX)
+        assert view >= MIN_VIEW_PX, (name, view)
+        for panel, dock in lay.placements():
+            if dock == "float":  # a floating panel opens inside the view, not over the docked panels
+                x, _ = FLOAT_AT.get(panel, FLOAT_DEFAULT)
+                assert abs(x) + (lay.panels[panel].width or DEFAULT_COLUMN_PX) <= view, (name, panel)
 
 
 def test_widths_outside_the_range_or_not_whole_pixels_are_refused():

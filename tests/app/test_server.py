@@ -109,6 +109,7 @@ def test_recording_with_its_map_runs_the_tracker_and_exports_a_trajectory(viewer
     viewer.player.wait_idle()
     assert isinstance(viewer.player.engine, TrackerEngine)
     assert viewer.map_dropdown.value.endswith("squares_map.ply")
+    assert viewer.time_slider.max == round(viewer.time_slider.max, 3)  # the end label in whole milliseconds
     for _ in range(5):
         viewer.player.step_forward()
     viewer.player.wait_idle()
@@ -220,7 +221,7 @@ def test_the_layout_folder_docks_and_sizes_panels_and_a_saved_layout_restores_th
     lg = app.layout_gui
     try:
         assert app.apply_layout_name("debug")
-        assert lg.docks["images"].value == "right" and lg.widths["images"].value == 420 and lg.widths["plots"].value == 0
+        assert lg.docks["images"].value == "right" and lg.widths["images"].value == 340 and lg.widths["plots"].value == 0
         assert lg.set_dock("images", "left") and lg.set_width("images", 500)
         assert app.layout.panels["images"].dock == "left" and app.layout.panels["images"].width == 500
         assert lg.shown_docks["plots"] == "below:images"  # stacked on images, it went left with it

@@ -180,6 +180,55 @@ def panel_edge(page, text):
         "e => { const l = e.closest('[data-dock-leaf]'); return l ? l.dataset.dockEdge : 'float'; }")
 
 
+def _overlap(a, b):
+    """Area shared by two (x, y, width, height) boxes."""
+    w = min(a[0] + a[2], b[0] + b[2]) - max(a[0], b[0])
+    h = min(a[1] + a[3], b[1] + b[3]) - max(a[1], b[1])
+    return max(w, 0) * max(h, 0)
+
+
+def test_shipped_layouts_leave_the_3d_view_room_without_overlapping_panels_in_narrow_windows(page, viewer):
+    from app.layouts import MIN_VIEW_PX
+
+    if not page.get_by_label("layout", exact=True).is_visible():
+        page.get_by_text("Layout", exact=True).click()
+    texts = {"images": "SP-TS positive", "plots": "Plots", "parameters": "Parameters", "teaching": "How it works"}
+    try:
+        for name in ("compare", "debug", "teaching"):
+            choose(page, "layout", name)
+            wait_for(lambda: viewer.layout.name == name, what=f"{name} layout")
+            shown = ["Recording"] + [texts[p] for p, _ in viewer.layout.placements()]
+            for width in (1280, 1400):
+                page.set_viewport_size({"width": width, "height": 900})
+
+                def boxes():
+                    return {t: panel_box(page, t) for t in shown}
+
+                def overlaps():
+                    b = boxes()
+                    return [(s, t) for i, s in enumerate(shown) for t in shown[i + 1:] if _overlap(b[s], b[t]) > 0]
+
+                canvas = lambda: page.locator("canvas").first.bounding_box()["width"]
+                # Placement and the resent widths settle within a second. The slack: the panels' borders, and viser
+                # sharing an edge among its columns in proportion to their widths (debug's left: 299 + 281 px).
+                wait_for(lambda: not overlaps() and canvas() >= MIN_VIEW_PX - 15, timeout=10,
+                         what=f"{name} at {width} px: no panels overlapping, 3D view >= {MIN_VIEW_PX} px",
+                         detail=lambda: f"overlapping {overlaps()}, view {canvas()}, boxes {boxes()}")
+        # A tab opened afterwards gets the widths too (sent with its placement on connecting, they were dropped).
+        choose(page, "layout", "debug")
+        wait_for(lambda: viewer.layout.name == "debug", what="debug layout")
+        other = page.context.browser.new_page(viewport={"width": 1280, "height": 900})
+        try:
+            other.goto(f"http://127.0.0.1:{viewer.cfg.port}")
+            other.get_by_text("SP-TS positive").first.wait_for(timeout=30_000)
+            view = lambda: other.locator("canvas").first.bounding_box()["width"]
+            wait_for(lambda: view() >= MIN_VIEW_PX - 15, timeout=10, what="a new tab's 3D view", detail=view)
+        finally:
+            other.close()
+    finally:
+        page.set_viewport_size({"width": 1400, "height": 900})
+
+
 def test_docking_a_panel_from_the_layout_folder_moves_it_and_a_saved_layout_puts_it_back(page, viewer):
     if not page.get_by_label("layout", exact=True).is_visible():
         page.get_by_text("Layout", exact=True).click()

@@ -74,6 +74,32 @@ def test_slam_maps_are_shown_on_the_ground_truth_and_the_toggle_shows_them_raw(v
     assert np.allclose(node.points, view.points, rtol=2e-3, atol=2e-3) and "own frame" in viewer.slam_info.content
     viewer._set_toggle("slam_aligned", True)
     viewer.player.wait_idle()
+    # The pose error is measured after the same alignment (it was empty: map-frame poses against the ground truth).
+    from app.plots import SLAM_POSE_ERROR
+
+    labels, plot = viewer.plots.handles[SLAM_POSE_ERROR]
+    note = viewer.plots.notes.get(SLAM_POSE_ERROR)
+    assert np.isfinite(plot.data[1]).sum() >= 2 and plot.visible and (note is None or not note.visible)
+
+
+def test_only_the_modes_own_image_panels_are_shown_and_teaching_says_slam_runs_no_tracker_stage(viewer):
+    viewer.set_mode("slam")
+    viewer.player.step_forward()
+    viewer.player.wait_idle()
+    assert viewer.images_note.visible and not viewer.image_handles["SP-TS positive"].visible  # frozen otherwise
+    assert viewer.image_handles["MCI + tracked features"].visible and not viewer.teaching_image.visible
+    viewer.stage_dropdown.value = "TDF"
+    viewer._set_stage("TDF")
+    viewer.player.wait_idle()
+    viewer.layout_gui.set_visible("teaching", True)
+    viewer.player.wait_idle()
+    assert "SLAM mode runs no map-based tracking" in viewer.teaching_text.content and "_Image:" not in viewer.teaching_text.content
+    viewer.set_mode("tracking")
+    viewer.player.step_forward()
+    viewer.player.wait_idle()
+    assert not viewer.images_note.visible and viewer.image_handles["SP-TS positive"].visible and viewer.teaching_image.visible
+    assert not viewer.image_handles["MCI + tracked features"].visible and "SLAM mode shows here" in viewer.slam_info.content
+    viewer.layout_gui.set_visible("teaching", False)
 
 
 def test_back_to_tracking_mode_without_a_map_is_the_events_view(viewer):
@@ -81,6 +107,11 @@ def test_back_to_tracking_mode_without_a_map_is_the_events_view(viewer):
     viewer.player.step_forward()
     viewer.player.wait_idle()
     assert isinstance(viewer.player.engine, (EventsOnlyEngine, TrackerEngine)) and viewer.last_frame.slam is None
+    if isinstance(viewer.player.engine, EventsOnlyEngine):  # no map here: the empty pose-error plot says why instead
+        viewer.player.step_forward()
+        viewer.player.wait_idle()
+        note = viewer.plots.notes["pose error"]
+        assert note.visible and "Tracking needs a map" in note.content and not viewer.plots.handles["pose error"][1].visible
     assert not viewer.set_mode("lidar")
 
 

@@ -150,6 +150,7 @@ def test_slam_engine_frames_carry_their_maps_aligned_to_the_recordings_ground_tr
     frames = []
     while (f := eng.step()) is not None:
         frames.append(f)
+    assert frames[0].slam.map_id == -1 and slam_markdown(frames[0]).startswith("no map yet")  # not "map -1: 0 points"
     last = frames[-1]
     assert last.slam.has_ground_truth and last.slam.atlas and last.slam.atlas[-1].active
     metrics = atlas_metrics(eng.slam.atlas.trajectories(), rec.ground_truth, correct_scale=True)

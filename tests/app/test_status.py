@@ -23,6 +23,8 @@ def test_events_only_status_has_no_run_ahead_note(bar_recording):
     f = Frame(3, 15_000, z, z, z, EventArray.empty(), EventArray.empty())
     text = status_markdown(f, eng, {"state": "paused", "speed": 1.0, "real_time_factor": 0.5})
     assert "step 3" in text and "real-time factor 0.50" in text and "run-ahead" not in text
+    text = status_markdown(f, eng, {"state": "paused", "speed": 1.0, "real_time_factor": 0.0})  # nothing played yet
+    assert "paused at 1.0x" in text and "real-time factor" not in text
 
 
 def test_run_ahead_note_says_what_came_from_the_disk_cache_and_why_it_stopped_writing():
