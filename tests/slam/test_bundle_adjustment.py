@@ -88,3 +88,17 @@ def test_a_pair_sigma_overrides_the_rotation_prior_sigma_of_that_pair_only():
     images_only = adjusted_rotation_error(False, None)
     assert adjusted_rotation_error(True, None) > images_only + 0.3
     assert abs(adjusted_rotation_error(True, {(2, 3): np.radians(10.0)}) - images_only) < 0.01
+
+
+def test_weak_points_are_left_out_of_the_bundle_adjustment():
+    m, X, _ = _map(seed=4)
+    weak = [j for j in m.points if j % 4 == 0]
+    for j in weak:
+        m.points[j].weak = True
+        m.points[j].xyz = m.points[j].xyz + 0.5  # far off: a BA using them would move them and be pulled by them
+    before = {j: m.points[j].xyz.copy() for j in weak}
+    rep = local_bundle_adjustment(m, K, window=4, iterations=20, huber_px=2.0, n_fixed=2)
+    assert rep.points == len(m.points) - len(weak)
+    assert all(np.array_equal(m.points[j].xyz, before[j]) for j in weak)
+    strong = [j for j in m.points if j not in weak]
+    assert np.median(np.linalg.norm(m.point_array()[strong] - X[strong], axis=1)) < 0.05

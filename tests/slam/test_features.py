@@ -74,3 +74,66 @@ def test_min_ncc_drops_tracks_carried_into_another_scene_and_keeps_a_shifted_cop
     _, ok_ncc = track_features(a, other, pts, cfg, guess=pts, min_ncc=0.6)
     # Blob images fool the forward-backward test for a share of tracks; the correlation removes most of those.
     assert ok_plain.sum() >= 10 and ok_ncc.sum() < 0.6 * ok_plain.sum() and ok_ncc.mean() < 0.2
+
+
+def test_support_ratio_is_low_on_an_isolated_event_and_high_on_a_corner():
+    from evpose.slam.features import support_ratio
+
+    x, y = _corners_and_noise()
+    img = event_image(x, y, None, 240, 180, 1.0)
+    r = support_ratio(img, np.array([[50.0, 40.0], [150.0, 120.0]]), 7)
+    assert (r > 3.0).all()
+    lone = event_image(np.r_[x, 200.0], np.r_[y, 160.0], None, 240, 180, 1.0)
+    assert support_ratio(lone, np.array([[200.0, 160.0]]), 7)[0] < 1.0
+
+
+def test_edge_tensor_gives_the_direction_along_a_straight_edge_and_tells_corners_apart():
+    import cv2
+
+    from evpose.slam.features import edge_tensor
+
+    img = np.zeros((60, 60), np.float32)
+    img[:, 30] = 1.0  # a vertical edge
+    img[45, 30:] = 1.0  # meeting a horizontal one: a corner at (30, 45)
+    img = cv2.GaussianBlur(img, (0, 0), 1.0)
+    ratio, along = edge_tensor(img, np.array([[30.0, 15.0], [30.0, 45.0], [50.0, 45.0]]))
+    assert ratio[0] < 0.05 and abs(along[0, 1]) > 0.99  # vertical edge: along y
+    assert ratio[2] < 0.05 and abs(along[2, 0]) > 0.99  # horizontal edge: along x
+    assert ratio[1] > 0.3
+
+
+def _scene(shift: np.ndarray) -> np.ndarray:
+    """Nine L-shaped corners and one long vertical line, all moved by ``shift`` pixels, as an 8-bit event image."""
+    rng = np.random.default_rng(5)
+    xs, ys = [], []
+    for cx in (40, 120, 200):
+        for cy in (30, 90, 150):
+            s = rng.uniform(0, 15, 300)
+            xs += [cx + s[:150], np.full(150, float(cx))]
+            ys += [np.full(150, float(cy)), cy + s[150:]]
+    t = np.linspace(10, 170, 800)
+    xs.append(np.full(800, 80.0))
+    ys.append(t)
+    x, y = np.concatenate(xs) + shift[0], np.concatenate(ys) + shift[1]
+    keep = (y >= 0) & (y < 179)
+    return event_image(x[keep], y[keep], None, 240, 180, 1.0)
+
+
+def test_edge_slide_correction_restores_the_along_edge_motion_klt_misses():
+    from evpose.slam.features import correct_edge_slide
+
+    flow = np.array([3.0, 4.0])
+    img = _scene(flow)
+    corners = np.array([[float(cx), float(cy)] for cx in (40, 120, 200) for cy in (30, 90, 150)])
+    edge = np.array([[80.0, v] for v in (50.0, 80.0, 110.0)])
+    prev = np.r_[corners, edge]
+    # KLT moved the corners with the scene but the edge tracks only across their (vertical) edge.
+    new = np.r_[corners + flow, edge + [flow[0], 0.0]].astype(np.float32)
+    cfg = FeatureConfig(edge_slide_correction=True)
+    ok = np.ones(len(prev), bool)
+    out = correct_edge_slide(prev, new, ok, to_uint8(img), img, cfg)
+    assert np.allclose(out[-3:], edge + flow, atol=0.05)
+    assert np.array_equal(out[:9], new[:9])  # corners keep KLT's own positions
+    # Fewer than eight corners to fit: KLT's positions come back unchanged.
+    ok[:3] = False
+    assert np.array_equal(correct_edge_slide(prev, new, ok, to_uint8(img), img, cfg), new)
