@@ -34,9 +34,6 @@ class MapPoint:
     created_kf: int = 0
     patch: np.ndarray | None = None
     """Template (uint8, square) around the point's newest keyframe observation, for re-finding it by projection."""
-    weak: bool = False
-    """Triangulated from a track on too few events (``TrackingConfig.weak_point_support_ratio``): pose tracking uses it,
-    the visual local BA leaves it out."""
 
 
 @dataclass

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import cv2
 import numpy as np
 
 from evpose.slam.atlas import SlamMap
@@ -54,7 +55,7 @@ def local_bundle_adjustment(m: SlamMap, K: np.ndarray, window: int, iterations: 
     fixed_ids = set(free_ids[: max(n_fixed, 2 if len(m.keyframes) <= 2 else n_fixed)])
     kf_by_id = {kf.id: kf for kf in m.keyframes}
     in_window = set(free_ids)
-    pt_ids = sorted({pid for pid, p in m.points.items() if not p.weak and any(k in in_window for k in p.obs)})
+    pt_ids = sorted({pid for pid, p in m.points.items() if any(k in in_window for k in p.obs)})
     cal = gtsam.Cal3_S2(K[0, 0], K[1, 1], 0.0, K[0, 2], K[1, 2])
     noise = gtsam.noiseModel.Robust.Create(gtsam.noiseModel.mEstimator.Huber.Create(huber_px), gtsam.noiseModel.Isotropic.Sigma(2, 1.0))
     tight = gtsam.noiseModel.Isotropic.Sigma(6, 1e-6)
@@ -129,8 +130,6 @@ def _edge_noise(gtsam, kf, uv, tensors: dict, along_px: float, max_ratio: float,
     if kf is None or kf.image8 is None:
         return None
     if kf.id not in tensors:
-        import cv2
-
         img = kf.image8.astype(np.float32)
         gx = cv2.Sobel(img, cv2.CV_32F, 1, 0, ksize=3)
         gy = cv2.Sobel(img, cv2.CV_32F, 0, 1, ksize=3)

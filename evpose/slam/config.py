@@ -115,23 +115,20 @@ class FeatureConfig:
     ``TrackingConfig.coast_s`` 0.4: 6.84 -> 12.29 %, 80.2 -> 47.2 % (with ``min_event_rate`` 0.1: 11.35 / 57.3).
     Session 13, the same test on every MCI-to-MCI track's new position (tracks dropped below 1.0; removed), landing
     event-only seeds 0-11 (``/tmp/s13/slamedge/exp.py``): mean ATE 2.52 -> 3.19 %, within 2 % 5 -> 2 of 12, tracked at
-    least 96.5 -> 88.0 %."""
+    least 96.5 -> 88.0 %. Leaving points triangulated from tracks below 1.0 out of the local BA (pose tracking still
+    using them; removed): seeds 0-11 2.52 -> 2.48 % (median 2.21 -> 1.72, within 2 % 5 -> 8), seeds 12-23 3.62 -> 2.94 %
+    (3 -> 4), but indoor event-only seeds 0-3 6.84 -> 11.14 % (worse on all four), tracked 80.2 -> 76.7 %; with
+    ``TrackingConfig.ba_edge_along_sigma_px`` 3, seeds 0-11: 3.26 % (4 within 2 %)."""
     support_window_px: int = field(default=7, metadata={"min": 3, "max": 31, "step": 2, "unit": "px"})
-    """Side of the square the support tests count events in, pixels (odd)."""
-    edge_slide_correction: bool = False
-    """MCI-to-MCI tracks on a straight edge get the along-edge part of their motion from a homography of the corner
-    tracks (:func:`evpose.slam.features.correct_edge_slide`); off: KLT's own, which stays behind along the edge."""
-    edge_max_ratio: float = field(default=0.1, metadata={"min": 0.0, "max": 1.0, "step": 0.01, "unit": "ratio"})
-    """A track is on a straight edge when the smaller eigenvalue of the MCI's structure tensor around it is below this
-    share of the larger, ratio."""
-    edge_tensor_px: int = field(default=11, metadata={"min": 3, "max": 31, "step": 2, "unit": "px"})
-    """Side of the square the structure tensor sums over, pixels (odd)."""
-    edge_fit_min_support: float = field(default=1.0, metadata={"min": 0.0, "max": 20.0, "step": 0.25, "unit": "ratio"})
-    """Corner tracks enter the homography of ``edge_slide_correction`` only with at least this multiple of the MCI's
-    mean event count per ``support_window_px`` square around them (isolated noise events follow the warps), ratio."""
+    """Side of the square the support test counts events in, pixels (odd)."""
     klt_window_px: int = field(default=23, metadata={"min": 5, "max": 51, "step": 2, "unit": "px"})
     """KLT block size, pixels (odd). Landing event-only seeds 0-11, 60 runs (``MciConfig.reference_fraction`` 1.0):
-    15 -> mean ATE 3.34 -> 4.13 % (tracked at least 79.0 %), 31 -> 3.34 % (within 2 % 9 -> 12 of 60)."""
+    15 -> mean ATE 3.34 -> 4.13 % (tracked at least 79.0 %), 31 -> 3.34 % (within 2 % 9 -> 12 of 60). KLT on a
+    straight edge measures only the motion across it (``TrackingConfig.ba_edge_along_sigma_px``). Session 13, replacing
+    the along-edge part of such tracks' motion (structure-tensor eigenvalue ratio below 0.1 over 11 px) by that of a
+    RANSAC homography of the corner tracks with event support (removed): landing event-only seeds 0-11 mean ATE 2.52 ->
+    3.15 % (median 2.21 -> 2.15, within 2 % 5 -> 4, tracked at least 96.5 -> 83.9 %), the summed keyframe-to-keyframe
+    x-rotation error per run (median over the seeds) 8.6 -> 5.4 deg; with ``ba_edge_along_sigma_px`` 3: 2.54 % (5)."""
     klt_levels: int = field(default=2, metadata={"min": 0, "max": 5, "step": 1, "unit": "levels"})
     """KLT pyramid levels above the base image, levels."""
     klt_max_bidir_error_px: float = field(default=1.0, metadata={"min": 0.1, "max": 5.0, "step": 0.1, "unit": "px"})
@@ -322,10 +319,6 @@ class TrackingConfig:
     solution nearest the BA's) was worse than the BA (seed 9: 3.4-3.8 against 2.7 deg RMS), so it was not fed in.
     Session 11 (``MciConfig.reference_fraction`` 0.5, landing seeds 0-11, 60 runs): on -> mean ATE 2.60 -> 2.58 %,
     within 2 % 30 -> 22 of 60."""
-    weak_point_support_ratio: float = field(default=0.0, metadata={"min": 0.0, "max": 20.0, "step": 0.25, "unit": "ratio"})
-    """Event-only: a new map point whose track has less than this multiple of the keyframe MCI's mean event count per
-    ``FeatureConfig.support_window_px`` square around it is weak (:attr:`evpose.slam.atlas.MapPoint.weak`): pose
-    tracking uses it, the local BA leaves it out (0: none is weak), ratio."""
     ba_edge_along_sigma_px: float = field(default=0.0, metadata={"min": 0.0, "max": 50.0, "step": 0.5, "unit": "px"})
     """Event-only local BA: observations on a straight edge of their keyframe's MCI get this sigma along the edge (one
     pixel across it; 0: isotropic like every other observation), pixels. KLT on an edge measures only the motion across
@@ -333,9 +326,6 @@ class TrackingConfig:
     ba_edge_max_ratio: float = field(default=0.1, metadata={"min": 0.0, "max": 1.0, "step": 0.01, "unit": "ratio"})
     """An observation is on a straight edge when the smaller eigenvalue of the MCI's structure tensor (11 px square)
     there is below this share of the larger, ratio."""
-    weak_point_pose_min: int = field(default=0, metadata={"min": 0, "max": 200, "step": 1, "unit": "points"})
-    """Pose tracking leaves weak points (``weak_point_support_ratio``) out when at least this many other tracked map
-    points remain (0: it always uses them), points."""
     min_observations: int = field(default=2, metadata={"min": 2, "max": 10, "step": 1, "unit": "keyframes"})
     """Points seen by fewer keyframes after three newer keyframes are culled, keyframes. Every new point starts with the
     two keyframes it is triangulated from, so 2 never culls by age; 3 is ORB-SLAM's monocular rule (points no later

@@ -47,7 +47,11 @@ def detect_features(img8: np.ndarray, cfg: FeatureConfig, existing: np.ndarray |
     if support is not None and cfg.min_support_ratio > 0:
         # A background-activity event splats an isolated blob that FAST and Shi-Tomasi both take for a
         # corner; KLT on it follows noise and a map point on it is garbage. Real corners gather many events.
-        keep &= support_ratio(support, pts, cfg.support_window_px) >= cfg.min_support_ratio
+        k = int(cfg.support_window_px) | 1
+        sup = np.abs(np.asarray(support, np.float32))
+        mass = cv2.boxFilter(sup, -1, (k, k), normalize=False, borderType=cv2.BORDER_CONSTANT)
+        mean_mass = float(sup.sum()) * k * k / sup.size
+        keep &= mass[iv, iu] >= cfg.min_support_ratio * mean_mass
     if existing is not None and len(existing):
         # Occupancy mask around existing tracks keeps new features from doubling old ones.
         mask = np.zeros((h, w), np.uint8)
@@ -75,77 +79,6 @@ def detect_features(img8: np.ndarray, cfg: FeatureConfig, existing: np.ndarray |
         top = np.lexsort((pts[:, 0], pts[:, 1], -resp))[:max_total]
         pts = pts[np.sort(top)]
     return np.ascontiguousarray(pts, np.float32)
-
-
-def support_ratio(support: np.ndarray, uv: np.ndarray, window_px: int) -> np.ndarray:
-    """Event mass in the ``window_px`` square around each of ``uv`` (nearest pixel, clipped to the image) over the
-    image's mean mass per such square, float32 (N,). ``support`` is a float event image (each event adds a mass of one;
-    signed polarity images count by magnitude)."""
-    h, w = support.shape
-    k = int(window_px) | 1
-    sup = np.abs(np.asarray(support, np.float32))
-    mass = cv2.boxFilter(sup, -1, (k, k), normalize=False, borderType=cv2.BORDER_CONSTANT)
-    mean_mass = float(sup.sum()) * k * k / sup.size
-    iu = np.clip(np.round(uv[:, 0]).astype(int), 0, w - 1)
-    iv = np.clip(np.round(uv[:, 1]).astype(int), 0, h - 1)
-    return (mass[iv, iu] / max(mean_mass, 1e-12)).astype(np.float32)
-
-
-def edge_tensor(img: np.ndarray, uv: np.ndarray, window_px: int = 11) -> tuple[np.ndarray, np.ndarray]:
-    """Structure tensor of ``img`` in the ``window_px`` square around each of ``uv`` (nearest pixel): the ratio of its
-    smaller to its larger eigenvalue (0: a straight edge, 1: a corner or a blob), float64 (N,), and the unit direction
-    along the edge (the smaller eigenvalue's eigenvector), float64 (N, 2)."""
-    h, w = img.shape
-    f = np.asarray(img, np.float32)
-    gx = cv2.Sobel(f, cv2.CV_32F, 1, 0, ksize=3)
-    gy = cv2.Sobel(f, cv2.CV_32F, 0, 1, ksize=3)
-    k = int(window_px) | 1
-    iu = np.clip(np.round(uv[:, 0]).astype(int), 0, w - 1)
-    iv = np.clip(np.round(uv[:, 1]).astype(int), 0, h - 1)
-    a, b, c = (cv2.boxFilter(q, -1, (k, k), normalize=False)[iv, iu].astype(np.float64) for q in (gx * gx, gx * gy, gy * gy))
-    # Closed-form eigen-decomposition of [[a, b], [b, c]].
-    mean, diff = 0.5 * (a + c), np.sqrt(0.25 * (a - c) ** 2 + b * b)
-    big, small = mean + diff, mean - diff
-    ratio = np.where(big > 0, small / np.where(big > 0, big, 1.0), 1.0)
-    # Eigenvector of the smaller eigenvalue: (b, small - a), or an axis when the tensor is diagonal.
-    vx, vy = b, small - a
-    diag = np.hypot(vx, vy) < 1e-12 * np.maximum(big, 1e-30)
-    vx = np.where(diag, np.where(a <= c, 1.0, 0.0), vx)
-    vy = np.where(diag, np.where(a <= c, 0.0, 1.0), vy)
-    n = np.hypot(vx, vy)
-    return ratio, np.c_[vx / n, vy / n]
-
-
-def correct_edge_slide(prev_uv: np.ndarray, new_uv: np.ndarray, ok: np.ndarray, img8: np.ndarray, support: np.ndarray,
-                       cfg: FeatureConfig, seed: int = 0) -> np.ndarray:
-    """KLT positions with the along-edge part of each straight-edge track's motion replaced by the motion a homography of
-    the corner tracks predicts (``cfg.edge_slide_correction``); returns float32 (N, 2).
-
-    KLT on a straight edge measures only the motion across it; started at zero flow it stays behind along the edge.
-    Corners (structure-tensor ratio at least ``cfg.edge_max_ratio``) with real event support (isolated noise events
-    follow the MCI warps, not the scene) give the image motion by a RANSAC homography (OpenCV, re-seeded).
-    """
-    out = np.asarray(new_uv, np.float32).copy()
-    if len(out) < 8:
-        return out
-    ratio, along = edge_tensor(img8, out.astype(np.float64), cfg.edge_tensor_px)
-    fit = ok & (ratio >= cfg.edge_max_ratio) & (support_ratio(support, out, cfg.support_window_px) >= cfg.edge_fit_min_support)
-    if fit.sum() < 8:
-        return out
-    cv2.setRNGSeed(seed)
-    H, _ = cv2.findHomography(np.asarray(prev_uv, np.float64)[fit], out[fit].astype(np.float64), cv2.RANSAC, 1.0)
-    if H is None:
-        return out
-    edge = ok & (ratio < cfg.edge_max_ratio)
-    q = np.c_[np.asarray(prev_uv, np.float64)[edge], np.ones(int(edge.sum()))] @ H.T
-    with np.errstate(divide="ignore", invalid="ignore"):
-        pred = q[:, :2] / q[:, 2:3]
-    d = pred - out[edge]
-    shift = np.sum(d * along[edge], axis=1)
-    good = np.isfinite(shift)
-    idx = np.flatnonzero(edge)[good]
-    out[idx] += (along[edge][good] * shift[good, None]).astype(np.float32)
-    return out
 
 
 def track_features(prev8: np.ndarray, cur8: np.ndarray, pts: np.ndarray, cfg: FeatureConfig, guess: np.ndarray | None = None,

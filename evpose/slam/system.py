@@ -35,7 +35,7 @@ from evpose.slam.bundle_adjustment import local_bundle_adjustment
 from evpose.slam.coasting import constant_velocity_pose
 from evpose.slam.config import SlamConfig, SlamMode
 from evpose.slam.event_window import WINDOW_REASONS, EventWindowSelector, ReconstructionWindow
-from evpose.slam.features import FrontendTracks, correct_edge_slide, detect_features, support_ratio, track_features
+from evpose.slam.features import FrontendTracks, detect_features, track_features
 from evpose.slam.inertial import InertialConfiguration, imu_init_due, initialize_imu
 from evpose.slam.inertial_bridge import predict_camera_pose
 from evpose.slam.inertial_ba import InertialState, inertial_local_bundle_adjustment
@@ -194,8 +194,6 @@ class EventSlam(GyroAids, VisualFailureHandling):
                 new2, ok2 = track_features(fe.prev8, alt.image8, fe.uv, self.cfg.features, guess=guess, min_ncc=min_ncc)
                 if ok2.sum() > ok.sum():
                     mci, new, ok = alt, new2, ok2
-            if self.cfg.features.edge_slide_correction:
-                new = correct_edge_slide(fe.uv, new, ok, mci.image8, mci.image, self.cfg.features, self.cfg.seed)
             fe.ids, fe.uv = fe.ids[ok], new[ok]
         fe.prev8, fe.prev_t = mci.image8, mci.t_us
         self._prev_hypothesis = mci.hypothesis.value
@@ -272,8 +270,6 @@ class EventSlam(GyroAids, VisualFailureHandling):
             m.points[pid] = MapPoint(pid, res.points[k].copy(), {0: p1[k].copy(), 1: p2[k].copy()}, tid, 1)
             fe.track_to_point[tid] = pid
         tc = self.cfg.tracking
-        if self.imu is None and tc.weak_point_support_ratio > 0:
-            self._mark_weak(m, kf1, mci.image8, list(m.points))
         # Global BA of the two-view map (both keyframes' poses fixed: they define frame and scale).
         local_bundle_adjustment(m, self.K, 2, tc.ba_iterations, tc.ba_huber_px, n_fixed=2)
         cull_points(m, self.K, fe.track_to_point, tc)
@@ -353,7 +349,6 @@ class EventSlam(GyroAids, VisualFailureHandling):
             sel = [i for i, t in enumerate(fe.ids.tolist()) if fe.track_to_point.get(t) in m.points]
         if len(sel) < tc.min_inliers:
             return self._bridge_or_lose(mci, f"{len(sel)} tracked map points < {tc.min_inliers}", R_prior)
-        sel = self._strong_only(m, sel)
         est, sel = self._estimate(m, mci, sel, guess, R_prior)
         if not est.ok:
             return self._bridge_or_lose(mci, est.reason, R_prior)
@@ -361,7 +356,7 @@ class EventSlam(GyroAids, VisualFailureHandling):
         if more:
             # Second pass with the estimated pose (ORB-SLAM's local-map search): re-solve with the new associations.
             n_refound += more
-            sel2 = self._strong_only(m, [i for i, t in enumerate(fe.ids.tolist()) if fe.track_to_point.get(t) in m.points])
+            sel2 = [i for i, t in enumerate(fe.ids.tolist()) if fe.track_to_point.get(t) in m.points]
             est2, sel2 = self._estimate(m, mci, sel2, est.T_wc, R_prior)
             if est2.ok:
                 est, sel = est2, sel2
@@ -423,10 +418,7 @@ class EventSlam(GyroAids, VisualFailureHandling):
         """Insert a keyframe, triangulate, run local (inertial) BA, cull, try the IMU initialisation; returns the adjusted pose."""
         fe, tc = self.fe, self.cfg.tracking
         kf = insert_keyframe(m, t_us, T_wc, fe.ids, fe.uv.astype(np.float64), fe.track_to_point)
-        first_new = self._next_point
         self._next_point = triangulate_new_points(m, self.K, kf, fe.track_to_point, tc, self._next_point)
-        if img8 is not None and self.imu is None and tc.weak_point_support_ratio > 0 and self._next_point > first_new:
-            self._mark_weak(m, kf, img8, range(first_new, self._next_point))
         if img8 is not None:
             store_patches(m, kf.id, img8, self.cfg.search.patch_px)
             if self._matcher() is SearchMatcher.KLT:
@@ -453,7 +445,8 @@ class EventSlam(GyroAids, VisualFailureHandling):
                                     scale_anchor=tc.ba_scale_anchor if self.imu is None else 0.0,
                                     velocity_sigma_ratio=tc.ba_velocity_prior if self.imu is None else 0.0,
                                     rotation_rate_sigma_rad_s=np.radians(tc.ba_rotation_rate_prior_deg_s) if self.imu is None else 0.0,
-                                    edge_along_sigma_px=tc.ba_edge_along_sigma_px if self.imu is None else 0.0, edge_max_ratio=tc.ba_edge_max_ratio)
+                                    edge_along_sigma_px=tc.ba_edge_along_sigma_px if self.imu is None else 0.0,
+                                    edge_max_ratio=tc.ba_edge_max_ratio)
         if before is not None:
             carry_relative_scale(m, before)
         cull_points(m, self.K, fe.track_to_point, tc)
@@ -467,25 +460,6 @@ class EventSlam(GyroAids, VisualFailureHandling):
         elif self.imu is not None and not m.scale_refined and ic.refine_after_s > 0 and (t_us - m.imu_init_t_us) / 1e6 >= ic.refine_after_s:
             self._refine_scale(m)
         return m.keyframes[-1].T_wc
-
-    def _strong_only(self, m: SlamMap, sel: list[int]) -> list[int]:
-        """``sel`` without the tracks of weak points when enough others remain (``TrackingConfig.weak_point_pose_min``)."""
-        n = self.cfg.tracking.weak_point_pose_min
-        if n <= 0:
-            return sel
-        fe = self.fe
-        strong = [i for i in sel if not m.points[fe.track_to_point[int(fe.ids[i])]].weak]
-        return strong if len(strong) >= n else sel
-
-    def _mark_weak(self, m: SlamMap, kf: Keyframe, img8: np.ndarray, pids) -> None:
-        """Flag new points whose track sits on too few events in ``kf``'s MCI (``TrackingConfig.weak_point_support_ratio``)."""
-        pids = [p for p in pids if p in m.points]
-        if not pids:
-            return
-        uv = np.array([m.points[p].obs[kf.id] for p in pids])
-        ratio = support_ratio(img8.astype(np.float32), uv, self.cfg.features.support_window_px)
-        for p, r in zip(pids, ratio):
-            m.points[p].weak = bool(r < self.cfg.tracking.weak_point_support_ratio)
 
     def _refine_scale(self, m: SlamMap) -> None:
         """Re-solve scale and gravity over all keyframes of a metric map, once (:mod:`evpose.slam.scale_refinement`)."""

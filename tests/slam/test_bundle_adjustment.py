@@ -90,15 +90,23 @@ def test_a_pair_sigma_overrides_the_rotation_prior_sigma_of_that_pair_only():
     assert abs(adjusted_rotation_error(True, {(2, 3): np.radians(10.0)}) - images_only) < 0.01
 
 
-def test_weak_points_are_left_out_of_the_bundle_adjustment():
-    m, X, _ = _map(seed=4)
-    weak = [j for j in m.points if j % 4 == 0]
-    for j in weak:
-        m.points[j].weak = True
-        m.points[j].xyz = m.points[j].xyz + 0.5  # far off: a BA using them would move them and be pulled by them
-    before = {j: m.points[j].xyz.copy() for j in weak}
-    rep = local_bundle_adjustment(m, K, window=4, iterations=20, huber_px=2.0, n_fixed=2)
-    assert rep.points == len(m.points) - len(weak)
-    assert all(np.array_equal(m.points[j].xyz, before[j]) for j in weak)
-    strong = [j for j in m.points if j not in weak]
-    assert np.median(np.linalg.norm(m.point_array()[strong] - X[strong], axis=1)) < 0.05
+def test_an_observation_on_a_straight_edge_gets_the_along_edge_sigma_and_a_corner_stays_isotropic():
+    from types import SimpleNamespace
+
+    import cv2
+    import gtsam
+
+    from evpose.slam.bundle_adjustment import _edge_noise
+
+    img = np.zeros((60, 80), np.uint8)
+    img[:, 30] = 255  # a vertical edge
+    img[45, 30:] = 255  # meeting a horizontal one: a corner at (30, 45)
+    kf = SimpleNamespace(id=0, image8=cv2.GaussianBlur(img, (0, 0), 1.0))
+    tensors: dict = {}
+    nm = _edge_noise(gtsam, kf, (30.0, 15.0), tensors, 5.0, 0.1, 2.0)
+    # Five pixels along the edge weigh as one across it.
+    assert abs(np.linalg.norm(nm.unweightedWhiten(np.array([0.0, 5.0]))) - 1.0) < 0.01
+    assert abs(np.linalg.norm(nm.unweightedWhiten(np.array([5.0, 0.0]))) - 5.0) < 0.05
+    assert _edge_noise(gtsam, kf, (30.0, 45.0), tensors, 5.0, 0.1, 2.0) is None  # corner
+    assert _edge_noise(gtsam, kf, (70.0, 10.0), tensors, 5.0, 0.1, 2.0) is None  # blank: no gradient
+    assert _edge_noise(gtsam, SimpleNamespace(id=1, image8=None), (30.0, 15.0), {}, 5.0, 0.1, 2.0) is None
