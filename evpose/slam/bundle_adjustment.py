@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import cv2
 import numpy as np
 
 from evpose.slam.atlas import SlamMap
@@ -24,7 +25,8 @@ class BaReport:
 def local_bundle_adjustment(m: SlamMap, K: np.ndarray, window: int, iterations: int, huber_px: float, n_fixed: int = 1,
                             rotation_priors: dict | None = None, rotation_sigma_rad: float = 1e-3, scale_anchor: float = 0.0,
                             rotation_sigmas_rad: dict | None = None, velocity_sigma_ratio: float = 0.0,
-                            rotation_rate_sigma_rad_s: float = 0.0) -> BaReport:
+                            rotation_rate_sigma_rad_s: float = 0.0, edge_along_sigma_px: float = 0.0,
+                            edge_max_ratio: float = 0.1) -> BaReport:
     """Optimise the last ``window`` keyframes of ``m`` and the points they see, in place.
 
     The ``n_fixed`` oldest keyframes of the window (two while the map has only
@@ -39,7 +41,9 @@ def local_bundle_adjustment(m: SlamMap, K: np.ndarray, window: int, iterations: 
     fixed keyframe the monocular scale is a gauge freedom the solver may slide along.
     ``velocity_sigma_ratio`` > 0 adds constant-velocity factors between consecutive keyframes
     (:mod:`evpose.slam.motion_prior`), that share of the speed as sigma; ``rotation_rate_sigma_rad_s`` > 0 adds
-    constant-rotation-rate factors with that sigma, rad/s.
+    constant-rotation-rate factors with that sigma, rad/s. ``edge_along_sigma_px`` > 0 gives observations on a straight
+    edge of a keyframe MCI (structure-tensor eigenvalue ratio below ``edge_max_ratio``; keyframes that keep their
+    ``image8``) that sigma along the edge, pixels: KLT measures only the motion across an edge.
     """
     import gtsam
     from gtsam.symbol_shorthand import L, X
@@ -59,6 +63,7 @@ def local_bundle_adjustment(m: SlamMap, K: np.ndarray, window: int, iterations: 
     values = gtsam.Values()
     used_kfs: set[int] = set()
     used_pts = []
+    tensors: dict = {}
     for pid in pt_ids:
         p = m.points[pid]
         obs = sorted(p.obs.items())
@@ -67,7 +72,10 @@ def local_bundle_adjustment(m: SlamMap, K: np.ndarray, window: int, iterations: 
         used_pts.append(pid)
         values.insert(L(pid), gtsam.Point3(*p.xyz))
         for kid, uv in obs:
-            graph.add(gtsam.GenericProjectionFactorCal3_S2(np.asarray(uv, np.float64), noise, X(kid), L(pid), cal))
+            nm = noise
+            if edge_along_sigma_px > 0:
+                nm = _edge_noise(gtsam, kf_by_id.get(kid), uv, tensors, edge_along_sigma_px, edge_max_ratio, huber_px) or noise
+            graph.add(gtsam.GenericProjectionFactorCal3_S2(np.asarray(uv, np.float64), nm, X(kid), L(pid), cal))
             used_kfs.add(kid)
     if not used_pts:
         return BaReport()
@@ -115,3 +123,24 @@ def local_bundle_adjustment(m: SlamMap, K: np.ndarray, window: int, iterations: 
     for pid in used_pts:
         m.points[pid].xyz = np.asarray(result.atPoint3(L(pid)), np.float64)
     return BaReport(n_free, len(used_pts), e0, graph.error(result))
+
+
+def _edge_noise(gtsam, kf, uv, tensors: dict, along_px: float, max_ratio: float, huber_px: float):
+    """Anisotropic Huber noise for an observation on a straight edge of ``kf``'s MCI (None: not on an edge, or no image)."""
+    if kf is None or kf.image8 is None:
+        return None
+    if kf.id not in tensors:
+        img = kf.image8.astype(np.float32)
+        gx = cv2.Sobel(img, cv2.CV_32F, 1, 0, ksize=3)
+        gy = cv2.Sobel(img, cv2.CV_32F, 0, 1, ksize=3)
+        tensors[kf.id] = np.stack([cv2.boxFilter(a, -1, (11, 11), normalize=False) for a in (gx * gx, gx * gy, gy * gy)])
+    T = tensors[kf.id]
+    h, w = T.shape[1:]
+    iu, iv = min(max(int(round(uv[0])), 0), w - 1), min(max(int(round(uv[1])), 0), h - 1)
+    S = np.array([[T[0, iv, iu], T[1, iv, iu]], [T[1, iv, iu], T[2, iv, iu]]], np.float64)
+    ev, V = np.linalg.eigh(S)
+    if not ev[1] > 0 or ev[0] >= max_ratio * ev[1]:
+        return None
+    n, e = V[:, 1], V[:, 0]
+    C = np.outer(n, n) + along_px**2 * np.outer(e, e)
+    return gtsam.noiseModel.Robust.Create(gtsam.noiseModel.mEstimator.Huber.Create(huber_px), gtsam.noiseModel.Gaussian.Covariance(C))

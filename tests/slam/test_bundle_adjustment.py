@@ -88,3 +88,25 @@ def test_a_pair_sigma_overrides_the_rotation_prior_sigma_of_that_pair_only():
     images_only = adjusted_rotation_error(False, None)
     assert adjusted_rotation_error(True, None) > images_only + 0.3
     assert abs(adjusted_rotation_error(True, {(2, 3): np.radians(10.0)}) - images_only) < 0.01
+
+
+def test_an_observation_on_a_straight_edge_gets_the_along_edge_sigma_and_a_corner_stays_isotropic():
+    from types import SimpleNamespace
+
+    import cv2
+    import gtsam
+
+    from evpose.slam.bundle_adjustment import _edge_noise
+
+    img = np.zeros((60, 80), np.uint8)
+    img[:, 30] = 255  # a vertical edge
+    img[45, 30:] = 255  # meeting a horizontal one: a corner at (30, 45)
+    kf = SimpleNamespace(id=0, image8=cv2.GaussianBlur(img, (0, 0), 1.0))
+    tensors: dict = {}
+    nm = _edge_noise(gtsam, kf, (30.0, 15.0), tensors, 5.0, 0.1, 2.0)
+    # Five pixels along the edge weigh as one across it.
+    assert abs(np.linalg.norm(nm.unweightedWhiten(np.array([0.0, 5.0]))) - 1.0) < 0.01
+    assert abs(np.linalg.norm(nm.unweightedWhiten(np.array([5.0, 0.0]))) - 5.0) < 0.05
+    assert _edge_noise(gtsam, kf, (30.0, 45.0), tensors, 5.0, 0.1, 2.0) is None  # corner
+    assert _edge_noise(gtsam, kf, (70.0, 10.0), tensors, 5.0, 0.1, 2.0) is None  # blank: no gradient
+    assert _edge_noise(gtsam, SimpleNamespace(id=1, image8=None), (30.0, 15.0), {}, 5.0, 0.1, 2.0) is None
