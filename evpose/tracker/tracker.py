@@ -198,6 +198,14 @@ class Tracker:
             self._side_motion().reset(int(t_us), T)
         return self.visible_count(T)
 
+    def _stateful(self) -> dict:
+        """The components with their own ``snapshot``/``restore``, by state key, in restore order (None: absent)."""
+        return {"noise_filter": self.noise_filter, "time_surface": self.time_surface, "predictor": self.predictor,
+                "motion": self._side_motion(),
+                "selector": self.polarity_selector if hasattr(self.polarity_selector, "snapshot") else None,
+                "visible_map": self.visible_map, "map_refinement": self.refiner, "edge_offsets": self.edge_offsets,
+                "event_registration": self.event_registration}
+
     def snapshot(self) -> dict:
         """Deep copy of the full engine state.
 
@@ -205,47 +213,23 @@ class Tracker:
         C-ordered copy takes another BLAS path in later products, so a restored run would drift from the
         uninterrupted one at the rounding level (seen with numpy 2.4).
         """
-        hold = self.hold.snapshot()
-        return {
-            "noise_filter": self.noise_filter.snapshot(),
-            "time_surface": self.time_surface.snapshot(),
-            "predictor": self.predictor.snapshot(),
-            "motion": self._side_motion().snapshot() if self._side_motion() is not None else None,
-            "selector": self.polarity_selector.snapshot() if hasattr(self.polarity_selector, "snapshot") else None,
-            "visible_map": self.visible_map.snapshot(),
-            "pose": None if self._pose is None else np.copy(self._pose),
-            "t_us": self._t_us,
-            "steps": self._steps,
-            "ego_history": tuple(np.copy(a) for a in self._ego_history),
-            "acquisition": hold[0],
-            "tracking": hold[1],
-            "map_refinement": None if self.refiner is None else self.refiner.snapshot(),
-            "edge_offsets": None if self.edge_offsets is None else self.edge_offsets.snapshot(),
-            "event_registration": None if self.event_registration is None else self.event_registration.snapshot(),
-        }
+        state = {key: None if c is None else c.snapshot() for key, c in self._stateful().items()}
+        state["acquisition"], state["tracking"] = self.hold.snapshot()
+        state.update(pose=None if self._pose is None else np.copy(self._pose), t_us=self._t_us, steps=self._steps,
+                     ego_history=tuple(np.copy(a) for a in self._ego_history))
+        return state
 
     def restore(self, state: dict) -> None:
-        self.noise_filter.restore(state["noise_filter"])
-        self.time_surface.restore(state["time_surface"])
-        self.predictor.restore(state["predictor"])
-        if state.get("motion") is not None:
-            self._side_motion().restore(state["motion"])
-        if state.get("selector") is not None:
-            self.polarity_selector.restore(state["selector"])
-        self.visible_map.restore(state["visible_map"])
+        for key, c in self._stateful().items():
+            if c is not None and state.get(key) is not None:
+                c.restore(state[key])
+                if key in ("map_refinement", "edge_offsets"):
+                    c.apply(self._points)  # the map's points carry what they learned
         self._pose = None if state["pose"] is None else np.copy(state["pose"])
         self._t_us = state["t_us"]
         self._steps = state["steps"]
         self._ego_history = tuple(np.copy(a) for a in state["ego_history"])
         self.hold.restore(state["acquisition"], state.get("tracking", (True, 0, True)))
-        if self.refiner is not None and state.get("map_refinement") is not None:
-            self.refiner.restore(state["map_refinement"])
-            self.refiner.apply(self._points)
-        if self.edge_offsets is not None and state.get("edge_offsets") is not None:
-            self.edge_offsets.restore(state["edge_offsets"])
-            self.edge_offsets.apply(self._points)
-        if self.event_registration is not None and state.get("event_registration") is not None:
-            self.event_registration.restore(state["event_registration"])
 
     def _side_motion(self):
         """The fusion backend when it runs beside (not as) the predictor, as in ``stpe+filter``."""
