@@ -103,6 +103,10 @@ def export_action(app, what: str, client=None, gif_frames: int = 16) -> Path:
         cfg = app.player.call(lambda eng: eng.config).result(60)
         return write_config(cfg, out_dir / stamped_name("config", ".yaml"))
     client = _render_client(app, client)
+    # A render takes the browser a moment (a GIF: seconds); without a word the button looked like it did nothing.
+    if what in ("screenshot", "GIF"):
+        app.export_info.content = (f"_rendering a {gif_frames}-frame GIF in the browser (a few seconds)..._" if what == "GIF"
+                                   else "_rendering the screenshot in the browser..._")
     if what == "screenshot":
         img = client.get_render(height=540, width=960, transport_format="png", timeout=20.0)
         dark = app.layout is not None and app.layout.dark_mode
