@@ -139,12 +139,17 @@ NICE_MULTIPLES = (1.0, 1.2, 1.5, 2.0, 2.5, 3.0, 4.0, 5.0, 6.0, 8.0)
 """Round tops of a y range, times a power of ten (1-2-5 alone left half the plot empty above 101 cm: range 0-220)."""
 
 
+MIN_X_SPAN_S = 0.05
+"""The time axis spans at least this long, seconds: over a recording's first step or two (a 1 ms span) uplot's ticks
+all read '0.036'."""
+
+
 def x_range(t: np.ndarray) -> tuple[float, float]:
-    """The time axis spans the window's steps (a window of one step gets a millisecond)."""
+    """The time axis spans the window's steps, at least :data:`MIN_X_SPAN_S` from the first."""
     if not len(t):
-        return (0.0, 1e-3)
+        return (0.0, MIN_X_SPAN_S)
     t0, t1 = float(t[0]), float(t[-1])
-    return (t0, t1 if t1 > t0 else t0 + 1e-3)
+    return (t0, max(t1, t0 + MIN_X_SPAN_S))
 
 
 def y_range(ys: tuple[np.ndarray, ...]) -> tuple[float, float]:

@@ -3,7 +3,7 @@
 import numpy as np
 
 from app.frame import StepSummary
-from app.plots import SLAM_POSE_ERROR, WINDOW_STEPS, PlotsView, empty_reasons, plot_series, pose_errors, x_range, y_range
+from app.plots import MIN_X_SPAN_S, SLAM_POSE_ERROR, WINDOW_STEPS, PlotsView, empty_reasons, plot_series, pose_errors, x_range, y_range
 
 
 def _history(gt, n, offset=0.0):
@@ -154,4 +154,4 @@ def test_every_plot_is_sent_the_x_range_of_its_latest_window(bar_recording):
     t = np.array([s.t_us for s in h[-WINDOW_STEPS:]]) / 1e6
     plots = [hd for kind, _, hd in gui.added if kind != "markdown" and not hd.removed]
     assert plots and all(np.allclose(p.scales["x"]["range"], (t[0], t[-1])) for p in plots)
-    assert x_range(np.array([2.5])) == (2.5, 2.501)
+    assert x_range(np.array([0.035])) == (0.035, 0.035 + MIN_X_SPAN_S)  # one step: ticks that differ
