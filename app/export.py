@@ -114,6 +114,11 @@ def export_action(app, what: str, client=None, gif_frames: int = 16) -> Path:
     if what == "GIF":
         frames = []
         was_playing = app.player.state.value == "playing"
+        shown, n = app.last_frame, getattr(app.player.engine, "n_steps", None)
+        if not was_playing and shown is not None and n is not None:
+            # Paused near the end, the steps forward ran out and the GIF was one still frame: it ends on the last step.
+            for _ in range(max(0, shown.index + gif_frames - (n - 1))):
+                app.player.step_back()
         for _ in range(gif_frames):
             if not was_playing:
                 app.player.step_forward()
