@@ -117,6 +117,15 @@ def slam_point_size(pts: np.ndarray, extent: float) -> float:
     return float(np.clip(SLAM_POINT_SPACING * np.median(dist[:, 1]), lo, hi))
 
 
+def keyframe_axes_length(positions: np.ndarray, extent: float) -> float:
+    """World length of a SLAM map's keyframe axes: 0.6 x the median step between consecutive keyframes, within
+    0.01-0.04 x ``extent`` (at 0.04 x the flight's extent, 32 cm on the landing demo, keyframes a few cm apart drew
+    one solid ladder of overlapping axes)."""
+    lo, hi = 0.01 * extent, 0.04 * extent
+    steps = np.linalg.norm(np.diff(np.asarray(positions, np.float64).reshape(-1, 3), axis=0), axis=1)
+    return float(np.clip(0.6 * np.median(steps), lo, hi)) if len(steps) else hi
+
+
 def _wxyz(T: np.ndarray) -> np.ndarray:
     return vtf.SO3.from_matrix(np.asarray(T)[:3, :3]).wxyz
 
@@ -278,7 +287,7 @@ class SceneView:
         if len(kfs):
             self._set(f"slam_kf/{i}", scene.add_batched_axes(
                 f"/slam/map_{i}/keyframes", batched_wxyzs=np.stack([_wxyz(T) for T in kfs]), batched_positions=kfs[:, :3, 3].astype(np.float32),
-                axes_length=0.04 * extent, axes_radius=0.003 * extent))
+                axes_length=(ax := keyframe_axes_length(kfs[:, :3, 3], extent)), axes_radius=0.075 * ax))
         if len(traj) > 1:
             self._set(f"slam_traj/{i}", scene.add_line_segments(
                 f"/slam/map_{i}/trajectory", polyline_segments(traj), (230, 120, 20) if view.active else (200, 160, 110),

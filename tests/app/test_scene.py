@@ -8,7 +8,7 @@ import viser
 
 from app.frame import StepSummary
 from app.scene import (FRUSTUM_IMAGE_WIDTH, GREY, SLAM_POINT_RANGE, SLAM_POINT_SPACING, TRAJECTORY_CHUNK, SceneView, frustum_image,
-                       map_colours, slam_point_size, trajectory_chunks)
+                       keyframe_axes_length, map_colours, slam_point_size, trajectory_chunks)
 
 
 def _free_port() -> int:
@@ -113,3 +113,11 @@ def test_turning_follow_off_puts_the_camera_back_on_the_overview(scene):
     scene.toggles.follow = False
     scene.apply_toggles()
     assert np.allclose(scene.server.initial_camera.position, overview)
+
+
+def test_keyframe_axes_are_shorter_than_the_steps_between_keyframes_within_the_scene_bounds():
+    line = np.outer(np.arange(10), [0.05, 0.0, 0.0])  # keyframes 5 cm apart
+    assert keyframe_axes_length(line, 2.0) == pytest.approx(0.03)
+    assert keyframe_axes_length(line * 100, 2.0) == pytest.approx(0.08)  # far apart: capped at 0.04 x extent
+    assert keyframe_axes_length(line / 100, 2.0) == pytest.approx(0.02)  # bunched: still visible
+    assert keyframe_axes_length(line[:1], 2.0) == pytest.approx(0.08)
