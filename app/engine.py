@@ -188,11 +188,13 @@ class EventsOnlyEngine(Engine):
         t_k = self._step_time(k)
         self._surface.reset()
         self._surface.update(ev.time_window(ev.t[0] if len(ev) else 0, t_k - w))
-        # Summaries of the skipped steps: counts are exact, timings were not measured.
+        # Summaries of the skipped steps: counts are exact, timings were not measured unless the step was computed
+        # before (kept: a step forward after playing seeks, and the latency plot then said the played steps were untimed).
         bounds = np.searchsorted(ev.t, self._step_time(np.arange(-1, k)), side="left")
         counts = np.diff(bounds)
+        timed = {s.index: s for s in self.history[:k] if s.timings_ms}
         self.history = [
-            StepSummary(i, self._step_time(i), None, None, "events only", {}, {"events_in": int(c), "events_kept": int(c)})
+            timed.get(i) or StepSummary(i, self._step_time(i), None, None, "events only", {}, {"events_in": int(c), "events_kept": int(c)})
             for i, c in enumerate(counts)
         ]
         self._next_index = k

@@ -103,6 +103,10 @@ def export_action(app, what: str, client=None, gif_frames: int = 16) -> Path:
         cfg = app.player.call(lambda eng: eng.config).result(60)
         return write_config(cfg, out_dir / stamped_name("config", ".yaml"))
     client = _render_client(app, client)
+    # A render takes the browser a moment (a GIF: seconds); without a word the button looked like it did nothing.
+    if what in ("screenshot", "GIF"):
+        app.export_info.content = (f"_rendering a {gif_frames}-frame GIF in the browser (a few seconds)..._" if what == "GIF"
+                                   else "_rendering the screenshot in the browser..._")
     if what == "screenshot":
         img = client.get_render(height=540, width=960, transport_format="png", timeout=20.0)
         dark = app.layout is not None and app.layout.dark_mode
@@ -110,6 +114,11 @@ def export_action(app, what: str, client=None, gif_frames: int = 16) -> Path:
     if what == "GIF":
         frames = []
         was_playing = app.player.state.value == "playing"
+        shown, n = app.last_frame, getattr(app.player.engine, "n_steps", None)
+        if not was_playing and shown is not None and n is not None:
+            # Paused near the end, the steps forward ran out and the GIF was one still frame: it ends on the last step.
+            for _ in range(max(0, shown.index + gif_frames - (n - 1))):
+                app.player.step_back()
         for _ in range(gif_frames):
             if not was_playing:
                 app.player.step_forward()

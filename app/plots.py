@@ -139,6 +139,19 @@ NICE_MULTIPLES = (1.0, 1.2, 1.5, 2.0, 2.5, 3.0, 4.0, 5.0, 6.0, 8.0)
 """Round tops of a y range, times a power of ten (1-2-5 alone left half the plot empty above 101 cm: range 0-220)."""
 
 
+MIN_X_SPAN_S = 0.05
+"""The time axis spans at least this long, seconds: over a recording's first step or two (a 1 ms span) uplot's ticks
+all read '0.036'."""
+
+
+def x_range(t: np.ndarray) -> tuple[float, float]:
+    """The time axis spans the window's steps, at least :data:`MIN_X_SPAN_S` from the first."""
+    if not len(t):
+        return (0.0, MIN_X_SPAN_S)
+    t0, t1 = float(t[0]), float(t[-1])
+    return (t0, max(t1, t0 + MIN_X_SPAN_S))
+
+
 def y_range(ys: tuple[np.ndarray, ...]) -> tuple[float, float]:
     """The y-axis range a plot is drawn with: from 0 (or the lowest value) to 10 % above a round number just above
     the highest (the round number's tick label, drawn at the very top, was cut in half).
@@ -239,9 +252,12 @@ class PlotsView:
                     known[1].visible = False
                 continue
             data = tuple(np.ascontiguousarray(d, np.float64) for d in data)
-            scales = {"x": uplot.Scale(time=False, auto=True), "y": uplot.Scale(auto=False, range=y_range(data[1:]))}
+            # The x range is sent, not left to uplot: viser's client keeps the x bounds relative to the old data's
+            # and after a seek then play they drifted off the window (at 3.99 s the axis read 1.0-1.9 s, empty).
+            scales = {"x": uplot.Scale(time=False, auto=False, range=x_range(data[0])),
+                      "y": uplot.Scale(auto=False, range=y_range(data[1:]))}
             if known is not None and known[0] == labels:
-                if known[1].scales["y"]["range"] != scales["y"]["range"]:
+                if any(known[1].scales[k]["range"] != scales[k]["range"] for k in scales):
                     known[1].scales = scales
                 known[1].data = data
                 if not known[1].visible:

@@ -8,6 +8,7 @@ import cv2
 import numpy as np
 import viser
 import viser.transforms as vtf
+from scipy.spatial import cKDTree
 
 from app.frame import Frame, StepSummary
 from app.frame_cache import quantize
@@ -32,6 +33,12 @@ POINT_PRECISION = "float32"
 """Point positions as sent to the browser. viser's default float16 keeps ~3 digits (8 mm steps at 10 m, 6 cm at
 100 m) and overflows past 65504: SLAM maps with far outliers logged "overflow encountered in cast" and drew them
 at infinity."""
+SLAM_POINT_SPACING = 0.4
+"""A SLAM map point is drawn this fraction of the map's median nearest-neighbour spacing wide, so neighbours never
+merge. viser sizes points in world units only: at 0.008 x the flight's extent (6.5 cm on the landing demo, whose
+SLAM map points are 7.5 cm apart) they overlapped into blobs ~25 px wide in the teaching layout's follow view."""
+SLAM_POINT_RANGE = (0.002, 0.008)
+"""Bounds on a SLAM map point's width, as fractions of the scene's extent (visible in the overview, never huge)."""
 TRAJECTORY_CHUNK = 256
 """Trajectory polylines are sent in chunks of this many steps; only the newest chunk changes as the run grows."""
 
@@ -98,6 +105,27 @@ def trajectory_chunks(positions: np.ndarray, chunk: int = TRAJECTORY_CHUNK) -> l
     return [polyline_segments(p[i : i + chunk + 1]) for i in range(0, max(len(p) - 1, 0), chunk)]
 
 
+def slam_point_size(pts: np.ndarray, extent: float) -> float:
+    """World width of a SLAM map's points: :data:`SLAM_POINT_SPACING` x their median spacing, bounded by
+    :data:`SLAM_POINT_RANGE` x ``extent``."""
+    lo, hi = SLAM_POINT_RANGE[0] * extent, SLAM_POINT_RANGE[1] * extent
+    pts = np.asarray(pts, np.float64).reshape(-1, 3)
+    if len(pts) < 2:
+        return hi
+    # A fixed stride bounds the cost on big maps (the active map is redrawn every step); same points every time.
+    dist, _ = cKDTree(pts).query(pts[:: max(1, len(pts) // 2000)], k=2)
+    return float(np.clip(SLAM_POINT_SPACING * np.median(dist[:, 1]), lo, hi))
+
+
+def keyframe_axes_length(positions: np.ndarray, extent: float) -> float:
+    """World length of a SLAM map's keyframe axes: 0.6 x the median step between consecutive keyframes, within
+    0.01-0.04 x ``extent`` (at 0.04 x the flight's extent, 32 cm on the landing demo, keyframes a few cm apart drew
+    one solid ladder of overlapping axes)."""
+    lo, hi = 0.01 * extent, 0.04 * extent
+    steps = np.linalg.norm(np.diff(np.asarray(positions, np.float64).reshape(-1, 3), axis=0), axis=1)
+    return float(np.clip(0.6 * np.median(steps), lo, hi)) if len(steps) else hi
+
+
 def _wxyz(T: np.ndarray) -> np.ndarray:
     return vtf.SO3.from_matrix(np.asarray(T)[:3, :3]).wxyz
 
@@ -118,6 +146,9 @@ class SceneView:
         """Per trajectory: for each chunk sent, (points in it, the summary of its last point) to tell whether it changed."""
         self._slam_drawn: dict[int, object] = {}
         """SLAM map id -> the view (and whether aligned) last drawn for it: maps no longer active are not resent."""
+        self._overview: tuple[np.ndarray, float] | None = None
+        """The overview's look-at centre and ground height, from the last :meth:`load`."""
+        self._followed = self.toggles.follow
         server.scene.set_up_direction("+z")
         server.scene.world_axes.visible = False
 
@@ -162,6 +193,7 @@ class SceneView:
             "/grid", width=2 * self.scale, height=2 * self.scale, cell_size=self.scale / 10, section_size=self.scale / 2,
             position=(float(centre[0]), float(centre[1]), zmin)))
         self.ground_truth = ground_truth
+        self._overview = (centre, zmin)
         self._frame_view(centre, zmin)
 
     def set_cloud(self, cloud: tuple[np.ndarray, np.ndarray | None] | None) -> None:
@@ -197,6 +229,11 @@ class SceneView:
             on = shown.get(name.split("/")[0])  # trajectory chunks are "fused/0", "fused/1", ...
             if on is not None:
                 node.visible = on
+        if self._followed and not t.follow and self._overview is not None:
+            # Leaving follow (its checkbox or a layout without it) left the camera a few metres behind the last
+            # pose, close to the map: the debug/compare layouts then opened on a zoomed-in corner of the scene.
+            self._frame_view(*self._overview)
+        self._followed = t.follow
 
     def update(self, frame: Frame, history: list[StepSummary] | None) -> None:
         """Draw the per-step content of ``frame``; ``history`` (None = leave as drawn) gives the trajectories so far."""
@@ -246,11 +283,11 @@ class SceneView:
         i = view.map_id
         if len(pts):
             self._set(f"slam_map/{i}", scene.add_point_cloud(f"/slam/map_{i}/points", pts.astype(np.float32), np.tile(colour, (len(pts), 1)),
-                                                              point_size=0.008 * extent, point_shape="circle", precision=POINT_PRECISION))
+                                                              point_size=slam_point_size(pts, extent), point_shape="circle", precision=POINT_PRECISION))
         if len(kfs):
             self._set(f"slam_kf/{i}", scene.add_batched_axes(
                 f"/slam/map_{i}/keyframes", batched_wxyzs=np.stack([_wxyz(T) for T in kfs]), batched_positions=kfs[:, :3, 3].astype(np.float32),
-                axes_length=0.04 * extent, axes_radius=0.003 * extent))
+                axes_length=(ax := keyframe_axes_length(kfs[:, :3, 3], extent)), axes_radius=0.075 * ax))
         if len(traj) > 1:
             self._set(f"slam_traj/{i}", scene.add_line_segments(
                 f"/slam/map_{i}/trajectory", polyline_segments(traj), (230, 120, 20) if view.active else (200, 160, 110),

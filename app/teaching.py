@@ -104,4 +104,6 @@ def live_facts(stage: Stage, frame: Frame | None) -> str:
 
 def teaching_markdown(stage: Stage, frame: Frame | None) -> str:
     image = "" if frame is not None and frame.slam is not None else f"\n\n_Image: {STAGE_PANEL[stage]}_"  # SLAM: none shown
+    if image and "map points" in image and frame is not None and frame.point_index is None:
+        image = image[:-1] + " (no map, so no points on it)_"  # the events-only view: a bare TDF under that name
     return f"### {stage.value}\n\n{EXPLANATIONS[stage]}\n\n**Now:** {live_facts(stage, frame)}{image}"

@@ -26,3 +26,16 @@ def test_events_only_covers_the_whole_recording(bar_recording):
         n += 1
     assert sum(s.counts["events_in"] for s in eng.history) == len(bar_recording.events)
     assert n == eng.n_steps
+
+
+def test_a_seek_keeps_the_timings_of_the_steps_already_computed(bar_recording):
+    # Stepping forward after playing seeks: the played steps' latencies stay on the plot.
+    eng = EventsOnlyEngine(bar_recording)
+    frames = [eng.step() for _ in range(20)]
+    f = eng.seek(frames[12].t_us)
+    assert f.index == 12
+    assert all(s.timings_ms for s in eng.history) and len(eng.history) == 13
+    fresh = EventsOnlyEngine(bar_recording)
+    fresh.seek(frames[12].t_us)
+    assert [s.counts for s in eng.history] == [s.counts for s in fresh.history]
+    assert not any(s.timings_ms for s in fresh.history[:12])  # never computed: untimed

@@ -328,3 +328,26 @@ def test_an_engine_the_player_lets_go_is_released(bar_recording):
         assert released == made[:2] and p.engine is made[2]
     finally:
         p.stop()
+
+
+def test_play_on_a_last_step_before_the_last_event_starts_again_from_the_first(bar_recording):
+    # The tracker's last step lies up to a step before the last event: play there paused at once and did nothing.
+    class EndsEarly(EventsOnlyEngine):
+        @property
+        def n_steps(self) -> int:
+            return super().n_steps - 1
+
+    frames = []
+    p = Player(lambda cfg: EndsEarly(bar_recording, cfg), lambda f, e: frames.append(f))
+    try:
+        p.seek(bar_recording.t_end_us)
+        p.wait_idle()
+        last = frames[-1]
+        assert last.t_us < bar_recording.t_end_us and last.index == p.engine.n_steps - 1
+        p.play()
+        p.wait_idle()
+        p.pause()
+        p.wait_idle()
+        assert any(f.index == 0 for f in frames[frames.index(last) + 1:])
+    finally:
+        p.stop()

@@ -3,7 +3,7 @@
 import numpy as np
 
 from app.frame import StepSummary
-from app.plots import SLAM_POSE_ERROR, PlotsView, empty_reasons, plot_series, pose_errors, y_range
+from app.plots import MIN_X_SPAN_S, SLAM_POSE_ERROR, WINDOW_STEPS, PlotsView, empty_reasons, plot_series, pose_errors, x_range, y_range
 
 
 def _history(gt, n, offset=0.0):
@@ -141,3 +141,17 @@ def test_y_ranges_are_round_cover_every_value_and_ignore_the_nans_uplot_could_no
     assert np.allclose(y_range((np.array([np.nan, np.nan]),)), (0.0, 1.1))
     lo, hi = y_range((np.array([-3.0, 7.0]),))
     assert lo == -3.0 and hi >= 7.0
+
+
+def test_every_plot_is_sent_the_x_range_of_its_latest_window(bar_recording):
+    # Left to viser's client, the x bounds drifted after a seek then play: at 3.99 s the axis showed 1.0-1.9 s.
+    gt = bar_recording.ground_truth
+    gui = _Gui()
+    view = PlotsView(gui)
+    h = _history(gt, WINDOW_STEPS + 50)
+    view.update(h[:20], gt)
+    view.update(h, gt)
+    t = np.array([s.t_us for s in h[-WINDOW_STEPS:]]) / 1e6
+    plots = [hd for kind, _, hd in gui.added if kind != "markdown" and not hd.removed]
+    assert plots and all(np.allclose(p.scales["x"]["range"], (t[0], t[-1])) for p in plots)
+    assert x_range(np.array([0.035])) == (0.035, 0.035 + MIN_X_SPAN_S)  # one step: ticks that differ

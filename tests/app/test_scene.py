@@ -7,7 +7,8 @@ import pytest
 import viser
 
 from app.frame import StepSummary
-from app.scene import FRUSTUM_IMAGE_WIDTH, GREY, TRAJECTORY_CHUNK, SceneView, frustum_image, map_colours, trajectory_chunks
+from app.scene import (FRUSTUM_IMAGE_WIDTH, GREY, SLAM_POINT_RANGE, SLAM_POINT_SPACING, TRAJECTORY_CHUNK, SceneView, frustum_image,
+                       keyframe_axes_length, map_colours, slam_point_size, trajectory_chunks)
 
 
 def _free_port() -> int:
@@ -86,3 +87,37 @@ def test_far_map_points_are_sent_at_full_precision_without_overflow(scene):
         scene.load(ContourMap.from_points(pts), None, None, None)
     sent = np.asarray(scene._nodes["map"].points)
     assert sent.dtype == np.float32 and np.allclose(sent, pts, rtol=1e-6)
+
+
+def test_slam_map_points_are_narrower_than_their_spacing_within_the_scene_bounds():
+    grid = np.stack(np.meshgrid(np.arange(20), np.arange(20), [0.0]), -1).reshape(-1, 3) * 0.075  # 7.5 cm apart
+    extent = 8.0  # the landing demo's flight: 0.008 x 8 m = 6.4 cm points would nearly touch
+    size = slam_point_size(grid, extent)
+    assert size == pytest.approx(SLAM_POINT_SPACING * 0.075)
+    assert slam_point_size(grid * 100, extent) == pytest.approx(SLAM_POINT_RANGE[1] * extent)  # sparse: capped
+    assert slam_point_size(grid / 100, extent) == pytest.approx(SLAM_POINT_RANGE[0] * extent)  # dense: still visible
+    assert slam_point_size(grid[:1], extent) == pytest.approx(SLAM_POINT_RANGE[1] * extent)
+
+
+def test_turning_follow_off_puts_the_camera_back_on_the_overview(scene):
+    from evpose.core.contour_map import ContourMap
+
+    scene.load(ContourMap.from_points(np.array([[0.0, 0.0, 0.0], [4.0, 2.0, 1.0]])), None, None, None)
+    overview = np.array(scene.server.initial_camera.position)
+    scene.toggles.follow = True
+    scene.apply_toggles()
+    pose = np.eye(4)
+    pose[:3, 3] = (1.0, 1.0, 0.5)
+    scene.follow(pose)
+    scene.server.initial_camera.position = (9.0, 9.0, 9.0)  # as a browser's camera left where follow put it
+    scene.toggles.follow = False
+    scene.apply_toggles()
+    assert np.allclose(scene.server.initial_camera.position, overview)
+
+
+def test_keyframe_axes_are_shorter_than_the_steps_between_keyframes_within_the_scene_bounds():
+    line = np.outer(np.arange(10), [0.05, 0.0, 0.0])  # keyframes 5 cm apart
+    assert keyframe_axes_length(line, 2.0) == pytest.approx(0.03)
+    assert keyframe_axes_length(line * 100, 2.0) == pytest.approx(0.08)  # far apart: capped at 0.04 x extent
+    assert keyframe_axes_length(line / 100, 2.0) == pytest.approx(0.02)  # bunched: still visible
+    assert keyframe_axes_length(line[:1], 2.0) == pytest.approx(0.08)

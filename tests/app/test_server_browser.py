@@ -90,10 +90,14 @@ def test_switch_recording_play_step_and_see_images_and_trajectory_change(page, v
     choose(page, "recording", "data0/squares.h5" if "data0" in viewer.rec_dropdown.options[0] else
            next(o for o in viewer.rec_dropdown.options if o.endswith("squares.h5")))
     wait_for(lambda: isinstance(viewer.player.engine, TrackerEngine) and viewer.last_frame is not None, timeout=90, what="tracker loaded")
+    # Slowly: at 1x this short recording could play to its end before the second click, which would then (play
+    # on the last step starts again) play it from the start instead of pausing.
+    viewer.player.set_speed(0.1)
     page.get_by_role("button", name="play / pause (space)").click()
     wait_for(lambda: viewer.last_frame.index >= 10, what="playback")
     page.get_by_role("button", name="play / pause (space)").click()
     wait_for(lambda: viewer.player.state.value == "paused", what="pause")
+    viewer.player.set_speed(1.0)
     viewer.player.seek(viewer.recording.t_start_us + 200_000)  # away from the end, however far playback got
     viewer.player.wait_idle()
     before_idx = viewer.last_frame.index
@@ -294,5 +298,15 @@ def test_two_tabs_see_one_session_and_a_gif_can_be_exported(page, viewer):
 
         frames = iio.imread(path, index=None)
         assert frames.shape[0] == 3 and frames.std() > 5.0
+        viewer.player.seek(viewer.recording.t_end_us)  # at the end: the GIF shows the steps before it, not one still
+        viewer.player.wait_idle()
+        drawn, draw = [], viewer.player._on_frame
+        viewer.player._on_frame = lambda f, e: drawn.append(f.index) or draw(f, e)
+        try:
+            export_action(viewer, "GIF", gif_frames=3)
+        finally:
+            viewer.player._on_frame = draw
+        n = viewer.player.engine.n_steps
+        assert drawn[-3:] == [n - 3, n - 2, n - 1]  # the GIF's three frames are the last three steps
     finally:
         other.close()

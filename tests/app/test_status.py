@@ -54,3 +54,14 @@ def test_run_ahead_note_says_frames_a_far_seek_skipped_are_being_filled_in():
     assert run_ahead_note(eng).startswith("run-ahead: ") and "470 frames" in run_ahead_note(eng)
     eng.frontier, eng.backfill_left = 2000, 0
     assert "done" in run_ahead_note(eng)
+
+
+def test_the_last_step_says_it_is_the_end_even_before_the_last_event():
+    # The tracker's last step lies up to a step before the last event (landing demo: 3.995 of 3.999995 s).
+    eng = SimpleNamespace(n_steps=793, t_end_us=3_999_995)
+    z = np.zeros((2, 2), np.float32)
+    last = Frame(792, 3_995_000, z, z, z, EventArray.empty(), EventArray.empty())
+    assert "the end of the recording" in status_markdown(last, eng, {"state": "paused", "speed": 1.0})
+    assert "end of the recording" not in status_markdown(last, eng, {"state": "playing", "speed": 1.0})
+    before = Frame(791, 3_990_000, z, z, z, EventArray.empty(), EventArray.empty())
+    assert "end of the recording" not in status_markdown(before, eng, {"state": "paused", "speed": 1.0})
