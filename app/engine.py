@@ -38,6 +38,12 @@ class Engine(ABC):
     def t_end_us(self) -> int:
         return self.recording.t_end_us
 
+    def is_last(self, frame: Frame) -> bool:
+        """``frame`` is the recording's last step. Its time lies up to a step before the last event (landing demo:
+        3.995 of 3.999995 s), so the step count decides where the engine knows it."""
+        n = getattr(self, "n_steps", None)
+        return frame.t_us >= self.t_end_us or (n is not None and frame.index >= n - 1)
+
     @abstractmethod
     def step(self) -> Frame | None:
         """Compute the next step with images; None at the end of the recording."""

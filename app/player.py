@@ -176,13 +176,6 @@ class Player:
         }
 
     # ----- worker thread -----
-    def _at_end(self) -> bool:
-        """The shown step is the recording's last. The tracker's last step lies up to a step before the last event
-        (landing demo: 3.995 of 3.999995 s), so play there did nothing: it stepped past the end and paused at once."""
-        n = getattr(self.engine, "n_steps", None)
-        return self.engine.current_t_us >= self.engine.t_end_us or (
-            n is not None and self.last_frame is not None and self.last_frame.index >= n - 1)
-
     def _publish(self, frame: Frame | None, force: bool = True) -> None:
         if frame is None:
             return
@@ -291,7 +284,8 @@ class Player:
             if kind == "cancel":
                 self._publish(self.last_frame)  # every tab's time slider back to the step shown
         if kind == "play" or (kind == "toggle" and self.state == PlayState.PAUSED):
-            if self.last_frame is None or self._at_end():
+            # At the last step (by count: it lies before the last event), play starts again instead of doing nothing.
+            if self.last_frame is None or self.engine.current_t_us >= self.engine.t_end_us or self.engine.is_last(self.last_frame):
                 self._publish(self._timed_seek(self.engine.t_start_us) if self.last_frame else self.engine.step())
             self.state = PlayState.PLAYING
             self._last_advance_wall = None

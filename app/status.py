@@ -39,8 +39,7 @@ def status_markdown(frame: Frame, engine: Engine, stats: dict) -> str:
             + f"\n\n{stats.get('state', '')} at {stats.get('speed', 1):.1f}x")
     if stats.get("real_time_factor", 0) > 0:  # 0 until something is played: "real-time factor 0.00" read as a stall
         text += f", real-time factor {stats['real_time_factor']:.2f}"
-    n = getattr(engine, "n_steps", None)
-    if stats.get("state") == "paused" and (frame.t_us >= engine.t_end_us or (n is not None and frame.index >= n - 1)):
+    if stats.get("state") == "paused" and engine.is_last(frame):
         # Forward did nothing here without a word.
         text += "\n\n_the end of the recording: play starts it again from the beginning_"
     catching = stats.get("catching_up")
