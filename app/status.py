@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from app.engine import Engine
 from app.frame import Frame
+from evpose.tracker.map_acquisition import map_mismatch
 
 
 def run_ahead_note(engine: Engine) -> str:
@@ -32,6 +33,20 @@ def run_ahead_note(engine: Engine) -> str:
     return f"run-ahead: {ready * step_us / 1e6:.2f} of {total:.2f} s ready (computing; beyond it, steps are computed live)" + note
 
 
+def map_mismatch_note(engine: Engine) -> str:
+    """A warning when no update has registered against the map since the start for as long as ``evpose track``
+    allows (:mod:`evpose.tracker.map_acquisition`); empty for engines without a map, or once one has registered."""
+    history = getattr(engine, "history", None)
+    if getattr(engine, "contour_map", None) is None or not history:
+        return ""
+    session = getattr(engine, "session", None)  # tracking starts at the first ground-truth pose, as in the CLI
+    s = map_mismatch(((h.t_us, h.counts) for h in history), getattr(session, "t0_us", engine.t_start_us))
+    if s is None:
+        return ""
+    return (f"**no update has registered against this map in the first {s:.2f} s**: is it this recording's map, in its "
+            "frame? The poses shown are the motion model's (`evpose track` stops here with an error).")
+
+
 def status_markdown(frame: Frame, engine: Engine, stats: dict) -> str:
     """Markdown of the status line under the playback controls."""
     text = (f"t = {frame.t_us / 1e6:.3f} s, step {frame.index}, **{frame.status}**"
@@ -48,5 +63,8 @@ def status_markdown(frame: Frame, engine: Engine, stats: dict) -> str:
                  else "no images on the way")
         text += (f"\n\n**computing {catching[0]:.1f} / {catching[1]:.1f} s** to reach the seek (tracking is causal: "
                  f"every step before it is needed; {shown}). Seek elsewhere or pause to cancel.")
+    mismatch = map_mismatch_note(engine)
+    if mismatch:
+        text += f"\n\n{mismatch}"
     note = run_ahead_note(engine)
     return text + (f"\n\n{note}" if note else "")

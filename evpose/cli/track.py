@@ -10,6 +10,7 @@ import numpy as np
 import tyro
 
 from evpose.errors import InputError
+from evpose.tracker.map_acquisition import DEFAULT_ACQUIRE_S, registered as update_registered
 
 
 def parse_init(text: str) -> np.ndarray | None:
@@ -78,7 +79,7 @@ def main(
     width: int | None = None,
     height: int | None = None,
     progress: bool = True,
-    acquire_s: float = 1.0,
+    acquire_s: float = DEFAULT_ACQUIRE_S,
 ) -> int:
     """Track the pose of the event camera of RECORDING against the contour map MAP; write a TUM trajectory.
 
@@ -161,7 +162,7 @@ def main(
         def tick(r):
             if r.status is TrackStatus.LOST:
                 lost.append(r)
-            registered[0] = registered[0] or bool(r.counts.get("registered", 1))
+            registered[0] = registered[0] or update_registered(r.counts)
             if not registered[0] and (r.t_us >= acquire_until or session.done):
                 raise InputError(map, f"no update registered against this map in the first {(r.t_us - session.t0_us) / 1e6:.2f} s"
                                  f" of {recording.name} ({r.reason}): is it this recording's map, in its frame?",

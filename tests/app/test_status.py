@@ -66,3 +66,22 @@ def test_the_last_step_says_it_is_the_end_even_before_the_last_event():
     assert "end of the recording" not in status_markdown(last, eng, {"state": "playing", "speed": 1.0})
     before = Frame(791, 3_990_000, z, z, z, EventArray.empty(), EventArray.empty())
     assert "end of the recording" not in status_markdown(before, eng, {"state": "paused", "speed": 1.0})
+
+
+def _tracker_like(registered_flags, t0_us=1_000_000, step_us=5_000):
+    hist = [SimpleNamespace(t_us=t0_us + k * step_us, counts={"registered": int(r)}) for k, r in enumerate(registered_flags)]
+    return SimpleNamespace(contour_map=object(), history=hist, session=SimpleNamespace(t0_us=t0_us), t_start_us=0,
+                           is_last=lambda frame: False)
+
+
+def test_a_map_nothing_registers_against_for_a_second_is_flagged_as_possibly_the_wrong_one():
+    z = np.zeros((2, 2), np.float32)
+    f = Frame(200, 2_000_000, z, z, z, EventArray.empty(), EventArray.empty(), status="degraded", reason="only 21 of 712 map points")
+    eng = _tracker_like([False] * 201)
+    text = status_markdown(f, eng, {"state": "paused", "speed": 1.0})
+    assert "no update has registered against this map in the first 1.00 s" in text and "this recording's map" in text
+    assert "registered against this map" not in status_markdown(f, _tracker_like([False] * 150), {"state": "paused"})
+    assert "registered against this map" not in status_markdown(f, _tracker_like([False] * 100 + [True] + [False] * 200), {})
+    no_map = _tracker_like([False] * 300)
+    no_map.contour_map = None  # the events-only view has no map to blame
+    assert "registered against this map" not in status_markdown(f, no_map, {})
