@@ -50,7 +50,8 @@ def map_mismatch_note(engine: Engine) -> str:
 def status_markdown(frame: Frame, engine: Engine, stats: dict) -> str:
     """Markdown of the status line under the playback controls."""
     text = (f"t = {frame.t_us / 1e6:.3f} s, step {frame.index}, **{frame.status}**"
-            + (f" ({frame.reason})" if frame.reason and frame.status != "events only" else "")
+            # A dash, not parentheses: the reasons carry their own ("40 inliers (2 re-found by projection)").
+            + (f" — {frame.reason}" if frame.reason and frame.status != "events only" else "")
             + f"\n\n{stats.get('state', '')} at {stats.get('speed', 1):.1f}x")
     if stats.get("real_time_factor", 0) > 0:  # 0 until something is played: "real-time factor 0.00" read as a stall
         text += f", real-time factor {stats['real_time_factor']:.2f}"

@@ -85,3 +85,11 @@ def test_a_map_nothing_registers_against_for_a_second_is_flagged_as_possibly_the
     no_map = _tracker_like([False] * 300)
     no_map.contour_map = None  # the events-only view has no map to blame
     assert "registered against this map" not in status_markdown(f, no_map, {})
+
+
+def test_the_reason_follows_the_status_without_nesting_its_own_parentheses():
+    z = np.zeros((2, 2), np.float32)
+    f = Frame(159, 800_000, z, z, z, EventArray.empty(), EventArray.empty(), status="ok",
+              reason="40 inliers (2 re-found by projection), rms 1.30 px")
+    text = status_markdown(f, SimpleNamespace(is_last=lambda frame: False), {"state": "paused", "speed": 1.0})
+    assert "**ok** \u2014 40 inliers (2 re-found by projection), rms 1.30 px" in text and "((" not in text and "))" not in text
