@@ -248,6 +248,8 @@ class FusionConfig:
         for name in positive:
             if not getattr(self, name) > 0:
                 raise ConfigError(f"fusion.{name} must be positive, got {getattr(self, name)}")
+        if not self.init_sigma_acc_bias_vertical >= 0:
+            raise ConfigError(f"fusion.init_sigma_acc_bias_vertical must be >= 0 (0 = off), got {self.init_sigma_acc_bias_vertical}")
         if not 0.0 <= self.registration_ar_rho < 1.0:
             raise ConfigError(f"fusion.registration_ar_rho must be in [0, 1), got {self.registration_ar_rho}")
         if self.window_states < 2:

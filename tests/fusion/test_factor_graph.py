@@ -229,7 +229,7 @@ def test_relinearize_skip_and_covariance_scale_are_validated():
     with pytest.raises(ConfigError):
         FactorGraphFusion(FusionConfig(registration_covariance_scale=0.0))
     for bad in ({"registration_ar_rho": 1.0}, {"registration_ar_rho": -0.1}, {"registration_ar_covariance_scale": 0.0},
-                {"registration_ar_between_scale": 0.0}):
+                {"registration_ar_between_scale": 0.0}, {"init_sigma_acc_bias_vertical": -0.1}):
         with pytest.raises(ConfigError):
             FactorGraphFusion(FusionConfig(**bad))
 
