@@ -212,8 +212,11 @@ class FusionConfig:
     3 s flight without moving objects 12.47 -> 15.06 mm: better in their first second (height error RMS 3.1 -> 1.3
     mm), then the bias follows the registrations' height errors (second 1-2: 4.4 -> 12.4 mm); 0.3 / 0.2: 10.03 /
     9.86, 16.74 / 17.99, 13.36 / 13.35 mm (3 s flight 14.55 mm at 0.3); with ``accel_bias_random_walk`` 3e-4 the
-    3 s flight 15.23 mm (240x180 seeds 0-3 6.61). 240x180 seeds 0-3: 0.3 / 1.0 6.70 / 6.88 mm; 0.5 with 0.05 across
-    7.68 mm. Not kept (off)."""
+    3 s flight 15.23 mm (240x180 seeds 0-3 6.61); three more 3 s landings (seeds 1 / 2 / 3, their own built maps, see
+    ``registration.fused_lag_floor_px``) 18.38 / 16.33 / 15.28 -> 21.12 / 17.60 / 14.97 mm. 240x180 seeds 0-3: 0.3 /
+    1.0 6.70 / 6.88 mm; 0.5 with 0.05 across 7.68 mm. Not kept (off). On those 3 s landings
+    ``registration_covariance_scale`` 10, ``accel_bias_random_walk`` 3e-4 and ``constant_velocity_sigma`` 0.5 gave
+    20.68 / 17.99 / 16.96, 17.95 / 16.22 / 15.36 and 19.36 / 16.47 / 16.23 mm."""
     init_sigma_gyro_bias: float = field(default=0.01, metadata={"min": 1e-6, "max": 0.5, "step": 1e-4, "unit": "rad/s"})
     """Prior sigma on the initial gyroscope bias, rad/s. (The simulator's IMU draws 0.002 per axis.) 0.002 gave seeds
     0-3 (closed loop, session 8, buffer-zone trail 0) 8.74 / 11.46 mm against 9.15 / 9.51 (ARE up to 0.18 deg),
