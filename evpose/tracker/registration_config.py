@@ -226,7 +226,9 @@ class RegistrationConfig:
     0.7 px + 1.5 ms): seeds 0 / 1 14.5 / 9.8 and 24.8 / 12.7 mm at 346x260 against 11.4 / 8.2.
     Session 9, ``full`` seeds 0-3 (7.78 / 9.40 mm): 4.0 / 5.0 ms 7.82 / 10.76, 8.31 / 9.19 mm; 240x180 alone 5.5 / 6.5
     ms 10.04 / 12.31 mm. The registrations' image-shift error against the true camera velocity: a lag-like term
-    explains only ~20 % of its variance (the cross-flow part -6 ms x velocity at 346x260, ~0 at 240x180)."""
+    explains only ~20 % of its variance (the cross-flow part -6 ms x velocity at 346x260, ~0 at 240x180).
+    Session 14, ``full``, the 3 s landings of ``fused_lag_floor_px`` (seeds 1 / 2 / 3, 18.38 / 16.33 / 15.28 mm): 3 / 6 ms
+    gave 20.19 / 17.81 / 17.90, 18.32 / 17.59 / 15.80 mm."""
     lag_floor_px: float = field(default=0.0, metadata={"min": 0.0, "max": 3.0, "step": 0.05, "unit": "px"})
     """Smallest distance the TDF minimum trails a moving edge, pixels (0 = off); needs the map's edge directions
     and the motion twist. The fused modes use ``fused_lag_floor_px`` instead.
