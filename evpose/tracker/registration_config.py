@@ -262,7 +262,8 @@ class RegistrationConfig:
     19.19 / 17.26 / 15.88, 0.6 15.85 / 14.40 / 14.22, 0.8 13.86 / 11.79 / 13.66 (ARE 0.183 / 0.201 / 0.126 -> 0.159 /
     0.185 / 0.105 deg), 1.1 12.94 / 10.82 mm (ARE 0.194 / 0.217); the bundled demos at 0.8: ``landing`` 9.71 ->
     10.60, ``landing_fast`` 18.20 -> 19.83, ``landing_dynamic`` 12.27 -> 7.11 mm; the 2 s benchmark at 0.6 (seeds
-    0-3) 6.38 -> 6.72 mm at 346x260, 7.25 -> 8.95 at 240x180. The floor moves the horizontal (tilt-vs-shift) error
+    0-3) 6.38 -> 6.72 mm at 346x260, 7.25 -> 8.95 at 240x180; the same 3 s landings at 240x180 (their own maps) 18.79
+    / 16.02 / 21.76 -> 22.41 / 18.54 / 26.85 mm at 0.8. The floor moves the horizontal (tilt-vs-shift) error
     of the 3 s flights (second 1-2, seed 2: 22.0 -> 14.1 mm RMS at 0.8); their height error in that second (12-15
     mm RMS, the fused estimate too high by up to 21 mm while the registrations read 6-16 mm) stays with every floor:
     a trail constant in pixels is a stand-in for something that differs between these flights. Not changed."""
