@@ -33,7 +33,7 @@ from evpose.core.camera import CameraCalibration
 from evpose.core.imu import ImuSamples
 from evpose.core.trajectory import Trajectory
 from evpose.fusion.config import FusionConfig, RobustLoss
-from evpose.fusion.factor_graph import registration_covariance, usable_pose
+from evpose.fusion.factor_graph import initial_bias_covariance, registration_covariance, usable_pose
 from evpose.fusion.preintegration import ImuBuffer
 from evpose.fusion.state import Extrinsic, FusedState, skew
 
@@ -134,6 +134,9 @@ class ErrorStateEkf:
         sigma_v = c.init_sigma_velocity if velocity_world is not None else c.unknown_velocity_sigma
         P = np.diag([c.init_sigma_rot**2] * 3 + [c.init_sigma_trans**2] * 3 + [sigma_v**2] * 3
                     + [c.init_sigma_acc_bias**2] * 3 + [c.init_sigma_gyro_bias**2] * 3)
+        bias_cov = initial_bias_covariance(c, T_wi[:3, :3])
+        if bias_cov is not None:
+            P[9:, 9:] = bias_cov
         self.state = _Nominal(int(t_us), T_wi[:3, :3].copy(), T_wi[:3, 3].copy(), v, ba, bg, P)
         self.history = [self.state.copy()]
         self.degraded = False

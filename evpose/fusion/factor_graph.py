@@ -40,6 +40,28 @@ from evpose.fusion.propagation import NavPropagator, imu_rate_trajectory
 from evpose.fusion.state import Extrinsic, FusedState
 
 
+def initial_bias_covariance(config: FusionConfig, R_world_imu: np.ndarray) -> np.ndarray | None:
+    """(6, 6) covariance of the initial (accelerometer, gyroscope) bias prior in the IMU frame, or None when it is the
+    diagonal of ``init_sigma_acc_bias`` / ``init_sigma_gyro_bias`` (``init_sigma_acc_bias_vertical`` off)."""
+    sv = float(config.init_sigma_acc_bias_vertical)
+    if not sv > 0:
+        return None
+    sh = float(config.init_sigma_acc_bias)
+    g = np.asarray(R_world_imu, np.float64)[2, :]  # world z in the IMU frame
+    P = np.zeros((6, 6))
+    P[:3, :3] = sh**2 * np.eye(3) + (sv**2 - sh**2) * np.outer(g, g)
+    P[3:, 3:] = float(config.init_sigma_gyro_bias) ** 2 * np.eye(3)
+    return P
+
+
+def initial_bias_noise(gtsam, config: FusionConfig, R_world_imu: np.ndarray):
+    """gtsam noise model of :func:`initial_bias_covariance`."""
+    P = initial_bias_covariance(config, R_world_imu)
+    if P is None:
+        return gtsam.noiseModel.Diagonal.Sigmas(np.array([config.init_sigma_acc_bias] * 3 + [config.init_sigma_gyro_bias] * 3))
+    return gtsam.noiseModel.Gaussian.Covariance(P)
+
+
 def registration_covariance(config: FusionConfig, covariance_6x6: np.ndarray | None, scale: float | None = None) -> np.ndarray:
     """Registration covariance (rotation, translation; camera frame), scaled, with defaults and a floor.
 
@@ -233,7 +255,7 @@ class FactorGraphFusion:
         graph.add(gtsam.PriorFactorPose3(x, pose, gtsam.noiseModel.Diagonal.Sigmas(np.array([c.init_sigma_rot] * 3 + [c.init_sigma_trans] * 3))))
         sigma_v = c.init_sigma_velocity if velocity_world is not None else c.unknown_velocity_sigma
         graph.add(gtsam.PriorFactorVector(vk, v_imu, gtsam.noiseModel.Isotropic.Sigma(3, sigma_v)))
-        graph.add(gtsam.PriorFactorConstantBias(b, bias, gtsam.noiseModel.Diagonal.Sigmas(np.array([c.init_sigma_acc_bias] * 3 + [c.init_sigma_gyro_bias] * 3))))
+        graph.add(gtsam.PriorFactorConstantBias(b, bias, initial_bias_noise(gtsam, c, T_wi[:3, :3])))
         values = gtsam.Values()
         values.insert(x, pose)
         values.insert(vk, v_imu)

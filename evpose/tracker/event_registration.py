@@ -52,6 +52,19 @@ registration error model (``fusion.registration_error_model`` ``ar1_whitened``, 
 between scale 3): 5.72 mm (ARE 0.059) but seeds 4-7 6.18 against 5.91 and 240x180 7.23 against 7.25. Nor does
 the factor graph gain on the EKF once the map is right: on the oracle map the EKF gives 5.71 mm combined (graph
 5.74) and 4.78 replacing (graph 4.77): either backend passes the registrations' slow error through.
+
+Session 14, not kept (``full`` mean ATE of seeds 0-3, 240x180 / 346x260, against 7.25 / 6.38 mm; scripts in
+``/tmp/s14/fullacc/``). In the events' weakest directions (tilt against sideways shift) their normal equations
+hold 0.1-5x the information of the pose prior towards the prediction (seed 0 at 240x180), so the prior sets
+those directions of the pose the fusion gets: handing on the events' own optimum (the pose moved by
+``H^-1 P e`` off the prior's pull, the covariance of ``H`` alone) gave 7.19 / 6.57 mm (240x180 seeds 4-7 8.32
+against 8.49); the same for the field registration's isotropic prior 7.42 mm at 240x180, both 7.57. The events
+of the step before registered too (each at its own timestamp): 7.49 / 6.66 mm, with ``covariance_scale`` 600
+7.26 / 6.58. The events' variance along the optical axis scaled by 10 / 0.1 before combining: 9.53 / 8.25 mm at
+240x180 (10: 8.37 at 346x260). With ``fusion.init_sigma_acc_bias_vertical`` 0.5 (240x180 6.74 mm):
+``covariance_scale`` 100 / 1000 6.88 / 7.26 mm, ``registration.max_points`` 1500 6.79 mm. Fusing the two poses
+as two factors instead of combining them is the same cost to first order (each scaled alike; the graph's robust
+kernel never engages), so it was not run.
 """
 
 from __future__ import annotations

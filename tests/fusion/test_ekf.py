@@ -50,3 +50,17 @@ def test_ekf_snapshot_restore_is_exact(calibration):
     assert np.array_equal(a.T_world_cam, b.T_world_cam) and np.array_equal(a.covariance, b.covariance)
     traj = f.imu_rate_poses(int(times[-2]), t)
     assert len(traj) > 0 and np.all(np.diff(traj.t) > 0)
+
+
+def test_ekf_starts_with_the_vertical_accelerometer_bias_prior(calibration):
+    from evpose.fusion.factor_graph import initial_bias_covariance
+
+    m = make_motion(duration_s=0.1, imu_rate_hz=500.0)
+    c = FusionConfig(**WHITE)
+    c.init_sigma_acc_bias_vertical = 0.5
+    f = ErrorStateEkf(c, calibration)
+    f.add_imu(m.imu())
+    T0 = m.camera_trajectory([m.config.t0_us], calibration.T_cam_imu).matrix(0)
+    f.initialize(m.config.t0_us, T0)
+    np.testing.assert_allclose(f.state.P[9:, 9:], initial_bias_covariance(c, f.extrinsic.imu_pose(T0)[:3, :3]))
+    assert not np.allclose(f.state.P[9:12, 9:12], np.diag(np.diag(f.state.P[9:12, 9:12])))

@@ -229,7 +229,7 @@ def test_relinearize_skip_and_covariance_scale_are_validated():
     with pytest.raises(ConfigError):
         FactorGraphFusion(FusionConfig(registration_covariance_scale=0.0))
     for bad in ({"registration_ar_rho": 1.0}, {"registration_ar_rho": -0.1}, {"registration_ar_covariance_scale": 0.0},
-                {"registration_ar_between_scale": 0.0}):
+                {"registration_ar_between_scale": 0.0}, {"init_sigma_acc_bias_vertical": -0.1}):
         with pytest.raises(ConfigError):
             FactorGraphFusion(FusionConfig(**bad))
 
@@ -364,3 +364,18 @@ def test_state_keys_are_gtsam_symbols():
     sh = gtsam.symbol_shorthand
     for i in (0, 1, 7, 123456):
         assert f._keys(i) == (sh.X(i), sh.V(i), sh.B(i))
+
+
+def test_initial_bias_prior_is_diagonal_unless_a_vertical_sigma_is_set():
+    from evpose.fusion.factor_graph import initial_bias_covariance
+
+    assert initial_bias_covariance(FusionConfig(), np.eye(3)) is None
+    c = FusionConfig(init_sigma_acc_bias=0.1, init_sigma_acc_bias_vertical=0.5, init_sigma_gyro_bias=0.01)
+    R_world_imu = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])  # world z = IMU y
+    P = initial_bias_covariance(c, R_world_imu)
+    up = R_world_imu[2]
+    across = np.array([1.0, 0.0, 0.0])
+    assert up @ P[:3, :3] @ up == pytest.approx(0.25)
+    assert across @ P[:3, :3] @ across == pytest.approx(0.01)
+    np.testing.assert_allclose(P[3:, 3:], 1e-4 * np.eye(3))
+    np.testing.assert_array_equal(P[:3, 3:], 0.0)
