@@ -438,6 +438,13 @@ class TrackingConfig:
     the truth's) 13-15 deg within about a second even on the best-tracked map (seed 0's last map: 12.8 deg over 0.91 s
     without coasting, 15.4 deg over 1.02 s with; seeds 4 / 7: 15.2 / 17.7 deg), against 4.8 deg over 2.9 s on landing
     seed 0: sideways motion past walls trades yaw for translation."""
+    coast_blank_s: float = field(default=0.0, metadata={"min": 0.0, "max": 2.0, "step": 0.01, "unit": "s"})
+    """Event-only coasting: up to this much of the time the event window spent rejecting tiny windows for their event
+    rate (``EventWindowConfig.min_event_rate``: the camera sees a blank wall, no MCI is made) does not count towards
+    ``coast_s`` (0: it counts), seconds. Such stretches carry no evidence against the motion model, and every indoor
+    seed has two of them (about 0.64-0.83 s and 1.58-1.89 s, 0.1-0.3 events/px/s) where the map is lost and the next
+    map starts after the blank; together they are 15-20 % of each recording's time, which caps the tracked share
+    near 83 %."""
     coast_drop_unconfirmed: bool = False
     """Event-only coasting: when a coast ends in a loss, the coasted poses are removed from the map's trajectory (no MCI
     confirmed them); off keeps them. Indoor seeds 0-3, ``coast_s`` 0.4: on -> ATE 9.02 %, tracked 49.1 % (off: 10.21 %,

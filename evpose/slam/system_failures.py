@@ -66,6 +66,8 @@ class VisualFailureHandling:
         m, fe, tc = self.atlas.active, self.fe, self.cfg.tracking
         if tc.coast_s <= 0:
             return self._lose(reason)
+        # Blank stretches (no MCI: the event rate fell below th_e) up to coast_blank_s do not use up the coast.
+        gap_s -= min(self._blank_us / 1e6, tc.coast_blank_s)
         T_wc = event_only_coast_pose(m, mci.t_us, int(tc.coast_span_s * 1e6)) if gap_s <= tc.coast_s else None
         if T_wc is None:
             if tc.coast_drop_unconfirmed:

@@ -40,11 +40,12 @@ def early_map():
     return make_recording(duration_s=0.4, speed=1.5, seed=7, shake=0.08)
 
 
-def _fail(rec, coast_s: float | None, after_us: int, drop: bool = False):
+def _fail(rec, coast_s: float | None, after_us: int, drop: bool = False, blank_s: float = 0.0):
     cfg = SlamConfig()
     if coast_s is not None:
         cfg.tracking.coast_s = coast_s
     cfg.tracking.coast_drop_unconfirmed = drop
+    cfg.tracking.coast_blank_s = blank_s
     slam = EventSlam(cfg, rec.calibration)
     slam.step(rec.events)
     m = slam.atlas.active
@@ -68,3 +69,13 @@ def test_a_coast_longer_than_coast_s_loses_the_map_and_can_drop_its_unconfirmed_
         assert status is SlamStatus.LOST and pose is None and slam.atlas.active is not m
         assert len(m.traj_t) == (n - 1 if drop else n)
 
+
+
+def test_a_blank_stretch_does_not_use_up_the_coast_when_coast_blank_s_allows(early_map):
+    for blank_s, expected in ((0.0, SlamStatus.LOST), (0.3, SlamStatus.COASTING)):
+        slam, m, _ = _fail(early_map, 0.4, 8000, blank_s=blank_s)
+        # 0.5 s after the last visual pose, 0.25 s of it without an MCI because the event rate was below th_e.
+        slam._blank_us = 250_000
+        mci = SimpleNamespace(t_us=slam._last_visual_t + 500_000, image8=np.zeros((slam.height, slam.width), np.uint8))
+        status, _, pose, _ = slam._bridge_or_lose(mci, "a blank wall")
+        assert status is expected and (pose is None) == (expected is SlamStatus.LOST)
