@@ -453,6 +453,10 @@ class TrackingConfig:
     96.5 -> 83.8 % on seed 4)."""
     coast_span_s: float = field(default=0.03, metadata={"min": 0.005, "max": 0.5, "step": 0.005, "unit": "s"})
     """Event-only coasting: the rotation rate and velocity held are means over the newest poses spanning this long, s."""
+    coast_young_span_s: float = field(default=0.0, metadata={"min": 0.0, "max": 0.5, "step": 0.005, "unit": "s"})
+    """Event-only coasting: a map whose whole trajectory spans less than ``coast_span_s`` (a two-view map a few MCIs
+    old) coasts on the motion of that whole trajectory when it spans at least this long (0: such a map is lost at its
+    first visual failure), seconds."""
     ba_iterations: int = field(default=10, metadata={"min": 0, "max": 100, "step": 1, "unit": "iterations"})
     """Levenberg-Marquardt iterations of local BA (0 disables it), iterations."""
     ba_huber_px: float = field(default=2.0, metadata={"min": 0.1, "max": 10.0, "step": 0.1, "unit": "px"})

@@ -69,6 +69,11 @@ class VisualFailureHandling:
         # Blank stretches (no MCI: the event rate fell below th_e) up to coast_blank_s do not use up the coast.
         gap_s -= min(self._blank_us / 1e6, tc.coast_blank_s)
         T_wc = event_only_coast_pose(m, mci.t_us, int(tc.coast_span_s * 1e6)) if gap_s <= tc.coast_s else None
+        if T_wc is None and gap_s <= tc.coast_s and tc.coast_young_span_s > 0 and m.traj_t:
+            # A young map: hold the motion of its whole trajectory, if that spans long enough to mean anything.
+            span_us = m.traj_t[-1] - m.traj_t[0]
+            if span_us >= tc.coast_young_span_s * 1e6:
+                T_wc = event_only_coast_pose(m, mci.t_us, span_us)
         if T_wc is None:
             if tc.coast_drop_unconfirmed:
                 drop_unconfirmed_poses(m, self._last_visual_t)

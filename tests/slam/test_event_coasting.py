@@ -79,3 +79,21 @@ def test_a_blank_stretch_does_not_use_up_the_coast_when_coast_blank_s_allows(ear
         mci = SimpleNamespace(t_us=slam._last_visual_t + 500_000, image8=np.zeros((slam.height, slam.width), np.uint8))
         status, _, pose, _ = slam._bridge_or_lose(mci, "a blank wall")
         assert status is expected and (pose is None) == (expected is SlamStatus.LOST)
+
+
+def test_a_young_map_coasts_on_its_whole_trajectory_when_coast_young_span_s_allows(early_map):
+    for young_s, expected in ((0.0, SlamStatus.LOST), (0.05, SlamStatus.COASTING)):
+        cfg = SlamConfig()
+        cfg.tracking.coast_young_span_s = young_s
+        cfg.tracking.coast_span_s = 0.2  # this recording's MCIs are ~0.1 s apart
+        slam = EventSlam(cfg, early_map.calibration)
+        slam.step(early_map.events)
+        m = slam.atlas.active
+        # Keep the map's two newest poses only: a two-view map one MCI old, too short for coast_span_s.
+        for lst in (m.traj_t, m.traj_T, m.traj_ref, m.traj_rel):
+            del lst[:-2]
+        span_us = m.traj_t[-1] - m.traj_t[0]
+        assert 50_000 <= span_us < cfg.tracking.coast_span_s * 1e6
+        mci = SimpleNamespace(t_us=m.traj_t[-1] + 8000, image8=np.zeros((slam.height, slam.width), np.uint8))
+        status, _, pose, _ = slam._bridge_or_lose(mci, "no tracks")
+        assert status is expected and (slam.atlas.active is m) == (expected is SlamStatus.COASTING)
