@@ -438,13 +438,13 @@ class TrackingConfig:
     the truth's) 13-15 deg within about a second even on the best-tracked map (seed 0's last map: 12.8 deg over 0.91 s
     without coasting, 15.4 deg over 1.02 s with; seeds 4 / 7: 15.2 / 17.7 deg), against 4.8 deg over 2.9 s on landing
     seed 0: sideways motion past walls trades yaw for translation."""
-    coast_blank_s: float = field(default=0.0, metadata={"min": 0.0, "max": 2.0, "step": 0.01, "unit": "s"})
-    """Event-only coasting: up to this much of the time the event window spent rejecting tiny windows for their event
-    rate (``EventWindowConfig.min_event_rate``: the camera sees a blank wall, no MCI is made) does not count towards
-    ``coast_s`` (0: it counts), seconds. Such stretches carry no evidence against the motion model, and every indoor
-    seed has two of them (about 0.64-0.83 s and 1.58-1.89 s, 0.1-0.3 events/px/s) where the map is lost and the next
-    map starts after the blank; together they are 15-20 % of each recording's time, which caps the tracked share
-    near 83 %."""
+    coast_blank_s: float = field(default=0.3, metadata={"min": 0.0, "max": 2.0, "step": 0.01, "unit": "s"})
+    """Event-only coasting: up to this much of the time whose events the window selection dropped for a low event rate
+    (``EventWindowConfig.min_event_rate``: a blank wall, no MCI) does not use up ``coast_s`` (0: it does), seconds.
+    Why and what it measured: :mod:`evpose.slam.event_coasting`."""
+    coast_after_blank_s: float = field(default=2.0, metadata={"min": 0.0, "max": 2.0, "step": 0.01, "unit": "s"})
+    """Event-only coasting: a coast that crossed a blank wall (``coast_blank_s``) goes on at most this long after the
+    first MCI past it unless an MCI is tracked visually (2: as any coast), seconds."""
     coast_drop_unconfirmed: bool = False
     """Event-only coasting: when a coast ends in a loss, the coasted poses are removed from the map's trajectory (no MCI
     confirmed them); off keeps them. Indoor seeds 0-3, ``coast_s`` 0.4: on -> ATE 9.02 %, tracked 49.1 % (off: 10.21 %,
@@ -453,10 +453,10 @@ class TrackingConfig:
     96.5 -> 83.8 % on seed 4)."""
     coast_span_s: float = field(default=0.03, metadata={"min": 0.005, "max": 0.5, "step": 0.005, "unit": "s"})
     """Event-only coasting: the rotation rate and velocity held are means over the newest poses spanning this long, s."""
-    coast_young_span_s: float = field(default=0.0, metadata={"min": 0.0, "max": 0.5, "step": 0.005, "unit": "s"})
+    coast_young_span_s: float = field(default=0.005, metadata={"min": 0.0, "max": 0.5, "step": 0.005, "unit": "s"})
     """Event-only coasting: a map whose whole trajectory spans less than ``coast_span_s`` (a two-view map a few MCIs
-    old) coasts on the motion of that whole trajectory when it spans at least this long (0: such a map is lost at its
-    first visual failure), seconds."""
+    old) coasts on that whole trajectory's motion if it spans at least this (0: it is lost at its first visual
+    failure), seconds. Measured with ``coast_blank_s`` in :mod:`evpose.slam.event_coasting`."""
     ba_iterations: int = field(default=10, metadata={"min": 0, "max": 100, "step": 1, "unit": "iterations"})
     """Levenberg-Marquardt iterations of local BA (0 disables it), iterations."""
     ba_huber_px: float = field(default=2.0, metadata={"min": 0.1, "max": 10.0, "step": 0.1, "unit": "px"})

@@ -65,8 +65,8 @@ class ReconstructionWindow:
     forced: bool = False
     """Dispatched by the ``th_Nf`` rule or a feature loss, not by the displacement test."""
     blank_us: int = 0
-    """Time spanned by the tiny windows rejected for their event rate (``th_e``) since the previous dispatch: the
-    camera saw nothing but noise then (blank walls), us."""
+    """Time spanned by the tiny windows rejected for their event rate (``th_e``) since the previous dispatch, with the
+    tiny frames collected before each and dropped with it: the camera saw little but noise then (blank walls), us."""
 
     @property
     def t_end_us(self) -> int:
@@ -198,9 +198,11 @@ class EventWindowSelector:
         rate = len(tiny.t) / (dt_s * self.width * self.height)  # eq. (6)
         if rate < cfg.min_event_rate:
             self.last_event = WindowEvent.LOW_RATE
-            s.blank_us += int(tiny.t[-1] - tiny.t[0])
             if s.n_frames >= cfg.max_tiny_frames and s.ref_pts is not None:
+                s.blank_us += int(tiny.t[-1] - tiny.t[0])
                 return self._dispatch(forced=True)
+            # The tiny frames collected so far are dropped with this one: none of their time reaches an MCI.
+            s.blank_us += int(tiny.t[-1] - (s.chunks[0].t[0] if s.chunks else tiny.t[0]))
             # Restart from the initial state: slow, noisy data must not blur the next MCI.
             self._reset(keep_overlap=False)
             return None

@@ -97,5 +97,6 @@ def test_time_the_window_spent_below_the_event_rate_is_reported_with_the_next_wi
     before = [w for w in out if w.t[-1] < 400_000]
     after = [w for w in out if w.t[-1] >= 700_000]
     assert before and len(after) >= 2 and all(w.blank_us == 0 for w in before)
-    assert 200_000 <= after[0].blank_us <= 300_000
+    # Most of the blank, and never more than the time between the windows around it.
+    assert 250_000 <= after[0].blank_us <= after[0].t[0] - before[-1].t[-1]
     assert all(w.blank_us == 0 for w in after[1:])
