@@ -97,3 +97,16 @@ def test_a_young_map_coasts_on_its_whole_trajectory_when_coast_young_span_s_allo
         mci = SimpleNamespace(t_us=m.traj_t[-1] + 8000, image8=np.zeros((slam.height, slam.width), np.uint8))
         status, _, pose, _ = slam._bridge_or_lose(mci, "no tracks")
         assert status is expected and (slam.atlas.active is m) == (expected is SlamStatus.COASTING)
+
+
+def test_a_coast_across_a_blank_ends_after_it_when_coast_after_blank_s_says_so(early_map):
+    for after_s, expected in ((2.0, SlamStatus.COASTING), (0.0, SlamStatus.LOST)):
+        slam, m, _ = _fail(early_map, 0.4, 8000, blank_s=0.3)
+        slam.cfg.tracking.coast_after_blank_s = after_s
+        img = np.zeros((slam.height, slam.width), np.uint8)
+        # The first MCI past a 0.2 s blank coasts either way; the next one only while coast_after_blank_s allows.
+        slam._blank_us, slam._after_blank_t = 200_000, slam._last_visual_t + 250_000
+        first = slam._bridge_or_lose(SimpleNamespace(t_us=slam._after_blank_t, image8=img), "a blank wall")
+        assert first[0] is SlamStatus.COASTING
+        status, _, _, _ = slam._bridge_or_lose(SimpleNamespace(t_us=slam._after_blank_t + 10_000, image8=img), "still nothing")
+        assert status is expected
