@@ -232,7 +232,11 @@ class InitializationConfig:
     ATE from 6.5 % (median 4.5) to 4.9 % (median 3.3): better on 6 seeds, worse on 3, the same on 11 (already homography);
     0.4 gave 5.8 % and 0.2 the same as 0.3."""
     min_parallax_deg: float = field(default=1.0, metadata={"min": 0.1, "max": 10.0, "step": 0.1, "unit": "deg"})
-    """Median triangulation angle needed to accept the two views, degrees."""
+    """Median triangulation angle needed to accept the two views, degrees. Session 14: an upper bound on it per second
+    between the two views (a camera at speed v past depth z sees at most v / z; landing event-only inits 7-98 deg/s,
+    indoor re-initialisations up to 3563 deg/s from translations the decomposition got wrong), 200 deg/s, indoor 0-7,
+    32 runs as in :mod:`evpose.slam.event_coasting`: ATE 8.62 -> 9.21 % (paired +0.59 +- 0.87), tracked 93.0 -> 87.4 %,
+    9 runs under 80 % (1): maps start later and are no better; removed."""
     min_rotation_free_parallax_deg: float = field(default=0.0, metadata={"min": 0.0, "max": 5.0, "step": 0.05, "unit": "deg"})
     """The two views are tried only when the median angle between the second view's rays and the first's, rotated by
     the pure rotation that fits them best, reaches this (:mod:`evpose.slam.init_parallax`; 0 disables), degrees. The
