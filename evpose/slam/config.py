@@ -446,9 +446,10 @@ class TrackingConfig:
     """Event-only coasting: up to this much of the time whose events the window selection dropped for a low event rate
     (``EventWindowConfig.min_event_rate``: a blank wall, no MCI) does not use up ``coast_s`` (0: it does), seconds.
     Why and what it measured: :mod:`evpose.slam.event_coasting`."""
-    coast_after_blank_s: float = field(default=2.0, metadata={"min": 0.0, "max": 2.0, "step": 0.01, "unit": "s"})
-    """Event-only coasting: a coast that crossed a blank wall (``coast_blank_s``) goes on at most this long after the
-    first MCI past it unless an MCI is tracked visually (2: as any coast), seconds."""
+    coast_after_blank_s: float = field(default=0.0, metadata={"min": 0.0, "max": 2.0, "step": 0.01, "unit": "s"})
+    """Event-only coasting: a coast the blank-wall rule (``coast_blank_s`` > 0) carried across a blank ends this long
+    after the first MCI past the blank unless an MCI is tracked visually (0: that first MCI must place the map or the
+    map is lost at its next failure; 2: as any coast), seconds."""
     coast_drop_unconfirmed: bool = False
     """Event-only coasting: when a coast ends in a loss, the coasted poses are removed from the map's trajectory (no MCI
     confirmed them); off keeps them. Indoor seeds 0-3, ``coast_s`` 0.4: on -> ATE 9.02 %, tracked 49.1 % (off: 10.21 %,

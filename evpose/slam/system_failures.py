@@ -69,7 +69,8 @@ class VisualFailureHandling:
             return self._lose(reason)
         # Blank stretches (no MCI: the event rate fell below th_e) up to coast_blank_s do not use up the coast.
         gap_s -= min(self._blank_us / 1e6, tc.coast_blank_s)
-        if self._after_blank_t is not None and (mci.t_us - self._after_blank_t) / 1e6 > tc.coast_after_blank_s:
+        after_s = (mci.t_us - self._after_blank_t) / 1e6 if self._after_blank_t is not None else 0.0
+        if tc.coast_blank_s > 0 and after_s > tc.coast_after_blank_s:
             gap_s = np.inf  # crossed a blank wall on dead reckoning and not placed again right after it
         T_wc = event_only_coast_pose(m, mci.t_us, int(tc.coast_span_s * 1e6)) if gap_s <= tc.coast_s else None
         if T_wc is None and gap_s <= tc.coast_s and tc.coast_young_span_s > 0 and m.traj_t:
