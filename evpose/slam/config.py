@@ -282,7 +282,10 @@ class TrackingConfig:
     """Inlier threshold of PnP RANSAC and of map-point checks, pixels."""
     min_inliers: int = field(default=12, metadata={"min": 6, "max": 200, "step": 1, "unit": "points"})
     """Tracking is lost below this many pose inliers, points. Indoor event-only seeds 0-3: 8 -> ATE 8.57 -> 10.64 %,
-    tracked 52.4 -> 59.8 %."""
+    tracked 52.4 -> 59.8 %. Session 14, 16 (with ``coast_blank_s`` / ``coast_young_span_s`` on, ``coast_after_blank_s``
+    2): indoor 0-7, 32 runs (:mod:`evpose.slam.event_coasting`) ATE 8.62 -> 8.17 % (paired -0.45 +- 1.06), tracked 93.0
+    -> 93.1 %; landing event-only 0-11 2.52 -> 2.47 % (worst 4.63 -> 5.33, 5 of 12 within 2 % either way); E-I-C2
+    landing 0-7 ATE 1.06 -> 1.05 %, RPE within target. Within the noise everywhere: not changed."""
     min_inlier_ratio: float = field(default=0.5, metadata={"min": 0.0, "max": 1.0, "step": 0.05, "unit": "ratio"})
     """Tracking is lost when fewer than this share of the tracked map points are pose inliers (tracks jumped to other features), ratio."""
     keyframe_tracked_ratio: float = field(default=0.7, metadata={"min": 0.1, "max": 1.0, "step": 0.05, "unit": "ratio"})
