@@ -232,11 +232,9 @@ class InitializationConfig:
     ATE from 6.5 % (median 4.5) to 4.9 % (median 3.3): better on 6 seeds, worse on 3, the same on 11 (already homography);
     0.4 gave 5.8 % and 0.2 the same as 0.3."""
     min_parallax_deg: float = field(default=1.0, metadata={"min": 0.1, "max": 10.0, "step": 0.1, "unit": "deg"})
-    """Median triangulation angle needed to accept the two views, degrees. Session 14: an upper bound on it per second
-    between the two views (a camera at speed v past depth z sees at most v / z; landing event-only inits 7-98 deg/s,
-    indoor re-initialisations up to 3563 deg/s from translations the decomposition got wrong), 200 deg/s, indoor 0-7,
-    32 runs as in :mod:`evpose.slam.event_coasting`: ATE 8.62 -> 9.21 % (paired +0.59 +- 0.87), tracked 93.0 -> 87.4 %,
-    9 runs under 80 % (1): maps start later and are no better; removed."""
+    """Median triangulation angle needed to accept the two views, degrees. Session 14, an upper bound of 200 deg per
+    second between the views (landing inits 7-98, indoor re-inits up to 3563 deg/s): indoor 0-7, 32 runs ATE 8.62 ->
+    9.21 % (paired +0.59 +- 0.87), tracked 93.0 -> 87.4 %, 9 runs under 80 % (1): later, no better maps; removed."""
     min_rotation_free_parallax_deg: float = field(default=0.0, metadata={"min": 0.0, "max": 5.0, "step": 0.05, "unit": "deg"})
     """The two views are tried only when the median angle between the second view's rays and the first's, rotated by
     the pure rotation that fits them best, reaches this (:mod:`evpose.slam.init_parallax`; 0 disables), degrees. The
@@ -450,9 +448,8 @@ class TrackingConfig:
     (``EventWindowConfig.min_event_rate``: a blank wall, no MCI) does not use up ``coast_s`` (0: it does), seconds.
     Why and what it measured: :mod:`evpose.slam.event_coasting`."""
     coast_after_blank_s: float = field(default=0.0, metadata={"min": 0.0, "max": 2.0, "step": 0.01, "unit": "s"})
-    """Event-only coasting: a coast the blank-wall rule (``coast_blank_s`` > 0) carried across a blank ends this long
-    after the first MCI past the blank unless an MCI is tracked visually (0: that first MCI must place the map or the
-    map is lost at its next failure; 2: as any coast), seconds."""
+    """Event-only coasting: a coast that ``coast_blank_s`` (> 0) carried across a blank wall ends this long after the
+    first MCI past it unless an MCI is tracked visually (0: at the next failure; 2: as any coast), seconds."""
     coast_drop_unconfirmed: bool = False
     """Event-only coasting: when a coast ends in a loss, the coasted poses are removed from the map's trajectory (no MCI
     confirmed them); off keeps them. Indoor seeds 0-3, ``coast_s`` 0.4: on -> ATE 9.02 %, tracked 49.1 % (off: 10.21 %,
