@@ -31,7 +31,10 @@ visually tracked MCIs from 44.0 % to 36.3 % (coasted: 44.2 -> 57.3 %); ending su
 the blank is tracked (``coast_after_blank_s`` 0, the default since): 32 runs ATE 8.62 -> 8.99 % (paired +0.37 +-
 0.70, better in 14; against the old defaults 10.08 -> 8.99 %, paired -1.08 +- 0.67, better in 20), tracked 93.0 ->
 93.6 %, min 79.9 -> 86.2, no run under 80 % (1), visually tracked MCIs 44.4 % (coasted 48.1 %); defaults alone 10.71
--> 9.94 %, 92.9 -> 93.7 % (min 86.8).
+-> 9.94 %, 92.9 -> 93.7 % (min 86.8). Held-out seeds 8-10 (``/tmp/s14/eoindoor/exp_new.py``), the same four
+settings, old -> these defaults: ATE 9.05 -> 9.30 % (paired +0.25 +- 1.04), tracked 77.4 -> 91.3 %, runs under 80 %
+8 -> 0 of 12; over all 44 runs 9.80 -> 9.08 % (paired -0.72 +- 0.57, better in 27), tracked 79.7 -> 93.0 % (min
+59.5 -> 84.4), runs under 80 % 24 -> 0, visually tracked MCIs 44.4 -> 44.6 %.
 """
 
 from __future__ import annotations
