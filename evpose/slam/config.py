@@ -235,7 +235,9 @@ class InitializationConfig:
     ATE from 6.5 % (median 4.5) to 4.9 % (median 3.3): better on 6 seeds, worse on 3, the same on 11 (already homography);
     0.4 gave 5.8 % and 0.2 the same as 0.3."""
     min_parallax_deg: float = field(default=1.0, metadata={"min": 0.1, "max": 10.0, "step": 0.1, "unit": "deg"})
-    """Median triangulation angle needed to accept the two views, degrees."""
+    """Median triangulation angle needed to accept the two views, degrees. Session 14, an upper bound of 200 deg per
+    second between the views (landing inits 7-98, indoor re-inits up to 3563 deg/s): indoor 0-7, 32 runs ATE 8.62 ->
+    9.21 % (paired +0.59 +- 0.87), tracked 93.0 -> 87.4 %, 9 runs under 80 % (1): later, no better maps; removed."""
     min_rotation_free_parallax_deg: float = field(default=0.0, metadata={"min": 0.0, "max": 5.0, "step": 0.05, "unit": "deg"})
     """The two views are tried only when the median angle between the second view's rays and the first's, rotated by
     the pure rotation that fits them best, reaches this (:mod:`evpose.slam.init_parallax`; 0 disables), degrees. The
@@ -282,7 +284,10 @@ class TrackingConfig:
     (defaults 2.52 %, 5 within 2 %): 1.5 -> 4.86 % (5; seed 3 23.9 %, seed 6 82.3 % tracked)."""
     min_inliers: int = field(default=12, metadata={"min": 6, "max": 200, "step": 1, "unit": "points"})
     """Tracking is lost below this many pose inliers, points. Indoor event-only seeds 0-3: 8 -> ATE 8.57 -> 10.64 %,
-    tracked 52.4 -> 59.8 %."""
+    tracked 52.4 -> 59.8 %. Session 14, 16 (with ``coast_blank_s`` / ``coast_young_span_s`` on, ``coast_after_blank_s``
+    2): indoor 0-7, 32 runs (:mod:`evpose.slam.event_coasting`) ATE 8.62 -> 8.17 % (paired -0.45 +- 1.06), tracked 93.0
+    -> 93.1 %; landing event-only 0-11 2.52 -> 2.47 % (worst 4.63 -> 5.33, 5 of 12 within 2 % either way); E-I-C2
+    landing 0-7 ATE 1.06 -> 1.05 %, RPE within target. Within the noise everywhere: not changed."""
     min_inlier_ratio: float = field(default=0.5, metadata={"min": 0.0, "max": 1.0, "step": 0.05, "unit": "ratio"})
     """Tracking is lost when fewer than this share of the tracked map points are pose inliers (tracks jumped to other features), ratio."""
     keyframe_tracked_ratio: float = field(default=0.7, metadata={"min": 0.1, "max": 1.0, "step": 0.05, "unit": "ratio"})
@@ -459,6 +464,13 @@ class TrackingConfig:
     the truth's) 13-15 deg within about a second even on the best-tracked map (seed 0's last map: 12.8 deg over 0.91 s
     without coasting, 15.4 deg over 1.02 s with; seeds 4 / 7: 15.2 / 17.7 deg), against 4.8 deg over 2.9 s on landing
     seed 0: sideways motion past walls trades yaw for translation."""
+    coast_blank_s: float = field(default=0.3, metadata={"min": 0.0, "max": 2.0, "step": 0.01, "unit": "s"})
+    """Event-only coasting: up to this much of the time whose events the window selection dropped for a low event rate
+    (``EventWindowConfig.min_event_rate``: a blank wall, no MCI) does not use up ``coast_s`` (0: it does), seconds.
+    Why and what it measured: :mod:`evpose.slam.event_coasting`."""
+    coast_after_blank_s: float = field(default=0.0, metadata={"min": 0.0, "max": 2.0, "step": 0.01, "unit": "s"})
+    """Event-only coasting: a coast that ``coast_blank_s`` (> 0) carried across a blank wall ends this long after the
+    first MCI past it unless an MCI is tracked visually (0: at the next failure; 2: as any coast), seconds."""
     coast_drop_unconfirmed: bool = False
     """Event-only coasting: when a coast ends in a loss, the coasted poses are removed from the map's trajectory (no MCI
     confirmed them); off keeps them. Indoor seeds 0-3, ``coast_s`` 0.4: on -> ATE 9.02 %, tracked 49.1 % (off: 10.21 %,
@@ -467,6 +479,10 @@ class TrackingConfig:
     96.5 -> 83.8 % on seed 4)."""
     coast_span_s: float = field(default=0.03, metadata={"min": 0.005, "max": 0.5, "step": 0.005, "unit": "s"})
     """Event-only coasting: the rotation rate and velocity held are means over the newest poses spanning this long, s."""
+    coast_young_span_s: float = field(default=0.005, metadata={"min": 0.0, "max": 0.5, "step": 0.005, "unit": "s"})
+    """Event-only coasting: a map whose whole trajectory spans less than ``coast_span_s`` (a two-view map a few MCIs
+    old) coasts on that whole trajectory's motion if it spans at least this (0: it is lost at its first visual
+    failure), seconds. Measured with ``coast_blank_s`` in :mod:`evpose.slam.event_coasting`."""
     ba_iterations: int = field(default=10, metadata={"min": 0, "max": 100, "step": 1, "unit": "iterations"})
     """Levenberg-Marquardt iterations of local BA (0 disables it), iterations."""
     ba_huber_px: float = field(default=2.0, metadata={"min": 0.1, "max": 10.0, "step": 0.1, "unit": "px"})

@@ -64,6 +64,9 @@ class ReconstructionWindow:
     """``M_fd`` at dispatch, px."""
     forced: bool = False
     """Dispatched by the ``th_Nf`` rule or a feature loss, not by the displacement test."""
+    blank_us: int = 0
+    """Time spanned by the tiny windows rejected for their event rate (``th_e``) since the previous dispatch, with the
+    tiny frames collected before each and dropped with it: the camera saw little but noise then (blank walls), us."""
 
     @property
     def t_end_us(self) -> int:
@@ -96,6 +99,8 @@ class WindowState:
     median_displacement_px: float = 0.0
     last_t_us: int | None = None
     """Time of the last event taken into a tiny window (the gap test looks across tiny windows too), us."""
+    blank_us: int = 0
+    """Time spanned by the tiny windows rejected for their event rate since the last dispatch, us."""
 
 
 def _empty_chunk() -> _Chunk:
@@ -194,7 +199,10 @@ class EventWindowSelector:
         if rate < cfg.min_event_rate:
             self.last_event = WindowEvent.LOW_RATE
             if s.n_frames >= cfg.max_tiny_frames and s.ref_pts is not None:
+                s.blank_us += int(tiny.t[-1] - tiny.t[0])
                 return self._dispatch(forced=True)
+            # The tiny frames collected so far are dropped with this one: none of their time reaches an MCI.
+            s.blank_us += int(tiny.t[-1] - (s.chunks[0].t[0] if s.chunks else tiny.t[0]))
             # Restart from the initial state: slow, noisy data must not blur the next MCI.
             self._reset(keep_overlap=False)
             return None
@@ -270,8 +278,9 @@ class EventWindowSelector:
             ref_pts=s.ref_pts[alive].copy() if s.ref_pts is not None else np.zeros((0, 2), np.float32),
             cur_pts=s.cur_pts[alive].copy() if s.cur_pts is not None else np.zeros((0, 2), np.float32),
             t_ref_us=s.t_ref_us, t_cur_us=s.t_cur_us, n_frames=s.n_frames,
-            median_displacement_px=s.median_displacement_px, forced=forced,
+            median_displacement_px=s.median_displacement_px, forced=forced, blank_us=s.blank_us,
         )
+        s.blank_us = 0
         if not forced and cfg.adapt_events:
             # eq. (8): fewer frames than expected -> the camera is fast -> smaller tiny windows, and vice versa.
             n_new = (s.n_frames * s.n_events) // cfg.expected_frames

@@ -98,6 +98,10 @@ class EventSlam(GyroAids, VisualFailureHandling):
         """Time of the last MCI tracked visually (C2/C3 bound their IMU bridges by it), us."""
         self._rejoin: RejoinCandidate | None = None
         """The last map lost while coasting (``InertialConfig.rejoin_s``), which the next two-view map may continue."""
+        self._blank_us = 0
+        """Time the event window rejected for a low event rate since the last MCI tracked visually (``TrackingConfig.coast_blank_s``), us."""
+        self._after_blank_t: int | None = None
+        """Time of the first MCI after the last blank wall since the last MCI tracked visually (``coast_after_blank_s``), us."""
 
     # --------------------------------------------------------------- public
     def step(self, events: EventArray) -> SlamStepResult:
@@ -133,7 +137,8 @@ class EventSlam(GyroAids, VisualFailureHandling):
             "n_hist": self.window.n_events_history, "atlas": self.atlas, "fe": self.fe, "next_point": self._next_point,
             "state": self._state, "last_t": self._last_t, "imu_init": self.last_imu_init, "n_results": len(self.results),
             "last_visual_t": self._last_visual_t, "prev_hypothesis": self._prev_hypothesis,
-            "scale_refinement": self.last_scale_refinement, "rejoin": self._rejoin,
+            "scale_refinement": self.last_scale_refinement, "rejoin": self._rejoin, "blank_us": self._blank_us,
+            "after_blank_t": self._after_blank_t,
         })
 
     def restore(self, snap: dict) -> None:
@@ -148,6 +153,7 @@ class EventSlam(GyroAids, VisualFailureHandling):
         self._prev_hypothesis = s.get("prev_hypothesis")
         self.last_scale_refinement = s.get("scale_refinement")
         self._rejoin = s.get("rejoin")
+        self._blank_us, self._after_blank_t = s.get("blank_us", 0), s.get("after_blank_t")
         del self.results[s["n_results"]:]
 
     # ------------------------------------------------------------- pipeline
@@ -212,6 +218,9 @@ class EventSlam(GyroAids, VisualFailureHandling):
     def _process_window(self, rw: ReconstructionWindow) -> SlamStepResult:
         t0, c0 = time.perf_counter(), time.thread_time()
         mci = self.mci_gen.generate(rw, self._prior(rw))
+        self._blank_us += rw.blank_us
+        if rw.blank_us:
+            self._after_blank_t = mci.t_us
         t1, c1 = time.perf_counter(), time.thread_time()
         mci = self._track_mci(mci)
         keyframe = False
@@ -279,7 +288,7 @@ class EventSlam(GyroAids, VisualFailureHandling):
         m.add_pose(kf1.t_us, kf1.T_wc)
         fe.init_ref = None
         self._state = SlamStatus.OK
-        self._last_visual_t = mci.t_us
+        self._last_visual_t, self._blank_us, self._after_blank_t = mci.t_us, 0, None
         if self._rejoin is not None:
             joined = self._try_rejoin(m)
             if joined is not None:
@@ -363,7 +372,7 @@ class EventSlam(GyroAids, VisualFailureHandling):
         for k in np.flatnonzero(~est.inliers):
             fe.track_to_point.pop(int(fe.ids[sel[k]]), None)
         T_wc = est.T_wc
-        self._last_visual_t = mci.t_us
+        self._last_visual_t, self._blank_us, self._after_blank_t = mci.t_us, 0, None
         m.add_pose(mci.t_us, T_wc)
         n_tracked = int(est.inliers.sum())
         keyframe = False

@@ -2,9 +2,10 @@
 
 E-I-C2/C3 bridge the failure and keep the map: a metric map is propagated by the IMU, a map the IMU initialisation
 has not reached yet coasts on the gyro rotation and its recent velocity. Event-only runs coast on the map's recent
-motion for at most ``TrackingConfig.coast_s``. Otherwise, or when the bridge runs too long, the map is lost and the
-next two-view initialisation opens a new map of the atlas. The methods read the system's ``atlas``, ``fe``, ``cfg``,
-``imu``, ``K`` and ``_last_visual_t`` and call its ``_new_keyframe`` and ``_imu_prediction``.
+motion for at most ``TrackingConfig.coast_s`` (time at a blank wall excepted, ``coast_blank_s``). Otherwise, or
+when the bridge runs too long, the map is lost and the next two-view initialisation opens a new map of the atlas.
+The methods read the system's ``atlas``, ``fe``, ``cfg``, ``imu``, ``K``, ``_last_visual_t`` and ``_blank_us`` and
+call its ``_new_keyframe`` and ``_imu_prediction``.
 """
 
 from __future__ import annotations
@@ -66,7 +67,17 @@ class VisualFailureHandling:
         m, fe, tc = self.atlas.active, self.fe, self.cfg.tracking
         if tc.coast_s <= 0:
             return self._lose(reason)
+        # Blank stretches (no MCI: the event rate fell below th_e) up to coast_blank_s do not use up the coast.
+        gap_s -= min(self._blank_us / 1e6, tc.coast_blank_s)
+        after_s = (mci.t_us - self._after_blank_t) / 1e6 if self._after_blank_t is not None else 0.0
+        if tc.coast_blank_s > 0 and after_s > tc.coast_after_blank_s:
+            gap_s = np.inf  # crossed a blank wall on dead reckoning and not placed again right after it
         T_wc = event_only_coast_pose(m, mci.t_us, int(tc.coast_span_s * 1e6)) if gap_s <= tc.coast_s else None
+        if T_wc is None and gap_s <= tc.coast_s and tc.coast_young_span_s > 0 and m.traj_t:
+            # A young map: hold the motion of its whole trajectory, if that spans long enough to mean anything.
+            span_us = m.traj_t[-1] - m.traj_t[0]
+            if span_us >= tc.coast_young_span_s * 1e6:
+                T_wc = event_only_coast_pose(m, mci.t_us, span_us)
         if T_wc is None:
             if tc.coast_drop_unconfirmed:
                 drop_unconfirmed_poses(m, self._last_visual_t)

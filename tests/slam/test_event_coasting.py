@@ -40,11 +40,12 @@ def early_map():
     return make_recording(duration_s=0.4, speed=1.5, seed=7, shake=0.08)
 
 
-def _fail(rec, coast_s: float | None, after_us: int, drop: bool = False):
+def _fail(rec, coast_s: float | None, after_us: int, drop: bool = False, blank_s: float = 0.0):
     cfg = SlamConfig()
     if coast_s is not None:
         cfg.tracking.coast_s = coast_s
     cfg.tracking.coast_drop_unconfirmed = drop
+    cfg.tracking.coast_blank_s = blank_s
     slam = EventSlam(cfg, rec.calibration)
     slam.step(rec.events)
     m = slam.atlas.active
@@ -68,3 +69,44 @@ def test_a_coast_longer_than_coast_s_loses_the_map_and_can_drop_its_unconfirmed_
         assert status is SlamStatus.LOST and pose is None and slam.atlas.active is not m
         assert len(m.traj_t) == (n - 1 if drop else n)
 
+
+
+def test_a_blank_stretch_does_not_use_up_the_coast_when_coast_blank_s_allows(early_map):
+    for blank_s, expected in ((0.0, SlamStatus.LOST), (0.3, SlamStatus.COASTING)):
+        slam, m, _ = _fail(early_map, 0.4, 8000, blank_s=blank_s)
+        # 0.5 s after the last visual pose, 0.25 s of it without an MCI because the event rate was below th_e.
+        slam._blank_us = 250_000
+        mci = SimpleNamespace(t_us=slam._last_visual_t + 500_000, image8=np.zeros((slam.height, slam.width), np.uint8))
+        status, _, pose, _ = slam._bridge_or_lose(mci, "a blank wall")
+        assert status is expected and (pose is None) == (expected is SlamStatus.LOST)
+
+
+def test_a_young_map_coasts_on_its_whole_trajectory_when_coast_young_span_s_allows(early_map):
+    for young_s, expected in ((0.0, SlamStatus.LOST), (0.05, SlamStatus.COASTING)):
+        cfg = SlamConfig()
+        cfg.tracking.coast_young_span_s = young_s
+        cfg.tracking.coast_span_s = 0.2  # this recording's MCIs are ~0.1 s apart
+        slam = EventSlam(cfg, early_map.calibration)
+        slam.step(early_map.events)
+        m = slam.atlas.active
+        # Keep the map's two newest poses only: a two-view map one MCI old, too short for coast_span_s.
+        for lst in (m.traj_t, m.traj_T, m.traj_ref, m.traj_rel):
+            del lst[:-2]
+        span_us = m.traj_t[-1] - m.traj_t[0]
+        assert 50_000 <= span_us < cfg.tracking.coast_span_s * 1e6
+        mci = SimpleNamespace(t_us=m.traj_t[-1] + 8000, image8=np.zeros((slam.height, slam.width), np.uint8))
+        status, _, pose, _ = slam._bridge_or_lose(mci, "no tracks")
+        assert status is expected and (slam.atlas.active is m) == (expected is SlamStatus.COASTING)
+
+
+def test_a_coast_across_a_blank_ends_after_it_when_coast_after_blank_s_says_so(early_map):
+    for after_s, expected in ((2.0, SlamStatus.COASTING), (0.0, SlamStatus.LOST)):
+        slam, m, _ = _fail(early_map, 0.4, 8000, blank_s=0.3)
+        slam.cfg.tracking.coast_after_blank_s = after_s
+        img = np.zeros((slam.height, slam.width), np.uint8)
+        # The first MCI past a 0.2 s blank coasts either way; the next one only while coast_after_blank_s allows.
+        slam._blank_us, slam._after_blank_t = 200_000, slam._last_visual_t + 250_000
+        first = slam._bridge_or_lose(SimpleNamespace(t_us=slam._after_blank_t, image8=img), "a blank wall")
+        assert first[0] is SlamStatus.COASTING
+        status, _, _, _ = slam._bridge_or_lose(SimpleNamespace(t_us=slam._after_blank_t + 10_000, image8=img), "still nothing")
+        assert status is expected

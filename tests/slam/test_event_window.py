@@ -82,3 +82,21 @@ def test_a_dropout_is_ignored_when_the_gap_rule_is_off():
     sel = EventWindowSelector(EventWindowConfig(max_event_gap_ms=0.0), FeatureConfig(), EventImageConfig(), 240, 180)
     out = sel.push(ev.t, ev.x.astype(float), ev.y.astype(float), ev.p)
     assert any(w.t[0] < 400_000 <= w.t[-1] for w in out)
+
+
+def test_time_the_window_spent_below_the_event_rate_is_reported_with_the_next_window():
+    rec = make_recording(duration_s=1.0, speed=2.0, seed=3)
+    ev = rec.events
+    # A blank wall from 400 to 700 ms: only every 50th event is left, about half th_e.
+    inside = (ev.t >= 400_000) & (ev.t < 700_000)
+    ev = ev[~inside | (np.arange(len(ev)) % 50 == 0)]
+    # Tiny windows of 1000 events: the blank fills several of them (adapted ones grow past the blank's events).
+    cfg = EventWindowConfig(initial_events=1000, max_events=1000)
+    sel = EventWindowSelector(cfg, FeatureConfig(), EventImageConfig(), 240, 180)
+    out = sel.push(ev.t, ev.x.astype(float), ev.y.astype(float), ev.p)
+    before = [w for w in out if w.t[-1] < 400_000]
+    after = [w for w in out if w.t[-1] >= 700_000]
+    assert before and len(after) >= 2 and all(w.blank_us == 0 for w in before)
+    # Most of the blank, and never more than the time between the windows around it.
+    assert 250_000 <= after[0].blank_us <= after[0].t[0] - before[-1].t[-1]
+    assert all(w.blank_us == 0 for w in after[1:])
