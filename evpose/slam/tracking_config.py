@@ -1,0 +1,233 @@
+"""Local-map tracking, keyframe insertion and local mapping settings of the map-free SLAM (:class:`TrackingConfig`).
+
+The longest of the SLAM settings, kept in its own module: most of its fields carry the measurements that set them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+@dataclass
+class TrackingConfig:
+    """Local-map tracking, keyframe insertion and local mapping."""
+
+    reprojection_threshold_px: float = field(default=2.5, metadata={"min": 0.5, "max": 10.0, "step": 0.1, "unit": "px"})
+    """Inlier threshold of PnP RANSAC and of map-point checks, pixels. Session 14, landing event-only seeds 0-11
+    (defaults 2.52 %, 5 within 2 %): 1.5 -> 4.86 % (5; seed 3 23.9 %, seed 6 82.3 % tracked)."""
+    min_inliers: int = field(default=12, metadata={"min": 6, "max": 200, "step": 1, "unit": "points"})
+    """Tracking is lost below this many pose inliers, points. Indoor event-only seeds 0-3: 8 -> ATE 8.57 -> 10.64 %,
+    tracked 52.4 -> 59.8 %. Session 14, 16 (with ``coast_blank_s`` / ``coast_young_span_s`` on, ``coast_after_blank_s``
+    2): indoor 0-7, 32 runs (:mod:`evpose.slam.event_coasting`) ATE 8.62 -> 8.17 % (paired -0.45 +- 1.06), tracked 93.0
+    -> 93.1 %; landing event-only 0-11 2.52 -> 2.47 % (worst 4.63 -> 5.33, 5 of 12 within 2 % either way); E-I-C2
+    landing 0-7 ATE 1.06 -> 1.05 %, RPE within target. Within the noise everywhere: not changed."""
+    min_inlier_ratio: float = field(default=0.5, metadata={"min": 0.0, "max": 1.0, "step": 0.05, "unit": "ratio"})
+    """Tracking is lost when fewer than this share of the tracked map points are pose inliers (tracks jumped to other features), ratio."""
+    keyframe_tracked_ratio: float = field(default=0.7, metadata={"min": 0.1, "max": 1.0, "step": 0.05, "unit": "ratio"})
+    """New keyframe when tracked map points drop below this share of the last keyframe's, ratio."""
+    keyframe_displacement_px: float = field(default=20.0, metadata={"min": 2.0, "max": 100.0, "step": 1.0, "unit": "px"})
+    """New keyframe when the median key-point displacement from the last keyframe exceeds this, pixels. Session 12,
+    landing event-only seeds 0-11 (defaults 2.53 %, 5 of 12 within 2 %): 30 -> 2.86 % (5 of 12); 14 -> 2.21 %
+    (median 1.77, 9 of 12), 60 runs 2.39 % (33 of 60 within 2 %, baseline 2.62 % and 27), paired -0.23 +- 0.18
+    points (better in 31, equal in 4), keyframe rotation error 1.82 -> 1.45 deg, at more CPU per MCI (29.2 against
+    27.4 ms median under the same load, not paired): within the spread."""
+    min_triangulation_deg: float = field(default=1.0, metadata={"min": 0.1, "max": 10.0, "step": 0.1, "unit": "deg"})
+    """New map points need this parallax between keyframes, degrees. Session 12, landing event-only seeds 0-11
+    (defaults 2.53 %, 5 of 12 within 2 %): 2 -> 2.92 % (2 of 12); 17 of the 60 perturbed runs paired +0.31 +- 0.40
+    points, degrees."""
+    min_pair_parallax_deg: float = field(default=2.0, metadata={"min": 0.0, "max": 10.0, "step": 0.1, "unit": "deg"})
+    """New points are triangulated from a keyframe pair only if its baseline over the median depth of the newer
+    keyframe's points subtends this angle (ORB-SLAM's baseline check; 0 disables), degrees. Below it every track's
+    parallax sits near ``min_triangulation_deg``, the tracks whose noise lifts them over that threshold are kept, and
+    they come out too near: on the simulated landing (seeds 3 and 9) new points were 14 % and 26 % nearer than the old
+    points of the same keyframe (ground truth: 1 % and 2 %), and the map scale shrank keyframe by keyframe; with 2 deg,
+    4 % and 2 % (ground truth 0 % and 3 %). Over seeds 0-19 (event-only, with ``homography_ratio`` 0.3) the ATE went
+    from 4.9 % (median 3.3, worst 20.3) to 4.0 % (median 3.0, worst 14.2), better on 12 seeds and worse on 8; 1.5 deg
+    gave 4.5 %, 2.5 deg 4.2 %."""
+    intermediate_observations: bool = False
+    """A new point also gets the observations of its track in the keyframes between the two it is triangulated from
+    (when they reproject within twice ``reprojection_threshold_px``); off: only those two keyframes observe it, and the
+    views in between, skipped by ``min_pair_parallax_deg``, are lost. On the simulated landing (event-only, 3 s, seeds
+    0-23) it raised the median observations per point from 2 to 4 and lowered the RMS error of the rotation between
+    consecutive keyframes from 1.85 to 1.58 deg, but not the scale-aligned ATE: mean 2.63 -> 2.66 %, median 2.53 ->
+    2.53, worst 5.77 -> 4.66, 8 -> 6 seeds within 2 %; indoor seeds 0-3 mean 8.8 -> 8.0 % at the same tracked time;
+    per-MCI CPU 21.3 -> 23.3 ms (paired, seeds 0-5). With ``local_window`` 10 as well: 2.48 % (median 2.10, 10 seeds
+    within 2 %) at 20.3 -> 29.6 ms, but 12 gave 2.77 % and 8 2.85 %: the spread of single changes is about 0.3 %.
+    What drives that ATE is the drift the per-step errors sum to (ground-truth rotations between keyframes as 0.2 deg
+    priors of the local BA brought all 24 seeds within 2 %, mean 1.16 %), not the per-step jitter. Session 8, the
+    same oracle on new recordings (default 3.01 %, 10 of 24 within 2 %): sigma 0.5 deg -> 1.95 % (20 of 24), 1 deg ->
+    2.54 % (7 of 24): an event-only "visual gyro" would need relative keyframe rotations good to about half a degree,
+    and the BA's are 1.6-2.7 deg RMS. A RANSAC homography between consecutive keyframes' tracks (1-2 px, decomposed, the
+    solution nearest the BA's) was worse than the BA (seed 9: 3.4-3.8 against 2.7 deg RMS), so it was not fed in.
+    Session 11 (``MciConfig.reference_fraction`` 0.5, landing seeds 0-11, 60 runs): on -> mean ATE 2.60 -> 2.58 %,
+    within 2 % 30 -> 22 of 60."""
+    ba_edge_along_sigma_px: float = field(default=0.0, metadata={"min": 0.0, "max": 50.0, "step": 0.5, "unit": "px"})
+    """Event-only local BA: observations on a straight edge of their keyframe's MCI get this sigma along the edge (one
+    pixel across it; 0: isotropic like every other observation), pixels. KLT on an edge measures only the motion across
+    it and, started at zero flow, stays behind along it: a candidate source of the x-rotation bias of
+    ``ba_rotation_rate_prior_deg_s``. About 40 % of the local BA's observations are on such edges (landing seed 2 and
+    indoor seed 1 alike, 20-30 corner observations per keyframe). Session 13 (``/tmp/s13/slamedge/exp.py``, as
+    ``ba_rotation_rate_prior_deg_s``; the four settings are the defaults and the neutral perturbations ``ba_huber_px``
+    1.9 / 2.1 and ``reprojection_threshold_px`` 2.4), landing event-only, 3 -> seeds 0-11 mean ATE 2.52 -> 2.46 %
+    (median 2.21 -> 1.66, within 2 % 5 -> 7), seeds 12-23 3.62 -> 2.07 % (3 -> 7 within 2 %; tracked at least 88.3 ->
+    96.2 %); huber 1.9: 0-11 2.35 -> 2.67 % (6 -> 5), 12-23 3.65 -> 2.93 % (2 -> 7); reprojection 2.4: 0-11 2.67 -> 2.40
+    % (6 -> 7), 12-23 2.25 -> 2.93 % (6 -> 2); over the 72 landing runs 2.85 -> 2.58 %, paired -0.27 +- 0.24 (s.e.)
+    points (better in 41, worse in 31), within 2 % 28 -> 35, tracked at least 84.0 -> 95.7 %; the summed
+    keyframe-to-keyframe x-rotation error (median over seeds 0-11, defaults) 8.6 -> 5.7 deg. Indoor event-only seeds 0-3
+    with the defaults 6.84 -> 9.83 % (tracked 80.2 -> 76.1 %), huber 1.9 11.38 -> 7.83 (76.5 -> 80.4), huber 2.1 10.11
+    -> 10.16 (84.1 -> 75.6), reprojection 2.4 9.38 -> 13.84 (76.1 -> 82.5); seeds 4-7 10.80 -> 12.09 (82.5 -> 90.9):
+    over the 20 runs 9.70 -> 10.75 %, paired +1.05 +- 1.06 points, tracked 79.9 -> 81.1 %. Off: the landing gain is
+    about one standard error and the indoor seeds 0-3 got worse with the defaults. Landing seeds 0-11 with the defaults:
+    2 -> 2.44 % (6 within 2 %; indoor 0-3 10.52 %), 10 -> 2.73 (7), 30 -> 3.31 (5); 3 only in maps with more than
+    ``local_window`` keyframes -> 2.62 (5; indoor 0-3 9.35); 3 with the tensor over KLT's 23 px window -> 2.74 (5;
+    indoor 9.98). Event-inertial runs never use it, pixels."""
+    ba_edge_max_ratio: float = field(default=0.1, metadata={"min": 0.0, "max": 1.0, "step": 0.01, "unit": "ratio"})
+    """An observation is on a straight edge when the smaller eigenvalue of the MCI's structure tensor (11 px square)
+    there is below this share of the larger, ratio. With ``ba_edge_along_sigma_px`` 3, 0.05 -> landing event-only seeds
+    0-11 mean ATE 2.51 % (median 1.82, 9 within 2 %, but seed 7 11.20 %, tracked 88.9 %), indoor seeds 0-3 9.29 %."""
+    min_observations: int = field(default=2, metadata={"min": 2, "max": 10, "step": 1, "unit": "keyframes"})
+    """Points seen by fewer keyframes after three newer keyframes are culled, keyframes. Every new point starts with the
+    two keyframes it is triangulated from, so 2 never culls by age; 3 is ORB-SLAM's monocular rule (points no later
+    keyframe confirms are dropped). Session 12, landing event-only seeds 0-11, 60 runs (see
+    ``ba_rotation_rate_prior_deg_s`` for the baseline): 3 -> mean ATE 2.43 %, median 1.88, 35 of 60 within 2 % (27),
+    paired -0.18 +- 0.21 points (better in 33 of 60), tracked at least 94.7 % (88.5); defaults alone 2.40 % (8 of 12
+    within 2 %, against 2.53 % and 5): within the spread, keyframes."""
+    local_window: int = field(default=6, metadata={"min": 2, "max": 30, "step": 1, "unit": "keyframes"})
+    """Keyframes optimised by local bundle adjustment, keyframes. Session 11, landing event-only seeds 0-11, 60 runs
+    (defaults and four perturbations, see ``MciConfig.reference_fraction``, 0.5 there): 10 -> mean ATE 2.60 -> 2.30 %,
+    within 2 % 30 -> 35 of 60, paired -0.30 +- 0.19 points (32 runs better, 28 worse), tracked at least 95.0 % (88.5);
+    short of the evidence for a default, keyframes."""
+    ba_fixed_keyframes: int = field(default=1, metadata={"min": 1, "max": 5, "step": 1, "unit": "keyframes"})
+    """Event-only local BA holds this many of the window's oldest keyframes fixed once the map has more keyframes than
+    the window (before that, only the first keyframe and ``ba_scale_anchor``); with two or more the fixed poses also
+    set the window's scale, and the range factor of ``ba_scale_anchor`` is not added. Event-inertial maps keep one.
+    Simulated landing, event-only, 3 s, seeds 0-23 (session 8 recordings; the default then measured mean ATE 3.01 %,
+    median 2.52, worst 5.88, 10 seeds within 2 %): 2 -> mean 2.85 %, median 2.44, worst 5.25, but 4 within 2 %
+    (12 seeds better, 12 worse); indoor seeds 0-3 8.76 -> 8.57 % at the same tracked time (49-54 %). With
+    ``local_window`` 8 (seeds 0-4, 8-15 only): 2.47 % against 3.19 % (CPU 31.9 against ~25 ms per MCI); 3 fixed of 8:
+    2.62 %. Single changes re-draw every seed's outcome by +-1-2 points here (dropping single observations over 2.5 px
+    instead of whole points: 2.62 %, 8 within 2 %), so none of these is a default, keyframes."""
+    ba_velocity_prior: float = field(default=0.0, metadata={"min": 0.0, "max": 2.0, "step": 0.05, "unit": "ratio"})
+    """Event-only local BA: sigma of a constant-velocity factor per three consecutive keyframes, as a share of their
+    speed (:mod:`evpose.slam.motion_prior`; 0 disables), ratio. Landing event-only seeds 0-23: 0.2 -> mean ATE 2.75 %
+    (median 2.52, worst 7.21, 4 within 2 %) against 3.01 % (2.52, 5.88, 10); the scale drift it targets fell on some
+    seeds (seed 9: 0.5 s pieces 258 -> 28 % apart, ATE 5.37 -> 1.77 %) and the outcome of others swung the other way.
+    Seeds 0-4, 8-15: 0.1 -> 2.96 %, 0.4 -> 3.03 %, 0.2 with ``ba_fixed_keyframes`` 2 -> 3.48 % (base 3.19). Off."""
+    ba_rotation_rate_prior_deg_s: float = field(default=0.0, metadata={"min": 0.0, "max": 200.0, "step": 1.0, "unit": "deg/s"})
+    """Event-only local BA: sigma of a constant-rotation-rate factor per three consecutive keyframes, the change of the
+    body-frame rate between the two keyframe steps (:func:`evpose.slam.motion_prior.add_rotation_rate_factors`; Huber
+    at two sigmas; 0 disables), degrees per second. Session 12, landing event-only seeds 0-11 (defaults: mean ATE
+    2.53 %, median 2.21, worst 5.59, 5 within 2 %; 60 runs with the four neutral perturbations of
+    ``MciConfig.reference_fraction``: 2.62 %, median 2.09, 27 of 60 within 2 %, RMS keyframe-to-keyframe rotation
+    error 1.82 deg): 40 -> defaults 2.27 % (median 1.73, 7 within 2 %; the corner collapse of seed 1, 4.63 -> 2.76 %,
+    gone), 60 runs 2.49 % (26 within 2 %), paired -0.12 +- 0.19 points (better in 34 of 60), rotation error 1.71 deg;
+    with ``ba_velocity_prior`` 0.2 as well: 2.46 % (30 of 60), paired -0.16 +- 0.21, rotation error 1.30 deg. Seeds
+    0-3 only: 20 / 40 / 60 -> 2.35 / 1.79 / 2.87 % (defaults 2.84). The per-step rotation error fell by up to a third
+    and the ATE did not follow: what drives the ATE is the map's scale drift (0.5 s pieces of one map need scales
+    10-30 % apart on most seeds, up to 2x after a collapse; ATE and that spread move together), not the per-step
+    jitter. The drift is a bias, not noise: the keyframe-to-keyframe rotation errors about the camera x axis sum to
+    +6.5 to +8.7 deg over the 30 keyframes of seeds 2, 5, 10 (0.2-0.3 deg per step, the axis coupled with the
+    dominant sideways translation over the near-planar ground; at 5 m depth that re-scales a 0.25 m keyframe step by
+    about 10 %), and the map's own depth scale per keyframe (rendered true depths, seed 3) stays within +-10 % while
+    the trajectory's 0.5 s scales drift 0.83-1.13 of their mean. New points are not its source: placing every new point
+    at its rendered true depth (scaled to the map) left the x sums at 7.3 / 8.9 / 9.1 deg (seeds 2, 3, 10; ATE 2.66 /
+    3.06 / 2.33 -> 2.45 / 2.01 / 2.42 %), though it removed seed 1's corner collapse (4.63 -> 1.52 %). Neither is the
+    estimator: a full BA of a run's final map started at the true keyframe poses (points re-triangulated from them)
+    ends at the same x sums, 6.75 / 9.88 / 8.29 deg (seeds 2, 10, 5; the runs' own 6.53 / 8.69 / 8.48), and 6.44 /
+    7.37 / 6.15 with only the points seen by three or more keyframes: the keyframe observations themselves carry the
+    bias, so priors and windows of the BA cannot remove it. Session 14 revises that (oracles replacing every live track
+    after KLT, ``/tmp/s14/eobias/oracle2.py``; each track's world point ray-cast from its first position; seeds 0-11,
+    defaults 2.52 %, x sums median 8.6 deg): true projections 0.52 % (12 of 12 within 2 %, x median 0.4 deg); true
+    projections plus each MCI's affine fit of the real track errors (what a wrong MCI time, warp or intrinsics moves)
+    0.69 % (12, 0.5 deg); the real errors minus that fit 2.90 % (4, 4.7 deg): per-track errors drive the drift, not the
+    MCIs. Zero-mean white noise on the true projections reproduces it: 1 px per MCI and axis 2.02 % (7; five runs turned
+    20-47 deg about x), 0.5 px 0.99 % (11), a 0.3 px-per-MCI random walk 1.48 % (10). Unbiased observations thus leave
+    the estimate biased along the rotation-translation valley, its sign set by the flight: in the turn into the second
+    leg (1.5-2.5 s, sideways along -y) the keyframe translation tilts toward the optical axis, may flip (seed 3, 1 px:
+    123 deg off at 2.49 s), its length falls from 0.19 to 0.04-0.09 map units per true metre and the x rotation takes
+    2-6 deg per keyframe. Snapping to the truth only observations off by more than 1.5 px: 1.14 % (11); only tracks born
+    within 4 px of a depth step: 1.48 % (9). Under the 1 px oracle, ``ba_iterations`` 0 gave 7.6-10.8 % (seeds 0-2,
+    43-63 deg about y), 30 iterations 9.5 / 33.8 deg (seeds 0, 1; 10: -0.2 / 3.9), no parallax gates 20-40 deg (seeds
+    0-3), ``min_triangulation_deg`` 2 1.54 % (seeds 0-5; 2.09). On real tracks: ``min_triangulation_deg`` 2 3.23 % (2 of
+    12), ``min_pair_parallax_deg`` 3 2.83 % (5), ``ba_velocity_prior`` 0.2 2.72 % (6), that pair gate at 1 deg for
+    keyframes seeing fewer than 40 map points 2.45 % (5; 6 seeds better, 6 worse), the PnP pose re-solved with each
+    point's sigma grown by the projection error its depth uncertainty allows (its keyframes' parallax against the
+    current view) at gain 1 / 2: 2.77 / 2.57 % (5 each); all removed. The lever left is track precision. This
+    factor's constant-rate prediction as a 0.5 deg prior of every MCI's pose (PnP refined like the gyro prior) was worse: 54
+    runs +0.24 +- 0.22 points (21 of 54 within 2 %); with the BA factor at 40: defaults 2.75 %. Both factors with
+    ``min_observations`` 3 and ``keyframe_displacement_px`` 14: 25 runs -0.09 +- 0.26 (rotation error 0.99 deg).
+    Starting each MCI's pose estimate at the last pose's rotation (translation still extrapolated), in case the
+    extrapolated rotation rate carried the bias from step to step along the weakly observed direction: seeds 1, 2, 3,
+    10 4.63 / 2.66 / 3.06 / 2.33 -> 2.07 / 1.62 / 1.47 / 2.91 %, but over the 60 runs +0.05 +- 0.15 points (29 of 60
+    within 2 %). Off, degrees per second."""
+    coast_s: float = field(default=0.4, metadata={"min": 0.0, "max": 2.0, "step": 0.01, "unit": "s"})
+    """Event-only: longest stretch a map coasts through visual failures, its pose predicted by its own recent rotation
+    rate and camera-frame velocity (:mod:`evpose.slam.event_coasting`), before it is given up (0: lost at once),
+    seconds. Event-inertial maps use ``InertialConfig.coast_s``. Session 10 (``MciConfig.reference_fraction`` 1.0),
+    indoor room, seeds 0-3 (0: ATE 8.57 %, tracked 52.4 %): 0.1 -> 12.14 % / 68.5 %, 0.2 -> 11.97 / 70.3, 0.4 -> 10.21 /
+    77.6; 0.4 with ``max_rotation_disagreement_deg`` 2 -> 9.29 / 73.1; seeds 0-7 (0: 10.75 % / 51.0 %): 0.4 -> 10.90 /
+    76.7, with that gate 9.19 / 74.2; landing seeds 0-7 2.41 -> 3.15 % (0.4), 5.59 % (the pair: the gate refuses the
+    landing's wider baselines). Searching the map's points 6 / 12 px around the coasted pose's projection before pose
+    estimation: 13.56 / 68.6 and 13.31 / 79.8 (with the gate; not kept). Session 12, with ``reference_fraction`` 0.5
+    (``/tmp/s12/slamin/exp.py``: ``run_slam`` + ``atlas_metrics`` as ``landing_seed_spread``), 0 -> 0.4, the default
+    since: indoor seeds 0-3 mean ATE 10.94 -> 6.84 % (7.46 / 12.19 / 14.63 / 9.48 -> 6.16 / 6.16 / 8.62 / 6.41), tracked
+    52.1 -> 80.2 % (min 50.4 -> 77.6), 11-15 -> 3-5 maps; seeds 4-7 10.28 -> 10.80 % (9.51 / 15.13 / 9.90 / 6.59 ->
+    10.88 / 9.65 / 7.52 / 15.16), tracked 53.0 -> 82.5 % (min 49.6 -> 73.5); landing seeds 0-11 mean 2.53 -> 2.53 % (only
+    seed 4 2.36 -> 3.34 and seed 7 5.59 -> 4.54 % changed, 5 of 12 within 2 % either way), tracked at least 88.5 ->
+    96.5 %; per-MCI main-thread CPU (indoor seed 0, the two alternated twice in one process) 21.4 -> 21.0 ms median;
+    event-inertial runs unchanged. Indoor seeds 0-3: 0.3 -> 9.27 % / 75.0 %, 0.5 -> 7.88 / 82.8, 0.6 -> 10.19 / 93.1; with 0.4, ``min_inliers``
+    16 -> 6.51 / 70.4, ``coast_span_s`` 0.06 -> 8.20 / 77.1, ``max_rotation_disagreement_deg`` 2 -> 7.04 / 66.9,
+    ``refit_disagreement_deg`` 5 -> 6.54 / 77.4 (min 66.7), ``FeatureConfig.min_support_ratio`` 2 -> 10.32 / 74.4.
+    Re-joining the lost map with the next two-view map (the event-inertial :mod:`evpose.slam.map_rejoin`, rotation
+    from the lost map's rate) within 0.3 s: 14.64 / 84.6 (not kept). Indoors the coasted poses are no worse than the
+    visual ones: in seed 0's map across the single-edge stretch (0.84-1.57 s, 93 coasted MCIs) they are 0.052 m RMS
+    off after alignment, the 20 visually tracked ones 0.113 m. More landing seeds (12-18, 20-23; 19 not simulated):
+    coasting changed seeds 12 (2.71 -> 1.69 %, one map), 17 (5.90 -> 9.53 %), 20 (2.37 -> 4.83 %) and 21 (6.07 ->
+    6.72 %): over the 23 seeds mean 2.83 -> 3.08 %, 7 -> 8 within 2 %. A landing map coasted across a spiral corner
+    continues as one map whose two parts one similarity no longer aligns (seed 20: the error grows from 0.04 to 1.16 m
+    after the coast), where losing it gave two maps aligned each on its own. Starting a coast only on a map starved of
+    tracked points (fewer than ``min_inliers``), not on a PnP failure (a running coast going on through either):
+    landing changes only seeds 7 and 17 (5.59 -> 4.54, 5.90 -> 9.53 %), indoor seeds 0-3 8.16 % / 69.9 %, 4-7
+    11.48 / 78.6 (not kept). A prior on each tracked MCI's rotation towards the held rate's prediction (sigma 0.3 /
+    1 deg, refined as the gyro prior is): indoor seeds 0-3 10.45 / 80.1 and 13.22 / 83.3 (not kept). Coasting without
+    keyframes at the coasted poses (no points triangulated from predicted poses): indoor seeds 0-3 7.27 / 68.6 (15 maps
+    on seed 3), landing seeds 4 / 7 / 12 / 17 / 20 / 21 3.34 / 5.55 / 3.88 / 7.57 / 2.36 / 6.72 % (with keyframes 3.34 /
+    4.54 / 1.69 / 9.53 / 4.83 / 6.72; without coasting 2.36 / 5.59 / 2.71 / 5.90 / 2.37 / 6.07; not kept). What the
+    indoor ATE left is made of: the visually tracked maps' rotation drifts (camera turn from a map's first pose, against
+    the truth's) 13-15 deg within about a second even on the best-tracked map (seed 0's last map: 12.8 deg over 0.91 s
+    without coasting, 15.4 deg over 1.02 s with; seeds 4 / 7: 15.2 / 17.7 deg), against 4.8 deg over 2.9 s on landing
+    seed 0: sideways motion past walls trades yaw for translation."""
+    coast_blank_s: float = field(default=0.3, metadata={"min": 0.0, "max": 2.0, "step": 0.01, "unit": "s"})
+    """Event-only coasting: up to this much of the time whose events the window selection dropped for a low event rate
+    (``EventWindowConfig.min_event_rate``: a blank wall, no MCI) does not use up ``coast_s`` (0: it does), seconds.
+    Why and what it measured: :mod:`evpose.slam.event_coasting`."""
+    coast_after_blank_s: float = field(default=0.0, metadata={"min": 0.0, "max": 2.0, "step": 0.01, "unit": "s"})
+    """Event-only coasting: a coast that ``coast_blank_s`` (> 0) carried across a blank wall ends this long after the
+    first MCI past it unless an MCI is tracked visually (0: at the next failure; 2: as any coast), seconds."""
+    coast_drop_unconfirmed: bool = False
+    """Event-only coasting: when a coast ends in a loss, the coasted poses are removed from the map's trajectory (no MCI
+    confirmed them); off keeps them. Indoor seeds 0-3, ``coast_s`` 0.4: on -> ATE 9.02 %, tracked 49.1 % (off: 10.21 %,
+    77.6 %): most coasts there end in a loss. Session 12 (``reference_fraction`` 0.5): indoor seeds 0-3 6.84 -> 9.38 %,
+    80.2 -> 52.4 %; landing seeds 4 / 7 / 20 / 21 3.34 / 4.54 / 4.83 / 6.72 -> 2.16 / 4.54 / 4.83 / 7.19 % (tracked
+    96.5 -> 83.8 % on seed 4)."""
+    coast_span_s: float = field(default=0.03, metadata={"min": 0.005, "max": 0.5, "step": 0.005, "unit": "s"})
+    """Event-only coasting: the rotation rate and velocity held are means over the newest poses spanning this long, s."""
+    coast_young_span_s: float = field(default=0.005, metadata={"min": 0.0, "max": 0.5, "step": 0.005, "unit": "s"})
+    """Event-only coasting: a map whose whole trajectory spans less than ``coast_span_s`` (a two-view map a few MCIs
+    old) coasts on that whole trajectory's motion if it spans at least this (0: it is lost at its first visual
+    failure), seconds. Measured with ``coast_blank_s`` in :mod:`evpose.slam.event_coasting`."""
+    ba_iterations: int = field(default=10, metadata={"min": 0, "max": 100, "step": 1, "unit": "iterations"})
+    """Levenberg-Marquardt iterations of local BA (0 disables it), iterations."""
+    ba_huber_px: float = field(default=2.0, metadata={"min": 0.1, "max": 10.0, "step": 0.1, "unit": "px"})
+    """Huber threshold of the reprojection factors, pixels. Session 14, landing event-only seeds 0-11 (defaults 2.52 %,
+    5 within 2 %): 1.0 -> 2.51 % (5; seeds 1, 3, 4, 10 better, seed 7 7.16 % in two maps, 8 3.70 %)."""
+    ba_scale_anchor: float = field(default=0.02, metadata={"min": 0.0, "max": 0.5, "step": 0.005, "unit": "ratio"})
+    """Event-only local BA holds the distance between the window's two oldest keyframes at its value before the
+    optimisation, with this sigma as a share of that distance (0 disables), ratio. With one fixed keyframe the monocular
+    scale is a gauge freedom of the BA, and the solver slid along it: on the simulated landing seed 9 the median depth
+    of the map points fell from 0.60 to 0.05 map units within four keyframes (altitude: 6.4 to 6.1 m), and such
+    collapses ended in 16-20 % ATE and a lost map. Over seeds 0-23 (event-only, 3 s) 0.02 lowered the scale-aligned ATE
+    from a mean of 5.0 % (median 3.0, worst 20.6) to 3.2 % (median 2.7, worst 9.3), better on 14 seeds and worse on 9;
+    0.01 gave 3.5 % (median 3.1), 0.05 3.6 % (median 3.0); fixing the second keyframe outright 3.7 % on seeds 0-15.
+    The subset 0-7 alone got slightly worse (mean 3.7 -> 3.8 %, median 2.7 -> 3.1, but no run split into two maps), and
+    indoor seeds 0-3 (maps of a few keyframes) went from 13.0 % to 14.1 % mean ATE at the same tracked time (45-54 %).
+    Not applied in event-inertial mode: on landing seeds 0-7 E-I-C2 it raised the mean ATE from 3.7 % to 5.9 %."""
