@@ -56,7 +56,8 @@ Session 14 (captured ``stpe+filter`` inputs, caches flushed before each call, al
 without the ``dist2`` map, the distance of a pixel's owner recomputed from its projection on each overlap (the same
 float32 values), 390-401 -> 403-417 us (slower). The reopening check of ``polarity.reopen_contradicted`` now runs in
 the selecting pass (:func:`_select_times_reopening`) instead of a second pass over the patch pixels with 2-D indexing,
-bit for bit the same.
+bit for bit the same: 233 us against 172 us for selecting alone (same captured inputs, caches flushed); a second pass
+that reads the other polarity only at the pixels of points still without events took 329 us.
 """
 
 from __future__ import annotations
