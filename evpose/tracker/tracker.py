@@ -290,16 +290,12 @@ class Tracker:
             visible = visible_over_walls(self._points, self._edge_normals, self._wall_feet, visible, predicted[:3, 3])
         # Painted points the refiner has not yet placed would pull the pose towards their map error.
         held = None if self.refiner is None or (self.polarity_selector is not None and not self._hold_filtered) else self.refiner.held_out()
-        candidates = visible
-        skip = None  # (N,) bool over the map: points whose patches T_align shows but registration skips
+        candidates, skip = visible, None  # skip: (N,) bool, points whose patches T_align shows but registration skips
         if held is not None:
             ready = ~held[visible]
             if 2 * int(np.count_nonzero(ready)) >= visible.size:  # else the painted points are the map: keep them
-                if self.polarity_selector is None:
-                    candidates = visible[ready]
-                else:
-                    # T_align shows the used points' patches alone: a point left out would never be refined.
-                    skip = held
+                # T_align shows the composed points' patches alone: a point left out of them would never be refined.
+                candidates, skip = (visible[ready], None) if self.polarity_selector is None else (visible, held)
         used = strided_subset(candidates, int(self.config.registration.max_points))
         vm = self.config.visible_map
         used_tangents = None  # the rows of ``used`` of ``_tangents`` once gathered
