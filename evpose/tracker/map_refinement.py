@@ -112,7 +112,9 @@ class MapRefinementConfig:
     11.76 / 14.12 mm. Textured landing (seed 0, 346x260, 7 % of its map painted against 1 % on the plain one):
     ``stpe+filter`` 22.66 -> 24.60 mm (``stpe`` 27.36, ``full`` 7.43: the ordering holds). The runs without the
     polarity filter's event filter (``polarity.event_filter`` off: per-point fields) are no reference here: the
-    refiner and the edge offsets never run on them (18.80 / 23.01 mm)."""
+    refiner and the edge offsets never run on them (18.80 / 23.01 mm). The same hold-out in ``full`` (not kept, no
+    switch): seeds 0-3 / 4-7 6.15 / 6.12 mm against 6.38 / 5.91 at 346x260, 7.15 / 8.94 against 7.25 / 8.49 mm at
+    240x180."""
     max_offset_m: float = field(default=0.05, metadata={"min": 0.0, "max": 0.5, "step": 0.005, "unit": "m"})
     """Largest distance a point may move from the map's position, metres (0.03: 26.2 / 33.6 mm, as 0.05)."""
     step_clip_px: float = field(default=0.25, metadata={"min": 0.01, "max": 5.0, "step": 0.05, "unit": "px"})
