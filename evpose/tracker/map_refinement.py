@@ -109,8 +109,9 @@ class MapRefinementConfig:
     ``stpe`` 12.03 / 14.20 mm, without its hold-out 12.89 / 15.11 mm; ``stpe+filter`` 13.67 / 15.03 mm, with it
     12.38 / 14.50 mm (composing ``stpe``'s registration set plus the held points' patches instead: 12.21 / 14.63), and
     with ``polarity.reopen_contradicted_unfused`` and ``edge_offsets.stpe_filter_field_lag_ms`` 6.0 (the defaults now)
-    11.76 / 14.12 mm. Textured landing (seed 0, 346x260, 7 % of its map painted against 1 % on the plain one):
-    ``stpe+filter`` 22.66 -> 24.60 mm (``stpe`` 27.36, ``full`` 7.43: the ordering holds). The runs without the
+    11.76 / 14.12 mm. Textured landing (346x260, 7 % of its map painted against 1 % on the plain one), seeds 0 / 1:
+    ``stpe+filter`` 22.66 / 23.06 -> 24.60 / - mm with the hold-out alone, 24.61 / 22.03 mm with the defaults
+    (``stpe`` 27.36 / 24.29, ``full`` 7.43 / 9.90: the ordering holds on both). The runs without the
     polarity filter's event filter (``polarity.event_filter`` off: per-point fields) are no reference here: the
     refiner and the edge offsets never run on them (18.80 / 23.01 mm). The same hold-out in ``full`` (not kept, no
     switch): seeds 0-3 / 4-7 6.15 / 6.12 mm against 6.38 / 5.91 at 346x260, 7.15 / 8.94 against 7.25 / 8.49 mm at
