@@ -111,7 +111,10 @@ class MapRefinementConfig:
     with ``polarity.reopen_contradicted_unfused`` and ``edge_offsets.stpe_filter_field_lag_ms`` 6.0 (the defaults now)
     11.76 / 14.12 mm. Textured landing (346x260, 7 % of its map painted against 1 % on the plain one), seeds 0 / 1:
     ``stpe+filter`` 22.66 / 23.06 -> 24.60 / - mm with the hold-out alone, 24.61 / 22.03 mm with the defaults
-    (``stpe`` 27.36 / 24.29, ``full`` 7.43 / 9.90: the ordering holds on both). The runs without the
+    (``stpe`` 27.36 / 24.29, ``full`` 7.43 / 9.90: the ordering holds on both). That puts ``stpe+filter`` level with
+    ``stpe`` on the plain landing, not clearly ahead: with the update rate moved to 190 / 210 Hz (``rate_hz``) ``stpe``
+    scores 11.75 / 11.66 and 14.20 / 13.95 mm, ``stpe+filter`` 11.77 / 11.82 and 14.34 / 14.22 mm (before: 13.58 /
+    15.07 mm at 190 Hz); the map explains nearly every event there (10-14 % removed). The runs without the
     polarity filter's event filter (``polarity.event_filter`` off: per-point fields) are no reference here: the
     refiner and the edge offsets never run on them (18.80 / 23.01 mm). The same hold-out in ``full`` (not kept, no
     switch): seeds 0-3 / 4-7 6.15 / 6.12 mm against 6.38 / 5.91 at 346x260, 7.15 / 8.94 against 7.25 / 8.49 mm at
