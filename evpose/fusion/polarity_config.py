@@ -112,8 +112,9 @@ class PolarityFilterConfig:
     Off: it saves the propagation's ~0.08 ms (CPU, seed 0, 346x260) in ``stpe+filter``'s front end, but scored 11.79
     / 14.21 mm against 11.76 / 14.12 mm (mean ATE of seeds 0-7 at 346x260 / 240x180, session 14; ``stpe`` 12.03 /
     14.20 mm), the same within the seeds' spread but above ``stpe`` at 240x180. For comparison, the motion taken from
-    ``stpe+filter``'s own constant-velocity filter (its twist; no IMU at all) gave 11.76 / 13.94 mm: the filter's
-    accuracy does not hinge on the IMU's motion."""
+    ``stpe+filter``'s own constant-velocity filter (its twist; no IMU at all) gave 11.76 / 13.94 mm, and at 190 / 210
+    Hz (``rate_hz``) 12.06 / 11.78 and 14.05 / 14.30 mm against 11.77 / 11.82 and 14.34 / 14.22 mm with the IMU's: the
+    filter's accuracy does not hinge on the IMU's motion."""
     empty_after_eta: float = field(default=3.0, metadata={"min": 0.5, "max": 12.0, "step": 0.5, "unit": "eta"})
     """A patch whose newest accepted event is older than this many time-surface constants counts as empty (TDF > 0.95 at 3), eta."""
     align_patch_radius_px: float = field(default=4.0, metadata={"min": 1.0, "max": 30.0, "step": 0.5, "unit": "px"})
