@@ -109,9 +109,10 @@ class MapRefinementConfig:
     ``stpe`` 12.03 / 14.20 mm, without its hold-out 12.89 / 15.11 mm; ``stpe+filter`` 13.67 / 15.03 mm, with it
     12.38 / 14.50 mm (composing ``stpe``'s registration set plus the held points' patches instead: 12.21 / 14.63), and
     with ``polarity.reopen_contradicted_unfused`` and ``edge_offsets.stpe_filter_field_lag_ms`` 6.0 (the defaults now)
-    11.76 / 14.12 mm. Textured landing (346x260, 7 % of its map painted against 1 % on the plain one), seeds 0 / 1:
-    ``stpe+filter`` 22.66 / 23.06 -> 24.60 / - mm with the hold-out alone, 24.61 / 22.03 mm with the defaults
-    (``stpe`` 27.36 / 24.29, ``full`` 7.43 / 9.90: the ordering holds on both). That puts ``stpe+filter`` level with
+    11.76 / 14.12 mm. Textured landing (346x260, 7 % of its map painted against 1 % on the plain one), seeds 0-3:
+    ``stpe+filter`` 22.66 / 23.06 / 22.68 / 26.04 (mean 23.61) -> 24.61 / 22.03 / 23.71 / 25.02 mm (mean 23.84) with
+    the defaults (seed 0 with the hold-out alone 24.60); ``stpe`` 27.36 / 24.29 / 28.32 / 31.05, ``full`` 7.43 / 9.90
+    / 9.42 / 9.74 mm: the ordering holds on every seed. That puts ``stpe+filter`` level with
     ``stpe`` on the plain landing, not clearly ahead: with the update rate moved to 190 / 210 Hz (``rate_hz``) ``stpe``
     scores 11.75 / 11.66 and 14.20 / 13.95 mm, ``stpe+filter`` 11.77 / 11.82 and 14.34 / 14.22 mm (before: 13.58 /
     15.07 mm at 190 Hz); the map explains nearly every event there (10-14 % removed). The runs without the
