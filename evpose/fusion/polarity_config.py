@@ -15,7 +15,13 @@ class PolarityFilterConfig:
     enabled: bool = True
     """Predict polarities (False: every point uses both, i.e. plain STPE)."""
     buffer_deg: float = field(default=20.0, metadata={"min": 0.0, "max": 89.0, "step": 0.5, "unit": "deg"})
-    """Base half-width of the buffer zone around 90 deg, degrees."""
+    """Base half-width of the buffer zone around 90 deg, degrees.
+
+    Session 14, ``stpe+filter`` with ``map_refinement.hold_out_filtered`` (no reopening, 5.5 ms lag at 240x180),
+    2 s landing from ground truth, mean ATE of seeds 0-7 at 346x260 / 240x180: 20 -> 12.38 / 14.50 mm, 30 -> 12.21 /
+    14.62 mm; every point both polarities (``min_image_speed_px_s`` 1e9) 11.60 / 14.57 mm (without the hold-out 12.71
+    / 15.56 against 13.67 / 15.03 mm). The polarity choice costs ~0.8 mm at 346x260 and nothing at 240x180;
+    ``reopen_contradicted_unfused`` (on) takes most of that back where the choice is contradicted."""
     flow_sigma_px_s: float = field(default=15.0, metadata={"min": 0.0, "max": 500.0, "step": 1.0, "unit": "px/s"})
     """Assumed uncertainty of the predicted image motion; widens the buffer by atan(sigma/speed), px/s."""
     max_buffer_deg: float = field(default=70.0, metadata={"min": 0.0, "max": 90.0, "step": 0.5, "unit": "deg"})
@@ -48,7 +54,10 @@ class PolarityFilterConfig:
     only 16 % (0.70 -> 0.59 ms median, paired, load 2.1) for 54 % fewer points, the filter's own time rose
     0.15 ms: the registration's per-iteration overhead, not its points, dominates. So off by default. Session 10
     (``stpe+filter``, seeds 0-3, 346x260 / 240x180): 14.90 / 20.58 mm against 14.78 / 21.70;
-    ``register_to_map`` CPU 1.54 against 1.67 ms median (see ``register_min_normal_speed_px_s``)."""
+    ``register_to_map`` CPU 1.54 against 1.67 ms median (see ``register_min_normal_speed_px_s``). Session 14 (with
+    ``map_refinement.hold_out_filtered`` and reopening, 5.5 ms lag at 240x180; seeds 0-7 at 346x260 / 240x180):
+    12.38 / 15.76 mm against 11.76 / 14.75 mm off; CPU per update (seed 0, 346x260, three alternated runs, load ~18)
+    registration 0.46 -> 0.40 ms, the filter's front end (field, prediction, ``T_align``, registration) 1.54 -> 1.50 ms."""
     reopen_contradicted: bool = False
     """``T_align`` accepts both polarities in the patch of a single-polarity point that shows no event of its predicted
     polarity younger than ``empty_after_eta`` but does of the other: the events contradict the prediction (a wrong
@@ -75,7 +84,7 @@ class PolarityFilterConfig:
     29-38, median / p95) ``stpe`` 1.80 / 2.92 ms, ``stpe+filter`` 1.67 / 2.47, with 40 px/s (756 of 898 points)
     1.65 / 2.47, ``drop_empty_points`` (421 of 898) 1.54 / 2.32, ``registration.max_points`` 500 (471 points) 1.42 /
     2.20 ms: the per-call cost, not the points, dominates, so no choice of points reaches the paper's 40 % cut."""
-    reopen_contradicted_unfused: bool = False
+    reopen_contradicted_unfused: bool = True
     """As ``reopen_contradicted``, but only where the pose is not fused with the IMU (``stpe+filter``: ``full`` is left
     as it is, where reopening costs, see there).
 
@@ -85,9 +94,27 @@ class PolarityFilterConfig:
     shown both polarities in its patch (``buffer_deg`` 89) it scores 13.79 / 20.42 mm, as with this switch, so the
     polarity choice costs ~1 mm through the contradicted points and the rest is the patches' and the painted points'
     share (``map_refinement.register_after_updates`` holds painted points out only in ``stpe``); larger patches
-    (10 px, all both) did not help (13.55 / 12.95 against 12.79 / 12.74 mm on seeds 0 / 1 at 346x260). Off by default:
+    (10 px, all both) did not help (13.55 / 12.95 against 12.79 / 12.74 mm on seeds 0 / 1 at 346x260). Left off then:
     on the textured landing (seed 0, 346x260; ``stpe`` 27.36, ``full`` 10.08 mm, 64 % of the events removed) it
-    costs ``stpe+filter`` 22.66 -> 23.71 mm, where the filter's point is to hide the texture's events."""
+    costs ``stpe+filter`` 22.66 -> 23.71 mm, where the filter's point is to hide the texture's events.
+
+    On since session 14, with ``map_refinement.hold_out_filtered`` (mean ATE of seeds 0-7 at 346x260 / 240x180):
+    12.38 / 14.17 -> 11.76 / 14.12 mm with ``edge_offsets.stpe_filter_field_lag_ms`` 6.0 (with 5.5: 14.50 -> 14.75 mm
+    at 240x180); textured landing 24.60 -> 24.61 mm. Its check of the other polarity now runs in the selecting pass
+    (:func:`~evpose.fusion.aligned_surface._select_times_reopening`), not in a pass of its own."""
+    unfused_latest_motion: bool = False
+    """In ``stpe+filter`` (where the fusion runs beside the registration, not as its prediction) take the motion the
+    prediction needs from the gyro at the update time less the latest fused gyro bias and the latest fused velocity
+    (one update old), instead of propagating the fused state with the IMU to the update time: that propagation then
+    runs once, in the fusion's update after the pose is out, not in the front end (``full`` predicts its pose by that
+    propagation anyway and reuses it).
+
+    Off: it saves the propagation's ~0.08 ms (CPU, seed 0, 346x260) in ``stpe+filter``'s front end, but scored 11.79
+    / 14.21 mm against 11.76 / 14.12 mm (mean ATE of seeds 0-7 at 346x260 / 240x180, session 14; ``stpe`` 12.03 /
+    14.20 mm), the same within the seeds' spread but above ``stpe`` at 240x180. For comparison, the motion taken from
+    ``stpe+filter``'s own constant-velocity filter (its twist; no IMU at all) gave 11.76 / 13.94 mm, and at 190 / 210
+    Hz (``rate_hz``) 12.06 / 11.78 and 14.05 / 14.30 mm against 11.77 / 11.82 and 14.34 / 14.22 mm with the IMU's: the
+    filter's accuracy does not hinge on the IMU's motion."""
     empty_after_eta: float = field(default=3.0, metadata={"min": 0.5, "max": 12.0, "step": 0.5, "unit": "eta"})
     """A patch whose newest accepted event is older than this many time-surface constants counts as empty (TDF > 0.95 at 3), eta."""
     align_patch_radius_px: float = field(default=4.0, metadata={"min": 1.0, "max": 30.0, "step": 0.5, "unit": "px"})

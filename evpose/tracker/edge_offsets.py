@@ -55,12 +55,13 @@ class EdgeOffsetConfig:
     2 s landing from ground truth, built map, mean ATE seeds 0-3 / 4-7. 240x180 (on, with
     ``stpe_filter_field_lag_ms`` 5.5): 18.71 / 17.37 -> 15.85 / 14.20 mm. 346x260 (off: ``min_pixel_mrad``): with
     registration's 4.5 ms lag 14.78 / 12.56 -> 13.58 / 12.55 mm, with 5.0 ms 13.84 / 12.45 mm: too little on 4-7."""
-    stpe_filter_field_lag_ms: float = field(default=5.5, metadata={"min": 0.0, "max": 50.0, "step": 0.1, "unit": "ms"})
+    stpe_filter_field_lag_ms: float = field(default=6.0, metadata={"min": 0.0, "max": 50.0, "step": 0.1, "unit": "ms"})
     """``registration.field_lag_ms`` in ``stpe+filter`` while the offsets are learned (0 = keep that), milliseconds.
 
     240x180 seeds 0-3: 4.5 / 5.0 / 5.5 / 6.0 ms gave 16.62 / 16.34 / 15.85 / 16.19 mm (seeds 4-7: 5.0 14.86, 5.5
     14.20 mm); 5.5 without the learner 18.83 mm. ``gain`` 0.3 / 0.7 at 5.5: 16.37 / 16.01, ``step_clip_px`` 0.8:
-    16.45 mm."""
+    16.45 mm. Session 14, with ``map_refinement.hold_out_filtered`` (seeds 0-7): 5.5 / 6.0 ms 14.50 / 14.17 mm, with
+    ``polarity.reopen_contradicted_unfused`` too 14.75 / 14.12 mm: 6.0, the lag ``stpe`` learns with (``field_lag_ms``)."""
     full: bool = True
     """Also in ``full``, from ``T_align``'s field and where registration samples it (its lag floor and polarity
     trail, :func:`evpose.tracker.registration_kernels._floor_shift`; sampled at the projection instead: 240x180

@@ -19,7 +19,10 @@ False`` keeps the older per-point ON/OFF/combined fields over the whole box.
 In ``stpe+filter`` a fusion backend still runs beside the registration, because
 the polarity prediction needs the bias-corrected angular rate and the velocity;
 its output is simply not the answer. ``fusion.backend`` picks the factor graph,
-the EKF baseline or IMU-only dead reckoning.
+the EKF baseline or IMU-only dead reckoning. Like ``stpe``, it holds painted
+points out of registration until the map refiner has placed them
+(``map_refinement.hold_out_filtered``; their patches stay in ``T_align``), and
+it reopens contradicted predictions (``polarity.reopen_contradicted_unfused``).
 """
 
 from __future__ import annotations
@@ -68,5 +71,7 @@ def build_motion_components(
     if config.polarity.enabled:
         selector = MapPolaritySelector(PolarityPredictor(config.polarity), contour_map, calibration.K, motion.fusion, calibration)
         selector.fused_pose = mode is TrackerMode.FULL
+        if mode is TrackerMode.STPE_FILTER and config.polarity.unfused_latest_motion:
+            selector.latest_state = motion
     ego = EgoMotionFilter(config.ego_motion) if (mode is TrackerMode.FULL and config.ego_motion.enabled) else None
     return MotionComponents(motion, selector, ego, drives_pose=mode is TrackerMode.FULL)

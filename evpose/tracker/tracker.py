@@ -125,6 +125,8 @@ class Tracker:
                            if (vm.fused_wall_occlusion if self.components.drives_pose else vm.wall_occlusion) else None)
         """Map points at the foot of a wall (:mod:`evpose.tracker.wall_occlusion`), None when off for this mode."""
         self._edge_normals = np.ascontiguousarray(contour_map.edge_normal, dtype=np.float64)
+        self._hold_filtered = not self.components.drives_pose and mr.hold_out_filtered
+        """``stpe+filter`` holds unrefined painted points out of registration too (``map_refinement.hold_out_filtered``)."""
         self.hold = TrackHold(not self.components.drives_pose or self._registration is rc, rc.regain_updates)
         """The fused modes' looser inlier test applies only once the map is acquired (``ACQUIRE_UPDATES`` strict
         registrations in a row); ``stpe`` regains a lost track only after ``regain_updates`` of them."""
@@ -286,14 +288,14 @@ class Tracker:
         if self._wall_feet is not None and visible.size:
             # Feet seen over their wall read the rim's events (see evpose.tracker.wall_occlusion).
             visible = visible_over_walls(self._points, self._edge_normals, self._wall_feet, visible, predicted[:3, 3])
-        # Painted points the refiner has not yet placed would pull the pose towards their map error. Only where
-        # the field shows every event: T_align (polarity filter) shows the used points' patches alone.
-        held = None if self.refiner is None or self.polarity_selector is not None else self.refiner.held_out()
-        candidates = visible
+        # Painted points the refiner has not yet placed would pull the pose towards their map error.
+        held = None if self.refiner is None or (self.polarity_selector is not None and not self._hold_filtered) else self.refiner.held_out()
+        candidates, skip = visible, None  # skip: (N,) bool, points whose patches T_align shows but registration skips
         if held is not None:
             ready = ~held[visible]
             if 2 * int(np.count_nonzero(ready)) >= visible.size:  # else the painted points are the map: keep them
-                candidates = visible[ready]
+                # T_align shows the composed points' patches alone: a point left out of them would never be refined.
+                candidates, skip = (visible[ready], None) if self.polarity_selector is None else (visible, held)
         used = strided_subset(candidates, int(self.config.registration.max_points))
         vm = self.config.visible_map
         used_tangents = None  # the rows of ``used`` of ``_tangents`` once gathered
@@ -315,6 +317,7 @@ class Tracker:
             timings["polarity_predict"] = _ms(t0)
         # --- polarity event filter (issue 7, evpose/fusion/aligned_surface.py): registration reads T_align, one field.
         surface, field_polarity = self.time_surface, polarity
+        composed = used, polarity  # what T_align is composed for: labelling and sign learning take them all
         if polarity is not None and hasattr(self.polarity_selector, "align"):
             t1 = time.perf_counter()
             box = self._field_box(pts, predicted, True) if self.coarse_field is not None else roi
@@ -323,8 +326,12 @@ class Tracker:
                 surface, field_polarity = aligned, None
                 counts.update(aligned.last_counts)
                 with_events = self.polarity_selector.points_to_register()
+                if skip is not None:
+                    ready = ~np.take(skip, used)
+                    with_events = ready if with_events is None else with_events & ready
                 if with_events is not None:
-                    # Points whose patch shows no recent event of their polarity cannot pull the pose: skip them.
+                    # Points whose patch shows no recent event of their polarity cannot pull the pose, and held-out
+                    # painted points must not yet: skip them.
                     used, pts, polarity = used[with_events], pts[with_events], polarity[with_events]
                     used_tangents = None
                 counts["points_registered"] = int(used.size)
@@ -457,7 +464,7 @@ class Tracker:
         if self.polarity_selector is not None and hasattr(self.polarity_selector, "observe") and polarity is not None:
             # Label this step's events against the prediction (reports, viewer) and learn point signs from them.
             t0 = time.perf_counter()
-            labels = self.polarity_selector.observe(events, self._pose, used, polarity, self.width, self.height, keep=keep)
+            labels = self.polarity_selector.observe(events, self._pose, *composed, self.width, self.height, keep=keep)
             counts.setdefault("events_polarity_removed", int(np.count_nonzero(labels == 0)))  # T_align's count if it ran
             counts["points_single_polarity"] = int(np.count_nonzero(polarity))
             timings["polarity_observe"] = _ms(t0)

@@ -239,3 +239,48 @@ def test_full_mode_samples_buffer_zone_points_further_behind_than_the_lag_model(
     # Both terms off: no per-point trail at all; the polarity-filter mode without fusion never gets one.
     assert all(t is None for t in _recorded_trails(rec, cmap, TrackerMode.FULL, buffer_px=0.0, split_px=0.0, steps=3)[0])
     assert all(t is None for t in _recorded_trails(rec, cmap, TrackerMode.STPE_FILTER, buffer_px=0.1, steps=3)[0])
+
+
+def test_stpe_filter_composes_held_out_painted_points_into_t_align_but_does_not_register_them(landing):
+    rec, cmap = landing
+    n = len(cmap)
+    # A quarter of the points painted (a brightness sign, a flat surface, an edge normal): held out until refined.
+    painted = ContourMap.from_points(cmap.points, edge_normal=np.tile([1.0, 0.0, 0.0], (n, 1)),
+                                     brightness_sign=np.where(np.arange(n) % 4 == 0, 1, 0))
+
+    def first_steps(hold):
+        cfg = TrackerConfig(mode=TrackerMode.STPE_FILTER)
+        cfg.map_refinement.hold_out_filtered = hold
+        s = TrackingSession(rec, painted, cfg)
+        return [s.step() for _ in range(5)]
+
+    held, kept = first_steps(True), first_steps(False)
+    for h, k in zip(held, kept):
+        assert h.counts["points_used"] == k.counts["points_used"]  # the same points' patches make up T_align
+        assert k.counts["points_registered"] == k.counts["points_used"]
+        assert h.counts["points_registered"] < h.counts["points_used"]
+    # Held points are still refined from their patches (T_align shows them), so they come back once placed.
+    assert sum(r.counts.get("points_refined", 0) for r in held) > 0
+
+
+def test_unfused_latest_motion_takes_the_gyro_and_the_latest_fused_velocity_without_propagating(landing):
+    rec, cmap = landing
+    cfg = TrackerConfig(mode=TrackerMode.STPE_FILTER)
+    cfg.polarity.unfused_latest_motion = True
+    s = TrackingSession(rec, cmap, cfg)
+    for _ in range(3):
+        r = s.step()
+    sel, motion = s.tracker.polarity_selector, s.tracker.components.motion
+    assert sel.latest_state is motion
+    cfg.mode = TrackerMode.FULL  # full predicts its pose by that propagation: the option leaves it alone
+    assert TrackingSession(rec, cmap, cfg).tracker.polarity_selector.latest_state is None
+    t = r.t_us + 5_000
+    omega, v = sel._motion(t)
+    _, gyro = motion.fusion.buffer.measurement_at(t)
+    assert np.array_equal(omega, motion.fusion.extrinsic.cam_omega(gyro - motion.last.gyro_bias))
+    assert np.array_equal(v, motion.last.velocity_world)
+    predicted = motion.fusion.predict(t)  # what the option replaces: the same rate, the velocity propagated 5 ms on
+    assert np.allclose(omega, predicted.omega_cam) and np.allclose(v, predicted.velocity_world, atol=0.05)
+    sel.latest_state = None
+    omega_p, v_p = sel._motion(t)
+    assert np.array_equal(omega_p, predicted.omega_cam) and np.array_equal(v_p, predicted.velocity_world)
