@@ -137,6 +137,15 @@ class FeatureConfig:
     klt_max_bidir_error_px: float = field(default=1.0, metadata={"min": 0.1, "max": 5.0, "step": 0.1, "unit": "px"})
     """Tracks whose forward-backward KLT error exceeds this are dropped, pixels. Landing event-only seeds 0-11, 60 runs
     (see ``MciConfig.reference_fraction``; 1.0 there): 0.5 -> mean ATE 3.34 -> 3.38 %, within 2 % 9 -> 3 of 60."""
+    max_track_age_mcis: int = field(default=0, metadata={"min": 0, "max": 100, "step": 1, "unit": "MCIs"})
+    """Tracks carried through more than this many MCI-to-MCI KLT steps are dropped (0: no limit), MCIs; a dropped
+    track's map point is re-found by projection from its keyframe's image (``ProjectionSearchConfig``)."""
+    klt_first_step_max_residual_px: float = field(default=0.0, metadata={"min": 0.0, "max": 10.0, "step": 0.1, "unit": "px"})
+    """A new track whose first MCI-to-MCI step lies farther than this from a RANSAC homography of the older tracks'
+    steps is dropped (0: no test), pixels."""
+    klt_anchor_shift_px: float = field(default=0.0, metadata={"min": 0.0, "max": 10.0, "step": 0.1, "unit": "px"})
+    """Each MCI-to-MCI track is re-tracked from its first MCI (single-level KLT from the chained position) and moved
+    there when that converges within this distance (0: off), pixels: the chain's per-step errors do not add up."""
     klt_min_ncc: float = field(default=0.0, metadata={"min": 0.0, "max": 1.0, "step": 0.05, "unit": "ratio"})
     """MCI-to-MCI tracks whose 11x11 patches (previous vs current MCI) correlate below this are dropped (0: no test).
     KLT started at the gyro-predicted flow passes its forward-backward test on blob-like event images even where
