@@ -143,6 +143,11 @@ class FeatureConfig:
     klt_first_step_max_residual_px: float = field(default=0.0, metadata={"min": 0.0, "max": 10.0, "step": 0.1, "unit": "px"})
     """A new track whose first MCI-to-MCI step lies farther than this from a RANSAC homography of the older tracks'
     steps is dropped (0: no test), pixels."""
+    klt_first_step_neighbours: int = field(default=0, metadata={"min": 0, "max": 50, "step": 1, "unit": "tracks"})
+    """``klt_first_step_max_residual_px`` compares a step with the median step of this many nearest older tracks
+    instead of a homography (0: the homography), tracks."""
+    klt_gated_steps: int = field(default=1, metadata={"min": 1, "max": 100, "step": 1, "unit": "MCIs"})
+    """How many of a track's first MCI-to-MCI steps ``klt_first_step_max_residual_px`` judges, MCIs."""
     klt_anchor_shift_px: float = field(default=0.0, metadata={"min": 0.0, "max": 10.0, "step": 0.1, "unit": "px"})
     """Each MCI-to-MCI track is re-tracked from its first MCI (single-level KLT from the chained position) and moved
     there when that converges within this distance (0: off), pixels: the chain's per-step errors do not add up."""

@@ -120,7 +120,7 @@ def track_features(prev8: np.ndarray, cur8: np.ndarray, pts: np.ndarray, cfg: Fe
 
 
 def step_consistent(p0: np.ndarray, p1: np.ndarray, ok: np.ndarray, judge: np.ndarray, max_residual_px: float,
-                    min_tracks: int = 12) -> np.ndarray:
+                    min_tracks: int = 12, neighbours: int = 0) -> np.ndarray:
     """False for the ``judge`` steps ``p0`` -> ``p1`` farther than ``max_residual_px`` from a RANSAC homography of the
     other ``ok`` steps (of all ``ok`` steps when fewer than ``min_tracks`` are left); True elsewhere.
 
@@ -133,6 +133,16 @@ def step_consistent(p0: np.ndarray, p1: np.ndarray, ok: np.ndarray, judge: np.nd
         fit = np.flatnonzero(ok)
     idx = np.flatnonzero(ok & judge)
     if len(fit) < min_tracks or not len(idx):
+        return keep
+    if neighbours > 0:
+        # Median step of the nearest fitted tracks: a scene with depth makes no single homography.
+        from scipy.spatial import cKDTree
+        k = min(int(neighbours), len(fit))
+        _, nn = cKDTree(p0[fit]).query(p0[idx], k=k)
+        nn = np.asarray(nn).reshape(len(idx), k)
+        steps = (p1 - p0)[fit]
+        pred = p0[idx] + np.median(steps[nn], axis=1)
+        keep[idx] = np.linalg.norm(p1[idx] - pred, axis=1) <= max_residual_px
         return keep
     H, _ = cv2.findHomography(np.ascontiguousarray(p0[fit], np.float64), np.ascontiguousarray(p1[fit], np.float64), cv2.RANSAC,
                               float(max_residual_px))

@@ -195,8 +195,10 @@ class EventSlam(GyroAids, VisualFailureHandling):
                 if ok2.sum() > ok.sum():
                     mci, new, ok = alt, new2, ok2
             if self.cfg.features.klt_first_step_max_residual_px > 0:
-                first = np.array([t not in fe.born for t in fe.ids.tolist()], bool)
-                ok &= step_consistent(fe.uv, new, ok, first, self.cfg.features.klt_first_step_max_residual_px)
+                nxt, n_gated = fe.n_tracked + 1, self.cfg.features.klt_gated_steps
+                first = np.array([nxt - fe.born.get(t, nxt) < n_gated for t in fe.ids.tolist()], bool)
+                ok &= step_consistent(fe.uv, new, ok, first, self.cfg.features.klt_first_step_max_residual_px,
+                                      neighbours=self.cfg.features.klt_first_step_neighbours)
             if self.cfg.features.klt_anchor_shift_px > 0:
                 self._anchor(mci.image8, new, ok)
             fe.ids, fe.uv = fe.ids[ok], new[ok]
