@@ -120,7 +120,7 @@ def track_features(prev8: np.ndarray, cur8: np.ndarray, pts: np.ndarray, cfg: Fe
 
 
 def step_consistent(p0: np.ndarray, p1: np.ndarray, ok: np.ndarray, judge: np.ndarray, max_residual_px: float,
-                    min_tracks: int = 12, neighbours: int = 0) -> np.ndarray:
+                    min_tracks: int = 12) -> np.ndarray:
     """False for the ``judge`` steps ``p0`` -> ``p1`` farther than ``max_residual_px`` from a RANSAC homography of the
     other ``ok`` steps (of all ``ok`` steps when fewer than ``min_tracks`` are left); True elsewhere.
 
@@ -134,16 +134,6 @@ def step_consistent(p0: np.ndarray, p1: np.ndarray, ok: np.ndarray, judge: np.nd
     idx = np.flatnonzero(ok & judge)
     if len(fit) < min_tracks or not len(idx):
         return keep
-    if neighbours > 0:
-        # Median step of the nearest fitted tracks: a scene with depth makes no single homography.
-        from scipy.spatial import cKDTree
-        k = min(int(neighbours), len(fit))
-        _, nn = cKDTree(p0[fit]).query(p0[idx], k=k)
-        nn = np.asarray(nn).reshape(len(idx), k)
-        steps = (p1 - p0)[fit]
-        pred = p0[idx] + np.median(steps[nn], axis=1)
-        keep[idx] = np.linalg.norm(p1[idx] - pred, axis=1) <= max_residual_px
-        return keep
     H, _ = cv2.findHomography(np.ascontiguousarray(p0[fit], np.float64), np.ascontiguousarray(p1[fit], np.float64), cv2.RANSAC,
                               float(max_residual_px))
     if H is None:
@@ -151,26 +141,6 @@ def step_consistent(p0: np.ndarray, p1: np.ndarray, ok: np.ndarray, judge: np.nd
     pred = cv2.perspectiveTransform(np.ascontiguousarray(p0[idx], np.float64).reshape(-1, 1, 2), H).reshape(-1, 2)
     keep[idx] = np.linalg.norm(p1[idx] - pred, axis=1) <= max_residual_px
     return keep
-
-
-def anchor_refine(ref8: np.ndarray, ref_uv: np.ndarray, cur8: np.ndarray, uv: np.ndarray, cfg: FeatureConfig,
-                  max_shift_px: float) -> tuple[np.ndarray, np.ndarray]:
-    """Re-track ``ref_uv`` of the track's first MCI ``ref8`` into ``cur8`` by single-level KLT started at the chained
-    positions ``uv``; returns (positions, refined mask): a track keeps ``uv`` where KLT fails, its forward-backward
-    error exceeds ``klt_max_bidir_error_px`` or it moves more than ``max_shift_px``."""
-    if len(uv) == 0:
-        return uv, np.zeros(0, bool)
-    p0 = np.ascontiguousarray(ref_uv, np.float32).reshape(-1, 1, 2)
-    p1 = np.ascontiguousarray(uv, np.float32).reshape(-1, 1, 2).copy()
-    win = (int(cfg.klt_window_px), int(cfg.klt_window_px))
-    crit = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 30, 0.01)
-    q, st1, _ = cv2.calcOpticalFlowPyrLK(ref8, cur8, p0, p1, winSize=win, maxLevel=0, criteria=crit, flags=cv2.OPTFLOW_USE_INITIAL_FLOW)
-    b, st2, _ = cv2.calcOpticalFlowPyrLK(cur8, ref8, q, p0.copy(), winSize=win, maxLevel=0, criteria=crit, flags=cv2.OPTFLOW_USE_INITIAL_FLOW)
-    q, b = q.reshape(-1, 2), b.reshape(-1, 2)
-    good = (st1.ravel() == 1) & (st2.ravel() == 1) & (np.linalg.norm(b - p0.reshape(-1, 2), axis=1) <= cfg.klt_max_bidir_error_px)
-    good &= np.linalg.norm(q - uv, axis=1) <= max_shift_px
-    out = np.where(good[:, None], q, uv).astype(np.float32)
-    return out, good
 
 
 def patch_ncc(img0: np.ndarray, img1: np.ndarray, uv0: np.ndarray, uv1: np.ndarray, radius: int = 5) -> np.ndarray:
@@ -215,21 +185,5 @@ class FrontendTracks:
     """Track id -> pixel in the initialisation reference MCI."""
     init_ref_t: int = 0
     init_frames: int = 0
-    n_tracked: int = 0
-    """MCIs tracked into so far (the clock of ``born``)."""
-    born: dict = field(default_factory=dict)
-    """Track id -> ``n_tracked`` when the track was first carried into an MCI (``FeatureConfig.max_track_age_mcis``)."""
-
-    ref: dict = field(default_factory=dict)
-    """Track id -> (key of its first MCI's image in ``ref_images``, its position there) (``FeatureConfig.klt_anchor_shift_px``)."""
-    ref_images: dict = field(default_factory=dict)
-    """Key -> uint8 MCI image some live track started on."""
-
-    def age_out(self, max_age: int) -> np.ndarray:
-        """Count one more MCI; returns the mask of tracks at most ``max_age`` MCIs old (all when ``max_age`` is 0)."""
-        self.n_tracked += 1
-        ids = self.ids.tolist()
-        self.born = {t: self.born.get(t, self.n_tracked) for t in ids}
-        if max_age <= 0:
-            return np.ones(len(ids), bool)
-        return np.array([self.n_tracked - self.born[t] < max_age for t in ids], bool)
+    stepped: set = field(default_factory=set)
+    """Ids of the live tracks already carried through an MCI-to-MCI step (``FeatureConfig.klt_first_step_max_residual_px``)."""

@@ -35,7 +35,7 @@ from evpose.slam.bundle_adjustment import local_bundle_adjustment
 from evpose.slam.coasting import constant_velocity_pose
 from evpose.slam.config import SlamConfig, SlamMode
 from evpose.slam.event_window import WINDOW_REASONS, EventWindowSelector, ReconstructionWindow
-from evpose.slam.features import FrontendTracks, anchor_refine, detect_features, step_consistent, track_features
+from evpose.slam.features import FrontendTracks, detect_features, step_consistent, track_features
 from evpose.slam.inertial import InertialConfiguration, imu_init_due, initialize_imu
 from evpose.slam.inertial_bridge import predict_camera_pose
 from evpose.slam.inertial_ba import InertialState, inertial_local_bundle_adjustment
@@ -195,43 +195,13 @@ class EventSlam(GyroAids, VisualFailureHandling):
                 if ok2.sum() > ok.sum():
                     mci, new, ok = alt, new2, ok2
             if self.cfg.features.klt_first_step_max_residual_px > 0:
-                nxt, n_gated = fe.n_tracked + 1, self.cfg.features.klt_gated_steps
-                first = np.array([nxt - fe.born.get(t, nxt) < n_gated for t in fe.ids.tolist()], bool)
-                ok &= step_consistent(fe.uv, new, ok, first, self.cfg.features.klt_first_step_max_residual_px,
-                                      neighbours=self.cfg.features.klt_first_step_neighbours)
-            if self.cfg.features.klt_anchor_shift_px > 0:
-                self._anchor(mci.image8, new, ok)
+                first = np.array([t not in fe.stepped for t in fe.ids.tolist()], bool)
+                ok &= step_consistent(fe.uv, new, ok, first, self.cfg.features.klt_first_step_max_residual_px)
             fe.ids, fe.uv = fe.ids[ok], new[ok]
-            young = fe.age_out(self.cfg.features.max_track_age_mcis)
-            for t in fe.ids[~young].tolist():
-                fe.track_to_point.pop(t, None)
-            fe.ids, fe.uv = fe.ids[young], fe.uv[young]
+            fe.stepped = set(fe.ids.tolist())
         fe.prev8, fe.prev_t = mci.image8, mci.t_us
         self._prev_hypothesis = mci.hypothesis.value
         return mci
-
-    def _anchor(self, cur8: np.ndarray, new: np.ndarray, ok: np.ndarray) -> None:
-        """Re-track every surviving track from its first MCI (``FeatureConfig.klt_anchor_shift_px``); called after the
-        MCI-to-MCI step (``new``, refined in place), with ``fe.uv`` still the previous positions and ``ok`` the step's survivors."""
-        fe = self.fe
-        key = fe.n_tracked
-        prev_ids = fe.ids.tolist()
-        for t, uv in zip(prev_ids, fe.uv):
-            if t not in fe.ref:
-                fe.ref[t] = (key, uv.astype(np.float32).copy())
-        if key not in fe.ref_images and any(fe.ref[t][0] == key for t in prev_ids):
-            fe.ref_images[key] = fe.prev8
-        alive = [i for i in np.flatnonzero(ok) if fe.ref[prev_ids[i]][0] != key]
-        by_key: dict = {}
-        for i in alive:
-            by_key.setdefault(fe.ref[prev_ids[i]][0], []).append(i)
-        for k, idx in sorted(by_key.items()):
-            ref_uv = np.stack([fe.ref[prev_ids[i]][1] for i in idx])
-            new[idx], _ = anchor_refine(fe.ref_images[k], ref_uv, cur8, new[idx], self.cfg.features, self.cfg.features.klt_anchor_shift_px)
-        live = {prev_ids[i] for i in np.flatnonzero(ok)}
-        fe.ref = {t: r for t, r in fe.ref.items() if t in live}
-        used = {r[0] for r in fe.ref.values()}
-        fe.ref_images = {k: v for k, v in fe.ref_images.items() if k in used}
 
     def _replenish(self, img8: np.ndarray, img: np.ndarray | None = None) -> None:
         fe = self.fe

@@ -92,12 +92,6 @@ def test_first_step_gate_drops_a_new_track_that_left_the_homography_of_the_older
     assert not keep[5] and keep[6] and keep.sum() == 39
 
 
-def test_first_step_gate_by_neighbour_median_drops_the_same_jump():
-    p0, p1, judge = _steps_with_one_jump()
-    keep = step_consistent(p0, p1, np.ones(40, bool), judge, 3.0, neighbours=6)
-    assert not keep[5] and keep[6] and keep.sum() == 39
-
-
 def test_first_step_gate_judges_nothing_with_too_few_tracks():
     p0, p1, judge = _steps_with_one_jump()
     ok = np.zeros(40, bool)
