@@ -139,6 +139,31 @@ class FeatureConfig:
     klt_max_bidir_error_px: float = field(default=1.0, metadata={"min": 0.1, "max": 5.0, "step": 0.1, "unit": "px"})
     """Tracks whose forward-backward KLT error exceeds this are dropped, pixels. Landing event-only seeds 0-11, 60 runs
     (see ``MciConfig.reference_fraction``; 1.0 there): 0.5 -> mean ATE 3.34 -> 3.38 %, within 2 % 9 -> 3 of 60."""
+    klt_first_step_max_residual_px: float = field(default=0.0, metadata={"min": 0.0, "max": 10.0, "step": 0.1, "unit": "px"})
+    """A new track whose first MCI-to-MCI step lies farther than this from a RANSAC homography of the older tracks'
+    steps is dropped (0: no test), pixels. Session 14 (``/tmp/s14/tracknoise``): the event-only landing's per-track
+    errors (``TrackingConfig.ba_huber_px``) start at the first step, heavy-tailed (seeds 1 / 3: median 1.06 / 0.88
+    px, 90th percentile 6.3 / 6.5 px, 41 / 37 % over 1.5 px; later steps 0.5-0.8 px); this residual correlates with
+    that step's true error at 0.86 / 0.93, and of the first steps it puts over 2 px (26 %) 90-92 % are over 1.5 px
+    off. At 1.5 px the share of one-step-old observations off by over 1.5 px fell to 15 / 13 % (all ages 53 / 50 ->
+    48 / 46 %). Landing event-only (defaults: seeds 0-11 2.52 %, 5 of 12 within 2 %; seeds 12-23 3.62 %, 3): 3 px
+    1.75 % (8, max 2.65; paired -0.77 +- 0.26 points, 11 better) and 2.52 % (8; -1.10 +- 0.67, 9 better); with
+    ``target_tracks`` 145 (a perturbation) 3.13 -> 2.24 % (2 -> 5; -0.89 +- 0.53, 7 better); seeds 0-11 at 1.5 / 2 /
+    4 px 2.73 / 2.82 / 2.38 % (7 / 6 / 5). E-I-C2 landing seeds 0-11 at 3 px: ATE 0.94 -> 0.97 %, RPE at most 0.0032
+    m/m and 0.0022 deg/m (0.0050, 0.0022). Indoor event-only (multi-map, much coasting) seeds 0-3: 6.84 -> 12.21 %
+    (all four worse), 4-7: 10.80 -> 13.18 % (two worse; tracked 82.5 -> 85.3 %), though the gate removed bad first
+    steps there too (seed 0: 51 -> 39 % over 1.5 px) and the homography holds there as well as on the landing (its
+    inlier share of the older tracks' steps at 3 px, median per MCI: indoor seed 0 0.91, landing seeds 1 / 3 0.89 /
+    0.91), so it stays off until indoor tracking is stable enough to judge it. Gating only while tracking a map (not
+    during the two-view initialisation): landing 3.13 %, indoor 6.53 % (tracked 80.2 -> 72.5 %); only during the
+    initialisation: landing 2.31 % (8). Judging each track's first three steps 2.25 % (7); the median step of the 6
+    nearest older tracks in place of the homography 2.13 % (6), indoor 9.89 %. Also tried and removed: the same test
+    on every track's every step (2 px: 3.22 %, 0 of 12; 1 px: seeds 0-6 3.6-7.3 %, initialisations delayed);
+    dropping tracks older than 8 MCIs (their map points re-found by projection) 5.41 % (3; 4 MCIs: seeds 0-3
+    4.3-13.1 %, coasting); re-tracking every track from its first MCI (single-level KLT from the chained position,
+    kept within 1 / 2 px) 2.48 / 4.23 % (6 / 4), with this gate 2.92 % (7). That re-tracking left the track errors
+    as they were (seed 1: 53 % over 1.5 px either way): they sit in the event images' appearance of the corners, not
+    in KLT's chaining."""
     klt_min_ncc: float = field(default=0.0, metadata={"min": 0.0, "max": 1.0, "step": 0.05, "unit": "ratio"})
     """MCI-to-MCI tracks whose 11x11 patches (previous vs current MCI) correlate below this are dropped (0: no test).
     KLT started at the gyro-predicted flow passes its forward-backward test on blob-like event images even where

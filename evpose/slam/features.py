@@ -119,6 +119,30 @@ def track_features(prev8: np.ndarray, cur8: np.ndarray, pts: np.ndarray, cfg: Fe
     return p1.astype(np.float32), ok
 
 
+def step_consistent(p0: np.ndarray, p1: np.ndarray, ok: np.ndarray, judge: np.ndarray, max_residual_px: float,
+                    min_tracks: int = 12) -> np.ndarray:
+    """False for the ``judge`` steps ``p0`` -> ``p1`` farther than ``max_residual_px`` from a RANSAC homography of the
+    other ``ok`` steps (of all ``ok`` steps when fewer than ``min_tracks`` are left); True elsewhere.
+
+    Nothing is judged when fewer than ``min_tracks`` steps are ``ok`` or no homography is found. OpenCV's RANSAC
+    seeds its own generator on every call, so the mask is deterministic.
+    """
+    keep = np.ones(len(p0), bool)
+    fit = np.flatnonzero(ok & ~judge)
+    if len(fit) < min_tracks:
+        fit = np.flatnonzero(ok)
+    idx = np.flatnonzero(ok & judge)
+    if len(fit) < min_tracks or not len(idx):
+        return keep
+    H, _ = cv2.findHomography(np.ascontiguousarray(p0[fit], np.float64), np.ascontiguousarray(p1[fit], np.float64), cv2.RANSAC,
+                              float(max_residual_px))
+    if H is None:
+        return keep
+    pred = cv2.perspectiveTransform(np.ascontiguousarray(p0[idx], np.float64).reshape(-1, 1, 2), H).reshape(-1, 2)
+    keep[idx] = np.linalg.norm(p1[idx] - pred, axis=1) <= max_residual_px
+    return keep
+
+
 def patch_ncc(img0: np.ndarray, img1: np.ndarray, uv0: np.ndarray, uv1: np.ndarray, radius: int = 5) -> np.ndarray:
     """Normalised cross-correlation of the (2 radius + 1)^2 patches around ``uv0`` in ``img0`` and ``uv1`` in ``img1``
     (nearest pixel; -1 where a patch leaves the image or is flat), float64 (N,)."""
@@ -161,3 +185,5 @@ class FrontendTracks:
     """Track id -> pixel in the initialisation reference MCI."""
     init_ref_t: int = 0
     init_frames: int = 0
+    stepped: set = field(default_factory=set)
+    """Ids of the live tracks already carried through an MCI-to-MCI step (``FeatureConfig.klt_first_step_max_residual_px``)."""

@@ -35,7 +35,7 @@ from evpose.slam.bundle_adjustment import local_bundle_adjustment
 from evpose.slam.coasting import constant_velocity_pose
 from evpose.slam.config import SlamConfig, SlamMode
 from evpose.slam.event_window import WINDOW_REASONS, EventWindowSelector, ReconstructionWindow
-from evpose.slam.features import FrontendTracks, detect_features, track_features
+from evpose.slam.features import FrontendTracks, detect_features, step_consistent, track_features
 from evpose.slam.inertial import InertialConfiguration, imu_init_due, initialize_imu
 from evpose.slam.inertial_bridge import predict_camera_pose
 from evpose.slam.inertial_ba import InertialState, inertial_local_bundle_adjustment
@@ -200,7 +200,11 @@ class EventSlam(GyroAids, VisualFailureHandling):
                 new2, ok2 = track_features(fe.prev8, alt.image8, fe.uv, self.cfg.features, guess=guess, min_ncc=min_ncc)
                 if ok2.sum() > ok.sum():
                     mci, new, ok = alt, new2, ok2
+            if self.cfg.features.klt_first_step_max_residual_px > 0:
+                first = np.array([t not in fe.stepped for t in fe.ids.tolist()], bool)
+                ok &= step_consistent(fe.uv, new, ok, first, self.cfg.features.klt_first_step_max_residual_px)
             fe.ids, fe.uv = fe.ids[ok], new[ok]
+            fe.stepped = set(fe.ids.tolist())
         fe.prev8, fe.prev_t = mci.image8, mci.t_us
         self._prev_hypothesis = mci.hypothesis.value
         return mci

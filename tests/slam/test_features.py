@@ -1,10 +1,10 @@
-"""Bucketed FAST detection: the event-support test drops isolated noise events and keeps real corners."""
+"""Bucketed FAST detection (the event-support test drops isolated noise events and keeps real corners) and the KLT track gates."""
 
 import numpy as np
 
 from evpose.slam.config import FeatureConfig
 from evpose.slam.event_image import event_image, to_uint8
-from evpose.slam.features import detect_features
+from evpose.slam.features import detect_features, step_consistent
 
 
 def _corners_and_noise():
@@ -74,3 +74,26 @@ def test_min_ncc_drops_tracks_carried_into_another_scene_and_keeps_a_shifted_cop
     _, ok_ncc = track_features(a, other, pts, cfg, guess=pts, min_ncc=0.6)
     # Blob images fool the forward-backward test for a share of tracks; the correlation removes most of those.
     assert ok_plain.sum() >= 10 and ok_ncc.sum() < 0.6 * ok_plain.sum() and ok_ncc.mean() < 0.2
+
+
+def _steps_with_one_jump():
+    rng = np.random.default_rng(3)
+    p0 = rng.uniform(20, 220, (40, 2))
+    p1 = p0 * 1.02 + np.array([3.0, -2.0])  # a zoom and a shift: one homography
+    p1[5] += (4.0, 0.0)  # a new track's first step jumps 4 px
+    judge = np.zeros(40, bool)
+    judge[[5, 6]] = True  # two new tracks; track 6 moved with the scene
+    return p0, p1, judge
+
+
+def test_first_step_gate_drops_a_new_track_that_left_the_homography_of_the_older_ones():
+    p0, p1, judge = _steps_with_one_jump()
+    keep = step_consistent(p0, p1, np.ones(40, bool), judge, 3.0)
+    assert not keep[5] and keep[6] and keep.sum() == 39
+
+
+def test_first_step_gate_judges_nothing_with_too_few_tracks():
+    p0, p1, judge = _steps_with_one_jump()
+    ok = np.zeros(40, bool)
+    ok[:8] = True
+    assert step_consistent(p0, p1, ok, judge, 3.0).all()
