@@ -157,6 +157,13 @@ def _mark_patches(points, R_cw, t_cw, fx, fy, cx, cy, polarity, radius, box, gen
 
 
 @nb.njit(cache=True)
+def _flat_views(tag, owner, last_on, last_off, last_comb):
+    """(row width as uint64, then flat views of the five maps) for the selecting kernels' one-offset pixel reads."""
+    return (np.uint64(tag.shape[1]), tag.reshape(-1), owner.reshape(-1), last_on.reshape(-1), last_off.reshape(-1),
+            last_comb.reshape(-1))
+
+
+@nb.njit(cache=True)
 def _select_times(touched, n, tag, owner, last_on, last_off, last_comb, recent_us, times, has_events):
     """``times[i]``: the last timestamp the accepted polarity of patch pixel ``touched[i]`` selects (every other
     pixel reads NEVER); ``has_events[k]`` is set when a pixel point ``k`` owns holds an accepted event at or after
@@ -164,12 +171,7 @@ def _select_times(touched, n, tag, owner, last_on, last_off, last_comb, recent_u
     (:mod:`evpose.fusion.aligned_field`), and :meth:`AlignedTimeSurface.last_of` scatters it only when asked."""
     # Flat views and one unsigned offset per pixel (no 2-D index arithmetic with negative-index wrap per array read):
     # the same reads, ~45 % less time with the maps out of cache (session 12, 20 demo steps: 320-350 -> 175 us).
-    width = np.uint64(tag.shape[1])
-    tag_flat = tag.reshape(-1)
-    owner_flat = owner.reshape(-1)
-    on_flat = last_on.reshape(-1)
-    off_flat = last_off.reshape(-1)
-    comb_flat = last_comb.reshape(-1)
+    width, tag_flat, owner_flat, on_flat, off_flat, comb_flat = _flat_views(tag, owner, last_on, last_off, last_comb)
     for i in range(n):
         p = np.uint64(touched[i, 0]) * width + np.uint64(touched[i, 1])
         a = tag_flat[p] & 3
@@ -195,12 +197,7 @@ def _select_times_reopening(touched, n, tag, owner, last_on, last_off, last_comb
     The other polarity is looked at in the selecting pass (flat views, as there), not in a second pass over the
     patch pixels: the same outputs, without reading every patch pixel's tag and owner twice (the second pass cost
     ~0.15 ms per update in ``stpe+filter`` at 346x260, session 14)."""
-    width = np.uint64(tag.shape[1])
-    tag_flat = tag.reshape(-1)
-    owner_flat = owner.reshape(-1)
-    on_flat = last_on.reshape(-1)
-    off_flat = last_off.reshape(-1)
-    comb_flat = last_comb.reshape(-1)
+    width, tag_flat, owner_flat, on_flat, off_flat, comb_flat = _flat_views(tag, owner, last_on, last_off, last_comb)
     for i in range(n):
         p = np.uint64(touched[i, 0]) * width + np.uint64(touched[i, 1])
         a = tag_flat[p] & 3
