@@ -163,7 +163,9 @@ class FeatureConfig:
     4.3-13.1 %, coasting); re-tracking every track from its first MCI (single-level KLT from the chained position,
     kept within 1 / 2 px) 2.48 / 4.23 % (6 / 4), with this gate 2.92 % (7). That re-tracking left the track errors
     as they were (seed 1: 53 % over 1.5 px either way): they sit in the event images' appearance of the corners, not
-    in KLT's chaining."""
+    in KLT's chaining. Lead, on main after the blank-wall coasting: 3 px landing 0-11 1.75 % (8) as above; indoor
+    seeds 0-3 / 4-7 8.43 / 11.44 -> 11.46 / 12.22 % (tracked 95.5 / 91.9 -> 90.1 / 88.0 %), hence off; 3 px with
+    ``ba_edge_along_sigma_px`` 3 landing 0-11 2.40 % (5 of 12, worst 4.60)."""
     klt_min_ncc: float = field(default=0.0, metadata={"min": 0.0, "max": 1.0, "step": 0.05, "unit": "ratio"})
     """MCI-to-MCI tracks whose 11x11 patches (previous vs current MCI) correlate below this are dropped (0: no test).
     KLT started at the gyro-predicted flow passes its forward-backward test on blob-like event images even where
