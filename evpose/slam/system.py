@@ -200,11 +200,13 @@ class EventSlam(GyroAids, VisualFailureHandling):
                 new2, ok2 = track_features(fe.prev8, alt.image8, fe.uv, self.cfg.features, guess=guess, min_ncc=min_ncc)
                 if ok2.sum() > ok.sum():
                     mci, new, ok = alt, new2, ok2
-            if self.cfg.features.klt_first_step_max_residual_px > 0:
+            gate = self.cfg.features.klt_first_step_max_residual_px > 0
+            if gate:
                 first = np.array([t not in fe.stepped for t in fe.ids.tolist()], bool)
                 ok &= step_consistent(fe.uv, new, ok, first, self.cfg.features.klt_first_step_max_residual_px)
             fe.ids, fe.uv = fe.ids[ok], new[ok]
-            fe.stepped = set(fe.ids.tolist())
+            if gate:  # only the gate reads which tracks have stepped: no per-MCI set otherwise
+                fe.stepped = set(fe.ids.tolist())
         fe.prev8, fe.prev_t = mci.image8, mci.t_us
         self._prev_hypothesis = mci.hypothesis.value
         return mci
