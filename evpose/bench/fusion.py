@@ -8,7 +8,7 @@
   machine inflates much less) for plain iSAM2 updates and for the updates
   that also run the window re-optimisation, ``predict`` and ``imu_rate_poses`` latency, and
   ATE/ARE (RMSE) of raw registrations, factor graph, EKF and IMU-only.
-* ``ablation``, ``ablation_texture``, ``ablation_seeds``, ``realtime_300hz``, ``registration_wander``, ``aligned_field``, ``refinement_cost``, ``crowding_cost``: whole tracking runs on
+* ``ablation``, ``ablation_texture``, ``ablation_seeds``, ``ablation_long``, ``realtime_300hz``, ``registration_wander``, ``aligned_field``, ``refinement_cost``, ``crowding_cost``: whole tracking runs on
   the simulated landing, in :mod:`evpose.bench.fusion_tracking`.
 * ``polarity_ceiling`` (:mod:`evpose.bench.polarity_ceiling`): the filter's wrong predictions on the
   simulated landing, with fused and true motion, and ``stpe+filter`` with oracle polarities.
@@ -26,7 +26,7 @@ import time
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from evpose.bench.fusion_tracking import (ABLATION, ablation_run, bench_ablation, bench_ablation_seeds, bench_ablation_texture,  # noqa: F401
+from evpose.bench.fusion_tracking import (ABLATION, ablation_run, bench_ablation, bench_ablation_long, bench_ablation_seeds, bench_ablation_texture,  # noqa: F401
                                           bench_aligned_field, bench_crowding_cost, bench_realtime_300hz, bench_refinement_cost,
                                           bench_registration_wander)
 from evpose.bench.polarity_ceiling import bench_polarity_ceiling
@@ -389,7 +389,7 @@ def bench_imu_buffer(ctx) -> dict:
 
 
 BENCHMARKS = {"backends": bench_backends, "polarity_sim": bench_polarity_sim, "ego_motion_dynamic": bench_ego_motion_dynamic,
-              "ablation": bench_ablation, "ablation_texture": bench_ablation_texture, "ablation_seeds": bench_ablation_seeds, "realtime_300hz": bench_realtime_300hz, "snapshot_restore": bench_snapshot_restore, "imu_buffer": bench_imu_buffer,
+              "ablation": bench_ablation, "ablation_texture": bench_ablation_texture, "ablation_seeds": bench_ablation_seeds, "ablation_long": bench_ablation_long, "realtime_300hz": bench_realtime_300hz, "snapshot_restore": bench_snapshot_restore, "imu_buffer": bench_imu_buffer,
               "registration_wander": bench_registration_wander, "aligned_field": bench_aligned_field,
               "polarity_ceiling": bench_polarity_ceiling, "refinement_cost": bench_refinement_cost,
               "crowding_cost": bench_crowding_cost}
