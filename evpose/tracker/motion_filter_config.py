@@ -51,7 +51,7 @@ class MotionFilterConfig:
     Session 15, ``stpe``, seeds 0-3. The 3 s landing at 346x260, RMS position error of every pose over 0-0.5 /
     0.5-1 / 1-1.5 / 1.5-2 s (``/tmp/s15/stpelong/seg.py``): off 61.1 / 46.9 / 69.0 / 365.3 mm; 1 / 2 / 5 / 10
     gave 31.4 / 46.7 / 184.7 / 724.5, 30.6 / 38.7 / 138.8 / 554.3, 28.9 / 25.0 / 77.3 / 384.4, 26.4 / 24.0 / 84.8 /
-    460.9 mm: the first second is 2x better, but the turn (events per update 2000 -> 170-350, 5-8 % of the map
+    460.9 mm: the first second is 2x better, but the turn (events per update 2000 -> 170-350, 3-7 % of the map
     points on recent events even at the truth) is lost either way, from ~1.4 s. Its ATE (the benchmark's, lost
     poses left out): off 120.1 mm; 1 / 2 / 5 / 10 / 20 / 40 gave 446.9 / 259.0 / 151.0 / 157.7 / 227.5 / 236.6 mm.
     The 2 s landing, mean ATE at 346x260 / 240x180: off 12.40 / 13.80; 1 / 2 / 5 / 10 gave 15.21 / 22.43, 15.72 /
