@@ -47,7 +47,10 @@ class DistanceFieldConfig:
     """Blur of an extra, coarser field registered first to widen the basin of convergence (0 = single level), pixels.
 
     Session 11, ``stpe`` at 240x180, seeds 0-3 (16.80 mm single level, before ``edge_offsets``): 7 / 11 px gave
-    18.10 / 18.13 mm: tracking from the truth needs no wider basin, and the coarse level's pose is a worse start."""
+    18.10 / 18.13 mm: tracking from the truth needs no wider basin, and the coarse level's pose is a worse start.
+    Session 15, ``stpe`` seeds 0-3, 7 px: 2 s landing 12.40 / 13.80 -> 13.04 / 15.15 mm at 346x260 / 240x180; the 3 s
+    landing 120.07 -> 98.20 mm ATE (lost poses left out), but its RMS error of every pose over 0-0.5 / 0.5-1 / 1-1.5 /
+    1.5-2 s 61.1 / 46.9 / 69.0 / 365.3 -> 61.9 / 43.3 / 62.9 / 370.7 mm: the turn is lost all the same."""
 
     def level(self, blur_px: int) -> "DistanceFieldConfig":
         """This config with another blur (one level of a coarse-to-fine pyramid)."""

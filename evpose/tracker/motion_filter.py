@@ -75,6 +75,45 @@ def _propagate_world(P, Rs_t, Rt, dt, qa, ql):
 
 
 @nb.njit(cache=True)
+def _propagate_world_accel(P, Rs_t, Rt, dt, qa, ql, qj):
+    """:func:`_propagate_world` with a world-frame linear acceleration in the state (error state of 15: rotation,
+    position, angular rate, velocity, acceleration; ``linear_jerk_noise``): ``d_p' = R_step^T d_p + dt R'^T d_v +
+    dt^2/2 R'^T d_a``, ``d_v' = d_v + dt d_a``; ``qj`` is the squared jerk noise on the acceleration, ``ql`` still
+    drives the velocity directly."""
+    F = np.eye(15)
+    for i in range(3):
+        F[i, 6 + i] = dt
+        F[9 + i, 12 + i] = dt
+        for j in range(3):
+            F[i, j] = Rs_t[i, j]
+            F[3 + i, 3 + j] = Rs_t[i, j]
+            F[3 + i, 9 + j] = Rt[i, j] * dt
+            F[3 + i, 12 + j] = Rt[i, j] * 0.5 * dt * dt
+    out = F @ P @ F.T
+    for i in range(3):
+        out[i, i] += qa * dt**3 / 3.0
+        out[i, 6 + i] += qa * dt**2 / 2.0
+        out[6 + i, i] += qa * dt**2 / 2.0
+        out[6 + i, 6 + i] += qa * dt
+        # White acceleration on the velocity plus white jerk on the acceleration (the constant-acceleration model's
+        # position / velocity / acceleration block), the position rows in the body frame.
+        out[3 + i, 3 + i] += ql * dt**3 / 3.0 + qj * dt**5 / 20.0
+        out[9 + i, 9 + i] += ql * dt + qj * dt**3 / 3.0
+        out[9 + i, 12 + i] += qj * dt**2 / 2.0
+        out[12 + i, 9 + i] += qj * dt**2 / 2.0
+        out[12 + i, 12 + i] += qj * dt
+        for j in range(3):
+            c = Rt[i, j] * (ql * dt**2 / 2.0 + qj * dt**4 / 8.0)
+            out[3 + i, 9 + j] += c
+            out[9 + j, 3 + i] += c
+            c = Rt[i, j] * qj * dt**3 / 6.0
+            out[3 + i, 12 + j] += c
+            out[12 + j, 3 + i] += c
+    _symmetrise(out)
+    return out
+
+
+@nb.njit(cache=True)
 def _symmetrise(out):
     """Replace both off-diagonal halves of the square ``out`` by their mean, in place (rounding keeps P symmetric)."""
     n = out.shape[0]
@@ -87,10 +126,11 @@ def _symmetrise(out):
 
 @nb.njit(cache=True)
 def _joseph_update(P, K, R):
-    """``(I - K H) P (I - K H)^T + K R K^T`` with ``H = [I6 0]``, symmetrised: the Joseph form keeps P symmetric
+    """``(I - K H) P (I - K H)^T + K R K^T`` with ``H = [I6 0]`` (P 12x12 or 15x15), symmetrised: the Joseph form keeps P symmetric
     positive definite in float64. Compiled: the numpy version is five 12x12 calls."""
-    A = np.eye(12)
-    for i in range(12):
+    n = P.shape[0]
+    A = np.eye(n)
+    for i in range(n):
         for j in range(6):
             A[i, j] -= K[i, j]
     AP = A @ P
@@ -125,7 +165,9 @@ class ConstantVelocityKalman:
         self._T: np.ndarray | None = None
         self._xi = np.zeros(6)
         """Angular rate (body, rad/s) then linear velocity (m/s, in ``config.velocity_frame``)."""
-        self._P = np.zeros((12, 12))
+        self._acc = np.zeros(3)
+        """World-frame linear acceleration, m/s^2 (stays zero unless ``linear_jerk_noise`` is on)."""
+        self._P = np.zeros((self._n, self._n))
         self.last_innovation_sigma = 0.0
         """Mahalanobis distance of the last registration from the prediction, sigma."""
         self.last_fused = False
@@ -141,10 +183,22 @@ class ConstantVelocityKalman:
         """Factor currently on both acceleration noises (1 unless the innovations keep pointing one way)."""
 
     # ------------------------------------------------------------ protocol
+    @property
+    def _with_acceleration(self) -> bool:
+        """The constant-acceleration model (``linear_jerk_noise`` > 0, world-frame velocity only)."""
+        return float(self.config.linear_jerk_noise) > 0 and self._world_velocity
+
+    @property
+    def _n(self) -> int:
+        """Size of the error state."""
+        return 15 if self._with_acceleration else 12
+
     def _initial_covariance(self) -> np.ndarray:
         c = self.config
         sd = [np.radians(c.initial_rotation_std_deg)] * 3 + [c.initial_translation_std_m] * 3
         sd += [c.initial_angular_rate_std] * 3 + [c.initial_velocity_std] * 3
+        if self._with_acceleration:
+            sd += [c.initial_acceleration_std] * 3
         return np.diag(np.square(np.maximum(sd, 1e-9)))
 
     def reset(self, t_us: int, T_world_cam: np.ndarray) -> None:
@@ -152,6 +206,7 @@ class ConstantVelocityKalman:
         self._t = int(t_us)
         self._T = np.array(T_world_cam, dtype=np.float64)
         self._xi = np.zeros(6)
+        self._acc = np.zeros(3)
         self._P = self._initial_covariance()
         self._motion_cache = None
         self._reset_adaptation()
@@ -172,6 +227,7 @@ class ConstantVelocityKalman:
             self._xi = gtsam.Pose3.Logmap(gtsam.Pose3(self._T).between(gtsam.Pose3(T))) / dt
             if self._world_velocity:
                 self._xi[3:] = (T[:3, 3] - self._T[:3, 3]) / dt
+        self._acc = np.zeros(3)
         self._t = int(t_us)
         self._T = T
         self._P = self._initial_covariance()
@@ -216,6 +272,8 @@ class ConstantVelocityKalman:
             T = np.eye(4)
             T[:3, :3] = self._T[:3, :3] @ step
             T[:3, 3] = self._T[:3, 3] + self._xi[3:] * dt
+            if self._with_acceleration:
+                T[:3, 3] += self._acc * (0.5 * dt * dt)
             out = (T, step)
         else:
             step = gtsam.Pose3.Expmap(self._xi * dt)
@@ -242,8 +300,10 @@ class ConstantVelocityKalman:
             # d_rot' = R_step^T d_rot + dt d_omega, d_p' = R_step^T d_p + dt R'^T d_v.
             c = self.config
             g = self.noise_scale**2
-            P = _propagate_world(self._P, np.ascontiguousarray(step.T), np.ascontiguousarray(T_pred[:3, :3].T), float(dt),
-                                 float(c.angular_acceleration_noise) ** 2 * g, float(c.linear_acceleration_noise) ** 2 * g)
+            args = (self._P, np.ascontiguousarray(step.T), np.ascontiguousarray(T_pred[:3, :3].T), float(dt),
+                    float(c.angular_acceleration_noise) ** 2 * g, float(c.linear_acceleration_noise) ** 2 * g)
+            P = (_propagate_world_accel(*args, float(c.linear_jerk_noise) ** 2 * g) if self._with_acceleration
+                 else _propagate_world(*args))
         else:
             F = np.eye(12)
             F[:6, :6] = step.inverse().AdjointMap()
@@ -270,6 +330,7 @@ class ConstantVelocityKalman:
     def coast(self, t_us: int) -> np.ndarray:
         """No measurement at ``t_us``: move the state forward on the motion model; returns the pose."""
         T_pred, P = self._propagate(t_us)
+        self._advance_velocity(t_us)
         self._t, self._T, self._P = int(t_us), T_pred, P
         self._motion_cache = None
         return T_pred.copy()
@@ -284,11 +345,14 @@ class ConstantVelocityKalman:
         if self._T is None:
             raise RuntimeError("predictor used before reset()")
         T_pred, P = self._propagate(t_us)
+        self._advance_velocity(t_us)
         self._t = int(t_us)
         self._T, self._P = T_pred, P
         self._motion_cache = None
         self.last_fused = False
-        if covariance is None or not np.isfinite(covariance).all():
+        if covariance is None or not np.isfinite(covariance).all() or not np.all(covariance.diagonal() > 0):
+            # A covariance without a positive variance on every axis is no usable measurement (and its correlation
+            # form would overflow: seen on a lost 3 s landing with ``linear_acceleration_noise`` 2).
             return T_pred.copy()
         R = 0.5 * (covariance + covariance.T) * float(self.config.measurement_covariance_scale)
         if float(self.config.measurement_anisotropy) > 0:
@@ -300,7 +364,7 @@ class ConstantVelocityKalman:
         except np.linalg.LinAlgError:
             return T_pred.copy()
         S_inv_y = sol[:, 0]
-        K = sol[:, 1:].T  # (12, 6) = P H^T S^-1, S symmetric
+        K = sol[:, 1:].T  # (n, 6) = P H^T S^-1, S symmetric
         d2 = float(y @ S_inv_y)
         self.last_innovation_sigma = float(np.sqrt(max(d2, 0.0)))
         self._adapt(y, S)
@@ -316,9 +380,16 @@ class ConstantVelocityKalman:
         self.last_fused = True
         dx = K @ y
         self._T = gtsam.Pose3(T_pred).compose(gtsam.Pose3.Expmap(dx[:6])).matrix()
-        self._xi = self._xi + dx[6:]
+        self._xi = self._xi + dx[6:12]
+        if self._with_acceleration:
+            self._acc = self._acc + dx[12:]
         self._P = _joseph_update(P, np.ascontiguousarray(K), np.ascontiguousarray(R))
         return self._T.copy()
+
+    def _advance_velocity(self, t_us: int) -> None:
+        """The constant-acceleration model's velocity moves on with its acceleration to ``t_us`` (before ``_t`` does)."""
+        if self._with_acceleration:
+            self._xi[3:] = self._xi[3:] + self._acc * self._dt(t_us)
 
     def _adapt(self, y: np.ndarray, S: np.ndarray) -> None:
         """Update the innovation statistics with ``y`` (covariance ``S``) and set the noise scale for the next
@@ -346,6 +417,7 @@ class ConstantVelocityKalman:
 
     def snapshot(self) -> dict:
         return {"t": self._t, "T": None if self._T is None else np.copy(self._T), "xi": np.copy(self._xi), "P": np.copy(self._P),
+                "acc": np.copy(self._acc),
                 "innovation": self.last_innovation_sigma, "fused": self.last_fused, "rejected": self._rejected,
                 "innovation_mean": np.copy(self._innovation_mean), "innovation_power": self._innovation_power,
                 "noise_scale": self.noise_scale}
@@ -354,6 +426,7 @@ class ConstantVelocityKalman:
         self._t = state["t"]
         self._T = None if state["T"] is None else np.copy(state["T"])
         self._xi = np.copy(state["xi"])
+        self._acc = np.array(state.get("acc", np.zeros(3)), dtype=np.float64)
         self._P = np.copy(state["P"])
         self.last_innovation_sigma = state["innovation"]
         self.last_fused = state["fused"]

@@ -317,3 +317,34 @@ def test_measurement_anisotropy_makes_the_filter_follow_a_registration_less_alon
     depth = _followed(0.3, DEPTH_STEP) / _followed(0.0, DEPTH_STEP)
     assert valley < 0.5 * depth  # the valley loses far more weight than a well determined direction
     assert depth > 0.6
+
+
+def _cornering(t_s: float) -> np.ndarray:
+    """A camera turning a corner: constant world acceleration (5, -5, 0) m/s^2 while it yaws at ``W_BODY``."""
+    T = straight_while_turning(t_s)
+    T[:3, 3] += 0.5 * np.array([5.0, -5.0, 0.0]) * t_s**2
+    return T
+
+
+def test_acceleration_state_follows_a_cornering_camera_that_the_constant_velocity_model_lags():
+    cov = np.diag([np.radians(0.05) ** 2] * 3 + [0.002**2] * 3)
+    last = {}
+    for jerk in (0.0, 10.0):
+        kf = seeded(MotionFilterConfig(velocity_frame=VelocityFrame.WORLD, linear_jerk_noise=jerk), _cornering)
+        for k in range(2, 101):
+            kf.correct(k * 5_000, _cornering(k * 0.005), cov)
+        last[jerk] = error(kf.predict(505_000), _cornering(0.505))[0]
+        if jerk:
+            assert np.allclose(kf._acc, [5.0, -5.0, 0.0], atol=0.1)
+            copy = ConstantVelocityKalman(kf.config)
+            copy.restore(kf.snapshot())
+            assert np.array_equal(copy.predict(510_000), kf.predict(510_000))
+    assert last[10.0] < 0.001 < last[0.0]
+
+
+def test_a_covariance_without_positive_variances_is_not_fused():
+    kf = seeded(MotionFilterConfig(velocity_frame=VelocityFrame.WORLD))
+    bad = np.diag([1e-6] * 5 + [0.0])
+    T = kf.correct(10_000, pose(0.01), bad)
+    assert not kf.last_fused
+    assert np.array_equal(T, seeded(MotionFilterConfig(velocity_frame=VelocityFrame.WORLD)).predict(10_000))
