@@ -65,6 +65,21 @@ of the step before registered too (each at its own timestamp): 7.49 / 6.66 mm, w
 ``covariance_scale`` 100 / 1000 6.88 / 7.26 mm, ``registration.max_points`` 1500 6.79 mm. Fusing the two poses
 as two factors instead of combining them is the same cost to first order (each scaled alike; the graph's robust
 kernel never engages), so it was not run.
+
+Session 15 (346x260 seeds 0-3 unless said; scripts ``/tmp/s15/regdrift/``): the registrations' slow errors are mostly
+the prediction's, echoed, not a bias of the field's optimum. Inside closed-loop runs (seed 0, built and true-edge
+maps), the field registration run again without its prior and to convergence stays where it starts: from the
+prediction at the prediction's height error (camera z, 0.6-1.0 s: 5-10 mm, the fused pose 7-11 mm, the run's own
+registration 6-10 mm), from the truth within 1-3.5 mm, from the prediction moved 20 mm up at +16 mm. Tilt against
+sideways shift behaves alike; roll less (~20 mdeg). Starting the registrations from the truth (oracle; ``full`` 6.38
+mm) gives 4.90 mm with their priors there too, 5.49 with the priors still at the prediction; only the tilt/sideways
+components 5.33 (init only 5.84), only the height 6.02, only the roll 6.41: the roll drift costs nothing, the echo of
+tilt and height does. The field's first-order (Gauss-Newton) information is 5-15 % of the second-order one its
+covariance reports (the curvature of each point's own TDF minimum), so it claims what it only echoes. Not kept
+(346x260 / 240x180 seeds 0-3, against 6.38 / 7.25 mm): the events registered first from the prediction and the field
+from their pose (prior still at the prediction) 6.67 / 7.82; ``prior_residual_px`` 0 6.44 / 7.28; the covariance
+without the priors' information (field and events) 6.43 (346x260); see also ``registration.second_order``,
+``prior_translation_m``, ``convergence_cost_ratio`` and ``distance_field.coarse_blur_px``.
 """
 
 from __future__ import annotations
