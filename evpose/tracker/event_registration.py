@@ -116,7 +116,10 @@ class EventRegistrationConfig:
     covariance scaled 3 / 10x before combining: 6.02 / 5.53, 5.81 / 5.59 mm at 346x260 but 7.45 / 9.48, 7.78 / 10.41 mm
     at 240x180. Replacing, the 4 s demos: 10.85 / 7.98 / 7.61 mm (``landing`` / ``fast`` / ``dynamic``). Replacing with
     a 2 px association radius, 346x260 seeds 0-3 / 4-7: 6.11 / 5.81 mm (ARE 0.070 / 0.072 deg against 0.066 / 0.068),
-    but the EKF backend then beats the graph (6.06 / 5.72 mm)."""
+    but the EKF backend then beats the graph (6.06 / 5.72 mm). Session 15 (the field echoes the prediction, see the
+    module), the field's covariance scaled 10x before combining, 3 s landings at 346x260 (``/tmp/s13/dyn/plain3.h5``
+    on the bundled map, ``/tmp/s14/fullacc/sim3`` seeds 1-3 on their built maps): 12.47 / 18.38 / 16.33 / 15.28 ->
+    8.52 / 13.59 / 12.66 / 12.26 mm, but the ``landing`` demo 9.71 -> 10.99 mm (3x / 5x: 10.49 / 10.80 mm): not kept."""
     covariance_scale: float = field(default=300.0, metadata={"min": 0.001, "max": 100000.0, "step": 1.0, "unit": "ratio"})
     """Factor on the events' covariance ``(J^T W J)^-1 sigma^2`` (``sigma^2`` their weighted residual variance), ratio.
 
