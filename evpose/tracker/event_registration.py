@@ -119,7 +119,9 @@ class EventRegistrationConfig:
     but the EKF backend then beats the graph (6.06 / 5.72 mm). Session 15 (the field echoes the prediction, see the
     module), the field's covariance scaled 10x before combining, 3 s landings at 346x260 (``/tmp/s13/dyn/plain3.h5``
     on the bundled map, ``/tmp/s14/fullacc/sim3`` seeds 1-3 on their built maps): 12.47 / 18.38 / 16.33 / 15.28 ->
-    8.52 / 13.59 / 12.66 / 12.26 mm, but the ``landing`` demo 9.71 -> 10.99 mm (3x / 5x: 10.49 / 10.80 mm): not kept."""
+    8.52 / 13.59 / 12.66 / 12.26 mm, but the ``landing`` demo 9.71 -> 10.99 mm (3x / 5x: 10.49 / 10.80 mm): not kept.
+    Its variance along the optical axis alone 10x: 2 s seeds 0-3 6.09 mm at 346x260, 7.89 at 240x180, the 3 s
+    ``plain3`` 13.09 mm, the demo 10.22 mm; its tilt and sideways variances 10x: 7.55 mm at 346x260."""
     covariance_scale: float = field(default=300.0, metadata={"min": 0.001, "max": 100000.0, "step": 1.0, "unit": "ratio"})
     """Factor on the events' covariance ``(J^T W J)^-1 sigma^2`` (``sigma^2`` their weighted residual variance), ratio.
 
