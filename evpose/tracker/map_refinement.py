@@ -66,7 +66,14 @@ class MapRefinementConfig:
     ARE 0.171 -> 0.133 deg (346x260), 15.51 -> 15.25 mm, 0.198 -> 0.179 deg (240x180); seed 0 16.6 -> 15.0 and
     20.7 -> 18.4 mm, ARE 0.241 -> 0.150 and 0.312 -> 0.233 deg. Bundled demos (ATE RMSE, ``--align none``):
     ``landing`` 17.38 -> 16.81 mm, ``landing_dynamic`` 34.90 -> 28.85 mm, ``landing_fast`` 22.29 -> 22.66 mm
-    (ARE 0.185 -> 0.212 deg): the one case it costs."""
+    (ARE 0.185 -> 0.212 deg): the one case it costs.
+
+    Session 15, 346x260 (no edge-offset gauge there): the built map's painted 'H' is turned (a rigid fit of the
+    offsets refined by 1.3 s: -0.6 / -0.1 deg about the vertical, seeds 0 / 2). Registered from the truth (no prior,
+    seeds 0 / 2), the roll ends at -0.21 / -0.17 deg in the last 0.2 s without the refiner, -0.05 / -0.08 deg with it
+    (true-edge map, refiner on: -0.07 / -0.02): the refiner corrects the map rather than following the pose. The edge
+    offsets' pose fit handed to it as a gauge (``edge_offsets`` on at 346x260 with ``gain`` 0, the registration's lag
+    kept): ``full`` seeds 0-3 6.40 mm against 6.38."""
     gain: float = field(default=0.05, metadata={"min": 0.0, "max": 1.0, "step": 0.01, "unit": "ratio"})
     """Share of each update's measured step a point moves by (an average over ~1 / gain updates), ratio.
 

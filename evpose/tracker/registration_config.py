@@ -65,6 +65,12 @@ class RegistrationConfig:
     of the weakly observed tilt-vs-sideways direction, not as a better minimum (session 9, ``stpe`` seeds 0-3:
     78.6 / 87.8 mm without it).
 
+    Session 15, ``full`` seeds 0-3 at 346x260 / 240x180 (6.38 / 7.25 mm; the field echoes the prediction in tilt and
+    height, see :mod:`evpose.tracker.event_registration`): Gauss-Newton steps and covariance 5.83 / 9.17 mm;
+    Gauss-Newton steps with the second-order covariance 6.43 / 8.88; second-order steps with the first-order
+    covariance 6.27 / 9.27, or with its shape scaled to the second-order determinant 6.44 / 7.90 mm. The 346x260 gain
+    is the larger covariance (as the field's covariance scaled 10x before combining), not the steps.
+
     Session 9, not kept: the gradient and curvature projected on each point's projected edge normal (along the edge
     the field only shows its events' scatter): ``stpe`` seeds 0-3 13.42 / 19.00 -> 14.00 / 18.34 mm at 346x260 /
     240x180; with ``visible_map.wall_occlusion`` 11.92 / 18.26 -> 13.00 / 16.81 (seeds 0-3) and 11.63 / 19.86 ->
@@ -125,7 +131,8 @@ class RegistrationConfig:
     mm against 140 / 108 mm for this test but ``full`` 19.5-20.3 / 23.8-25.3 mm and
     up to 10 iterations per update, so the cost test stays the default. Session 8, ``full`` seeds 0-3 (buffer-zone
     trail 0), 0 with 30 iterations: 8.65 / 9.85 mm against 9.15 / 9.51 at 346x260 / 240x180, median iterations
-    2 -> 12."""
+    2 -> 12. Session 15, ``full`` 346x260 seeds 0-3 (6.38 mm): 1e-4 / 0 gave 6.33 / 6.52 mm; converged or not, the
+    field stays where it starts in tilt and height (see :mod:`evpose.tracker.event_registration`)."""
     prior_translation_m: float = field(default=0.01, metadata={"min": 0.0, "max": 1.0, "step": 0.001, "unit": "m"})
     """Std of a Gaussian prior pulling the pose towards the prediction, translation, metres (0 = no prior).
 
@@ -141,7 +148,9 @@ class RegistrationConfig:
     9.15 / 9.51 at 346x260 / 240x180."""
     prior_rotation_deg: float = field(default=0.2, metadata={"min": 0.0, "max": 10.0, "step": 0.01, "unit": "deg"})
     """Std of the same prior, rotation, degrees (0 = no prior). Session 9, ``full`` seeds 0-3 (7.78 / 9.40 mm at 0.2):
-    0.1 / 0.05 gave 7.82 / 9.57, 7.42 / 10.28 mm."""
+    0.1 / 0.05 gave 7.82 / 9.57, 7.42 / 10.28 mm. Session 15, ``full`` 346x260 seeds 0-3 (6.38 mm): no prior
+    (``prior_translation_m`` 0, field and events) 6.95 mm; the priors kept but their information left out of the
+    reported covariances 6.43 mm."""
     prior_residual_sigma: float = field(default=0.2, metadata={"min": 0.01, "max": 1.0, "step": 0.01, "unit": "TDF"})
     """Typical TDF residual of one point, which converts the prior stds into the cost's units, TDF units."""
     residual_variance: ResidualVariance = ResidualVariance.ALL
@@ -233,7 +242,15 @@ class RegistrationConfig:
     ms 10.04 / 12.31 mm. The registrations' image-shift error against the true camera velocity: a lag-like term
     explains only ~20 % of its variance (the cross-flow part -6 ms x velocity at 346x260, ~0 at 240x180).
     Session 14, ``full``, the 3 s landings of ``fused_lag_floor_px`` (seeds 1 / 2 / 3, 18.38 / 16.33 / 15.28 mm): 3 / 6 ms
-    gave 20.19 / 17.81 / 17.90, 18.32 / 17.59 / 15.80 mm."""
+    gave 20.19 / 17.81 / 17.90, 18.32 / 17.59 / 15.80 mm.
+    Session 15 (``full``, registrations from the truth with the true twist, no prior, true-edge map, refiner off,
+    seeds 0 / 2 at 346x260): the pose is registered ``field_lag_ms`` back and moved forward by the twist, so a lag
+    change moves the roll by the yaw rate times the change, no more (3 -> 6 ms: -20 / +18 / +23 / -10 / -27 mdeg per
+    ms at 0.2 / 0.6 / 1.0 / 1.4 / 1.8 s, yaw rate -20 / +21 / +23 / -16 / -26 deg/s). 4.5 ms gives the smallest
+    roll spread (27.7 / 25.0 mdeg against 38.6 / 37.8 at 3 ms and 49.1 / 43.6 at 6 ms); what is left is a slow offset
+    (mean -20 / -11 mdeg, -56 / -32 mdeg in the last 0.2 s) that does not follow the yaw rate (correlation +0.16 /
+    +0.12; with the lateral image flow -0.39 / -0.18, the number of points -0.18 / -0.27), and the roll drift
+    costs ``full`` nothing (see :mod:`evpose.tracker.event_registration`)."""
     lag_floor_px: float = field(default=0.0, metadata={"min": 0.0, "max": 3.0, "step": 0.05, "unit": "px"})
     """Smallest distance the TDF minimum trails a moving edge, pixels (0 = off); needs the map's edge directions
     and the motion twist. The fused modes use ``fused_lag_floor_px`` instead.
