@@ -127,7 +127,8 @@ class Tracker:
         self._edge_normals = np.ascontiguousarray(contour_map.edge_normal, dtype=np.float64)
         self._hold_filtered = not self.components.drives_pose and mr.hold_out_filtered
         """``stpe+filter`` holds unrefined painted points out of registration too (``map_refinement.hold_out_filtered``)."""
-        self.hold = TrackHold(not self.components.drives_pose or self._registration is rc, rc.regain_updates)
+        self.hold = TrackHold(not self.components.drives_pose or self._registration is rc, rc.regain_updates,
+                               rc.weak_run_degraded_updates)
         """The fused modes' looser inlier test applies only once the map is acquired (``ACQUIRE_UPDATES`` strict
         registrations in a row); ``stpe`` regains a lost track only after ``regain_updates`` of them."""
         if predictor is None and self.components.drives_pose:
@@ -470,6 +471,9 @@ class Tracker:
             timings["polarity_observe"] = _ms(t0)
             timings["polarity_filter"] = timings.get("polarity_filter", 0.0) + timings["polarity_observe"]
         counts["registered"] = int(ok)
+        if self._weak_test:
+            status, reason = self.hold.weak_run(status, reason, ok and weak)
+            counts["weak_run"] = self.hold.weak_streak
         if reg is not None:
             counts.update(inliers=reg.inliers, iterations=reg.iterations, points_in_image=reg.points_used)
         else:

@@ -151,10 +151,17 @@ def test_a_weak_registration_agreeing_with_the_motion_model_keeps_the_track(scen
     # Every registration is weak against a strict test no real one passes; the weak test keeps the track on them.
     cfg = TrackerConfig()
     cfg.registration.min_inlier_ratio, cfg.registration.weak_inlier_ratio = 0.99, 0.01
+    cfg.registration.weak_run_degraded_updates = 0
     res = run(started(rec, cmap, cfg), rec, int(rec.ground_truth.t[0]), 30)
     assert all(r.status is TrackStatus.OK for r in res)
     T_gt = rec.ground_truth.interpolate(np.array([res[-1].t_us])).matrix(0)
     assert np.linalg.norm(res[-1].pose[:3, 3] - T_gt[:3, 3]) < 0.02
+    # A long run of them is reported degraded (the pose follows the motion model), with the same poses.
+    cfg.registration.weak_run_degraded_updates = 10
+    labelled = run(started(rec, cmap, cfg), rec, int(rec.ground_truth.t[0]), 30)
+    assert [r.status for r in labelled] == [TrackStatus.OK] * 9 + [TrackStatus.DEGRADED] * 21
+    assert "updates in a row held only by weak registrations" in labelled[-1].reason
+    assert all(np.array_equal(a.pose, b.pose) for a, b in zip(res, labelled))
     # Without it the same registrations lose the track.
     cfg.registration.weak_inlier_ratio = 0.0
     res = run(started(rec, cmap, cfg), rec, int(rec.ground_truth.t[0]), 3)
