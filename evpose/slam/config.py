@@ -166,6 +166,11 @@ class FeatureConfig:
     in KLT's chaining. Lead, on main after the blank-wall coasting: 3 px landing 0-11 1.75 % (8) as above; indoor
     seeds 0-3 / 4-7 8.43 / 11.44 -> 11.46 / 12.22 % (tracked 95.5 / 91.9 -> 90.1 / 88.0 %), hence off; 3 px with
     ``ba_edge_along_sigma_px`` 3 landing 0-11 2.40 % (5 of 12, worst 4.60)."""
+    klt_curvature_gain: float = field(default=0.0, metadata={"min": 0.0, "max": 3.0, "step": 0.05, "unit": "ratio"})
+    """Each MCI-to-MCI step removes the change of the shift a constant-velocity warp leaves under image acceleration
+    (:func:`evpose.slam.features.remove_curvature_shift`; 0: off), ratio of the model's ``a T^2 / 24``."""
+    klt_curvature_perpendicular: bool = False
+    """``klt_curvature_gain``: only the part across each track's motion (the turn's), not along it."""
     klt_min_ncc: float = field(default=0.0, metadata={"min": 0.0, "max": 1.0, "step": 0.05, "unit": "ratio"})
     """MCI-to-MCI tracks whose 11x11 patches (previous vs current MCI) correlate below this are dropped (0: no test).
     KLT started at the gyro-predicted flow passes its forward-backward test on blob-like event images even where

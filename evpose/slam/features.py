@@ -143,6 +143,38 @@ def step_consistent(p0: np.ndarray, p1: np.ndarray, ok: np.ndarray, judge: np.nd
     return keep
 
 
+def remove_curvature_shift(p0: np.ndarray, p1: np.ndarray, ok: np.ndarray, ids: np.ndarray, motion: dict, dt_s: float,
+                           dt_prev_s: float, span_s: float, gain: float, perpendicular: bool) -> tuple[np.ndarray, dict]:
+    """Tracks ``p0`` -> ``p1`` (one MCI-to-MCI step of ``dt_s``) less the change of the shift a constant-velocity warp
+    leaves where the image motion accelerates; returns (corrected ``p1``, the new ``motion`` of the ``ok`` tracks).
+
+    An MCI warps its events, spread over ``span_s``, to the window's middle with one velocity: under a constant image
+    acceleration ``a`` an event ``t`` off the middle lands ``a t^2 / 2`` off, so the corner shows ``a span^2 / 24`` (the
+    mean) towards the acceleration, the inside of a turn. ``a`` is each track's own, from its last two steps (``motion``:
+    track id -> (velocity of its last step px/s, the shift removed from it px), that step ``dt_prev_s`` long); only the
+    change of the shift since the previous MCI is removed, so a track keeps the shift it was born with. ``gain``
+    scales the model; ``perpendicular`` keeps only the part across the track's motion.
+    """
+    out = p1.copy()
+    idx = np.flatnonzero(ok)
+    tids = ids[idx].tolist()
+    v = (p1[idx].astype(np.float64) - p0[idx]) / max(dt_s, 1e-6)
+    s = np.zeros_like(v)
+    has = np.array([t in motion for t in tids], bool)
+    if dt_prev_s > 0 and has.any():
+        h = np.flatnonzero(has)
+        v0 = np.array([motion[tids[k]][0] for k in h]).reshape(-1, 2)
+        s0 = np.array([motion[tids[k]][1] for k in h]).reshape(-1, 2)
+        acc = (v[h] - v0) / (0.5 * (dt_s + dt_prev_s))
+        sh = gain * acc * span_s ** 2 / 24.0
+        if perpendicular:
+            u = v[h] / np.maximum(np.hypot(v[h, 0], v[h, 1]), 1e-9)[:, None]
+            sh = sh - u * (sh * u).sum(axis=1)[:, None]
+        s[h] = sh
+        out[idx[h]] = p1[idx[h]] - (sh - s0)
+    return out, {t: (v[k], s[k]) for k, t in enumerate(tids)}
+
+
 def patch_ncc(img0: np.ndarray, img1: np.ndarray, uv0: np.ndarray, uv1: np.ndarray, radius: int = 5) -> np.ndarray:
     """Normalised cross-correlation of the (2 radius + 1)^2 patches around ``uv0`` in ``img0`` and ``uv1`` in ``img1``
     (nearest pixel; -1 where a patch leaves the image or is flat), float64 (N,)."""
@@ -187,3 +219,7 @@ class FrontendTracks:
     init_frames: int = 0
     stepped: set = field(default_factory=set)
     """Ids of the live tracks already carried through an MCI-to-MCI step (``FeatureConfig.klt_first_step_max_residual_px``)."""
+    motion: dict = field(default_factory=dict)
+    """Track id -> (image velocity of its last step px/s, the warp shift removed from it px) (``FeatureConfig.klt_curvature_gain``)."""
+    prev_step_s: float = 0.0
+    """Time between the last two MCIs tracked across, s (0 before the first step)."""
