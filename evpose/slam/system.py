@@ -35,7 +35,7 @@ from evpose.slam.bundle_adjustment import local_bundle_adjustment
 from evpose.slam.coasting import constant_velocity_pose
 from evpose.slam.config import SlamConfig, SlamMode
 from evpose.slam.event_window import WINDOW_REASONS, EventWindowSelector, ReconstructionWindow
-from evpose.slam.features import FrontendTracks, detect_features, remove_curvature_shift, step_consistent, track_features
+from evpose.slam.features import FrontendTracks, detect_features, step_consistent, track_features
 from evpose.slam.inertial import InertialConfiguration, imu_init_due, initialize_imu
 from evpose.slam.inertial_bridge import predict_camera_pose
 from evpose.slam.inertial_ba import InertialState, inertial_local_bundle_adjustment
@@ -204,13 +204,8 @@ class EventSlam(GyroAids, VisualFailureHandling):
             if gate:
                 first = np.array([t not in fe.stepped for t in fe.ids.tolist()], bool)
                 ok &= step_consistent(fe.uv, new, ok, first, self.cfg.features.klt_first_step_max_residual_px)
-            fc = self.cfg.features
-            if fc.klt_curvature_gain > 0:
-                dt = (mci.t_us - fe.prev_t) * 1e-6
-                span = dt / max(1.0 - self.cfg.window.overlap, 1e-3)  # overlapping windows: each spans this
-                new, fe.motion = remove_curvature_shift(fe.uv, new, ok, fe.ids, fe.motion, dt, fe.prev_step_s, span,
-                                                        fc.klt_curvature_gain, fc.klt_curvature_perpendicular)
-                fe.prev_step_s = dt
+            if self.cfg.features.klt_curvature_gain > 0:
+                new = fe.remove_curvature_shift(new, ok, mci.t_us, self.cfg.features, self.cfg.window.overlap)
             fe.ids, fe.uv = fe.ids[ok], new[ok]
             if gate:  # only the gate reads which tracks have stepped: no per-MCI set otherwise
                 fe.stepped = set(fe.ids.tolist())
