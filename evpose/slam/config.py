@@ -182,9 +182,12 @@ class FeatureConfig:
     perturbations ``ba_huber_px`` 1.9 / 2.1 and ``reprojection_threshold_px`` 2.4), 0.5 across: mean ATE 2.77 -> 2.50 %,
     median 2.23 -> 2.02, within 2 % 40 -> 46, paired -0.28 +- 0.17 points, 55 better; with ``klt_curvature_max_px``
     0.3: -0.27 +- 0.20 (47 within 2 %); gain 1 in full over 60 runs -0.41 +- 0.25. E-I-C2 landing seeds 0-3 (0.5
-    across): ATE 0.81 -> 0.68 %, RPE at most 0.0031 m/m and 0.0016 deg/m. But indoor event-only seeds 0-3 with the same
-    four settings (16 runs): 8.14 -> 8.82 % (paired +0.69 +- 0.73, 5 better; defaults alone 8.43 -> 10.78 %, tracked
-    95.5 -> 92.8 %), with the 0.3 px clip 9.96 % (+1.82 +- 1.05). So off. CPU 0.16 ms per MCI at 150 tracks."""
+    across): ATE 0.81 -> 0.68 %, RPE at most 0.0031 m/m and 0.0016 deg/m. But on top of
+    ``klt_first_step_max_residual_px`` 3 (landing seeds 0-23, 1.75 / 2.52 %) it is worse: 2.72 / 2.12 %, within 2 % 16
+    -> 9 of 24, paired +0.29 +- 0.37. Indoor event-only seeds 0-3 with the same four settings and seeds 4-7 with the
+    defaults (20 runs): 8.80 -> 9.03 % (paired +0.23 +- 0.66, 8 better; seeds 0-3 defaults 8.43 -> 10.78 %, tracked
+    95.5 -> 92.8 %; seeds 4-7 11.44 -> 9.87 %); with the 0.3 px clip, seeds 0-3, 16 runs: 8.14 -> 9.96 % (+1.82 +-
+    1.05). So off. CPU 0.16 ms per MCI at 150 tracks."""
     klt_curvature_perpendicular: bool = False
     """``klt_curvature_gain``: only the part across each track's motion (the turn's), not along it."""
     klt_curvature_max_px: float = field(default=0.0, metadata={"min": 0.0, "max": 5.0, "step": 0.05, "unit": "px"})
