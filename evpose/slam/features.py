@@ -7,6 +7,26 @@ the backward pass) where the map's constant-velocity motion moves them (map poin
 homography of the plane fitted to the map points) kept about twice as many tracks per keyframe pair there and cut the
 keyframe rotation error 1.84 -> 1.48 deg, but made the ATE worse (session 12, landing seeds 0-11 with two
 perturbations, 24 runs: paired +0.73 +- 0.29 points, seed 7 5.59 -> 9.31 %), so it was not kept.
+
+Session 15 (``/tmp/s15/turnbias``: ``trk.py`` records each track's error against the true projection of its birth
+ray-cast, ``an*.py`` analyse it; event-only landing seeds 1, 2, 3, 7, 4465-4742 observations each, median error
+1.50-1.64 px). What the error follows, Spearman rank correlation: the track's age 0.18-0.22; the angle the true image
+flow at the track turned through since its birth 0.17-0.21 (median error 1.0-1.25 px below 5 deg, 2.6-3.1 px above 80
+deg, but much of it is age; a shift along the flow direction, fitted as ``e = a (d_now - d_birth)``, explains 1.0-2.3
+% of the error's variance); the root of the summed squares of the track's MCI-to-MCI step residuals against each MCI's
+RANSAC homography of all steps 0.68-0.72 (quintile median errors 0.4-0.5 / 0.9-1.0 / 1.6-1.7 / 2.6-2.9 / 5.0-5.3 px).
+After removing each MCI's affine fit of the errors, edge-like patches (structure-tensor eigenvalue ratio below 0.1)
+are off by 1.6-2.0 px against 1.3-1.4 for corners (0.1-0.2), and edges along the flow (gradient across it) more than
+edges across it (1.8-2.2 / 1.4-1.5 px); the MCI's hypothesis matters little (H1 / H2 / H3 1.46-1.71 / 1.66-1.73 /
+1.39-1.63 px). Per step, the error grows 0.27-0.34 px (median) where the flow turned by under 2 deg and 0.9-1.1 px
+where it turned 10-20 deg: those are the slow, long MCIs of the turn into the second leg (1.2-2.1 s: 40-70 ms apart,
+3000-10000 events, sharpness 0.07-0.2, against 20-35 ms, 11000-23000 events and 0.25-0.47 elsewhere). Using the
+step-residual sum (negative, removed; seeds 0-11, defaults 2.52 %, 5 of 12 within 2 %): ending a track over 2 / 3 / 4
+/ 6 px 4.71 / 2.85 / 2.29 / 3.45 % (0 / 4 / 4 / 3); continuing it under a new id (its point left to re-finding) at 2 /
+3 / 4 / 5 px 3.89 / 3.12 / 2.62 / 3.67 % (2 / 4 / 4 / 4); local-BA sigma ``sqrt(1 + w d2)`` at w 0.25 / 1 / 4 3.53 /
+4.01 / 3.35 % (5 / 2 / 4). A fixed shift along the track's own step direction (0.3 / 0.6 / 1.0 px: 2.68 / 2.05 / 2.42
+%, 7 / 9 / 4; 0.6 over 60 runs, seeds 0-23 and three perturbations: paired -0.29 +- 0.20 points, 35 of 60 better) was
+not kept; its better-founded form is :func:`remove_curvature_shift`.
 """
 
 from __future__ import annotations
@@ -143,6 +163,43 @@ def step_consistent(p0: np.ndarray, p1: np.ndarray, ok: np.ndarray, judge: np.nd
     return keep
 
 
+def remove_curvature_shift(p0: np.ndarray, p1: np.ndarray, ok: np.ndarray, ids: np.ndarray, motion: dict, dt_s: float,
+                           dt_prev_s: float, span_s: float, gain: float, perpendicular: bool,
+                           max_shift_px: float = 0.0) -> tuple[np.ndarray, dict]:
+    """Tracks ``p0`` -> ``p1`` (one MCI-to-MCI step of ``dt_s``) less the change of the shift a constant-velocity warp
+    leaves where the image motion accelerates; returns (corrected ``p1``, the new ``motion`` of the ``ok`` tracks).
+
+    An MCI warps its events, spread over ``span_s``, to the window's middle with one velocity: under a constant image
+    acceleration ``a`` an event ``t`` off the middle lands ``a t^2 / 2`` off, so the corner shows ``a span^2 / 24`` (the
+    mean) towards the acceleration, the inside of a turn. ``a`` is each track's own, from its last two steps (``motion``:
+    track id -> (velocity of its last step px/s, the shift removed from it px), that step ``dt_prev_s`` long); only the
+    change of the shift since the previous MCI is removed, so a track keeps the shift it was born with. ``gain``
+    scales the model; ``perpendicular`` keeps only the part across the track's motion; ``max_shift_px`` > 0 clips
+    each shift's length (a KLT jump or a step across a blank gap makes a huge acceleration).
+    """
+    out = p1.copy()
+    idx = np.flatnonzero(ok)
+    tids = ids[idx].tolist()
+    v = (p1[idx].astype(np.float64) - p0[idx]) / max(dt_s, 1e-6)
+    s = np.zeros_like(v)
+    has = np.array([t in motion for t in tids], bool)
+    if dt_prev_s > 0 and has.any():
+        h = np.flatnonzero(has)
+        v0 = np.array([motion[tids[k]][0] for k in h]).reshape(-1, 2)
+        s0 = np.array([motion[tids[k]][1] for k in h]).reshape(-1, 2)
+        acc = (v[h] - v0) / (0.5 * (dt_s + dt_prev_s))
+        sh = gain * acc * span_s ** 2 / 24.0
+        if perpendicular:
+            u = v[h] / np.maximum(np.hypot(v[h, 0], v[h, 1]), 1e-9)[:, None]
+            sh = sh - u * (sh * u).sum(axis=1)[:, None]
+        if max_shift_px > 0:
+            n = np.hypot(sh[:, 0], sh[:, 1])
+            sh = np.where((n > max_shift_px)[:, None], sh * (max_shift_px / np.maximum(n, 1e-12))[:, None], sh)
+        s[h] = sh
+        out[idx[h]] = p1[idx[h]] - (sh - s0)
+    return out, {t: (v[k], s[k]) for k, t in enumerate(tids)}
+
+
 def patch_ncc(img0: np.ndarray, img1: np.ndarray, uv0: np.ndarray, uv1: np.ndarray, radius: int = 5) -> np.ndarray:
     """Normalised cross-correlation of the (2 radius + 1)^2 patches around ``uv0`` in ``img0`` and ``uv1`` in ``img1``
     (nearest pixel; -1 where a patch leaves the image or is flat), float64 (N,)."""
@@ -187,3 +244,17 @@ class FrontendTracks:
     init_frames: int = 0
     stepped: set = field(default_factory=set)
     """Ids of the live tracks already carried through an MCI-to-MCI step (``FeatureConfig.klt_first_step_max_residual_px``)."""
+    motion: dict = field(default_factory=dict)
+    """Track id -> (image velocity of its last step px/s, the warp shift removed from it px) (``FeatureConfig.klt_curvature_gain``)."""
+    prev_step_s: float = 0.0
+    """Time between the last two MCIs tracked across, s (0 before the first step)."""
+
+    def remove_curvature_shift(self, new: np.ndarray, ok: np.ndarray, t_us: int, cfg: FeatureConfig, overlap: float) -> np.ndarray:
+        """:func:`remove_curvature_shift` on the step from ``uv`` (at ``prev_t``) to ``new`` (at ``t_us``), keeping its
+        state; each window spans the MCI spacing over ``1 - overlap``."""
+        dt = (t_us - self.prev_t) * 1e-6
+        out, self.motion = remove_curvature_shift(self.uv, new, ok, self.ids, self.motion, dt, self.prev_step_s,
+                                                  dt / max(1.0 - overlap, 1e-3), cfg.klt_curvature_gain,
+                                                  cfg.klt_curvature_perpendicular, cfg.klt_curvature_max_px)
+        self.prev_step_s = dt
+        return out

@@ -204,6 +204,8 @@ class EventSlam(GyroAids, VisualFailureHandling):
             if gate:
                 first = np.array([t not in fe.stepped for t in fe.ids.tolist()], bool)
                 ok &= step_consistent(fe.uv, new, ok, first, self.cfg.features.klt_first_step_max_residual_px)
+            if self.cfg.features.klt_curvature_gain > 0:
+                new = fe.remove_curvature_shift(new, ok, mci.t_us, self.cfg.features, self.cfg.window.overlap)
             fe.ids, fe.uv = fe.ids[ok], new[ok]
             if gate:  # only the gate reads which tracks have stepped: no per-MCI set otherwise
                 fe.stepped = set(fe.ids.tolist())
