@@ -308,7 +308,8 @@ class InitializationConfig:
     the fit's solution reports the small parallax there really is): indoor event-only seeds 0-7 mean ATE 9.94 -> 7.08 %
     (7 of 8 better), tracked 93.7 -> 92.9 % (min 86.8 -> 87.0); with the neutral perturbations ``ba_huber_px`` 1.9 / 2.1
     and ``reprojection_threshold_px`` 2.4 (32 runs) paired -1.43 +- 0.60 (s.e.) points, better in 21, tracked 93.6 ->
-    92.4 %, no run under 80 %. But landing event-only seeds 0-11 2.52 -> 5.23 % (within 2 %: 5 -> 2 of 12): over the
+    92.4 %, no run under 80 %; held-out seeds 8-11 (``/tmp/s14/eoindoor/sim``) 10.72 -> 7.87 % (all 4 better), tracked 91.0
+    -> 89.7 % (min 84.4 -> 84.1). But landing event-only seeds 0-11 2.52 -> 5.23 % (within 2 %: 5 -> 2 of 12): over the
     landing's wider baselines the fit soaks up translation flow and the count is right (the near-planar ground). E-I-C2
     landing seeds 0-3 0.81 -> 0.86 %, RPE within target (at most 0.0031 m/m, 0.0014 deg/m). Off: an opt-in for rooms
     (with ``min_parallax_deg`` 0.5). 0.5 alone: indoor 6.87 % but tracked 84.9 % (min 65.2: maps wait for 1 deg);
