@@ -318,6 +318,9 @@ class InitializationConfig:
     3 runs under 80 %), for re-initialisations only 7.21 % (32 runs -1.02 +- 0.62, tracked 88.3 %, 3 under 80 %);
     landing seeds 0 / 1 1.01 / 4.63 -> 8.11 / 9.20 %; ``homography_ratio`` 0.5 or 1 (always the essential matrix):
     indoor 8.67 %, tracked 90.6 % (min 77.2)."""
+    homography_fit_depth_spread: float = field(default=0.0, metadata={"min": 0.0, "max": 5.0, "step": 0.05, "unit": "ratio"})
+    """``homography_fit_share`` applies only when the best-count decomposition's triangulated depths spread more than
+    this (standard deviation over median): a scene it places on a plane keeps the count's choice, ratio."""
     min_triangulated: int = field(default=15, metadata={"min": 8, "max": 500, "step": 1, "unit": "points"})
     """Fewest good triangulated points to accept the map, points."""
     max_frames: int = field(default=8, metadata={"min": 1, "max": 100, "step": 1, "unit": "MCIs"})

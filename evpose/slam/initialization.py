@@ -88,6 +88,13 @@ def _evaluate(K, R, t, p1, p2, cfg) -> tuple[int, np.ndarray, np.ndarray, np.nda
     return int(good.sum()), good, X, T_wc2
 
 
+def _depth_spread(candidate) -> float:
+    """Standard deviation of a decomposition's good triangulated depths over their median (a plane seen face-on: small)."""
+    _, good, X, _ = candidate
+    z = X[good, 2]
+    return float(np.std(z) / abs(np.median(z))) if z.size >= 2 and np.median(z) != 0 else np.inf
+
+
 def initialize_two_view(K: np.ndarray, p1: np.ndarray, p2: np.ndarray, cfg: InitializationConfig, seed: int = 0) -> TwoViewResult:
     """Relative pose and structure from matched ideal-pinhole pixels ``p1`` (first view) and ``p2`` (second)."""
     p1 = np.asarray(p1, np.float64).reshape(-1, 2)
@@ -150,7 +157,7 @@ def initialize_two_view(K: np.ndarray, p1: np.ndarray, p2: np.ndarray, cfg: Init
     counts = sorted((c[0] for c in candidates), reverse=True)
     best = max(candidates, key=lambda c: c[0])
     share = cfg.homography_fit_share
-    if model.startswith("homography") and share > 0 and len(counts) > 1:
+    if model.startswith("homography") and share > 0 and len(counts) > 1 and _depth_spread(best) > cfg.homography_fit_depth_spread:
         # The rays' pure-rotation fit, not the cheirality count, picks among the well-supported decompositions.
         eligible = [c for c in candidates if c[0] >= share * counts[0]]
         best = min(eligible, key=lambda c: rotation_fit_disagreement_deg(K, p1, p2, c[3]))

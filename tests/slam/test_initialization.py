@@ -107,3 +107,11 @@ def test_homography_fit_share_takes_the_decomposition_nearest_the_rays_rotation(
         return np.degrees(Rotation.from_matrix(res.T_wc2[:3, :3].T @ T_true[:3, :3]).magnitude())
 
     assert rot_err(by_fit) < 2.0 < 4.0 < rot_err(by_count)
+
+
+def test_homography_fit_depth_spread_keeps_the_count_choice_on_a_plane():
+    p1, p2, _, _ = _views(True)
+    ungated = initialize_two_view(K, p1, p2, InitializationConfig(homography_fit_share=0.5, min_parallax_deg=0.2))
+    gated = initialize_two_view(K, p1, p2, InitializationConfig(homography_fit_share=0.5, min_parallax_deg=0.2, homography_fit_depth_spread=0.2))
+    assert ungated.ok and gated.ok
+    assert ungated.model == "homography+fit" and gated.model == "homography"
