@@ -98,8 +98,8 @@ def _sideways_views(seed=0, n=40, noise=0.7):
 
 def test_homography_fit_share_takes_the_decomposition_nearest_the_rays_rotation():
     p1, p2, T_true = _sideways_views()
-    by_count = initialize_two_view(K, p1, p2, InitializationConfig())
-    by_fit = initialize_two_view(K, p1, p2, InitializationConfig(homography_fit_share=0.5, min_parallax_deg=0.2))
+    by_count = initialize_two_view(K, p1, p2, InitializationConfig(homography_fit_share=0.0, min_parallax_deg=1.0))
+    by_fit = initialize_two_view(K, p1, p2, InitializationConfig(homography_fit_share=0.5, homography_fit_depth_spread=0.0, min_parallax_deg=0.2))
     assert by_count.ok and by_fit.ok, (by_count.reason, by_fit.reason)
     assert by_count.model == "homography" and by_fit.model == "homography+fit"
 
@@ -111,7 +111,7 @@ def test_homography_fit_share_takes_the_decomposition_nearest_the_rays_rotation(
 
 def test_homography_fit_depth_spread_keeps_the_count_choice_on_a_plane():
     p1, p2, _, _ = _views(True)
-    ungated = initialize_two_view(K, p1, p2, InitializationConfig(homography_fit_share=0.5, min_parallax_deg=0.2))
+    ungated = initialize_two_view(K, p1, p2, InitializationConfig(homography_fit_share=0.5, homography_fit_depth_spread=0.0, min_parallax_deg=0.2))
     gated = initialize_two_view(K, p1, p2, InitializationConfig(homography_fit_share=0.5, min_parallax_deg=0.2, homography_fit_depth_spread=0.2))
     assert ungated.ok and gated.ok
     assert ungated.model == "homography+fit" and gated.model == "homography"
