@@ -81,6 +81,10 @@ class EventSlam(GyroAids, VisualFailureHandling):
         if self.imu is not None:
             mcfg = replace(mcfg, reference_fraction=mcfg.reference_fraction_inertial)
         self.mci_gen = MciGenerator(mcfg, config.image, self.K, self.width, self.height, config.seed)
+        icfg = config.initialization
+        self._init_cfg = icfg if self.imu is None else replace(icfg, homography_fit_share=icfg.homography_fit_share_inertial,
+                                                                min_parallax_deg=icfg.min_parallax_deg_inertial)
+        """Two-view settings of this run's mode (event-inertial runs keep their own parallax and decomposition choice)."""
         self.atlas = Atlas()
         self.fe = FrontendTracks()
         self.results: list[SlamStepResult] = []
@@ -256,7 +260,7 @@ class EventSlam(GyroAids, VisualFailureHandling):
 
     # ------------------------------------------------------- initialisation
     def _try_initialise(self, mci: MciResult) -> tuple[SlamStatus, str, np.ndarray | None]:
-        fe, icfg = self.fe, self.cfg.initialization
+        fe, icfg = self.fe, self._init_cfg
         if fe.init_ref is None:
             self._replenish(mci.image8, mci.image)
             fe.init_ref = {int(t): uv.astype(np.float64) for t, uv in zip(fe.ids.tolist(), fe.uv)}

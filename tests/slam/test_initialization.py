@@ -75,3 +75,43 @@ def test_refit_leaves_a_wide_baseline_initialisation_where_it_was():
     assert res.model.endswith("+refit")
     R_err = Rotation.from_matrix(res.T_wc2[:3, :3].T @ T_true[:3, :3]).magnitude()
     assert np.degrees(R_err) < 0.5
+
+
+def _sideways_views(seed=0, n=40, noise=0.7):
+    """A depth-varied scene seen across 9 cm of sideways motion and 2.3 deg of yaw: the homography scores past
+    ``homography_ratio`` and its decomposition turns the camera degrees too far."""
+    rng = np.random.default_rng(seed)
+    z = rng.uniform(1.5, 4.0, n)
+    X = np.c_[rng.uniform(-1.5, 1.5, n), rng.uniform(-1.0, 1.0, n), z]
+    T_wc2 = np.eye(4)
+    T_wc2[:3, :3] = Rotation.from_rotvec([0.0, -0.04, 0.0]).as_matrix()
+    T_wc2[:3, 3] = [-0.09, 0.0, 0.0]
+
+    def proj(T_wc):
+        T_cw = invert_pose(T_wc)
+        Xc = X @ T_cw[:3, :3].T + T_cw[:3, 3]
+        return Xc[:, :2] / Xc[:, 2:3] @ K[:2, :2].T + K[:2, 2]
+
+    return proj(np.eye(4)) + rng.normal(0, noise, (n, 2)), proj(T_wc2) + rng.normal(0, noise, (n, 2)), T_wc2
+
+
+
+def test_homography_fit_share_takes_the_decomposition_nearest_the_rays_rotation():
+    p1, p2, T_true = _sideways_views()
+    by_count = initialize_two_view(K, p1, p2, InitializationConfig(homography_fit_share=0.0, min_parallax_deg=1.0))
+    by_fit = initialize_two_view(K, p1, p2, InitializationConfig(homography_fit_share=0.5, homography_fit_depth_spread=0.0, min_parallax_deg=0.2))
+    assert by_count.ok and by_fit.ok, (by_count.reason, by_fit.reason)
+    assert by_count.model == "homography" and by_fit.model == "homography+fit"
+
+    def rot_err(res):
+        return np.degrees(Rotation.from_matrix(res.T_wc2[:3, :3].T @ T_true[:3, :3]).magnitude())
+
+    assert rot_err(by_fit) < 2.0 < 4.0 < rot_err(by_count)
+
+
+def test_homography_fit_depth_spread_keeps_the_count_choice_on_a_plane():
+    p1, p2, _, _ = _views(True)
+    ungated = initialize_two_view(K, p1, p2, InitializationConfig(homography_fit_share=0.5, homography_fit_depth_spread=0.0, min_parallax_deg=0.2))
+    gated = initialize_two_view(K, p1, p2, InitializationConfig(homography_fit_share=0.5, min_parallax_deg=0.2, homography_fit_depth_spread=0.2))
+    assert ungated.ok and gated.ok
+    assert ungated.model == "homography+fit" and gated.model == "homography"
