@@ -36,7 +36,9 @@ from evpose.core.contour_map import ContourMap
 from evpose.errors import InputError
 from evpose.fusion import FusionMotionPredictor, MapPolaritySelector, PolarityPredictor, make_fusion
 from evpose.fusion.ego_motion import EgoMotionFilter
-from evpose.tracker.config import TrackerConfig, TrackerMode
+from evpose.tracker.config import MotionModel, TrackerConfig, TrackerMode
+from evpose.tracker.motion_filter import ConstantVelocityKalman
+from evpose.tracker.predictor import ConstantPosePredictor, ConstantVelocityPredictor
 
 
 @dataclass
@@ -75,3 +77,12 @@ def build_motion_components(
             selector.latest_state = motion
     ego = EgoMotionFilter(config.ego_motion) if (mode is TrackerMode.FULL and config.ego_motion.enabled) else None
     return MotionComponents(motion, selector, ego, drives_pose=mode is TrackerMode.FULL)
+
+
+def unfused_predictor(config: TrackerConfig):
+    """The motion model of the modes without IMU fusion (``config.motion_model``)."""
+    if config.motion_model is MotionModel.CONSTANT_POSE:
+        return ConstantPosePredictor()
+    if config.motion_model is MotionModel.KALMAN:
+        return ConstantVelocityKalman(config.motion_filter)
+    return ConstantVelocityPredictor(window_us=int(round(float(config.velocity_window_ms) * 1e3)))

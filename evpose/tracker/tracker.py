@@ -43,12 +43,12 @@ from evpose.tracker.edge_offsets import EdgeOffsetLearner
 from evpose.tracker.event_registration import event_registration_for
 from evpose.tracker.map_refinement import PaintedEdgeRefiner
 from evpose.tracker.motion_filter import ConstantVelocityKalman
-from evpose.tracker.predictor import ConstantPosePredictor, ConstantVelocityPredictor, MotionPredictor
+from evpose.tracker.predictor import ConstantVelocityPredictor, MotionPredictor
 from evpose.tracker.registration import polarity_trail, register_to_map, strided_subset
 from evpose.tracker.step_result import StepResult, TrackStatus, step_debug
 from evpose.tracker.stpe_pose import stpe_pose
 from evpose.tracker.track_hold import ACQUIRE_UPDATES, TrackHold  # noqa: F401 (ACQUIRE_UPDATES re-exported)
-from evpose.tracker.modes import MotionComponents
+from evpose.tracker.modes import MotionComponents, unfused_predictor
 from evpose.tracker.visible_map import VisibleMap, field_box, visible_points
 from evpose.tracker.wall_occlusion import visible_over_walls, wall_foot_mask
 
@@ -135,14 +135,7 @@ class Tracker:
             predictor = self.components.motion
         if polarity_selector is None:
             polarity_selector = self.components.polarity_selector
-        if predictor is None:
-            if config.motion_model is MotionModel.CONSTANT_POSE:
-                predictor = ConstantPosePredictor()
-            elif config.motion_model is MotionModel.KALMAN:
-                predictor = ConstantVelocityKalman(config.motion_filter)
-            else:
-                predictor = ConstantVelocityPredictor(window_us=int(round(float(config.velocity_window_ms) * 1e3)))
-        self.predictor = predictor
+        self.predictor = predictor if predictor is not None else unfused_predictor(config)
         self.polarity_selector = polarity_selector
         eo = config.edge_offsets
         for_mode = eo.full if self.components.drives_pose else eo.stpe_filter if polarity_selector is not None else True
