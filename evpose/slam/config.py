@@ -190,7 +190,10 @@ class FeatureConfig:
     -> 9 of 24, paired +0.29 +- 0.37. Indoor event-only seeds 0-3 with the same four settings and seeds 4-7 with the
     defaults (20 runs): 8.80 -> 9.03 % (paired +0.23 +- 0.66, 8 better; seeds 0-3 defaults 8.43 -> 10.78 %, tracked
     95.5 -> 92.8 %; seeds 4-7 11.44 -> 9.87 %); with the 0.3 px clip, seeds 0-3, 16 runs: 8.14 -> 9.96 % (+1.82 +-
-    1.05). So off. CPU 0.16 ms per MCI at 150 tracks."""
+    1.05). So off. CPU 0.16 ms per MCI at 150 tracks. Lead, after session 15's two-view initialisation
+    (``InitializationConfig.homography_fit_share``; defaults: landing seeds 0-11 / 12-23 2.37 / 3.18 %, 7 / 6 within 2
+    %, indoor seeds 0-7 7.39 %), 0.5 across (``/tmp/s15/lead/exp.py cg ...``): landing 2.10 / 2.80 %, 9 / 4 within 2 %
+    (13 of 24 either way), indoor 9.25 % (tracked 93.7 %, min 85.4): still off."""
     klt_curvature_perpendicular: bool = False
     """``klt_curvature_gain``: only the part across each track's motion (the turn's), not along it."""
     klt_curvature_max_px: float = field(default=0.0, metadata={"min": 0.0, "max": 5.0, "step": 0.05, "unit": "px"})
