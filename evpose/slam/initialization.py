@@ -46,7 +46,8 @@ class TwoViewResult:
     good: np.ndarray | None = None
     """Mask of the matches that became map points (N,)."""
     model: str = ""
-    """"essential" or "homography"."""
+    """"essential" or "homography"; "+refit" when the pose was re-estimated near the rays' pure-rotation fit
+    (``refit_disagreement_deg``), "+fit" when that fit picked the homography decomposition (``homography_fit_share``)."""
     homography_ratio: float = 0.0
     """``S_H / (S_H + S_E)``."""
     median_parallax_deg: float = 0.0

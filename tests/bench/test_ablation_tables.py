@@ -14,11 +14,11 @@ def fake_runs(monkeypatch):
     calls = []
 
     def landing_case(work_dir, res, seconds, seed, scenario="landing"):
-        return (f"rec{seed}-{seconds}", res), "map"
+        return (seed, seconds, res), "map"  # (recording, map) stand-ins
 
     def ablation_run(recording, contour_map, mode, event_filter=None):
-        calls.append((recording[0], mode))
-        seed = int(recording[0][3])
+        seed, seconds, _ = recording
+        calls.append((seed, seconds, mode))
         return {"ate_rmse_mm": 10.0 * seed + len(mode), "are_rmse_deg": 0.1, "lost_updates": seed}
 
     monkeypatch.setattr(tracking, "landing_case", landing_case)
@@ -29,7 +29,7 @@ def fake_runs(monkeypatch):
 def test_long_ablation_runs_each_mode_on_each_3s_seed_and_reports_means(fake_runs):
     out = ft.bench_ablation_long(BenchContext(quick=False, work_dir=Path("unused"), seed=2))
     seeds = range(2, 2 + ft.ABLATION_SEEDS)
-    assert fake_runs == [(f"rec{s}-3.0", mode) for s in seeds for mode in ("stpe", "full", "full:ekf")]
+    assert fake_runs == [(s, 3.0, mode) for s in seeds for mode in ("stpe", "full", "full:ekf")]
     per = [10.0 * s + len("full:ekf") for s in seeds]
     assert out["346x260_3s_full_ekf_ate_rmse_mm_per_seed"] == per
     assert out["346x260_3s_full_ekf_ate_rmse_mm_mean"] == pytest.approx(sum(per) / len(per))
