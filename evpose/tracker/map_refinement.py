@@ -105,7 +105,9 @@ class MapRefinementConfig:
     seeds 0-3 ``full`` 7.77 / 9.40 -> 7.36 / 9.27 mm, ``stpe+filter`` 15.77 / 23.37 -> 14.90 / 19.59 mm, but the
     textured landing (seed 0, 346x260) ``stpe+filter`` 23.26 -> 25.94 mm (``full`` 10.08 -> 9.13) and every 4 s demo
     worse: ``full`` landing / fast / dynamic 15.81 / 23.81 / 15.64 -> 15.84 / 24.74 / 16.14 mm, ``stpe+filter``
-    171.6 / 1579 / 61.9 -> 181.5 / 1600 / 65.6 mm."""
+    171.6 / 1579 / 61.9 -> 181.5 / 1600 / 65.6 mm. Session 16, ``full`` with the event registration (6.38 / 5.91 mm
+    at 346x260 seeds 0-3 / 4-7, 7.25 / 8.49 at 240x180): held out for 10 updates 6.15 / 6.12, 7.14 / 8.94 mm; for
+    ever 6.52 mm (346x260 seeds 0-3); not changed."""
     hold_out_filtered: bool = True
     """``register_after_updates`` in ``stpe+filter`` too: a held-out painted point keeps its patch in ``T_align``
     (the polarity filter's field shows the composed points' patches alone, so a point left out of them would never

@@ -70,6 +70,9 @@ class RegistrationConfig:
     Gauss-Newton steps with the second-order covariance 6.43 / 8.88; second-order steps with the first-order
     covariance 6.27 / 9.27, or with its shape scaled to the second-order determinant 6.44 / 7.90 mm. The 346x260 gain
     is the larger covariance (as the field's covariance scaled 10x before combining), not the steps.
+    Session 16: the second-order covariance is not over-confident at the scale that matters (the cost's rise at +-3
+    claimed standard deviations is 0.2-0.9 of the claim in the weak directions); capping the information by that
+    rise helps 346x260 and costs 240x180 (see :mod:`evpose.tracker.event_registration`).
 
     Session 9, not kept: the gradient and curvature projected on each point's projected edge normal (along the edge
     the field only shows its events' scatter): ``stpe`` seeds 0-3 13.42 / 19.00 -> 14.00 / 18.34 mm at 346x260 /
