@@ -42,7 +42,9 @@ class DistanceFieldConfig:
     at 1-4 px of motion per ``eta``; and it flattens thin (slow-edge) minima, so
     with 5 px half the true edge points of the simulated landing read TDF > 0.7. Session 7, ``stpe`` at 240x180
     (seeds 0-3, mean ATE), where a pixel is 1.44x wider than at 346x260: 1 / 3 / 5 px gave 39.65 / 23.80 / 27.81 mm
-    (true-edge map: 19.40 / 16.83 / - mm)."""
+    (true-edge map: 19.40 / 16.83 / - mm). Session 16, ``full`` (3 px: 6.38 / 5.91 mm at 346x260 seeds 0-3 / 4-7,
+    7.25 at 240x180 seeds 0-3): 1 px 6.86 mm (seeds 0-3), 5 px 6.30 / 5.86 / 7.33 mm, 7 px 6.23 mm (seeds 0-3, ARE
+    0.075 against 0.066 deg): within the seeds' spread, not changed."""
     coarse_blur_px: int = field(default=0, metadata={"min": 0, "max": 41, "step": 2, "unit": "px"})
     """Blur of an extra, coarser field registered first to widen the basin of convergence (0 = single level), pixels.
 
