@@ -35,7 +35,7 @@ from evpose.slam.bundle_adjustment import local_bundle_adjustment
 from evpose.slam.coasting import constant_velocity_pose
 from evpose.slam.config import SlamConfig, SlamMode
 from evpose.slam.event_window import WINDOW_REASONS, EventWindowSelector, ReconstructionWindow
-from evpose.slam.features import FrontendTracks, detect_features, step_consistent, track_features
+from evpose.slam.features import FrontendTracks, detect_features, has_support, step_consistent, track_features
 from evpose.slam.inertial import InertialConfiguration, imu_init_due, initialize_imu
 from evpose.slam.inertial_bridge import predict_camera_pose
 from evpose.slam.inertial_ba import InertialState, inertial_local_bundle_adjustment
@@ -208,6 +208,9 @@ class EventSlam(GyroAids, VisualFailureHandling):
             if gate:
                 first = np.array([t not in fe.stepped for t in fe.ids.tolist()], bool)
                 ok &= step_consistent(fe.uv, new, ok, first, self.cfg.features.klt_first_step_max_residual_px)
+            fc = self.cfg.features
+            if fc.klt_min_support_ratio > 0 and self.imu is None and self._state is SlamStatus.OK:  # event-only, on a map
+                ok &= has_support(mci.image, new, fc.support_window_px, fc.klt_min_support_ratio)
             if self.cfg.features.klt_curvature_gain > 0:
                 new = fe.remove_curvature_shift(new, ok, mci.t_us, self.cfg.features, self.cfg.window.overlap)
             fe.ids, fe.uv = fe.ids[ok], new[ok]

@@ -5,7 +5,7 @@ import numpy as np
 
 from evpose.slam.config import FeatureConfig
 from evpose.slam.event_image import event_image, to_uint8
-from evpose.slam.features import FrontendTracks, detect_features, remove_curvature_shift, step_consistent
+from evpose.slam.features import FrontendTracks, detect_features, has_support, remove_curvature_shift, step_consistent
 
 
 def _corners_and_noise():
@@ -159,3 +159,13 @@ def test_frontend_curvature_step_times_the_steps_and_keeps_the_state():
     out = fe.remove_curvature_shift(c, np.ones(1, bool), 20_000, cfg, 0.5)
     assert fe.prev_step_s == dt and 7 in fe.motion
     assert np.allclose(out, _correct(a, b, c, dt)[0])
+
+
+def test_has_support_is_false_on_a_blank_patch_and_true_on_an_edge():
+    img = np.zeros((60, 80), np.float32)
+    img[30, 10:70] = 3.0  # an edge drawn by 180 events
+    img[5, 5] = 1.0  # one background-activity event
+    uv = np.array([[40.0, 30.4], [40.0, 45.0], [5.0, 5.0]])
+    assert has_support(img, uv, 7, 2.0).tolist() == [True, False, False]
+    # The mean mass per 7x7 square is 181 * 49 / 4800 = 1.85 events: a lone event is below one mean, the edge far above.
+    assert has_support(img, uv, 7, 0.5).tolist() == [True, False, True]

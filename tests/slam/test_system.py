@@ -144,3 +144,14 @@ def test_snapshot_and_restore_replay_identically():
     assert len(first) == len(second) >= 1
     for x, y in zip(first, second):
         assert np.array_equal(x.t, y.t) and np.array_equal(x.position, y.position)
+
+
+def test_support_gate_drops_tracks_on_empty_patches_only_while_a_map_is_tracked(radtan_recording, radtan_run):
+    # A floor no patch can meet: every track is dropped as soon as the map is tracked, so it is lost, but the two-view
+    # initialisation (not gated) still succeeds.
+    cfg = SlamConfig()
+    cfg.features.klt_min_support_ratio = 20.0
+    gated = run_slam(radtan_recording, cfg)
+    ok = lambda run: sum(r.status is SlamStatus.OK for r in run.results)
+    assert 0 < ok(gated) < ok(radtan_run)
+    assert any(r.status is SlamStatus.OK and "initialised" in r.reason for r in gated.results)
