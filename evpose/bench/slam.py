@@ -119,6 +119,8 @@ def _slam_latencies(rec, ctx: BenchContext, config=None) -> dict:
     out["realtime_factor"] = run.duration_s / wall if wall > 0 else 0.0
     out["mcis"] = len(res)
     out["ok_share"] = float(np.mean([r.status.value == "ok" for r in res])) if res else 0.0
+    # Time, not MCIs: the share of the recording tracked from the events (tracked_fraction counts coasted poses too).
+    out["visual_fraction"] = run.visual_fraction
     # Wall times on a shared machine depend on the other processes: the load average says how busy it was.
     out["load_average_1min"] = float(max(load_before, os.getloadavg()[0]))
     out["mode"] = config.mode.value
@@ -230,7 +232,7 @@ def bench_landing_seed_spread(ctx: BenchContext) -> dict:
 
     cv2.setNumThreads(1)
     load_before = os.getloadavg()[0]
-    ate, tracked, maps, cpu, rows = [], [], [], [], []
+    ate, tracked, visual, maps, cpu, rows = [], [], [], [], [], []
     for seed in range(ctx.seed, ctx.seed + LANDING_SEEDS):
         rec = _scenario_recording(ctx, "landing", seed)
         if rec is None:
@@ -239,11 +241,13 @@ def bench_landing_seed_spread(ctx: BenchContext) -> dict:
         m = atlas_metrics(run.trajectories(), rec.ground_truth, correct_scale=True, duration_s=run.duration_s)
         ate.append(m.ate_percent)
         tracked.append(m.tracked_fraction)
+        visual.append(run.visual_fraction)
         maps.append(len(m.maps))
         cpu.extend(r.timings_ms["mci_cpu"] + r.timings_ms["tracking_cpu"] for r in run.results)
-        rows.append(f"s{seed} {m.ate_percent:.2f}% {len(m.maps)}m {100 * m.tracked_fraction:.0f}%")
+        rows.append(f"s{seed} {m.ate_percent:.2f}% {len(m.maps)}m {100 * m.tracked_fraction:.0f}% (events {100 * run.visual_fraction:.0f}%)")
     out = {f"ate_percent_{k}": v for k, v in spread_summary(ate, 2.0).items()}
     out["tracked_fraction_min"] = float(min(tracked))
+    out["visual_fraction_min"] = float(min(visual))
     out["maps_max"] = int(max(maps))
     out["per_mci_cpu_median_ms"] = float(np.median(cpu)) if cpu else float("nan")
     out["per_seed"] = "; ".join(rows)

@@ -90,6 +90,9 @@ def main(
         "config": config_to_dict(cfg),
         "mcis": len(run.results),
         "status_counts": dict(sorted(Counter(r.status.value for r in run.results).items())),
+        # Seconds under each status: a map's tracked time also holds its coasted poses; "ok" is what the events tracked.
+        "time_by_status_s": run.time_by_status_s(),
+        "visual_fraction": run.visual_fraction,
         "hypothesis_counts": dict(sorted(Counter(r.hypothesis for r in run.results).items())),
         "maps": [{"id": m.id, "poses": len(m.traj_t), "keyframes": len(m.keyframes), "points": len(m.points), "lost_reason": m.lost_reason,
                   "imu_initialised": m.imu_initialised, "imu_scale": m.scale} for m in maps],

@@ -10,6 +10,10 @@
   product (m s). The distance uses ground-truth positions at the estimate
   times, because event-only maps have no metric scale of their own.
 - **ATE** of each aligned map, and as a share of its travelled distance.
+- **Time per status** (:func:`status_durations_s`): how much of the recording each
+  step status covers. A map's tracked time counts every pose it holds, coasted
+  ones (event-only, no visual fix) included; the share under ``ok`` is the time
+  actually tracked from the events.
 - **Scale drift** of each map: the map is cut into segments of ``segment_s``
   seconds, each is Sim(3)-aligned to ground truth on its own, and the spread of
   the segment scales (largest over smallest, minus one) says how far the map's
@@ -115,6 +119,23 @@ class SlamMetrics:
             "scale_drift_percent_max": max((m.scale_drift_percent for m in self.maps if np.isfinite(m.scale_drift_percent)), default=None),
             "per_map": [vars(m) | {"ate_percent": m.ate_percent, "scale_drift_percent": _finite_or_none(m.scale_drift_percent)} for m in self.maps],
         }
+
+
+def status_durations_s(t_us: np.ndarray, statuses: list[str], start_us: int, end_us: int) -> dict[str, float]:
+    """Seconds of ``[start_us, end_us]`` under each step status: the span from the previous MCI (the first: from
+    ``start_us``) to each MCI is credited to that MCI's status, whose window of events it covers; what follows the last
+    MCI is credited to ``"none"`` (no MCI yet / any more). ``t_us`` must be sorted (one entry per MCI)."""
+    t = np.asarray(t_us, np.int64)
+    if t.ndim != 1 or len(t) != len(statuses):
+        raise ValueError(f"status_durations_s: {t.shape} times for {len(statuses)} statuses")
+    if len(t) > 1 and np.any(np.diff(t) < 0):
+        raise ValueError("status_durations_s: MCI times must be sorted")
+    edges = np.clip(np.concatenate(([start_us], t, [end_us])), start_us, max(start_us, end_us))
+    spans = np.diff(edges) / 1e6
+    out: dict[str, float] = {}
+    for status, span in zip(list(statuses) + ["none"], spans):
+        out[status] = out.get(status, 0.0) + float(span)
+    return dict(sorted(out.items()))
 
 
 def _finite_or_none(v: float) -> float | None:

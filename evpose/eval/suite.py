@@ -276,6 +276,7 @@ def slam_and_measure(recording, mode: str) -> dict:
     else:
         # Event-only maps have no metric scale: Sim(3) alignment per map, as the paper does.
         metrics["slam"] = atlas_metrics(trajs, gt, correct_scale=slam_mode is SlamMode.EVENT, duration_s=run.duration_s).to_dict()
+        metrics["slam"]["visual_fraction"] = run.visual_fraction
     # The first MCI of a fresh process loads (or compiles) the numba kernels: reported apart.
     warm = res[1:] if n > 1 else res
     latency = {k: latency_summary([r.timings_ms[k] for r in warm if k in r.timings_ms]) for k in ("mci", "tracking", "total", "mci_cpu", "tracking_cpu")}

@@ -10,9 +10,10 @@ import numpy as np
 from evpose.core.recording import Recording
 from evpose.core.trajectory import Trajectory
 from evpose.errors import InputError
+from evpose.eval.slam_metrics import status_durations_s
 from evpose.slam.atlas import Atlas
 from evpose.slam.config import SlamConfig, SlamMode
-from evpose.slam.step_result import SlamStepResult
+from evpose.slam.step_result import SlamStatus, SlamStepResult
 from evpose.slam.system import EventSlam
 
 
@@ -27,9 +28,22 @@ class SlamRun:
     """Span of the recording's events, seconds."""
     wall_s: float
     """Wall time of the run, seconds."""
+    start_us: int = 0
+    """Time of the recording's first event, us."""
 
     def trajectories(self) -> list[Trajectory]:
         return self.atlas.trajectories()
+
+    def time_by_status_s(self) -> dict[str, float]:
+        """Seconds of the recording under each step status (see :func:`evpose.eval.slam_metrics.status_durations_s`)."""
+        end_us = self.start_us + int(round(self.duration_s * 1e6))
+        return status_durations_s(np.array([r.t_us for r in self.results], np.int64), [r.status.value for r in self.results],
+                                  self.start_us, end_us)
+
+    @property
+    def visual_fraction(self) -> float:
+        """Share of the recording tracked from the events (status ``ok``): coasted and IMU-bridged time left out."""
+        return self.time_by_status_s().get(SlamStatus.OK.value, 0.0) / self.duration_s if self.duration_s > 0 else 0.0
 
 
 def run_slam(recording: Recording, config: SlamConfig, chunk_us: int = 5000, slam: EventSlam | None = None) -> SlamRun:
@@ -55,4 +69,4 @@ def run_slam(recording: Recording, config: SlamConfig, chunk_us: int = 5000, sla
         for a, b in zip(idx[:-1], idx[1:]):
             if b > a:
                 slam.step(ev[a:b])
-    return SlamRun(slam.results, slam.atlas, ev.duration_us / 1e6, time.perf_counter() - t_start)
+    return SlamRun(slam.results, slam.atlas, ev.duration_us / 1e6, time.perf_counter() - t_start, int(ev.t[0]) if len(ev) else 0)

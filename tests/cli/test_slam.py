@@ -28,6 +28,7 @@ def test_slam_cli_writes_a_tum_file_per_map_and_a_summary(moving_h5, tmp_path):
     doc = json.loads((tmp_path / "est.slam.json").read_text())
     assert doc["maps"][0]["poses"] == len(traj)
     assert doc["metrics"]["tracked_fraction"] > 0.5
+    assert doc["visual_fraction"] == pytest.approx(doc["time_by_status_s"].get("ok", 0.0) / doc["duration_s"])
     assert doc["latency_ms"]["total"]["median_ms"] > 0
 
 

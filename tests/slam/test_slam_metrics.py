@@ -6,7 +6,7 @@ from scipy.spatial.transform import Rotation
 
 from evpose.core.trajectory import Trajectory
 from evpose.errors import InputError
-from evpose.eval.slam_metrics import atlas_metrics
+from evpose.eval.slam_metrics import atlas_metrics, status_durations_s
 
 
 def _gt():
@@ -82,3 +82,18 @@ def test_spread_summary_reports_mean_median_extremes_and_runs_within_target():
     s = spread_summary([1.5, 4.0, 2.0, float("nan"), 10.5], target=2.0)
     assert s == {"runs": 4, "mean": 4.5, "median": 3.0, "best": 1.5, "worst": 10.5, "within_target": 2}
     assert spread_summary([], target=2.0)["runs"] == 0
+
+
+def test_each_mci_status_owns_the_time_since_the_previous_mci():
+    t = np.array([100_000, 300_000, 600_000, 700_000])
+    d = status_durations_s(t, ["not_initialised", "ok", "coasting", "ok"], 0, 1_000_000)
+    assert d == pytest.approx({"not_initialised": 0.1, "ok": 0.3, "coasting": 0.3, "none": 0.3})
+    assert sum(d.values()) == pytest.approx(1.0)
+    assert status_durations_s(np.zeros(0, np.int64), [], 0, 500_000) == pytest.approx({"none": 0.5})
+
+
+def test_status_durations_reject_unsorted_or_mismatched_inputs():
+    with pytest.raises(ValueError, match="sorted"):
+        status_durations_s(np.array([2, 1]), ["ok", "ok"], 0, 3)
+    with pytest.raises(ValueError, match="statuses"):
+        status_durations_s(np.array([1, 2]), ["ok"], 0, 3)

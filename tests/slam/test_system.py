@@ -32,6 +32,11 @@ def test_event_only_slam_tracks_most_of_the_recording_with_small_scale_aligned_e
     assert m.ate_percent <= 2.0
     statuses = [r.status for r in radtan_run.results]
     assert statuses[0] is SlamStatus.NOT_INITIALISED and statuses[-1] is SlamStatus.OK
+    # Time under each status covers the recording; the events' own share (no coasting here) is the tracked one.
+    by_status = radtan_run.time_by_status_s()
+    assert sum(by_status.values()) == pytest.approx(radtan_run.duration_s)
+    assert radtan_run.visual_fraction == pytest.approx(by_status["ok"] / radtan_run.duration_s)
+    assert 0.8 <= radtan_run.visual_fraction <= m.tracked_fraction + 0.05
     kf = radtan_run.atlas.maps[0].keyframes
     assert len(kf) >= 3 and any(r.keyframe for r in radtan_run.results)
     # The viewer's products are filled in for tracked MCIs.
