@@ -1,13 +1,41 @@
-"""Re-initialising a young event-only map's structure once its baseline has grown.
+"""Re-initialising a young event-only map's structure once its baseline has grown (off by default).
 
 Every indoor event-only map starts from a two-view solution over a few millimetres of baseline (see
-:mod:`evpose.slam.initialization`), and the local bundle adjustments that follow carry its error forward. Once the
-map's first keyframe and a later one see the same tracks under a wide parallax, the two-view problem is well posed:
-this module solves it again between those two keyframes, re-triangulates the map's points from the new pair, places
-every other keyframe by PnP on them, re-triangulates the points the pair does not see, and runs one bundle adjustment
-over all keyframes. The map, its point ids, its tracks and its gauge (first keyframe at its pose, the first-to-chosen
-keyframe distance as before) stay the same, so tracking carries on from the newest keyframe without a break; per-MCI
-poses follow their reference keyframes (:meth:`SlamMap.trajectory`).
+:mod:`evpose.slam.initialization`), and the local bundle adjustments that follow carry its error forward. Two ways of
+re-estimating the structure later, both keeping the map, its point ids, its tracks and its gauge, so that tracking
+carries on from the newest keyframe without a break (per-MCI poses follow their reference keyframes,
+:meth:`SlamMap.trajectory`, and the motion model's poses are re-read from them):
+
+- ``TWO_VIEW``: solve the two-view problem again between the first keyframe and the newest one still sharing
+  ``min_common`` matches with it (map points both see, plus tracks both followed), keep the pair's distance, triangulate
+  the points from that pair, place every other keyframe by PnP on them, re-triangulate the rest from their widest pair,
+  bundle-adjust all keyframes.
+- ``RETRIANGULATE``: keep the poses; place every point at the triangulation from the two of its keyframes farthest
+  apart (optionally followed by that bundle adjustment).
+
+Measured (session 16, simulated indoor room 3 s at 346x260, event-only, scale-aligned ATE % of the distance; defaults:
+seeds 0-7 7.39 %, 0-11 8.06 %, 0-19 8.75 %; scripts in ``/tmp/s16/reinit9/``):
+
+- Tracks die within 2-3 keyframes, so the first keyframe shares only 10-20 matches with any keyframe past the third,
+  and those matches' parallax left after the best pure rotation is 0.2-1.0 deg (the room's walls are near-planar).
+  ``TWO_VIEW`` over such a pair is no better than the chain of PnP and local BA it replaces: translation direction
+  26-60 deg off against the chain's 11-16 deg on four of five maps (one map: 101 -> 26 deg). ``baseline_ratio`` 3,
+  ``min_common`` 15: seeds 0-7 7.39 -> 8.48 %.
+- A full BA of each map at the end of the run (``/tmp/s15/indooreo/gba.py``): seeds 0-3 7.26 -> 8.77 % (one fixed
+  keyframe), 9.53 % (plus the scale anchor), 9.60 % (two fixed); every map got worse: the keyframe observations
+  themselves carry the bias, and a better fit of them is no better trajectory.
+- ``RETRIANGULATE``, ``baseline_ratio`` 3, no BA: seeds 0-19 8.75 -> 7.85 %, paired -0.90 +- 0.60 points (11 better, 8
+  worse, one unchanged), tracked at least 84.1 % (as before); the map re-triangulated first (earlier maps identical)
+  9.15 -> 8.50 % (9 better, 5 worse). Landing event-only seeds 0-23 2.78 -> 2.67 %, -0.11 +- 0.39 (13 better, 11
+  worse), within 2 % 13 -> 12 of 24 (seeds 0-11 2.37 -> 2.51 %, 7 of 12 either way).
+- ``RETRIANGULATE`` at 4 keyframes (``keyframes`` 4) instead: indoor 0-19 7.82 %, -0.93 +- 0.52 (14 better, 6 worse;
+  seed 18 tracked 76.8 %), landing 0-11 2.37 -> 2.98 %, +0.61 +- 0.36 (5 better, 7 worse).
+- ``RETRIANGULATE`` at ratio 2 / 5 (no BA), seeds 0-11: -0.40 +- 0.83 / -0.37 +- 0.67; ratio 3 with the 20-iteration BA:
+  seeds 0-11 8.06 -> 7.67 % (-0.40 +- 0.67); with constant-velocity (0.2) and rotation-rate (40 deg/s) factors in that BA
+  7.61 % (-0.45 +- 0.91, 5 better, 6 worse); three times (at ratios 3, 6, 12) with the BA, seeds 0-7 7.41 %.
+
+Each run re-draws every later map (a change of one map's trajectory changes when the next map starts), so single
+seeds swing by +-3 points either way; the figures above are the paired means over all seeds.
 """
 
 from __future__ import annotations
@@ -40,15 +68,16 @@ class RestructureConfig:
     """When and how a young event-only map is re-initialised from a wide-baseline keyframe pair."""
 
     baseline_ratio: float = field(default=0.0, metadata={"min": 0.0, "max": 50.0, "step": 0.5, "unit": "ratio"})
-    """Re-initialise once the newest keyframe sharing ``min_common`` matches with the map's first keyframe lies this
-    many times farther from it than the second keyframe does (0 disables), ratio."""
+    """Re-initialise once the chosen keyframe (``TWO_VIEW``: the newest sharing ``min_common`` matches with the map's
+    first keyframe; ``RETRIANGULATE``: the newest) lies this many times farther from the first keyframe than the second
+    keyframe does (0 disables), ratio. See the module docstring for the measured settings."""
     keyframes: int = field(default=0, metadata={"min": 0, "max": 100, "step": 1, "unit": "keyframes"})
     """Re-initialise (``RETRIANGULATE`` only) once the map has this many keyframes whatever its baseline (0: never);
     each further time needs twice as many, keyframes."""
     method: RestructureMethod = RestructureMethod.TWO_VIEW
     """How the structure is re-estimated."""
-    min_common: int = field(default=30, metadata={"min": 8, "max": 500, "step": 1, "unit": "tracks"})
-    """Tracks the first keyframe and the chosen one must share, tracks."""
+    min_common: int = field(default=30, metadata={"min": 8, "max": 500, "step": 1, "unit": "matches"})
+    """``TWO_VIEW``: matches the first keyframe and the chosen one must share, matches."""
     max_keyframes: int = field(default=20, metadata={"min": 3, "max": 200, "step": 1, "unit": "keyframes"})
     """Maps with more keyframes are no longer young and are left alone, keyframes."""
     times: int = field(default=1, metadata={"min": 1, "max": 10, "step": 1, "unit": "times"})
