@@ -57,6 +57,8 @@ if TYPE_CHECKING:
 
 
 class RestructureMethod(str, enum.Enum):
+    """How a young map's structure is re-estimated."""
+
     TWO_VIEW = "two-view"
     """Two-view solution between the first keyframe and the chosen one, PnP of the others, re-triangulation, BA."""
     RETRIANGULATE = "retriangulate"
@@ -74,16 +76,17 @@ class RestructureConfig:
     keyframes: int = field(default=0, metadata={"min": 0, "max": 100, "step": 1, "unit": "keyframes"})
     """Re-initialise (``RETRIANGULATE`` only) once the map has this many keyframes whatever its baseline (0: never);
     each further time needs twice as many, keyframes."""
-    method: RestructureMethod = RestructureMethod.TWO_VIEW
-    """How the structure is re-estimated."""
+    method: RestructureMethod = RestructureMethod.RETRIANGULATE
+    """How the structure is re-estimated (``TWO_VIEW`` measured worse, see the module docstring)."""
     min_common: int = field(default=30, metadata={"min": 8, "max": 500, "step": 1, "unit": "matches"})
     """``TWO_VIEW``: matches the first keyframe and the chosen one must share, matches."""
     max_keyframes: int = field(default=20, metadata={"min": 3, "max": 200, "step": 1, "unit": "keyframes"})
     """Maps with more keyframes are no longer young and are left alone, keyframes."""
     times: int = field(default=1, metadata={"min": 1, "max": 10, "step": 1, "unit": "times"})
     """How often a map may be re-initialised; each further time needs twice the previous baseline ratio, times."""
-    ba_iterations: int = field(default=20, metadata={"min": 0, "max": 100, "step": 1, "unit": "iterations"})
-    """Levenberg-Marquardt iterations of the bundle adjustment over all keyframes afterwards (0: none), iterations."""
+    ba_iterations: int = field(default=0, metadata={"min": 0, "max": 100, "step": 1, "unit": "iterations"})
+    """Levenberg-Marquardt iterations of a bundle adjustment over all keyframes afterwards (0: none; 20 measured no
+    better, see the module docstring), iterations."""
     ba_huber_px: float = field(default=2.0, metadata={"min": 0.1, "max": 10.0, "step": 0.1, "unit": "px"})
     """Huber threshold of that bundle adjustment's reprojection factors, pixels."""
     velocity_prior: float = field(default=0.0, metadata={"min": 0.0, "max": 2.0, "step": 0.05, "unit": "ratio"})
@@ -96,6 +99,8 @@ class RestructureConfig:
 
 @dataclass
 class RestructureReport:
+    """Outcome of one re-initialisation attempt."""
+
     ok: bool
     reason: str = ""
     pair: tuple[int, int] = (0, 0)

@@ -74,7 +74,8 @@ def test_two_view_restructure_recovers_poses_and_keeps_the_pair_distance():
     d_before = np.linalg.norm(m.keyframes[j].T_wc[:3, 3])
     err_before = max(np.linalg.norm(m.keyframes[k].T_wc[:3, 3] - true_T[k][:3, 3]) for k in range(2, 5))
     t2p = {t: t for t in range(len(X))}
-    rep = restructure_map(m, K, j, RestructureConfig(baseline_ratio=3.0, ba_iterations=0), InitializationConfig(), TrackingConfig(), t2p)
+    cfg = RestructureConfig(baseline_ratio=3.0, method=RestructureMethod.TWO_VIEW)
+    rep = restructure_map(m, K, j, cfg, InitializationConfig(), TrackingConfig(), t2p)
     assert rep.ok, rep.reason
     # The gauge: keyframe 0 stays, the pair's distance is the one before (the true one here up to the noise).
     np.testing.assert_allclose(m.keyframes[0].T_wc, np.eye(4))
@@ -94,7 +95,7 @@ def test_slam_retriangulates_a_young_map_once_and_keeps_tracking_it():
 
     rec = make_recording(duration_s=1.0, speed=1.5, seed=5)
     cfg = SlamConfig()
-    cfg.restructure.method, cfg.restructure.baseline_ratio, cfg.restructure.ba_iterations = RestructureMethod.RETRIANGULATE, 3.0, 0
+    cfg.restructure.baseline_ratio = 3.0
     run = run_slam(rec, cfg)
     m = atlas_metrics(run.trajectories(), rec.ground_truth, correct_scale=True, duration_s=run.duration_s)
     assert [mp.restructured for mp in run.atlas.maps] == [1]
