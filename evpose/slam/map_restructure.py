@@ -14,7 +14,8 @@ carries on from the newest keyframe without a break (per-MCI poses follow their 
   apart (optionally followed by that bundle adjustment).
 
 Measured (session 16, simulated indoor room 3 s at 346x260, event-only, scale-aligned ATE % of the distance; defaults:
-seeds 0-7 7.39 %, 0-11 8.06 %, 0-19 8.75 %; scripts in ``/tmp/s16/reinit9/``):
+seeds 0-7 7.39 %, 0-11 8.06 %, 0-19 8.75 %; seeds 12-19 recorded for this in ``/tmp/s16/reinit9/sim``, scripts
+there too):
 
 - Tracks die within 2-3 keyframes, so the first keyframe shares only 10-20 matches with any keyframe past the third,
   and those matches' parallax left after the best pure rotation is 0.2-1.0 deg (the room's walls are near-planar).
@@ -27,7 +28,12 @@ seeds 0-7 7.39 %, 0-11 8.06 %, 0-19 8.75 %; scripts in ``/tmp/s16/reinit9/``):
 - ``RETRIANGULATE``, ``baseline_ratio`` 3, no BA: seeds 0-19 8.75 -> 7.85 %, paired -0.90 +- 0.60 points (11 better, 8
   worse, one unchanged), tracked at least 84.1 % (as before); the map re-triangulated first (earlier maps identical)
   9.15 -> 8.50 % (9 better, 5 worse). Landing event-only seeds 0-23 2.78 -> 2.67 %, -0.11 +- 0.39 (13 better, 11
-  worse), within 2 % 13 -> 12 of 24 (seeds 0-11 2.37 -> 2.51 %, 7 of 12 either way).
+  worse), within 2 % 13 -> 12 of 24 (seeds 0-11 2.37 -> 2.51 %, 7 of 12 either way). The indoor gain did not survive a
+  neutral perturbation: with ``TrackingConfig.ba_huber_px`` 2.1, seeds 0-19 8.73 -> 9.45 %, +0.72 +- 0.53 (9 better,
+  11 worse; the map re-triangulated first 9.25 -> 9.78 %); over the 40 paired runs -0.09 +- 0.42 (20 better, 19
+  worse). Three times (at ratios 3, 6, 12): seeds 0-19 8.24 %, -0.51 +- 0.68 (10 better, 9 worse). CPU per MCI
+  unchanged (median of the per-run medians, seeds 0-7: 15.5 -> 15.7 ms, the re-triangulation itself 0-4 ms once
+  per map; 8-105 ms with the BA below). Hence off.
 - ``RETRIANGULATE`` at 4 keyframes (``keyframes`` 4) instead: indoor 0-19 7.82 %, -0.93 +- 0.52 (14 better, 6 worse;
   seed 18 tracked 76.8 %), landing 0-11 2.37 -> 2.98 %, +0.61 +- 0.36 (5 better, 7 worse).
 - ``RETRIANGULATE`` at ratio 2 / 5 (no BA), seeds 0-11: -0.40 +- 0.83 / -0.37 +- 0.67; ratio 3 with the 20-iteration BA:
