@@ -32,7 +32,7 @@ there too):
   neutral perturbation: with ``TrackingConfig.ba_huber_px`` 2.1, seeds 0-19 8.73 -> 9.45 %, +0.72 +- 0.53 (9 better,
   11 worse; the map re-triangulated first 9.25 -> 9.78 %); over the 40 paired runs -0.09 +- 0.42 (20 better, 19
   worse). Three times (at ratios 3, 6, 12): seeds 0-19 8.24 %, -0.51 +- 0.68 (10 better, 9 worse). CPU per MCI
-  unchanged (median of the per-run medians, seeds 0-7: 15.5 -> 15.7 ms, the re-triangulation itself 0-4 ms once
+  unchanged (median of the per-run medians, seeds 0-7: 15.5 -> 15.7 ms, the re-triangulation itself 4-29 ms once
   per map; 8-105 ms with the BA below). Hence off.
 - ``RETRIANGULATE`` at 4 keyframes (``keyframes`` 4) instead: indoor 0-19 7.82 %, -0.93 +- 0.52 (14 better, 6 worse;
   seed 18 tracked 76.8 %), landing 0-11 2.37 -> 2.98 %, +0.61 +- 0.36 (5 better, 7 worse).
