@@ -39,6 +39,10 @@ there too):
 - ``RETRIANGULATE`` at ratio 2 / 5 (no BA), seeds 0-11: -0.40 +- 0.83 / -0.37 +- 0.67; ratio 3 with the 20-iteration BA:
   seeds 0-11 8.06 -> 7.67 % (-0.40 +- 0.67); with constant-velocity (0.2) and rotation-rate (40 deg/s) factors in that BA
   7.61 % (-0.45 +- 0.91, 5 better, 6 worse); three times (at ratios 3, 6, 12) with the BA, seeds 0-7 7.41 %.
+- Re-picking the first pair's homography decomposition at the third keyframe by that keyframe's PnP reprojection error
+  (prototype ``/tmp/s16/reinit9/threeview.py``, seeds 0 and 3): the errors of the candidates are alike (0.4-1.4 px,
+  within 0.4 px of each other), and over 13-16 mm of baseline every candidate's translation can be wrong (seed 3's last
+  map: 91-101 deg off against the truth for all three): no decomposition is there to pick.
 
 Each run re-draws every later map (a change of one map's trajectory changes when the next map starts), so single
 seeds swing by +-3 points either way; the figures above are the paired means over all seeds.
