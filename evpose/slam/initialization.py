@@ -110,9 +110,17 @@ def initialize_two_view(K: np.ndarray, p1: np.ndarray, p2: np.ndarray, cfg: Init
         if not rfp >= cfg.min_rotation_free_parallax_deg:
             return TwoViewResult(False, f"parallax after the best pure rotation {rfp:.2f} deg < {cfg.min_rotation_free_parallax_deg}")
     cv2.setRNGSeed(seed)
-    E, mask_e = cv2.findEssentialMat(p1, p2, K, cv2.RANSAC, 0.999, cfg.ransac_threshold_px)
+    try:
+        E, mask_e = cv2.findEssentialMat(p1, p2, K, cv2.RANSAC, 0.999, cfg.ransac_threshold_px)
+    except cv2.error:
+        # The five-point solver asserts on a degenerate minimal sample (OpenCV 5.1 ``solvePoly``; seen on 64 ordinary
+        # indoor matches, /tmp/s16/reinit9/crash.pkl): no essential matrix, the homography may still serve.
+        E, mask_e = None, None
     cv2.setRNGSeed(seed)
-    H, mask_h = cv2.findHomography(p1, p2, cv2.RANSAC, cfg.ransac_threshold_px)
+    try:
+        H, mask_h = cv2.findHomography(p1, p2, cv2.RANSAC, cfg.ransac_threshold_px)
+    except cv2.error:
+        H, mask_h = None, None
     if E is None or E.shape != (3, 3):
         E = None
     s_h = _score_h(H, p1, p2) if H is not None else 0.0
