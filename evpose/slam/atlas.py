@@ -62,6 +62,8 @@ class SlamMap:
     """:class:`evpose.slam.inertial_ba.InertialState` once the IMU is initialised."""
     lost_reason: str = ""
     """Why tracking of this map ended ("" while active or at the end of the recording)."""
+    restructured: int = 0
+    """Times the map was re-initialised from a wide-baseline keyframe pair (:mod:`evpose.slam.map_restructure`)."""
     segment_start_kf: int = 0
     """Id of the first keyframe of the map's newest visual segment: a lost map re-joined by the next two-view map
     (:mod:`evpose.slam.map_rejoin`) shares no points with it, and the visual local BA stays within the segment."""

@@ -11,6 +11,7 @@ import enum
 from dataclasses import dataclass, field
 
 from evpose.slam.inertial import InertialConfig
+from evpose.slam.map_restructure import RestructureConfig
 from evpose.slam.projection_search import ProjectionSearchConfig
 # The tracking settings live in their own module; re-exported here, where they were (imports and docs name them here).
 from evpose.slam.tracking_config import TrackingConfig  # noqa: F401
@@ -420,5 +421,7 @@ class SlamConfig:
     tracking: TrackingConfig = field(default_factory=TrackingConfig)
     search: ProjectionSearchConfig = field(default_factory=ProjectionSearchConfig)
     """Re-finding untracked local-map points by projection and patch search."""
+    restructure: RestructureConfig = field(default_factory=RestructureConfig)
+    """Re-initialising a young event-only map from a wide-baseline keyframe pair."""
     seed: int = 0
     """Seed of OpenCV's RANSAC generator, reset before every call so runs repeat bit for bit."""

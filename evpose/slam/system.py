@@ -41,6 +41,7 @@ from evpose.slam.inertial_bridge import predict_camera_pose
 from evpose.slam.inertial_ba import InertialState, inertial_local_bundle_adjustment
 from evpose.slam.inertial_trajectory import carry_relative_scale, keyframe_positions
 from evpose.slam.initialization import initialize_two_view
+from evpose.slam.map_restructure import maybe_restructure
 from evpose.slam.map_rejoin import RejoinCandidate, merge_into, rejoin_similarity
 from evpose.slam.local_map import cull_points, insert_keyframe, need_keyframe, triangulate_new_points
 from evpose.slam.event_image import to_uint8
@@ -474,6 +475,8 @@ class EventSlam(GyroAids, VisualFailureHandling):
         if before is not None:
             carry_relative_scale(m, before)
         cull_points(m, self.K, fe.track_to_point, tc)
+        if self.imu is None and adjust:
+            maybe_restructure(m, self.K, self.cfg.restructure, self._init_cfg, tc, fe.track_to_point, self.cfg.seed)
         # BA moved the newest keyframe: the trajectory's last pose follows it.
         m.add_pose(t_us, m.keyframes[-1].T_wc)
         if self.imu is not None and (m.imu_initialised or self.cfg.inertial.reanchor_before_init) and len(m.keyframes) >= 2:

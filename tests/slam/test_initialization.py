@@ -115,3 +115,18 @@ def test_homography_fit_depth_spread_keeps_the_count_choice_on_a_plane():
     gated = initialize_two_view(K, p1, p2, InitializationConfig(homography_fit_share=0.5, min_parallax_deg=0.2, homography_fit_depth_spread=0.2))
     assert ungated.ok and gated.ok
     assert ungated.model == "homography+fit" and gated.model == "homography"
+
+
+def test_two_view_initialisation_survives_an_opencv_solver_assertion(monkeypatch):
+    import cv2
+
+    def raising(*args, **kwargs):
+        raise cv2.error("solvePoly assertion")
+
+    p1, p2, _, _ = _views(planar=True)
+    monkeypatch.setattr(cv2, "findEssentialMat", raising)
+    res = initialize_two_view(K, p1, p2, InitializationConfig())
+    assert res.ok and res.model.startswith("homography")
+    monkeypatch.setattr(cv2, "findHomography", raising)
+    res = initialize_two_view(K, p1, p2, InitializationConfig())
+    assert not res.ok and res.reason
