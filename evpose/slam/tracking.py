@@ -35,11 +35,16 @@ def estimate_pose(K: np.ndarray, Xw: np.ndarray, uv: np.ndarray, T_wc_guess: np.
     rvec, _ = cv2.Rodrigues(T_cw[:3, :3])
     tvec = T_cw[:3, 3].reshape(3, 1).copy()
     cv2.setRNGSeed(seed)
-    ok, rvec, tvec, inl = cv2.solvePnPRansac(obj, img, K, None, rvec, tvec, useExtrinsicGuess=True, iterationsCount=100, reprojectionError=cfg.reprojection_threshold_px, confidence=0.99, flags=cv2.SOLVEPNP_ITERATIVE)
-    if not ok or inl is None or len(inl) < cfg.min_inliers:
-        return PoseEstimate(False, reason=f"PnP found {0 if inl is None else len(inl)} inliers < {cfg.min_inliers}")
-    idx = inl.ravel()
-    rvec, tvec = cv2.solvePnPRefineLM(obj[idx], img[idx], K, None, rvec, tvec)
+    try:
+        ok, rvec, tvec, inl = cv2.solvePnPRansac(obj, img, K, None, rvec, tvec, useExtrinsicGuess=True, iterationsCount=100, reprojectionError=cfg.reprojection_threshold_px, confidence=0.99, flags=cv2.SOLVEPNP_ITERATIVE)
+        if not ok or inl is None or len(inl) < cfg.min_inliers:
+            return PoseEstimate(False, reason=f"PnP found {0 if inl is None else len(inl)} inliers < {cfg.min_inliers}")
+        idx = inl.ravel()
+        rvec, tvec = cv2.solvePnPRefineLM(obj[idx], img[idx], K, None, rvec, tvec)
+    except cv2.error as exc:
+        # OpenCV's solvers assert on degenerate samples (seen with its five-point solver, see
+        # :func:`evpose.slam.initialization.initialize_two_view`): a failed estimate, never an exception out of a run.
+        return PoseEstimate(False, reason=f"PnP failed: {str(exc).strip().splitlines()[-1]}")
     R, _ = cv2.Rodrigues(rvec)
     T_cw = np.eye(4)
     T_cw[:3, :3] = R
