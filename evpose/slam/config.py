@@ -262,6 +262,17 @@ class MciConfig:
     """H3: SE(3) warp from the IMU / last-pose prior with the average depth of eq. (5). Event-only landing seeds 0-11,
     60 runs (``reference_fraction`` 0.5, mean ATE 2.60 %, 30 within 2 %): without H3 2.40 % (31), without H1 2.54 %
     (23); paired -0.20 / -0.06 +- 0.18 points, not significant."""
+    use_parallax: bool = False
+    """H5: SE(3) fitted to the window's tracks with a depth per event from the nearest map point
+    (:mod:`evpose.slam.parallax_warp`)."""
+    use_parallax_inertial: bool = False
+    """``use_parallax`` of event-inertial runs."""
+    parallax_plane: bool = False
+    """H5's depths from one plane fitted to the map points in view instead of the nearest map point."""
+    parallax_preferred: bool = False
+    """Dispatch H5 whenever it exists instead of the sharpest hypothesis."""
+    parallax_min_points: int = field(default=12, metadata={"min": 6, "max": 200, "step": 1, "unit": "points"})
+    """H5 needs this many map points in view and as many tracks in the window, points."""
     keep_hypothesis_survival: float = field(default=0.25, metadata={"min": 0.0, "max": 1.0, "step": 0.05, "unit": "ratio"})
     """When the sharpest hypothesis differs from the previous MCI's and KLT keeps fewer than this share of the tracks on
     it, the previous hypothesis's image is tracked instead and kept if more tracks survive (a warped and an unwarped

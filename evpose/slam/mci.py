@@ -26,6 +26,7 @@ from scipy.spatial.transform import Rotation
 from evpose.slam.config import EventImageConfig, MciConfig
 from evpose.slam.event_image import event_image, local_std_score, to_uint8
 from evpose.slam.event_window import ReconstructionWindow
+from evpose.slam.parallax_warp import depth_field, fit_twist, plane_depth, sample_depth, warp_events
 
 
 class Hypothesis(str, enum.Enum):
@@ -39,6 +40,9 @@ class Hypothesis(str, enum.Enum):
     """SE(3) from the IMU / last-pose prior, average depth fitted to the feature tracks (eq. 5)."""
     H4_NONE = "H4"
     """No compensation: the plain event histogram."""
+    H5_PARALLAX = "H5"
+    """SE(3) fitted to the window's feature tracks, each event at the depth of its nearest map point
+    (:mod:`evpose.slam.parallax_warp`)."""
 
 
 @dataclass
@@ -51,6 +55,10 @@ class MotionPrior:
     """Linear velocity of the camera in its own frame, map units/s (3,), from the last poses."""
     map_depth: float | None = None
     """Median depth of the map points in the current view, map units."""
+    point_uv: np.ndarray | None = None
+    """Map points of the tracks projected at the last tracked pose, px (N, 2): H5's depth samples."""
+    point_depth: np.ndarray | None = None
+    """Their depths at that pose, map units (N,)."""
 
 
 @dataclass
@@ -196,6 +204,30 @@ class MciGenerator:
         p = rw.p if self.icfg.use_polarity else None
         return event_image(rw.x, rw.y, p, self.width, self.height, self.icfg.sigma_px, idx, H)
 
+    def _parallax(self, rw: ReconstructionWindow, prior: MotionPrior, idx: np.ndarray, dts: np.ndarray, track_s: float) -> np.ndarray | None:
+        """H5's image, or None without enough map points or tracks (``MciConfig.parallax_min_points``)."""
+        c = self.cfg
+        if not c.use_parallax or prior.point_uv is None or len(prior.point_uv) < c.parallax_min_points or track_s <= 0:
+            return None
+        ref = np.asarray(rw.ref_pts, np.float64)
+        if len(ref) < c.parallax_min_points:
+            return None
+        if c.parallax_plane:
+            z_ref = plane_depth(self.K, prior.point_uv, prior.point_depth, ref[:, 0], ref[:, 1])
+            z_ev = plane_depth(self.K, prior.point_uv, prior.point_depth, rw.x, rw.y) if z_ref is not None else None
+        else:
+            field = depth_field(prior.point_uv, prior.point_depth, self.width, self.height)
+            z_ref = sample_depth(field, ref[:, 0], ref[:, 1]) if field is not None else None
+            z_ev = sample_depth(field, rw.x, rw.y) if field is not None else None
+        if z_ev is None:
+            return None
+        xi = fit_twist(self.K, ref, np.asarray(rw.cur_pts, np.float64), z_ref)
+        if xi is None:
+            return None
+        u, v = warp_events(self.K, rw.x, rw.y, z_ev, idx, dts, xi[:3] / track_s, xi[3:] / track_s)
+        p = rw.p if self.icfg.use_polarity else None
+        return event_image(u, v, p, self.width, self.height, self.icfg.sigma_px)
+
     def generate(self, rw: ReconstructionWindow, prior: MotionPrior | None = None) -> MciResult:
         prior = prior or MotionPrior()
         cands: dict[Hypothesis, np.ndarray] = {}
@@ -222,10 +254,15 @@ class MciGenerator:
             z = depth if depth is not None else (prior.map_depth or 1.0)
             H = se3_homographies(self.K, omega, vel, z, dts)
             cands[Hypothesis.H3_POSE_PRIOR] = self._render(rw, idx, H)
+        h5 = self._parallax(rw, prior, idx, dts, track_s)
+        if h5 is not None:
+            cands[Hypothesis.H5_PARALLAX] = h5
         cands[Hypothesis.H4_NONE] = self._render(rw, None, None)
         scores = {h.value: local_std_score(img, self.cfg.patch_px) for h, img in cands.items()}
         # Highest score wins; ties go to the earlier hypothesis in H1..H4 order (deterministic).
         best = max(sorted(cands, key=lambda h: h.value), key=lambda h: scores[h.value])
+        if h5 is not None and self.cfg.parallax_preferred:
+            best = Hypothesis.H5_PARALLAX
         img = cands[best]
         t_ref = reference_time_us(rw.t, frac) if len(rw.t) else rw.t_end_us
         return MciResult(t_us=t_ref, image=img, image8=to_uint8(img), hypothesis=best, scores=scores, n_events=len(rw.t), sim2=sim2, depth=depth,

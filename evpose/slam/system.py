@@ -79,7 +79,7 @@ class EventSlam(GyroAids, VisualFailureHandling):
         self.window = EventWindowSelector(wcfg, config.features, config.image, self.width, self.height, config.seed)
         mcfg = config.mci
         if self.imu is not None:
-            mcfg = replace(mcfg, reference_fraction=mcfg.reference_fraction_inertial)
+            mcfg = replace(mcfg, reference_fraction=mcfg.reference_fraction_inertial, use_parallax=mcfg.use_parallax_inertial)
         self.mci_gen = MciGenerator(mcfg, config.image, self.K, self.width, self.height, config.seed)
         icfg = config.initialization
         self._init_cfg = icfg if self.imu is None else replace(icfg, homography_fit_share=icfg.homography_fit_share_inertial,
@@ -174,6 +174,12 @@ class EventSlam(GyroAids, VisualFailureHandling):
             pids = [self.fe.track_to_point[t] for t in self.fe.ids.tolist() if t in self.fe.track_to_point]
             if pids:
                 Xw = np.stack([m.points[p].xyz for p in pids if p in m.points] or [np.full(3, np.nan)])
+                if self.mci_gen.cfg.use_parallax:
+                    # H5's depth samples: the tracks' map points as the last pose sees them.
+                    Xc = Xw @ T_cw[:3, :3].T + T_cw[:3, 3]
+                    Xc = Xc[np.isfinite(Xc).all(axis=1) & (Xc[:, 2] > 0)]
+                    q = Xc @ self.K.T
+                    prior.point_uv, prior.point_depth = q[:, :2] / q[:, 2:3], Xc[:, 2]
                 z = Xw @ T_cw[2, :3] + T_cw[2, 3]
                 z = z[np.isfinite(z) & (z > 0)]
                 prior.map_depth = float(np.median(z)) if z.size else None

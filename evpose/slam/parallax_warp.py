@@ -1,0 +1,148 @@
+"""H5: an SE(3) warp with a depth per event, from the map's points, fitted to the window's own feature tracks.
+
+Every other hypothesis moves all events of a window by one homography per time slice: one scene depth (H1, H3) or a
+similarity (H2). The simulated landing looks down on buildings and crates several metres tall from a few metres up,
+so the image flow of a translating camera varies across the image by tens of percent, which no homography holds.
+How much that costs was measured with oracle MCIs (``/tmp/s16/slowmci9``: ``oracle.py``, ``orun.py``: the
+dispatched MCI replaced by one warped with the true poses; event-only landing seeds 0-11, defaults 2.37 %, 7 of 12
+within 2 %): every event ray-cast at its own true pose and moved to the true reference pose, 1.68 % (10 of 12; seed 4
+5.58 -> 1.06 %); the same true 3D points moved by the constant twist of the true motion from the window's first to its
+last event, 1.69 % (10 of 12); the true pose per time slice with one plane fitted to the true depths, 2.24 % (7); with
+one fronto-parallel depth (the median), 3.96 % (7). The depth of each event, not the change of the motion within a
+window (40-140 ms in the turn), sets the warp's error.
+
+Here each event takes the depth of the nearest map point projected at the last tracked pose (a nearest-neighbour
+depth image), and the camera's twist over the window is the one that best moves the window's tiny-frame tracks
+(their depths read from the same image) from the reference tiny frame to the last one: Gauss-Newton with Huber
+weights on the exact projection. The depths are in map units, so the fitted velocity is too: no scale enters.
+"""
+
+from __future__ import annotations
+
+import cv2
+import numba as nb
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+
+def depth_field(uv: np.ndarray, z: np.ndarray, width: int, height: int, step: int = 2) -> np.ndarray | None:
+    """Depth of the nearest of the points ``uv`` (N, 2) px with depths ``z`` (N,) at every ``step``-th pixel, float32
+    (ceil(H/step), ceil(W/step)); None without a point inside the image."""
+    h, w = (height + step - 1) // step, (width + step - 1) // step
+    cols = np.floor(np.asarray(uv[:, 0]) / step).astype(np.int64)
+    rows = np.floor(np.asarray(uv[:, 1]) / step).astype(np.int64)
+    inside = (cols >= 0) & (cols < w) & (rows >= 0) & (rows < h) & np.isfinite(z) & (z > 0)
+    if not inside.any():
+        return None
+    mask = np.ones((h, w), np.uint8)
+    mask[rows[inside], cols[inside]] = 0
+    # Labels of the zero pixels follow their raster order; map each label back to a depth (the last point wins a pixel).
+    _, labels = cv2.distanceTransformWithLabels(mask, cv2.DIST_L2, 3, labelType=cv2.DIST_LABEL_PIXEL)
+    seed_img = np.zeros((h, w), np.float32)
+    seed_img[rows[inside], cols[inside]] = np.asarray(z, np.float32)[inside]
+    zr, zc = np.nonzero(mask == 0)
+    lut = np.zeros(len(zr) + 1, np.float32)
+    lut[labels[zr, zc]] = seed_img[zr, zc]
+    return lut[labels]
+
+
+def sample_depth(field: np.ndarray, x: np.ndarray, y: np.ndarray, step: int = 2) -> np.ndarray:
+    """Depth of the field at pixels ``(x, y)`` (nearest cell, clamped to the image), float64."""
+    h, w = field.shape
+    c = np.clip((np.asarray(x) / step).astype(np.int64), 0, w - 1)
+    r = np.clip((np.asarray(y) / step).astype(np.int64), 0, h - 1)
+    return field[r, c].astype(np.float64)
+
+
+def plane_depth(K: np.ndarray, uv: np.ndarray, z: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray | None:
+    """Depths at pixels ``(x, y)`` on the plane fitted to the points ``uv`` (N, 2) px at depths ``z`` (N,): inverse depth
+    linear in the normalised coordinates, least squares after dropping points over 3 median deviations off; None when
+    the plane is degenerate or puts a queried pixel behind the camera."""
+    Ki = np.linalg.inv(K)
+    A = np.c_[np.c_[uv, np.ones(len(uv))] @ Ki.T[:, :2], np.ones(len(uv))]
+    w = 1.0 / np.asarray(z, np.float64)
+    keep = np.ones(len(w), bool)
+    for _ in range(2):
+        if keep.sum() < 3:
+            return None
+        abc = np.linalg.lstsq(A[keep], w[keep], rcond=None)[0]
+        r = np.abs(A @ abc - w)
+        keep = r <= 3.0 * max(float(np.median(r[keep])), 1e-12) * 1.4826
+    q = np.c_[np.c_[x, y, np.ones(len(x))] @ Ki.T[:, :2], np.ones(len(x))] @ abc
+    return 1.0 / q if np.all(q > 0) else None
+
+
+def _move(K: np.ndarray, Ki: np.ndarray, uv: np.ndarray, z: np.ndarray, xi: np.ndarray) -> np.ndarray:
+    """Pixels ``uv`` at depths ``z`` after the camera motion ``xi = (omega s, v s)`` (H1's convention), (N, 2)."""
+    R = cv2.Rodrigues(np.asarray(xi[:3], np.float64))[0].T
+    X = (np.c_[uv, np.ones(len(uv))] @ Ki.T) * z[:, None]
+    q = (X - xi[3:]) @ R.T @ K.T
+    return q[:, :2] / q[:, 2:3]
+
+
+def fit_twist(K: np.ndarray, ref: np.ndarray, cur: np.ndarray, z: np.ndarray, huber_px: float = 1.0, iterations: int = 5) -> np.ndarray | None:
+    """The motion ``(omega s, v s)`` (6,) moving the tracks ``ref`` (at depths ``z``) onto ``cur`` over their span, or None.
+
+    Gauss-Newton on the reprojection error with a numerical Jacobian and Huber weights; a small damping keeps the
+    rotation / translation trade-off of a shallow scene (the warp is the same either way) well posed.
+    """
+    ref = np.asarray(ref, np.float64)
+    cur = np.asarray(cur, np.float64)
+    if len(ref) < 6:
+        return None
+    Ki = np.linalg.inv(K)
+    xi = np.zeros(6)
+    eps = 1e-6
+    zs = float(np.median(z))
+    for _ in range(iterations):
+        r0 = (_move(K, Ki, ref, z, xi) - cur).ravel()
+        J = np.empty((r0.size, 6))
+        for k in range(6):
+            d = np.zeros(6)
+            d[k] = eps * (1.0 if k < 3 else zs)
+            J[:, k] = ((_move(K, Ki, ref, z, xi + d) - cur).ravel() - r0) / d[k]
+        e = np.hypot(r0[0::2], r0[1::2])
+        w = np.where(e > huber_px, huber_px / np.maximum(e, 1e-12), 1.0).repeat(2)
+        A = J.T @ (J * w[:, None])
+        A += 1e-6 * np.trace(A) / 6.0 * np.eye(6)
+        step = np.linalg.solve(A, -J.T @ (w * r0))
+        xi = xi + step
+        if not np.all(np.isfinite(xi)):
+            return None
+        if np.abs(step[:3]).max() < 1e-7 and np.abs(step[3:]).max() < 1e-7 * zs:
+            break
+    return xi
+
+
+@nb.njit(cache=True)
+def _warp_kernel(x, y, z, slice_idx, M, b):
+    """``q = M_s z Ki x - b_s`` per event (``M_s = K R_s Ki``, ``b_s = K R_s t_s``), projected; behind the camera -> -1e6."""
+    n = x.shape[0]
+    u = np.empty(n)
+    v = np.empty(n)
+    for i in range(n):
+        s = slice_idx[i]
+        m = M[s]
+        qx = z[i] * (m[0, 0] * x[i] + m[0, 1] * y[i] + m[0, 2]) - b[s, 0]
+        qy = z[i] * (m[1, 0] * x[i] + m[1, 1] * y[i] + m[1, 2]) - b[s, 1]
+        qz = z[i] * (m[2, 0] * x[i] + m[2, 1] * y[i] + m[2, 2]) - b[s, 2]
+        if qz > 1e-9:
+            u[i] = qx / qz
+            v[i] = qy / qz
+        else:
+            u[i] = -1e6
+            v[i] = -1e6
+    return u, v
+
+
+def warp_events(K: np.ndarray, x: np.ndarray, y: np.ndarray, z: np.ndarray, slice_idx: np.ndarray, dts: np.ndarray,
+                omega: np.ndarray, velocity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Events at pixels ``(x, y)`` and depths ``z``, seen ``dts[slice_idx]`` seconds before the reference time, moved to
+    it by the constant own-frame rates ``omega`` (rad/s) and ``velocity`` (map units/s), as :func:`se3_homographies`
+    moves them at one depth; events that end behind the camera go far outside the image."""
+    K = np.asarray(K, np.float64)
+    R = Rotation.from_rotvec(np.outer(dts, omega)).as_matrix().transpose(0, 2, 1)  # (S, 3, 3)
+    M = K @ R @ np.linalg.inv(K)
+    b = np.einsum("ij,sjk,sk->si", K, R, np.outer(dts, velocity))
+    return _warp_kernel(np.ascontiguousarray(x, np.float64), np.ascontiguousarray(y, np.float64), np.ascontiguousarray(z, np.float64),
+                        np.ascontiguousarray(slice_idx, np.int64), np.ascontiguousarray(M), np.ascontiguousarray(b))
