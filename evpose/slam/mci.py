@@ -26,7 +26,7 @@ from scipy.spatial.transform import Rotation
 from evpose.slam.config import EventImageConfig, MciConfig
 from evpose.slam.event_image import event_image, local_std_score, to_uint8
 from evpose.slam.event_window import ReconstructionWindow
-from evpose.slam.parallax_warp import depth_field, fit_twist, plane_depth, sample_depth, warp_events
+from evpose.slam.parallax_warp import depth_field, fit_twist, plane_depth, sample_depth, slice_motions, warp_events
 
 
 class Hypothesis(str, enum.Enum):
@@ -224,9 +224,30 @@ class MciGenerator:
         xi = fit_twist(self.K, ref, np.asarray(rw.cur_pts, np.float64), z_ref)
         if xi is None:
             return None
-        u, v = warp_events(self.K, rw.x, rw.y, z_ev, idx, dts, xi[:3] / track_s, xi[3:] / track_s)
+        prev = self._previous_twist(rw, prior) if c.parallax_acceleration_gain > 0 else None
+        mid = 0.5 * (rw.t_ref_us + rw.t_cur_us) / 1e6
+        ref_s = reference_time_us(rw.t, c.reference_fraction) / 1e6
+        xi_p, span_p, mid_p = prev if prev is not None else (None, 0.0, 0.0)
+        rot, trans = slice_motions(xi, track_s, mid, dts, ref_s, xi_p, span_p, mid_p, c.parallax_acceleration_gain)
+        u, v = warp_events(self.K, rw.x, rw.y, z_ev, idx, rot, trans)
         p = rw.p if self.icfg.use_polarity else None
         return event_image(u, v, p, self.width, self.height, self.icfg.sigma_px)
+
+    def _previous_twist(self, rw: ReconstructionWindow, prior: MotionPrior) -> tuple[np.ndarray, float, float] | None:
+        """The motion of the previous window's tracks (at the current depths), its span and centre (s), or None."""
+        if rw.previous_tracks is None:
+            return None
+        ref, cur, t0, t1 = rw.previous_tracks
+        span = (t1 - t0) / 1e6
+        if span <= 0 or len(ref) < self.cfg.parallax_min_points:
+            return None
+        ref = np.asarray(ref, np.float64)
+        if self.cfg.parallax_plane:
+            z = plane_depth(self.K, prior.point_uv, prior.point_depth, ref[:, 0], ref[:, 1])
+        else:
+            z = sample_depth(depth_field(prior.point_uv, prior.point_depth, self.width, self.height), ref[:, 0], ref[:, 1])
+        xi = fit_twist(self.K, ref, np.asarray(cur, np.float64), z) if z is not None else None
+        return None if xi is None else (xi, span, 0.5 * (t0 + t1) / 1e6)
 
     def generate(self, rw: ReconstructionWindow, prior: MotionPrior | None = None) -> MciResult:
         prior = prior or MotionPrior()

@@ -72,35 +72,31 @@ def plane_depth(K: np.ndarray, uv: np.ndarray, z: np.ndarray, x: np.ndarray, y: 
     return 1.0 / q if np.all(q > 0) else None
 
 
-def _move(K: np.ndarray, Ki: np.ndarray, uv: np.ndarray, z: np.ndarray, xi: np.ndarray) -> np.ndarray:
-    """Pixels ``uv`` at depths ``z`` after the camera motion ``xi = (omega s, v s)`` (H1's convention), (N, 2)."""
-    R = cv2.Rodrigues(np.asarray(xi[:3], np.float64))[0].T
-    X = (np.c_[uv, np.ones(len(uv))] @ Ki.T) * z[:, None]
-    q = (X - xi[3:]) @ R.T @ K.T
-    return q[:, :2] / q[:, 2:3]
+def _project_moved(K: np.ndarray, X: np.ndarray, xis: np.ndarray) -> np.ndarray:
+    """Points ``X`` (N, 3) after each motion ``xis`` (M, 6) ``= (omega s, v s)`` (H1's convention), pixels (M, N, 2)."""
+    R = Rotation.from_rotvec(xis[:, :3]).as_matrix()  # R_k; a point moves by R_k^T (X - t_k)
+    q = np.einsum("ij,mkj,mnk->mni", K, R, X[None] - xis[:, None, 3:])
+    return q[..., :2] / q[..., 2:3]
 
 
 def fit_twist(K: np.ndarray, ref: np.ndarray, cur: np.ndarray, z: np.ndarray, huber_px: float = 1.0, iterations: int = 5) -> np.ndarray | None:
     """The motion ``(omega s, v s)`` (6,) moving the tracks ``ref`` (at depths ``z``) onto ``cur`` over their span, or None.
 
-    Gauss-Newton on the reprojection error with a numerical Jacobian and Huber weights; a small damping keeps the
-    rotation / translation trade-off of a shallow scene (the warp is the same either way) well posed.
+    Gauss-Newton on the reprojection error with a forward-difference Jacobian and Huber weights; a small damping keeps
+    the rotation / translation trade-off of a shallow scene (the warp is the same either way) well posed.
     """
     ref = np.asarray(ref, np.float64)
     cur = np.asarray(cur, np.float64)
     if len(ref) < 6:
         return None
-    Ki = np.linalg.inv(K)
+    X = (np.c_[ref, np.ones(len(ref))] @ np.linalg.inv(K).T) * np.asarray(z, np.float64)[:, None]
     xi = np.zeros(6)
-    eps = 1e-6
     zs = float(np.median(z))
+    h = 1e-6 * np.r_[1.0, 1.0, 1.0, zs, zs, zs]
     for _ in range(iterations):
-        r0 = (_move(K, Ki, ref, z, xi) - cur).ravel()
-        J = np.empty((r0.size, 6))
-        for k in range(6):
-            d = np.zeros(6)
-            d[k] = eps * (1.0 if k < 3 else zs)
-            J[:, k] = ((_move(K, Ki, ref, z, xi + d) - cur).ravel() - r0) / d[k]
+        P = _project_moved(K, X, np.vstack([xi, xi + np.diag(h)]))
+        r0 = (P[0] - cur).ravel()
+        J = ((P[1:] - P[0]).reshape(6, -1) / h[:, None]).T
         e = np.hypot(r0[0::2], r0[1::2])
         w = np.where(e > huber_px, huber_px / np.maximum(e, 1e-12), 1.0).repeat(2)
         A = J.T @ (J * w[:, None])
@@ -135,14 +131,32 @@ def _warp_kernel(x, y, z, slice_idx, M, b):
     return u, v
 
 
-def warp_events(K: np.ndarray, x: np.ndarray, y: np.ndarray, z: np.ndarray, slice_idx: np.ndarray, dts: np.ndarray,
-                omega: np.ndarray, velocity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Events at pixels ``(x, y)`` and depths ``z``, seen ``dts[slice_idx]`` seconds before the reference time, moved to
-    it by the constant own-frame rates ``omega`` (rad/s) and ``velocity`` (map units/s), as :func:`se3_homographies`
-    moves them at one depth; events that end behind the camera go far outside the image."""
+def warp_events(K: np.ndarray, x: np.ndarray, y: np.ndarray, z: np.ndarray, slice_idx: np.ndarray, rotvecs: np.ndarray,
+                translations: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Events at pixels ``(x, y)`` and depths ``z`` moved to the reference view by their slice's motion: a point ``X``
+    of slice ``s`` goes to ``Exp(rotvecs[s])^T (X - translations[s])`` (rad, map units; :func:`se3_homographies`'s
+    convention with ``rotvec = omega dt``, ``translation = v dt``); events that end behind the camera go far outside
+    the image."""
     K = np.asarray(K, np.float64)
-    R = Rotation.from_rotvec(np.outer(dts, omega)).as_matrix().transpose(0, 2, 1)  # (S, 3, 3)
+    R = Rotation.from_rotvec(np.asarray(rotvecs, np.float64)).as_matrix().transpose(0, 2, 1)  # (S, 3, 3)
     M = K @ R @ np.linalg.inv(K)
-    b = np.einsum("ij,sjk,sk->si", K, R, np.outer(dts, velocity))
+    b = np.einsum("ij,sjk,sk->si", K, R, np.asarray(translations, np.float64))
     return _warp_kernel(np.ascontiguousarray(x, np.float64), np.ascontiguousarray(y, np.float64), np.ascontiguousarray(z, np.float64),
                         np.ascontiguousarray(slice_idx, np.int64), np.ascontiguousarray(M), np.ascontiguousarray(b))
+
+
+def slice_motions(xi: np.ndarray, span_s: float, mid_s: float, dts: np.ndarray, ref_s: float, xi_prev: np.ndarray | None = None,
+                  span_prev_s: float = 0.0, mid_prev_s: float = 0.0, gain: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """Per-slice ``(rotvecs, translations)`` (S, 3) moving a point seen ``dts`` seconds before ``ref_s`` to it.
+
+    ``xi`` is the motion over the current tracks' span ``span_s`` (centred at ``mid_s``), a constant twist; with the
+    previous window's ``xi_prev`` (its span and centre) and ``gain`` > 0 the twist changes linearly in time at ``gain``
+    times the rate the two fits imply, and each slice takes its integral up to the reference time.
+    """
+    rate = np.asarray(xi, np.float64) / span_s
+    integral = np.outer(dts, rate)
+    if xi_prev is not None and gain > 0 and mid_s > mid_prev_s and span_prev_s > 0:
+        acc = gain * (rate - np.asarray(xi_prev, np.float64) / span_prev_s) / (mid_s - mid_prev_s)
+        t = ref_s - np.asarray(dts, np.float64)
+        integral = integral + np.outer(0.5 * ((ref_s - mid_s) ** 2 - (t - mid_s) ** 2), acc)
+    return integral[:, :3], integral[:, 3:]

@@ -49,7 +49,7 @@ def test_warp_events_at_one_depth_equals_the_plane_homography():
     x, y = rng.uniform(0, W, 50), rng.uniform(0, H, 50)
     dts = np.array([0.01, -0.02])
     idx = rng.integers(0, 2, 50)
-    u, v = warp_events(K, x, y, np.full(50, 3.0), idx, dts, OMEGA, VEL)
+    u, v = warp_events(K, x, y, np.full(50, 3.0), idx, np.outer(dts, OMEGA), np.outer(dts, VEL))
     Hs = se3_homographies(K, OMEGA, VEL, 3.0, dts)
     q = np.einsum("nij,nj->ni", Hs[idx], np.c_[x, y, np.ones(50)])
     assert np.allclose(u, q[:, 0] / q[:, 2]) and np.allclose(v, q[:, 1] / q[:, 2])
