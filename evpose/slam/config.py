@@ -267,13 +267,6 @@ class MciConfig:
     (:mod:`evpose.slam.parallax_warp`)."""
     use_parallax_inertial: bool = False
     """``use_parallax`` of event-inertial runs."""
-    parallax_plane: bool = False
-    """H5's depths from one plane fitted to the map points in view instead of the nearest map point."""
-    parallax_acceleration_gain: float = field(default=0.0, metadata={"min": 0.0, "max": 2.0, "step": 0.1, "unit": "ratio"})
-    """H5's twist changes linearly over the window at this share of the rate its fit and the previous window's fit
-    imply (0: a constant twist), ratio."""
-    parallax_preferred: bool = False
-    """Dispatch H5 whenever it exists instead of the sharpest hypothesis."""
     parallax_min_points: int = field(default=12, metadata={"min": 6, "max": 200, "step": 1, "unit": "points"})
     """H5 needs this many map points in view and as many tracks in the window, points."""
     keep_hypothesis_survival: float = field(default=0.25, metadata={"min": 0.0, "max": 1.0, "step": 0.05, "unit": "ratio"})

@@ -67,9 +67,6 @@ class ReconstructionWindow:
     blank_us: int = 0
     """Time spanned by the tiny windows rejected for their event rate (``th_e``) since the previous dispatch, with the
     tiny frames collected before each and dropped with it: the camera saw little but noise then (blank walls), us."""
-    previous_tracks: tuple | None = None
-    """The previous window's ``(ref_pts, cur_pts, t_ref_us, t_cur_us)`` when this window overlaps it, else None: the
-    motion over the overlapping part (H5's acceleration, ``MciConfig.parallax_acceleration_gain``)."""
 
     @property
     def t_end_us(self) -> int:
@@ -104,8 +101,6 @@ class WindowState:
     """Time of the last event taken into a tiny window (the gap test looks across tiny windows too), us."""
     blank_us: int = 0
     """Time spanned by the tiny windows rejected for their event rate since the last dispatch, us."""
-    prev_tracks: tuple | None = None
-    """The last dispatched window's ``(ref_pts, cur_pts, t_ref_us, t_cur_us)``, kept with its overlap."""
 
 
 def _empty_chunk() -> _Chunk:
@@ -192,8 +187,6 @@ class EventWindowSelector:
     def _reset(self, keep_overlap: bool) -> None:
         s = self.state
         s.prev_window = _cat(s.chunks) if keep_overlap and s.chunks else None
-        if s.prev_window is None:
-            s.prev_tracks = None
         s.chunks = []
         s.ref_pts = s.cur_pts = s.alive = s.prev8 = None
         s.n_frames = 0
@@ -272,13 +265,11 @@ class EventWindowSelector:
         s, cfg = self.state, self.cfg
         cur = _cat(s.chunks)
         parts = []
-        overlapped = False
         if s.prev_window is not None and cfg.overlap > 0 and len(s.prev_window.t):
             k = int(round(len(s.prev_window.t) * min(cfg.overlap / (1.0 - cfg.overlap), 1.0)))
             if k > 0:
                 pw = s.prev_window
                 parts.append(_Chunk(pw.t[-k:], pw.x[-k:], pw.y[-k:], pw.p[-k:]))
-                overlapped = True
         parts.append(cur)
         ev = _cat(parts)
         alive = s.alive if s.alive is not None else np.zeros(0, bool)
@@ -288,9 +279,7 @@ class EventWindowSelector:
             cur_pts=s.cur_pts[alive].copy() if s.cur_pts is not None else np.zeros((0, 2), np.float32),
             t_ref_us=s.t_ref_us, t_cur_us=s.t_cur_us, n_frames=s.n_frames,
             median_displacement_px=s.median_displacement_px, forced=forced, blank_us=s.blank_us,
-            previous_tracks=s.prev_tracks if overlapped else None,
         )
-        s.prev_tracks = (rw.ref_pts, rw.cur_pts, rw.t_ref_us, rw.t_cur_us)
         s.blank_us = 0
         if not forced and cfg.adapt_events:
             # eq. (8): fewer frames than expected -> the camera is fast -> smaller tiny windows, and vice versa.

@@ -1,4 +1,4 @@
-"""Motion-compensated images (paper Algorithm 2): warp hypotheses H1-H4, local-STD scoring, selection.
+"""Motion-compensated images (paper Algorithm 2): warp hypotheses H1-H4 (and our H5), local-STD scoring, selection.
 
 Every hypothesis is a constant velocity over the window (``psi = Log(theta)/dT``);
 events are moved to the window's reference time (its last timestamp, or
@@ -26,7 +26,7 @@ from scipy.spatial.transform import Rotation
 from evpose.slam.config import EventImageConfig, MciConfig
 from evpose.slam.event_image import event_image, local_std_score, to_uint8
 from evpose.slam.event_window import ReconstructionWindow
-from evpose.slam.parallax_warp import depth_field, fit_twist, plane_depth, sample_depth, slice_motions, warp_events
+from evpose.slam.parallax_warp import depth_field, fit_twist, sample_depth, warp_events
 
 
 class Hypothesis(str, enum.Enum):
@@ -73,14 +73,14 @@ class MciResult:
     """Its 8-bit form, uint8 (H, W)."""
     hypothesis: Hypothesis
     scores: dict[str, float] = field(default_factory=dict)
-    """Mean local STD per tried hypothesis ("H1".."H4")."""
+    """Mean local STD per tried hypothesis ("H1".."H5")."""
     n_events: int = 0
     sim2: np.ndarray | None = None
     """Fitted Sim(2) motion over the track interval (3x3 px), kept as the next prior."""
     depth: float | None = None
     """Scene depth of the H3 fit, map units."""
     candidates: dict = field(default_factory=dict, repr=False)
-    """Every rendered hypothesis ("H1".."H4") -> float32 image: the tracker may prefer the previous MCI's hypothesis."""
+    """Every rendered hypothesis ("H1".."H5") -> float32 image: the tracker may prefer the previous MCI's hypothesis."""
 
 
 def reference_time_us(t: np.ndarray, fraction: float = 1.0) -> int:
@@ -210,44 +210,17 @@ class MciGenerator:
         if not c.use_parallax or prior.point_uv is None or len(prior.point_uv) < c.parallax_min_points or track_s <= 0:
             return None
         ref = np.asarray(rw.ref_pts, np.float64)
-        if len(ref) < c.parallax_min_points:
+        field = depth_field(prior.point_uv, prior.point_depth, self.width, self.height)
+        if field is None or len(ref) < c.parallax_min_points:
             return None
-        if c.parallax_plane:
-            z_ref = plane_depth(self.K, prior.point_uv, prior.point_depth, ref[:, 0], ref[:, 1])
-            z_ev = plane_depth(self.K, prior.point_uv, prior.point_depth, rw.x, rw.y) if z_ref is not None else None
-        else:
-            field = depth_field(prior.point_uv, prior.point_depth, self.width, self.height)
-            z_ref = sample_depth(field, ref[:, 0], ref[:, 1]) if field is not None else None
-            z_ev = sample_depth(field, rw.x, rw.y) if field is not None else None
-        if z_ev is None:
-            return None
-        xi = fit_twist(self.K, ref, np.asarray(rw.cur_pts, np.float64), z_ref)
+        xi = fit_twist(self.K, ref, np.asarray(rw.cur_pts, np.float64), sample_depth(field, ref[:, 0], ref[:, 1]))
         if xi is None:
             return None
-        prev = self._previous_twist(rw, prior) if c.parallax_acceleration_gain > 0 else None
-        mid = 0.5 * (rw.t_ref_us + rw.t_cur_us) / 1e6
-        ref_s = reference_time_us(rw.t, c.reference_fraction) / 1e6
-        xi_p, span_p, mid_p = prev if prev is not None else (None, 0.0, 0.0)
-        rot, trans = slice_motions(xi, track_s, mid, dts, ref_s, xi_p, span_p, mid_p, c.parallax_acceleration_gain)
-        u, v = warp_events(self.K, rw.x, rw.y, z_ev, idx, rot, trans)
+        # A constant twist: points seen dts before the reference time move by Exp(omega dts)^T (X - v dts).
+        rate = xi / track_s
+        u, v = warp_events(self.K, rw.x, rw.y, sample_depth(field, rw.x, rw.y), idx, np.outer(dts, rate[:3]), np.outer(dts, rate[3:]))
         p = rw.p if self.icfg.use_polarity else None
         return event_image(u, v, p, self.width, self.height, self.icfg.sigma_px)
-
-    def _previous_twist(self, rw: ReconstructionWindow, prior: MotionPrior) -> tuple[np.ndarray, float, float] | None:
-        """The motion of the previous window's tracks (at the current depths), its span and centre (s), or None."""
-        if rw.previous_tracks is None:
-            return None
-        ref, cur, t0, t1 = rw.previous_tracks
-        span = (t1 - t0) / 1e6
-        if span <= 0 or len(ref) < self.cfg.parallax_min_points:
-            return None
-        ref = np.asarray(ref, np.float64)
-        if self.cfg.parallax_plane:
-            z = plane_depth(self.K, prior.point_uv, prior.point_depth, ref[:, 0], ref[:, 1])
-        else:
-            z = sample_depth(depth_field(prior.point_uv, prior.point_depth, self.width, self.height), ref[:, 0], ref[:, 1])
-        xi = fit_twist(self.K, ref, np.asarray(cur, np.float64), z) if z is not None else None
-        return None if xi is None else (xi, span, 0.5 * (t0 + t1) / 1e6)
 
     def generate(self, rw: ReconstructionWindow, prior: MotionPrior | None = None) -> MciResult:
         prior = prior or MotionPrior()
@@ -280,10 +253,8 @@ class MciGenerator:
             cands[Hypothesis.H5_PARALLAX] = h5
         cands[Hypothesis.H4_NONE] = self._render(rw, None, None)
         scores = {h.value: local_std_score(img, self.cfg.patch_px) for h, img in cands.items()}
-        # Highest score wins; ties go to the earlier hypothesis in H1..H4 order (deterministic).
+        # Highest score wins; ties go to the earlier hypothesis in H1..H5 order (deterministic).
         best = max(sorted(cands, key=lambda h: h.value), key=lambda h: scores[h.value])
-        if h5 is not None and self.cfg.parallax_preferred:
-            best = Hypothesis.H5_PARALLAX
         img = cands[best]
         t_ref = reference_time_us(rw.t, frac) if len(rw.t) else rw.t_end_us
         return MciResult(t_us=t_ref, image=img, image8=to_uint8(img), hypothesis=best, scores=scores, n_events=len(rw.t), sim2=sim2, depth=depth,

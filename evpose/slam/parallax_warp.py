@@ -25,6 +25,14 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 
+def points_in_view(Xw: np.ndarray, T_cw: np.ndarray, K: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Pixels (N, 2) and depths (N,) of the world points ``Xw`` (M, 3) in front of the camera ``T_cw`` (4x4)."""
+    Xc = Xw @ T_cw[:3, :3].T + T_cw[:3, 3]
+    Xc = Xc[np.isfinite(Xc).all(axis=1) & (Xc[:, 2] > 0)]
+    q = Xc @ np.asarray(K, np.float64).T
+    return q[:, :2] / q[:, 2:3], Xc[:, 2]
+
+
 def depth_field(uv: np.ndarray, z: np.ndarray, width: int, height: int, step: int = 2) -> np.ndarray | None:
     """Depth of the nearest of the points ``uv`` (N, 2) px with depths ``z`` (N,) at every ``step``-th pixel, float32
     (ceil(H/step), ceil(W/step)); None without a point inside the image."""
@@ -52,24 +60,6 @@ def sample_depth(field: np.ndarray, x: np.ndarray, y: np.ndarray, step: int = 2)
     c = np.clip((np.asarray(x) / step).astype(np.int64), 0, w - 1)
     r = np.clip((np.asarray(y) / step).astype(np.int64), 0, h - 1)
     return field[r, c].astype(np.float64)
-
-
-def plane_depth(K: np.ndarray, uv: np.ndarray, z: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray | None:
-    """Depths at pixels ``(x, y)`` on the plane fitted to the points ``uv`` (N, 2) px at depths ``z`` (N,): inverse depth
-    linear in the normalised coordinates, least squares after dropping points over 3 median deviations off; None when
-    the plane is degenerate or puts a queried pixel behind the camera."""
-    Ki = np.linalg.inv(K)
-    A = np.c_[np.c_[uv, np.ones(len(uv))] @ Ki.T[:, :2], np.ones(len(uv))]
-    w = 1.0 / np.asarray(z, np.float64)
-    keep = np.ones(len(w), bool)
-    for _ in range(2):
-        if keep.sum() < 3:
-            return None
-        abc = np.linalg.lstsq(A[keep], w[keep], rcond=None)[0]
-        r = np.abs(A @ abc - w)
-        keep = r <= 3.0 * max(float(np.median(r[keep])), 1e-12) * 1.4826
-    q = np.c_[np.c_[x, y, np.ones(len(x))] @ Ki.T[:, :2], np.ones(len(x))] @ abc
-    return 1.0 / q if np.all(q > 0) else None
 
 
 def _project_moved(K: np.ndarray, X: np.ndarray, xis: np.ndarray) -> np.ndarray:
@@ -143,20 +133,3 @@ def warp_events(K: np.ndarray, x: np.ndarray, y: np.ndarray, z: np.ndarray, slic
     b = np.einsum("ij,sjk,sk->si", K, R, np.asarray(translations, np.float64))
     return _warp_kernel(np.ascontiguousarray(x, np.float64), np.ascontiguousarray(y, np.float64), np.ascontiguousarray(z, np.float64),
                         np.ascontiguousarray(slice_idx, np.int64), np.ascontiguousarray(M), np.ascontiguousarray(b))
-
-
-def slice_motions(xi: np.ndarray, span_s: float, mid_s: float, dts: np.ndarray, ref_s: float, xi_prev: np.ndarray | None = None,
-                  span_prev_s: float = 0.0, mid_prev_s: float = 0.0, gain: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
-    """Per-slice ``(rotvecs, translations)`` (S, 3) moving a point seen ``dts`` seconds before ``ref_s`` to it.
-
-    ``xi`` is the motion over the current tracks' span ``span_s`` (centred at ``mid_s``), a constant twist; with the
-    previous window's ``xi_prev`` (its span and centre) and ``gain`` > 0 the twist changes linearly in time at ``gain``
-    times the rate the two fits imply, and each slice takes its integral up to the reference time.
-    """
-    rate = np.asarray(xi, np.float64) / span_s
-    integral = np.outer(dts, rate)
-    if xi_prev is not None and gain > 0 and mid_s > mid_prev_s and span_prev_s > 0:
-        acc = gain * (rate - np.asarray(xi_prev, np.float64) / span_prev_s) / (mid_s - mid_prev_s)
-        t = ref_s - np.asarray(dts, np.float64)
-        integral = integral + np.outer(0.5 * ((ref_s - mid_s) ** 2 - (t - mid_s) ** 2), acc)
-    return integral[:, :3], integral[:, 3:]
