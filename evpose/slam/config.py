@@ -269,6 +269,9 @@ class MciConfig:
     """``use_parallax`` of event-inertial runs."""
     parallax_min_points: int = field(default=12, metadata={"min": 6, "max": 200, "step": 1, "unit": "points"})
     """H5 needs this many map points in view and as many tracks in the window, points."""
+    parallax_max_residual_ratio: float = field(default=0.0, metadata={"min": 0.0, "max": 2.0, "step": 0.05, "unit": "ratio"})
+    """H5 is tried only when its fit leaves the window's tracks a median residual below this share of H2's (0: always),
+    ratio."""
     keep_hypothesis_survival: float = field(default=0.25, metadata={"min": 0.0, "max": 1.0, "step": 0.05, "unit": "ratio"})
     """When the sharpest hypothesis differs from the previous MCI's and KLT keeps fewer than this share of the tracks on
     it, the previous hypothesis's image is tracked instead and kept if more tracks survive (a warped and an unwarped

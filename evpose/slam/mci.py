@@ -204,7 +204,8 @@ class MciGenerator:
         p = rw.p if self.icfg.use_polarity else None
         return event_image(rw.x, rw.y, p, self.width, self.height, self.icfg.sigma_px, idx, H)
 
-    def _parallax(self, rw: ReconstructionWindow, prior: MotionPrior, idx: np.ndarray, dts: np.ndarray, track_s: float) -> np.ndarray | None:
+    def _parallax(self, rw: ReconstructionWindow, prior: MotionPrior, idx: np.ndarray, dts: np.ndarray, track_s: float,
+                  sim2: np.ndarray | None) -> np.ndarray | None:
         """H5's image, or None without enough map points or tracks (``MciConfig.parallax_min_points``)."""
         c = self.cfg
         if not c.use_parallax or prior.point_uv is None or len(prior.point_uv) < c.parallax_min_points or track_s <= 0:
@@ -213,9 +214,16 @@ class MciGenerator:
         field = depth_field(prior.point_uv, prior.point_depth, self.width, self.height)
         if field is None or len(ref) < c.parallax_min_points:
             return None
-        xi = fit_twist(self.K, ref, np.asarray(rw.cur_pts, np.float64), sample_depth(field, ref[:, 0], ref[:, 1]))
-        if xi is None:
+        cur = np.asarray(rw.cur_pts, np.float64)
+        fit = fit_twist(self.K, ref, cur, sample_depth(field, ref[:, 0], ref[:, 1]))
+        if fit is None:
             return None
+        xi, residual = fit
+        if c.parallax_max_residual_ratio > 0 and sim2 is not None:
+            # The depths must explain the tracks better than the similarity does, or they are not the scene's.
+            moved = np.c_[ref, np.ones(len(ref))] @ sim2[:2].T
+            if residual >= c.parallax_max_residual_ratio * float(np.median(np.linalg.norm(moved - cur, axis=1))):
+                return None
         # A constant twist: points seen dts before the reference time move by Exp(omega dts)^T (X - v dts).
         rate = xi / track_s
         u, v = warp_events(self.K, rw.x, rw.y, sample_depth(field, rw.x, rw.y), idx, np.outer(dts, rate[:3]), np.outer(dts, rate[3:]))
@@ -248,7 +256,7 @@ class MciGenerator:
             z = depth if depth is not None else (prior.map_depth or 1.0)
             H = se3_homographies(self.K, omega, vel, z, dts)
             cands[Hypothesis.H3_POSE_PRIOR] = self._render(rw, idx, H)
-        h5 = self._parallax(rw, prior, idx, dts, track_s)
+        h5 = self._parallax(rw, prior, idx, dts, track_s, sim2)
         if h5 is not None:
             cands[Hypothesis.H5_PARALLAX] = h5
         cands[Hypothesis.H4_NONE] = self._render(rw, None, None)

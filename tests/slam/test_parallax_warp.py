@@ -3,7 +3,7 @@ from scipy.spatial.transform import Rotation
 
 from evpose.slam.config import EventImageConfig, MciConfig
 from evpose.slam.event_window import ReconstructionWindow
-from evpose.slam.mci import Hypothesis, MciGenerator, MotionPrior, _slices, se3_homographies
+from evpose.slam.mci import Hypothesis, MciGenerator, MotionPrior, se3_homographies
 from evpose.slam.parallax_warp import depth_field, fit_twist, sample_depth, warp_events
 
 K = np.array([[150.0, 0, 80], [0, 150.0, 60], [0, 0, 1]])
@@ -40,7 +40,8 @@ def test_fit_twist_recovers_the_motion_that_moves_tracks_at_two_depths():
     X, uv, z = _two_depth_scene()
     s = 0.04
     cur = _project(s, X)
-    xi = fit_twist(K, uv, cur, z)
+    xi, residual = fit_twist(K, uv, cur, z)
+    assert residual < 1e-3
     assert np.allclose(xi[:3], OMEGA * s, atol=1e-4) and np.allclose(xi[3:], VEL * s, atol=1e-3)
 
 
@@ -80,5 +81,9 @@ def test_parallax_hypothesis_is_sharper_than_one_depth_warps_on_a_two_depth_scen
     # Without enough map points in view there is no H5.
     few = MotionPrior(omega=OMEGA, velocity=VEL, map_depth=3.0, point_uv=uv[:5], point_depth=z[:5])
     assert "H5" not in MciGenerator(cfg, EventImageConfig(), K, W, H).generate(rw, few).scores
-    idx, dts = _slices(rw.t, cfg.time_slices, cfg.reference_fraction)
-    assert len(dts) == cfg.time_slices and idx.max() == cfg.time_slices - 1
+    # The residual gate keeps H5 when its depths explain the tracks better than H2's similarity, and drops it when
+    # the map's depths are wrong (swapped between the two halves).
+    gated = MciConfig(use_parallax=True, parallax_max_residual_ratio=1.0)
+    assert "H5" in MciGenerator(gated, EventImageConfig(), K, W, H).generate(rw, prior).scores
+    flat = MotionPrior(omega=OMEGA, velocity=VEL, map_depth=3.0, point_uv=uv, point_depth=np.where(z > 3.0, 2.0, 4.0))
+    assert "H5" not in MciGenerator(gated, EventImageConfig(), K, W, H).generate(rw, flat).scores
