@@ -281,9 +281,10 @@ class MciConfig:
     use_parallax_inertial: bool = False
     """``use_parallax`` of event-inertial runs (figures there)."""
     parallax_min_points: int = field(default=12, metadata={"min": 6, "max": 200, "step": 1, "unit": "points"})
-    """H5 needs this many map points in view and as many tracks in the window, points. 24 (median per window: indoor seeds
-    2, 7 17 tracks and 12-13 points, landing seeds 4, 17 35-37 and 39-40): landing 2.44 % (10 of 24 within 2 %; 12: 2.04 %, 14), indoor
-    7.44 % (``ba_huber_px`` 1.9: 8.03 %); 24 points but 12 tracks: landing 2.11 % (14), indoor 7.70 % (8.17 %)."""
+    """H5 needs this many map points in view and as many tracks in the window, points. 24 (median per window: indoor
+    seeds 2, 7 17 tracks and 12-13 points, landing seeds 4, 17 35-37 and 39-40): landing 2.44 % (10 of 24 within 2 %;
+    12: 2.04 %, 14), indoor 7.44 % (``ba_huber_px`` 1.9: 8.03 %); 24 points but 12 tracks: landing 2.11 % (14), indoor
+    7.70 % (8.17 %)."""
     parallax_max_residual_ratio: float = field(default=0.0, metadata={"min": 0.0, "max": 2.0, "step": 0.05, "unit": "ratio"})
     """H5 is tried only when its fit leaves the window's tracks a median residual below this share of H2's (0: always),
     ratio. 1.0: landing 2.86 % (12 of 24 within 2 %; 0: 2.04 %, 14), indoor 8.34 % (``ba_huber_px`` 1.9 /
