@@ -27,7 +27,11 @@ this and the previous window's fits imply 2.70 / 2.69 % (4 / 6); depths from one
 2.28 % (5 / 7); depths from every map point in view, not only the tracks', seeds 0-11 2.95 % (5; seed 4 7.01 %,
 lost once); H5 dispatched whenever it exists, seed 4 6.67 % (1.67 % by sharpness). Against the exact warp, H5's
 events on seed 4 are not closer than H2's (24 px block-mean error 0.42 / 0.44 / 0.11 px over the first leg, the
-turn and the second leg, H2 0.36 / 0.35 / 0.09): the whole-run gain is not a uniformly better image.
+turn and the second leg, H2 0.36 / 0.35 / 0.09): the whole-run gain is not a uniformly better image. Nor is the
+map's depth what limits it: H5 with the true depths (the tracks' and every event's ray-cast, the same twist fit,
+competing on sharpness; ``orun.py`` TD) gave seeds 0-11 3.14 % (5 of 12). The exact oracles above move the events by
+the true motion: the twist fitted to the tiny-frame tracks (extrapolated over the overlap with the previous window) is
+where a better H5 has to start.
 """
 
 from __future__ import annotations
