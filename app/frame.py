@@ -18,7 +18,7 @@ class SlamView:
     mci: np.ndarray | None
     """Selected motion-compensated image, float32 (H, W), when one was made in this step."""
     hypothesis: str
-    """Name of the selected MCI hypothesis ("H1".."H4"), "" without an MCI."""
+    """Name of the selected MCI hypothesis ("H1".."H5"), "" without an MCI."""
     hypothesis_scores: dict[str, float]
     """Score (mean local STD) of every hypothesis tried."""
     features: np.ndarray | None

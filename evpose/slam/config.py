@@ -291,6 +291,33 @@ class MciConfig:
     """H3: SE(3) warp from the IMU / last-pose prior with the average depth of eq. (5). Event-only landing seeds 0-11,
     60 runs (``reference_fraction`` 0.5, mean ATE 2.60 %, 30 within 2 %): without H3 2.40 % (31), without H1 2.54 %
     (23); paired -0.20 / -0.06 +- 0.18 points, not significant."""
+    use_parallax: bool = False
+    """H5: SE(3) fitted to the window's tracks with a depth per event from the nearest map point, competing on sharpness
+    with H1-H4 (:mod:`evpose.slam.parallax_warp`, where the oracle figures that led to it are). Session 16
+    (``/tmp/s16/slowmci9/exp.py``, event-only, 3 s, 346x260), landing seeds 0-11 2.37 -> 2.22 % (within 2 %: 7 -> 6,
+    worst 5.58 -> 3.81), seeds 12-23 3.18 -> 1.86 % (6 -> 8, worst 9.53 -> 2.29): 24 seeds 2.78 -> 2.04 % (13 -> 14,
+    paired -0.74 +- 0.43 points, 14 better); with ``TrackingConfig.ba_huber_px`` 1.9 2.88 -> 2.38 % (7 -> 12), with
+    ``reprojection_threshold_px`` 2.4 2.88 -> 2.80 % (8 -> 11); the 72 runs paired -0.44 +- 0.26, 43 better, within 2 %
+    28 -> 37, tracked at least 95.3 % either way. H5 is dispatched for about a third of the landing MCIs (seeds 4 / 17:
+    26 of 79 / 27 of 78). Off because the indoor room does not gain: seeds 0-7 7.39 -> 7.53 % (paired +0.14 +- 0.63),
+    with ``ba_huber_px`` 1.9 7.19 -> 7.94 %, ``reprojection_threshold_px`` 2.4 7.54 -> 7.77 % (one run down to 77.6 %
+    tracked), ``ba_huber_px`` 2.1 7.48 -> 7.96 %, ``reprojection_threshold_px`` 2.6 8.94 -> 8.91 %; the 40 runs +0.31 +-
+    0.38, 18 better, runs under 80 % tracked 1 -> 1; held-out seeds 8-11 9.41 -> 10.91 % (``ba_huber_px`` 1.9: 10.10 ->
+    8.13 %). Landing E-I-C2 seeds 0-11 (``use_parallax_inertial``): 0.94 -> 0.88 %, RPE at most 0.0050 -> 0.0037 m/m
+    and 0.0022 -> 0.0022 deg/m. CPU per MCI (landing seeds 0, 4, 8, 12 twice, alternated): median 25.72 -> 27.46 ms
+    (paired +1.57 +- 0.23). Dispatching H5 only when its score beats the others' by 2 %: landing 2.85 % (9 of 24),
+    indoor 8.57 %; removed."""
+    use_parallax_inertial: bool = False
+    """``use_parallax`` of event-inertial runs (figures there)."""
+    parallax_min_points: int = field(default=12, metadata={"min": 6, "max": 200, "step": 1, "unit": "points"})
+    """H5 needs this many map points in view and as many tracks in the window, points. 24 (median per window: indoor
+    seeds 2, 7 17 tracks and 12-13 points, landing seeds 4, 17 35-37 and 39-40): landing 2.44 % (10 of 24 within 2 %;
+    12: 2.04 %, 14), indoor 7.44 % (``ba_huber_px`` 1.9: 8.03 %); 24 points but 12 tracks: landing 2.11 % (14), indoor
+    7.70 % (8.17 %)."""
+    parallax_max_residual_ratio: float = field(default=0.0, metadata={"min": 0.0, "max": 2.0, "step": 0.05, "unit": "ratio"})
+    """H5 is tried only when its fit leaves the window's tracks a median residual below this share of H2's (0: always),
+    ratio. 1.0: landing 2.86 % (12 of 24 within 2 %; 0: 2.04 %, 14), indoor 8.34 % (``ba_huber_px`` 1.9 /
+    ``reprojection_threshold_px`` 2.4: 8.26 / 8.25 %)."""
     keep_hypothesis_survival: float = field(default=0.25, metadata={"min": 0.0, "max": 1.0, "step": 0.05, "unit": "ratio"})
     """When the sharpest hypothesis differs from the previous MCI's and KLT keeps fewer than this share of the tracks on
     it, the previous hypothesis's image is tracked instead and kept if more tracks survive (a warped and an unwarped

@@ -1,4 +1,4 @@
-"""Motion-compensated images (paper Algorithm 2): warp hypotheses H1-H4, local-STD scoring, selection.
+"""Motion-compensated images (paper Algorithm 2): warp hypotheses H1-H4 (and our H5), local-STD scoring, selection.
 
 Every hypothesis is a constant velocity over the window (``psi = Log(theta)/dT``);
 events are moved to the window's reference time (its last timestamp, or
@@ -26,6 +26,7 @@ from scipy.spatial.transform import Rotation
 from evpose.slam.config import EventImageConfig, MciConfig
 from evpose.slam.event_image import event_image, local_std_score, to_uint8
 from evpose.slam.event_window import ReconstructionWindow
+from evpose.slam.parallax_warp import depth_field, fit_twist, sample_depth, warp_events
 
 
 class Hypothesis(str, enum.Enum):
@@ -39,6 +40,9 @@ class Hypothesis(str, enum.Enum):
     """SE(3) from the IMU / last-pose prior, average depth fitted to the feature tracks (eq. 5)."""
     H4_NONE = "H4"
     """No compensation: the plain event histogram."""
+    H5_PARALLAX = "H5"
+    """SE(3) fitted to the window's feature tracks, each event at the depth of its nearest map point
+    (:mod:`evpose.slam.parallax_warp`)."""
 
 
 @dataclass
@@ -51,6 +55,10 @@ class MotionPrior:
     """Linear velocity of the camera in its own frame, map units/s (3,), from the last poses."""
     map_depth: float | None = None
     """Median depth of the map points in the current view, map units."""
+    point_uv: np.ndarray | None = None
+    """Map points of the tracks projected at the last tracked pose, px (N, 2): H5's depth samples."""
+    point_depth: np.ndarray | None = None
+    """Their depths at that pose, map units (N,)."""
 
 
 @dataclass
@@ -65,14 +73,14 @@ class MciResult:
     """Its 8-bit form, uint8 (H, W)."""
     hypothesis: Hypothesis
     scores: dict[str, float] = field(default_factory=dict)
-    """Mean local STD per tried hypothesis ("H1".."H4")."""
+    """Mean local STD per tried hypothesis ("H1".."H5")."""
     n_events: int = 0
     sim2: np.ndarray | None = None
     """Fitted Sim(2) motion over the track interval (3x3 px), kept as the next prior."""
     depth: float | None = None
     """Scene depth of the H3 fit, map units."""
     candidates: dict = field(default_factory=dict, repr=False)
-    """Every rendered hypothesis ("H1".."H4") -> float32 image: the tracker may prefer the previous MCI's hypothesis."""
+    """Every rendered hypothesis ("H1".."H5") -> float32 image: the tracker may prefer the previous MCI's hypothesis."""
 
 
 def reference_time_us(t: np.ndarray, fraction: float = 1.0) -> int:
@@ -196,6 +204,32 @@ class MciGenerator:
         p = rw.p if self.icfg.use_polarity else None
         return event_image(rw.x, rw.y, p, self.width, self.height, self.icfg.sigma_px, idx, H)
 
+    def _parallax(self, rw: ReconstructionWindow, prior: MotionPrior, idx: np.ndarray, dts: np.ndarray, track_s: float,
+                  sim2: np.ndarray | None) -> np.ndarray | None:
+        """H5's image, or None without enough map points or tracks (``MciConfig.parallax_min_points``)."""
+        c = self.cfg
+        if not c.use_parallax or prior.point_uv is None or len(prior.point_uv) < c.parallax_min_points or track_s <= 0:
+            return None
+        ref = np.asarray(rw.ref_pts, np.float64)
+        field = depth_field(prior.point_uv, prior.point_depth, self.width, self.height)
+        if field is None or len(ref) < c.parallax_min_points:
+            return None
+        cur = np.asarray(rw.cur_pts, np.float64)
+        fit = fit_twist(self.K, ref, cur, sample_depth(field, ref[:, 0], ref[:, 1]))
+        if fit is None:
+            return None
+        xi, residual = fit
+        if c.parallax_max_residual_ratio > 0 and sim2 is not None:
+            # The depths must explain the tracks better than the similarity does, or they are not the scene's.
+            moved = np.c_[ref, np.ones(len(ref))] @ sim2[:2].T
+            if residual >= c.parallax_max_residual_ratio * float(np.median(np.linalg.norm(moved - cur, axis=1))):
+                return None
+        # A constant twist: points seen dts before the reference time move by Exp(omega dts)^T (X - v dts).
+        rate = xi / track_s
+        u, v = warp_events(self.K, rw.x, rw.y, sample_depth(field, rw.x, rw.y), idx, np.outer(dts, rate[:3]), np.outer(dts, rate[3:]))
+        p = rw.p if self.icfg.use_polarity else None
+        return event_image(u, v, p, self.width, self.height, self.icfg.sigma_px)
+
     def generate(self, rw: ReconstructionWindow, prior: MotionPrior | None = None) -> MciResult:
         prior = prior or MotionPrior()
         cands: dict[Hypothesis, np.ndarray] = {}
@@ -222,9 +256,12 @@ class MciGenerator:
             z = depth if depth is not None else (prior.map_depth or 1.0)
             H = se3_homographies(self.K, omega, vel, z, dts)
             cands[Hypothesis.H3_POSE_PRIOR] = self._render(rw, idx, H)
+        h5 = self._parallax(rw, prior, idx, dts, track_s, sim2)
+        if h5 is not None:
+            cands[Hypothesis.H5_PARALLAX] = h5
         cands[Hypothesis.H4_NONE] = self._render(rw, None, None)
         scores = {h.value: local_std_score(img, self.cfg.patch_px) for h, img in cands.items()}
-        # Highest score wins; ties go to the earlier hypothesis in H1..H4 order (deterministic).
+        # Highest score wins; ties go to the earlier hypothesis in H1..H5 order (deterministic).
         best = max(sorted(cands, key=lambda h: h.value), key=lambda h: scores[h.value])
         img = cands[best]
         t_ref = reference_time_us(rw.t, frac) if len(rw.t) else rw.t_end_us

@@ -44,7 +44,7 @@ class SlamStepResult:
     mci: np.ndarray | None = None
     """Selected MCI, float32 (H, W), if one was made in this step."""
     hypothesis: str = ""
-    """Name of the selected MCI hypothesis ("H1".."H4")."""
+    """Name of the selected MCI hypothesis ("H1".."H5")."""
     hypothesis_scores: dict[str, float] = field(default_factory=dict)
     """Mean local STD of every hypothesis tried."""
     features: np.ndarray | None = None

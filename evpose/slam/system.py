@@ -46,6 +46,7 @@ from evpose.slam.map_rejoin import RejoinCandidate, merge_into, rejoin_similarit
 from evpose.slam.local_map import cull_points, insert_keyframe, need_keyframe, triangulate_new_points
 from evpose.slam.event_image import to_uint8
 from evpose.slam.mci import Hypothesis, MciGenerator, MciResult, MotionPrior
+from evpose.slam.parallax_warp import points_in_view
 from evpose.slam.keyframe_search import keep_keyframe_image, klt_refind_points
 from evpose.slam.projection_search import SearchMatcher, refind_points, store_patches
 from evpose.slam.scale_refinement import refine_map_scale
@@ -80,7 +81,7 @@ class EventSlam(GyroAids, VisualFailureHandling):
         self.window = EventWindowSelector(wcfg, config.features, config.image, self.width, self.height, config.seed)
         mcfg = config.mci
         if self.imu is not None:
-            mcfg = replace(mcfg, reference_fraction=mcfg.reference_fraction_inertial)
+            mcfg = replace(mcfg, reference_fraction=mcfg.reference_fraction_inertial, use_parallax=mcfg.use_parallax_inertial)
         self.mci_gen = MciGenerator(mcfg, config.image, self.K, self.width, self.height, config.seed)
         icfg = config.initialization
         self._init_cfg = icfg if self.imu is None else replace(icfg, homography_fit_share=icfg.homography_fit_share_inertial,
@@ -98,7 +99,7 @@ class EventSlam(GyroAids, VisualFailureHandling):
         self.last_scale_refinement = None
         """Outcome of the last scale refinement (``InertialConfig.refine_after_s``)."""
         self._prev_hypothesis: str | None = None
-        """Hypothesis of the previous MCI ("H1".."H4")."""
+        """Hypothesis of the previous MCI ("H1".."H5")."""
         self._last_visual_t = 0
         """Time of the last MCI tracked visually (C2/C3 bound their IMU bridges by it), us."""
         self._rejoin: RejoinCandidate | None = None
@@ -175,6 +176,8 @@ class EventSlam(GyroAids, VisualFailureHandling):
             pids = [self.fe.track_to_point[t] for t in self.fe.ids.tolist() if t in self.fe.track_to_point]
             if pids:
                 Xw = np.stack([m.points[p].xyz for p in pids if p in m.points] or [np.full(3, np.nan)])
+                if self.mci_gen.cfg.use_parallax:  # H5's depth samples: the tracks' map points seen from the last pose
+                    prior.point_uv, prior.point_depth = points_in_view(Xw, T_cw, self.K)
                 z = Xw @ T_cw[2, :3] + T_cw[2, 3]
                 z = z[np.isfinite(z) & (z > 0)]
                 prior.map_depth = float(np.median(z)) if z.size else None

@@ -45,6 +45,21 @@ def test_event_only_slam_tracks_most_of_the_recording_with_small_scale_aligned_e
     assert set(r.hypothesis_scores) >= {"H2", "H4"} and r.hypothesis in r.hypothesis_scores
 
 
+def test_parallax_hypothesis_joins_once_a_map_exists_and_only_where_enabled(radtan_recording):
+    cfg = SlamConfig()
+    cfg.mci.use_parallax = True
+    run = run_slam(radtan_recording, cfg)
+    m = atlas_metrics(run.trajectories(), radtan_recording.ground_truth, correct_scale=True, duration_s=run.duration_s)
+    assert m.tracked_fraction >= 0.8 and m.ate_percent <= 2.0
+    # H5 needs map depths: absent before the first map, tried on most MCIs after it.
+    assert "H5" not in run.results[0].hypothesis_scores
+    assert sum("H5" in r.hypothesis_scores for r in run.results) > len(run.results) // 2
+    # Event-inertial runs take use_parallax_inertial (off) instead.
+    inertial = SlamConfig(mode=SlamMode.EVENT_INERTIAL)
+    inertial.mci.use_parallax = True
+    assert not EventSlam(inertial, radtan_recording.calibration, radtan_recording.imu).mci_gen.cfg.use_parallax
+
+
 def test_each_initial_pose_follows_its_own_keyframe(radtan_run):
     # The two-view pose at the first keyframe stays with it when later BAs move the second keyframe.
     m = radtan_run.atlas.maps[0]
