@@ -76,7 +76,7 @@ def test_parallax_hypothesis_is_sharper_than_one_depth_warps_on_a_two_depth_scen
     res = MciGenerator(cfg, EventImageConfig(), K, W, H).generate(rw, prior)
     assert res.hypothesis is Hypothesis.H5_PARALLAX
     assert res.scores["H5"] > 1.1 * max(res.scores[h] for h in ("H1", "H2", "H3"))
-    off = MciGenerator(MciConfig(), EventImageConfig(), K, W, H).generate(rw, prior)
+    off = MciGenerator(MciConfig(use_parallax=False), EventImageConfig(), K, W, H).generate(rw, prior)
     assert "H5" not in off.scores
     # Without enough map points in view there is no H5.
     few = MotionPrior(omega=OMEGA, velocity=VEL, map_depth=3.0, point_uv=uv[:5], point_depth=z[:5])
