@@ -316,6 +316,9 @@ class MciConfig:
     seeds 2, 7 17 tracks and 12-13 points, landing seeds 4, 17 35-37 and 39-40): landing 2.44 % (10 of 24 within 2 %;
     12: 2.04 %, 14), indoor 7.44 % (``ba_huber_px`` 1.9: 8.03 %); 24 points but 12 tracks: landing 2.11 % (14), indoor
     7.70 % (8.17 %)."""
+    parallax_prior_weight: float = field(default=0.0, metadata={"min": 0.0, "max": 50.0, "step": 0.5, "unit": "tracks"})
+    """H5's twist fit is pulled towards the twist of the last two tracked poses (``MotionPrior``) with this many tracks'
+    worth of weight (:func:`evpose.slam.parallax_warp.fit_twist`; 0: the tracks alone), tracks."""
     parallax_max_residual_ratio: float = field(default=0.0, metadata={"min": 0.0, "max": 2.0, "step": 0.05, "unit": "ratio"})
     """H5 is tried only when its fit leaves the window's tracks a median residual below this share of H2's (0: always),
     ratio. 1.0: landing 2.86 % (12 of 24 within 2 %; 0: 2.04 %, 14), indoor 8.34 % (``ba_huber_px`` 1.9 /

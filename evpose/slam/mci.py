@@ -215,7 +215,10 @@ class MciGenerator:
         if field is None or len(ref) < c.parallax_min_points:
             return None
         cur = np.asarray(rw.cur_pts, np.float64)
-        fit = fit_twist(self.K, ref, cur, sample_depth(field, ref[:, 0], ref[:, 1]))
+        guess = None
+        if c.parallax_prior_weight > 0 and prior.omega is not None and prior.velocity is not None:
+            guess = np.r_[prior.omega, prior.velocity] * track_s  # the last poses' twist over the tracks' span
+        fit = fit_twist(self.K, ref, cur, sample_depth(field, ref[:, 0], ref[:, 1]), prior=guess, prior_weight=c.parallax_prior_weight)
         if fit is None:
             return None
         xi, residual = fit

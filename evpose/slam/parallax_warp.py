@@ -88,20 +88,26 @@ def _project_moved(K: np.ndarray, X: np.ndarray, xis: np.ndarray) -> np.ndarray:
 
 
 def fit_twist(K: np.ndarray, ref: np.ndarray, cur: np.ndarray, z: np.ndarray, huber_px: float = 1.0,
-              iterations: int = 5) -> tuple[np.ndarray, float] | None:
+              iterations: int = 5, prior: np.ndarray | None = None, prior_weight: float = 0.0) -> tuple[np.ndarray, float] | None:
     """The motion ``(omega s, v s)`` (6,) moving the tracks ``ref`` (at depths ``z``) onto ``cur`` over their span, and
     the tracks' median distance from where it moves them (px); None when the fit fails.
 
     Gauss-Newton on the reprojection error with a forward-difference Jacobian and Huber weights; a small damping keeps
-    the rotation / translation trade-off of a shallow scene (the warp is the same either way) well posed.
+    the rotation / translation trade-off of a shallow scene (the warp is the same either way) well posed. A ``prior``
+    motion (6,) (same units) with ``prior_weight`` > 0 adds ``prior_weight`` tracks' worth of residual, measured as the
+    image motion the difference makes (``f`` px per rad, ``f / median(z)`` px per map unit), and starts the fit there.
     """
     ref = np.asarray(ref, np.float64)
     cur = np.asarray(cur, np.float64)
     if len(ref) < 6:
         return None
     X = (np.c_[ref, np.ones(len(ref))] @ np.linalg.inv(K).T) * np.asarray(z, np.float64)[:, None]
-    xi = np.zeros(6)
     zs = float(np.median(z))
+    use_prior = prior is not None and prior_weight > 0 and bool(np.all(np.isfinite(prior)))
+    xi = np.asarray(prior, np.float64).copy() if use_prior else np.zeros(6)
+    # Two residuals per track: the prior's information per axis is 2 prior_weight (f s)^2, s the axis's px per unit.
+    f = 0.5 * (K[0, 0] + K[1, 1])
+    P_info = 2.0 * prior_weight * f * f * np.r_[1.0, 1.0, 1.0, np.full(3, 1.0 / (zs * zs))] if use_prior else np.zeros(6)
     h = 1e-6 * np.r_[1.0, 1.0, 1.0, zs, zs, zs]
     for _ in range(iterations):
         P = _project_moved(K, X, np.vstack([xi, xi + np.diag(h)]))
@@ -111,7 +117,11 @@ def fit_twist(K: np.ndarray, ref: np.ndarray, cur: np.ndarray, z: np.ndarray, hu
         w = np.where(e > huber_px, huber_px / np.maximum(e, 1e-12), 1.0).repeat(2)
         A = J.T @ (J * w[:, None])
         A += 1e-6 * np.trace(A) / 6.0 * np.eye(6)
-        step = np.linalg.solve(A, -J.T @ (w * r0))
+        g = J.T @ (w * r0)
+        if use_prior:
+            A += np.diag(P_info)
+            g += P_info * (xi - prior)
+        step = np.linalg.solve(A, -g)
         xi = xi + step
         if not np.all(np.isfinite(xi)):
             return None

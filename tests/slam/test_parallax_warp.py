@@ -45,6 +45,21 @@ def test_fit_twist_recovers_the_motion_that_moves_tracks_at_two_depths():
     assert np.allclose(xi[:3], OMEGA * s, atol=1e-4) and np.allclose(xi[3:], VEL * s, atol=1e-3)
 
 
+def test_fit_twist_prior_settles_the_rotation_translation_trade_off_of_noisy_tracks():
+    # One far plane and 1 px of track noise: sideways translation and rotation move the tracks alike.
+    rng = np.random.default_rng(3)
+    uv = np.c_[rng.uniform(10, 150, 40), rng.uniform(10, 110, 40)]
+    z = np.full(40, 6.0)
+    X = (np.c_[uv, np.ones(40)] @ np.linalg.inv(K).T) * z[:, None]
+    s = 0.03
+    cur = _project(s, X) + rng.normal(0.0, 1.0, (40, 2))
+    truth = np.r_[OMEGA, VEL] * s
+    free, _ = fit_twist(K, uv, cur, z)
+    assert np.array_equal(fit_twist(K, uv, cur, z, prior=truth, prior_weight=0.0)[0], free)
+    pulled, _ = fit_twist(K, uv, cur, z, prior=truth, prior_weight=4.0)
+    assert np.linalg.norm(pulled - truth) < 0.5 * np.linalg.norm(free - truth)
+
+
 def test_warp_events_at_one_depth_equals_the_plane_homography():
     rng = np.random.default_rng(2)
     x, y = rng.uniform(0, W, 50), rng.uniform(0, H, 50)
