@@ -318,7 +318,13 @@ class MciConfig:
     7.70 % (8.17 %)."""
     parallax_prior_weight: float = field(default=0.0, metadata={"min": 0.0, "max": 50.0, "step": 0.5, "unit": "tracks"})
     """H5's twist fit is pulled towards the twist of the last two tracked poses (``MotionPrior``) with this many tracks'
-    worth of weight (:func:`evpose.slam.parallax_warp.fit_twist`; 0: the tracks alone), tracks."""
+    worth of weight (:func:`evpose.slam.parallax_warp.fit_twist`; 0: the tracks alone), tracks. Session 16
+    (``/tmp/s16/h5fit9``): against the true motion (landing seeds 4 and 17, 150 H5 windows; each window's events moved
+    to its reference time at the map's depths, RMS px off the true relative pose's move) the fit alone is 1.48 px off
+    (median; mean 2.00), the last poses' twist alone 2.15 (2.85), weight 1 1.21 (1.72), 4 1.22 (1.82), 16 1.44 (2.10).
+    Yet whole runs (event-only landing, ``/tmp/s16/lead/exp.py``) got worse: weight 1, seeds 0-11 / 12-23 2.22 / 1.86
+    -> 2.96 / 2.85 % (within 2 %: 6 / 8 -> 7 / 6; seeds 4, 7 split into two maps): the tracker's own motion fed back
+    into its images; off."""
     parallax_max_residual_ratio: float = field(default=0.0, metadata={"min": 0.0, "max": 2.0, "step": 0.05, "unit": "ratio"})
     """H5 is tried only when its fit leaves the window's tracks a median residual below this share of H2's (0: always),
     ratio. 1.0: landing 2.86 % (12 of 24 within 2 %; 0: 2.04 %, 14), indoor 8.34 % (``ba_huber_px`` 1.9 /
