@@ -58,6 +58,12 @@ float32 values), 390-401 -> 403-417 us (slower). The reopening check of ``polari
 the selecting pass (:func:`_select_times_reopening`) instead of a second pass over the patch pixels with 2-D indexing,
 bit for bit the same: 233 us against 172 us for selecting alone (same captured inputs, caches flushed); a second pass
 that reads the other polarity only at the pixels of points still without events took 329 us.
+Session 17 (captured ``stpe+filter`` inputs, 346x260, caches flushed, outputs compared; not kept): ``_mark_patches``
+branch-free (every disk pixel read and written back) 255 -> 313 us; one uint64 cell per pixel (float32 bits of the
+distance, owner, tag: one array, compared as integers) 315 -> 307 us. Warming the three maps first takes it 309 -> 195
+us (hot 127): the cost is the ~2,000 cache lines the patches cover, whatever their layout. ``defer_events`` (the
+event pass after the pose; ``stpe+filter`` only, see :meth:`MapPolaritySelector.align
+<evpose.fusion.polarity.MapPolaritySelector.align>`) moves work, it does not save any: the grid is colder by then.
 """
 
 from __future__ import annotations
