@@ -58,6 +58,12 @@ float32 values), 390-401 -> 403-417 us (slower). The reopening check of ``polari
 the selecting pass (:func:`_select_times_reopening`) instead of a second pass over the patch pixels with 2-D indexing,
 bit for bit the same: 233 us against 172 us for selecting alone (same captured inputs, caches flushed); a second pass
 that reads the other polarity only at the pixels of points still without events took 329 us.
+Session 17 (captured ``stpe+filter`` inputs, 346x260, caches flushed, outputs compared; not kept): ``_mark_patches``
+branch-free (every disk pixel read and written back) 255 -> 313 us; one uint64 cell per pixel (float32 bits of the
+distance, owner, tag: one array, compared as integers) 315 -> 307 us. Warming the three maps first takes it 309 -> 195
+us (hot 127): the cost is the ~2,000 cache lines the patches cover, whatever their layout. ``defer_events`` (the
+event pass after the pose; ``stpe+filter`` only, see :meth:`MapPolaritySelector.align
+<evpose.fusion.polarity.MapPolaritySelector.align>`) moves work, it does not save any: the grid is colder by then.
 """
 
 from __future__ import annotations
@@ -351,11 +357,13 @@ class AlignedTimeSurface:
         self._judged = None
         """(r^2, count, first and last time, labels, points, per-point majority polarity) of the kept events of the last
         compose, for :meth:`kept_labels` / :meth:`batch_judgement`."""
+        self._pending = None
+        """(events, keep, r^2) of a compose whose event pass :meth:`judge` has yet to run (``defer_events``)."""
 
     def compose(self, surface, points_world: np.ndarray, T_world_cam: np.ndarray, K: np.ndarray, polarity: np.ndarray,
                 radius_px: float, roi: tuple[int, int, int, int] | None, events=None, keep: np.ndarray | None = None,
                 t_us: int | None = None, empty_after_eta: float = 3.0, classify_radius_px: float | None = None,
-                reopen_contradicted: bool = False) -> "AlignedTimeSurface":
+                reopen_contradicted: bool = False, defer_events: bool = False) -> "AlignedTimeSurface":
         """Build ``T_align`` in ``roi`` from ``surface`` for map points (M, 3) with predicted ``polarity`` (M,) at ``T_world_cam``.
 
         ``events`` / ``keep`` (the step's batch and the mask of those stored in
@@ -367,6 +375,9 @@ class AlignedTimeSurface:
         such event but one of the other polarity accepts both (see :func:`_select_times_reopening`).
         The same pass labels the kept events as :meth:`classify` would within
         ``classify_radius_px`` (default ``radius_px``), so classifying them afterwards costs nothing.
+        With ``defer_events`` that pass (and the event counts of :attr:`last_counts`) waits for :meth:`judge`, or the
+        first :meth:`kept_labels` / :meth:`batch_judgement`: registration needs none of it, so the tracker runs it after
+        the pose is out (``keep`` is copied; ``events`` must stay unchanged until then).
         """
         if t_us is None:
             t_us = int(events.t[-1]) if events is not None and len(events) else int(NEVER_US)
@@ -401,24 +412,36 @@ class AlignedTimeSurface:
         counts = {"points_single_polarity": int(np.count_nonzero(pol)), "points_both": int(pol.size - np.count_nonzero(pol)),
                   "points_with_events": int(np.count_nonzero(self.point_has_events)), "points_reopened": reopened}
         self._judged = None
+        self.last_counts = counts
+        self._pending = None
         if events is not None and len(events):
-            k = np.ones(len(events), np.bool_) if keep is None else np.ascontiguousarray(keep, np.bool_)
-            n_kept = int(np.count_nonzero(k))
-            label = np.empty(n_kept, np.int8)
-            point = np.empty(n_kept, np.int32)
-            majority = np.empty(pol.size, np.int8)
-            r2 = float(radius_px if classify_radius_px is None else classify_radius_px) ** 2
-            n, outside, wrong = _judge_events(events.x, events.y, events.p, k, self.width, self._lut, np.uint16(self._gen),
-                                              self._tag, self._owner, self._dist2, self.box, pol, r2, label, point, majority)
-            if n_kept:  # first / last kept times by index: no copy of every kept timestamp
-                first, last = int(np.argmax(k)), k.shape[0] - 1 - int(np.argmax(k[::-1]))
-                self._judged = (r2, n_kept, int(events.t[first]), int(events.t[last]), label, point, majority)
-            counts.update(events_polarity_judged=int(n), events_polarity_removed=int(outside + wrong),
-                          events_outside_patches=int(outside), events_wrong_polarity=int(wrong))
+            k = np.ones(len(events), np.bool_) if keep is None else np.array(keep, np.bool_)
+            self._pending = (events, k, float(radius_px if classify_radius_px is None else classify_radius_px) ** 2)
+            if not defer_events:
+                self.judge()
         else:
             counts.update(events_polarity_judged=0, events_polarity_removed=0, events_outside_patches=0, events_wrong_polarity=0)
-        self.last_counts = counts
         return self
+
+    def judge(self) -> None:
+        """The event pass :meth:`compose` deferred (``defer_events``), if any: labels the kept events and adds the
+        event counts to :attr:`last_counts`. Nothing else of the compose changes."""
+        if self._pending is None:
+            return
+        events, k, r2 = self._pending
+        self._pending = None
+        pol = self._polarity
+        n_kept = int(np.count_nonzero(k))
+        label = np.empty(n_kept, np.int8)
+        point = np.empty(n_kept, np.int32)
+        majority = np.empty(pol.size, np.int8)
+        n, outside, wrong = _judge_events(events.x, events.y, events.p, k, self.width, self._lut, np.uint16(self._gen),
+                                          self._tag, self._owner, self._dist2, self.box, pol, r2, label, point, majority)
+        if n_kept:  # first / last kept times by index: no copy of every kept timestamp
+            first, last = int(np.argmax(k)), k.shape[0] - 1 - int(np.argmax(k[::-1]))
+            self._judged = (r2, n_kept, int(events.t[first]), int(events.t[last]), label, point, majority)
+        self.last_counts.update(events_polarity_judged=int(n), events_polarity_removed=int(outside + wrong),
+                                events_outside_patches=int(outside), events_wrong_polarity=int(wrong))
 
     def classify(self, events, radius_px: float) -> tuple[np.ndarray, np.ndarray]:
         """``(label, point)`` of events against the last :meth:`compose`'s patches and polarities, as
@@ -436,6 +459,7 @@ class AlignedTimeSurface:
         """:meth:`classify` of ``events`` when they are the kept events of the last :meth:`compose` (given its
         ``keep``) and ``radius_px`` its ``classify_radius_px``: labelled in compose's pass, no second one. None when
         they are not (same count and first/last times are checked)."""
+        self.judge()
         j = self._judged
         n = len(events)
         if j is None or n != j[1] or float(radius_px) ** 2 != j[0] or int(events.t[0]) != j[2] or int(events.t[-1]) != j[3]:
@@ -447,6 +471,7 @@ class AlignedTimeSurface:
         :meth:`compose` (checked as in :meth:`kept_labels`): the labels of :meth:`kept_labels` and each point's majority
         polarity (:func:`~evpose.fusion.event_labels.observed_point_polarity` of its events), without copying the kept
         events. Views, valid until the next compose. None when they are not."""
+        self.judge()
         j = self._judged
         k = np.ascontiguousarray(keep, np.bool_)
         if j is None or float(radius_px) ** 2 != j[0] or k.shape[0] != len(events):

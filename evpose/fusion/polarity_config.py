@@ -126,4 +126,8 @@ class PolarityFilterConfig:
     share of events removed falls from 17 % to 10 %; so 4 stays the default. 3 px (session 8, seed 0, 346x260) cuts
     ``T_align``'s composition by 0.06-0.23 ms but costs ``stpe+filter`` 23.82 -> 24.08 mm (textured landing) and
     15.15 -> 15.85 mm (plain), ``full`` 11.38 -> 12.09 mm on the plain landing (9.38 vs 10.18 mm textured). Session 9,
-    ``stpe+filter`` seeds 0-3 (346x260 / 240x180): 4 / 6 / 8 px 15.77 / 23.37, 16.25 / 23.54, 16.12 / 23.25 mm, pixels."""
+    ``stpe+filter`` seeds 0-3 (346x260 / 240x180): 4 / 6 / 8 px 15.77 / 23.37, 16.25 / 23.54, 16.12 / 23.25 mm.
+    Session 17 (346x260 seeds 0-3, mean ATE, 4 -> 3 px): plain landing ``stpe+filter`` 12.00 -> 13.40, ``full`` 6.38 ->
+    6.70 mm; textured 23.84 -> 22.83 and 9.12 -> 8.00 mm; events removed 10.5 -> 15.6 % (plain), 63.5 -> 66.6 %
+    (textured); ``T_align`` composition -0.14 / -0.16 ms CPU, but ``stpe+filter``'s registration latency (prediction,
+    composition, field, registration) stays 2.07-2.20x / 1.83x ``stpe``'s (plain / textured), pixels."""

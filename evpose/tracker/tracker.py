@@ -459,6 +459,9 @@ class Tracker:
             # Label this step's events against the prediction (reports, viewer) and learn point signs from them.
             t0 = time.perf_counter()
             labels = self.polarity_selector.observe(events, self._pose, *composed, self.width, self.height, keep=keep)
+            if isinstance(surface, AlignedTimeSurface):  # its event pass (labels, counts) waited for the pose: see align
+                surface.judge()
+                counts.update({k: v for k, v in surface.last_counts.items() if k.startswith("events_")})
             counts.setdefault("events_polarity_removed", int(np.count_nonzero(labels == 0)))  # T_align's count if it ran
             counts["points_single_polarity"] = int(np.count_nonzero(polarity))
             timings["polarity_observe"] = _ms(t0)

@@ -166,7 +166,7 @@ def test_patches_match_a_brute_force_nearest_point_rule_with_ties():
     assert np.count_nonzero(flag == 3) > 0 and len(np.unique(flag)) == 4  # ties and all polarities occurred
 
 
-def _composed_with_random_events(seed: int, n_events: int):
+def _composed_with_random_events(seed: int, n_events: int, defer_events: bool = False):
     """A surface composed for 30 random points of random polarity, with ``n_events`` random events, 70 % kept."""
     rng = np.random.default_rng(seed)
     uv = np.stack([rng.uniform(5, W - 5, 30), rng.uniform(5, H - 5, 30)], 1)
@@ -174,7 +174,7 @@ def _composed_with_random_events(seed: int, n_events: int):
     ev = _events(rng.integers(0, W, n_events), rng.integers(0, H, n_events), rng.choice([-1, 1], n_events))
     keep = rng.random(n_events) < 0.7
     a = AlignedTimeSurface(W, H).compose(_surface(ev), _points_at(uv), np.eye(4), K, pol, 4.0, (4, 40, 6, 60), ev, keep,
-                                         classify_radius_px=2.0)
+                                         classify_radius_px=2.0, defer_events=defer_events)
     return a, ev, keep
 
 
@@ -200,6 +200,17 @@ def test_batch_judgement_gives_the_kept_labels_and_each_points_majority_polarity
     assert (majority == 1).any() and (majority == -1).any() and (majority == 0).any()
     # Another mask or radius is not the compose pass's batch.
     assert a.batch_judgement(ev, ~keep, 2.0) is None and a.batch_judgement(ev, keep, 3.0) is None
+
+
+def test_a_deferred_event_pass_labels_and_counts_as_the_compose_pass_and_ignores_later_changes_to_keep():
+    a, ev, keep = _composed_with_random_events(9, 500)
+    d, _, mask = _composed_with_random_events(9, 500, defer_events=True)
+    assert "events_polarity_judged" not in d.last_counts  # nothing labelled before it is asked for
+    mask[:] = False  # the caller's mask may change meanwhile: the pass judges the batch as it was composed
+    label, majority = d.batch_judgement(ev, keep, 2.0)
+    ref_label, ref_majority = a.batch_judgement(ev, keep, 2.0)
+    assert np.array_equal(label, ref_label) and np.array_equal(majority, ref_majority)
+    assert d.last_counts == a.last_counts and a.last_counts["events_polarity_removed"] > 0
 
 
 def test_a_point_whose_patch_shows_only_the_other_polarity_is_reopened_to_both():
