@@ -43,9 +43,10 @@ logs every MCI with the simulator's truth, ``classify.py`` splits the time as ``
 Tracked from the events 44.7 %; the rest, by the MCI that owns it: coasting with fewer than ``min_inliers`` tracked map
 points while 24 or more of the map's points project into the view 23.3 % (625 MCIs), with fewer in view 7.5 % (71);
 blank time (no MCI: tiny windows under ``min_event_rate``) 16.7 %; PnP under ``min_inliers`` inliers 2.5 % (72);
-two-view initialisation pending 3.0 %, lost MCIs 1.0 %, after the last MCI 1.2 %. 79 loss episodes (median 4 MCIs; 24 of
-one MCI): 46 begin with too few tracked map points, 25 with PnP short of inliers (8, 10 or 11 of 12), 8 are the start.
-Each seed crosses two blank stretches: about 0.53-0.84 s at 0.28-0.33 events/px/s (whole stretch), near
+two-view initialisation pending 3.0 %, lost MCIs 1.0 %, after the last MCI 1.2 %. ``SlamRun.time_by_failure_s`` reports
+this split (seconds of the 24: blank 4.00, starved 7.65, rejected 0.60, initialising 0.73). 79 loss episodes (median 4
+MCIs; 24 of one MCI): 46 begin with too few tracked map points, 25 with PnP short of inliers (8, 10 or 11 of 12), 8 are
+the start. Each seed crosses two blank stretches: about 0.53-0.84 s at 0.28-0.33 events/px/s (whole stretch), near
 ``min_event_rate``, events in 4-9 % of 10 px cells over 50 ms (tracked MCIs: median 10.5 %, tenth percentile 6.3 %), so
 sparse evidence; and about 1.57-1.90 s at 0.14-0.18 events/px/s (background activity), events in 0.3-0.6 % of the cells
 and 0-0.7 true corners: truly blank, so coasting is right there (2.6 of the 24 s). The coasting MCIs see about as much
@@ -64,8 +65,12 @@ survivors drift, median 2.65 px (90th percentile 14 px) from the truth. Tried ag
 from the events; defaults 7.39 / 93.7 / 44.7): ``ProjectionSearchConfig.prepass_below`` 12 (re-finding map points at the
 predicted pose before deciding to coast) 9.95 / 92.8 / 43.1; ``EventWindowConfig.min_events`` 600 6.72 / 89.8 / 42.8;
 ``FeatureConfig.klt_max_bidir_error_px`` 2 11.10 / 91.2 / 43.9; KLT between MCIs blurred by a 1 px Gaussian 7.39 / 90.4
-/ 37.3. What the oracle asks for is an association that does not slide along edges, such as aligning each MCI's events
-with the map's projected edges, rather than looser KLT.
+/ 37.3; ``FeatureConfig.target_tracks`` 300 8.02 / 93.3 / 40.2; ``FeatureConfig.klt_window_px`` 31 10.55 / 90.6 / 49.4
+(least 45.2 % per seed, against 33.6), and with the neutral nudge ``TrackingConfig.ba_huber_px`` 2.1 (7.48 / 91.9 /
+44.2) 10.64 / 91.8 / 50.3: the wider window keeps more tracks alive, and they are worse; 31 only for KLT after an MCI
+not tracked from the events 10.39 / 94.4 / 43.1; 31 with ``klt_max_bidir_error_px`` 0.5 10.69 / 88.4 / 42.7. What the
+oracle asks for is an association that does not slide along edges, such as aligning each MCI's events with the map's
+projected edges, rather than looser KLT.
 """
 
 from __future__ import annotations
