@@ -57,7 +57,9 @@ births lie on true structure. Oracles (``alive.py``): keeping the tracks born wi
 over 0.1 per px; 9.5 % of the births) alive at their true projection while their point is in view and unoccluded (an
 upper bound: it ignores whether the edge made events) -> 83.5 % of the time tracked from the events (every seed at least
 80.0 %), ATE 3.92 %, 2 maps per run; the same for tracks on true corners only (1 % of the births) -> 49.4 % (ATE 9.81
-%); moving the surviving structure tracks to the truth without reviving the dead ones -> 40.8 % (ATE 7.41 %). So the
+%); moving the surviving structure tracks to the truth without reviving the dead ones -> 40.8 % (ATE 7.41 %). Reviving
+only the structure tracks that carry a map point -> 51.8 % (ATE 6.98 %), only those without one -> 41.1 % (ATE 3.96 %):
+the map needs both, its points' tracks kept and new tracks on structure living long enough to be triangulated. So the
 evidence is there for most of the lost time, and what loses it is the survival of tracks on edges: of their MCI-to-MCI
 steps (seeds 0-3, ``death.py``) 67 % survive; 83 % of the deaths fail the forward-backward test, and only 13 % of the
 dead ones had their forward result within 2 px of the truth (a correct rejection: KLT slides along the sparse edges);
