@@ -93,6 +93,8 @@ def main(
         # Seconds under each status: a map's tracked time also holds its coasted poses; "ok" is what the events tracked.
         "time_by_status_s": run.time_by_status_s(),
         "visual_fraction": run.visual_fraction,
+        # The time not tracked from the events, by why (blank view, too few tracked map points, pose rejected, no map).
+        "time_by_failure_s": run.time_by_failure_s(),
         "hypothesis_counts": dict(sorted(Counter(r.hypothesis for r in run.results).items())),
         "maps": [{"id": m.id, "poses": len(m.traj_t), "keyframes": len(m.keyframes), "points": len(m.points), "lost_reason": m.lost_reason,
                   "imu_initialised": m.imu_initialised, "imu_scale": m.scale} for m in maps],

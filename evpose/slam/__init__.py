@@ -15,8 +15,8 @@ configurations, ``config.inertial.configuration``: E-I-C1 (a new map when lost),
 
 from evpose.slam.config import SlamConfig, SlamMode
 from evpose.slam.inertial import InertialConfiguration
-from evpose.slam.step_result import SlamStatus, SlamStepResult
+from evpose.slam.step_result import SlamFailure, SlamStatus, SlamStepResult
 from evpose.slam.run import SlamRun, run_slam
 from evpose.slam.system import EventSlam
 
-__all__ = ["EventSlam", "InertialConfiguration", "SlamConfig", "SlamMode", "SlamRun", "SlamStatus", "SlamStepResult", "run_slam"]
+__all__ = ["EventSlam", "InertialConfiguration", "SlamConfig", "SlamFailure", "SlamMode", "SlamRun", "SlamStatus", "SlamStepResult", "run_slam"]

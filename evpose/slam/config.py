@@ -139,7 +139,8 @@ class FeatureConfig:
     x-rotation error per run (median over the seeds) 8.6 -> 5.4 deg; with ``ba_edge_along_sigma_px`` 3: 2.54 % (5).
     Session 14, re-tracking every MCI-to-MCI track at full resolution with an 11 px window from the 23 px result
     (kept when within 2 px): 2.87 % (5 of 12, worst 5.39); dropping tracks that refinement moved over 0.7 px left
-    seeds 0-3 59.7-91.8 % tracked at 5.5-7.1 % ATE (removed)."""
+    seeds 0-3 59.7-91.8 % tracked at 5.5-7.1 % ATE (removed). Session 17, indoor event-only seeds 0-7: 31 -> time
+    tracked from the events 44.7 -> 49.4 % but ATE 7.39 -> 10.55 % (:mod:`evpose.slam.event_coasting`), pixels."""
     klt_levels: int = field(default=2, metadata={"min": 0, "max": 5, "step": 1, "unit": "levels"})
     """KLT pyramid levels above the base image, levels."""
     klt_max_bidir_error_px: float = field(default=1.0, metadata={"min": 0.1, "max": 5.0, "step": 0.1, "unit": "px"})
@@ -238,7 +239,8 @@ class FeatureConfig:
     3.61 / 9.89), landing seeds 0-5 3.95 / 4.70 / 3.78 / 3.50 / 6.83 / 6.91 % (1.50 / 1.72 / 1.87 / 3.06 / 5.58 /
     1.96). So off, ratio."""
     target_tracks: int = field(default=150, metadata={"min": 20, "max": 1000, "step": 10, "unit": "tracks"})
-    """New features are detected on an MCI when fewer tracks survive, tracks."""
+    """New features are detected on an MCI when fewer tracks survive, tracks. Session 17, indoor event-only seeds
+    0-7: 300 -> ATE 7.39 -> 8.02 %, time tracked from the events 44.7 -> 40.2 % (:mod:`evpose.slam.event_coasting`)."""
 
 
 @dataclass

@@ -37,6 +37,42 @@ settings, old -> these defaults: ATE 9.05 -> 9.30 % (paired +0.25 +- 1.04), trac
 59.5 -> 84.4), runs under 80 % 24 -> 0, visually tracked MCIs 44.4 -> 44.6 %. Session 15: holding the map-frame
 velocity instead of the camera-frame one (a straight path while the camera turns, as the room's flight nearly is):
 indoor seeds 0-7 9.94 -> 10.87 %, tracked 93.7 -> 95.0 % (not kept).
+
+Why the indoor runs leave event tracking (session 17, defaults, seeds 0-7, 24 s; ``/tmp/s17/indoorlost9``: ``diag.py``
+logs every MCI with the simulator's truth, ``classify.py`` splits the time as ``SlamRun.time_by_status_s`` credits it).
+Tracked from the events 44.7 %; the rest, by the MCI that owns it: coasting with fewer than ``min_inliers`` tracked map
+points while 24 or more of the map's points project into the view 23.3 % (625 MCIs), with fewer in view 7.5 % (71);
+blank time (no MCI: tiny windows under ``min_event_rate``) 16.7 %; PnP under ``min_inliers`` inliers 2.5 % (72);
+two-view initialisation pending 3.0 %, lost MCIs 1.0 %, after the last MCI 1.2 %. ``SlamRun.time_by_failure_s`` reports
+this split (seconds of the 24: blank 4.00, starved 7.65, rejected 0.60, initialising 0.73). 79 loss episodes (median 4
+MCIs; 24 of one MCI): 46 begin with too few tracked map points, 25 with PnP short of inliers (8, 10 or 11 of 12), 8 are
+the start. Each seed crosses two blank stretches: about 0.53-0.84 s at 0.28-0.33 events/px/s (whole stretch), near
+``min_event_rate``, events in 4-9 % of 10 px cells over 50 ms (tracked MCIs: median 10.5 %, tenth percentile 6.3 %), so
+sparse evidence; and about 1.57-1.90 s at 0.14-0.18 events/px/s (background activity), events in 0.3-0.6 % of the cells
+and 0-0.7 true corners: truly blank, so coasting is right there (2.6 of the 24 s). The coasting MCIs see about as much
+structure as the tracked ones (truth: image cells with a log-gradient over 0.1 per px, median 8 % against 10 %; corners
+8 against 10), but with half the events (median 1500 against 3078: ``N_e`` sits at ``min_events``), a lower sharpness
+(0.035 against 0.076), point tracks surviving an MCI 71 % against 91 %; and over the run only a tenth of the track
+births lie on true structure. Oracles (``alive.py``): keeping the tracks born within 2 px of a true edge (log-gradient
+over 0.1 per px; 9.5 % of the births) alive at their true projection while their point is in view and unoccluded (an
+upper bound: it ignores whether the edge made events) -> 83.5 % of the time tracked from the events (every seed at least
+80.0 %), ATE 3.92 %, 2 maps per run; the same for tracks on true corners only (1 % of the births) -> 49.4 % (ATE 9.81
+%); moving the surviving structure tracks to the truth without reviving the dead ones -> 40.8 % (ATE 7.41 %). Reviving
+only the structure tracks that carry a map point -> 51.8 % (ATE 6.98 %), only those without one -> 41.1 % (ATE 3.96 %):
+the map needs both, its points' tracks kept and new tracks on structure living long enough to be triangulated. So the
+evidence is there for most of the lost time, and what loses it is the survival of tracks on edges: of their MCI-to-MCI
+steps (seeds 0-3, ``death.py``) 67 % survive; 83 % of the deaths fail the forward-backward test, and only 13 % of the
+dead ones had their forward result within 2 px of the truth (a correct rejection: KLT slides along the sparse edges);
+survivors drift, median 2.65 px (90th percentile 14 px) from the truth. Tried against it, indoor 0-7 (ATE / tracked /
+from the events; defaults 7.39 / 93.7 / 44.7): ``ProjectionSearchConfig.prepass_below`` 12 (re-finding map points at the
+predicted pose before deciding to coast) 9.95 / 92.8 / 43.1; ``EventWindowConfig.min_events`` 600 6.72 / 89.8 / 42.8;
+``FeatureConfig.klt_max_bidir_error_px`` 2 11.10 / 91.2 / 43.9; KLT between MCIs blurred by a 1 px Gaussian 7.39 / 90.4
+/ 37.3; ``FeatureConfig.target_tracks`` 300 8.02 / 93.3 / 40.2; ``FeatureConfig.klt_window_px`` 31 10.55 / 90.6 / 49.4
+(least 45.2 % per seed, against 33.6), and with the neutral nudge ``TrackingConfig.ba_huber_px`` 2.1 (7.48 / 91.9 /
+44.2) 10.64 / 91.8 / 50.3: the wider window keeps more tracks alive, and they are worse; 31 only for KLT after an MCI
+not tracked from the events 10.39 / 94.4 / 43.1; 31 with ``klt_max_bidir_error_px`` 0.5 10.69 / 88.4 / 42.7. What the
+oracle asks for is an association that does not slide along edges, such as aligning each MCI's events with the map's
+projected edges, rather than looser KLT.
 """
 
 from __future__ import annotations

@@ -40,6 +40,23 @@ class SlamRun:
         return status_durations_s(np.array([r.t_us for r in self.results], np.int64), [r.status.value for r in self.results],
                                   self.start_us, end_us)
 
+    def time_by_failure_s(self) -> dict[str, float]:
+        """Seconds of the recording not tracked from the events, by why: each MCI not tracked from the events owns the
+        span :meth:`time_by_status_s` credits it with; the part of that span the window selection dropped for a low
+        event rate (``counts["blank_us"]``) goes to ``"blank"``, the rest to the MCI's :class:`~evpose.slam.step_result.SlamFailure` value."""
+        out: dict[str, float] = {}
+        prev = self.start_us
+        for r in self.results:
+            span = max(r.t_us - prev, 0)
+            prev = max(prev, r.t_us)
+            if r.status is SlamStatus.OK:
+                continue
+            blank = min(int(r.counts.get("blank_us", 0)), span)
+            for key, us in (("blank", blank), (r.failure.value or "other", span - blank)):
+                if us > 0:
+                    out[key] = out.get(key, 0.0) + us / 1e6
+        return dict(sorted(out.items()))
+
     @property
     def visual_fraction(self) -> float:
         """Share of the recording tracked from the events (status ``ok``): coasted and IMU-bridged time left out."""

@@ -26,6 +26,19 @@ class SlamStatus(str, enum.Enum):
     """Tracking failed on this MCI; the next map of the atlas will be initialised."""
 
 
+class SlamFailure(str, enum.Enum):
+    """Why an MCI was not tracked from the events (its status is not ``OK``)."""
+
+    NONE = ""
+    """Tracked from the events (status ``OK``), or no MCI."""
+    INITIALISING = "initialising"
+    """No map to track against: two-view initialisation pending."""
+    STARVED = "starved"
+    """Too few tracks carried map points for a pose (``TrackingConfig.min_inliers``)."""
+    REJECTED = "rejected"
+    """Enough tracked map points, but the pose estimate failed its checks (PnP inliers, inlier share)."""
+
+
 @dataclass
 class SlamStepResult:
     """Outcome of ``EventSlam.step``: the state after the last MCI of the step (or the window state if none)."""
@@ -35,6 +48,8 @@ class SlamStepResult:
     status: SlamStatus
     reason: str = ""
     """Why the status is not OK, in plain words."""
+    failure: SlamFailure = SlamFailure.NONE
+    """The class of ``reason`` when the MCI was not tracked from the events."""
     pose: np.ndarray | None = None
     """``T_world_cam`` (4, 4) in the active map's frame and scale, when tracked."""
     map_id: int = -1
@@ -64,4 +79,6 @@ class SlamStepResult:
     timings_ms: dict[str, float] = field(default_factory=dict)
     """Per stage for the last MCI, ms: wall 'mci', 'tracking' (KLT, pose, keyframe, local BA), 'total'; CPU 'mci_cpu', 'tracking_cpu'."""
     counts: dict[str, int] = field(default_factory=dict)
-    """tracks, inliers, map_points, keyframes ..."""
+    """tracks, map_points, keyframes, events; map_tracks (tracks carrying a point of the active map when the pose was
+    estimated, -1 without a map), inliers (of the accepted pose, -1 without one), blank_us (time before this MCI the
+    window selection dropped for a low event rate, ``ReconstructionWindow.blank_us``, us)."""

@@ -48,7 +48,7 @@ from evpose.slam.mci import Hypothesis, MciGenerator, MciResult, MotionPrior
 from evpose.slam.parallax_warp import points_in_view
 from evpose.slam.keyframe_search import keep_keyframe_image, klt_refind_points
 from evpose.slam.projection_search import SearchMatcher, refind_points, store_patches
-from evpose.slam.step_result import SlamStatus, SlamStepResult
+from evpose.slam.step_result import SlamFailure, SlamStatus, SlamStepResult
 from evpose.slam.system_failures import VisualFailureHandling
 from evpose.slam.system_gyro import GyroAids
 from evpose.slam.system_inertial import InertialMaps
@@ -235,6 +235,8 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling):
 
     def _process_window(self, rw: ReconstructionWindow) -> SlamStepResult:
         t0, c0 = time.perf_counter(), time.thread_time()
+        # What the pose estimate of this MCI saw and why it failed (StepResult.counts, .failure); set by _track_map.
+        self._map_tracks, self._inliers, self._failure = -1, -1, SlamFailure.NONE
         mci = self.mci_gen.generate(rw, self._prior(rw))
         self._blank_us += rw.blank_us
         if rw.blank_us:
@@ -246,6 +248,7 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling):
             status, reason, pose, keyframe = self._track_map(mci)
         else:
             status, reason, pose = self._try_initialise(mci)
+            self._failure = SlamFailure.INITIALISING
         t2, c2 = time.perf_counter(), time.thread_time()
         self._replenish(mci.image8, mci.image)
         m = self.atlas.active
@@ -254,6 +257,7 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling):
         t3 = time.perf_counter()
         return SlamStepResult(
             t_us=mci.t_us, status=status, reason=reason, pose=pose, map_id=m.id if m else -1,
+            failure=SlamFailure.NONE if status is SlamStatus.OK else self._failure,
             mci=mci.image, hypothesis=mci.hypothesis.value, hypothesis_scores=dict(mci.scores),
             features=fe.uv.copy(), feature_ids=fe.ids.copy(), feature_has_point=has_pt, keyframe=keyframe,
             map_points=m.point_array() if m is not None and status is SlamStatus.OK else None,
@@ -261,7 +265,8 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling):
             # Wall times, plus this thread's CPU times (immune to other processes on shared cores).
             timings_ms={"mci": (t1 - t0) * 1e3, "tracking": (t2 - t1) * 1e3, "total": (t3 - t0) * 1e3,
                         "mci_cpu": (c1 - c0) * 1e3, "tracking_cpu": (c2 - c1) * 1e3},
-            counts={"tracks": int(len(fe.ids)), "map_points": int(len(m.points)) if m else 0, "keyframes": int(len(m.keyframes)) if m else 0, "events": int(mci.n_events)},
+            counts={"tracks": int(len(fe.ids)), "map_points": int(len(m.points)) if m else 0, "keyframes": int(len(m.keyframes)) if m else 0,
+                    "events": int(mci.n_events), "map_tracks": self._map_tracks, "inliers": self._inliers, "blank_us": int(rw.blank_us)},
         )
 
     # ------------------------------------------------------- initialisation
@@ -348,10 +353,13 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling):
         if len(sel) < self.cfg.search.prepass_below:
             n_refound = self._refind(m, mci, guess, self.cfg.search.radius_px)
             sel = [i for i, t in enumerate(fe.ids.tolist()) if fe.track_to_point.get(t) in m.points]
+        self._map_tracks = len(sel)
         if len(sel) < tc.min_inliers:
+            self._failure = SlamFailure.STARVED
             return self._bridge_or_lose(mci, f"{len(sel)} tracked map points < {tc.min_inliers}", R_prior)
         est, sel = self._estimate(m, mci, sel, guess, R_prior)
         if not est.ok:
+            self._failure = SlamFailure.REJECTED
             return self._bridge_or_lose(mci, est.reason, R_prior)
         more = self._refind(m, mci, est.T_wc, self.cfg.search.refine_radius_px)
         if more:
@@ -361,12 +369,13 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling):
             est2, sel2 = self._estimate(m, mci, sel2, est.T_wc, R_prior)
             if est2.ok:
                 est, sel = est2, sel2
+                self._map_tracks = len(sel2)
         for k in np.flatnonzero(~est.inliers):
             fe.track_to_point.pop(int(fe.ids[sel[k]]), None)
         T_wc = est.T_wc
         self._last_visual_t, self._blank_us, self._after_blank_t = mci.t_us, 0, None
         m.add_pose(mci.t_us, T_wc)
-        n_tracked = int(est.inliers.sum())
+        n_tracked = self._inliers = int(est.inliers.sum())
         keyframe = False
         if need_keyframe(m, fe.ids, fe.uv, n_tracked, tc):
             keyframe = True

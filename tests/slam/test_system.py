@@ -8,7 +8,7 @@ from evpose.core.events import EventArray
 from evpose.core.recording import Recording
 from evpose.eval.slam_metrics import atlas_metrics
 from evpose.errors import InputError
-from evpose.slam import EventSlam, SlamConfig, SlamMode, SlamStatus, run_slam
+from evpose.slam import EventSlam, SlamConfig, SlamFailure, SlamMode, SlamStatus, run_slam
 from slam_synthetic import make_recording
 
 RADTAN = CameraCalibration(240, 180, 200, 200, 119.5, 89.5, "radtan", (-0.25, 0.07, 0.001, -0.001, 0.0))
@@ -100,6 +100,24 @@ def test_lost_tracking_opens_a_new_map_in_the_atlas(search):
     assert len(maps) == 2 and maps[0].lost_reason
     assert maps[0].traj_t[-1] < maps[1].traj_t[0]
     assert run.results[-1].map_id == maps[1].id
+
+
+def test_each_untracked_mci_says_why_and_tracked_ones_count_their_inliers():
+    cfg = SlamConfig()
+    run = run_slam(_scene_switch_recording(), cfg)
+    for r in run.results:
+        if r.status is SlamStatus.OK:
+            assert r.failure is SlamFailure.NONE
+        elif r.status is SlamStatus.NOT_INITIALISED:
+            assert r.failure is SlamFailure.INITIALISING and r.counts["map_tracks"] == -1
+        else:
+            assert r.failure in (SlamFailure.STARVED, SlamFailure.REJECTED)
+            assert (r.counts["map_tracks"] < cfg.tracking.min_inliers) == (r.failure is SlamFailure.STARVED)
+    tracked = [r for r in run.results if r.status is SlamStatus.OK and r.counts["inliers"] >= 0]
+    assert tracked and all(cfg.tracking.min_inliers <= r.counts["inliers"] <= r.counts["map_tracks"] for r in tracked)
+    lost = next(r for r in run.results if r.status is SlamStatus.LOST)
+    assert lost.failure is not SlamFailure.NONE
+    assert run.time_by_failure_s().keys() >= {"initialising", lost.failure.value}
 
 
 def test_still_camera_waits_with_a_reason_and_never_initialises():
