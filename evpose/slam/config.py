@@ -333,6 +333,16 @@ class MciConfig:
     """H5 is tried only when its fit leaves the window's tracks a median residual below this share of H2's (0: always),
     ratio. 1.0: landing 2.86 % (12 of 24 within 2 %; 0: 2.04 %, 14), indoor 8.34 % (``ba_huber_px`` 1.9 /
     ``reprojection_threshold_px`` 2.4: 8.26 / 8.25 %)."""
+    sim2_whole_window: bool = False
+    """H2 fits its similarity to the tracks carried from the window's first tiny frame to its last
+    (``ReconstructionWindow.whole_pts``, :mod:`evpose.slam.window_fit`) instead of the window's own tracks, which start
+    half-way through it; the window's own when fewer than ``whole_window_min_tracks`` are carried."""
+    parallax_whole_window: bool = False
+    """H5 fits one constant twist to the carried tracks' positions in every tiny frame of the window
+    (:func:`evpose.slam.window_fit.fit_twist_rate`) instead of the two ends of the window's own tracks
+    (``parallax_prior_weight`` and ``parallax_max_residual_ratio`` then do not apply)."""
+    whole_window_min_tracks: int = field(default=12, metadata={"min": 6, "max": 200, "step": 1, "unit": "tracks"})
+    """``sim2_whole_window`` / ``parallax_whole_window`` need this many tracks carried through the whole window, tracks."""
     keep_hypothesis_survival: float = field(default=0.25, metadata={"min": 0.0, "max": 1.0, "step": 0.05, "unit": "ratio"})
     """When the sharpest hypothesis differs from the previous MCI's and KLT keeps fewer than this share of the tracks on
     it, the previous hypothesis's image is tracked instead and kept if more tracks survive (a warped and an unwarped

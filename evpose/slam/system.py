@@ -77,7 +77,8 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling):
         if self.imu is not None and config.inertial.configuration is InertialConfiguration.C3:
             # E-I-C3: fixed tiny windows, and no withdrawal of tiny windows by event rate.
             wcfg = replace(wcfg, adapt_events=False, min_event_rate=0.0)
-        self.window = EventWindowSelector(wcfg, config.features, config.image, self.width, self.height, config.seed)
+        carry = config.mci.sim2_whole_window or config.mci.parallax_whole_window
+        self.window = EventWindowSelector(wcfg, config.features, config.image, self.width, self.height, config.seed, carry_tracks=carry)
         mcfg = config.mci
         if self.imu is not None:
             mcfg = replace(mcfg, reference_fraction=mcfg.reference_fraction_inertial, use_parallax=mcfg.use_parallax_inertial)
