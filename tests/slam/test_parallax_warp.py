@@ -122,7 +122,11 @@ def test_parallax_whole_window_fits_the_tracks_carried_through_every_tiny_frame(
     rw.whole_t_us = np.linspace(0, b, 6).astype(np.int64)
     rw.whole_pts = np.stack([_project(tt / 1e6, X) for tt in rw.whole_t_us]).astype(np.float32)
     prior = MotionPrior(omega=OMEGA, velocity=VEL, map_depth=3.0, point_uv=uv, point_depth=z)
-    own = MciGenerator(MciConfig(use_parallax=True), EventImageConfig(), K, W, H).generate(rw, prior)
+    own = MciGenerator(MciConfig(use_parallax=True, parallax_whole_window=False), EventImageConfig(), K, W, H).generate(rw, prior)
     whole = MciGenerator(MciConfig(use_parallax=True, parallax_whole_window=True), EventImageConfig(), K, W, H).generate(rw, prior)
     assert whole.scores["H5"] > 1.1 * own.scores["H5"]
     assert whole.hypothesis is Hypothesis.H5_PARALLAX
+    # Fewer carried tracks than whole_window_min_tracks: the window's own tracks again.
+    rw.whole_pts = rw.whole_pts[:, :8]
+    again = MciGenerator(MciConfig(use_parallax=True), EventImageConfig(), K, W, H).generate(rw, prior)
+    assert again.scores["H5"] == own.scores["H5"]
