@@ -217,7 +217,10 @@ class MciGenerator:
             return None
         if c.parallax_whole_window and self._has_whole(rw):
             pts = rw.whole_pts
-            fit = fit_twist_rate(self.K, pts, rw.whole_t_us, sample_depth(field, pts[0, :, 0], pts[0, :, 1]))
+            own = None
+            if c.parallax_joint_tracks and track_s > 0:
+                own = (np.stack([ref, rw.cur_pts]), np.array([rw.t_ref_us, rw.t_cur_us]), sample_depth(field, ref[:, 0], ref[:, 1]))
+            fit = fit_twist_rate(self.K, pts, rw.whole_t_us, sample_depth(field, pts[0, :, 0], pts[0, :, 1]), extra=own)
             if fit is None:
                 return None
             return self._parallax_image(rw, field, idx, dts, fit[0])
