@@ -67,6 +67,12 @@ class ReconstructionWindow:
     blank_us: int = 0
     """Time spanned by the tiny windows rejected for their event rate (``th_e``) since the previous dispatch, with the
     tiny frames collected before each and dropped with it: the camera saw little but noise then (blank walls), us."""
+    whole_pts: np.ndarray = field(default_factory=lambda: np.zeros((0, 0, 2), np.float32))
+    """Tracks that cover the whole window (``EventWindowSelector(carry_tracks=True)``): the previous window's features,
+    from its reference tiny frame (where this window's overlap starts) through every tiny frame to this window's last
+    one, float32 (F, M, 2) px; only tracks alive in every frame; empty without an overlap or when not carried."""
+    whole_t_us: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    """Mean event time of each of those tiny frames, int64 (F,) us."""
 
     @property
     def t_end_us(self) -> int:
@@ -79,6 +85,16 @@ class _Chunk:
     x: np.ndarray
     y: np.ndarray
     p: np.ndarray
+
+
+@dataclass
+class _Carried:
+    """The previous window's features, tracked on through the next window (one position per tiny frame)."""
+
+    t_us: list
+    pts: list
+    alive: np.ndarray
+    last8: np.ndarray
 
 
 @dataclass
@@ -101,6 +117,12 @@ class WindowState:
     """Time of the last event taken into a tiny window (the gap test looks across tiny windows too), us."""
     blank_us: int = 0
     """Time spanned by the tiny windows rejected for their event rate since the last dispatch, us."""
+    hist_t: list = field(default_factory=list)
+    """Mean event time of each tiny frame of the current reference, us (kept only when tracks are carried)."""
+    hist_pts: list = field(default_factory=list)
+    """Positions of all reference features in each of those frames, float32 (M, 2) px (only when carried)."""
+    carried: _Carried | None = None
+    """The previous window's features, continued through this one (only when carried)."""
 
 
 def _empty_chunk() -> _Chunk:
@@ -116,8 +138,12 @@ def _cat(chunks: list[_Chunk]) -> _Chunk:
 class EventWindowSelector:
     """Algorithm 1 as an explicit state machine; ``push`` returns the reconstruction windows completed."""
 
-    def __init__(self, window: EventWindowConfig, features: FeatureConfig, image: EventImageConfig, width: int, height: int, seed: int = 0):
+    def __init__(self, window: EventWindowConfig, features: FeatureConfig, image: EventImageConfig, width: int, height: int, seed: int = 0,
+                 carry_tracks: bool = False):
         self.cfg = window
+        self.carry_tracks = bool(carry_tracks)
+        """Track each window's features on through the next window, so that window gets tracks from its start
+        (``ReconstructionWindow.whole_pts``): one more KLT pass per tiny frame."""
         self.fcfg = features
         self.icfg = image
         self.width = int(width)
@@ -187,6 +213,11 @@ class EventWindowSelector:
     def _reset(self, keep_overlap: bool) -> None:
         s = self.state
         s.prev_window = _cat(s.chunks) if keep_overlap and s.chunks else None
+        s.carried = None
+        if self.carry_tracks and s.prev_window is not None and s.alive is not None and s.prev8 is not None and len(s.hist_t):
+            keep = np.flatnonzero(s.alive)
+            s.carried = _Carried([*s.hist_t], [p[keep] for p in s.hist_pts], np.ones(len(keep), bool), s.prev8)
+        s.hist_t, s.hist_pts = [], []
         s.chunks = []
         s.ref_pts = s.cur_pts = s.alive = s.prev8 = None
         s.n_frames = 0
@@ -220,6 +251,7 @@ class EventWindowSelector:
             s.prev8, s.t_ref_us, s.t_cur_us = img8, t_mid, t_mid
             s.chunks = [tiny]
             s.n_frames = 1
+            self._record(img8, t_mid)
             self.last_event = WindowEvent.TRACKING
             return None
         s.chunks.append(tiny)
@@ -230,6 +262,7 @@ class EventWindowSelector:
         s.alive[idx[~ok]] = False
         s.prev8, s.t_cur_us = img8, t_mid
         self._reject_outliers()
+        self._record(img8, t_mid)
         alive = np.flatnonzero(s.alive)
         if len(alive) < cfg.min_features:
             # Features vanished (large motion or texture change): dispatch what we have if it spans motion.
@@ -246,6 +279,40 @@ class EventWindowSelector:
             return self._dispatch(forced=True)
         self.last_event = WindowEvent.TRACKING
         return None
+
+    def _record(self, img8: np.ndarray, t_mid: int) -> None:
+        """Keeps this tiny frame's feature positions and moves the carried features into it (``carry_tracks``)."""
+        if not self.carry_tracks:
+            return
+        s = self.state
+        s.hist_t.append(t_mid)
+        s.hist_pts.append(s.cur_pts.copy())
+        c = s.carried
+        if c is None:
+            return
+        idx = np.flatnonzero(c.alive)
+        new, ok = track_features(c.last8, img8, c.pts[-1][idx], self.fcfg)
+        pts = c.pts[-1].copy()
+        pts[idx[ok]] = new[ok]
+        c.alive[idx[~ok]] = False
+        c.t_us.append(t_mid)
+        c.pts.append(pts)
+        c.last8 = img8
+
+    def _whole_tracks(self) -> tuple[np.ndarray, np.ndarray]:
+        """The carried tracks alive through every frame, outliers to the epipolar geometry of their first and last
+        frames removed, (F, M, 2) float32 px and (F,) int64 us."""
+        c = self.state.carried
+        if c is None or not c.alive.any():
+            return np.zeros((0, 0, 2), np.float32), np.zeros(0, np.int64)
+        pts = np.stack(c.pts)[:, c.alive]
+        a, b = pts[0], pts[-1]
+        if len(a) >= 12 and np.median(np.linalg.norm(a - b, axis=1)) >= 1.0:
+            cv2.setRNGSeed(self.seed)
+            _, mask = cv2.findFundamentalMat(a, b, cv2.FM_RANSAC, 1.0, 0.999)
+            if mask is not None:
+                pts = pts[:, mask.ravel() == 1]
+        return np.ascontiguousarray(pts, np.float32), np.asarray(c.t_us, np.int64)
 
     def _reject_outliers(self) -> None:
         """RANSAC on the fundamental matrix between reference and current features (the two-view test of Algorithm 1)."""
@@ -273,12 +340,14 @@ class EventWindowSelector:
         parts.append(cur)
         ev = _cat(parts)
         alive = s.alive if s.alive is not None else np.zeros(0, bool)
+        whole_pts, whole_t = self._whole_tracks() if parts[:-1] else (np.zeros((0, 0, 2), np.float32), np.zeros(0, np.int64))
         rw = ReconstructionWindow(
             t=ev.t, x=ev.x, y=ev.y, p=ev.p,
             ref_pts=s.ref_pts[alive].copy() if s.ref_pts is not None else np.zeros((0, 2), np.float32),
             cur_pts=s.cur_pts[alive].copy() if s.cur_pts is not None else np.zeros((0, 2), np.float32),
             t_ref_us=s.t_ref_us, t_cur_us=s.t_cur_us, n_frames=s.n_frames,
             median_displacement_px=s.median_displacement_px, forced=forced, blank_us=s.blank_us,
+            whole_pts=whole_pts, whole_t_us=whole_t,
         )
         s.blank_us = 0
         if not forced and cfg.adapt_events:

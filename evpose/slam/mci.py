@@ -27,6 +27,7 @@ from evpose.slam.config import EventImageConfig, MciConfig
 from evpose.slam.event_image import event_image, local_std_score, to_uint8
 from evpose.slam.event_window import ReconstructionWindow
 from evpose.slam.parallax_warp import depth_field, fit_twist, sample_depth, warp_events
+from evpose.slam.window_fit import fit_twist_rate, whole_span_s
 
 
 class Hypothesis(str, enum.Enum):
@@ -214,6 +215,15 @@ class MciGenerator:
         field = depth_field(prior.point_uv, prior.point_depth, self.width, self.height)
         if field is None or len(ref) < c.parallax_min_points:
             return None
+        if c.parallax_whole_window and self._has_whole(rw):
+            pts = rw.whole_pts
+            own = None
+            if c.parallax_joint_tracks and track_s > 0:
+                own = (np.stack([ref, rw.cur_pts]), np.array([rw.t_ref_us, rw.t_cur_us]), sample_depth(field, ref[:, 0], ref[:, 1]))
+            fit = fit_twist_rate(self.K, pts, rw.whole_t_us, sample_depth(field, pts[0, :, 0], pts[0, :, 1]), extra=own)
+            if fit is None:
+                return None
+            return self._parallax_image(rw, field, idx, dts, fit[0])
         cur = np.asarray(rw.cur_pts, np.float64)
         guess = None
         if c.parallax_prior_weight > 0 and prior.omega is not None and prior.velocity is not None:
@@ -227,11 +237,17 @@ class MciGenerator:
             moved = np.c_[ref, np.ones(len(ref))] @ sim2[:2].T
             if residual >= c.parallax_max_residual_ratio * float(np.median(np.linalg.norm(moved - cur, axis=1))):
                 return None
+        return self._parallax_image(rw, field, idx, dts, xi / track_s)
+
+    def _parallax_image(self, rw: ReconstructionWindow, field: np.ndarray, idx: np.ndarray, dts: np.ndarray, rate: np.ndarray) -> np.ndarray:
         # A constant twist: points seen dts before the reference time move by Exp(omega dts)^T (X - v dts).
-        rate = xi / track_s
         u, v = warp_events(self.K, rw.x, rw.y, sample_depth(field, rw.x, rw.y), idx, np.outer(dts, rate[:3]), np.outer(dts, rate[3:]))
         p = rw.p if self.icfg.use_polarity else None
         return event_image(u, v, p, self.width, self.height, self.icfg.sigma_px)
+
+    def _has_whole(self, rw: ReconstructionWindow) -> bool:
+        """The window carries enough tracks from its start (``MciConfig.whole_window_min_tracks``)."""
+        return rw.whole_pts.shape[1] >= self.cfg.whole_window_min_tracks and whole_span_s(rw.whole_t_us) > 0
 
     def generate(self, rw: ReconstructionWindow, prior: MotionPrior | None = None) -> MciResult:
         prior = prior or MotionPrior()
@@ -243,7 +259,11 @@ class MciGenerator:
         depth = None
         # Warps map a point seen dt before the end to the end: the tracks go forward in time, so
         # a warp over dt is the tracked motion raised to dt / track_s.
-        if self.cfg.use_feature_fit and track_s > 0 and len(rw.ref_pts) >= 3:
+        if self.cfg.use_feature_fit and self.cfg.sim2_whole_window and self._has_whole(rw):
+            sim2 = fit_sim2(rw.whole_pts[0], rw.whole_pts[-1], self.seed)
+            if sim2 is not None:
+                cands[Hypothesis.H2_SIM2] = self._render(rw, idx, sim2_homographies(sim2, whole_span_s(rw.whole_t_us), dts))
+        elif self.cfg.use_feature_fit and track_s > 0 and len(rw.ref_pts) >= 3:
             sim2 = fit_sim2(rw.ref_pts, rw.cur_pts, self.seed)
             if sim2 is not None:
                 H = sim2_homographies(sim2, track_s, dts)

@@ -77,10 +77,12 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling):
         if self.imu is not None and config.inertial.configuration is InertialConfiguration.C3:
             # E-I-C3: fixed tiny windows, and no withdrawal of tiny windows by event rate.
             wcfg = replace(wcfg, adapt_events=False, min_event_rate=0.0)
-        self.window = EventWindowSelector(wcfg, config.features, config.image, self.width, self.height, config.seed)
         mcfg = config.mci
         if self.imu is not None:
             mcfg = replace(mcfg, reference_fraction=mcfg.reference_fraction_inertial, use_parallax=mcfg.use_parallax_inertial)
+        # Tracks carried through the next window cost a KLT pass per tiny frame: only for a hypothesis that uses them.
+        carry = mcfg.sim2_whole_window or (mcfg.use_parallax and mcfg.parallax_whole_window)
+        self.window = EventWindowSelector(wcfg, config.features, config.image, self.width, self.height, config.seed, carry_tracks=carry)
         self.mci_gen = MciGenerator(mcfg, config.image, self.K, self.width, self.height, config.seed)
         icfg = config.initialization
         self._init_cfg = icfg if self.imu is None else replace(icfg, homography_fit_share=icfg.homography_fit_share_inertial,

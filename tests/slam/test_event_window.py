@@ -100,3 +100,26 @@ def test_time_the_window_spent_below_the_event_rate_is_reported_with_the_next_wi
     # Most of the blank, and never more than the time between the windows around it.
     assert 250_000 <= after[0].blank_us <= after[0].t[0] - before[-1].t[-1]
     assert all(w.blank_us == 0 for w in after[1:])
+
+
+def test_carried_tracks_span_each_window_from_the_previous_windows_reference_frame():
+    rec = make_recording(duration_s=0.4, speed=2.0, seed=2)
+    ev = rec.events
+    plain = EventWindowSelector(EventWindowConfig(), FeatureConfig(), EventImageConfig(), 240, 180)
+    carry = EventWindowSelector(EventWindowConfig(), FeatureConfig(), EventImageConfig(), 240, 180, carry_tracks=True)
+    a = plain.push(ev.t, ev.x.astype(float), ev.y.astype(float), ev.p)
+    b = carry.push(ev.t, ev.x.astype(float), ev.y.astype(float), ev.p)
+    assert len(a) == len(b) >= 3
+    # Carrying changes nothing else about the windows.
+    for u, v in zip(a, b):
+        assert np.array_equal(u.t, v.t) and np.array_equal(u.ref_pts, v.ref_pts) and np.array_equal(u.cur_pts, v.cur_pts)
+        assert u.whole_pts.size == 0 and u.whole_t_us.size == 0
+    assert b[0].whole_pts.size == 0  # the first window has no overlap
+    for prev, w in zip(b[:-1], b[1:]):
+        F, M, _ = w.whole_pts.shape
+        assert M >= 8 and F == len(w.whole_t_us) == prev.n_frames + w.n_frames
+        assert w.whole_t_us[0] == prev.t_ref_us and w.whole_t_us[-1] == w.t_cur_us
+        # They start where the previous window's features were and move farther than this window's own tracks.
+        assert all(np.any(np.all(prev.ref_pts == p, axis=1)) for p in w.whole_pts[0])
+        whole = np.median(np.linalg.norm(w.whole_pts[-1] - w.whole_pts[0], axis=1))
+        assert whole > 1.5 * w.median_displacement_px

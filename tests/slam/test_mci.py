@@ -150,3 +150,24 @@ def test_a_wrong_warp_rate_blurs_a_mid_window_mci_in_place_but_shifts_an_end_win
     assert t0 < t1
     assert offsets[1.0] > 0.7  # a quarter of 8.9 px over half the window: about 1.1 px
     assert offsets[0.5] < 0.35
+
+
+def test_sim2_whole_window_fits_the_tracks_carried_from_the_window_start():
+    rw = _sim2_window(seed=3)
+    # The window's own tracks are short and noisy; tracks carried through the whole window follow the true motion.
+    rng = np.random.default_rng(4)
+    rw.cur_pts = (rw.ref_pts + (rw.cur_pts - rw.ref_pts) * 0.6 + rng.normal(0, 1.0, rw.ref_pts.shape)).astype(np.float32)
+    th, s, tx, ty, span = 0.08, 1.03, 9.0, -4.0, 40_000
+    L = np.real(logm(np.array([[s * np.cos(th), -s * np.sin(th), tx], [s * np.sin(th), s * np.cos(th), ty], [0, 0, 1]])))
+    p0 = np.c_[rng.uniform(20, 140, 40), rng.uniform(15, 105, 40), np.ones(40)]
+    rw.whole_t_us = np.array([1_000, 12_000, 25_000, 38_000], np.int64)
+    rw.whole_pts = np.stack([(p0 @ expm(L * t / span).T)[:, :2] for t in rw.whole_t_us]).astype(np.float32)
+    own = MciGenerator(MciConfig(), EventImageConfig(), K, W, H).generate(rw, MotionPrior())
+    whole = MciGenerator(MciConfig(sim2_whole_window=True), EventImageConfig(), K, W, H).generate(rw, MotionPrior())
+    truth = expm(L * (38_000 - 1_000) / span)
+    assert np.abs(whole.sim2 - truth).max() < 1e-3 < np.abs(own.sim2 - truth).max()
+    assert whole.scores["H2"] > own.scores["H2"]
+    # Too few carried tracks: the window's own tracks again.
+    rw.whole_pts = rw.whole_pts[:, :5]
+    again = MciGenerator(MciConfig(sim2_whole_window=True), EventImageConfig(), K, W, H).generate(rw, MotionPrior())
+    assert np.array_equal(again.sim2, own.sim2)

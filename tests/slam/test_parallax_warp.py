@@ -102,3 +102,31 @@ def test_parallax_hypothesis_is_sharper_than_one_depth_warps_on_a_two_depth_scen
     assert "H5" in MciGenerator(gated, EventImageConfig(), K, W, H).generate(rw, prior).scores
     flat = MotionPrior(omega=OMEGA, velocity=VEL, map_depth=3.0, point_uv=uv, point_depth=np.where(z > 3.0, 2.0, 4.0))
     assert "H5" not in MciGenerator(gated, EventImageConfig(), K, W, H).generate(rw, flat).scores
+
+
+def test_parallax_whole_window_fits_the_tracks_carried_through_every_tiny_frame():
+    X, uv, z = _two_depth_scene(n=150)
+    rng = np.random.default_rng(5)
+    span_us = 100_000
+    t = np.sort(rng.integers(0, span_us, 150 * 40))
+    j = rng.integers(0, 150, t.size)
+    pos = np.empty((t.size, 2))
+    for k in np.unique(t // 1000):
+        sel = t // 1000 == k
+        pos[sel] = _project((k * 1000 + 500) / 1e6, X[j[sel]])
+    a, b = span_us // 2, 5 * span_us // 6
+    # The window's own tracks (its second half) are noisy; the carried ones follow the points through six frames.
+    ref, cur = _project(a / 1e6, X), _project(b / 1e6, X) + rng.normal(0.0, 4.0, (150, 2))
+    rw = ReconstructionWindow(t.astype(np.int64), pos[:, 0], pos[:, 1], np.ones(t.size, np.int8), ref.astype(np.float32),
+                              cur.astype(np.float32), a, b, 4, 5.0)
+    rw.whole_t_us = np.linspace(0, b, 6).astype(np.int64)
+    rw.whole_pts = np.stack([_project(tt / 1e6, X) for tt in rw.whole_t_us]).astype(np.float32)
+    prior = MotionPrior(omega=OMEGA, velocity=VEL, map_depth=3.0, point_uv=uv, point_depth=z)
+    own = MciGenerator(MciConfig(use_parallax=True, parallax_whole_window=False), EventImageConfig(), K, W, H).generate(rw, prior)
+    whole = MciGenerator(MciConfig(use_parallax=True, parallax_whole_window=True), EventImageConfig(), K, W, H).generate(rw, prior)
+    assert whole.scores["H5"] > 1.1 * own.scores["H5"]
+    assert whole.hypothesis is Hypothesis.H5_PARALLAX
+    # Fewer carried tracks than whole_window_min_tracks: the window's own tracks again.
+    rw.whole_pts = rw.whole_pts[:, :8]
+    again = MciGenerator(MciConfig(use_parallax=True), EventImageConfig(), K, W, H).generate(rw, prior)
+    assert again.scores["H5"] == own.scores["H5"]

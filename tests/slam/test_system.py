@@ -57,7 +57,10 @@ def test_parallax_hypothesis_joins_once_a_map_exists_and_only_where_enabled(radt
     # Event-inertial runs take use_parallax_inertial (off) instead.
     inertial = SlamConfig(mode=SlamMode.EVENT_INERTIAL)
     inertial.mci.use_parallax = True
-    assert not EventSlam(inertial, radtan_recording.calibration, radtan_recording.imu).mci_gen.cfg.use_parallax
+    slam = EventSlam(inertial, radtan_recording.calibration, radtan_recording.imu)
+    assert not slam.mci_gen.cfg.use_parallax
+    # ... and do not carry tiny-frame tracks for it.
+    assert not slam.window.carry_tracks and EventSlam(cfg, radtan_recording.calibration).window.carry_tracks
 
 
 def test_each_initial_pose_follows_its_own_keyframe(radtan_run):
