@@ -14,3 +14,15 @@ def grazing_points(plane_normals: np.ndarray, points: np.ndarray, camera_centre:
     d = np.asarray(points, dtype=np.float64) - np.asarray(camera_centre, dtype=np.float64)
     cos = np.abs(np.einsum("ij,ij->i", n, d)) / np.maximum(np.linalg.norm(d, axis=1), 1e-12)
     return (np.einsum("ij,ij->i", n, n) > 0.25) & (cos < float(max_cos))
+
+
+def add_grazing_off_trail(trail: np.ndarray, polarity: np.ndarray, plane_normals: np.ndarray, used: np.ndarray,
+                          points: np.ndarray, camera_centre: np.ndarray, config) -> None:
+    """Adds a :class:`~evpose.tracker.config.TrackerConfig`'s ``registration.fused_grazing_off_trail_px`` to the field
+    ``trail`` (pixels, as ``used``) of the map points ``used`` (``points`` their positions, ``plane_normals`` the
+    whole map's) predicted to fire OFF events (``polarity`` < 0) whose surface is grazing by
+    ``event_registration.grazing_max_cos``, seen from ``camera_centre``; nothing when either is 0."""
+    extra, max_cos = float(config.registration.fused_grazing_off_trail_px), float(config.event_registration.grazing_max_cos)
+    if extra == 0 or not max_cos > 0 or not len(used):
+        return
+    trail[(np.asarray(polarity) < 0) & grazing_points(np.asarray(plane_normals)[used], points, camera_centre, max_cos)] += extra

@@ -9,7 +9,6 @@ from tracker_synthetic import generate
 from evpose.core.contour_map import ContourMap
 from evpose.tracker.config import TrackerConfig, TrackerMode
 from evpose.tracker.event_registration import EventRegistration, EventRegistrationConfig
-from evpose.tracker.grazing import grazing_points
 from evpose.tracker.modes import MotionComponents
 from evpose.tracker.tracker import Tracker
 
@@ -111,14 +110,6 @@ def test_grazing_points_take_their_own_lead():
         return error(reg.refine(perturbed(), np.arange(len(cmap)), None, *events, T_REF, TWIST, K, None)[0])
     assert np.abs(run(grazing_max_cos=0.6, grazing_off_lead_px=-0.3)).max() < 2e-5
     assert np.abs(run()).max() > 3e-4  # off: one lead for both
-
-
-def test_grazing_points_are_those_seen_edge_on():
-    normals = np.array([[0.0, 0, 1], [1.0, 0, 0], [0.0, 0, 0], [0.0, 0.6, 0.8]])
-    points = np.array([[0.0, 0, 0], [0.0, 0, 0], [0.0, 0, 0], [0.0, 0, 0]])
-    # camera 2 m above the origin: cos 1 / 0 / unknown / 0.8
-    assert grazing_points(normals, points, np.array([0.0, 0, 2]), 0.6).tolist() == [False, True, False, False]
-    assert grazing_points(normals, points, np.array([0.0, 0, 2]), 0.9).tolist() == [False, True, False, True]
 
 
 def test_points_predicted_to_fire_the_other_polarity_take_none_of_the_events():
