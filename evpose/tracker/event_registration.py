@@ -115,7 +115,8 @@ edges by 0.28 px where face-on ones trail by 0.135 (``grazing_max_cos``, now on 
 3 s landings at 346x260 15.72 / 16.79 -> 13.62 / 14.95 mm). Oracles (``oracle.py``, seeds 0 / 1 / 4, before this):
 each point's own mean event offset from its true edge as its ON / OFF lead 6.43 -> 6.04 mm at 346x260 and 9.50 ->
 9.48 at 240x180 (per-point means of >= 5 events measured at the truth in every 5th update, so noisy); each point's
-mean offset from the built map, with offset learning off, 5.94 / 9.70 mm.
+mean offset from the built map, with offset learning off, 5.94 / 9.70 mm. The events' map moved onto the true edges
+(session 12's oracle, combined, seeds 0-3): 5.74 -> 5.08 mm at 346x260 and 6.45 -> 6.10 at 240x180 with these leads.
 """
 
 from __future__ import annotations
@@ -221,14 +222,17 @@ class EventRegistrationConfig:
     the four sets' average): off 6.38 / 5.91 / 7.25 / 8.49 (7.01); this alone (grazing OFF lead -0.28) 6.12 / 5.50 /
     7.46 / 7.97 (6.76); with ``fused_grazing_off_trail_px`` 0.1 / 0.2 (the defaults) / 0.3: 6.14 / 5.48 / 7.42 / 7.63
     (6.67), **6.12 / 5.28 / 7.35 / 7.52 (6.57)**, ARE 0.064 / 0.065 / 0.079 / 0.085 deg, 5.99 / 5.12 / 7.58 / 7.28
-    (6.49); that field trail alone (events' leads as off) 6.32 / 5.65 / 7.27 / 8.12 (6.84); grazing leads -0.35 / ON
+    (6.49); with 0.2 at ``grazing_max_cos`` 0.7 6.07 / 5.27 / 7.37 / 7.55 (6.56); that field trail alone (events' leads as off) 6.32 / 5.65 / 7.27 / 8.12 (6.84); grazing leads -0.35 / ON
     +0.06 (no field trail) 6.21 / 5.68 / 7.74 / 7.82 (6.86); the whole measured table (face-on ON -0.07, OFF -0.135,
     grazing ON +0.05, OFF -0.28, field trail 0.1) 6.03 / 5.50 / 7.31 / 7.90 (6.69). 3 s landings (``landing_case``
     3 s, ``fusion.ablation_long``'s flights), off -> on: 346x260 seeds 0-3 15.72 -> 13.62 mm (13.00 / 18.22 / 16.35 /
     15.30 -> 11.01 / 15.76 / 14.41 / 13.30), seeds 4-7 16.79 -> 14.95 (every seed better), ARE 0.163 / 0.145 ->
     0.148 / 0.132 deg; 240x180 seeds 0-3 18.86 -> 18.11 mm. Bundled demos (``evpose track`` on
     ``maps/landing_map.ply``, ``evpose eval --align none``, ATE RMSE): ``landing`` 9.71 -> 10.00 mm,
-    ``landing_fast`` 18.20 -> 19.06 mm, ``landing_dynamic`` 12.27 -> 10.84 mm."""
+    ``landing_fast`` 18.20 -> 19.06 mm, ``landing_dynamic`` 12.27 -> 10.84 mm. The EKF backend on the 2 s sets
+    (``full:ekf``) 6.58 / 6.00 / 7.31 / 8.54 -> 6.05 / 5.36 / 7.41 / 7.41 mm: the graph, ahead on all four before,
+    is ahead on two (346x260 seeds 4-7, 240x180 seeds 0-3). CPU per update +0.02-0.04 ms (seed 0, 346x260, paired
+    runs, median 2.6-3.1 ms at load ~3)."""
     grazing_on_lead_px: float = field(default=0.0, metadata={"min": -2.0, "max": 2.0, "step": 0.01, "unit": "px"})
     """``on_lead_px`` of the grazing points (see ``grazing_max_cos``), pixels."""
     grazing_off_lead_px: float = field(default=-0.28, metadata={"min": -2.0, "max": 2.0, "step": 0.01, "unit": "px"})
