@@ -224,7 +224,10 @@ class EventRegistrationConfig:
     (6.67), **6.12 / 5.28 / 7.35 / 7.52 (6.57)**, ARE 0.064 / 0.065 / 0.079 / 0.085 deg, 5.99 / 5.12 / 7.58 / 7.28
     (6.49); with 0.2 at ``grazing_max_cos`` 0.7 6.07 / 5.27 / 7.37 / 7.55 (6.56); that field trail alone (events' leads as off) 6.32 / 5.65 / 7.27 / 8.12 (6.84); grazing leads -0.35 / ON
     +0.06 (no field trail) 6.21 / 5.68 / 7.74 / 7.82 (6.86); the whole measured table (face-on ON -0.07, OFF -0.135,
-    grazing ON +0.05, OFF -0.28, field trail 0.1) 6.03 / 5.50 / 7.31 / 7.90 (6.69). 3 s landings (``landing_case``
+    grazing ON +0.05, OFF -0.28, field trail 0.1) 6.03 / 5.50 / 7.31 / 7.90 (6.69); the face-on OFF lead split by
+    the edge's motion along / against its outward normal (measured -0.04 / -0.20 px, -0.011 to -0.077 / -0.193 to
+    -0.205 in every run; ``run_nside.py``) 5.99 / 5.14 / 7.41 / 7.67 (6.55), the grazing one too (-0.32 / -0.25) 5.94
+    / 5.20 / 7.55 / 7.66 (6.59): 346x260 against 240x180 again, not kept. 3 s landings (``landing_case``
     3 s, ``fusion.ablation_long``'s flights), off -> on: 346x260 seeds 0-3 15.72 -> 13.62 mm (13.00 / 18.22 / 16.35 /
     15.30 -> 11.01 / 15.76 / 14.41 / 13.30), seeds 4-7 16.79 -> 14.95 (every seed better), ARE 0.163 / 0.145 ->
     0.148 / 0.132 deg; 240x180 seeds 0-3 18.86 -> 18.11 mm. Bundled demos (``evpose track`` on
