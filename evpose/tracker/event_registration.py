@@ -206,8 +206,8 @@ class EventRegistrationConfig:
     motion, non-painted points within 30 mm of a true edge. Against the simulator's true edges (346x260 and 240x180,
     seeds 0 / 1 / 4 each, 15-38 k events per run): ON events -0.01 to +0.05 px, OFF -0.18 px as ``off_lead_px``
     says, but OFF events of grazing points (|cos| < 0.6: the boxes' vertical faces seen from above, a third of the OFF
-    events) sit -0.27 to -0.34 px behind their edge (pooled -0.28), those of face-on points -0.13 to -0.20 (pooled
-    -0.135); ON +0.05 / -0.07. Nothing else the tracker sees moves them as much: the event's age (0-5 ms) within 0.05
+    events) sit -0.26 to -0.29 px behind their edge (pooled -0.28; -0.23 to -0.27 against the events' own map), those
+    of face-on points -0.125 to -0.148 (pooled -0.135); ON -0.03 to +0.07 / -0.06 to -0.08. Nothing else the tracker sees moves them as much: the event's age (0-5 ms) within 0.05
     px, the normal image speed -0.19 ms x speed (OFF) / -0.09 ms (ON), the event's pixel multiplicity (a stand-in for
     the edge's contrast) within 0.09 px, whether the edge moves out of or into its region (the map's outward normal
     along or against the motion) up to 0.15 px but not alike on every surface. Per point the offset from the true
