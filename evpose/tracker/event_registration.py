@@ -107,6 +107,16 @@ painted points held out of the field registration for their first 10 refined upd
 field's covariance scaled before combining (``combine``), trades 346x260 against 240x180 (mean of the four sets 7.01
 mm with these defaults, 7.03 capped, 7.09 held out): the target needs information the field and the events' map do not
 hold (the events' copy of the map moved onto the true edges: 4.77 mm, session 12).
+
+Session 17 (``/tmp/s17/polbias7/``): the events' own bias against the true edges, split by polarity, speed, age and
+the surface's view angle, is no smaller than the map's: OFF events of surfaces seen at a grazing angle trail their
+edges by 0.28 px where face-on ones trail by 0.135 (``grazing_max_cos``, now on with the field's matching
+``registration.fused_grazing_off_trail_px``; 2 s landing 6.38 / 5.91 / 7.25 / 8.49 -> 6.12 / 5.28 / 7.35 / 7.52 mm,
+3 s landings at 346x260 15.72 / 16.79 -> 13.62 / 14.95 mm). Oracles (``oracle.py``, seeds 0 / 1 / 4, before this):
+each point's own mean event offset from its true edge as its ON / OFF lead 6.43 -> 6.04 mm at 346x260 and 9.50 ->
+9.48 at 240x180 (per-point means of >= 5 events measured at the truth in every 5th update, so noisy); each point's
+mean offset from the built map, with offset learning off, 5.94 / 9.70 mm. The events' map moved onto the true edges
+(session 12's oracle, combined, seeds 0-3): 5.74 -> 5.08 mm at 346x260 and 6.45 -> 6.10 at 240x180 with these leads.
 """
 
 from __future__ import annotations
@@ -117,6 +127,7 @@ import gtsam
 import numpy as np
 
 from evpose.tracker.event_registration_kernels import _associate_nearest, _kept_events, _learn_offsets, _linearise_events
+from evpose.tracker.grazing import grazing_points
 from evpose.tracker.lapack_calls import inv
 from evpose.tracker.registration import _eigvalsh, _inv, _isotropic_information
 from evpose.tracker.registration_kernels import _lm_step
@@ -183,6 +194,52 @@ class EventRegistrationConfig:
     replacing: ON +0.1 6.43 mm, OFF 0 / -0.25 7.33 / 6.18 mm against 6.08."""
     off_lead_px: float = field(default=-0.17, metadata={"min": -2.0, "max": 2.0, "step": 0.01, "unit": "px"})
     """As ``on_lead_px`` for OFF events, pixels."""
+    grazing_max_cos: float = field(default=0.6, metadata={"min": 0.0, "max": 1.0, "step": 0.05, "unit": "ratio"})
+    """Points whose surface is seen at a grazing angle, the absolute cosine between the map's plane normal and the
+    ray from the camera below this, take ``grazing_on_lead_px`` / ``grazing_off_lead_px`` instead of ``on_lead_px`` /
+    ``off_lead_px``, and their OFF fields trail ``registration.fused_grazing_off_trail_px`` further (0 = off; points
+    without a plane normal never do), ratio.
+
+    Measured (session 17, scripts in ``/tmp/s17/polbias7/``, ``measure.py``): every 5th event registration of
+    closed-loop ``full`` runs, the step's events associated at the true pose, each event's distance along its point's
+    image normal from the point projected at the true pose *at the event's time*, signed along the point's image
+    motion, non-painted points within 30 mm of a true edge. Against the simulator's true edges (346x260 and 240x180,
+    seeds 0 / 1 / 4 each, 15-38 k events per run): ON events -0.01 to +0.05 px, OFF -0.18 px as ``off_lead_px``
+    says, but OFF events of grazing points (|cos| < 0.6: the boxes' vertical faces seen from above, a third of the OFF
+    events) sit -0.26 to -0.29 px behind their edge (pooled -0.28; -0.23 to -0.27 against the events' own map), those
+    of face-on points -0.125 to -0.148 (pooled -0.135); ON -0.03 to +0.07 / -0.06 to -0.08. Nothing else the tracker sees moves them as much: the event's age (0-5 ms) within 0.05
+    px, the normal image speed -0.19 ms x speed (OFF) / -0.09 ms (ON), the event's pixel multiplicity (a stand-in for
+    the edge's contrast) within 0.09 px, whether the edge moves out of or into its region (the map's outward normal
+    along or against the motion) up to 0.15 px but not alike on every surface. Per point the offset from the true
+    edge is stable (split-half correlation 0.85; 0.13-0.19 px between points), and 99.5 % of the points fire one
+    polarity only. The pose those offsets imply at the truth (``screen.py``: the events' normal equations with the
+    run's prior, averaged over 0.25 s), slow part per run 6.42 / 6.07 / 5.06 mm (346x260 seeds 0 / 1 / 4) and 6.13 /
+    5.56 / 5.39 (240x180): with the grazing OFF lead 5.95 / 5.62 / 4.69 and 5.41 / 4.87 / 4.70; with each event's own
+    true offset as its lead (an oracle) 3.45 / 4.47 / - and 1.15 / - / -; with the map on the true edges instead
+    (leads kept) 5.44 / 6.29 / - and 6.05.
+
+    ``full``, 2 s landing, mean ATE of 346x260 seeds 0-3 / 4-7 and 240x180 seeds 0-3 / 4-7 (``/tmp/s13/acc/run.py``;
+    the four sets' average): off 6.38 / 5.91 / 7.25 / 8.49 (7.01); this alone (grazing OFF lead -0.28) 6.12 / 5.50 /
+    7.46 / 7.97 (6.76); with ``fused_grazing_off_trail_px`` 0.1 / 0.2 (the defaults) / 0.3: 6.14 / 5.48 / 7.42 / 7.63
+    (6.67), **6.12 / 5.28 / 7.35 / 7.52 (6.57)**, ARE 0.064 / 0.065 / 0.079 / 0.085 deg, 5.99 / 5.12 / 7.58 / 7.28
+    (6.49); with 0.2 at ``grazing_max_cos`` 0.7 6.07 / 5.27 / 7.37 / 7.55 (6.56); that field trail alone (events' leads as off) 6.32 / 5.65 / 7.27 / 8.12 (6.84); grazing leads -0.35 / ON
+    +0.06 (no field trail) 6.21 / 5.68 / 7.74 / 7.82 (6.86); the whole measured table (face-on ON -0.07, OFF -0.135,
+    grazing ON +0.05, OFF -0.28, field trail 0.1) 6.03 / 5.50 / 7.31 / 7.90 (6.69); the face-on OFF lead split by
+    the edge's motion along / against its outward normal (measured -0.04 / -0.20 px, -0.011 to -0.077 / -0.193 to
+    -0.205 in every run; ``run_nside.py``) 5.99 / 5.14 / 7.41 / 7.67 (6.55), the grazing one too (-0.32 / -0.25) 5.94
+    / 5.20 / 7.55 / 7.66 (6.59): 346x260 against 240x180 again, not kept. 3 s landings (``landing_case``
+    3 s, ``fusion.ablation_long``'s flights), off -> on: 346x260 seeds 0-3 15.72 -> 13.62 mm (13.00 / 18.22 / 16.35 /
+    15.30 -> 11.01 / 15.76 / 14.41 / 13.30), seeds 4-7 16.79 -> 14.95 (every seed better), ARE 0.163 / 0.145 ->
+    0.148 / 0.132 deg; 240x180 seeds 0-3 18.86 -> 18.11 mm. Bundled demos (``evpose track`` on
+    ``maps/landing_map.ply``, ``evpose eval --align none``, ATE RMSE): ``landing`` 9.71 -> 10.00 mm,
+    ``landing_fast`` 18.20 -> 19.06 mm, ``landing_dynamic`` 12.27 -> 10.84 mm. The EKF backend on the 2 s sets
+    (``full:ekf``) 6.58 / 6.00 / 7.31 / 8.54 -> 6.05 / 5.36 / 7.41 / 7.41 mm: the graph, ahead on all four before,
+    is ahead on two (346x260 seeds 4-7, 240x180 seeds 0-3). CPU per update +0.02-0.04 ms (seed 0, 346x260, paired
+    runs, median 2.6-3.1 ms at load ~3)."""
+    grazing_on_lead_px: float = field(default=0.0, metadata={"min": -2.0, "max": 2.0, "step": 0.01, "unit": "px"})
+    """``on_lead_px`` of the grazing points (see ``grazing_max_cos``), pixels."""
+    grazing_off_lead_px: float = field(default=-0.28, metadata={"min": -2.0, "max": 2.0, "step": 0.01, "unit": "px"})
+    """``off_lead_px`` of the grazing points (see ``grazing_max_cos``), pixels."""
     iterations: int = field(default=3, metadata={"min": 1, "max": 20, "step": 1, "unit": "iterations"})
     """Gauss-Newton steps on one association, iterations (2: 6.03 mm against 6.08, replacing, 346x260 (3 px); combined
     (2 px): 6.44 / 5.92 and 7.26 / 8.55 mm, ~0.03 ms less)."""
@@ -220,9 +277,10 @@ class EventRegistration:
     """Registers the step's events (see the module); its state is the learned per-point offsets."""
 
     def __init__(self, config: EventRegistrationConfig, width: int, height: int, points: np.ndarray, tangents: np.ndarray,
-                 edge_normal: np.ndarray, skip: np.ndarray | None = None):
+                 edge_normal: np.ndarray, skip: np.ndarray | None = None, plane_normal: np.ndarray | None = None):
         """``points`` (N, 3) the map (copied), ``tangents`` (N, 3) its unit edge directions and ``edge_normal`` (N, 3)
-        its edge normals (zero = unknown: such points take no events), ``skip`` (N,) bool points left out."""
+        its edge normals (zero = unknown: such points take no events), ``skip`` (N,) bool points left out,
+        ``plane_normal`` (N, 3) the surfaces' unit normals (zero = unknown; None = none known) for ``grazing_max_cos``."""
         self.config = config
         self._base = np.array(points, dtype=np.float64, order="C")
         self.points = self._base.copy()
@@ -233,6 +291,7 @@ class EventRegistration:
         self._tangents[~np.any(n != 0, axis=1)] = 0.0
         if skip is not None:
             self._tangents[np.asarray(skip, np.bool_)] = 0.0  # no edge direction: such points take no events
+        self._plane_normals = None if plane_normal is None else np.array(plane_normal, dtype=np.float64, order="C")
         self.offsets = np.zeros(self._base.shape[0])
         """Learned offset of each map point along its unit edge normal, metres."""
         self._width, self._height = int(width), int(height)
@@ -286,7 +345,7 @@ class EventRegistration:
         info = None
         if prior is not None:
             T_p, info = gtsam.Pose3(prior[0]), prior[1]
-        args = (float(c.on_lead_px), float(c.off_lead_px), float(c.huber_px), float(c.gate_px), H, b, sw, swr)
+        args = (*self._leads(used, T), float(c.huber_px), float(c.gate_px), H, b, sw, swr)
         n_it = int(c.iterations)
         t_ref = int(t_us)
         for it in range(n_it + 1):
@@ -311,6 +370,18 @@ class EventRegistration:
         cov = _inv(Hf) * (swr2 / max(n_used - 6, 1)) * float(c.covariance_scale)
         self._last = (used, sw, swr, R_cw, t_cw, (fx, fy, cx, cy))
         return pose.matrix(), 0.5 * (cov + cov.T)
+
+    def _leads(self, used: np.ndarray, T: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(ON, OFF) lead of each point ``used`` (pixels), the grazing ones (see ``grazing_max_cos``) seen from the
+        camera centre of ``T``."""
+        c = self.config
+        on = np.full(used.size, float(c.on_lead_px))
+        off = np.full(used.size, float(c.off_lead_px))
+        if float(c.grazing_max_cos) > 0 and self._plane_normals is not None and used.size:
+            g = grazing_points(self._plane_normals[used], self.points[used], T[:3, 3], float(c.grazing_max_cos))
+            on[g] = float(c.grazing_on_lead_px)
+            off[g] = float(c.grazing_off_lead_px)
+        return on, off
 
     def learn(self) -> int:
         """Move the points of the last successful :meth:`refine` by ``offset_gain`` of their gauge-free offsets;
@@ -371,4 +442,5 @@ def event_registration_for(config, contour_map, tangents: np.ndarray, width: int
         skip[painted_points(contour_map, float(config.map_refinement.max_curvature))] = True
     if er.skip_wall_feet:
         skip |= wall_foot_mask(contour_map, vm.wall_inward_m, vm.wall_radius_m, vm.wall_min_height_m, vm.wall_max_height_m)
-    return EventRegistration(er, width, height, contour_map.points, tangents, contour_map.edge_normal, skip)
+    return EventRegistration(er, width, height, contour_map.points, tangents, contour_map.edge_normal, skip,
+                             contour_map.plane_normal)

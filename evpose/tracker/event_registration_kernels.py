@@ -123,8 +123,8 @@ def _linearise_events(n_events, ex, ey, et, ep, assoc, points, tangents, R_cw, t
     """Robust normal equations of the first ``n_events`` events' distances to their points' edge lines (event ``i``'s
     point the row ``assoc[i]`` of ``points`` / ``tangents``), each point projected at its
     event's time (the pose ``t_ref - t`` earlier along ``twist``, body frame, rotation then translation, per
-    second). An ON event is taken ``on_lead`` pixels ahead of the edge along its motion, an OFF event ``off_lead``
-    (see ``EventRegistrationConfig.on_lead_px``). ``sw`` / ``swr`` (M,) get each point's sums of the robust weights
+    second). An ON event of row ``k``'s point is taken ``on_lead[k]`` pixels ahead of the edge along its motion, an OFF
+    event ``off_lead[k]`` (see ``EventRegistrationConfig.on_lead_px`` and ``grazing_max_cos``). ``sw`` / ``swr`` (M,) get each point's sums of the robust weights
     and weighted residuals. Returns (cost, events used, sum of w r^2)."""
     for k in range(sw.shape[0]):
         sw[k] = 0.0
@@ -166,7 +166,7 @@ def _linearise_events(n_events, ex, ey, et, ep, assoc, points, tangents, R_cw, t
         J[4] = -(nv * (-pvy))
         J[5] = -(nu * (-puz) + nv * (-pvz))
         res = nu * (ex[i] - u) + nv * (ey[i] - v)
-        lead = on_lead if ep[i] > 0 else off_lead
+        lead = on_lead[k] if ep[i] > 0 else off_lead[k]
         if lead != 0.0:
             vn = 0.0  # the edge's image speed along n: -J . twist
             for a in range(6):

@@ -317,6 +317,13 @@ class RegistrationConfig:
     0.155 -> 0.123 / 0.152 deg at 0.2). Bundled demos (``full``, ``--align none``) 0 -> 0.2: ``landing`` 15.79 ->
     15.55 mm, ``landing_dynamic`` 21.83 -> 20.58 mm, ``landing_fast`` 24.19 -> 23.88 mm. ``stpe+filter`` (not
     applied there) would go 22.28 / 30.38 -> 22.47 / 28.54 mm."""
+    fused_grazing_off_trail_px: float = field(default=0.2, metadata={"min": -1.0, "max": 1.0, "step": 0.05, "unit": "px"})
+    """In the fused modes, how much further the field of a point predicted to fire OFF events trails when its surface
+    is seen at a grazing angle (``event_registration.grazing_max_cos``; 0 there turns this off too), along its edge
+    normal, pixels (0 = off): the OFF events of such points sit ~0.15 px further behind their edges than the face-on
+    points' (see ``EventRegistrationConfig.grazing_max_cos``, which also gives the figures: 0 / 0.1 / 0.2 / 0.3 px
+    with the events' grazing leads 6.76 / 6.67 / 6.57 / 6.49 mm averaged over the four 2 s sets, 0.3 trading
+    240x180 seeds 0-3 for the rest, 7.58 mm against 7.25 off)."""
     fused_buffer_trail_px: float = field(default=0.1, metadata={"min": -1.0, "max": 1.0, "step": 0.05, "unit": "px"})
     """In the fused modes, how much further behind the lag model the field of a point in the polarity filter's buffer
     zone (predicted polarity 0: its patch shows events of both polarities) is sampled, along its edge normal, pixels

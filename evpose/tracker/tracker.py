@@ -41,6 +41,7 @@ from evpose.tracker.crowding import uncrowded
 from evpose.tracker.ego_motion_events import ego_motion_keep, empty_ego_history
 from evpose.tracker.edge_offsets import EdgeOffsetLearner
 from evpose.tracker.event_registration import event_registration_for
+from evpose.tracker.grazing import add_grazing_off_trail
 from evpose.tracker.map_refinement import PaintedEdgeRefiner
 from evpose.tracker.motion_filter import ConstantVelocityKalman
 from evpose.tracker.predictor import ConstantVelocityPredictor, MotionPredictor
@@ -370,9 +371,10 @@ class Tracker:
             split = float(self.config.registration.fused_polarity_trail_px)
             both = float(self.config.registration.fused_buffer_trail_px)
             if (split != 0 or both != 0) and self.components.drives_pose and polarity is not None:
-                # OFF points' fields trail further than ON points' (see ``fused_polarity_trail_px``), and those of
-                # points shown both polarities (the buffer zone) further still (``fused_buffer_trail_px``).
+                # OFF points' fields trail further than ON points' (``fused_polarity_trail_px``), those of points shown
+                # both polarities further still (``fused_buffer_trail_px``), OFF ones of grazing surfaces too.
                 trail = polarity_trail(polarity, 0.5 * split, -0.5 * split, both)
+                add_grazing_off_trail(trail, polarity, self.map.plane_normal, used, pts, predicted[:3, 3], self.config)
             with_tangents = self._registration.lag_floor_px > 0 or trail is not None or self._normal_only
             tangents = ((used_tangents if used_tangents is not None else np.take(self._tangents, used, axis=0))
                         if with_tangents else None)

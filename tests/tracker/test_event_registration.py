@@ -1,5 +1,5 @@
 """Events registered at their own timestamps: exact events put the pose back on the truth from a perturbed start, the
-polarity leads and the predicted polarity are honoured, a map line's own offset is learned but not a pose-like one,
+polarity leads (grazing surfaces' apart) and the predicted polarity are honoured, a map line's own offset is learned but not a pose-like one,
 and the tracker runs it in the fused modes only."""
 
 import gtsam
@@ -91,6 +91,25 @@ def test_the_lead_of_a_polarity_is_taken_out_and_ignoring_it_biases_the_pose():
     without = registration(cmap).refine(perturbed(), np.arange(len(cmap)), None, *events, T_REF, TWIST, K, None)
     assert np.abs(error(with_lead[0])).max() < 2e-5
     assert np.abs(error(without[0])).max() > 1e-3
+
+
+def test_grazing_points_take_their_own_lead():
+    # The x lines as the feet of vertical faces (plane normal along x: seen from 2 m above at |cos| < 0.45), the y
+    # lines on the ground (|cos| > 0.85); their OFF events trail by -0.3 / -0.1 px.
+    lines = ground_lines()
+    vertical = lines.edge_normal[:, 0] == 1.0
+    normals = np.where(vertical[:, None], [1.0, 0.0, 0.0], lines.plane_normal)
+    cmap = ContourMap.from_points(lines.points, edge_normal=lines.edge_normal, plane_normal=normals)
+    parts = [exact_events(ContourMap.from_points(lines.points[m], edge_normal=lines.edge_normal[m], plane_normal=lines.plane_normal[m]),
+                          lead_px=lead, polarity=-1, seed=k) for k, (m, lead) in enumerate(((vertical, -0.3), (~vertical, -0.1)))]
+    events = tuple(np.concatenate(a) for a in zip(*parts))
+    tangents = np.cross(lines.plane_normal, lines.edge_normal)
+    def run(**config):
+        cfg = EventRegistrationConfig(**{"on_lead_px": 0.0, "off_lead_px": -0.1, "iterations": 5, **config})
+        reg = EventRegistration(cfg, W, H, cmap.points, tangents, cmap.edge_normal, plane_normal=cmap.plane_normal)
+        return error(reg.refine(perturbed(), np.arange(len(cmap)), None, *events, T_REF, TWIST, K, None)[0])
+    assert np.abs(run(grazing_max_cos=0.6, grazing_off_lead_px=-0.3)).max() < 2e-5
+    assert np.abs(run()).max() > 3e-4  # off: one lead for both
 
 
 def test_points_predicted_to_fire_the_other_polarity_take_none_of_the_events():

@@ -1,0 +1,28 @@
+"""Map points whose surface the camera sees at a grazing angle: their OFF edges' events trail further behind the
+edge than a face-on surface's (see ``EventRegistrationConfig.grazing_max_cos``)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def grazing_points(plane_normals: np.ndarray, points: np.ndarray, camera_centre: np.ndarray, max_cos: float) -> np.ndarray:
+    """(M,) bool: the points (``points`` (M, 3) world, metres, ``plane_normals`` (M, 3) their surfaces' unit normals,
+    zero = unknown) whose normal makes an absolute cosine below ``max_cos`` with the ray from ``camera_centre``
+    (world, metres); points without a normal never are."""
+    n = np.asarray(plane_normals, dtype=np.float64)
+    d = np.asarray(points, dtype=np.float64) - np.asarray(camera_centre, dtype=np.float64)
+    cos = np.abs(np.einsum("ij,ij->i", n, d)) / np.maximum(np.linalg.norm(d, axis=1), 1e-12)
+    return (np.einsum("ij,ij->i", n, n) > 0.25) & (cos < float(max_cos))
+
+
+def add_grazing_off_trail(trail: np.ndarray, polarity: np.ndarray, plane_normals: np.ndarray, used: np.ndarray,
+                          points: np.ndarray, camera_centre: np.ndarray, config) -> None:
+    """Adds a :class:`~evpose.tracker.config.TrackerConfig`'s ``registration.fused_grazing_off_trail_px`` to the field
+    ``trail`` (pixels, as ``used``) of the map points ``used`` (``points`` their positions, ``plane_normals`` the
+    whole map's) predicted to fire OFF events (``polarity`` < 0) whose surface is grazing by
+    ``event_registration.grazing_max_cos``, seen from ``camera_centre``; nothing when either is 0."""
+    extra, max_cos = float(config.registration.fused_grazing_off_trail_px), float(config.event_registration.grazing_max_cos)
+    if extra == 0 or not max_cos > 0 or not len(used):
+        return
+    trail[(np.asarray(polarity) < 0) & grazing_points(np.asarray(plane_normals)[used], points, camera_centre, max_cos)] += extra

@@ -1,0 +1,36 @@
+"""Which points' surfaces are seen at a grazing angle, and the field's extra OFF trail they take."""
+
+import numpy as np
+
+from evpose.tracker.config import TrackerConfig
+from evpose.tracker.grazing import add_grazing_off_trail, grazing_points
+
+NORMALS = np.array([[0.0, 0, 1], [1.0, 0, 0], [0.0, 0, 0], [0.0, 0.6, 0.8]])
+"""Seen from 2 m above the origin: |cos| 1 (face-on), 0 (edge-on), unknown, 0.8."""
+POINTS = np.zeros((4, 3))
+ABOVE = np.array([0.0, 0, 2])
+
+
+def test_grazing_points_are_those_seen_edge_on_and_never_those_without_a_normal():
+    assert grazing_points(NORMALS, POINTS, ABOVE, 0.6).tolist() == [False, True, False, False]
+    assert grazing_points(NORMALS, POINTS, ABOVE, 0.9).tolist() == [False, True, False, True]
+
+
+def trail_of(max_cos: float, extra_px: float) -> np.ndarray:
+    used = np.array([1, 0, 3])  # edge-on, face-on, grazing at max_cos 0.9
+    polarity = np.array([-1, -1, 1], np.int8)  # OFF, OFF, ON
+    cfg = TrackerConfig()
+    cfg.event_registration.grazing_max_cos = max_cos
+    cfg.registration.fused_grazing_off_trail_px = extra_px
+    trail = np.full(3, 0.1)
+    add_grazing_off_trail(trail, polarity, NORMALS, used, POINTS[used], ABOVE, cfg)
+    return trail
+
+
+def test_only_grazing_off_points_trail_further():
+    assert np.allclose(trail_of(0.9, 0.2), [0.3, 0.1, 0.1])
+
+
+def test_no_extra_trail_when_either_setting_is_zero():
+    assert np.array_equal(trail_of(0.0, 0.2), np.full(3, 0.1))
+    assert np.array_equal(trail_of(0.9, 0.0), np.full(3, 0.1))
