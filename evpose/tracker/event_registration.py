@@ -127,7 +127,7 @@ import gtsam
 import numpy as np
 
 from evpose.tracker.event_registration_kernels import _associate_nearest, _kept_events, _learn_offsets, _linearise_events
-from evpose.tracker.grazing import grazing_points
+from evpose.tracker.grazing import crease_points, grazing_points
 from evpose.tracker.lapack_calls import inv
 from evpose.tracker.registration import _eigvalsh, _inv, _isotropic_information
 from evpose.tracker.registration_kernels import _lm_step
@@ -240,6 +240,14 @@ class EventRegistrationConfig:
     """``on_lead_px`` of the grazing points (see ``grazing_max_cos``), pixels."""
     grazing_off_lead_px: float = field(default=-0.28, metadata={"min": -2.0, "max": 2.0, "step": 0.01, "unit": "px"})
     """``off_lead_px`` of the grazing points (see ``grazing_max_cos``), pixels."""
+    crease_radius_m: float = field(default=0.0, metadata={"min": 0.0, "max": 0.1, "step": 0.005, "unit": "m"})
+    """Points with a point of another region within this distance whose surface normal makes an absolute cosine
+    below 0.5 with their own (a crease between two planes: a box's top and side) take ``crease_on_lead_px`` /
+    ``crease_off_lead_px`` unless grazing (see ``grazing_max_cos``), metres (0 = off)."""
+    crease_on_lead_px: float = field(default=0.0, metadata={"min": -2.0, "max": 2.0, "step": 0.01, "unit": "px"})
+    """``on_lead_px`` of the face-on crease points (see ``crease_radius_m``), pixels."""
+    crease_off_lead_px: float = field(default=-0.17, metadata={"min": -2.0, "max": 2.0, "step": 0.01, "unit": "px"})
+    """``off_lead_px`` of the face-on crease points (see ``crease_radius_m``), pixels."""
     iterations: int = field(default=3, metadata={"min": 1, "max": 20, "step": 1, "unit": "iterations"})
     """Gauss-Newton steps on one association, iterations (2: 6.03 mm against 6.08, replacing, 346x260 (3 px); combined
     (2 px): 6.44 / 5.92 and 7.26 / 8.55 mm, ~0.03 ms less)."""
@@ -277,10 +285,12 @@ class EventRegistration:
     """Registers the step's events (see the module); its state is the learned per-point offsets."""
 
     def __init__(self, config: EventRegistrationConfig, width: int, height: int, points: np.ndarray, tangents: np.ndarray,
-                 edge_normal: np.ndarray, skip: np.ndarray | None = None, plane_normal: np.ndarray | None = None):
+                 edge_normal: np.ndarray, skip: np.ndarray | None = None, plane_normal: np.ndarray | None = None,
+                 region_id: np.ndarray | None = None):
         """``points`` (N, 3) the map (copied), ``tangents`` (N, 3) its unit edge directions and ``edge_normal`` (N, 3)
         its edge normals (zero = unknown: such points take no events), ``skip`` (N,) bool points left out,
-        ``plane_normal`` (N, 3) the surfaces' unit normals (zero = unknown; None = none known) for ``grazing_max_cos``."""
+        ``plane_normal`` (N, 3) the surfaces' unit normals (zero = unknown; None = none known) for ``grazing_max_cos``,
+        ``region_id`` (N,) their surface regions (-1 = none; None = none known) for ``crease_radius_m``."""
         self.config = config
         self._base = np.array(points, dtype=np.float64, order="C")
         self.points = self._base.copy()
@@ -292,6 +302,9 @@ class EventRegistration:
         if skip is not None:
             self._tangents[np.asarray(skip, np.bool_)] = 0.0  # no edge direction: such points take no events
         self._plane_normals = None if plane_normal is None else np.array(plane_normal, dtype=np.float64, order="C")
+        self._crease = None
+        if float(config.crease_radius_m) > 0 and plane_normal is not None and region_id is not None:
+            self._crease = crease_points(self._base, self._plane_normals, region_id, float(config.crease_radius_m))
         self.offsets = np.zeros(self._base.shape[0])
         """Learned offset of each map point along its unit edge normal, metres."""
         self._width, self._height = int(width), int(height)
@@ -377,6 +390,10 @@ class EventRegistration:
         c = self.config
         on = np.full(used.size, float(c.on_lead_px))
         off = np.full(used.size, float(c.off_lead_px))
+        if self._crease is not None and used.size:
+            k = self._crease[used]
+            on[k] = float(c.crease_on_lead_px)
+            off[k] = float(c.crease_off_lead_px)
         if float(c.grazing_max_cos) > 0 and self._plane_normals is not None and used.size:
             g = grazing_points(self._plane_normals[used], self.points[used], T[:3, 3], float(c.grazing_max_cos))
             on[g] = float(c.grazing_on_lead_px)
@@ -443,4 +460,4 @@ def event_registration_for(config, contour_map, tangents: np.ndarray, width: int
     if er.skip_wall_feet:
         skip |= wall_foot_mask(contour_map, vm.wall_inward_m, vm.wall_radius_m, vm.wall_min_height_m, vm.wall_max_height_m)
     return EventRegistration(er, width, height, contour_map.points, tangents, contour_map.edge_normal, skip,
-                             contour_map.plane_normal)
+                             contour_map.plane_normal, contour_map.region_id)

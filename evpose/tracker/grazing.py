@@ -4,6 +4,7 @@ edge than a face-on surface's (see ``EventRegistrationConfig.grazing_max_cos``).
 from __future__ import annotations
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 
 def grazing_points(plane_normals: np.ndarray, points: np.ndarray, camera_centre: np.ndarray, max_cos: float) -> np.ndarray:
@@ -26,3 +27,25 @@ def add_grazing_off_trail(trail: np.ndarray, polarity: np.ndarray, plane_normals
     if extra == 0 or not max_cos > 0 or not len(used):
         return
     trail[(np.asarray(polarity) < 0) & grazing_points(np.asarray(plane_normals)[used], points, camera_centre, max_cos)] += extra
+
+
+def crease_points(points: np.ndarray, plane_normals: np.ndarray, region_id: np.ndarray, radius: float,
+                  max_cos: float = 0.5) -> np.ndarray:
+    """(N,) bool: the map points (``points`` (N, 3) world, metres) on a crease: a point of another region
+    (``region_id`` (N,), -1 = none) lies within ``radius`` (metres) and the two surfaces' unit normals
+    (``plane_normals`` (N, 3), zero = unknown) make an absolute cosine below ``max_cos``. None when ``radius`` <= 0."""
+    n = len(points)
+    out = np.zeros(n, np.bool_)
+    if not float(radius) > 0 or n == 0:
+        return out
+    pn = np.asarray(plane_normals, dtype=np.float64)
+    reg = np.asarray(region_id)
+    pairs = cKDTree(np.asarray(points, dtype=np.float64)).query_pairs(float(radius), output_type="ndarray")
+    if not len(pairs):
+        return out
+    i, j = pairs[:, 0], pairs[:, 1]
+    known = (np.einsum("ij,ij->i", pn[i], pn[i]) > 0.25) & (np.einsum("ij,ij->i", pn[j], pn[j]) > 0.25)
+    hit = known & (reg[i] != reg[j]) & (reg[i] >= 0) & (reg[j] >= 0) & (np.abs(np.einsum("ij,ij->i", pn[i], pn[j])) < float(max_cos))
+    out[i[hit]] = True
+    out[j[hit]] = True
+    return out

@@ -1,9 +1,9 @@
-"""Which points' surfaces are seen at a grazing angle, and the field's extra OFF trail they take."""
+"""Which points' surfaces are seen at a grazing angle or sit on a crease, and the field's extra OFF trail they take."""
 
 import numpy as np
 
 from evpose.tracker.config import TrackerConfig
-from evpose.tracker.grazing import add_grazing_off_trail, grazing_points
+from evpose.tracker.grazing import add_grazing_off_trail, crease_points, grazing_points
 
 NORMALS = np.array([[0.0, 0, 1], [1.0, 0, 0], [0.0, 0, 0], [0.0, 0.6, 0.8]])
 """Seen from 2 m above the origin: |cos| 1 (face-on), 0 (edge-on), unknown, 0.8."""
@@ -34,3 +34,13 @@ def test_only_grazing_off_points_trail_further():
 def test_no_extra_trail_when_either_setting_is_zero():
     assert np.array_equal(trail_of(0.0, 0.2), np.full(3, 0.1))
     assert np.array_equal(trail_of(0.9, 0.0), np.full(3, 0.1))
+
+
+def test_crease_points_are_those_beside_another_regions_surface_at_an_angle():
+    # A box's top (region 0, normal +z) meeting its side (region 1, normal +x) at x = 0; a coplanar ground panel
+    # (region 2, normal +z) beside the top's far edge; a lone point of the top's own region.
+    points = np.array([[0.0, 0, 0], [0.005, 0, 0], [0.3, 0, 0], [0.31, 0, 0], [0.6, 0, 0], [0.605, 0, 0]])
+    normals = np.array([[0.0, 0, 1], [1.0, 0, 0], [0.0, 0, 1], [0.0, 0, 1], [0.0, 0, 1], [0.0, 0, 0]])
+    region = np.array([0, 1, 0, 2, 0, 3])
+    assert crease_points(points, normals, region, 0.02).tolist() == [True, True, False, False, False, False]
+    assert not crease_points(points, normals, region, 0.0).any()
