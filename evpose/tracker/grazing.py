@@ -49,3 +49,21 @@ def crease_points(points: np.ndarray, plane_normals: np.ndarray, region_id: np.n
     out[i[hit]] = True
     out[j[hit]] = True
     return out
+
+
+def add_crease_off_trail(trail: np.ndarray, polarity: np.ndarray, crease: np.ndarray | None, plane_normals: np.ndarray,
+                         used: np.ndarray, points: np.ndarray, camera_centre: np.ndarray, config) -> None:
+    """Moves the field ``trail`` (pixels, as ``used``) of the face-on map points ``used`` predicted to fire OFF events
+    (``polarity`` < 0) by half a :class:`~evpose.tracker.config.TrackerConfig`'s
+    ``registration.fused_crease_off_trail_px``: further behind on a crease (``crease``, the whole map's mask of
+    :func:`crease_points`), less elsewhere; grazing points (``event_registration.grazing_max_cos``, seen from
+    ``camera_centre``; ``points`` the used points' positions) are left as they are. Nothing when ``crease`` is None or
+    the setting 0."""
+    half = 0.5 * float(config.registration.fused_crease_off_trail_px)
+    if crease is None or half == 0 or not len(used):
+        return
+    off = np.asarray(polarity) < 0
+    max_cos = float(config.event_registration.grazing_max_cos)
+    if max_cos > 0:
+        off &= ~grazing_points(np.asarray(plane_normals)[used], points, camera_centre, max_cos)
+    trail[off] += np.where(np.asarray(crease)[used][off], half, -half)

@@ -3,7 +3,7 @@
 import numpy as np
 
 from evpose.tracker.config import TrackerConfig
-from evpose.tracker.grazing import add_grazing_off_trail, crease_points, grazing_points
+from evpose.tracker.grazing import add_crease_off_trail, add_grazing_off_trail, crease_points, grazing_points
 
 NORMALS = np.array([[0.0, 0, 1], [1.0, 0, 0], [0.0, 0, 0], [0.0, 0.6, 0.8]])
 """Seen from 2 m above the origin: |cos| 1 (face-on), 0 (edge-on), unknown, 0.8."""
@@ -44,3 +44,21 @@ def test_crease_points_are_those_beside_another_regions_surface_at_an_angle():
     region = np.array([0, 1, 0, 2, 0, 3])
     assert crease_points(points, normals, region, 0.02).tolist() == [True, True, False, False, False, False]
     assert not crease_points(points, normals, region, 0.0).any()
+
+
+def crease_trail_of(extra_px: float, crease) -> np.ndarray:
+    used = np.array([1, 0, 0, 3])  # edge-on (grazing), face-on, face-on, |cos| 0.8
+    polarity = np.array([-1, -1, 1, -1], np.int8)  # OFF, OFF, ON, OFF
+    cfg = TrackerConfig()
+    cfg.event_registration.grazing_max_cos = 0.6
+    cfg.registration.fused_crease_off_trail_px = extra_px
+    trail = np.full(4, 0.1)
+    add_crease_off_trail(trail, polarity, crease, NORMALS, used, POINTS[used], ABOVE, cfg)
+    return trail
+
+
+def test_face_on_off_points_trail_further_on_a_crease_and_less_elsewhere():
+    crease = np.array([True, True, False, False])  # points 0 and 1 on a crease
+    assert np.allclose(crease_trail_of(0.2, crease), [0.1, 0.2, 0.1, 0.0])
+    assert np.array_equal(crease_trail_of(0.0, crease), np.full(4, 0.1))
+    assert np.array_equal(crease_trail_of(0.2, None), np.full(4, 0.1))
