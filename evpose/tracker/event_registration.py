@@ -248,6 +248,10 @@ class EventRegistrationConfig:
     """``on_lead_px`` of the face-on crease points (see ``crease_radius_m``), pixels."""
     crease_off_lead_px: float = field(default=-0.17, metadata={"min": -2.0, "max": 2.0, "step": 0.01, "unit": "px"})
     """``off_lead_px`` of the face-on crease points (see ``crease_radius_m``), pixels."""
+    beyond_off_lead_px: float = field(default=-0.17, metadata={"min": -2.0, "max": 2.0, "step": 0.01, "unit": "px"})
+    """``off_lead_px`` of the face-on points off a crease whose edge the camera sees past (their outward edge normal
+    points towards the camera centre: a low step's unmapped riser shows beyond its top edge), with ``crease_radius_m``
+    on, pixels."""
     iterations: int = field(default=3, metadata={"min": 1, "max": 20, "step": 1, "unit": "iterations"})
     """Gauss-Newton steps on one association, iterations (2: 6.03 mm against 6.08, replacing, 346x260 (3 px); combined
     (2 px): 6.44 / 5.92 and 7.26 / 8.55 mm, ~0.03 ms less)."""
@@ -394,6 +398,7 @@ class EventRegistration:
             k = self._crease[used]
             on[k] = float(c.crease_on_lead_px)
             off[k] = float(c.crease_off_lead_px)
+            off[~k & (np.einsum("ij,ij->i", self._normals[used], T[:3, 3] - self.points[used]) > 0)] = float(c.beyond_off_lead_px)
         if float(c.grazing_max_cos) > 0 and self._plane_normals is not None and used.size:
             g = grazing_points(self._plane_normals[used], self.points[used], T[:3, 3], float(c.grazing_max_cos))
             on[g] = float(c.grazing_on_lead_px)
