@@ -132,7 +132,7 @@ def test_crease_points_take_their_own_lead():
                                 region_id=cmap.region_id)
         return error(reg.refine(perturbed(), np.arange(len(cmap)), None, *events, T_REF, TWIST, K, None)[0])
     assert np.abs(run(crease_radius_m=0.02, crease_off_lead_px=-0.3, beyond_off_lead_px=-0.1)).max() < 2e-5
-    assert np.abs(run()).max() > 3e-4  # off: one lead for both
+    assert np.abs(run(crease_radius_m=0.0)).max() > 3e-4  # off: one lead for both
 
 
 def test_points_whose_edge_the_camera_sees_past_take_their_own_lead():
@@ -153,7 +153,7 @@ def test_points_whose_edge_the_camera_sees_past_take_their_own_lead():
                                 region_id=cmap.region_id)
         return error(reg.refine(perturbed(), np.arange(len(cmap)), None, *events, T_REF, TWIST, K, None)[0])
     assert np.abs(run(crease_radius_m=0.02, beyond_off_lead_px=0.3)).max() < 2e-5
-    assert np.abs(run(beyond_off_lead_px=0.3)).max() > 3e-4  # crease_radius_m off: one lead for all
+    assert np.abs(run(crease_radius_m=0.0, beyond_off_lead_px=0.3)).max() > 3e-4  # crease_radius_m off: one lead for all
 
 
 def test_points_predicted_to_fire_the_other_polarity_take_none_of_the_events():
