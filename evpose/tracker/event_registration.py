@@ -270,7 +270,13 @@ class EventRegistrationConfig:
     (6.467), 5.85 / 4.92 / 7.35 / 7.38 (6.378), **5.84 / 4.76 / 7.29 / 7.36 (6.313)**, 5.78 / 4.71 / 7.42 / 7.62
     (6.385); the full OFF split with +0.35 5.86 / 4.91 / 7.48 / 7.49 (6.436); +0.5 alone (every other face-on OFF
     point at -0.17) 5.95 / 5.03 / 7.09 / 7.67 (6.434). The field's matching split
-    (``registration.fused_crease_off_trail_px``) did not help."""
+    (``registration.fused_crease_off_trail_px``) did not help. With the defaults: ARE 0.064 / 0.065 / 0.079 / 0.085
+    -> 0.061 / 0.058 / 0.081 / 0.080 deg; 3 s landings (``run3.py``) at 346x260 seeds 0-3 13.62 -> 12.16 mm (11.01 /
+    15.76 / 14.41 / 13.30 -> 9.88 / 14.67 / 12.72 / 11.36), seeds 4-7 14.95 -> 13.31 (11.35 / 17.85 / 18.85 / 11.74 ->
+    9.93 / 15.83 / 17.41 / 10.06), but at 240x180 seeds 0-3 18.11 -> 18.83 (21.41 / 17.12 / 13.83 / 20.09 -> 23.12 /
+    18.50 / 13.78 / 19.93); bundled demos (``evpose track`` on ``maps/landing_map.ply``, ``evpose eval --align
+    none``, ATE RMSE): ``landing`` 10.00 -> 9.95 mm, ``landing_fast`` 19.06 -> 18.56, ``landing_dynamic`` 10.84 ->
+    10.43."""
     crease_on_lead_px: float = field(default=0.0, metadata={"min": -2.0, "max": 2.0, "step": 0.01, "unit": "px"})
     """``on_lead_px`` of the face-on crease points (see ``crease_radius_m``), pixels."""
     crease_off_lead_px: float = field(default=-0.22, metadata={"min": -2.0, "max": 2.0, "step": 0.01, "unit": "px"})
