@@ -34,7 +34,7 @@ def crease_points(points: np.ndarray, plane_normals: np.ndarray, region_id: np.n
                   max_cos: float = 0.5) -> np.ndarray:
     """(N,) bool: the map points (``points`` (N, 3) world, metres) on a crease: a point of another region
     (``region_id`` (N,), -1 = none) lies within ``radius`` (metres) and the two surfaces' unit normals
-    (``plane_normals`` (N, 3), zero = unknown) make an absolute cosine below ``max_cos``. None is when ``radius`` <= 0."""
+    (``plane_normals`` (N, 3), zero = unknown) make an absolute cosine below ``max_cos``. All False when ``radius`` <= 0."""
     n = len(points)
     out = np.zeros(n, np.bool_)
     if not float(radius) > 0 or n == 0:
