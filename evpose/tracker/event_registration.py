@@ -269,7 +269,10 @@ class EventRegistrationConfig:
     split and the points seen past their edge at +0.15 / +0.35 / **+0.5** / +0.7 px: 5.95 / 5.01 / 7.51 / 7.40
     (6.467), 5.85 / 4.92 / 7.35 / 7.38 (6.378), **5.84 / 4.76 / 7.29 / 7.36 (6.313)**, 5.78 / 4.71 / 7.42 / 7.62
     (6.385); the full OFF split with +0.35 5.86 / 4.91 / 7.48 / 7.49 (6.436); +0.5 alone (every other face-on OFF
-    point at -0.17) 5.95 / 5.03 / 7.09 / 7.67 (6.434). The field's matching split
+    point at -0.17) 5.95 / 5.03 / 7.09 / 7.67 (6.434). With the defaults, ``on_lead_px`` -0.09 (the face-on ON
+events off a crease) 5.72 / 4.88 / 7.41 / 7.30 (6.324), the radius 3 cm 5.95 / 4.82 / 7.45 / 7.25 (6.371); the EKF
+backend (``full:ekf``) 6.05 / 5.36 / 7.41 / 7.41 -> 5.88 / 4.79 / 7.50 / 7.24 (6.35), the graph ahead on three sets
+(all but 240x180 seeds 4-7). The field's matching split
     (``registration.fused_crease_off_trail_px``) did not help. With the defaults: ARE 0.064 / 0.065 / 0.079 / 0.085
     -> 0.061 / 0.058 / 0.081 / 0.080 deg; 3 s landings (``run3.py``) at 346x260 seeds 0-3 13.62 -> 12.16 mm (11.01 /
     15.76 / 14.41 / 13.30 -> 9.88 / 14.67 / 12.72 / 11.36), seeds 4-7 14.95 -> 13.31 (11.35 / 17.85 / 18.85 / 11.74 ->
