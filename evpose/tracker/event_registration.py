@@ -117,6 +117,10 @@ each point's own mean event offset from its true edge as its ON / OFF lead 6.43 
 9.48 at 240x180 (per-point means of >= 5 events measured at the truth in every 5th update, so noisy); each point's
 mean offset from the built map, with offset learning off, 5.94 / 9.70 mm. The events' map moved onto the true edges
 (session 12's oracle, combined, seeds 0-3): 5.74 -> 5.08 mm at 346x260 and 6.45 -> 6.10 at 240x180 with these leads.
+Split again by the map point's edge class (``crease_radius_m``, ``/tmp/s17/edgeclass7/``): face-on OFF events of
+creases trail ~0.26 px, those of the other points where the camera sees past their edge lead ~0.35 px, the rest trail
+~0.1 px; half the crease split with the seen-past lead +0.5 px took the four 2 s sets to 5.84 / 4.76 / 7.29 / 7.36 mm
+(6.565 -> 6.313).
 """
 
 from __future__ import annotations
@@ -127,7 +131,7 @@ import gtsam
 import numpy as np
 
 from evpose.tracker.event_registration_kernels import _associate_nearest, _kept_events, _learn_offsets, _linearise_events
-from evpose.tracker.grazing import grazing_points
+from evpose.tracker.grazing import crease_points, grazing_points
 from evpose.tracker.lapack_calls import inv
 from evpose.tracker.registration import _eigvalsh, _inv, _isotropic_information
 from evpose.tracker.registration_kernels import _lm_step
@@ -192,8 +196,9 @@ class EventRegistrationConfig:
     trend with the event's age beyond 0.05 px over 0-5 ms: no lag. Against the built map the same events read ON
     +0.21, OFF -0.16 px and spread by 0.60 px instead of 0.34 px (the map's own errors). 346x260 seeds 0-3,
     replacing: ON +0.1 6.43 mm, OFF 0 / -0.25 7.33 / 6.18 mm against 6.08."""
-    off_lead_px: float = field(default=-0.17, metadata={"min": -2.0, "max": 2.0, "step": 0.01, "unit": "px"})
-    """As ``on_lead_px`` for OFF events, pixels."""
+    off_lead_px: float = field(default=-0.11, metadata={"min": -2.0, "max": 2.0, "step": 0.01, "unit": "px"})
+    """As ``on_lead_px`` for OFF events, pixels. -0.17 until session 17, where ``crease_radius_m`` split the face-on
+    points: this is now the lead of those neither on a crease nor seen past (their events -0.08 to -0.11 px)."""
     grazing_max_cos: float = field(default=0.6, metadata={"min": 0.0, "max": 1.0, "step": 0.05, "unit": "ratio"})
     """Points whose surface is seen at a grazing angle, the absolute cosine between the map's plane normal and the
     ray from the camera below this, take ``grazing_on_lead_px`` / ``grazing_off_lead_px`` instead of ``on_lead_px`` /
@@ -240,6 +245,49 @@ class EventRegistrationConfig:
     """``on_lead_px`` of the grazing points (see ``grazing_max_cos``), pixels."""
     grazing_off_lead_px: float = field(default=-0.28, metadata={"min": -2.0, "max": 2.0, "step": 0.01, "unit": "px"})
     """``off_lead_px`` of the grazing points (see ``grazing_max_cos``), pixels."""
+    crease_radius_m: float = field(default=0.02, metadata={"min": 0.0, "max": 0.1, "step": 0.005, "unit": "m"})
+    """Points with a point of another region within this distance whose surface normal makes an absolute cosine
+    below 0.5 with their own (a crease between two planes: a box's top and side) take ``crease_on_lead_px`` /
+    ``crease_off_lead_px``, the other points whose edge the camera sees past ``beyond_off_lead_px``, unless grazing
+    (see ``grazing_max_cos``), metres (0 = off: ``on_lead_px`` / ``off_lead_px`` for every face-on point).
+
+    Measured (session 17, ``/tmp/s17/edgeclass7/classes.py``, ``rim.py`` on ``grazing_max_cos``'s per-event offsets
+    from the true edges, seeds 0 / 1 / 4 at 346x260 and 240x180): 93 % of the built map's points are creases at 2 cm
+    (half the face-on events: box tops at 0.4 / 1.5 m), the rest mostly the 0.15 m steps' tops and ground edges with
+    a known brightness sign. Face-on OFF events of crease points trail by -0.256 to -0.267 px in all six runs (convex
+    and concave alike within 0.01), of the others by -0.003 to -0.074, those split again: where the camera sees past
+    the edge (the map's outward edge normal towards the camera centre; 4-6 % of the face-on OFF events) they *lead*
+    by +0.30 / +0.41 / +0.37 px (346x260 seeds 0 / 4, 240x180 seed 0: a low step's unmapped riser shows beyond its top
+    edge and fires its own OFF events there), the rest trail by -0.08 to -0.11. Face-on ON events: creases -0.04 to
+    -0.07, the others -0.15 to -0.32 px. Grazing OFF: creases -0.28 to -0.29 (as ``grazing_off_lead_px``).
+
+    ``full``, 2 s landing, mean ATE of 346x260 seeds 0-3 / 4-7 and 240x180 seeds 0-3 / 4-7 (the four sets' average;
+    ``/tmp/s17/edgeclass7/run.py``, ``sets.sh``, ``run_beyond.py``): off 6.12 / 5.28 / 7.35 / 7.51 (6.565); the
+    measured face-on OFF leads crease -0.26 / other -0.05 5.84 / 5.14 / 7.69 / 7.57 (6.562), with the ON ones (-0.06
+    / -0.18) 6.11 / 5.06 / 7.84 / 7.54 (6.636); half the OFF split (-0.22 / -0.11) 5.95 / 5.09 / 7.45 / 7.52 (6.503),
+    at 1 cm 5.93 / 5.08 / 7.55 / 7.53 (6.523), with half the ON split 5.89 / 5.08 / 7.60 / 7.46 (6.507); half the OFF
+    split and the points seen past their edge at +0.15 / +0.35 / **+0.5** / +0.7 px: 5.95 / 5.01 / 7.51 / 7.40
+    (6.467), 5.85 / 4.92 / 7.35 / 7.38 (6.378), **5.84 / 4.76 / 7.29 / 7.36 (6.313)**, 5.78 / 4.71 / 7.42 / 7.62
+    (6.385); the full OFF split with +0.35 5.86 / 4.91 / 7.48 / 7.49 (6.436); +0.5 alone (every other face-on OFF
+    point at -0.17) 5.95 / 5.03 / 7.09 / 7.67 (6.434). With the defaults, ``on_lead_px`` -0.09 (the face-on ON
+events off a crease) 5.72 / 4.88 / 7.41 / 7.30 (6.324), the radius 3 cm 5.95 / 4.82 / 7.45 / 7.25 (6.371); the EKF
+backend (``full:ekf``) 6.05 / 5.36 / 7.41 / 7.41 -> 5.88 / 4.79 / 7.50 / 7.24 (6.35), the graph ahead on three sets
+(all but 240x180 seeds 4-7). The field's matching split
+    (``registration.fused_crease_off_trail_px``) did not help. With the defaults: ARE 0.064 / 0.065 / 0.079 / 0.085
+    -> 0.061 / 0.058 / 0.081 / 0.080 deg; 3 s landings (``run3.py``) at 346x260 seeds 0-3 13.62 -> 12.16 mm (11.01 /
+    15.76 / 14.41 / 13.30 -> 9.88 / 14.67 / 12.72 / 11.36), seeds 4-7 14.95 -> 13.31 (11.35 / 17.85 / 18.85 / 11.74 ->
+    9.93 / 15.83 / 17.41 / 10.06), but at 240x180 seeds 0-3 18.11 -> 18.83 (21.41 / 17.12 / 13.83 / 20.09 -> 23.12 /
+    18.50 / 13.78 / 19.93); bundled demos (``evpose track`` on ``maps/landing_map.ply``, ``evpose eval --align
+    none``, ATE RMSE): ``landing`` 10.00 -> 9.95 mm, ``landing_fast`` 19.06 -> 18.56, ``landing_dynamic`` 10.84 ->
+    10.43."""
+    crease_on_lead_px: float = field(default=0.0, metadata={"min": -2.0, "max": 2.0, "step": 0.01, "unit": "px"})
+    """``on_lead_px`` of the face-on crease points (see ``crease_radius_m``), pixels."""
+    crease_off_lead_px: float = field(default=-0.22, metadata={"min": -2.0, "max": 2.0, "step": 0.01, "unit": "px"})
+    """``off_lead_px`` of the face-on crease points (see ``crease_radius_m``, which gives the figures), pixels."""
+    beyond_off_lead_px: float = field(default=0.5, metadata={"min": -2.0, "max": 2.0, "step": 0.01, "unit": "px"})
+    """``off_lead_px`` of the face-on points off a crease whose edge the camera sees past (their outward edge normal
+    points towards the camera centre: a low step's unmapped riser shows beyond its top edge), with ``crease_radius_m``
+    on, pixels."""
     iterations: int = field(default=3, metadata={"min": 1, "max": 20, "step": 1, "unit": "iterations"})
     """Gauss-Newton steps on one association, iterations (2: 6.03 mm against 6.08, replacing, 346x260 (3 px); combined
     (2 px): 6.44 / 5.92 and 7.26 / 8.55 mm, ~0.03 ms less)."""
@@ -277,10 +325,12 @@ class EventRegistration:
     """Registers the step's events (see the module); its state is the learned per-point offsets."""
 
     def __init__(self, config: EventRegistrationConfig, width: int, height: int, points: np.ndarray, tangents: np.ndarray,
-                 edge_normal: np.ndarray, skip: np.ndarray | None = None, plane_normal: np.ndarray | None = None):
+                 edge_normal: np.ndarray, skip: np.ndarray | None = None, plane_normal: np.ndarray | None = None,
+                 region_id: np.ndarray | None = None):
         """``points`` (N, 3) the map (copied), ``tangents`` (N, 3) its unit edge directions and ``edge_normal`` (N, 3)
         its edge normals (zero = unknown: such points take no events), ``skip`` (N,) bool points left out,
-        ``plane_normal`` (N, 3) the surfaces' unit normals (zero = unknown; None = none known) for ``grazing_max_cos``."""
+        ``plane_normal`` (N, 3) the surfaces' unit normals (zero = unknown; None = none known) for ``grazing_max_cos``,
+        ``region_id`` (N,) their surface regions (-1 = none; None = none known) for ``crease_radius_m``."""
         self.config = config
         self._base = np.array(points, dtype=np.float64, order="C")
         self.points = self._base.copy()
@@ -292,6 +342,9 @@ class EventRegistration:
         if skip is not None:
             self._tangents[np.asarray(skip, np.bool_)] = 0.0  # no edge direction: such points take no events
         self._plane_normals = None if plane_normal is None else np.array(plane_normal, dtype=np.float64, order="C")
+        self._crease = None
+        if float(config.crease_radius_m) > 0 and plane_normal is not None and region_id is not None:
+            self._crease = crease_points(self._base, self._plane_normals, region_id, float(config.crease_radius_m))
         self.offsets = np.zeros(self._base.shape[0])
         """Learned offset of each map point along its unit edge normal, metres."""
         self._width, self._height = int(width), int(height)
@@ -377,6 +430,11 @@ class EventRegistration:
         c = self.config
         on = np.full(used.size, float(c.on_lead_px))
         off = np.full(used.size, float(c.off_lead_px))
+        if self._crease is not None and used.size:
+            k = self._crease[used]
+            on[k] = float(c.crease_on_lead_px)
+            off[k] = float(c.crease_off_lead_px)
+            off[~k & (np.einsum("ij,ij->i", self._normals[used], T[:3, 3] - self.points[used]) > 0)] = float(c.beyond_off_lead_px)
         if float(c.grazing_max_cos) > 0 and self._plane_normals is not None and used.size:
             g = grazing_points(self._plane_normals[used], self.points[used], T[:3, 3], float(c.grazing_max_cos))
             on[g] = float(c.grazing_on_lead_px)
@@ -443,4 +501,4 @@ def event_registration_for(config, contour_map, tangents: np.ndarray, width: int
     if er.skip_wall_feet:
         skip |= wall_foot_mask(contour_map, vm.wall_inward_m, vm.wall_radius_m, vm.wall_min_height_m, vm.wall_max_height_m)
     return EventRegistration(er, width, height, contour_map.points, tangents, contour_map.edge_normal, skip,
-                             contour_map.plane_normal)
+                             contour_map.plane_normal, contour_map.region_id)

@@ -1,9 +1,11 @@
-"""Map points whose surface the camera sees at a grazing angle: their OFF edges' events trail further behind the
-edge than a face-on surface's (see ``EventRegistrationConfig.grazing_max_cos``)."""
+"""Map points whose surface the camera sees at a grazing angle, and those on a crease between two surfaces: their OFF
+edges' events trail further behind the edge than a face-on surface's plain edge (see
+``EventRegistrationConfig.grazing_max_cos`` and ``crease_radius_m``)."""
 
 from __future__ import annotations
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 
 def grazing_points(plane_normals: np.ndarray, points: np.ndarray, camera_centre: np.ndarray, max_cos: float) -> np.ndarray:
@@ -26,3 +28,43 @@ def add_grazing_off_trail(trail: np.ndarray, polarity: np.ndarray, plane_normals
     if extra == 0 or not max_cos > 0 or not len(used):
         return
     trail[(np.asarray(polarity) < 0) & grazing_points(np.asarray(plane_normals)[used], points, camera_centre, max_cos)] += extra
+
+
+def crease_points(points: np.ndarray, plane_normals: np.ndarray, region_id: np.ndarray, radius: float,
+                  max_cos: float = 0.5) -> np.ndarray:
+    """(N,) bool: the map points (``points`` (N, 3) world, metres) on a crease: a point of another region
+    (``region_id`` (N,), -1 = none) lies within ``radius`` (metres) and the two surfaces' unit normals
+    (``plane_normals`` (N, 3), zero = unknown) make an absolute cosine below ``max_cos``. All False when ``radius`` <= 0."""
+    n = len(points)
+    out = np.zeros(n, np.bool_)
+    if not float(radius) > 0 or n == 0:
+        return out
+    pn = np.asarray(plane_normals, dtype=np.float64)
+    reg = np.asarray(region_id)
+    pairs = cKDTree(np.asarray(points, dtype=np.float64)).query_pairs(float(radius), output_type="ndarray")
+    if not len(pairs):
+        return out
+    i, j = pairs[:, 0], pairs[:, 1]
+    known = (np.einsum("ij,ij->i", pn[i], pn[i]) > 0.25) & (np.einsum("ij,ij->i", pn[j], pn[j]) > 0.25)
+    hit = known & (reg[i] != reg[j]) & (reg[i] >= 0) & (reg[j] >= 0) & (np.abs(np.einsum("ij,ij->i", pn[i], pn[j])) < float(max_cos))
+    out[i[hit]] = True
+    out[j[hit]] = True
+    return out
+
+
+def add_crease_off_trail(trail: np.ndarray, polarity: np.ndarray, crease: np.ndarray | None, plane_normals: np.ndarray,
+                         used: np.ndarray, points: np.ndarray, camera_centre: np.ndarray, config) -> None:
+    """Moves the field ``trail`` (pixels, as ``used``) of the face-on map points ``used`` predicted to fire OFF events
+    (``polarity`` < 0) by half a :class:`~evpose.tracker.config.TrackerConfig`'s
+    ``registration.fused_crease_off_trail_px``: further behind on a crease (``crease``, the whole map's mask of
+    :func:`crease_points`), less elsewhere; grazing points (``event_registration.grazing_max_cos``, seen from
+    ``camera_centre``; ``points`` the used points' positions) are left as they are. Nothing when ``crease`` is None or
+    the setting 0."""
+    half = 0.5 * float(config.registration.fused_crease_off_trail_px)
+    if crease is None or half == 0 or not len(used):
+        return
+    off = np.asarray(polarity) < 0
+    max_cos = float(config.event_registration.grazing_max_cos)
+    if max_cos > 0:
+        off &= ~grazing_points(np.asarray(plane_normals)[used], points, camera_centre, max_cos)
+    trail[off] += np.where(np.asarray(crease)[used][off], half, -half)

@@ -324,6 +324,14 @@ class RegistrationConfig:
     points' (see ``EventRegistrationConfig.grazing_max_cos``, which also gives the figures: 0 / 0.1 / 0.2 / 0.3 px
     with the events' grazing leads 6.76 / 6.67 / 6.57 / 6.49 mm averaged over the four 2 s sets, 0.3 trading
     240x180 seeds 0-3 for the rest, 7.58 mm against 7.25 off)."""
+    fused_crease_off_trail_px: float = field(default=0.0, metadata={"min": -1.0, "max": 1.0, "step": 0.05, "unit": "px"})
+    """In the fused modes, how much further the field of a face-on point predicted to fire OFF events trails on a
+    crease (``event_registration.crease_radius_m``; 0 there turns this off too) than elsewhere, pixels: each is
+    sampled half of it behind / ahead, along its edge normal (0 = off).
+
+    With the events' measured crease split (``EventRegistrationConfig.crease_radius_m``; crease -0.26 / other -0.05
+    px, no ``beyond_off_lead_px``: 5.84 / 5.14 / 7.69 / 7.57 mm, the four 2 s sets), 0.2 / -0.1 px gave 6.32 / 5.31 /
+    7.99 / 7.34 (6.74) and 6.01 / 5.19 / 7.77 / 7.73 mm (6.67) against 6.56: not kept."""
     fused_buffer_trail_px: float = field(default=0.1, metadata={"min": -1.0, "max": 1.0, "step": 0.05, "unit": "px"})
     """In the fused modes, how much further behind the lag model the field of a point in the polarity filter's buffer
     zone (predicted polarity 0: its patch shows events of both polarities) is sampled, along its edge normal, pixels

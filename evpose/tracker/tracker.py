@@ -41,7 +41,7 @@ from evpose.tracker.crowding import uncrowded
 from evpose.tracker.ego_motion_events import ego_motion_keep, empty_ego_history
 from evpose.tracker.edge_offsets import EdgeOffsetLearner
 from evpose.tracker.event_registration import event_registration_for
-from evpose.tracker.grazing import add_grazing_off_trail
+from evpose.tracker.grazing import add_crease_off_trail, add_grazing_off_trail, crease_points
 from evpose.tracker.map_refinement import PaintedEdgeRefiner
 from evpose.tracker.motion_filter import ConstantVelocityKalman
 from evpose.tracker.predictor import ConstantVelocityPredictor, MotionPredictor
@@ -156,6 +156,9 @@ class Tracker:
                                    if config.event_registration.enabled and self.components.drives_pose else None)
         """The fused modes' registration of the step's events at their own timestamps
         (:mod:`evpose.tracker.event_registration`), None when off."""
+        self._crease = (crease_points(contour_map.points, contour_map.plane_normal, contour_map.region_id,
+                                      float(config.event_registration.crease_radius_m))
+                        if float(config.registration.fused_crease_off_trail_px) != 0 else None)
         self._pose: np.ndarray | None = None
         self._t_us: int | None = None
         self._steps = 0
@@ -375,6 +378,7 @@ class Tracker:
                 # both polarities further still (``fused_buffer_trail_px``), OFF ones of grazing surfaces too.
                 trail = polarity_trail(polarity, 0.5 * split, -0.5 * split, both)
                 add_grazing_off_trail(trail, polarity, self.map.plane_normal, used, pts, predicted[:3, 3], self.config)
+                add_crease_off_trail(trail, polarity, self._crease, self.map.plane_normal, used, pts, predicted[:3, 3], self.config)
             with_tangents = self._registration.lag_floor_px > 0 or trail is not None or self._normal_only
             tangents = ((used_tangents if used_tangents is not None else np.take(self._tangents, used, axis=0))
                         if with_tangents else None)

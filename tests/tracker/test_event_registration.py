@@ -1,5 +1,5 @@
 """Events registered at their own timestamps: exact events put the pose back on the truth from a perturbed start, the
-polarity leads (grazing surfaces' apart) and the predicted polarity are honoured, a map line's own offset is learned but not a pose-like one,
+polarity leads (grazing surfaces', creases' and edges seen past apart) and the predicted polarity are honoured, a map line's own offset is learned but not a pose-like one,
 and the tracker runs it in the fused modes only."""
 
 import gtsam
@@ -110,6 +110,50 @@ def test_grazing_points_take_their_own_lead():
         return error(reg.refine(perturbed(), np.arange(len(cmap)), None, *events, T_REF, TWIST, K, None)[0])
     assert np.abs(run(grazing_max_cos=0.6, grazing_off_lead_px=-0.3)).max() < 2e-5
     assert np.abs(run()).max() > 3e-4  # off: one lead for both
+
+
+def test_crease_points_take_their_own_lead():
+    # The x lines as box tops' edges: each point has a twin of another region (a side face, plane normal along x) at
+    # the same place; the y lines plain ground edges. Their OFF events trail by -0.3 / -0.1 px.
+    lines = ground_lines()
+    crease = lines.edge_normal[:, 0] == 1.0
+    n_side = int(crease.sum())
+    cmap = ContourMap.from_points(np.concatenate([lines.points, lines.points[crease]]),
+                                  edge_normal=np.concatenate([lines.edge_normal, lines.edge_normal[crease]]),
+                                  plane_normal=np.concatenate([lines.plane_normal, np.tile([1.0, 0.0, 0.0], (n_side, 1))]),
+                                  region_id=np.r_[np.zeros(len(lines)), np.ones(n_side)])
+    parts = [exact_events(ContourMap.from_points(lines.points[m], edge_normal=lines.edge_normal[m], plane_normal=lines.plane_normal[m]),
+                          lead_px=lead, polarity=-1, seed=k) for k, (m, lead) in enumerate(((crease, -0.3), (~crease, -0.1)))]
+    events = tuple(np.concatenate(a) for a in zip(*parts))
+    tangents = np.concatenate([np.cross(lines.plane_normal, lines.edge_normal), np.tile([0.0, 1.0, 0.0], (n_side, 1))])
+    def run(**config):
+        cfg = EventRegistrationConfig(**{"on_lead_px": 0.0, "off_lead_px": -0.1, "iterations": 5, "grazing_max_cos": 0.0, **config})
+        reg = EventRegistration(cfg, W, H, cmap.points, tangents, cmap.edge_normal, plane_normal=cmap.plane_normal,
+                                region_id=cmap.region_id)
+        return error(reg.refine(perturbed(), np.arange(len(cmap)), None, *events, T_REF, TWIST, K, None)[0])
+    assert np.abs(run(crease_radius_m=0.02, crease_off_lead_px=-0.3, beyond_off_lead_px=-0.1)).max() < 2e-5
+    assert np.abs(run(crease_radius_m=0.0)).max() > 3e-4  # off: one lead for both
+
+
+def test_points_whose_edge_the_camera_sees_past_take_their_own_lead():
+    # One ground region, no crease: the camera (above the origin) sees past the lines x = -1 and -0.4 (outward normal
+    # +x towards it) and the y lines (normal +y, all at y < 0) but not the lines x = 0.3 and 0.9; their OFF events
+    # lead by +0.3 / trail by -0.1 px.
+    lines = ground_lines()
+    cmap = ContourMap.from_points(lines.points, edge_normal=lines.edge_normal, plane_normal=lines.plane_normal,
+                                  region_id=np.zeros(len(lines)))
+    beyond = (lines.edge_normal[:, 1] == 1.0) | (lines.points[:, 0] < 0)
+    parts = [exact_events(ContourMap.from_points(lines.points[m], edge_normal=lines.edge_normal[m], plane_normal=lines.plane_normal[m]),
+                          lead_px=lead, polarity=-1, seed=k) for k, (m, lead) in enumerate(((beyond, 0.3), (~beyond, -0.1)))]
+    events = tuple(np.concatenate(a) for a in zip(*parts))
+    tangents = np.cross(lines.plane_normal, lines.edge_normal)
+    def run(**config):
+        cfg = EventRegistrationConfig(**{"on_lead_px": 0.0, "off_lead_px": -0.1, "iterations": 5, "grazing_max_cos": 0.0, **config})
+        reg = EventRegistration(cfg, W, H, cmap.points, tangents, cmap.edge_normal, plane_normal=cmap.plane_normal,
+                                region_id=cmap.region_id)
+        return error(reg.refine(perturbed(), np.arange(len(cmap)), None, *events, T_REF, TWIST, K, None)[0])
+    assert np.abs(run(crease_radius_m=0.02, beyond_off_lead_px=0.3)).max() < 2e-5
+    assert np.abs(run(crease_radius_m=0.0, beyond_off_lead_px=0.3)).max() > 3e-4  # crease_radius_m off: one lead for all
 
 
 def test_points_predicted_to_fire_the_other_polarity_take_none_of_the_events():

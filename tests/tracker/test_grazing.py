@@ -1,9 +1,9 @@
-"""Which points' surfaces are seen at a grazing angle, and the field's extra OFF trail they take."""
+"""Which points' surfaces are seen at a grazing angle or sit on a crease, and the field's extra OFF trail they take."""
 
 import numpy as np
 
 from evpose.tracker.config import TrackerConfig
-from evpose.tracker.grazing import add_grazing_off_trail, grazing_points
+from evpose.tracker.grazing import add_crease_off_trail, add_grazing_off_trail, crease_points, grazing_points
 
 NORMALS = np.array([[0.0, 0, 1], [1.0, 0, 0], [0.0, 0, 0], [0.0, 0.6, 0.8]])
 """Seen from 2 m above the origin: |cos| 1 (face-on), 0 (edge-on), unknown, 0.8."""
@@ -34,3 +34,31 @@ def test_only_grazing_off_points_trail_further():
 def test_no_extra_trail_when_either_setting_is_zero():
     assert np.array_equal(trail_of(0.0, 0.2), np.full(3, 0.1))
     assert np.array_equal(trail_of(0.9, 0.0), np.full(3, 0.1))
+
+
+def test_crease_points_are_those_beside_another_regions_surface_at_an_angle():
+    # A box's top (region 0, normal +z) meeting its side (region 1, normal +x) at x = 0; a coplanar ground panel
+    # (region 2, normal +z) beside the top's far edge; a lone point of the top's own region.
+    points = np.array([[0.0, 0, 0], [0.005, 0, 0], [0.3, 0, 0], [0.31, 0, 0], [0.6, 0, 0], [0.605, 0, 0]])
+    normals = np.array([[0.0, 0, 1], [1.0, 0, 0], [0.0, 0, 1], [0.0, 0, 1], [0.0, 0, 1], [0.0, 0, 0]])
+    region = np.array([0, 1, 0, 2, 0, 3])
+    assert crease_points(points, normals, region, 0.02).tolist() == [True, True, False, False, False, False]
+    assert not crease_points(points, normals, region, 0.0).any()
+
+
+def crease_trail_of(extra_px: float, crease) -> np.ndarray:
+    used = np.array([1, 0, 0, 3])  # edge-on (grazing), face-on, face-on, |cos| 0.8
+    polarity = np.array([-1, -1, 1, -1], np.int8)  # OFF, OFF, ON, OFF
+    cfg = TrackerConfig()
+    cfg.event_registration.grazing_max_cos = 0.6
+    cfg.registration.fused_crease_off_trail_px = extra_px
+    trail = np.full(4, 0.1)
+    add_crease_off_trail(trail, polarity, crease, NORMALS, used, POINTS[used], ABOVE, cfg)
+    return trail
+
+
+def test_face_on_off_points_trail_further_on_a_crease_and_less_elsewhere():
+    crease = np.array([True, True, False, False])  # points 0 and 1 on a crease
+    assert np.allclose(crease_trail_of(0.2, crease), [0.1, 0.2, 0.1, 0.0])
+    assert np.array_equal(crease_trail_of(0.0, crease), np.full(4, 0.1))
+    assert np.array_equal(crease_trail_of(0.2, None), np.full(4, 0.1))
