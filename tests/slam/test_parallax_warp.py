@@ -71,16 +71,22 @@ def test_warp_events_at_one_depth_equals_the_plane_homography():
     assert np.allclose(u, q[:, 0] / q[:, 2]) and np.allclose(v, q[:, 1] / q[:, 2])
 
 
-def test_parallax_hypothesis_is_sharper_than_one_depth_warps_on_a_two_depth_scene():
-    X, uv, z = _two_depth_scene(n=150)
-    rng = np.random.default_rng(4)
-    span_us = 100_000
-    t = np.sort(rng.integers(0, span_us, 150 * 40))
-    j = rng.integers(0, 150, t.size)
+def _events_of_the_points(X, rng, span_us=100_000, per_point=40):
+    """Events (sorted timestamps, us; pixel positions) fired at the points ``X`` as the camera moves, each at the
+    projection of its millisecond's middle, and the span, us."""
+    t = np.sort(rng.integers(0, span_us, len(X) * per_point))
+    j = rng.integers(0, len(X), t.size)
     pos = np.empty((t.size, 2))
     for k in np.unique(t // 1000):
         sel = t // 1000 == k
         pos[sel] = _project((k * 1000 + 500) / 1e6, X[j[sel]])
+    return t, pos, span_us
+
+
+def test_parallax_hypothesis_is_sharper_than_one_depth_warps_on_a_two_depth_scene():
+    X, uv, z = _two_depth_scene(n=150)
+    rng = np.random.default_rng(4)
+    t, pos, span_us = _events_of_the_points(X, rng)
     a, b = span_us // 6, 5 * span_us // 6
     ref, cur = _project(a / 1e6, X), _project(b / 1e6, X)
     rw = ReconstructionWindow(t.astype(np.int64), pos[:, 0], pos[:, 1], np.ones(t.size, np.int8), ref.astype(np.float32),
@@ -107,13 +113,7 @@ def test_parallax_hypothesis_is_sharper_than_one_depth_warps_on_a_two_depth_scen
 def test_parallax_whole_window_fits_the_tracks_carried_through_every_tiny_frame():
     X, uv, z = _two_depth_scene(n=150)
     rng = np.random.default_rng(5)
-    span_us = 100_000
-    t = np.sort(rng.integers(0, span_us, 150 * 40))
-    j = rng.integers(0, 150, t.size)
-    pos = np.empty((t.size, 2))
-    for k in np.unique(t // 1000):
-        sel = t // 1000 == k
-        pos[sel] = _project((k * 1000 + 500) / 1e6, X[j[sel]])
+    t, pos, span_us = _events_of_the_points(X, rng)
     a, b = span_us // 2, 5 * span_us // 6
     # The window's own tracks (its second half) are noisy; the carried ones follow the points through six frames.
     ref, cur = _project(a / 1e6, X), _project(b / 1e6, X) + rng.normal(0.0, 4.0, (150, 2))
