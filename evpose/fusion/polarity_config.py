@@ -40,7 +40,27 @@ class PolarityFilterConfig:
     """Radius of a point's patch when classifying events or reading observed polarities, pixels."""
     event_filter: bool = True
     """Registration reads ``T_align`` (:mod:`evpose.fusion.aligned_surface`): in each used map point's patch only the
-    predicted polarity's events, nothing outside the patches (False: per-point ON/OFF/combined fields over the whole box)."""
+    predicted polarity's events, nothing outside the patches (False: per-point ON/OFF/combined fields over the whole box).
+
+    Session 18, the issue's "the filter cuts registration latency by >= 40 %" (the paper: 20.11 -> 7.69 ms): not
+    reachable by a filter that registers the map's points, whatever builds the field. Registration latency = CPU
+    (thread time) of polarity prediction + ``T_align`` + field + registration per update, medians, 346x260 seeds 0-3,
+    the variants alternated in one process, load 3-4.5; in ``stpe`` field + registration. Plain / textured landing:
+    ``stpe`` 0.74 / 0.91 ms, ``stpe+filter`` 1.68 / 1.76 ms (2.28x / 1.95x; 10.5 / 63 % of the events removed). The
+    floor: the prediction alone takes 0.27-0.29 ms and the registration stage ~0.3 ms before its points (0.32-0.35 ms
+    for 148 points against 0.58-0.60 ms for 913, ``registration.max_points`` 150, seeds 0-1), so with 134 points
+    ``stpe+filter`` still took 0.98-1.04 ms against ``stpe``'s 0.88-0.90 ms with 913; ``drop_empty_points`` (383-413
+    points) 1.54-1.67 ms against 1.84-2.02 ms. The filter removes events, and registration's cost follows the points.
+    A grid-free filter was prototyped and not kept (``/tmp/s18/pointfield7/pfkern.py``): each point reads only its
+    predicted polarity inside its own 4 px disk around its predicted projection (reopened when contradicted, no
+    nearest-point ownership), the blurred TDF, gradient and curvature computed at the projection from the SP-TS
+    maps (within 2e-7 of the field's values), so neither ``T_align``'s grid nor a field image is built before the
+    pose: 1.68 -> 1.40 / 1.76 -> 1.58 ms, ATE 12.00 -> 11.77 / 23.84 -> 23.29 mm (its refiner read the plain time
+    surface's field). But reading the field at the points serves ``stpe`` as well (0.74 -> 0.65 / 0.91 -> 0.76 ms,
+    ATE unchanged to 0.001 mm), so within one design the filter still costs 2.16x / 2.07x ``stpe``; and the
+    painted-edge refiner and the event labelling then need passes of their own after the pose (CPU per update 3.53
+    -> 3.85 / 3.96 -> 4.61 ms). Turning this switch off (per-point
+    polarity fields over the box, no reopening, no refiner) costs 12.00 -> 22.38 mm (plain landing)."""
     drop_empty_points: bool = False
     """Registration skips map points whose ``T_align`` patch shows no accepted event younger than
     ``empty_after_eta`` (50-60 % of the used points on the simulated landing); points whose patch shows only the
@@ -57,7 +77,8 @@ class PolarityFilterConfig:
     ``register_to_map`` CPU 1.54 against 1.67 ms median (see ``register_min_normal_speed_px_s``). Session 14 (with
     ``map_refinement.hold_out_filtered`` and reopening, 5.5 ms lag at 240x180; seeds 0-7 at 346x260 / 240x180):
     12.38 / 15.76 mm against 11.76 / 14.75 mm off; CPU per update (seed 0, 346x260, three alternated runs, load ~18)
-    registration 0.46 -> 0.40 ms, the filter's front end (field, prediction, ``T_align``, registration) 1.54 -> 1.50 ms."""
+    registration 0.46 -> 0.40 ms, the filter's front end (field, prediction, ``T_align``, registration) 1.54 -> 1.50 ms.
+    Session 18 (346x260 seeds 0-3, ``stpe+filter``): 12.81 against 12.00 mm; see ``event_filter`` for its latency."""
     reopen_contradicted: bool = False
     """``T_align`` accepts both polarities in the patch of a single-polarity point that shows no event of its predicted
     polarity younger than ``empty_after_eta`` but does of the other: the events contradict the prediction (a wrong
