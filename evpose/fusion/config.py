@@ -113,7 +113,9 @@ class FusionConfig:
     registrations (with the simulator's true edges as the map, ``full`` 7.30 / 8.80 mm: not the map's). Session 12,
     the field's registrations combined with the events' (:mod:`evpose.tracker.event_registration`, which scales its
     own covariance; seeds 0-3 6.38 / 7.25 mm): 10 / 100 gave 6.57 / 8.04, 6.37 / 7.80 mm. Session 14, 240x180 seeds 0-3 with
-    ``init_sigma_acc_bias_vertical`` 0.5 (6.74 mm): 20 / 50 gave 6.85 / 6.91 mm, ratio."""
+    ``init_sigma_acc_bias_vertical`` 0.5 (6.74 mm): 20 / 50 gave 6.85 / 6.91 mm. Session 18, seeds 0-7 (240x180 /
+    346x260 7.325 / 5.30 mm), the 2 least-constrained directions of the correlation matrix inflated 10x 7.92 / 6.08,
+    3x 7.48 mm (240x180), ratio."""
     registration_error_model: RegistrationErrorModel = RegistrationErrorModel.WHITE
     """Time structure of the registration errors the factor graph assumes (the EKF always takes them as white).
     Session 10, closed loop, ATE mm 346x260 / 240x180 (white: seeds 0-3 7.77 / 9.40, seeds 4-7 7.95 / 11.37, demo
