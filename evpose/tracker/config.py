@@ -67,7 +67,8 @@ class TrackerConfig:
     initial_velocity_from_ground_truth: bool = True
     """When starting from ground truth, also seed the motion model with the ground-truth velocity at the start."""
     warmup_ms: float = field(default=30.0, metadata={"min": 0.0, "max": 1000.0, "step": 1.0, "unit": "ms"})
-    """Events this long before the start time are fed to the front end before the first update, milliseconds."""
+    """Events this long before the start time are fed to the front end before the first update, milliseconds.
+    (120, a full time surface at the first update: 240x180 seeds 0-7 7.89 mm against 7.325, from 90 ms later.)"""
     field_margin_px: int = field(default=24, metadata={"min": 0, "max": 200, "step": 1, "unit": "px"})
     """The TDF is built only in the box around the projected visible map, padded by this, pixels."""
     snapshot_every: int = field(default=50, metadata={"min": 1, "max": 10000, "step": 1, "unit": "steps"})
