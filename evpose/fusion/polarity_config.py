@@ -41,7 +41,9 @@ class PolarityFilterConfig:
     pose off by 1 m after 0.15 s). Bench ``fusion.regimes`` ``cold`` (no velocity, pose 3 cm / 1 deg off), 346x260
     seeds 0-7, runs lost (ATE > 100 mm) factor graph / EKF: 0 (no hold) 2 / 3; 40 with only ``T_align`` off 1 / 1
     (seed 3; on the six seeds every run kept 16.10 / 16.01 mm); 40 (both polarities too) 1 / 1 (seed 5; the same six
-    seeds 15.19 / 15.13 mm, the seven kept 15.43 / 15.38 mm). The length is not tuned."""
+    seeds 15.19 / 15.13 mm, the seven kept 15.43 / 15.38 mm); 240x180 seeds 0-7: 0: 2 / 0 lost (seeds 2, 3), 40: none
+    (22.99 / 22.84 mm). With the pose given exactly (``cold_velocity``, 346x260) 40 keeps all: 6.127 / 6.119 mm.
+    The length is not tuned."""
     learn_min_votes: int = field(default=3, metadata={"min": 1, "max": 100, "step": 1, "unit": "votes"})
     """Net votes a point needs before a learned brightness sign is used."""
     learned_overrides_map: bool = True

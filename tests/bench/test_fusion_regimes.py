@@ -50,14 +50,17 @@ def test_an_outage_withholds_every_registration_inside_it_and_tracking_resumes_a
 
 def test_the_table_pairs_the_backends_per_seed(monkeypatch):
     def regime_run(rec, cmap, regime, backend, seed, config=None):
-        return {"ate_rmse_mm": seed + (0.5 if backend == "ekf" else 0.0) * (-1) ** seed, "not_ok_updates": 0}
+        ate = seed + (0.5 if backend == "ekf" else 0.0) * (-1) ** seed + (1000.0 if (seed, backend) == (4, "ekf") else 0.0)
+        return {"ate_rmse_mm": ate, "not_ok_updates": 0, "diverged": int(ate > fr.DIVERGED_MM)}
 
     monkeypatch.setattr(fr, "regime_run", regime_run)
-    out = fr.regime_table([(s, None, None) for s in range(4)], regimes=(fr.Regime("steady"),))
-    assert out["steady_factor_graph_ate_rmse_mm_per_seed"] == [0.0, 1.0, 2.0, 3.0]
-    assert out["steady_ekf_ate_rmse_mm_mean"] == pytest.approx(1.5)
+    out = fr.regime_table([(s, None, None) for s in range(5)], regimes=(fr.Regime("steady"),))
+    assert out["steady_factor_graph_ate_rmse_mm_per_seed"] == [0.0, 1.0, 2.0, 3.0, 4.0]
+    assert out["steady_ekf_diverged_mean"] == pytest.approx(0.2) and out["steady_factor_graph_diverged_mean"] == 0
+    # Seed 4, where the EKF lost the track, is left out of the pairs.
+    assert out["steady_seeds_neither_diverged"] == 4
     assert out["steady_graph_minus_ekf_ate_rmse_mm_mean"] == pytest.approx(0.0)
-    assert out["steady_graph_wins_ate_rmse_mm"] == 2  # the even seeds, where the EKF's figure is 0.5 higher
+    assert out["steady_graph_wins_ate_rmse_mm"] == 2  # seeds 0 and 2, where the EKF's figure is 0.5 higher
     assert "steady_graph_wins_not_ok_updates" not in out
 
 
@@ -65,6 +68,7 @@ def test_the_benchmark_is_registered_under_fusion(monkeypatch):
     assert collect()["fusion.regimes"] is fr.bench_fusion_regimes
     calls = []
     monkeypatch.setattr("evpose.bench.tracking.landing_case", lambda work_dir, res, seconds, seed: calls.append((res, seconds, seed)) or (seed, None))
-    monkeypatch.setattr(fr, "regime_table", lambda cases: {"n": len(list(cases))})
+    monkeypatch.setattr(fr, "regime_table", lambda cases, regimes: {"n": len(list(cases)), "regimes": [r.name for r in regimes]})
     out = fr.bench_fusion_regimes(BenchContext(quick=True, work_dir=Path("unused"), seed=3))
     assert out["240x180_n"] == 1 and calls == [((240, 180), 2.0, 3)]
+    assert out["240x180_regimes"] == list(fr.QUICK_REGIMES)
