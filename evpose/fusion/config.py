@@ -171,6 +171,29 @@ class FusionConfig:
     """iSAM2 checks which variables to relinearise only every this many updates (gtsam ``relinearizeSkip``); the
     window re-optimisation relinearises anyway. 10 instead of 1 cut the update's CPU time by ~20 % with the same
     estimates to 0.01 mm on the simulated landing, updates."""
+    relinearize_correction_velocity: float = field(default=0.05, metadata={"min": 0.0, "max": 10.0, "step": 0.01, "unit": "m/s"})
+    """When an update moves the newest state's velocity by more than this from its IMU prediction, the window is
+    relinearised at once (forced, whatever ``relinearize_skip``) and re-optimised; a re-acquisition's joint
+    optimisation is forced likewise, m/s (0 = never: the window then relinearises only every ``relinearize_skip``
+    iSAM2 calls, about once per state before it is marginalised).
+
+    New states enter at their IMU prediction. In steady tracking an update corrects that by mm/s and the trigger
+    does not fire: from ground truth the 2 s landings (seeds 0-7; 346x260 5.296 mm / 0.0589 deg, 240x180 7.270 mm /
+    0.0796 deg) and the demos ``landing`` / ``landing_fast`` (9.953 / 18.560 mm) are bit-identical, the 3 s landings
+    (seeds 0-7, 346x260, 12.77 mm) differ on one seed by 0.004 mm (a re-acquisition after the turn). A start without
+    the initial velocity (``evpose track --init``) corrects it by m/s in its first updates, and the front end follows
+    the fused motion, so that start is a knife edge for either backend. Bench ``fusion.regimes`` ``cold`` (no
+    velocity, pose 3 cm / 1 deg off), seeds 0-7, runs that lost the track (ATE > 100 mm), the graph without / with
+    the trigger / the EKF: 346x260 4 (seeds 0, 2, 3, 5) / 2 (2, 5) / 3 (3, 5, 6); with
+    ``PolarityFilterConfig.unknown_velocity_hold_updates`` 40 but ``T_align`` off only 3 / 1 / 1, with that hold as
+    it is 1 / 1 / 1 (seed 5; the seven kept 15.74 / 15.43 / 15.38 mm); 240x180 without the hold 1 / 2 / 0, with it
+    none (22.95 / 22.99 / 22.84 mm). Weak evidence, a real mechanism: on 346x260 seed 0 without the hold (lost
+    without the trigger, 3162 mm; the EKF 16.72) forced relinearisation at every joint optimisation only gave 2564 mm,
+    relinearising at every update (``relinearize_skip`` 1, ``reoptimize_every`` 1, 5 iterations) 16.76, this trigger
+    at 0.05 / 0.2 m/s 16.77 / 17.07 mm; no robust loss changed nothing (the kernel never engages). Replayed open
+    loop on the EKF's recorded inputs the graph gives the EKF's velocities to 0.07 m/s with or without it. Outages
+    from ground truth (0.1 / 0.3 / 0.5 s at 0.8 s, 346x260 seeds 0-7): 5.386 / 5.945 / 7.543 mm without, 5.388 /
+    5.956 / 7.543 with it (the EKF 5.408 / 5.947 / 7.498)."""
     init_sigma_rot: float = field(default=0.01, metadata={"min": 1e-6, "max": 1.0, "step": 1e-4, "unit": "rad"})
     """Prior sigma on the initial orientation, rad. Started from ground truth, the fusion's first updates take a
     registration's image-shift error partly as a tilt (seed-mean error about camera x at the first update -34 mdeg);
@@ -267,6 +290,8 @@ class FusionConfig:
         for name in positive:
             if not getattr(self, name) > 0:
                 raise ConfigError(f"fusion.{name} must be positive, got {getattr(self, name)}")
+        if not self.relinearize_correction_velocity >= 0:
+            raise ConfigError(f"fusion.relinearize_correction_velocity must be >= 0 (0 = off), got {self.relinearize_correction_velocity}")
         if not self.init_sigma_acc_bias_vertical >= 0:
             raise ConfigError(f"fusion.init_sigma_acc_bias_vertical must be >= 0 (0 = off), got {self.init_sigma_acc_bias_vertical}")
         if not 0.0 <= self.registration_ar_rho < 1.0:

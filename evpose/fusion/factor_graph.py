@@ -22,7 +22,10 @@ A failed registration (``None``) adds a state constrained only by the IMU and
 constant-velocity factors: the pose is IMU-propagated, marked degraded, and its
 covariance grows honestly. The first successful registration after a loss
 enters with a plain Gaussian (not robust) noise model and triggers a joint
-optimisation, so a large correction is accepted at once (re-acquisition).
+optimisation, so a large correction is accepted at once (re-acquisition). That
+optimisation, and one after any update that corrects the new state's velocity
+by more than ``relinearize_correction_velocity`` (a start without velocity),
+relinearises the window at once instead of waiting for ``relinearize_skip``.
 """
 
 from __future__ import annotations
@@ -369,7 +372,13 @@ class FactorGraphFusion:
         self.t_state_us = t_us
         self.n_updates += 1
         if reacquire or self.n_updates % c.reoptimize_every == 0:
-            self._joint_optimisation()
+            self._joint_optimisation(force=reacquire and c.relinearize_correction_velocity > 0)
+        elif c.relinearize_correction_velocity > 0:
+            # A large correction of the new state (a start without velocity) must not stay linearised at the
+            # prediction until the state is marginalised: see FusionConfig.relinearize_correction_velocity.
+            v = np.asarray(self.smoother.calculateEstimateVector(vj), np.float64)
+            if np.linalg.norm(v - np.asarray(nav_pred.velocity(), np.float64)) > c.relinearize_correction_velocity:
+                self._joint_optimisation(force=True)
         self.degraded = degraded
         return self._finish_state(t_us, degraded=degraded)
 
@@ -407,10 +416,14 @@ class FactorGraphFusion:
             last = self._cv_noise = (sigma, self._gtsam.noiseModel.Isotropic.Sigma(3, sigma))
         return last[1]
 
-    def _joint_optimisation(self) -> None:
-        """Re-optimise the whole window: extra relinearising iSAM2 iterations with no new factors."""
-        for _ in range(self.config.reoptimize_iterations):
-            self.smoother.update()
+    def _joint_optimisation(self, force: bool = False) -> None:
+        """Re-optimise the whole window: extra relinearising iSAM2 iterations with no new factors (``force``: the
+        first relinearises whatever ``relinearize_skip`` says)."""
+        for k in range(self.config.reoptimize_iterations):
+            if force and k == 0:
+                self.smoother.update(force_relinearize=True)
+            else:
+                self.smoother.update()
 
     def _finish_state(self, t_us: int, degraded: bool) -> FusedState:
         x, v, b = self._keys(self.index)

@@ -192,10 +192,13 @@ class CopyableFixedLagSmoother:
             other._groups.insert2(key, 1)
         return other
 
-    def update(self, graph=None, values=None, timestamps: dict | None = None, remove: list[int] | None = None) -> list[int]:
+    def update(self, graph=None, values=None, timestamps: dict | None = None, remove: list[int] | None = None,
+               force_relinearize: bool = False) -> list[int]:
         """Add factors and new variables with their timestamps, remove the factors at the indices ``remove`` (as
         returned by an earlier update), update iSAM2, marginalise keys older than the lag (re-based first when the
-        newest timestamp reaches a new multiple of :attr:`rebase_every`). Returns the new factors' indices."""
+        newest timestamp reaches a new multiple of :attr:`rebase_every`). Returns the new factors' indices.
+        ``force_relinearize``: relinearise every variable whose delta exceeds the threshold in this update, whatever
+        the params' ``relinearizeSkip``."""
         if timestamps and self.rebase_every and self._stamps:
             every = self.rebase_every
             if max(timestamps.values()) // every > self._stamps[-1] // every:
@@ -204,10 +207,14 @@ class CopyableFixedLagSmoother:
                     remove = [moved[i] for i in remove if i in moved]
         if self.journal is not None:
             entry = ("update", graph, values, None if timestamps is None else dict(timestamps))
-            self.journal.append(entry + (list(remove),) if remove else entry)
-        return self._update(graph, values, timestamps, remove)
+            if force_relinearize:
+                entry += (list(remove) if remove else None, True)
+            elif remove:
+                entry += (list(remove),)
+            self.journal.append(entry)
+        return self._update(graph, values, timestamps, remove, force_relinearize)
 
-    def _update(self, graph, values, timestamps, remove=None) -> list[int]:
+    def _update(self, graph, values, timestamps, remove=None, force=False) -> list[int]:
         gtsam = self._gtsam
         hot = list(self._keys[-1]) + [int(k) for k in timestamps] if self.newest_last and timestamps and self._stamps else []
         if timestamps:
@@ -215,7 +222,11 @@ class CopyableFixedLagSmoother:
                 self._insert(int(key), float(stamp))
         cut = bisect.bisect_left(self._stamps, self._stamps[-1] - self.lag) if self._stamps else 0
         if not cut:
-            if remove:
+            if force:
+                result = self.isam.update(gtsam.NonlinearFactorGraph() if graph is None else graph,
+                                          gtsam.Values() if values is None else values, list(remove) if remove else [], None, None,
+                                          None, True)
+            elif remove:
                 result = self.isam.update(gtsam.NonlinearFactorGraph() if graph is None else graph,
                                           gtsam.Values() if values is None else values, list(remove))
             else:
@@ -241,7 +252,7 @@ class CopyableFixedLagSmoother:
                 groups.erase(key)
                 groups.insert2(key, 2)
         result = self.isam.update(gtsam.NonlinearFactorGraph() if graph is None else graph,
-                                  gtsam.Values() if values is None else values, list(remove) if remove else [], groups, None, extra)
+                                  gtsam.Values() if values is None else values, list(remove) if remove else [], groups, None, extra, bool(force))
         for key in hot:
             groups.erase(key)
             groups.insert2(key, 1)
@@ -331,7 +342,8 @@ class CopyableFixedLagSmoother:
         """Make the calls of a :attr:`journal` (graphs and values as gtsam objects) again, in order."""
         for entry in entries:
             if entry[0] == "update":
-                self._update(entry[1], entry[2], entry[3], entry[4] if len(entry) > 4 else None)  # a re-base: journalled
+                self._update(entry[1], entry[2], entry[3], entry[4] if len(entry) > 4 else None,  # a re-base: journalled
+                             len(entry) > 5 and entry[5])
             elif entry[0] == "rebase":
                 self._rebuild(entry[1], entry[2], entry[3])
             else:

@@ -307,6 +307,10 @@ class MapPolaritySelector:
         self.latest_state = None
         """The fusion's adapter (its ``last`` fused state) when the motion is taken without IMU propagation
         (``unfused_latest_motion``, ``stpe+filter``), else None."""
+        self.hold_updates = 0
+        """For the next this many updates every point takes both polarities and :meth:`align` composes no ``T_align``
+        (registration reads the plain fields; :meth:`align` counts them down): set at a start without the initial
+        velocity (``PolarityFilterConfig.unknown_velocity_hold_updates``)."""
         self._aligned = None
         self._aligned_fresh = False
         """True between :meth:`align` and the :meth:`observe` of the same step (the grid is this step's)."""
@@ -328,6 +332,9 @@ class MapPolaritySelector:
         """
         c = self.predictor.config
         if not (c.enabled and c.event_filter):
+            return None
+        if self.hold_updates > 0:
+            self.hold_updates -= 1
             return None
         from evpose.fusion.aligned_surface import AlignedTimeSurface
 
@@ -404,6 +411,8 @@ class MapPolaritySelector:
         # The map's arrays with the indices (read in place by the kernels): the same values as gathering them first.
         pol = self.predictor.predict_full(m.points, m.edge_normal, m.brightness_sign, T_world_cam, omega,
                                           velocity, self.K, idx, rows=idx).polarity
+        if self.hold_updates > 0:
+            pol = np.zeros_like(pol)  # the velocity is not known yet: every point takes both polarities
         single = int(np.count_nonzero(pol))
         self.last_counts = {"points": int(idx.size), "points_single_polarity": single, "points_both": int(pol.size) - single}
         self._step_points = (idx, pol)
@@ -482,9 +491,10 @@ class MapPolaritySelector:
 
     def snapshot(self) -> dict:
         """Learned signs (the motion source is snapshotted by its owner)."""
-        return {"predictor": self.predictor.snapshot(), "last_counts": dict(self.last_counts)}
+        return {"predictor": self.predictor.snapshot(), "last_counts": dict(self.last_counts), "hold_updates": self.hold_updates}
 
     def restore(self, snap: dict) -> None:
         self.predictor.restore(snap["predictor"])
         self.last_counts = dict(snap["last_counts"])
+        self.hold_updates = int(snap.get("hold_updates", 0))
         self._aligned_fresh = False

@@ -30,6 +30,24 @@ class PolarityFilterConfig:
     """Below this image speed a point keeps both polarities, px/s."""
     min_gradient_visibility: float = field(default=0.2, metadata={"min": 0.0, "max": 1.0, "step": 0.01, "unit": "ratio"})
     """Minimum foreshortening of the projected edge normal (1 = parallel to the image plane) to trust its direction."""
+    unknown_velocity_hold_updates: int = field(default=40, metadata={"min": 0, "max": 1000, "step": 1, "unit": "updates"})
+    """``full`` started without the initial velocity (``evpose track --init``, or ``initial_velocity_from_ground_truth``
+    off): for this many first updates every point takes both polarities and the event filter (``T_align``) is off,
+    updates (0 = never; a start from ground truth gives the velocity and is not affected).
+
+    The first registrations give the fused velocity m/s wrong (a pose 3 cm off read over 5 ms is 6 m/s); a filter
+    predicting polarities and aligning events with that motion keeps the events that agree with it, registration
+    confirms it, and the track is lost (seed 2 at 346x260: the fused lateral velocity held at 5-6 m/s against 0, the
+    pose off by 1 m after 0.15 s). Bench ``fusion.regimes`` ``cold`` (no velocity, pose 3 cm / 1 deg off), 346x260
+    seeds 0-7, runs lost (ATE > 100 mm) factor graph / EKF: 0 (no hold) 2 / 3; 40 with only ``T_align`` off 1 / 1
+    (seed 3; on the six seeds every run kept 16.10 / 16.01 mm); 40 (both polarities too) 1 / 1 (seed 5; the same six
+    seeds 15.19 / 15.13 mm, the seven kept 15.43 / 15.38 mm); 240x180 seeds 0-7: 0: 2 / 0 lost (seeds 2, 3), 40: none
+    (22.99 / 22.84 mm). With the pose given exactly (``cold_velocity``, 346x260, none lost either way) 0 -> 40: 6.185
+    / 6.213 -> 6.127 / 6.119 mm (first 0.3 s 7.58 / 7.53 -> 6.96 / 6.93 mm). But the demos started the same way
+    (``evpose track ... --init`` with the ground-truth pose at the first event, ``evpose eval --align none``, RMSE):
+    ``landing`` 10.03 / 10.19 -> 11.67 / 11.70 mm, ``landing_fast`` 18.44 / 18.55 -> 18.35 / 18.55 mm: a lost track
+    is metres, so it is on. 10 updates: ``landing`` 11.07 / 11.18 mm, ``cold`` the same runs lost (346x260 seed 5,
+    240x180 none), the rest 15.68 / 15.67 and 23.00 / 23.10 mm (40: 15.43 / 15.38, 22.99 / 22.84)."""
     learn_min_votes: int = field(default=3, metadata={"min": 1, "max": 100, "step": 1, "unit": "votes"})
     """Net votes a point needs before a learned brightness sign is used."""
     learned_overrides_map: bool = True

@@ -73,6 +73,10 @@ def build_motion_components(
     if config.polarity.enabled:
         selector = MapPolaritySelector(PolarityPredictor(config.polarity), contour_map, calibration.K, motion.fusion, calibration)
         selector.fused_pose = mode is TrackerMode.FULL
+        if initial_velocity_world is None and selector.fused_pose:
+            # The fused motion is unknown until the registrations have shown it: T_align composed from it would keep
+            # only the events that agree with it (see PolarityFilterConfig.unknown_velocity_hold_updates).
+            selector.hold_updates = int(config.polarity.unknown_velocity_hold_updates)
         if mode is TrackerMode.STPE_FILTER and config.polarity.unfused_latest_motion:
             selector.latest_state = motion
     ego = EgoMotionFilter(config.ego_motion) if (mode is TrackerMode.FULL and config.ego_motion.enabled) else None

@@ -397,3 +397,18 @@ def test_reopening_contradicted_points_only_without_fusion_follows_the_selectors
         sel.align(surface, cmap.points[idx], T, pol, None, ev, None, 60_000)
         reopened[fused] = sel.last_counts["points_reopened"]
     assert reopened == {True: 0, False: 1}
+
+
+def test_while_held_every_point_takes_both_polarities_and_no_t_align_is_composed():
+    from evpose.frontend.time_surface import SeparatedTimeSurface, TimeSurfaceConfig
+
+    cmap = _square_map()
+    T = _pose(0.0, np.array([0.0, 0.0, 2.0]), R_DOWN, np.zeros(3), np.zeros(3))
+    sel = MapPolaritySelector(PolarityPredictor(), cmap, K, _MovingAlongX(T))
+    sel.hold_updates = 1
+    idx = np.arange(0, len(cmap), 3)
+    surface = SeparatedTimeSurface(TimeSurfaceConfig(), W, H)
+    held = sel(T, 1000, idx)
+    assert not held.any() and sel.align(surface, cmap.points[idx], T, held, None) is None and sel.hold_updates == 0
+    free = sel(T, 1000, idx)  # the hold is over: the motion predicts single polarities again
+    assert free.any() and sel.align(surface, cmap.points[idx], T, free, None) is not None

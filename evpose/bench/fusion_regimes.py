@@ -1,0 +1,207 @@
+"""The factor graph against the EKF where re-linearising and re-weighting past states could matter (issue 7).
+
+From ground truth, in steady tracking, a fixed-lag smoother's newest state is the filter's estimate and the two
+backends tie (:mod:`evpose.fusion.ekf`). This benchmark runs ``full`` with either backend, same recording, same
+map, in the regimes a landing drone meets besides that:
+
+* ``steady``: the ablation's start (ground-truth pose and velocity), the reference;
+* ``cold_velocity``: the ground-truth pose but no initial velocity (the fusion starts it at zero with
+  ``unknown_velocity_sigma``, as ``evpose track --init`` does);
+* ``cold``: no initial velocity and the initial pose off by ``COLD_OFFSET_M`` along a seeded random direction and
+  ``COLD_OFFSET_DEG`` about another;
+* ``outage_<ms>``: from ground truth, every registration withheld from the fusion for that long from
+  ``OUTAGE_START_S`` after the start (IMU-only propagation: the tracker reports DEGRADED and learns nothing), then
+  resumed: the tracker's registration restarts from the IMU-bridged pose (issue 7, tracking loss and recovery).
+
+Per run: ATE / ARE (RMSE, no alignment) over the whole run and over the regime's phases (``first`` / ``settled``
+split at ``SETTLE_S`` after the start for ``cold``; ``outage``, ``reacquired`` (the first ``REACQUIRED_S`` after the
+resume) and ``after`` (resume to end) for the outages). :func:`bench_fusion_regimes` pairs the backends per seed.
+Registered under the ``fusion`` area as ``regimes``.
+
+Measured (session 18, 2 s landings, seeds 0-7, ``full``, graph - EKF paired; ``/tmp/s18/graphwin7/reg.py``):
+the two tie in every regime once neither loses the track. ``cold_velocity`` 346x260 6.127 / 6.119 mm, 0.0620 /
+0.0619 deg; ``cold`` 346x260 (seven seeds, both lost seed 5) 15.42 / 15.38 mm, 0.155 / 0.154 deg, 240x180 22.99 /
+22.84 mm (the graph lower on 1 of 8), 0.190 / 0.190 deg; outages at 346x260, 0.1 / 0.3 / 0.5 s: ATE 5.388 / 5.956
+/ 7.543 against 5.408 / 5.947 / 7.498 mm, the first 0.1 s after the resume 5.50 / 5.53 / 6.06 against 5.55 / 5.48
+/ 6.12 mm, from the resume on 5.78 / 5.82 / 6.12 against 5.81 / 5.77 / 6.05 mm (the graph lower on 3-4 of 8
+seeds), the error when the outage ends 7.0 / 11.5 / 17.6 mm either way; from ground truth (``steady``) 346x260
+5.296 mm. The cold start is where the two differed, by which runs the closed loop kept (see
+``FusionConfig.relinearize_correction_velocity`` and ``PolarityFilterConfig.unknown_velocity_hold_updates``).
+The simulated 3 s landings (turn bridged by degraded updates, seeds 0-7 at 346x260): 12.77 / 12.61 mm, 0.1258 /
+0.1266 deg (the graph lower on 4 of 8).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+COLD_OFFSET_M = 0.03
+"""Initial position error of the ``cold`` regime, m."""
+COLD_OFFSET_DEG = 1.0
+"""Initial rotation error of the ``cold`` regime, deg."""
+OUTAGE_START_S = 0.8
+"""Start of the outage regimes' outage after the start of tracking, s."""
+SETTLE_S = 0.3
+"""The ``cold`` regime's ``first`` phase (``settled`` after it), s."""
+REACQUIRED_S = 0.1
+"""The outage regimes' ``reacquired`` phase after the resume, s."""
+DIVERGED_MM = 100.0
+"""A run whose ATE exceeds this lost the track for good (it is counted, and left out of the paired differences), mm."""
+REGIME_SEEDS = 8
+"""Simulator seeds per resolution of the full suite."""
+
+
+@dataclass(frozen=True)
+class Regime:
+    """How a run departs from the steady start from ground truth."""
+
+    name: str
+    cold: bool = False
+    """Start without the ground-truth velocity, the pose off by ``offset_m`` / ``offset_deg``."""
+    offset_m: float = 0.0
+    """Initial position error (cold start), m."""
+    offset_deg: float = 0.0
+    """Initial rotation error (cold start), deg."""
+    outage_start_s: float = 0.0
+    """Outage start after the start of tracking, s."""
+    outage_s: float = 0.0
+    """Outage length (0: none), s."""
+
+
+REGIMES = (Regime("steady"), Regime("cold_velocity", True), Regime("cold", True, COLD_OFFSET_M, COLD_OFFSET_DEG),
+           *(Regime(f"outage_{ms}ms", outage_start_s=OUTAGE_START_S, outage_s=ms * 1e-3) for ms in (100, 300, 500)))
+"""The regimes of :func:`bench_fusion_regimes`."""
+
+QUICK_REGIMES = ("steady", "cold", "outage_300ms")
+"""The regimes of the quick suite (one seed at 240x180)."""
+BACKENDS = ("factor_graph", "ekf")
+
+
+def perturbed_pose(T: np.ndarray, offset_m: float, offset_deg: float, seed: int) -> np.ndarray:
+    """``T`` (4, 4) moved by ``offset_m`` along a random direction and rotated by ``offset_deg`` about another (world
+    frame, about the camera centre), both drawn from ``seed``."""
+    from scipy.spatial.transform import Rotation
+
+    rng = np.random.default_rng(seed)
+    d = rng.normal(size=(2, 3))
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    out = np.array(T, np.float64)
+    out[:3, :3] = Rotation.from_rotvec(np.radians(offset_deg) * d[1]).as_matrix() @ out[:3, :3]
+    out[:3, 3] += offset_m * d[0]
+    return out
+
+
+def _phase(errors: np.ndarray, mask: np.ndarray) -> tuple[float, float]:
+    """(ATE mm, ARE deg) RMSE of the (N, 6) errors where ``mask``; NaN when empty."""
+    if not mask.any():
+        return float("nan"), float("nan")
+    e = errors[mask]
+    return float(np.sqrt(np.mean(np.sum(e[:, 3:] ** 2, 1))) * 1e3), float(np.degrees(np.sqrt(np.mean(np.sum(e[:, :3] ** 2, 1)))))
+
+
+def regime_run(recording, contour_map, regime: Regime, backend: str = "factor_graph", seed: int = 0, config=None) -> dict:
+    """``full`` with the fusion ``backend`` on one recording in ``regime`` (``seed`` draws the cold start's offsets):
+    ATE / ARE over the run and its phases, updates not OK, and (cold) the initial errors given."""
+    from evpose.fusion import FusionBackend
+    from evpose.fusion.registration_errors import pose_error_vectors
+    from evpose.tracker.config import TrackerConfig, TrackerMode
+    from evpose.tracker.session import TrackingSession
+    from evpose.tracker.step_result import TrackStatus
+
+    cfg = config if config is not None else TrackerConfig(mode=TrackerMode.FULL)
+    cfg.fusion.backend = FusionBackend(backend)
+    gt = recording.ground_truth
+    if regime.cold:
+        # The session's own start time from ground truth (see TrackingSession), the pose given as ``--init`` would.
+        t0 = max(int(gt.t[0]), int(recording.events.t[0]) + int(round(cfg.warmup_ms * 1e3)))
+        pose0 = perturbed_pose(gt.interpolate(t0).matrix(0), regime.offset_m, regime.offset_deg, seed)
+        session = TrackingSession(recording, contour_map, cfg, initial_pose=pose0, t_start_us=t0)
+    else:
+        session = TrackingSession(recording, contour_map, cfg)
+    t0 = session.t0_us
+    lo = t0 + int(round(regime.outage_start_s * 1e6))
+    hi = lo + int(round(regime.outage_s * 1e6))
+    if regime.outage_s > 0:
+        motion = session.tracker.components.motion
+        report = motion.report
+
+        def withheld(t_us, T_world_cam, covariance_6x6):
+            if lo <= t_us < hi:
+                return report(t_us, None, None)
+            return report(t_us, T_world_cam, covariance_6x6)
+
+        motion.report = withheld
+    session.run()
+    traj = session.trajectory()
+    t = np.asarray(traj.t, np.int64)
+    errors = pose_error_vectors(t, traj.matrices(), gt)
+    res = session.results
+    out: dict = {"updates": len(res), "not_ok_updates": sum(r.status is not TrackStatus.OK for r in res)}
+    out["ate_rmse_mm"], out["are_rmse_deg"] = _phase(errors, np.ones(len(t), bool))
+    out["diverged"] = int(not out["ate_rmse_mm"] <= DIVERGED_MM)
+    if regime.cold:
+        settle = t0 + int(round(SETTLE_S * 1e6))
+        out["first_ate_rmse_mm"], out["first_are_rmse_deg"] = _phase(errors, t < settle)
+        out["settled_ate_rmse_mm"], out["settled_are_rmse_deg"] = _phase(errors, t >= settle)
+    if regime.outage_s > 0:
+        out["outage_ate_rmse_mm"], out["outage_are_rmse_deg"] = _phase(errors, (t >= lo) & (t < hi))
+        reacq = hi + int(round(REACQUIRED_S * 1e6))
+        out["reacquired_ate_rmse_mm"], out["reacquired_are_rmse_deg"] = _phase(errors, (t >= hi) & (t < reacq))
+        out["after_ate_rmse_mm"], out["after_are_rmse_deg"] = _phase(errors, t >= hi)
+        during = (t >= lo) & (t < hi)
+        out["outage_end_error_mm"] = float(np.linalg.norm(errors[during][-1, 3:]) * 1e3) if during.any() else float("nan")
+    return out
+
+
+def regime_table(cases, regimes=REGIMES, backends=BACKENDS, config_factory=None) -> dict:
+    """Every regime and backend on every ``(seed, recording, contour_map)`` of ``cases``: per-seed figures, their
+    means, and per figure the paired mean difference graph - EKF and the seeds the graph wins (lower), both over the
+    seeds where neither backend diverged (``DIVERGED_MM``); ``diverged`` per backend counts the runs that did."""
+    out: dict = {}
+    runs: dict = {}
+    for seed, rec, cmap in cases:
+        for regime in regimes:
+            for backend in backends:
+                cfg = config_factory() if config_factory is not None else None
+                runs.setdefault((regime.name, backend), []).append(regime_run(rec, cmap, regime, backend, seed, cfg))
+    for (name, backend), per in runs.items():
+        for key in per[0]:
+            vals = [r[key] for r in per]
+            out[f"{name}_{backend}_{key}_per_seed"] = [round(float(v), 4) for v in vals]
+            out[f"{name}_{backend}_{key}_mean"] = float(np.mean(vals))
+    if {"factor_graph", "ekf"} <= set(backends):
+        for regime in regimes:
+            g, e = runs[(regime.name, "factor_graph")], runs[(regime.name, "ekf")]
+            both = [(a, b) for a, b in zip(g, e) if not (a["diverged"] or b["diverged"])]
+            out[f"{regime.name}_seeds_neither_diverged"] = len(both)
+            for key in g[0]:
+                if key.endswith(("_mm", "_deg")) and both:
+                    d = np.array([a[key] - b[key] for a, b in both])
+                    out[f"{regime.name}_graph_minus_ekf_{key}_mean"] = float(np.mean(d))
+                    out[f"{regime.name}_graph_wins_{key}"] = int(np.sum(d < 0))
+    return out
+
+
+def bench_fusion_regimes(ctx) -> dict:
+    """:data:`REGIMES` with the factor graph and the EKF, paired per seed: ``REGIME_SEEDS`` simulated 2 s landings at
+    346x260 and 240x180 (the quick suite: ``QUICK_REGIMES`` on one at 240x180)."""
+    import os
+
+    from evpose.bench.tracking import landing_case
+
+    if ctx.quick:
+        sets = (((240, 180), [ctx.seed]),)
+        regimes = tuple(r for r in REGIMES if r.name in QUICK_REGIMES)
+    else:
+        seeds = list(range(ctx.seed, ctx.seed + REGIME_SEEDS))
+        sets = (((346, 260), seeds), ((240, 180), seeds))
+        regimes = REGIMES
+    out: dict = {}
+    for res, seeds in sets:
+        cases = ((s, *landing_case(ctx.work_dir, res, 2.0, s)) for s in seeds)
+        out.update({f"{res[0]}x{res[1]}_{k}": v for k, v in regime_table(cases, regimes).items()})
+    la = os.getloadavg()
+    out.update({"load_avg_1min": float(la[0]), "cpus": os.cpu_count() or 0})
+    return out
