@@ -93,12 +93,13 @@ straight edges whose forward-backward error across the edge is under 0.7 px, at 
 edge: survival 68.2 -> 83.3 % but the survivors' error against the truth median 2.37 -> 3.19 px (90th percentile 13.2
 -> 26.7), 10.40 / 93.0 / 48.3 / 28; with the along-edge coordinate of those tracks following the pose in PnP
 (point-to-line by alternation) 10.70 / 94.4 / 48.2 / 28; only for tracks carrying a map point 7.73 / 93.0 / 44.5 / 30
-(CPU 27.3 ms); aligning a coasted pose (6 DoF) with the last tracked MCI's edge pixels placed at the depth of the map
-points near them: open loop (seeds 0-3, ``coast2.py``) rotation error against the truth 1.14 -> 1.01 deg within 50 ms
-of the last tracked MCI, 3.17 -> 3.03 within 50-150 ms, 2.50 -> 6.23 within 150-400 ms (accepted MCIs only; closed
-loop worse, not run through the harness). A point on a vertical edge gives one coordinate; what is left is a map of
-points on lines (free along the line) and a pose solver taking pitch and the vertical translation from a motion prior
-while only vertical edges are seen. The coast's rotation is another matter: :mod:`evpose.slam.visual_gyro`.
+(CPU per MCI 27.3 ms, not paired); aligning a coasted pose (6 DoF) with the last tracked MCI's edge pixels placed at
+the depth of the map points near them: open loop (seeds 0-3, ``coast2.py``) rotation error against the truth 1.14 ->
+1.01 deg within 50 ms of the last tracked MCI, 3.17 -> 3.03 within 50-150 ms, 2.50 -> 6.23 within 150-400 ms (accepted
+MCIs only; closed loop worse, not run through the harness). A point on a vertical edge gives one coordinate; what is
+left is a map of points on lines (free along the line) and a pose solver taking pitch and the vertical translation
+from a motion prior while only vertical edges are seen. The coast's rotation is another matter:
+:mod:`evpose.slam.visual_gyro`.
 """
 
 from __future__ import annotations

@@ -17,15 +17,15 @@ camera moves 9 mm per MCI at 1.24 m/s); with the true translation and the edges 
 the neutral perturbations ``ba_huber_px`` 1.9 / 2.1 and ``reprojection_threshold_px`` 2.4 (32 runs): ATE 7.48 -> 4.46
 % (paired -3.02 +- 0.60 s.e. points, better in 26, 3 runs within 2 % against none), but tracked from the events 42.6
 -> 30.5 % (paired -12.1 +- 1.2), tracked 92.8 -> 90.2 % (least 80.8 -> 79.1), maps 117 -> 154, median RPE 0.0351 ->
-0.0422 m/m, CPU per MCI median 15.0 -> 20.0 ms: maps coast longer instead of being re-placed, and the ATE, summed per
-map, gains from the shorter maps (the 7 runs with as many maps either way: 7.30 -> 6.65 %, better in 3). Held-out
-indoor seeds 8-11 (defaults): ATE 8.59 -> 5.07 %, from the events 40.3 -> 34.3 %, maps 14 -> 18. Landing event-only
-seeds 0-11: 1.97 %, 8 of 12 within 2 % (as without it); held-out seeds 24-35: 2.99 -> 3.24 %, 5 -> 4 within 2 % (seed
-29 1.95 -> 4.91 % from one coasted MCI). Event-inertial runs never use it (E-I-C2 landing seeds 0 and 1
-bit-identical). Variants: also as the rotation of the pose prediction of tracked MCIs 3.92 % / 32.7 % from the events
-(defaults, seeds 0-7; this and the last variant with an earlier, Gauss-Newton alignment); with the translation
-modelled (the map's camera-frame velocity, the edges on a plane at the map points' median depth) 7.98 % / 47.4 %, with
-``ProjectionSearchConfig.prepass_below`` 12 (rotation only) 4.87 % / 32.3 %.
+0.0422 m/m, CPU per MCI median 15.0 -> 20.0 ms (runs not paired under the shared load): maps coast longer instead of
+being re-placed, and the ATE, summed per map, gains from the shorter maps (the 7 runs with as many maps either way:
+7.30 -> 6.65 %, better in 3). Held-out indoor seeds 8-11 (defaults): ATE 8.59 -> 5.07 %, from the events 40.3 -> 34.3
+%, maps 14 -> 18. Landing event-only seeds 0-11: 1.97 %, 8 of 12 within 2 % (as without it); held-out seeds 24-35:
+2.99 -> 3.24 %, 5 -> 4 within 2 % (seed 29 1.95 -> 4.91 % from one coasted MCI). Event-inertial runs never use it
+(E-I-C2 landing seeds 0 and 1 bit-identical). Variants: also as the rotation of the pose prediction of tracked MCIs
+3.92 % / 32.7 % from the events (defaults, seeds 0-7; this and the last variant with an earlier, Gauss-Newton
+alignment); with the translation modelled (the map's camera-frame velocity, the edges on a plane at the map points'
+median depth) 7.98 % / 47.4 %, with ``ProjectionSearchConfig.prepass_below`` 12 (rotation only) 4.87 % / 32.3 %.
 """
 
 from __future__ import annotations
