@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 from evpose.slam.inertial import InertialConfig
 from evpose.slam.map_restructure import RestructureConfig
 from evpose.slam.projection_search import ProjectionSearchConfig
+from evpose.slam.visual_gyro import VisualGyroConfig
 # The tracking settings live in their own module; re-exported here, where they were (imports and docs name them here).
 from evpose.slam.tracking_config import TrackingConfig  # noqa: F401
 
@@ -503,6 +504,8 @@ class SlamConfig:
     tracking: TrackingConfig = field(default_factory=TrackingConfig)
     search: ProjectionSearchConfig = field(default_factory=ProjectionSearchConfig)
     """Re-finding untracked local-map points by projection and patch search."""
+    visual_gyro: VisualGyroConfig = field(default_factory=VisualGyroConfig)
+    """Event-only coasting on the rotation measured between consecutive MCIs' edges."""
     restructure: RestructureConfig = field(default_factory=RestructureConfig)
     """Re-initialising a young event-only map from a wide-baseline keyframe pair."""
     seed: int = 0

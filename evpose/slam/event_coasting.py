@@ -73,6 +73,33 @@ predicted pose before deciding to coast) 9.95 / 92.8 / 43.1; ``EventWindowConfig
 not tracked from the events 10.39 / 94.4 / 43.1; 31 with ``klt_max_bidir_error_px`` 0.5 10.69 / 88.4 / 42.7. What the
 oracle asks for is an association that does not slide along edges, such as aligning each MCI's events with the map's
 projected edges, rather than looser KLT.
+
+Why the edge tracks die (session 18, ``/tmp/s18/edgealign9``; indoor seeds 0-3 with the defaults). The MCIs a map
+coasts through show vertical edges only: of their straight-edge ridge pixels (structure tensor over 7 px, eigenvalue
+ratio under 0.1; ``vert.py``) a median 100 % (first quartile 91 %) lie within 30 deg of vertical, against 67 % (34 %)
+in the MCIs tracked from the events. The camera yaws and only edges across the image motion make events, so the
+vertical image coordinate of a point on them is not in the events at all, except at the edges' ends; 58.5 % of the
+deaths of tracks born on structure are their first MCI-to-MCI step (52.6 % of first steps die, 20.6 % of later ones;
+``death.py``). Tried against it (indoor seeds 0-7, ATE / tracked / from the events / maps over the 8 runs; defaults
+7.04 / 94.0 / 45.3 / 29, CPU per MCI median 15.0 ms; code on branch ``s18-edgealign9-wip``): aligning the predicted
+pose of a starved MCI (6 DoF, Gauss-Newton) to a distance field of its edges at the projections of the map's points,
+then re-finding the points by projection at the aligned pose: 7.28 / 94.0 / 45.6 / 29; with the distance field on the
+edges' crests and Levenberg-Marquardt (``tr.py``, seed 0, tracked MCIs) only 17 % of the map points in view (38 % of
+the PnP inliers) lie within 1.5 px of an edge pixel at the PnP pose, and the alignment moved the predicted rotation
+away from the PnP one (median 0.61 -> 1.49 deg); KLT between MCIs started, forward and backward, at the flow of the
+camera's motion since the previous MCI (visual gyro, the map's velocity, a plane at the map points' median depth):
+8.81 / 91.6 / 45.5 / 28, structure tracks surviving a step (seeds 0-1) 68.2 -> 71.3 %; keeping the failed steps on
+straight edges whose forward-backward error across the edge is under 0.7 px, at the predicted flow moved across the
+edge: survival 68.2 -> 83.3 % but the survivors' error against the truth median 2.37 -> 3.19 px (90th percentile 13.2
+-> 26.7), 10.40 / 93.0 / 48.3 / 28; with the along-edge coordinate of those tracks following the pose in PnP
+(point-to-line by alternation) 10.70 / 94.4 / 48.2 / 28; only for tracks carrying a map point 7.73 / 93.0 / 44.5 / 30
+(CPU per MCI 27.3 ms, not paired); aligning a coasted pose (6 DoF) with the last tracked MCI's edge pixels placed at
+the depth of the map points near them: open loop (seeds 0-3, ``coast2.py``) rotation error against the truth 1.14 ->
+1.01 deg within 50 ms of the last tracked MCI, 3.17 -> 3.03 within 50-150 ms, 2.50 -> 6.23 within 150-400 ms (accepted
+MCIs only; closed loop worse, not run through the harness). A point on a vertical edge gives one coordinate; what is
+left is a map of points on lines (free along the line) and a pose solver taking pitch and the vertical translation
+from a motion prior while only vertical edges are seen. The coast's rotation is another matter:
+:mod:`evpose.slam.visual_gyro`.
 """
 
 from __future__ import annotations

@@ -109,6 +109,8 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling):
         """Time the event window rejected for a low event rate since the last MCI tracked visually (``TrackingConfig.coast_blank_s``), us."""
         self._after_blank_t: int | None = None
         """Time of the first MCI after the last blank wall since the last MCI tracked visually (``coast_after_blank_s``), us."""
+        self._prev_mci: tuple = (None, 0)
+        """The previous MCI (8-bit image, time in us) while the current one is processed (``VisualGyroConfig``)."""
 
     # --------------------------------------------------------------- public
     def step(self, events: EventArray) -> SlamStepResult:
@@ -244,6 +246,7 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling):
         if rw.blank_us:
             self._after_blank_t = mci.t_us
         t1, c1 = time.perf_counter(), time.thread_time()
+        self._prev_mci = (self.fe.prev8, self.fe.prev_t)  # the visual gyro's reference: _track_mci moves on from it
         mci = self._track_mci(mci)
         keyframe = False
         if self._state is SlamStatus.OK:
@@ -350,6 +353,9 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling):
         pred = self._imu_prediction(mci.t_us)
         if pred is not None:
             guess = pred  # metric maps: the IMU predicts position as well
+        R_coast = R_prior
+        if R_coast is None and self.imu is None and self.cfg.visual_gyro.enabled:
+            R_coast = self._visual_gyro(m, mci)
         sel = [i for i, t in enumerate(fe.ids.tolist()) if fe.track_to_point.get(t) in m.points]
         n_refound = 0
         if len(sel) < self.cfg.search.prepass_below:
@@ -358,11 +364,11 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling):
         self._map_tracks = len(sel)
         if len(sel) < tc.min_inliers:
             self._failure = SlamFailure.STARVED
-            return self._bridge_or_lose(mci, f"{len(sel)} tracked map points < {tc.min_inliers}", R_prior)
+            return self._bridge_or_lose(mci, f"{len(sel)} tracked map points < {tc.min_inliers}", R_coast)
         est, sel = self._estimate(m, mci, sel, guess, R_prior)
         if not est.ok:
             self._failure = SlamFailure.REJECTED
-            return self._bridge_or_lose(mci, est.reason, R_prior)
+            return self._bridge_or_lose(mci, est.reason, R_coast)
         more = self._refind(m, mci, est.T_wc, self.cfg.search.refine_radius_px)
         if more:
             # Second pass with the estimated pose (ORB-SLAM's local-map search): re-solve with the new associations.

@@ -44,7 +44,7 @@ class VisualFailureHandling:
         m, fe, ic, tc = self.atlas.active, self.fe, self.cfg.inertial, self.cfg.tracking
         gap_s = (mci.t_us - self._last_visual_t) / 1e6
         if self.imu is None:
-            return self._coast_event_only(mci, reason, gap_s)
+            return self._coast_event_only(mci, reason, gap_s, R_prior)
         if ic.configuration is InertialConfiguration.C1 or gap_s > ic.max_bridge_s:
             return self._lose(reason)
         if m.imu_initialised:
@@ -62,8 +62,11 @@ class VisualFailureHandling:
         T_wc = self._new_keyframe(m, mci.t_us, T_wc, mci.image8, adjust=m.imu_initialised or ic.coast_ba)
         return SlamStatus.INERTIAL, f"visual tracking failed ({reason}); pose {how}, map {m.id} kept", T_wc.copy(), True
 
-    def _coast_event_only(self, mci: MciResult, reason: str, gap_s: float) -> tuple[SlamStatus, str, np.ndarray | None, bool]:
-        """Event-only: keep the map through a visual failure of at most ``TrackingConfig.coast_s`` (``SlamStatus.COASTING``)."""
+    def _coast_event_only(self, mci: MciResult, reason: str, gap_s: float, R_wc: np.ndarray | None = None) -> tuple[SlamStatus, str, np.ndarray | None, bool]:
+        """Event-only: keep the map through a visual failure of at most ``TrackingConfig.coast_s`` (``SlamStatus.COASTING``).
+
+        ``R_wc``: an orientation measured for this MCI (the visual gyro, :mod:`evpose.slam.visual_gyro`) replaces the
+        coast's constant-rate one."""
         m, fe, tc = self.atlas.active, self.fe, self.cfg.tracking
         if tc.coast_s <= 0:
             return self._lose(reason)
@@ -82,6 +85,9 @@ class VisualFailureHandling:
             if tc.coast_drop_unconfirmed:
                 drop_unconfirmed_poses(m, self._last_visual_t)
             return self._lose(reason)
+        if R_wc is not None:
+            T_wc = T_wc.copy()
+            T_wc[:3, :3] = R_wc
         drop_contradicted(m, self.K, T_wc, fe.ids, fe.uv, fe.track_to_point, 2.0 * tc.reprojection_threshold_px)
         m.add_pose(mci.t_us, T_wc)
         # No BA on a keyframe at a predicted pose (InertialConfig.coast_ba: with one fixed keyframe it slid along the scale).

@@ -9,12 +9,16 @@ from __future__ import annotations
 
 import numpy as np
 
+from scipy.spatial.transform import Rotation
+
 from evpose.core.trajectory import invert_pose
 from evpose.slam.atlas import SlamMap
+from evpose.slam.event_coasting import camera_frame_rate
 from evpose.slam.geometry import project
 from evpose.slam.gyro_prior import (camera_delta_rotation, gyro_delta_rotation, keyframe_rotation_priors, reanchor_rotations,
                                     refine_pose_with_rotation_prior, rotation_angle_deg, sparse_pair_sigmas)
 from evpose.slam.tracking import PoseEstimate
+from evpose.slam.visual_gyro import visual_rotation
 
 
 class GyroAids:
@@ -36,6 +40,18 @@ class GyroAids:
         # few mrad/s turns the camera by hundredths of a degree: far less than the visual rotation error indoors.
         bias = m.inertial.bias_gyro if m.imu_initialised and m.inertial is not None else np.zeros(3)
         reanchor_rotations(m, self.imu, self.calib.T_cam_imu, self.calib.time_offset_us, bias, refs)
+
+    def _visual_gyro(self, m: SlamMap, mci) -> np.ndarray | None:
+        """Event-only: orientation at ``mci`` from the map's pose at the previous MCI and the rotation measured between the
+        two MCIs' edges (:mod:`evpose.slam.visual_gyro`), started at the map's recent rate; None when the previous MCI
+        has no pose in ``m`` or nothing was measured."""
+        prev8, prev_t = self._prev_mci
+        if prev8 is None or not m.traj_t or m.traj_t[-1] != prev_t:
+            return None
+        w = camera_frame_rate(m, int(self.cfg.tracking.coast_span_s * 1e6))
+        dR0 = np.eye(3) if w is None else Rotation.from_rotvec(w * (mci.t_us - prev_t)).as_matrix()
+        dR = visual_rotation(prev8, mci.image8, self.K, dR0, self.cfg.visual_gyro)
+        return None if dR is None else m.traj_T[-1][:3, :3] @ dR
 
     def _gyro_rotation(self, t0_us: int, t1_us: int, T_wc0: np.ndarray) -> np.ndarray | None:
         """Camera orientation at ``t1`` predicted from ``T_wc0`` at ``t0`` by the gyro (event-inertial mode), else None."""

@@ -110,3 +110,13 @@ def test_a_coast_across_a_blank_ends_after_it_when_coast_after_blank_s_says_so(e
         assert first[0] is SlamStatus.COASTING
         status, _, _, _ = slam._bridge_or_lose(SimpleNamespace(t_us=slam._after_blank_t + 10_000, image8=img), "still nothing")
         assert status is expected
+
+
+def test_a_measured_orientation_replaces_the_coasted_one(early_map):
+    # The visual gyro (evpose.slam.visual_gyro) hands the coast the orientation it measured for the MCI.
+    slam, m, _ = _fail(early_map, None, 4000)
+    R = m.traj_T[-1][:3, :3] @ Rotation.from_rotvec([0.0, 0.02, 0.0]).as_matrix()
+    mci = SimpleNamespace(t_us=m.traj_t[-1] + 4000, image8=np.zeros((early_map.calibration.height, early_map.calibration.width), np.uint8))
+    status, _, pose, _ = slam._bridge_or_lose(mci, "no tracks", R)
+    assert status is SlamStatus.COASTING
+    np.testing.assert_allclose(pose[:3, :3], R, atol=1e-12)
