@@ -96,6 +96,10 @@ class TrackingConfig:
     (defaults and four perturbations, see ``MciConfig.reference_fraction``, 0.5 there): 10 -> mean ATE 2.60 -> 2.30 %,
     within 2 % 30 -> 35 of 60, paired -0.30 +- 0.19 points (32 runs better, 28 worse), tracked at least 95.0 % (88.5);
     short of the evidence for a default, keyframes."""
+    ba_window: int = field(default=0, metadata={"min": 0, "max": 30, "step": 1, "unit": "keyframes"})
+    """Keyframes the event-only visual local BA optimises (0: ``local_window``), keyframes. Unlike ``local_window`` it
+    leaves the keyframes the projection search reads untouched, so the per-MCI cost stays; event-inertial runs keep
+    ``local_window``."""
     ba_fixed_keyframes: int = field(default=1, metadata={"min": 1, "max": 5, "step": 1, "unit": "keyframes"})
     """Event-only local BA holds this many of the window's oldest keyframes fixed once the map has more keyframes than
     the window (before that, only the first keyframe and ``ba_scale_anchor``); with two or more the fixed poses also
