@@ -467,7 +467,10 @@ class InitializationConfig:
     essential matrix by the same fit instead of the score ratio: indoor 8.02 % (32 runs -0.66 +- 0.66, tracked 88.1 %,
     3 runs under 80 %), for re-initialisations only 7.21 % (32 runs -1.02 +- 0.62, tracked 88.3 %, 3 under 80 %);
     landing seeds 0 / 1 1.01 / 4.63 -> 8.11 / 9.20 %; ``homography_ratio`` 0.5 or 1 (always the essential matrix):
-    indoor 8.67 %, tracked 90.6 % (min 77.2)."""
+    indoor 8.67 %, tracked 90.6 % (min 77.2). Session 18: the landing's two worst held-out seeds (27, 36: 9.99 / 10.67 %)
+    both start from a "+fit" map; 0 on the six landing seeds whose first map took the fit (4, 15, 26, 27, 28, 36; with
+    ``TrackingConfig.ba_window`` 10) -> 1.68 / 2.45 / 1.32 / 7.84 / 1.38 / 11.30 -> 1.41 / 1.97 / 4.03 / 2.52 / 1.22 /
+    9.42 %: a redraw, not a cure."""
     homography_fit_depth_spread: float = field(default=0.3, metadata={"min": 0.0, "max": 5.0, "step": 0.05, "unit": "ratio"})
     """``homography_fit_share`` applies only when the best-count decomposition's good triangulated depths spread more
     than this (standard deviation over median; 0: always): a scene that decomposition places on a plane seen face-on

@@ -28,6 +28,16 @@ def need_keyframe(m: SlamMap, tr_ids: np.ndarray, tr_uv: np.ndarray, n_tracked_p
     return bool(disp > cfg.keyframe_displacement_px)
 
 
+def visual_ba_window(m: SlamMap, cfg: TrackingConfig, event_only: bool) -> tuple[int, int]:
+    """Keyframes the visual local BA optimises after a keyframe insertion, and how many of the oldest of them it holds
+    fixed: ``ba_window`` (event-only, when set) or ``local_window`` keyframes, never reaching back past the map's newest
+    visual segment (:attr:`SlamMap.segment_start_kf`)."""
+    span = cfg.ba_window if event_only and cfg.ba_window > 0 else cfg.local_window
+    window = min(span, sum(k.id >= m.segment_start_kf for k in m.keyframes))
+    n_fixed = cfg.ba_fixed_keyframes if event_only and len(m.keyframes) > span else 1
+    return window, n_fixed
+
+
 def _point_tracks(m: SlamMap) -> set[int]:
     return {p.track_id for p in m.points.values()}
 

@@ -42,7 +42,7 @@ from evpose.slam.inertial_trajectory import carry_relative_scale, keyframe_posit
 from evpose.slam.initialization import initialize_two_view
 from evpose.slam.map_restructure import maybe_restructure
 from evpose.slam.map_rejoin import RejoinCandidate, merge_into, rejoin_similarity
-from evpose.slam.local_map import cull_points, insert_keyframe, need_keyframe, triangulate_new_points
+from evpose.slam.local_map import cull_points, insert_keyframe, need_keyframe, triangulate_new_points, visual_ba_window
 from evpose.slam.event_image import to_uint8
 from evpose.slam.mci import Hypothesis, MciGenerator, MciResult, MotionPrior
 from evpose.slam.parallax_warp import points_in_view
@@ -454,8 +454,7 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling):
             priors = self._keyframe_rotation_priors(m)
             sigma, pair_sigmas = self._ba_rotation_sigmas(m, priors)
             # A re-joined map's older segment shares no points with the newest one (SlamMap.segment_start_kf).
-            window = min(tc.local_window, sum(k.id >= m.segment_start_kf for k in m.keyframes))
-            n_fixed = tc.ba_fixed_keyframes if self.imu is None and len(m.keyframes) > tc.local_window else 1
+            window, n_fixed = visual_ba_window(m, tc, event_only=self.imu is None)
             local_bundle_adjustment(m, self.K, window, tc.ba_iterations, tc.ba_huber_px, n_fixed=n_fixed,
                                     rotation_priors=priors, rotation_sigma_rad=sigma, rotation_sigmas_rad=pair_sigmas,
                                     # Event-inertial maps get their scale from the IMU initialisation; anchoring the visual

@@ -105,3 +105,28 @@ def test_a_new_point_keeps_its_tracks_observations_in_the_keyframes_between_the_
     m.keyframes.append(Keyframe(2, 200_000, T2, {t: uv2[i] for i, t in enumerate(tids)}))
     nxt = triangulate_new_points(m, K, m.keyframes[2], t2p, TrackingConfig(min_pair_parallax_deg=2.0, intermediate_observations=False), 1000)
     assert all(sorted(m.points[p].obs) == [0, 2] for p in range(1000, nxt))
+
+
+def _map_with_keyframes(n: int, segment_start: int = 0) -> SlamMap:
+    m = SlamMap(0, segment_start_kf=segment_start)
+    m.keyframes = [Keyframe(i, 1000 * i, np.eye(4)) for i in range(n)]
+    return m
+
+
+def test_event_only_ba_window_reaches_past_the_local_window_and_event_inertial_keeps_it():
+    from evpose.slam.local_map import visual_ba_window
+
+    cfg = TrackingConfig(local_window=6, ba_window=10, ba_fixed_keyframes=2)
+    assert visual_ba_window(_map_with_keyframes(12), cfg, event_only=True) == (10, 2)
+    # Fewer keyframes than the window: all of them, one fixed (with the scale anchor).
+    assert visual_ba_window(_map_with_keyframes(8), cfg, event_only=True) == (8, 1)
+    assert visual_ba_window(_map_with_keyframes(12), cfg, event_only=False) == (6, 1)
+    # 0 falls back to the local window.
+    assert visual_ba_window(_map_with_keyframes(12), TrackingConfig(local_window=6, ba_window=0), event_only=True) == (6, 1)
+
+
+def test_ba_window_stays_within_the_newest_visual_segment():
+    from evpose.slam.local_map import visual_ba_window
+
+    cfg = TrackingConfig(local_window=6, ba_window=10)
+    assert visual_ba_window(_map_with_keyframes(12, segment_start=9), cfg, event_only=True)[0] == 3
