@@ -162,8 +162,9 @@ def test_a_restore_replays_only_the_journal_since_the_smoothers_last_re_base_at_
         replayed.append(eng.disk.replayed_entries)
     if rebase_every:  # the same few entries (those of the updates since the last re-base) at every depth
         assert len(set(replayed)) == 1 and 0 < replayed[0] < 30
-    else:  # every entry since step 0: a chunk's worth more for each snapshot further in
-        assert replayed == [replayed[0] * (n + 1) for n in range(4)] and replayed[0] > 30
+    else:  # every entry since step 0: at least a chunk's updates more for each snapshot further in (not exactly a
+        # chunk's worth: a large velocity correction adds a relinearising update, FusionConfig.relinearize_correction_velocity)
+        assert replayed[0] > 30 and all(b - a >= CHUNK for a, b in zip(replayed, replayed[1:]))
 
 
 def test_disk_snapshots_are_encoded_off_the_players_thread_and_written_in_order(squares_scene, tmp_path, pair_files,
