@@ -63,7 +63,8 @@ branch-free (every disk pixel read and written back) 255 -> 313 us; one uint64 c
 distance, owner, tag: one array, compared as integers) 315 -> 307 us. Warming the three maps first takes it 309 -> 195
 us (hot 127): the cost is the ~2,000 cache lines the patches cover, whatever their layout. ``defer_events`` (the
 event pass after the pose; ``stpe+filter`` only, see :meth:`MapPolaritySelector.align
-<evpose.fusion.polarity.MapPolaritySelector.align>`) moves work, it does not save any: the grid is colder by then.
+<evpose.fusion.map_polarity_selector.MapPolaritySelector.align>`) moves work, it does not save any: the grid is colder
+by then.
 """
 
 from __future__ import annotations
