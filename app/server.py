@@ -22,24 +22,21 @@ from app.engine import Engine
 from app.engine_factory import MODES, NO_MAP_NOTE, engine_factory
 from app.export import export_action, write_config
 from app.frame import Frame
-from app.hotkeys import SliderKeyGuard, bind_hotkeys
-from app.layout_gui import LayoutGui
+from app.hotkeys import SliderKeyGuard
 from app.layouts import Layout
-from app.panels import IMAGES_IN_SLAM_MODE, SLAM_PANELS, SLAM_PLACEHOLDER, TRACKER_PANELS, OverlayColour, panel_images
+from app.panels import SLAM_PANELS, SLAM_PLACEHOLDER, TRACKER_PANELS, OverlayColour, panel_images
 from app.player import Player, PlayState, RerunFrom
-from app.plots import PlotsView, plot_context
+from app.plots import plot_context
 from app.scene import SceneView
 from app.slam_engine import slam_markdown
 from app.status import status_markdown
 from app.teaching import STAGE_PANEL, Stage, teaching_markdown
+from app.viewer_controls import NO_MAP, bind_viewer_hotkeys, build_main_panel, build_panels
 from app.warm_up import WarmUp
 from evpose.errors import EvposeError, InputError
 
 __all__ = ["AppConfig", "ViewerApp"]
 
-NO_MAP = "(no map: events only)"
-TOGGLE_HINTS = {"slam_aligned": "SLAM mode: place each map on the ground truth (Sim(3), evo's Umeyama); untick for the maps' own frames"}
-"""Hover text of the 3D view's checkboxes that need more than their name."""
 OPENING = "_opening "
 """How the status line starts while a recording's first step is computed."""
 SLOW_REFRESH_S = 0.25
@@ -84,105 +81,20 @@ class ViewerApp:
         self._last_slow = 0.0
         self.key_guard = SliderKeyGuard()
         """Arrow/Home shortcuts pressed on a focused slider move the slider only (app/hotkeys.py)."""
-        self._build_main_panel()
+        build_main_panel(self)  # the controls: app/viewer_controls.py
         self.warm_up = WarmUp(cfg.disk_cache, cfg.frame_cache, lambda md: setattr(self.warm_info, "content", md),
                               cfg.warm_up, busy=self._player_busy)
-        self._build_panels()
+        build_panels(self)
         self.layout_gui.panels = self.panels
         self.refresh_entries()
         self.apply_layout_name(cfg.layout)
-        self._bind_hotkeys()
+        bind_viewer_hotkeys(self)
         self.server.on_client_connect(lambda _client: self.layout_gui.client_connected())
         recs = [e for e in self.entries if e.kind == EntryKind.RECORDING and e.error is None]
         if recs:
             # Open on the shortest-named landing recording (the showcase) when there is one, else the first found.
             with_map = [e for e in recs if e.path.stem.startswith("landing")]
             self.select((sorted(with_map, key=lambda e: len(e.path.stem)) or recs)[0].label)
-
-    # ------------------------------------------------------------------ GUI construction
-    def _build_main_panel(self) -> None:
-        g = self.gui
-        g.main_panel.dock_left()
-        with g.add_folder("Recording"):
-            self.rec_dropdown = g.add_dropdown("recording", ["(none found)"], hint="Recordings under the --data folders")
-            self.map_dropdown = g.add_dropdown("map", [NO_MAP], hint="Contour map to track against")
-            # Not "mode": the tracker's own mode (full / stpe / stpe+filter) has that label in the Parameters panel.
-            self.mode_dropdown = g.add_dropdown("viewer mode", list(MODES), initial_value=MODES[0], hint="tracking: EV-Pose against the map; slam: map-free event SLAM")
-            self.rescan_button = g.add_button("rescan data folders")
-            self.rec_info = g.add_markdown("")
-        with g.add_folder("Playback"):
-            self.play_button = g.add_button("play / pause (space)")
-            self.step_buttons = g.add_button_group("step", ["< back", "forward >"])
-            self.time_slider = g.add_slider("time [s]", min=0.0, max=1.0, step=0.001, initial_value=0.0)
-            self.speed_slider = g.add_slider("speed [x]", min=0.1, max=10.0, step=0.1, initial_value=1.0)
-            self.loop_box = g.add_checkbox("loop", False)
-            self.status = g.add_markdown("_no recording loaded_")
-        # Below the playback controls: one line or more per recording found, it pushed them off a 900 px screen.
-        self.warm_info = g.add_markdown("")
-        with g.add_folder("3D view", expand_by_default=False):
-            self.toggle_boxes = {}
-            for name in ("contour_map", "raw_cloud", "ground_truth", "registration", "fused", "imu_poses", "frustum", "follow", "slam_aligned"):
-                self.toggle_boxes[name] = g.add_checkbox(name.replace("_", " "), getattr(self.scene.toggles, name), hint=TOGGLE_HINTS.get(name))
-            self.overlay_dropdown = g.add_dropdown("TDF points coloured by", [o.value for o in OverlayColour], initial_value=self.overlay.value)
-        with g.add_folder("Layout", expand_by_default=False):
-            self.layout_gui = LayoutGui(g, self.cfg.layout_dir, self._notify, self._layout_applied, self._redraw)
-        with g.add_folder("Export", expand_by_default=False):
-            self.export_buttons = g.add_button_group("export", ["trajectory", "config", "screenshot", "GIF"])
-            self.export_info = g.add_markdown("")
-        self._wire_main_panel()
-
-    def _wire_main_panel(self) -> None:
-        self.rec_dropdown.on_update(lambda e: e.client is not None and self.select(self.rec_dropdown.value))
-        self.map_dropdown.on_update(lambda e: e.client is not None and self.select(self.rec_dropdown.value, self.map_dropdown.value))
-        self.mode_dropdown.on_update(lambda e: e.client is not None and self.set_mode(self.mode_dropdown.value))
-        self.rescan_button.on_click(lambda e: self.refresh_entries())
-        self.play_button.on_click(lambda e: self.player and self.player.toggle())
-        self.step_buttons.on_click(lambda e: self.player and (self.player.step_back() if e.target.value == "< back" else self.player.step_forward()))
-        self.time_slider.on_update(lambda e: e.client is not None and self.player and self.player.seek(self._slider_to_us(self.time_slider.value)))
-        self.speed_slider.on_update(lambda e: self.player and self.player.set_speed(self.speed_slider.value))
-        self.loop_box.on_update(lambda e: self.player and self.player.set_loop(self.loop_box.value))
-        for name, box in self.toggle_boxes.items():
-            box.on_update(lambda e, name=name, box=box: self._set_toggle(name, box.value))
-        self.overlay_dropdown.on_update(lambda e: self._set_overlay(self.overlay_dropdown.value))
-        self.export_buttons.on_click(lambda e: self.export(e.target.value, e.client))
-
-    def _build_panels(self) -> None:
-        g = self.gui
-        self.panels = {}
-        self.panels["images"] = p = g.add_panel()
-        blank = np.zeros((48, 64, 3), np.uint8)
-        with p.add_tab("Images"):
-            self.images_note = g.add_markdown(IMAGES_IN_SLAM_MODE, visible=False)
-            self.image_handles = {name: g.add_image(blank, label=name, format="jpeg", jpeg_quality=85) for name in TRACKER_PANELS}
-        with p.add_tab("SLAM"):
-            self.slam_info = g.add_markdown(SLAM_PLACEHOLDER)
-            self.image_handles.update({name: g.add_image(blank, label=name, format="jpeg", jpeg_quality=85) for name in SLAM_PANELS})
-        self.panels["plots"] = p = g.add_panel()
-        self.plots = PlotsView(g, p.add_tab("Plots"))
-        self.panels["teaching"] = p = g.add_panel()
-        with p.add_tab("How it works"):
-            self.stage_dropdown = g.add_dropdown("stage", [s.value for s in Stage], initial_value=self.stage.value)
-            self.teaching_text = g.add_markdown(teaching_markdown(self.stage, None))
-            self.teaching_image = g.add_image(blank, label="live", format="jpeg")
-        self.stage_dropdown.on_update(lambda e: self._set_stage(self.stage_dropdown.value))
-        self.panels["parameters"] = p = g.add_panel()
-        self.params_tab = p.add_tab("Parameters")
-        with self.params_tab:
-            self.rerun_dropdown = g.add_dropdown("on change re-run from", [r.value for r in RerunFrom], initial_value=RerunFrom.CURRENT.value)
-            self.param_buttons = g.add_button_group("configuration", ["reset", "save", "load"])
-            self.config_path = g.add_text("config file", "evpose_exports/config.yaml", hint="Path for save/load (load: inside the data folders or the export folder)")
-            self.param_info = g.add_markdown("")
-        self.param_buttons.on_click(lambda e: self._param_action(e.target.value))
-
-    def _bind_hotkeys(self) -> None:
-        self.key_guard.watch([self.time_slider, self.speed_slider])
-        bind_hotkeys(self.gui, (("play / pause", "space", lambda: self.player and self.player.toggle()),
-                                ("step forward", "arrowright", lambda: self.player and self.player.step_forward()),
-                                ("step back", "arrowleft", lambda: self.player and self.player.step_back()),
-                                ("faster", "arrowup", lambda: self._nudge_speed(2.0)),
-                                ("slower", "arrowdown", lambda: self._nudge_speed(0.5)),
-                                ("to start", "home", lambda: self.player and self.player.seek(self.player.engine.t_start_us))),
-                     self.key_guard)
 
     # ------------------------------------------------------------------ data
     def refresh_entries(self) -> None:

@@ -142,7 +142,7 @@ class PolarityFilterConfig:
     On since session 14, with ``map_refinement.hold_out_filtered`` (mean ATE of seeds 0-7 at 346x260 / 240x180):
     12.38 / 14.17 -> 11.76 / 14.12 mm with ``edge_offsets.stpe_filter_field_lag_ms`` 6.0 (with 5.5: 14.50 -> 14.75 mm
     at 240x180); textured landing 24.60 -> 24.61 mm. Its check of the other polarity now runs in the selecting pass
-    (:func:`~evpose.fusion.aligned_surface._select_times_reopening`), not in a pass of its own."""
+    (:func:`~evpose.fusion.aligned_surface_kernels._select_times_reopening`), not in a pass of its own."""
     unfused_latest_motion: bool = False
     """In ``stpe+filter`` (where the fusion runs beside the registration, not as its prediction) take the motion the
     prediction needs from the gyro at the update time less the latest fused gyro bias and the latest fused velocity

@@ -20,7 +20,7 @@ from evpose.fusion.ego_motion import EgoMotionConfig
 from evpose.fusion.polarity_config import PolarityFilterConfig
 from evpose.io.config_file import config_from_dict, config_to_dict, read_config, write_config  # noqa: F401 - re-exported
 from evpose.tracker.edge_offsets import EdgeOffsetConfig
-from evpose.tracker.event_registration import EventRegistrationConfig
+from evpose.tracker.event_registration_config import EventRegistrationConfig
 from evpose.tracker.map_refinement import MapRefinementConfig
 from evpose.tracker.motion_filter_config import MotionFilterConfig
 from evpose.tracker.registration_config import RegistrationConfig

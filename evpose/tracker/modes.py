@@ -9,7 +9,7 @@ mode              pose prediction       field registration reads        output p
 ================  ====================  ==============================  =================
 
 The polarity filter predicts each used map point's polarity from the IMU
-motion (:class:`~evpose.fusion.polarity.MapPolaritySelector`) and builds
+motion (:class:`~evpose.fusion.map_polarity_selector.MapPolaritySelector`) and builds
 ``T_align`` (:mod:`evpose.fusion.aligned_surface`): per point patch only the
 events of the predicted polarity, nothing outside the patches (with
 ``polarity.drop_empty_points``, points whose patch shows no recent event are

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import enum
+import time
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -103,3 +104,8 @@ def step_debug(time_surface, distance_field, until, events, keep, visible, used,
         events_removed=events[~keep],
         extra=extra,
     )
+
+
+def elapsed_ms(t0: float) -> float:
+    """Milliseconds since ``t0`` (a ``time.perf_counter()`` reading), as :attr:`StepResult.timings_ms` holds them."""
+    return (time.perf_counter() - t0) * 1e3

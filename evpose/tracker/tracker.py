@@ -37,21 +37,23 @@ from evpose.frontend.time_surface import SeparatedTimeSurface
 from evpose.fusion import aligned_field
 from evpose.fusion.aligned_surface import AlignedTimeSurface
 from evpose.tracker.config import MotionModel, TrackerConfig
-from evpose.tracker.crowding import uncrowded
 from evpose.tracker.ego_motion_events import ego_motion_keep, empty_ego_history
 from evpose.tracker.edge_offsets import EdgeOffsetLearner
 from evpose.tracker.event_registration import event_registration_for
 from evpose.tracker.grazing import add_crease_off_trail, add_grazing_off_trail, crease_points
+from evpose.tracker.map_learning import learn_map_points
 from evpose.tracker.map_refinement import PaintedEdgeRefiner
 from evpose.tracker.motion_filter import ConstantVelocityKalman
+from evpose.tracker.point_selection import registered_points
+from evpose.tracker.polarity_stage import align_to_polarity, learn_polarity_signs
 from evpose.tracker.predictor import ConstantVelocityPredictor, MotionPredictor
-from evpose.tracker.registration import polarity_trail, register_to_map, strided_subset
-from evpose.tracker.step_result import StepResult, TrackStatus, step_debug
+from evpose.tracker.registration import polarity_trail, register_to_map
+from evpose.tracker.step_result import StepResult, TrackStatus, elapsed_ms, step_debug
 from evpose.tracker.stpe_pose import stpe_pose
 from evpose.tracker.track_hold import ACQUIRE_UPDATES, TrackHold  # noqa: F401 (ACQUIRE_UPDATES re-exported)
 from evpose.tracker.modes import MotionComponents, unfused_predictor
 from evpose.tracker.visible_map import VisibleMap, field_box, visible_points
-from evpose.tracker.wall_occlusion import visible_over_walls, wall_foot_mask
+from evpose.tracker.wall_occlusion import wall_foot_mask
 
 PolaritySelector = Callable[[np.ndarray, int, np.ndarray], "np.ndarray | None"]
 """``(T_world_cam_predicted, t_us, map_point_indices) -> int8 polarity per point (+1/-1/0) or None (all combined)``."""
@@ -59,10 +61,6 @@ PolaritySelector = Callable[[np.ndarray, int, np.ndarray], "np.ndarray | None"]
 
 _NO_PRIOR = np.zeros((6, 6))
 """Information matrix of "no prior" for :func:`register_to_map`."""
-
-
-def _ms(t0: float) -> float:
-    return (time.perf_counter() - t0) * 1e3
 
 
 class Tracker:
@@ -254,7 +252,7 @@ class Tracker:
 
         t0 = time.perf_counter()
         keep = self.noise_filter.filter(events)
-        timings["noise_filter"] = _ms(t0)
+        timings["noise_filter"] = elapsed_ms(t0)
         ego = self.components.ego_motion
         n_ego_removed = 0
         if ego is not None and self._pose is not None and len(events):
@@ -263,10 +261,10 @@ class Tracker:
                                                           self._ego_history, events, keep, until)
             n_ego_removed = int(np.count_nonzero(keep & ~keep_ego))
             keep &= keep_ego
-            timings["ego_motion"] = _ms(t0)
+            timings["ego_motion"] = elapsed_ms(t0)
         t0 = time.perf_counter()
         self.time_surface.update(events, keep)
-        timings["time_surface"] = _ms(t0)
+        timings["time_surface"] = elapsed_ms(t0)
         n_in = len(events)
         n_kept = int(np.count_nonzero(keep))
         counts = {"events_in": n_in, "events_kept": n_kept}
@@ -276,35 +274,15 @@ class Tracker:
 
         if self._pose is None:
             self._t_us = until
-            timings["total"] = _ms(t_total)
+            timings["total"] = elapsed_ms(t_total)
             timings["total_cpu"] = (time.thread_time() - cpu_total) * 1e3
             return StepResult(until, np.full((4, 4), np.nan), TrackStatus.NOT_INITIALISED, "no initial pose", timings_ms=timings, counts=counts)
 
         predicted = self.predictor.predict(until)
         t0 = time.perf_counter()
-        visible = self.visible_map.visible(predicted, self.config.visible_map)
-        if self._wall_feet is not None and visible.size:
-            # Feet seen over their wall read the rim's events (see evpose.tracker.wall_occlusion).
-            visible = visible_over_walls(self._points, self._edge_normals, self._wall_feet, visible, predicted[:3, 3])
-        # Painted points the refiner has not yet placed would pull the pose towards their map error.
-        held = None if self.refiner is None or (self.polarity_selector is not None and not self._hold_filtered) else self.refiner.held_out()
-        candidates, skip = visible, None  # skip: (N,) bool, points whose patches T_align shows but registration skips
-        if held is not None:
-            ready = ~held[visible]
-            if 2 * int(np.count_nonzero(ready)) >= visible.size:  # else the painted points are the map: keep them
-                # T_align shows the composed points' patches alone: a point left out of them would never be refined.
-                candidates, skip = (visible[ready], None) if self.polarity_selector is None else (visible, held)
-        used = strided_subset(candidates, int(self.config.registration.max_points))
-        vm = self.config.visible_map
-        used_tangents = None  # the rows of ``used`` of ``_tangents`` once gathered
-        if vm.crowded_radius_px > 0 and used.size:
-            # Another edge's TDF overlaps theirs: their minimum is not their edge's (see evpose.tracker.crowding).
-            used, pts, used_tangents = uncrowded(self._points, self._tangents, used, predicted, self.K, vm.crowded_radius_px,
-                                                 vm.crowded_tolerance_px)
-        else:
-            pts = np.take(self._points, used, axis=0)  # the rows of ``used``; 3x cheaper than fancy indexing
+        visible, used, pts, used_tangents, skip = registered_points(self, predicted)
         roi = self._field_box(pts, predicted)
-        timings["culling"] = _ms(t0)
+        timings["culling"] = elapsed_ms(t0)
         counts.update(points_visible=int(visible.size), points_used=int(used.size))
 
         t0 = time.perf_counter()
@@ -312,31 +290,25 @@ class Tracker:
         if self.polarity_selector is not None:
             # Per part of the filter: prediction (includes the fusion's IMU propagation to ``until``, which its update
             # then reuses), T_align composition, and the labelling after registration (below).
-            timings["polarity_predict"] = _ms(t0)
-        # --- polarity event filter (issue 7, evpose/fusion/aligned_surface.py): registration reads T_align, one field.
+            timings["polarity_predict"] = elapsed_ms(t0)
+        # --- polarity event filter (issue 7, evpose/tracker/polarity_stage.py): registration reads T_align, one field.
         surface, field_polarity = self.time_surface, polarity
         composed = used, polarity  # what T_align is composed for: labelling and sign learning take them all
         if polarity is not None and hasattr(self.polarity_selector, "align"):
             t1 = time.perf_counter()
-            box = self._field_box(pts, predicted, True) if self.coarse_field is not None else roi
-            aligned = self.polarity_selector.align(self.time_surface, pts, predicted, polarity, box, events, keep, until)
+            aligned, with_events = align_to_polarity(self, used, pts, polarity, skip, predicted, roi, events, keep, until, counts)
             if aligned is not None:
                 surface, field_polarity = aligned, None
-                counts.update(aligned.last_counts)
-                with_events = self.polarity_selector.points_to_register()
-                if skip is not None:
-                    ready = ~np.take(skip, used)
-                    with_events = ready if with_events is None else with_events & ready
                 if with_events is not None:
                     # Points whose patch shows no recent event of their polarity cannot pull the pose, and held-out
                     # painted points must not yet: skip them.
                     used, pts, polarity = used[with_events], pts[with_events], polarity[with_events]
                     used_tangents = None
                 counts["points_registered"] = int(used.size)
-            timings["polarity_align"] = _ms(t1)
+            timings["polarity_align"] = elapsed_ms(t1)
         # --- end polarity event filter
         if self.polarity_selector is not None:
-            timings["polarity_filter"] = _ms(t0)
+            timings["polarity_filter"] = elapsed_ms(t0)
         t0 = time.perf_counter()
         pols = (0,) if field_polarity is None else tuple(sorted({int(p) for p in np.unique(field_polarity)}))
         # Registration takes the curvature from the field's values (bit for bit the same): no curvature images.
@@ -349,7 +321,7 @@ class Tracker:
         if self.coarse_field is not None:
             self.coarse_field.compute(surface, until, pols, self._field_box(pts, predicted, True), curv)
             levels.insert(0, self.coarse_field)
-        timings["distance_field"] = _ms(t0)
+        timings["distance_field"] = elapsed_ms(t0)
 
         t0 = time.perf_counter()
         weak = False
@@ -393,7 +365,7 @@ class Tracker:
                 counts["events_registered"] = int(self.event_registration.refine_registration(
                     reg, used, polarity, events, keep, until, twist, self.K, self.calibration, predicted,
                     self._registration)) * self.event_registration.last_events
-                timings["event_registration"] = _ms(t1)
+                timings["event_registration"] = elapsed_ms(t1)
             reason = reg.reason
             if self._weak_test and reg.success and reg.inliers < float(self.config.registration.min_inlier_ratio) * reg.points_used:
                 weak = True
@@ -406,7 +378,7 @@ class Tracker:
                               f"{self.config.registration.min_inlier_ratio:g} of them once the track was lost)")
             if not self.hold.acquired and reg.success:
                 reason = self.hold.acquisition_test(reg.inliers, reg.points_used, self.config.registration.min_inlier_ratio)
-        timings["registration"] = _ms(t0)
+        timings["registration"] = elapsed_ms(t0)
 
         ok = reg is not None and reg.success and not reason
         fused = None
@@ -414,7 +386,7 @@ class Tracker:
         if motion is not None:
             t0 = time.perf_counter()
             fused = motion.report(until, reg.T_world_cam if ok else None, reg.covariance if ok else None)
-            timings["fusion"] = _ms(t0)
+            timings["fusion"] = elapsed_ms(t0)
         t_prev = self._t_us
         if self.components.drives_pose:
             # Fused output: a failed registration is bridged by IMU propagation (degraded), never dropped.
@@ -434,44 +406,9 @@ class Tracker:
             status, reason = self.hold.regain(status, reason, ok and not weak)
         if status is TrackStatus.LOST:
             self.hold.never_lost = False
-        if self.edge_offsets is not None:
-            self.edge_offsets.last_fit[:] = np.nan
-        if self.event_registration is not None and status is TrackStatus.OK and self.hold.never_lost and counts.get("events_registered"):
-            # Only what an accepted update's events say, and only while the track was never lost (a wrong lock must not
-            # be learned).
-            counts["points_event_offset"] = self.event_registration.learn()
-        if self.edge_offsets is not None and status is TrackStatus.OK and field_polarity is None and self.hold.never_lost:
-            # As the refiner below (which takes this update's pose-like fit out of its own steps), from the pose the
-            # field shows, only while the track was never lost (a wrong lock must not be learned).
-            t0 = time.perf_counter()
-            T_field = self._field_pose(twist)
-            # Measured where registration read the field (the fused modes' lag floor and polarity trail).
-            counts["points_offset"] = self.edge_offsets.update(self._points, used, levels[-1], T_field, self.K, twist,
-                                                               float(self._registration.field_lag_ms) * 1e-3,
-                                                               float(self._registration.lag_floor_px), trail)
-            timings["edge_offsets"] = _ms(t0)
-        if self.refiner is not None and status is TrackStatus.OK and field_polarity is None and self.hold.never_lost:
-            # Registration read slot 0. A regained track may be a wrong lock the map would learn, so only a track
-            # never lost since its start refines (indoor demo, stpe: refining after regains 192 -> 861 mm ATE).
-            # Painted edges move towards where this update's events put them, seen from the pose the field shows.
-            t0 = time.perf_counter()
-            T_field = self._field_pose(twist)
-            gauge = None
-            if self.edge_offsets is not None and self.config.edge_offsets.gauge_painted and np.all(np.isfinite(self.edge_offsets.last_fit)):
-                gauge = self.edge_offsets.last_fit
-            counts["points_refined"] = self.refiner.update(self._points, levels[-1], T_field, self.K, gauge)
-            timings["map_refinement"] = _ms(t0)
+        learn_map_points(self, status, used, field_polarity, levels, twist, trail, counts, timings)
         if self.polarity_selector is not None and hasattr(self.polarity_selector, "observe") and polarity is not None:
-            # Label this step's events against the prediction (reports, viewer) and learn point signs from them.
-            t0 = time.perf_counter()
-            labels = self.polarity_selector.observe(events, self._pose, *composed, self.width, self.height, keep=keep)
-            if isinstance(surface, AlignedTimeSurface):  # its event pass (labels, counts) waited for the pose: see align
-                surface.judge()
-                counts.update({k: v for k, v in surface.last_counts.items() if k.startswith("events_")})
-            counts.setdefault("events_polarity_removed", int(np.count_nonzero(labels == 0)))  # T_align's count if it ran
-            counts["points_single_polarity"] = int(np.count_nonzero(polarity))
-            timings["polarity_observe"] = _ms(t0)
-            timings["polarity_filter"] = timings.get("polarity_filter", 0.0) + timings["polarity_observe"]
+            learn_polarity_signs(self, events, keep, composed, polarity, surface, counts, timings)
         counts["registered"] = int(ok)
         if self._weak_test:
             status, reason = self.hold.weak_run(status, reason, ok and weak)
@@ -480,7 +417,7 @@ class Tracker:
             counts.update(inliers=reg.inliers, iterations=reg.iterations, points_in_image=reg.points_used)
         else:
             counts.update(inliers=0, iterations=0, points_in_image=0)
-        timings["total"] = _ms(t_total)
+        timings["total"] = elapsed_ms(t_total)
         timings["total_cpu"] = (time.thread_time() - cpu_total) * 1e3
 
         result = StepResult(
@@ -501,13 +438,6 @@ class Tracker:
         return result
 
     # ---------------------------------------------------------------- helpers
-    def _field_pose(self, twist: np.ndarray | None) -> np.ndarray:
-        """The current pose moved back by the field's lag along ``twist``: the pose this update's field shows."""
-        lag = float(self._registration.field_lag_ms) * 1e-3
-        if twist is None or lag <= 0:
-            return self._pose
-        return gtsam.Pose3(self._pose).compose(gtsam.Pose3.Expmap(-np.asarray(twist, dtype=np.float64) * lag)).matrix()
-
     def _painted_mask(self) -> np.ndarray:
         """(N,) bool over the map: the points the painted-edge refiner owns."""
         mask = np.zeros(self._points.shape[0], dtype=np.bool_)

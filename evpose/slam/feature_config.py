@@ -1,0 +1,164 @@
+"""Feature detection and tracking settings of the map-free SLAM (:class:`FeatureConfig`): FAST with a bucketing grid, KLT.
+
+Kept in its own module: most of its fields carry the measurements that set them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+
+@dataclass
+class FeatureConfig:
+    """FAST detection with a bucketing grid and pyramidal KLT tracking (both OpenCV)."""
+
+    fast_threshold: int = field(default=8, metadata={"min": 1, "max": 80, "step": 1, "unit": "grey levels"})
+    """FAST intensity threshold on the 8-bit normalised image, grey levels."""
+    min_eigen_quality: float = field(default=0.001, metadata={"min": 0.0, "max": 0.5, "step": 0.005, "unit": "ratio"})
+    """FAST corners need a Shi-Tomasi score of at least this share of the image's best, ratio. Many tracks sit on
+    straight edges (where KLT slides along the edge), yet fewer, cornerier ones starve the map: landing event-only
+    seeds 0-11 (``MciConfig.reference_fraction`` 1.0, mean ATE 3.16 %, 2 of 12 within 2 %): 0.01 -> 3.94 % (0 of 12,
+    tracked at least 74.8 %), 0.03 -> 5.02 % (0, 50.0 %). Triangulating only tracks whose structure tensor (11 px)
+    had an eigenvalue ratio of at least 0.1 in the keyframe MCI: 3.79 % (0 of 12); only edge tracks that moved across
+    their edge (|cos| to the gradient 0.3 / 0.5): 2.98 / 4.61 % (2 of 12 each). New points within 2 / 3 times the
+    keyframe's median depth: 3.36 / 2.86 % (1 / 4 of 12)."""
+    grid_cols: int = field(default=8, metadata={"min": 1, "max": 32, "step": 1, "unit": "cells"})
+    """Bucketing grid columns, cells."""
+    grid_rows: int = field(default=6, metadata={"min": 1, "max": 32, "step": 1, "unit": "cells"})
+    """Bucketing grid rows, cells."""
+    per_cell: int = field(default=4, metadata={"min": 1, "max": 50, "step": 1, "unit": "features"})
+    """Strongest features kept per grid cell, features."""
+    min_distance_px: float = field(default=8.0, metadata={"min": 1.0, "max": 40.0, "step": 1.0, "unit": "px"})
+    """New features keep this far from existing tracks, pixels."""
+    border_px: int = field(default=8, metadata={"min": 0, "max": 40, "step": 1, "unit": "px"})
+    """Features closer than this to the image border are ignored, pixels."""
+    min_support_ratio: float = field(default=0.0, metadata={"min": 0.0, "max": 20.0, "step": 0.25, "unit": "ratio"})
+    """A corner needs at least this multiple of the image's mean event count per ``support_window_px`` square around it
+    (isolated noise events look like corners; 0 disables the test), ratio. On the indoor room most of the 150 tracks sit
+    on noise events in sparse stretches (KLT keeps 1-9 % of them per MCI there), yet event-only seeds 0-3 got worse
+    with the test: 2 / 4 / 8 -> ATE 11.99 / 19.64 / 10.80 %, tracked 51.2 / 45.8 / 38.5 % (off: 8.57 %, 52.4 %).
+    Dropping the noise events themselves before window selection (session 12, the front end's consistency filter,
+    :class:`evpose.frontend.noise_filter.ConsistencyNoiseFilter`, not kept): seeds 0, 1 without coasting, 5 / 10 ms ->
+    ATE 9.82 -> 10.73 / 14.36 %, tracked 53.2 -> 40.9 / 39.6 % (the filtered blank-wall stretches fall below
+    ``min_event_rate`` and give no MCI, and the room's edges alone leave 20-50 tracks); seeds 0-3 with
+    ``TrackingConfig.coast_s`` 0.4: 6.84 -> 12.29 %, 80.2 -> 47.2 % (with ``min_event_rate`` 0.1: 11.35 / 57.3).
+    Session 13, the same test on every MCI-to-MCI track's new position (tracks dropped below 1.0; removed), landing
+    event-only seeds 0-11 (``/tmp/s13/slamedge/exp.py``): mean ATE 2.52 -> 3.19 %, within 2 % 5 -> 2 of 12, tracked at
+    least 96.5 -> 88.0 %. Leaving points triangulated from tracks below 1.0 out of the local BA (pose tracking still
+    using them; removed): seeds 0-11 2.52 -> 2.48 % (median 2.21 -> 1.72, within 2 % 5 -> 8), seeds 12-23 3.62 -> 2.94 %
+    (3 -> 4), but indoor event-only seeds 0-3 6.84 -> 11.14 % (worse on all four), tracked 80.2 -> 76.7 %; with
+    ``TrackingConfig.ba_edge_along_sigma_px`` 3, seeds 0-11: 3.26 % (4 within 2 %)."""
+    support_window_px: int = field(default=7, metadata={"min": 3, "max": 31, "step": 2, "unit": "px"})
+    """Side of the square the support test counts events in, pixels (odd)."""
+    klt_window_px: int = field(default=23, metadata={"min": 5, "max": 51, "step": 2, "unit": "px"})
+    """KLT block size, pixels (odd). Landing event-only seeds 0-11, 60 runs (``MciConfig.reference_fraction`` 1.0):
+    15 -> mean ATE 3.34 -> 4.13 % (tracked at least 79.0 %), 31 -> 3.34 % (within 2 % 9 -> 12 of 60). KLT on a
+    straight edge measures only the motion across it (``TrackingConfig.ba_edge_along_sigma_px``). Session 13, replacing
+    the along-edge part of such tracks' motion (structure-tensor eigenvalue ratio below 0.1 over 11 px) by that of a
+    RANSAC homography of the corner tracks with event support (removed): landing event-only seeds 0-11 mean ATE 2.52 ->
+    3.15 % (median 2.21 -> 2.15, within 2 % 5 -> 4, tracked at least 96.5 -> 83.9 %), the summed keyframe-to-keyframe
+    x-rotation error per run (median over the seeds) 8.6 -> 5.4 deg; with ``ba_edge_along_sigma_px`` 3: 2.54 % (5).
+    Session 14, re-tracking every MCI-to-MCI track at full resolution with an 11 px window from the 23 px result
+    (kept when within 2 px): 2.87 % (5 of 12, worst 5.39); dropping tracks that refinement moved over 0.7 px left
+    seeds 0-3 59.7-91.8 % tracked at 5.5-7.1 % ATE (removed). Session 17, indoor event-only seeds 0-7: 31 -> time
+    tracked from the events 44.7 -> 49.4 % but ATE 7.39 -> 10.55 % (:mod:`evpose.slam.event_coasting`), pixels."""
+    klt_levels: int = field(default=2, metadata={"min": 0, "max": 5, "step": 1, "unit": "levels"})
+    """KLT pyramid levels above the base image, levels."""
+    klt_max_bidir_error_px: float = field(default=1.0, metadata={"min": 0.1, "max": 5.0, "step": 0.1, "unit": "px"})
+    """Tracks whose forward-backward KLT error exceeds this are dropped, pixels. Landing event-only seeds 0-11, 60 runs
+    (see ``MciConfig.reference_fraction``; 1.0 there): 0.5 -> mean ATE 3.34 -> 3.38 %, within 2 % 9 -> 3 of 60."""
+    klt_first_step_max_residual_px: float = field(default=0.0, metadata={"min": 0.0, "max": 10.0, "step": 0.1, "unit": "px"})
+    """A new track whose first MCI-to-MCI step lies farther than this from a RANSAC homography of the older tracks'
+    steps is dropped (0: no test), pixels. Session 14 (``/tmp/s14/tracknoise``): the event-only landing's per-track
+    errors (``TrackingConfig.ba_huber_px``) start at the first step, heavy-tailed (seeds 1 / 3: median 1.06 / 0.88
+    px, 90th percentile 6.3 / 6.5 px, 41 / 37 % over 1.5 px; later steps 0.5-0.8 px); this residual correlates with
+    that step's true error at 0.86 / 0.93, and of the first steps it puts over 2 px (26 %) 90-92 % are over 1.5 px
+    off. At 1.5 px the share of one-step-old observations off by over 1.5 px fell to 15 / 13 % (all ages 53 / 50 ->
+    48 / 46 %). Landing event-only (defaults: seeds 0-11 2.52 %, 5 of 12 within 2 %; seeds 12-23 3.62 %, 3): 3 px
+    1.75 % (8, max 2.65; paired -0.77 +- 0.26 points, 11 better) and 2.52 % (8; -1.10 +- 0.67, 9 better); with
+    ``target_tracks`` 145 (a perturbation) 3.13 -> 2.24 % (2 -> 5; -0.89 +- 0.53, 7 better); seeds 0-11 at 1.5 / 2 /
+    4 px 2.73 / 2.82 / 2.38 % (7 / 6 / 5). E-I-C2 landing seeds 0-11 at 3 px: ATE 0.94 -> 0.97 %, RPE at most 0.0032
+    m/m and 0.0022 deg/m (0.0050, 0.0022). Indoor event-only (multi-map, much coasting) seeds 0-3: 6.84 -> 12.21 %
+    (all four worse), 4-7: 10.80 -> 13.18 % (two worse; tracked 82.5 -> 85.3 %), though the gate removed bad first
+    steps there too (seed 0: 51 -> 39 % over 1.5 px) and the homography holds there as well as on the landing (its
+    inlier share of the older tracks' steps at 3 px, median per MCI: indoor seed 0 0.91, landing seeds 1 / 3 0.89 /
+    0.91), so it stays off until indoor tracking is stable enough to judge it. Gating only while tracking a map (not
+    during the two-view initialisation): landing 3.13 %, indoor 6.53 % (tracked 80.2 -> 72.5 %); only during the
+    initialisation: landing 2.31 % (8). Judging each track's first three steps 2.25 % (7); the median step of the 6
+    nearest older tracks in place of the homography 2.13 % (6), indoor 9.89 %. Also tried and removed: the same test
+    on every track's every step (2 px: 3.22 %, 0 of 12; 1 px: seeds 0-6 3.6-7.3 %, initialisations delayed);
+    dropping tracks older than 8 MCIs (their map points re-found by projection) 5.41 % (3; 4 MCIs: seeds 0-3
+    4.3-13.1 %, coasting); re-tracking every track from its first MCI (single-level KLT from the chained position,
+    kept within 1 / 2 px) 2.48 / 4.23 % (6 / 4), with this gate 2.92 % (7). That re-tracking left the track errors
+    as they were (seed 1: 53 % over 1.5 px either way): they sit in the event images' appearance of the corners, not
+    in KLT's chaining. Lead, on main after the blank-wall coasting: 3 px landing 0-11 1.75 % (8) as above; indoor
+    seeds 0-3 / 4-7 8.43 / 11.44 -> 11.46 / 12.22 % (tracked 95.5 / 91.9 -> 90.1 / 88.0 %), hence off; 3 px with
+    ``ba_edge_along_sigma_px`` 3 landing 0-11 2.40 % (5 of 12, worst 4.60)."""
+    klt_curvature_gain: float = field(default=0.0, metadata={"min": 0.0, "max": 3.0, "step": 0.05, "unit": "ratio"})
+    """Each MCI-to-MCI step removes the change of the shift a constant-velocity warp leaves under image acceleration
+    (:func:`evpose.slam.features.remove_curvature_shift`; 0: off), ratio of the model's ``a T^2 / 24``. Session 15
+    (``/tmp/s15/turnbias``, see the module notes of :mod:`evpose.slam.features`): the shift is there but small. On the
+    event-only landing (seeds 1, 2, 3, 7) the true track errors regress on the model's summed shift since birth (true
+    image acceleration) at 1.6-2.1 times the model, R^2 0.6-1.1 %, the model's shift 0.11-0.14 px RMS; from the tracks'
+    own acceleration (what this option uses) at 0.6-0.8 times. Per step it moves a track by 0.02 px median, 0.65 px at
+    the 99th percentile (landing seed 1; indoor seed 0: 0.008 / 0.67 px, at most 14 px), and leaves the observation
+    errors as they were (seeds 1 / 3, gain 1: median 1.64 / 1.50 -> 1.51 / 1.61 px). Landing event-only seeds 0-11
+    (defaults 2.52 %, 5 of 12 within 2 %): gain 0.5 / 1 2.64 / 2.00 % (4 / 6), across the motion only
+    (``klt_curvature_perpendicular``) 1.92 / 3.05 % (8 / 7). Over 96 runs (seeds 0-23, the defaults and the neutral
+    perturbations ``ba_huber_px`` 1.9 / 2.1 and ``reprojection_threshold_px`` 2.4), 0.5 across: mean ATE 2.77 -> 2.50 %,
+    median 2.23 -> 2.02, within 2 % 40 -> 46, paired -0.28 +- 0.17 points, 55 better; with ``klt_curvature_max_px``
+    0.3: -0.27 +- 0.20 (47 within 2 %); gain 1 in full over 60 runs -0.41 +- 0.25. E-I-C2 landing seeds 0-3 (0.5
+    across): ATE 0.81 -> 0.68 %, RPE at most 0.0031 m/m and 0.0016 deg/m. But on top of
+    ``klt_first_step_max_residual_px`` 3 (landing seeds 0-23, 1.75 / 2.52 %) it is worse: 2.72 / 2.12 %, within 2 % 16
+    -> 9 of 24, paired +0.29 +- 0.37. Indoor event-only seeds 0-3 with the same four settings and seeds 4-7 with the
+    defaults (20 runs): 8.80 -> 9.03 % (paired +0.23 +- 0.66, 8 better; seeds 0-3 defaults 8.43 -> 10.78 %, tracked
+    95.5 -> 92.8 %; seeds 4-7 11.44 -> 9.87 %); with the 0.3 px clip, seeds 0-3, 16 runs: 8.14 -> 9.96 % (+1.82 +-
+    1.05). So off. CPU 0.16 ms per MCI at 150 tracks. Lead, after session 15's two-view initialisation
+    (``InitializationConfig.homography_fit_share``; defaults: landing seeds 0-11 / 12-23 2.37 / 3.18 %, 7 / 6 within 2
+    %, indoor seeds 0-7 7.39 %), 0.5 across (``/tmp/s15/lead/exp.py cg ...``): landing 2.10 / 2.80 %, 9 / 4 within 2 %
+    (13 of 24 either way), indoor 9.25 % (tracked 93.7 %, min 85.4): still off."""
+    klt_curvature_perpendicular: bool = False
+    """``klt_curvature_gain``: only the part across each track's motion (the turn's), not along it."""
+    klt_curvature_max_px: float = field(default=0.0, metadata={"min": 0.0, "max": 5.0, "step": 0.05, "unit": "px"})
+    """``klt_curvature_gain``: longest shift a track is credited with (0: no clip), pixels."""
+    klt_min_ncc: float = field(default=0.0, metadata={"min": 0.0, "max": 1.0, "step": 0.05, "unit": "ratio"})
+    """MCI-to-MCI tracks whose 11x11 patches (previous vs current MCI) correlate below this are dropped (0: no test).
+    KLT started at the gyro-predicted flow passes its forward-backward test on blob-like event images even where
+    the scene changed, confirming its own prediction; the patch correlation does not (see the measured figures in
+    ``InertialConfig.ba_gyro_prior_uninit_deg``). Synthetic scene switch with that prior at 0.02 (measured before
+    ``EventWindowConfig.max_event_gap_ms``, which bridges it without this test): 0 / 0.2 / 0.3 / 0.6 ->
+    ATE 5.5 / 2.7 / 3.3 / 3.8 %, bridged by the IMU from 0.3 up (as without the prior). Landing E-I-C2 seeds 0-23 with
+    the prior: 0.3 -> mean ATE 1.09 % (23 of 24 within 2 %, seed 13 6.2 % and 0.0196 m/m), 0.6 -> 1.48 % (21/24);
+    without the prior 0.6 -> 7.23 % (15/24, against 4.53 % and 18/24 off). Indoor seeds 0-3 (scale lost either way):
+    0.3 with the prior 1/3/6/4 maps, RPE above 0.01 m/m on seeds 1-3 (seed 2 1.95 m/m). So off, ratio."""
+    klt_min_support_ratio: float = field(default=0.0, metadata={"min": 0.0, "max": 20.0, "step": 0.25, "unit": "ratio"})
+    """Event-only, while a map is tracked: MCI-to-MCI tracks whose new position's ``support_window_px`` square holds
+    fewer than this multiple of the MCI's mean event mass per square are dropped (0: no test), ratio. KLT on a patch
+    with no events (a blank wall, an edge the motion runs along) stays where it started and still passes the
+    forward-backward test (what such tracks are: the module notes of :mod:`evpose.slam.features`). Session 16
+    (``/tmp/s16/indoorfe9``; indoor event-only seeds 0-7 with the defaults and the neutral perturbations ``ba_huber_px``
+    1.9 / 2.1 and ``reprojection_threshold_px`` 2.4, 32 runs, defaults 7.40 %, tracked at least 79.3 %): 2 -> 5.77 %
+    (defaults alone 7.39 -> 5.51 %), paired -1.63 +- 0.61 points, 23 better, tracked mean 93.0 -> 90.1 % (one run 73.2
+    %); 3 -> 6.04 % (24 runs, -1.43 +- 0.62). Testing during the two-view initialisation as well delays it (not
+    initialised 8 -> 45 MCIs on seed 0): 1.5 / 2 / 3 -> 7.40 (16 runs) / 5.96 / 7.15 %, tracked at least 66.8 / 74.4 /
+    66.7 %. An absolute floor of 2 events in the square (state as here) 5.43 % (24 runs, -1.94 +- 0.82), and applied
+    only to tracks without a map point (none of them becomes one) 5.38 % (16 runs, -1.91 +- 0.63, tracked at least 85.3
+    %). But the event-only landing, whose tracks mostly lie on texture (5 % of them on patches with fewer than 2 events,
+    against 75 % indoors), loses visual tracking in the turn with any of these (PnP inliers fall under ``min_inliers``
+    and the map coasts), seeds 0-11 (defaults 2.37 %, 7 of 12 within 2 %): 2 -> seeds 0-6 4.03 % against 2.52 (2 of 7
+    within 2 % against 5); the 2-event floor 3.36 % (4 of 12), only for tracks without a map point 3.49 % (6 of 12,
+    seed 4 5.58 -> 10.28 %); 2 only while 24 supported map-point tracks remain, seeds 0-8 3.34 % against 2.44; a track
+    dropped only after two unsupported MCIs in a row, seeds 0-7 4.67 % against 2.54. The same test at detection
+    (``min_support_ratio``) 2 / 4: indoor defaults 6.84 / 11.86 %, tracked at least 75.3 / 69.5 %, landing seeds 0-8 3.68
+    % against 2.44. Most of the indoor gain is coasting, not better tracks: visually tracked MCIs per run fall 75 -> 47
+    and coasted ones rise 103 -> 129 (means over the 32 runs), the 0.84-1.9 s stretch becomes a coasted map that the
+    per-map alignment fits within 0.1-3 cm (seeds 2, 4, 5 tracked it visually at 10-22 cm RMS). A test that drops
+    nearly every track shows how far that goes: KLT of four 9 px sub-windows 5 px off each diagonal, started at the
+    track's flow, any of them off by more than 1.5 px (an occlusion-boundary test) leaves 9-10 MCIs tracked of 177-197
+    and gives indoor seeds 0-3 1.35 / 2.13 / 1.70 / 2.86 % at 82-90 % tracked (5-7 maps); landing seeds 0-8 2.0-3.2 %
+    at 70-86 %. With two of the four off by more than 3 px: indoor seeds 0-2 10.59 / 6.49 / 4.25 % (defaults 7.84 /
+    3.61 / 9.89), landing seeds 0-5 3.95 / 4.70 / 3.78 / 3.50 / 6.83 / 6.91 % (1.50 / 1.72 / 1.87 / 3.06 / 5.58 /
+    1.96). So off, ratio."""
+    target_tracks: int = field(default=150, metadata={"min": 20, "max": 1000, "step": 10, "unit": "tracks"})
+    """New features are detected on an MCI when fewer tracks survive, tracks. Session 17, indoor event-only seeds
+    0-7: 300 -> ATE 7.39 -> 8.02 %, time tracked from the events 44.7 -> 40.2 % (:mod:`evpose.slam.event_coasting`)."""

@@ -1,0 +1,190 @@
+"""Settings of the events registered at their own timestamps in the fused modes (:class:`EventRegistrationConfig`).
+
+Kept in its own module, beside :mod:`evpose.tracker.event_registration` (the method): most of its fields carry the
+measurements that set them. "See the module" in them means that module's docstring, which has the figures.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+
+@dataclass
+class EventRegistrationConfig:
+    """Events registered at their own timestamps, combined with the fused modes' field registration (see the module)."""
+
+    enabled: bool = True
+    """Register the step's events in ``full`` (the fusion's twist moves each map point to its event's time).
+
+    Off: the field registration alone (7.77 / 7.95 and 8.11 / 10.46 mm, see the module)."""
+    combine: bool = True
+    """Combine the events' pose with the field registration's by their covariances (information-weighted, in the
+    field pose's tangent space); False = replace it. Replacing (seeds 0-3 / 4-7): 6.08 / 5.78 mm at 346x260 but
+    8.90 mm (seeds 0-3) at 240x180, where the events hold the depth along the optical axis poorly (seed 1: 9.1 mm
+    RMS against the field's 3.3); combined 6.28 / 5.84 and 7.38 / 8.54 mm (3 px association radius). The field's
+    covariance scaled 3 / 10x before combining: 6.02 / 5.53, 5.81 / 5.59 mm at 346x260 but 7.45 / 9.48, 7.78 / 10.41 mm
+    at 240x180. Replacing, the 4 s demos: 10.85 / 7.98 / 7.61 mm (``landing`` / ``fast`` / ``dynamic``). Replacing with
+    a 2 px association radius, 346x260 seeds 0-3 / 4-7: 6.11 / 5.81 mm (ARE 0.070 / 0.072 deg against 0.066 / 0.068),
+    but the EKF backend then beats the graph (6.06 / 5.72 mm). Session 15 (the field echoes the prediction, see the
+    module), the field's covariance scaled 10x before combining, 3 s landings at 346x260 (``/tmp/s13/dyn/plain3.h5``
+    on the bundled map, ``/tmp/s14/fullacc/sim3`` seeds 1-3 on their built maps): 12.47 / 18.38 / 16.33 / 15.28 ->
+    8.52 / 13.59 / 12.66 / 12.26 mm, but the ``landing`` demo 9.71 -> 10.99 mm (3x / 5x: 10.49 / 10.80 mm): not kept.
+    Its variance along the optical axis alone 10x: 2 s seeds 0-3 6.09 mm at 346x260, 7.89 at 240x180, the 3 s
+    ``plain3`` 13.09 mm, the demo 10.22 mm; its tilt and sideways variances 10x: 7.55 mm at 346x260."""
+    covariance_scale: float = field(default=300.0, metadata={"min": 0.001, "max": 100000.0, "step": 1.0, "unit": "ratio"})
+    """Factor on the events' covariance ``(J^T W J)^-1 sigma^2`` (``sigma^2`` their weighted residual variance), ratio.
+
+    A step's ~1000 events claim ~0.01 px but share the map's slowly learned errors from update to update. Seeds
+    0-3, 346x260, replacing (3 px association radius): 1 / 3 / 10 / 30 / 100 / 300 / 1000 / 3000 gave 16.1 (seed 0)
+    / 8.07 / 7.37 / 6.94 / 6.36 / 6.08 / 6.02 / 7.04 mm (seeds 4-7 at 300 / 1000: 5.78 / 7.16); 240x180 30 / 100 /
+    300 / 1000: 9.56 / 8.76 / 8.90 / 10.36 mm; combined at 240x180 100 / 300 / 1000: 7.71 / 7.38 / 7.74 mm, at
+    346x260 30 / 100 / 300: 6.62 / 6.32 / 6.28 mm."""
+    association_radius_px: float = field(default=2.0, metadata={"min": 0.5, "max": 10.0, "step": 0.5, "unit": "px"})
+    """An event is associated with the nearest used map point projected within this distance, pixels.
+
+    3 px (the other figures in this class): seeds 0-3 / 4-7 6.28 / 5.84 mm at 346x260, 7.38 / 8.54 mm at 240x180,
+    the demos 9.42 / 14.28 / 11.61 mm, but ~0.15 ms more CPU per update and the EKF backend level with the graph
+    (346x260 seeds 0-3 6.28 / 0.0677 deg against the graph's 6.28 / 0.0684); 2 px 6.38 / 5.91, 7.25 / 8.49 mm
+    (EKF 6.58 / 6.00, 7.31 / 8.54 mm). Replacing, 346x260 seeds 0-3: 2 / 3 px 6.11 / 6.08 mm."""
+    gate_px: float = field(default=1.5, metadata={"min": 0.1, "max": 10.0, "step": 0.1, "unit": "px"})
+    """Events farther than this from their point's edge line (at the current pose) take no part, pixels (2 px: 6.34
+    mm against 6.08; seed 0 without the painted mask 0.7 / 1.0 px: 17.7 / 16.1 mm against 16.1)."""
+    huber_px: float = field(default=0.5, metadata={"min": 0.01, "max": 10.0, "step": 0.05, "unit": "px"})
+    """Huber scale on the events' distances, pixels (0.3: 6.04 mm against 6.08, replacing, 3 px association radius).
+
+    With ``gate_px`` 1.0 (combined, 2 px): seeds 0-3 / 4-7 6.29 / 5.59 mm at 346x260 and 7.25 / 8.30 mm at 240x180
+    (ARE 0.062 / 0.066, 0.072 / 0.086 deg), the demos 9.47 / 16.84 / 12.35 mm, but the EKF backend then beats the
+    graph at 240x180 (7.22 / 8.18 mm, ARE 0.073 / 0.085 deg): not kept."""
+    on_lead_px: float = field(default=0.0, metadata={"min": -2.0, "max": 2.0, "step": 0.01, "unit": "px"})
+    """How far ahead of its edge along the edge's image motion an ON event fires (negative: behind), pixels.
+
+    Simulated landing (seed 0, the simulator's true edges, at the truth, events of 5 ms), 346x260 / 240x180: ON -0.01
+    / -0.02 px, OFF -0.17 / -0.17 px (a pixel's log response: crossing from bright to dark its events come late), no
+    trend with the event's age beyond 0.05 px over 0-5 ms: no lag. Against the built map the same events read ON
+    +0.21, OFF -0.16 px and spread by 0.60 px instead of 0.34 px (the map's own errors). 346x260 seeds 0-3,
+    replacing: ON +0.1 6.43 mm, OFF 0 / -0.25 7.33 / 6.18 mm against 6.08."""
+    off_lead_px: float = field(default=-0.11, metadata={"min": -2.0, "max": 2.0, "step": 0.01, "unit": "px"})
+    """As ``on_lead_px`` for OFF events, pixels. -0.17 until session 17, where ``crease_radius_m`` split the face-on
+    points: this is now the lead of those neither on a crease nor seen past (their events -0.08 to -0.11 px)."""
+    grazing_max_cos: float = field(default=0.6, metadata={"min": 0.0, "max": 1.0, "step": 0.05, "unit": "ratio"})
+    """Points whose surface is seen at a grazing angle, the absolute cosine between the map's plane normal and the
+    ray from the camera below this, take ``grazing_on_lead_px`` / ``grazing_off_lead_px`` instead of ``on_lead_px`` /
+    ``off_lead_px``, and their OFF fields trail ``registration.fused_grazing_off_trail_px`` further (0 = off; points
+    without a plane normal never do), ratio.
+
+    Measured (session 17, scripts in ``/tmp/s17/polbias7/``, ``measure.py``): every 5th event registration of
+    closed-loop ``full`` runs, the step's events associated at the true pose, each event's distance along its point's
+    image normal from the point projected at the true pose *at the event's time*, signed along the point's image
+    motion, non-painted points within 30 mm of a true edge. Against the simulator's true edges (346x260 and 240x180,
+    seeds 0 / 1 / 4 each, 15-38 k events per run): ON events -0.01 to +0.05 px, OFF -0.18 px as ``off_lead_px``
+    says, but OFF events of grazing points (|cos| < 0.6: the boxes' vertical faces seen from above, a third of the OFF
+    events) sit -0.26 to -0.29 px behind their edge (pooled -0.28; -0.23 to -0.27 against the events' own map), those
+    of face-on points -0.125 to -0.148 (pooled -0.135); ON -0.03 to +0.07 / -0.06 to -0.08. Nothing else the tracker sees moves them as much: the event's age (0-5 ms) within 0.05
+    px, the normal image speed -0.19 ms x speed (OFF) / -0.09 ms (ON), the event's pixel multiplicity (a stand-in for
+    the edge's contrast) within 0.09 px, whether the edge moves out of or into its region (the map's outward normal
+    along or against the motion) up to 0.15 px but not alike on every surface. Per point the offset from the true
+    edge is stable (split-half correlation 0.85; 0.13-0.19 px between points), and 99.5 % of the points fire one
+    polarity only. The pose those offsets imply at the truth (``screen.py``: the events' normal equations with the
+    run's prior, averaged over 0.25 s), slow part per run 6.42 / 6.07 / 5.06 mm (346x260 seeds 0 / 1 / 4) and 6.13 /
+    5.56 / 5.39 (240x180): with the grazing OFF lead 5.95 / 5.62 / 4.69 and 5.41 / 4.87 / 4.70; with each event's own
+    true offset as its lead (an oracle) 3.45 / 4.47 / - and 1.15 / - / -; with the map on the true edges instead
+    (leads kept) 5.44 / 6.29 / - and 6.05.
+
+    ``full``, 2 s landing, mean ATE of 346x260 seeds 0-3 / 4-7 and 240x180 seeds 0-3 / 4-7 (``/tmp/s13/acc/run.py``;
+    the four sets' average): off 6.38 / 5.91 / 7.25 / 8.49 (7.01); this alone (grazing OFF lead -0.28) 6.12 / 5.50 /
+    7.46 / 7.97 (6.76); with ``fused_grazing_off_trail_px`` 0.1 / 0.2 (the defaults) / 0.3: 6.14 / 5.48 / 7.42 / 7.63
+    (6.67), **6.12 / 5.28 / 7.35 / 7.52 (6.57)**, ARE 0.064 / 0.065 / 0.079 / 0.085 deg, 5.99 / 5.12 / 7.58 / 7.28
+    (6.49); with 0.2 at ``grazing_max_cos`` 0.7 6.07 / 5.27 / 7.37 / 7.55 (6.56); that field trail alone (events' leads as off) 6.32 / 5.65 / 7.27 / 8.12 (6.84); grazing leads -0.35 / ON
+    +0.06 (no field trail) 6.21 / 5.68 / 7.74 / 7.82 (6.86); the whole measured table (face-on ON -0.07, OFF -0.135,
+    grazing ON +0.05, OFF -0.28, field trail 0.1) 6.03 / 5.50 / 7.31 / 7.90 (6.69); the face-on OFF lead split by
+    the edge's motion along / against its outward normal (measured -0.04 / -0.20 px, -0.011 to -0.077 / -0.193 to
+    -0.205 in every run; ``run_nside.py``) 5.99 / 5.14 / 7.41 / 7.67 (6.55), the grazing one too (-0.32 / -0.25) 5.94
+    / 5.20 / 7.55 / 7.66 (6.59): 346x260 against 240x180 again, not kept. 3 s landings (``landing_case``
+    3 s, ``fusion.ablation_long``'s flights), off -> on: 346x260 seeds 0-3 15.72 -> 13.62 mm (13.00 / 18.22 / 16.35 /
+    15.30 -> 11.01 / 15.76 / 14.41 / 13.30), seeds 4-7 16.79 -> 14.95 (every seed better), ARE 0.163 / 0.145 ->
+    0.148 / 0.132 deg; 240x180 seeds 0-3 18.86 -> 18.11 mm. Bundled demos (``evpose track`` on
+    ``maps/landing_map.ply``, ``evpose eval --align none``, ATE RMSE): ``landing`` 9.71 -> 10.00 mm,
+    ``landing_fast`` 18.20 -> 19.06 mm, ``landing_dynamic`` 12.27 -> 10.84 mm. The EKF backend on the 2 s sets
+    (``full:ekf``) 6.58 / 6.00 / 7.31 / 8.54 -> 6.05 / 5.36 / 7.41 / 7.41 mm: the graph, ahead on all four before,
+    is ahead on two (346x260 seeds 4-7, 240x180 seeds 0-3). CPU per update +0.02-0.04 ms (seed 0, 346x260, paired
+    runs, median 2.6-3.1 ms at load ~3)."""
+    grazing_on_lead_px: float = field(default=0.0, metadata={"min": -2.0, "max": 2.0, "step": 0.01, "unit": "px"})
+    """``on_lead_px`` of the grazing points (see ``grazing_max_cos``), pixels."""
+    grazing_off_lead_px: float = field(default=-0.28, metadata={"min": -2.0, "max": 2.0, "step": 0.01, "unit": "px"})
+    """``off_lead_px`` of the grazing points (see ``grazing_max_cos``), pixels."""
+    crease_radius_m: float = field(default=0.02, metadata={"min": 0.0, "max": 0.1, "step": 0.005, "unit": "m"})
+    """Points with a point of another region within this distance whose surface normal makes an absolute cosine
+    below 0.5 with their own (a crease between two planes: a box's top and side) take ``crease_on_lead_px`` /
+    ``crease_off_lead_px``, the other points whose edge the camera sees past ``beyond_off_lead_px``, unless grazing
+    (see ``grazing_max_cos``), metres (0 = off: ``on_lead_px`` / ``off_lead_px`` for every face-on point).
+
+    Measured (session 17, ``/tmp/s17/edgeclass7/classes.py``, ``rim.py`` on ``grazing_max_cos``'s per-event offsets
+    from the true edges, seeds 0 / 1 / 4 at 346x260 and 240x180): 93 % of the built map's points are creases at 2 cm
+    (half the face-on events: box tops at 0.4 / 1.5 m), the rest mostly the 0.15 m steps' tops and ground edges with
+    a known brightness sign. Face-on OFF events of crease points trail by -0.256 to -0.267 px in all six runs (convex
+    and concave alike within 0.01), of the others by -0.003 to -0.074, those split again: where the camera sees past
+    the edge (the map's outward edge normal towards the camera centre; 4-6 % of the face-on OFF events) they *lead*
+    by +0.30 / +0.41 / +0.37 px (346x260 seeds 0 / 4, 240x180 seed 0: a low step's unmapped riser shows beyond its top
+    edge and fires its own OFF events there), the rest trail by -0.08 to -0.11. Face-on ON events: creases -0.04 to
+    -0.07, the others -0.15 to -0.32 px. Grazing OFF: creases -0.28 to -0.29 (as ``grazing_off_lead_px``).
+
+    ``full``, 2 s landing, mean ATE of 346x260 seeds 0-3 / 4-7 and 240x180 seeds 0-3 / 4-7 (the four sets' average;
+    ``/tmp/s17/edgeclass7/run.py``, ``sets.sh``, ``run_beyond.py``): off 6.12 / 5.28 / 7.35 / 7.51 (6.565); the
+    measured face-on OFF leads crease -0.26 / other -0.05 5.84 / 5.14 / 7.69 / 7.57 (6.562), with the ON ones (-0.06
+    / -0.18) 6.11 / 5.06 / 7.84 / 7.54 (6.636); half the OFF split (-0.22 / -0.11) 5.95 / 5.09 / 7.45 / 7.52 (6.503),
+    at 1 cm 5.93 / 5.08 / 7.55 / 7.53 (6.523), with half the ON split 5.89 / 5.08 / 7.60 / 7.46 (6.507); half the OFF
+    split and the points seen past their edge at +0.15 / +0.35 / **+0.5** / +0.7 px: 5.95 / 5.01 / 7.51 / 7.40
+    (6.467), 5.85 / 4.92 / 7.35 / 7.38 (6.378), **5.84 / 4.76 / 7.29 / 7.36 (6.313)**, 5.78 / 4.71 / 7.42 / 7.62
+    (6.385); the full OFF split with +0.35 5.86 / 4.91 / 7.48 / 7.49 (6.436); +0.5 alone (every other face-on OFF
+    point at -0.17) 5.95 / 5.03 / 7.09 / 7.67 (6.434). With the defaults, ``on_lead_px`` -0.09 (the face-on ON
+events off a crease) 5.72 / 4.88 / 7.41 / 7.30 (6.324), the radius 3 cm 5.95 / 4.82 / 7.45 / 7.25 (6.371); the EKF
+backend (``full:ekf``) 6.05 / 5.36 / 7.41 / 7.41 -> 5.88 / 4.79 / 7.50 / 7.24 (6.35), the graph ahead on three sets
+(all but 240x180 seeds 4-7). The field's matching split
+    (``registration.fused_crease_off_trail_px``) did not help. With the defaults: ARE 0.064 / 0.065 / 0.079 / 0.085
+    -> 0.061 / 0.058 / 0.081 / 0.080 deg; 3 s landings (``run3.py``) at 346x260 seeds 0-3 13.62 -> 12.16 mm (11.01 /
+    15.76 / 14.41 / 13.30 -> 9.88 / 14.67 / 12.72 / 11.36), seeds 4-7 14.95 -> 13.31 (11.35 / 17.85 / 18.85 / 11.74 ->
+    9.93 / 15.83 / 17.41 / 10.06), but at 240x180 seeds 0-3 18.11 -> 18.83 (21.41 / 17.12 / 13.83 / 20.09 -> 23.12 /
+    18.50 / 13.78 / 19.93); bundled demos (``evpose track`` on ``maps/landing_map.ply``, ``evpose eval --align
+    none``, ATE RMSE): ``landing`` 10.00 -> 9.95 mm, ``landing_fast`` 19.06 -> 18.56, ``landing_dynamic`` 10.84 ->
+    10.43."""
+    crease_on_lead_px: float = field(default=0.0, metadata={"min": -2.0, "max": 2.0, "step": 0.01, "unit": "px"})
+    """``on_lead_px`` of the face-on crease points (see ``crease_radius_m``), pixels."""
+    crease_off_lead_px: float = field(default=-0.22, metadata={"min": -2.0, "max": 2.0, "step": 0.01, "unit": "px"})
+    """``off_lead_px`` of the face-on crease points (see ``crease_radius_m``, which gives the figures), pixels."""
+    beyond_off_lead_px: float = field(default=0.5, metadata={"min": -2.0, "max": 2.0, "step": 0.01, "unit": "px"})
+    """``off_lead_px`` of the face-on points off a crease whose edge the camera sees past (their outward edge normal
+    points towards the camera centre: a low step's unmapped riser shows beyond its top edge), with ``crease_radius_m``
+    on, pixels."""
+    iterations: int = field(default=3, metadata={"min": 1, "max": 20, "step": 1, "unit": "iterations"})
+    """Gauss-Newton steps on one association, iterations (2: 6.03 mm against 6.08, replacing, 346x260 (3 px); combined
+    (2 px): 6.44 / 5.92 and 7.26 / 8.55 mm, ~0.03 ms less)."""
+    prior_residual_px: float = field(default=0.5, metadata={"min": 0.0, "max": 10.0, "step": 0.05, "unit": "px"})
+    """Typical distance of one event from its edge, which converts registration's isotropic pose prior (``prior_*``,
+    towards the prediction) into the events' units; 0 = no prior, pixels (0: 6.23 mm against 6.08)."""
+    min_events: int = field(default=100, metadata={"min": 6, "max": 100000, "step": 10, "unit": "events"})
+    """Fewer associated events than this: the field registration stands alone, events."""
+    skip_painted: bool = True
+    """Leave the map's painted (albedo) edges out: the built map has them ~10 mm off (936 of its 979 painted points
+    more than 1.5 mm from the true edge, seed 0), which the field's smoothing and robust loss tolerate but the
+    events do not (346x260 seeds 0-3, replacing, 3 px association radius: 9.99 mm with them against 6.08)."""
+    skip_wall_feet: bool = True
+    """Leave the points at the foot of a wall out (:mod:`evpose.tracker.wall_occlusion`): seen over the wall they
+    take the rim's events (6.32 mm with them against 6.08)."""
+    offset_gain: float = field(default=0.3, metadata={"min": 0.0, "max": 1.0, "step": 0.01, "unit": "ratio"})
+    """Share of each update's gauge-free per-point offset (its events' mean distance from its edge line, the part a
+    pose change explains taken out) that the events' copy of the map moves by (0 = the map as built), ratio.
+
+    346x260 seeds 0-3, replacing, ``covariance_scale`` 300: 0.1 / 0.3 / 0.5 gave 6.26 / 6.08 / 6.15 mm; 240x180
+    (``covariance_scale`` 100) 0 (the map the field reads, with its own offsets) / 0.1 / 0.3 / 0.6: 8.56 / 9.05 /
+    8.76 / 8.80 mm. Seed 0 at 346x260 with an oracle mask (only points within 1.5 mm of the true edges): 8.19 ->
+    6.26 mm. Points rejected instead (by their events' mean distance, per update or averaged): no better."""
+    offset_min_weight: float = field(default=3.0, metadata={"min": 0.5, "max": 100.0, "step": 0.5, "unit": "events"})
+    """A point learns only from an update where its events' robust weights sum to at least this, events (1.5: 6.32 mm
+    against 6.38, 346x260 seeds 0-3, within the seeds' spread)."""
+    offset_clip_px: float = field(default=1.0, metadata={"min": 0.05, "max": 5.0, "step": 0.05, "unit": "px"})
+    """A point whose events' mean distance is larger than this takes no part in that update, pixels (0.5: 6.12 mm
+    against 6.08; 2.0: 6.43 mm against 6.38, combined, 2 px association radius)."""
+    offset_max_m: float = field(default=0.05, metadata={"min": 0.0, "max": 0.5, "step": 0.005, "unit": "m"})
+    """Largest distance a point may move from the map's position, metres. Session 18 (seeds 0-7, 240x180 / 346x260,
+    7.325 / 5.30 mm): 0.005 7.45 / 5.37 mm; no learning at grazing points (``grazing_max_cos``, whose ON events'
+    lead the offsets take up, 5-14 mm off the true edges) 7.43 / 5.50; ``offset_gain`` 0 7.59 mm at 240x180."""
