@@ -109,10 +109,15 @@ def keys_to_reeliminate(dot: str, marginalize: set[str]) -> set[str]:
     """
     cliques, children, owner = parse_bayes_tree(dot)
     whole: dict[str, bool] = {}
+    parent_sets: dict[str, set[str]] = {}
 
     def parents(c: str) -> set[str]:
-        p = cliques[c][1]
-        return set(p.split(", ")) if p else set()
+        # Memoised: needs() asks for every child once per frontal key, and splitting the printed separator each time
+        # cost ~0.18 ms per fusion update (session 18 profile, 346x260 landing).
+        if c not in parent_sets:
+            p = cliques[c][1]
+            parent_sets[c] = set(p.split(", ")) if p else set()
+        return parent_sets[c]
 
     def whole_subtree(c: str) -> bool:
         if c not in whole:

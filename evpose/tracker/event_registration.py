@@ -256,7 +256,7 @@ class EventRegistration:
             off[k] = float(c.crease_off_lead_px)
             off[~k & (np.einsum("ij,ij->i", self._normals[used], T[:3, 3] - self.points[used]) > 0)] = float(c.beyond_off_lead_px)
         if float(c.grazing_max_cos) > 0 and self._plane_normals is not None and used.size:
-            g = grazing_points(self._plane_normals[used], self.points[used], T[:3, 3], float(c.grazing_max_cos))
+            g = grazing_points(self._plane_normals, self.points, T[:3, 3], float(c.grazing_max_cos), used)
             on[g] = float(c.grazing_on_lead_px)
             off[g] = float(c.grazing_off_lead_px)
         return on, off
