@@ -17,19 +17,9 @@ SECONDS = 0.5
 
 
 @pytest.fixture(scope="module")
-def landing(sim_landing_small):
+def landing(landing_head):
     """The first half second of the small simulated landing and a map sampled along its true edges (2 cm)."""
-    res = sim_landing_small
-    rec = res.recording
-    pts = []
-    for a, b in res.edges:
-        n = max(int(np.linalg.norm(b - a) / 0.02), 1)
-        pts.append(a + (b - a) * (np.arange(n) / n)[:, None])
-    t_end = int(rec.events.t[0] + SECONDS * 1e6)
-    import dataclasses
-
-    short = dataclasses.replace(rec, events=rec.events.time_window(int(rec.events.t[0]), t_end))
-    return short, ContourMap.from_points(np.concatenate(pts))
+    return landing_head(SECONDS)
 
 
 def _run(rec, cmap, mode, backend=FusionBackend.FACTOR_GRAPH):

@@ -2,12 +2,9 @@
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 import pytest
 
-from evpose.core.contour_map import ContourMap
 from evpose.tracker.config import TrackerConfig, TrackerMode
 from evpose.tracker.session import TrackingSession
 
@@ -15,16 +12,9 @@ HOLD = 8
 
 
 @pytest.fixture(scope="module")
-def landing(sim_landing_small):
+def landing(landing_head):
     """The first 0.15 s of the small simulated landing and a map sampled along its true edges (2 cm)."""
-    res = sim_landing_small
-    rec = res.recording
-    pts = []
-    for a, b in res.edges:
-        n = max(int(np.linalg.norm(b - a) / 0.02), 1)
-        pts.append(a + (b - a) * (np.arange(n) / n)[:, None])
-    short = dataclasses.replace(rec, events=rec.events.time_window(int(rec.events.t[0]), int(rec.events.t[0]) + 150_000))
-    return short, ContourMap.from_points(np.concatenate(pts))
+    return landing_head(0.15)
 
 
 def _aligned(results) -> list[bool]:
