@@ -130,7 +130,7 @@ import numpy as np
 
 from evpose.tracker.event_registration_config import EventRegistrationConfig  # noqa: F401 (re-exported)
 from evpose.tracker.event_registration_kernels import _associate_nearest, _kept_events, _learn_offsets, _linearise_events
-from evpose.tracker.grazing import crease_points, grazing_points
+from evpose.tracker.grazing import crease_points, point_leads
 from evpose.tracker.lapack_calls import inv
 from evpose.tracker.registration import _eigvalsh, _inv, _isotropic_information
 from evpose.tracker.registration_kernels import _lm_step
@@ -247,19 +247,7 @@ class EventRegistration:
     def _leads(self, used: np.ndarray, T: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(ON, OFF) lead of each point ``used`` (pixels), the grazing ones (see ``grazing_max_cos``) seen from the
         camera centre of ``T``."""
-        c = self.config
-        on = np.full(used.size, float(c.on_lead_px))
-        off = np.full(used.size, float(c.off_lead_px))
-        if self._crease is not None and used.size:
-            k = self._crease[used]
-            on[k] = float(c.crease_on_lead_px)
-            off[k] = float(c.crease_off_lead_px)
-            off[~k & (np.einsum("ij,ij->i", self._normals[used], T[:3, 3] - self.points[used]) > 0)] = float(c.beyond_off_lead_px)
-        if float(c.grazing_max_cos) > 0 and self._plane_normals is not None and used.size:
-            g = grazing_points(self._plane_normals, self.points, T[:3, 3], float(c.grazing_max_cos), used)
-            on[g] = float(c.grazing_on_lead_px)
-            off[g] = float(c.grazing_off_lead_px)
-        return on, off
+        return point_leads(used, self._crease, self._normals, self.points, self._plane_normals, T[:3, 3], self.config)
 
     def learn(self) -> int:
         """Move the points of the last successful :meth:`refine` by ``offset_gain`` of their gauge-free offsets;
