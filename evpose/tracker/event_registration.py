@@ -231,7 +231,7 @@ class EventRegistration:
             if it == n_it:
                 break  # the last pass measures the covariance and the points' distances at the final pose
             if info is not None:  # H + info, b + info e, the damped solve and its finiteness test in one call
-                delta, finite = _lm_step(H, b, info, info @ gtsam.Pose3.Logmap(T_p.between(pose)), True, 0.0)
+                delta, finite = _lm_step(H, b, info, info @ T_p.logmap(pose), True, 0.0)
             else:
                 delta, finite = _lm_step(H, b, H, b, False, 0.0)
             if not finite:
@@ -285,7 +285,7 @@ class EventRegistration:
             return False
         if c.combine and reg.covariance is not None:
             T_f = gtsam.Pose3(reg.T_world_cam)
-            e = gtsam.Pose3.Logmap(T_f.between(gtsam.Pose3(out[0])))
+            e = T_f.logmap(gtsam.Pose3(out[0]))
             I_f = inv(reg.covariance)  # a singular one raises as np.linalg.inv
             I_e = _inv(out[1])  # positive definite (checked above), as the sum below
             P = _inv(I_f + I_e)

@@ -264,6 +264,36 @@ def visible_points(points_world: np.ndarray, T_world_cam: np.ndarray, K: np.ndar
     return out[:n].copy()
 
 
+@nb.njit(cache=True)
+def _moved_little(T0, T, f, zmin, limit):
+    """Whether the worst-case image motion (pixels, focal length ``f``) of a point at depth >= ``zmin`` between the
+    poses ``T0`` and ``T`` stays below ``limit``: rotation moves every point by <= f * angle (small angles, with 1.5x
+    slack), translation moves a point at depth z by <= f * dist / (z - dist)."""
+    trace = 0.0  # trace(R0^T R)
+    for i in range(3):
+        for j in range(3):
+            trace += T0[i, j] * T[i, j]
+    angle = math.acos(min(max((trace - 1.0) / 2.0, -1.0), 1.0))
+    d2 = 0.0
+    for i in range(3):
+        d2 += (T[i, 3] - T0[i, 3]) ** 2
+    dist = math.sqrt(d2)
+    if dist >= zmin:
+        return False
+    return f * (1.5 * angle + dist / (zmin - dist)) < limit
+
+
+@nb.njit(cache=True)
+def _min_depth(points, T):
+    """Smallest depth (metres along the optical axis of the camera pose ``T``) of ``points`` (N >= 1, 3): one pass
+    instead of the whole (N, 3) product of the camera-frame points."""
+    z = np.inf
+    for i in range(points.shape[0]):
+        d = (points[i, 0] - T[0, 3]) * T[0, 2] + (points[i, 1] - T[1, 3]) * T[1, 2] + (points[i, 2] - T[2, 3]) * T[2, 2]
+        z = min(z, d)
+    return z
+
+
 class VisibleMap:
     """Culling with a cached superset: a wider cull is redone only when the camera moved enough to matter.
 
@@ -305,19 +335,12 @@ class VisibleMap:
         if self._cache is None:
             return False
         T0, _, zmin = self._cache
-        # All on Python floats: this runs every update, where a 3x3 product, np.trace and np.linalg.norm cost ~30 us
-        # (cold, in a run). The test has slack (1.5x the angle), so its rounding cannot change which points are
-        # visible, only, at a border case, whether the superset is rebuilt (the result is the same either way).
-        a, b = T0.tolist(), np.asarray(T_world_cam, dtype=np.float64).tolist()
-        trace = sum(a[i][j] * b[i][j] for i in range(3) for j in range(3))  # trace(R0^T R)
-        angle = math.acos(min(max((trace - 1.0) / 2.0, -1.0), 1.0))
-        dist = math.sqrt(sum((b[i][3] - a[i][3]) ** 2 for i in range(3)))
-        f = max(float(self.K[0, 0]), float(self.K[1, 1]))
-        if dist >= zmin:
-            return False
-        # Worst-case image motion: rotation moves every point by <= f * angle (small angles, with slack),
-        # translation moves a point at depth z by <= f * dist / (z - dist).
-        return f * (1.5 * angle + dist / (zmin - dist)) < 0.5 * self.extra_px
+        # One compiled call: this runs every update, where a 3x3 product, np.trace and np.linalg.norm cost ~30 us (cold,
+        # in a run) and the same on Python floats ~20 us (session 19). The test has slack (1.5x the angle), so its
+        # rounding cannot change which points are visible, only, at a border case, whether the superset is rebuilt
+        # (the result is the same either way).
+        return bool(_moved_little(T0, np.asarray(T_world_cam, dtype=np.float64), max(float(self.K[0, 0]), float(self.K[1, 1])),
+                                  float(zmin), 0.5 * self.extra_px))
 
     def visible(self, T_world_cam: np.ndarray, config: VisibleMapConfig) -> np.ndarray:
         """Indices (ascending) of the visible points, as :func:`visible_points` gives them."""
@@ -330,8 +353,7 @@ class VisibleMap:
             sup = self._superset(T, wide)
             self._sup_points = np.ascontiguousarray(self.points[sup])  # gathered once, reused below
             if sup.size:
-                Xc = (self._sup_points - T[:3, 3]) @ T[:3, :3]
-                zmin = float(Xc[:, 2].min())
+                zmin = float(_min_depth(self._sup_points, T))  # only bounds the rebuild test (see _still_valid)
             else:
                 zmin = float(config.min_depth_m)
             self._cache = (T.copy(), sup, max(zmin, float(config.min_depth_m), 1e-6))
