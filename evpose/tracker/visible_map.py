@@ -13,7 +13,10 @@ Not kept (session 12, the demo's poses, ~27,000 superset points, same indices ou
 branch-free projection pass first (138-142 -> 134-137 us), multiplying by the inverse of a power-of-two cell (131-144
 us), int32 scratch (140-142 us); the remap of the superset's indices done in the kernel instead of ``sup[...]``
 (184 -> 188 us per ``visible``); ``extra_px`` 20 / 40 / 60 / 120 instead of 80 (151 / 80 / 56 / 31 instead of 43
-rebuilds over the run, 284-309 us mean per ``visible`` either way, cold).
+rebuilds over the run, 284-309 us mean per ``visible`` either way, cold). Session 19 (``full`` 346x260 seed 0, in-process
+A/B, sessions stepped interleaved, 3 rounds, same poses): the occluding cull of the superset block by block (bounding
+spheres of 64 consecutive superset points, rebuilt with it, :func:`_block_cull_kernel`'s test): CPU per update
++0.006 / -0.002 / +0.027 ms median paired, no gain.
 """
 
 from __future__ import annotations
