@@ -293,7 +293,7 @@ class FactorGraphFusion:
     def predict_view(self, t_us: int) -> FusedState:
         """:meth:`predict` without the copy (the propagator's cached state: read it, never modify it)."""
         if not self.initialized:
-            raise RuntimeError("FactorGraphFusion.predict called before initialize")
+            raise RuntimeError("FactorGraphFusion.predict_view called before initialize")
         return self.propagator.predict_view(int(t_us), degraded=self.degraded)
 
     def imu_rate_poses(self, t0_us: int, t1_us: int) -> Trajectory:
