@@ -277,7 +277,9 @@ class FusionConfig:
     inputs replayed, CPU per update, alternated, load 4.2): update without covariance 0.43 -> 0.33 ms median,
     the covariance 0.111 -> 0.044 ms, whole update 0.49-0.52 -> 0.37 ms."""
     compute_covariance: bool = True
-    """Report the marginal pose covariance with every update (costs a little latency)."""
+    """Report the marginal pose covariance with every update (costs a little latency: session 19, ``full`` at 346x260
+    seed 0, in-process A/B against it on, same poses, 2 rounds at load ~3.6: CPU per update 0.08-0.10 ms less
+    without it, which the fused estimate itself never reads)."""
 
     def validate(self) -> None:
         from evpose.errors import ConfigError

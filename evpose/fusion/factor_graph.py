@@ -30,6 +30,8 @@ relinearises the window at once instead of waiting for ``relinearize_skip``.
 
 from __future__ import annotations
 
+import math
+
 import numba as nb
 import numpy as np
 
@@ -288,6 +290,12 @@ class FactorGraphFusion:
             raise RuntimeError("FactorGraphFusion.predict called before initialize")
         return self.propagator.predict(int(t_us), degraded=self.degraded)
 
+    def predict_view(self, t_us: int) -> FusedState:
+        """:meth:`predict` without the copy (the propagator's cached state: read it, never modify it)."""
+        if not self.initialized:
+            raise RuntimeError("FactorGraphFusion.predict_view called before initialize")
+        return self.propagator.predict_view(int(t_us), degraded=self.degraded)
+
     def imu_rate_poses(self, t0_us: int, t1_us: int) -> Trajectory:
         """Camera poses at IMU sample times in ``[t0, t1)``, each propagated from the state before it."""
         return imu_rate_trajectory(self.history, self.buffer, self.params, self.extrinsic, int(t0_us), int(t1_us))
@@ -371,16 +379,20 @@ class FactorGraphFusion:
         self.index = j
         self.t_state_us = t_us
         self.n_updates += 1
+        velocity = None
         if reacquire or self.n_updates % c.reoptimize_every == 0:
             self._joint_optimisation(force=reacquire and c.relinearize_correction_velocity > 0)
         elif c.relinearize_correction_velocity > 0:
             # A large correction of the new state (a start without velocity) must not stay linearised at the
             # prediction until the state is marginalised: see FusionConfig.relinearize_correction_velocity.
             v = np.asarray(self.smoother.calculateEstimateVector(vj), np.float64)
-            if np.linalg.norm(v - np.asarray(nav_pred.velocity(), np.float64)) > c.relinearize_correction_velocity:
+            d = v - np.asarray(nav_pred.velocity(), np.float64)
+            if math.sqrt(d.dot(d)) > c.relinearize_correction_velocity:  # np.linalg.norm's own recipe, without its wrapper
                 self._joint_optimisation(force=True)
+            else:
+                velocity = v  # nothing changed the smoother since: the new state's estimate, read once
         self.degraded = degraded
-        return self._finish_state(t_us, degraded=degraded)
+        return self._finish_state(t_us, degraded=degraded, velocity=velocity)
 
     def _add_registration(self, graph, i: int, xi, xj, T_meas_imu: np.ndarray, cov_cam, robust: bool):
         """Add the registration's factors on state j = i + 1 to ``graph`` (see ``FusionConfig.registration_error_model``).
@@ -425,10 +437,11 @@ class FactorGraphFusion:
             else:
                 self.smoother.update()
 
-    def _finish_state(self, t_us: int, degraded: bool) -> FusedState:
+    def _finish_state(self, t_us: int, degraded: bool, velocity: np.ndarray | None = None) -> FusedState:
+        """``velocity``: the newest velocity's estimate when already read since the smoother's last update."""
         x, v, b = self._keys(self.index)
         pose = self.smoother.calculateEstimatePose3(x)
-        vel = np.asarray(self.smoother.calculateEstimateVector(v), np.float64)
+        vel = np.asarray(self.smoother.calculateEstimateVector(v), np.float64) if velocity is None else velocity
         bias = self.smoother.calculateEstimateConstantBias(b)
         nav = self._gtsam.NavState(pose, vel)
         self.propagator.anchor(t_us, nav, bias)

@@ -157,7 +157,8 @@ class MapPolaritySelector:
         runs before the pose: its fusion update integrates the same span after the pose is out."""
         last = None if self.latest_state is None else self.latest_state.last
         if last is None or not hasattr(self.motion, "buffer"):
-            state = self.motion.predict(t_us)
+            view = getattr(self.motion, "predict_view", None)  # read only below: no copy of the state
+            state = view(t_us) if view is not None else self.motion.predict(t_us)
             return (np.zeros(3) if state.omega_cam is None else state.omega_cam), state.velocity_world
         _, gyro = self.motion.buffer.measurement_at(t_us)
         return self.motion.extrinsic.cam_omega(gyro - last.gyro_bias), last.velocity_world

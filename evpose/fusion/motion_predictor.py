@@ -31,7 +31,9 @@ class FusionMotionPredictor:
         self.last = self.fusion.initialize(int(t_us), T_world_cam, self.initial_velocity_world)
 
     def predict(self, t_us: int) -> np.ndarray:
-        return self.fusion.predict(int(t_us)).T_world_cam
+        # The pose alone: a copy of it, not of the whole propagated state, where the backend shares its cache.
+        view = getattr(self.fusion, "predict_view", None)
+        return view(int(t_us)).T_world_cam.copy() if view is not None else self.fusion.predict(int(t_us)).T_world_cam
 
     def update(self, t_us: int, T_world_cam: np.ndarray) -> None:
         self.report(t_us, T_world_cam, None)

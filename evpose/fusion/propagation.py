@@ -78,21 +78,27 @@ class NavPropagator:
         """Camera-frame FusedState from an IMU-body NavState."""
         T_wi = nav.pose().matrix()
         acc_m, gyro_m = self.buffer.measurement_at(t_us)
-        omega_imu = gyro_m - bias.gyroscope()
+        gyro_bias = np.array(bias.gyroscope(), dtype=np.float64)  # asked once, copied (gtsam hands out a view into the bias)
+        omega_imu = gyro_m - gyro_bias
         R_wi = T_wi[:3, :3]
         v_cam = self.extrinsic.cam_velocity(R_wi, np.asarray(nav.velocity(), dtype=np.float64), omega_imu)
         cov = None if covariance_imu is None else self.extrinsic.cam_covariance(covariance_imu)
         return FusedState(int(t_us), self.extrinsic.cam_pose(T_wi), v_cam, np.array(bias.accelerometer(), dtype=np.float64),
-                          np.array(bias.gyroscope(), dtype=np.float64), cov, bool(degraded), self.extrinsic.cam_omega(omega_imu))
+                          gyro_bias, cov, bool(degraded), self.extrinsic.cam_omega(omega_imu))
 
     def predict(self, t_us: int, degraded: bool = False) -> FusedState:
+        """The state propagated to ``t_us`` (a copy: the caller may modify it)."""
+        return self.predict_view(t_us, degraded).copy()
+
+    def predict_view(self, t_us: int, degraded: bool = False) -> FusedState:
+        """:meth:`predict` without the copy: the cached state itself, which the caller must not modify."""
         # The motion model and the polarity selector both ask for the same time each update: reuse the
-        # state (a copy, so callers may modify theirs) while the anchor and the buffer are unchanged.
+        # state while the anchor and the buffer are unchanged (each reads a part of it, none writes).
         key = (self.buffer.version, int(t_us), bool(degraded))
         if self._cache_state_key != key:
             self._cache_state = self.fused_state(t_us, self.predict_nav(t_us), self.bias, None, degraded)
             self._cache_state_key = key
-        return self._cache_state.copy()
+        return self._cache_state
 
 
 def imu_rate_trajectory(history, buffer: ImuBuffer, params, extrinsic: Extrinsic, t0_us: int, t1_us: int) -> Trajectory:

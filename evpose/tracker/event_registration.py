@@ -130,7 +130,7 @@ import numpy as np
 
 from evpose.tracker.event_registration_config import EventRegistrationConfig  # noqa: F401 (re-exported)
 from evpose.tracker.event_registration_kernels import _associate_nearest, _kept_events, _learn_offsets, _linearise_events
-from evpose.tracker.grazing import crease_points, grazing_points
+from evpose.tracker.grazing import crease_points, point_leads
 from evpose.tracker.lapack_calls import inv
 from evpose.tracker.registration import _eigvalsh, _inv, _isotropic_information
 from evpose.tracker.registration_kernels import _lm_step
@@ -231,7 +231,7 @@ class EventRegistration:
             if it == n_it:
                 break  # the last pass measures the covariance and the points' distances at the final pose
             if info is not None:  # H + info, b + info e, the damped solve and its finiteness test in one call
-                delta, finite = _lm_step(H, b, info, info @ gtsam.Pose3.Logmap(T_p.between(pose)), True, 0.0)
+                delta, finite = _lm_step(H, b, info, info @ T_p.logmap(pose), True, 0.0)
             else:
                 delta, finite = _lm_step(H, b, H, b, False, 0.0)
             if not finite:
@@ -247,19 +247,7 @@ class EventRegistration:
     def _leads(self, used: np.ndarray, T: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(ON, OFF) lead of each point ``used`` (pixels), the grazing ones (see ``grazing_max_cos``) seen from the
         camera centre of ``T``."""
-        c = self.config
-        on = np.full(used.size, float(c.on_lead_px))
-        off = np.full(used.size, float(c.off_lead_px))
-        if self._crease is not None and used.size:
-            k = self._crease[used]
-            on[k] = float(c.crease_on_lead_px)
-            off[k] = float(c.crease_off_lead_px)
-            off[~k & (np.einsum("ij,ij->i", self._normals[used], T[:3, 3] - self.points[used]) > 0)] = float(c.beyond_off_lead_px)
-        if float(c.grazing_max_cos) > 0 and self._plane_normals is not None and used.size:
-            g = grazing_points(self._plane_normals, self.points, T[:3, 3], float(c.grazing_max_cos), used)
-            on[g] = float(c.grazing_on_lead_px)
-            off[g] = float(c.grazing_off_lead_px)
-        return on, off
+        return point_leads(used, self._crease, self._normals, self.points, self._plane_normals, T[:3, 3], self.config)
 
     def learn(self) -> int:
         """Move the points of the last successful :meth:`refine` by ``offset_gain`` of their gauge-free offsets;
@@ -297,7 +285,7 @@ class EventRegistration:
             return False
         if c.combine and reg.covariance is not None:
             T_f = gtsam.Pose3(reg.T_world_cam)
-            e = gtsam.Pose3.Logmap(T_f.between(gtsam.Pose3(out[0])))
+            e = T_f.logmap(gtsam.Pose3(out[0]))
             I_f = inv(reg.covariance)  # a singular one raises as np.linalg.inv
             I_e = _inv(out[1])  # positive definite (checked above), as the sum below
             P = _inv(I_f + I_e)

@@ -13,7 +13,10 @@ Not kept (session 12, the demo's poses, ~27,000 superset points, same indices ou
 branch-free projection pass first (138-142 -> 134-137 us), multiplying by the inverse of a power-of-two cell (131-144
 us), int32 scratch (140-142 us); the remap of the superset's indices done in the kernel instead of ``sup[...]``
 (184 -> 188 us per ``visible``); ``extra_px`` 20 / 40 / 60 / 120 instead of 80 (151 / 80 / 56 / 31 instead of 43
-rebuilds over the run, 284-309 us mean per ``visible`` either way, cold).
+rebuilds over the run, 284-309 us mean per ``visible`` either way, cold). Session 19 (``full`` 346x260 seed 0, in-process
+A/B, sessions stepped interleaved, 3 rounds, same poses): the occluding cull of the superset block by block (bounding
+spheres of 64 consecutive superset points, rebuilt with it, :func:`_block_cull_kernel`'s test): CPU per update
++0.006 / -0.002 / +0.027 ms median paired, no gain.
 """
 
 from __future__ import annotations
@@ -264,6 +267,36 @@ def visible_points(points_world: np.ndarray, T_world_cam: np.ndarray, K: np.ndar
     return out[:n].copy()
 
 
+@nb.njit(cache=True)
+def _moved_little(T0, T, f, zmin, limit):
+    """Whether the worst-case image motion (pixels, focal length ``f``) of a point at depth >= ``zmin`` between the
+    poses ``T0`` and ``T`` stays below ``limit``: rotation moves every point by <= f * angle (small angles, with 1.5x
+    slack), translation moves a point at depth z by <= f * dist / (z - dist)."""
+    trace = 0.0  # trace(R0^T R)
+    for i in range(3):
+        for j in range(3):
+            trace += T0[i, j] * T[i, j]
+    angle = math.acos(min(max((trace - 1.0) / 2.0, -1.0), 1.0))
+    d2 = 0.0
+    for i in range(3):
+        d2 += (T[i, 3] - T0[i, 3]) ** 2
+    dist = math.sqrt(d2)
+    if dist >= zmin:
+        return False
+    return f * (1.5 * angle + dist / (zmin - dist)) < limit
+
+
+@nb.njit(cache=True)
+def _min_depth(points, T):
+    """Smallest depth (metres along the optical axis of the camera pose ``T``) of ``points`` (N >= 1, 3): one pass
+    instead of the whole (N, 3) product of the camera-frame points."""
+    z = np.inf
+    for i in range(points.shape[0]):
+        d = (points[i, 0] - T[0, 3]) * T[0, 2] + (points[i, 1] - T[1, 3]) * T[1, 2] + (points[i, 2] - T[2, 3]) * T[2, 2]
+        z = min(z, d)
+    return z
+
+
 class VisibleMap:
     """Culling with a cached superset: a wider cull is redone only when the camera moved enough to matter.
 
@@ -305,19 +338,12 @@ class VisibleMap:
         if self._cache is None:
             return False
         T0, _, zmin = self._cache
-        # All on Python floats: this runs every update, where a 3x3 product, np.trace and np.linalg.norm cost ~30 us
-        # (cold, in a run). The test has slack (1.5x the angle), so its rounding cannot change which points are
-        # visible, only, at a border case, whether the superset is rebuilt (the result is the same either way).
-        a, b = T0.tolist(), np.asarray(T_world_cam, dtype=np.float64).tolist()
-        trace = sum(a[i][j] * b[i][j] for i in range(3) for j in range(3))  # trace(R0^T R)
-        angle = math.acos(min(max((trace - 1.0) / 2.0, -1.0), 1.0))
-        dist = math.sqrt(sum((b[i][3] - a[i][3]) ** 2 for i in range(3)))
-        f = max(float(self.K[0, 0]), float(self.K[1, 1]))
-        if dist >= zmin:
-            return False
-        # Worst-case image motion: rotation moves every point by <= f * angle (small angles, with slack),
-        # translation moves a point at depth z by <= f * dist / (z - dist).
-        return f * (1.5 * angle + dist / (zmin - dist)) < 0.5 * self.extra_px
+        # One compiled call: this runs every update, where a 3x3 product, np.trace and np.linalg.norm cost ~30 us (cold,
+        # in a run) and the same on Python floats ~20 us (session 19). The test has slack (1.5x the angle), so its
+        # rounding cannot change which points are visible, only, at a border case, whether the superset is rebuilt
+        # (the result is the same either way).
+        return bool(_moved_little(T0, np.asarray(T_world_cam, dtype=np.float64), max(float(self.K[0, 0]), float(self.K[1, 1])),
+                                  float(zmin), 0.5 * self.extra_px))
 
     def visible(self, T_world_cam: np.ndarray, config: VisibleMapConfig) -> np.ndarray:
         """Indices (ascending) of the visible points, as :func:`visible_points` gives them."""
@@ -330,8 +356,7 @@ class VisibleMap:
             sup = self._superset(T, wide)
             self._sup_points = np.ascontiguousarray(self.points[sup])  # gathered once, reused below
             if sup.size:
-                Xc = (self._sup_points - T[:3, 3]) @ T[:3, :3]
-                zmin = float(Xc[:, 2].min())
+                zmin = float(_min_depth(self._sup_points, T))  # only bounds the rebuild test (see _still_valid)
             else:
                 zmin = float(config.min_depth_m)
             self._cache = (T.copy(), sup, max(zmin, float(config.min_depth_m), 1e-6))

@@ -88,3 +88,20 @@ def test_field_stays_exact_when_the_box_changes_size_between_steps_on_one_field(
         ref = TemporalDistanceField(DistanceFieldConfig(blur_px=5), W, H)
         ref.compute(a, t_us, (0,), roi, curvature=True)
         assert _same_field(fast, ref), roi
+
+
+def test_tracker_setting_field_in_one_pass_equals_compute_as_the_box_moves():
+    """3 px blur without curvature (the tracker's setting) takes the one-pass path with its persistent TDF scratch:
+    every box of a moving sequence (growing, shrinking, at the borders, 2 px wide) must still equal ``compute``."""
+    rng = np.random.default_rng(19)
+    a = AlignedTimeSurface(W, H)
+    fast = TemporalDistanceField(DistanceFieldConfig(blur_px=3), W, H)
+    rois = [None, (5, 40, 3, 60), (0, H, 0, W), (10, 12, 20, 30), (2, 46, 0, 2), (0, H, 1, W - 1), None, (-3, 9, W - 9, W + 4)]
+    for step, roi in enumerate(rois):
+        s, ev, pts, pol = _random_step(rng, 1_000_000 + step * 5000)
+        t_us = int(ev.t[-1]) + 700
+        a.compose(s, pts, np.eye(4), K, pol, 4.0, roi, ev)
+        fill_distance_field(a, fast, t_us, roi, curvature=False)
+        ref = TemporalDistanceField(DistanceFieldConfig(blur_px=3), W, H)
+        ref.compute(a, t_us, (0,), roi, curvature=False)
+        assert _same_field(fast, ref), roi
