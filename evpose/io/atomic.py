@@ -22,6 +22,10 @@ def _check_not_input(dst: Path, inputs: tuple[Path, ...]) -> None:
         try:
             if src.exists() and dst.exists() and os.path.samefile(src, dst):
                 raise InputError(dst, "refusing to overwrite an input file")
+            # A folder recording (ECD, ROS2 bag) is read from the files in it: `convert ecd ecd/events.txt` replaced
+            # the events it was converting.
+            if src.is_dir() and dst.is_file() and dst.resolve().is_relative_to(src.resolve()):
+                raise InputError(dst, f"refusing to overwrite a file of the input folder {src}")
         except OSError:
             continue
 
@@ -48,10 +52,15 @@ def check_outputs(outputs, inputs=(), folders=()) -> None:
     long run (or after writing its other outputs). ``folders`` are output paths that are directories.
     """
     ins = tuple(Path(p) for p in inputs if p is not None)
+    seen: set[Path] = set()
     for dst, is_dir in [(o, False) for o in outputs] + [(f, True) for f in folders]:
         if dst is None:
             continue
         dst = Path(dst)
+        if dst.resolve() in seen:
+            # e.g. `track --out a.txt --timings a.txt`: the second write replaced the first, exit 0.
+            raise InputError(dst, "given for two outputs; each output needs its own file")
+        seen.add(dst.resolve())
         _check_not_input(dst, ins)
         for src in ins:
             if dst.resolve() == src.resolve():

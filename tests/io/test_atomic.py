@@ -62,3 +62,29 @@ def test_check_outputs_refuses_inputs_folders_and_files_in_the_way_before_any_wo
         check_outputs((), folders=(src,))
     check_outputs((None, tmp_path / "new" / "deeper" / "o.txt"), inputs=(src, None), folders=(tmp_path / "d", None))
     assert src.read_text() == "keep" and not (tmp_path / "new").exists()
+
+
+def test_a_file_inside_an_input_folder_is_never_replaced(tmp_path):
+    from evpose.io.atomic import check_outputs
+
+    ecd = tmp_path / "ecd"
+    ecd.mkdir()
+    events = ecd / "events.txt"
+    events.write_text("keep")
+    with pytest.raises(InputError, match="events.txt: refusing to overwrite a file of the input folder"):
+        check_outputs((events,), inputs=(ecd,))
+    with pytest.raises(InputError, match="refusing to overwrite a file of the input folder"):
+        with atomic_path(events, inputs=(ecd,)) as tmp:
+            tmp.write_text("replaced")
+    assert events.read_text() == "keep"
+    check_outputs((ecd / "new.h5",), inputs=(ecd,))  # a new file next to the recording's is fine
+
+
+def test_the_same_path_for_two_outputs_is_refused(tmp_path):
+    from evpose.io.atomic import check_outputs
+
+    with pytest.raises(InputError, match="a.txt: given for two outputs"):
+        check_outputs((tmp_path / "a.txt", tmp_path / "d" / ".." / "a.txt"))
+    with pytest.raises(InputError, match="given for two outputs"):
+        check_outputs((tmp_path / "o",), folders=(tmp_path / "o",))
+    check_outputs((tmp_path / "a.txt", None, None, tmp_path / "b.txt"))
