@@ -212,7 +212,10 @@ def read_ecd_context(folder: str | Path, width: int | None = None, height: int |
         if calibration is not None and (calibration.width, calibration.height) != size:
             d = calibration.to_dict()
             d["width"], d["height"] = size
-            calibration = CameraCalibration.from_dict(d)
+            try:
+                calibration = CameraCalibration.from_dict(d, source=str(folder / SIDECAR_FILE))
+            except InputError as exc:  # named no file: the size comes from the flags, the rest from the sidecar
+                raise InputError(exc.path, f"{exc.problem} (sensor size {size[0]}x{size[1]} from --width/--height)") from None
     imu = None
     if (folder / IMU_FILE).is_file():
         t, v = read_table(folder / IMU_FILE, 7)
