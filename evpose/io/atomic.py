@@ -18,14 +18,19 @@ def _umask() -> int:
 
 
 def _check_not_input(dst: Path, inputs: tuple[Path, ...]) -> None:
+    from evpose.io.open import recording_files
+
     for src in inputs:
         try:
             if src.exists() and dst.exists() and os.path.samefile(src, dst):
                 raise InputError(dst, "refusing to overwrite an input file")
-            # A folder recording (ECD, ROS2 bag) is read from the files in it: `convert ecd ecd/events.txt` replaced
-            # the events it was converting.
-            if src.is_dir() and dst.is_file() and dst.resolve().is_relative_to(src.resolve()):
-                raise InputError(dst, f"refusing to overwrite a file of the input folder {src}")
+            if not dst.is_file():
+                continue
+            # A recording is also read from other files: `convert ecd ecd/events.txt` replaced the events it was
+            # converting, `eval EST seq-events_left.h5 --json mocap_data.txt` the ground truth it was read against.
+            for part in recording_files(src):
+                if os.path.samefile(part, dst):
+                    raise InputError(dst, f"refusing to overwrite a file the input recording {src} is read from")
         except OSError:
             continue
 

@@ -201,6 +201,17 @@ def find_sibling_calibration(path: Path) -> tuple[CameraCalibration | None, Path
     return None, None
 
 
+def sibling_files(path: Path) -> list[Path]:
+    """The files next to the event file that the ``find_sibling_*`` readers may read (all kalibr YAML candidates)."""
+    folder = path.parent
+    calib = sorted(folder.glob("*calib*.json"))[:1] or sorted(list(folder.glob("*.yaml")) + list(folder.glob("*.yml")))
+    gt = [folder / "mocap_data.txt"] if (folder / "mocap_data.txt").is_file() else []
+    for pattern in ("*groundtruth*.txt", "*gt*.txt"):
+        gt = gt or sorted(folder.glob(pattern))[:1]
+    imu = [folder / "imu_data.txt"] if (folder / "imu_data.txt").is_file() else []
+    return calib + gt + imu
+
+
 def find_sibling_ground_truth(path: Path):
     from evpose.io.tum import read_tum
 
