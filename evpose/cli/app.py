@@ -22,7 +22,8 @@ def default_data_folders(data: list[Path]) -> list[Path]:
 def check_arguments(data: list[Path], port: int, layout: str, export_dir: Path, cache_dir: Path | None) -> None:
     """Refuse what would otherwise start a server that cannot work as asked: a typo in ``--data`` served an empty
     browser, an unknown ``--layout`` a default one, and an out-of-range port ended in a bind() traceback."""
-    from app.layouts import LAYOUT_DIR, layout_path
+    import app.layouts
+    from app.layouts import layout_path, load_layout
 
     from evpose.errors import InputError
     from evpose.io.atomic import check_outputs
@@ -34,9 +35,12 @@ def check_arguments(data: list[Path], port: int, layout: str, export_dir: Path, 
             raise InputError(root, "no such folder (--data takes folders of recordings and maps)")
         if not root.is_dir():
             raise InputError(root, "not a folder (--data takes folders of recordings and maps, not single files)")
-    if not layout_path(layout).is_file():
-        known = sorted(q.stem for q in LAYOUT_DIR.glob("*.json"))
-        raise InputError(None, f"--layout {layout!r} is not in {LAYOUT_DIR} (known: {', '.join(known)})")
+    folder = app.layouts.LAYOUT_DIR
+    path = layout_path(layout, folder)
+    if not path.is_file():
+        known = sorted(q.stem for q in folder.glob("*.json"))
+        raise InputError(None, f"--layout {layout!r} is not in {folder} (known: {', '.join(known)})")
+    load_layout(path)  # a broken saved layout served the default one, its error shown only in the browser
     check_outputs((), folders=(export_dir, cache_dir))
 
 

@@ -81,8 +81,9 @@ def evaluate_atlas(estimate: Path, ground_truth: Path, maps: tuple[Path, ...], c
             "duration_s": result.duration_s, **result.to_dict()}
 
 
-def check_numbers(max_time_diff_s: float, time_offset_s: float, rpe_delta: float, duration_s: float | None) -> None:
-    """A NaN or zero RPE delta ended in a ZeroDivisionError/ValueError traceback; a negative duration was accepted."""
+def check_numbers(max_time_diff_s: float, time_offset_s: float, rpe_delta: float, duration_s: float | None, rpe_delta_unit: str = "frames") -> None:
+    """A NaN or zero RPE delta ended in a ZeroDivisionError/ValueError traceback (so did 0.5 frames; 2.7 frames was
+    silently taken as 2); a negative duration was accepted."""
     import math
 
     from evpose.errors import InputError
@@ -95,6 +96,8 @@ def check_numbers(max_time_diff_s: float, time_offset_s: float, rpe_delta: float
         if not math.isfinite(value) or (low is not None and (value < low or (value == low and not inclusive))):
             bound = "" if low is None else f" {'>=' if inclusive else '>'} {low:g}"
             raise InputError(None, f"{flag} must be a finite number{bound}, got {value}")
+    if rpe_delta_unit == "frames" and rpe_delta != int(rpe_delta):
+        raise InputError(None, f"--rpe-delta in frames must be a whole number of poses (1 = consecutive), got {rpe_delta:g}")
 
 
 def main(
@@ -141,7 +144,7 @@ def main(
     from evpose.io.atomic import atomic_path, check_outputs
 
     check_outputs((json,), inputs=(estimate, ground_truth, *maps), folders=(plots,))
-    check_numbers(max_time_diff_s, time_offset_s, rpe_delta, duration_s)
+    check_numbers(max_time_diff_s, time_offset_s, rpe_delta, duration_s, rpe_delta_unit)
     if atlas or maps:
         summary = evaluate_atlas(estimate, ground_truth, maps, correct_scale or align == "sim3", duration_s)
         if not quiet:

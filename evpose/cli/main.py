@@ -51,10 +51,11 @@ def run(argv: list[str]) -> int:
     if name not in COMMANDS:
         print(f"evpose: error: unknown command {name!r}\n\n{_usage()}", file=sys.stderr)
         return 2
-    import tyro
-
-    module = importlib.import_module(COMMANDS[name][0])
     try:
+        # Importing a command takes about a second (numba, gtsam, open3d): a Ctrl+C then printed a 40-line traceback.
+        import tyro
+
+        module = importlib.import_module(COMMANDS[name][0])
         result = tyro.cli(module.main, args=argv[1:], prog=f"evpose {name}")
     except EvposeError as exc:
         print(f"evpose {name}: error: {exc}", file=sys.stderr)

@@ -29,6 +29,10 @@ def _check_writable(out: Path) -> None:
         raise InputError(out, "output is an existing folder, expected an .h5 file path")
     if out.suffix != ".h5" and out.exists() and not out.is_dir():
         raise InputError(out, "output exists and is not a folder (give a path ending in .h5 for HDF5)")
+    if out.suffix != ".h5":
+        from evpose.io.ecd import check_ecd_target
+
+        check_ecd_target(out)
 
 
 def main(

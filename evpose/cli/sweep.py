@@ -8,6 +8,34 @@ from typing import Literal
 import tyro
 
 
+def check_recording_item(item: str) -> None:
+    """Refuse a ``--recordings`` item that no job could read, before any job: a typo, an unknown scenario or a
+    damaged file would otherwise become one failed job per configuration and exit 1 after the whole grid.
+
+    Only the cheap checks: the scenario name, what opening the recording for streaming reads (format, schema,
+    calibration, IMU, ground truth), the whole map. Bad events deep in a recording still fail its jobs, each naming file and record.
+    """
+    from evpose.errors import ConfigError, InputError
+
+    if item.startswith("sim:"):
+        from evpose.sim.scenarios import SCENARIOS
+
+        if item[4:] not in SCENARIOS:
+            raise ConfigError(f"--recordings {item}: unknown simulated scenario {item[4:]!r} (known: {', '.join(SCENARIOS)})")
+        return
+    parts = item.split("::")
+    for part in parts:
+        if not Path(part).exists():
+            raise InputError(part, "no such file or folder", f"--recordings {item}")
+    from evpose.io.open import open_stream
+
+    open_stream(parts[0])  # format, schema, calibration, IMU and ground truth; the events are not read
+    if len(parts) > 1:
+        from evpose.io.map_ply import read_contour_map
+
+        read_contour_map(parts[1])
+
+
 def main(
     grid: tyro.conf.Positional[list[str]],
     recordings: list[str],
@@ -48,14 +76,8 @@ def main(
     from evpose.cli.runner_args import check_runner_args
 
     check_runner_args(workers, scheduler, (out,))
-    from evpose.errors import InputError
-
     for item in recordings:
-        if not item.startswith("sim:"):
-            # A typo would otherwise become one failed job per configuration and exit 1 after the whole grid.
-            for part in item.split("::"):
-                if not Path(part).exists():
-                    raise InputError(part, "no such file or folder", f"--recordings {item}")
+        check_recording_item(item)
     direction = True if minimize else (False if maximize else None)
     result = run_sweep(target, list(grid), list(recordings), out, RunnerConfig(workers=workers, scheduler=scheduler, progress=progress), score=score, minimize=direction)
     print(markdown_table(result.table), end="")

@@ -94,6 +94,22 @@ def _kb_theta_from_distorted(thd, k1, k2, k3, k4, iters):
     return out
 
 
+_RIGID_TOL = 5e-3
+"""Largest deviation of ``R^T R`` from the identity (and of the bottom row from 0 0 0 1) accepted in ``T_cam_imu``: loose
+enough for rotations printed with 3-4 decimals, tight enough to refuse a scaled or sheared matrix."""
+
+
+def _check_rigid(T: np.ndarray) -> None:
+    """Refuse a ``T_cam_imu`` that is not a rigid transform: the fusion would rotate the IMU by a non-rotation and the
+    tracker then blamed the map ("no update registered against this map")."""
+    R = T[:3, :3]
+    if np.abs(T[3] - (0.0, 0.0, 0.0, 1.0)).max() > _RIGID_TOL:
+        raise InputError(None, f"calibration's T_cam_imu bottom row is {T[3].tolist()}, expected [0, 0, 0, 1]")
+    err = float(np.abs(R.T @ R - np.eye(3)).max())
+    if err > _RIGID_TOL or np.linalg.det(R) <= 0:
+        raise InputError(None, f"calibration's T_cam_imu rotation is not a rotation matrix (|R^T R - I| = {err:.3g}, det {np.linalg.det(R):.3g})")
+
+
 @dataclass(frozen=True)
 class CameraCalibration:
     """Intrinsics, distortion and the camera-IMU extrinsic of one event camera."""
@@ -134,6 +150,10 @@ class CameraCalibration:
             raise InputError(None, "calibration has NaN or infinite values")
         if self.width <= 0 or self.height <= 0 or self.fx <= 0 or self.fy <= 0:
             raise InputError(None, f"calibration needs positive size and focal lengths, got {self.width}x{self.height}, fx={self.fx}, fy={self.fy}")
+        # A principal point off the sensor projects nothing onto it: the tracker then blamed the map ("no map point in view").
+        if not (0.0 <= self.cx <= self.width and 0.0 <= self.cy <= self.height):
+            raise InputError(None, f"calibration's principal point ({self.cx:g}, {self.cy:g}) px lies outside the {self.width}x{self.height} sensor")
+        _check_rigid(T)
 
     # ------------------------------------------------------------------ basics
     @property

@@ -52,8 +52,10 @@ class Trajectory:
         q = np.ascontiguousarray(quat_xyzw, dtype=np.float64).reshape(-1, 4)
         if not (t.shape[0] == position.shape[0] == q.shape[0]):
             raise ValueError("trajectory columns differ in length")
-        norms = np.linalg.norm(q, axis=1, keepdims=True)
-        q = q / np.where(norms > 0, norms, 1.0)
+        # A NaN or infinite quaternion (caught by ``validate`` with its record) must not print numpy warnings first.
+        with np.errstate(invalid="ignore", over="ignore"):
+            norms = np.linalg.norm(q, axis=1, keepdims=True)
+            q = q / np.where(norms > 0, norms, 1.0)
         return cls(t, position, q)
 
     @classmethod

@@ -18,10 +18,19 @@ def _umask() -> int:
 
 
 def _check_not_input(dst: Path, inputs: tuple[Path, ...]) -> None:
+    from evpose.io.open import recording_files
+
     for src in inputs:
         try:
             if src.exists() and dst.exists() and os.path.samefile(src, dst):
                 raise InputError(dst, "refusing to overwrite an input file")
+            if not dst.is_file():
+                continue
+            # A recording is also read from other files: `convert ecd ecd/events.txt` replaced the events it was
+            # converting, `eval EST seq-events_left.h5 --json mocap_data.txt` the ground truth it was read against.
+            for part in recording_files(src):
+                if os.path.samefile(part, dst):
+                    raise InputError(dst, f"refusing to overwrite a file the input recording {src} is read from")
         except OSError:
             continue
 
@@ -48,10 +57,15 @@ def check_outputs(outputs, inputs=(), folders=()) -> None:
     long run (or after writing its other outputs). ``folders`` are output paths that are directories.
     """
     ins = tuple(Path(p) for p in inputs if p is not None)
+    seen: set[Path] = set()
     for dst, is_dir in [(o, False) for o in outputs] + [(f, True) for f in folders]:
         if dst is None:
             continue
         dst = Path(dst)
+        if dst.resolve() in seen:
+            # e.g. `track --out a.txt --timings a.txt`: the second write replaced the first, exit 0.
+            raise InputError(dst, "given for two outputs; each output needs its own file")
+        seen.add(dst.resolve())
         _check_not_input(dst, ins)
         for src in ins:
             if dst.resolve() == src.resolve():

@@ -45,6 +45,24 @@ def is_ecd_folder(path: str | Path) -> bool:
     return path.is_dir() and (path / EVENTS_FILE).is_file()
 
 
+_WRITTEN_FILES = frozenset({EVENTS_FILE, IMU_FILE, GT_FILE, CALIB_FILE, SIDECAR_FILE})
+
+
+def check_ecd_target(folder: str | Path) -> None:
+    """Refuse to write an ECD folder over an existing folder that holds anything but an ECD recording's files.
+
+    The folder is replaced whole (atomically): ``evpose simulate --out some_folder`` deleted every file in it.
+    """
+    folder = Path(folder)
+    if not folder.is_dir():
+        return
+    foreign = sorted(p.name for p in folder.iterdir() if p.name not in _WRITTEN_FILES)
+    if foreign:
+        more = f" and {len(foreign) - 1} more" if len(foreign) > 1 else ""
+        raise InputError(folder, f"refusing to replace a folder that is not an ECD recording (it holds {foreign[0]!r}{more});"
+                         " give a new folder name, or a path ending in .h5")
+
+
 def _line_text(buf: np.ndarray, start: int, n_bytes: int) -> str:
     end = start
     while end < n_bytes and buf[end] != 10 and end - start < 80:
@@ -194,7 +212,10 @@ def read_ecd_context(folder: str | Path, width: int | None = None, height: int |
         if calibration is not None and (calibration.width, calibration.height) != size:
             d = calibration.to_dict()
             d["width"], d["height"] = size
-            calibration = CameraCalibration.from_dict(d)
+            try:
+                calibration = CameraCalibration.from_dict(d, source=str(folder / SIDECAR_FILE))
+            except InputError as exc:  # named no file: the size comes from the flags, the rest from the sidecar
+                raise InputError(exc.path, f"{exc.problem} (sensor size {size[0]}x{size[1]} from --width/--height)") from None
     imu = None
     if (folder / IMU_FILE).is_file():
         t, v = read_table(folder / IMU_FILE, 7)
@@ -239,6 +260,7 @@ def write_ecd_folder(folder: str | Path, recording: Recording) -> None:
     ``evpose.json`` sidecar keeps the full calibration, sensor size and metadata.
     """
     inputs = (recording.source,) if recording.source is not None else ()
+    check_ecd_target(folder)
     with atomic_path(folder, inputs=inputs, is_dir=True) as tmp:
         write_ecd_events(tmp / EVENTS_FILE, recording.events)
         if recording.imu is not None:

@@ -83,8 +83,17 @@ class EventH5Reader:
     def __exit__(self, *exc) -> None:
         self.close()
 
+    def _times(self, i0: int, i1: int) -> np.ndarray:
+        """Absolute times (int64 us) of events ``i0:i1``; a NaN in a float column was cast to -2**63 (with numpy's
+        RuntimeWarning) and reported as 'earlier than the previous -9223372036854775808 us'."""
+        t = self._cols["t"][i0:i1]
+        if t.dtype.kind == "f" and not np.isfinite(t).all():
+            i = int(np.flatnonzero(~np.isfinite(t))[0])
+            raise EventH5Error(self.path, f"timestamp {t[i]} is not a finite number", f"event {i0 + i}")
+        return t.astype(np.int64) + self.t_offset_us
+
     def read_slice(self, i0: int, i1: int) -> EventArray:
-        t = self._cols["t"][i0:i1].astype(np.int64) + self.t_offset_us
+        t = self._times(i0, i1)
         p = self._cols["p"][i0:i1]
         if p.size and not np.all((p == 0) | (p == 1) | (p == -1)):
             i = int(np.flatnonzero(~((p == 0) | (p == 1) | (p == -1)))[0])
@@ -106,7 +115,7 @@ class EventH5Reader:
             k1 = int(np.clip(-((self.t_offset_us - t1_us) // 1000) + 1, 0, K))
             lo = int(self._ms_to_idx[k0])
             hi = self.n_events if k1 >= K else max(lo, int(self._ms_to_idx[k1]))
-        t = self._cols["t"][lo:hi].astype(np.int64) + self.t_offset_us
+        t = self._times(lo, hi)
         return lo + int(np.searchsorted(t, t0_us, "left")), lo + int(np.searchsorted(t, t1_us, "left"))
 
     def read_events(self, t0_us: int, t1_us: int) -> EventArray:
@@ -138,6 +147,8 @@ def _basalt_calibration(path: Path, cam: int) -> CameraCalibration:
             T_imu_cam[:3, 3] = [e["px"], e["py"], e["pz"]]
         T_cam_imu = np.linalg.inv(T_imu_cam)
         return CameraCalibration(w, h, v["fx"], v["fy"], v["cx"], v["cy"], model, dist, T_cam_imu)
+    except InputError as exc:  # CameraCalibration's own checks name no file
+        raise InputError(exc.path or path, exc.problem, exc.record) from None
     except (KeyError, IndexError, TypeError, ValueError) as exc:
         raise InputError(path, f"not a basalt calibration ({type(exc).__name__}: {exc})") from None
 
@@ -173,6 +184,8 @@ def _kalibr_calibration(path: Path, cam: int) -> CameraCalibration | None:
         T = np.asarray(c.get("T_cam_imu", np.eye(4)), dtype=np.float64).reshape(4, 4)
         offset = int(round(float(c.get("timeshift_cam_imu", 0.0)) * 1e6))
         return CameraCalibration(w, h, fx, fy, cx, cy, model, dist, T, offset)
+    except InputError as exc:  # CameraCalibration's own checks name no file
+        raise InputError(exc.path or path, exc.problem, exc.record or key) from None
     except (KeyError, TypeError, ValueError) as exc:
         raise InputError(path, f"not a kalibr camera calibration ({type(exc).__name__}: {exc})", key) from None
 
@@ -186,6 +199,17 @@ def find_sibling_calibration(path: Path) -> tuple[CameraCalibration | None, Path
         if cal is not None:
             return cal, cand
     return None, None
+
+
+def sibling_files(path: Path) -> list[Path]:
+    """The files next to the event file that the ``find_sibling_*`` readers may read (all kalibr YAML candidates)."""
+    folder = path.parent
+    calib = sorted(folder.glob("*calib*.json"))[:1] or sorted(list(folder.glob("*.yaml")) + list(folder.glob("*.yml")))
+    gt = [folder / "mocap_data.txt"] if (folder / "mocap_data.txt").is_file() else []
+    for pattern in ("*groundtruth*.txt", "*gt*.txt"):
+        gt = gt or sorted(folder.glob(pattern))[:1]
+    imu = [folder / "imu_data.txt"] if (folder / "imu_data.txt").is_file() else []
+    return calib + gt + imu
 
 
 def find_sibling_ground_truth(path: Path):

@@ -143,12 +143,48 @@ def _read_vertices(path: Path) -> np.ndarray | None:
         return None
 
 
+MAX_COORDINATE_M = 1e7
+"""Largest coordinate magnitude a map or cloud may have, metres (beyond the Earth's radius: not metres, or garbage;
+1e300 overflowed the KD-tree with a traceback)."""
+
+
 def _check_points(points: np.ndarray, path: Path) -> None:
     if points.shape[0] == 0:
         raise MapFileError(path, "point cloud is empty")
     bad = np.flatnonzero(~np.isfinite(points).all(axis=1))
     if bad.size:
         raise MapFileError(path, "NaN or infinite coordinate", f"point {int(bad[0])}")
+    bad = np.flatnonzero(np.abs(points).max(axis=1) > MAX_COORDINATE_M)
+    if bad.size:
+        raise MapFileError(path, f"coordinate {points[bad[0]].tolist()} is beyond {MAX_COORDINATE_M:g} m (not metres?)", f"point {int(bad[0])}")
+
+
+_UNIT_TOL = 1e-2
+"""How far from 1 the length of a known (non-zero) normal may be."""
+
+
+def _check_attributes(attrs: dict[str, np.ndarray], path: Path) -> None:
+    """The schema's per-point attributes hold what the tracker assumes: finite unit normals (or 0 = unknown), finite
+    curvature, brightness signs -1/0/+1. A NaN normal ended in a KD-tree traceback; a sign of 7 was used as a weight."""
+    for key, label in (("edge_normal", "edge normal"), ("plane_normal", "plane normal")):
+        if key not in attrs:
+            continue
+        n = np.asarray(attrs[key], dtype=np.float64)
+        bad = np.flatnonzero(~np.isfinite(n).all(axis=1))
+        if bad.size:
+            raise MapFileError(path, f"NaN or infinite {label}", f"point {int(bad[0])}")
+        length = np.linalg.norm(n, axis=1)
+        bad = np.flatnonzero((length != 0) & (np.abs(length - 1.0) > _UNIT_TOL))
+        if bad.size:
+            raise MapFileError(path, f"{label} has length {length[bad[0]]:.4g} (a unit vector, or 0 for unknown)", f"point {int(bad[0])}")
+    if "curvature" in attrs:
+        bad = np.flatnonzero(~np.isfinite(attrs["curvature"]))
+        if bad.size:
+            raise MapFileError(path, "NaN or infinite curvature", f"point {int(bad[0])}")
+    if "brightness_sign" in attrs:
+        bad = np.flatnonzero(~np.isin(attrs["brightness_sign"], (-1, 0, 1)))
+        if bad.size:
+            raise MapFileError(path, f"brightness_sign is {int(attrs['brightness_sign'][bad[0]])} (expected -1, 0 or +1)", f"point {int(bad[0])}")
 
 
 def read_contour_map(path: str | Path) -> ContourMap:
@@ -179,6 +215,7 @@ def read_contour_map(path: str | Path) -> ContourMap:
             attrs["curvature"] = verts["curvature"]
         if "brightness_sign" in names:
             attrs["brightness_sign"] = verts["brightness_sign"]
+        _check_attributes(attrs, path)
         return ContourMap.from_points(pts, **attrs)
     return ContourMap.from_points(read_point_cloud(path)[0])
 

@@ -94,6 +94,23 @@ def detect_format(path: str | Path) -> SourceFormat:
     raise InputError(path, f"unrecognised recording (suffix {suffix!r}); expected an ECD folder, .h5/.hdf5, .bag, ROS2 bag folder, .db3 or .mcap")
 
 
+def recording_files(path: str | Path) -> list[Path]:
+    """The files besides ``path`` itself that a recording at ``path`` is read from: an ECD folder's text files and
+    sidecar, a ROS2 bag folder's metadata and storage files, an event h5's sibling calibration, ground truth and IMU.
+    Outputs must never replace them (``evpose.io.atomic``); anything else gives []."""
+    from evpose.io import ecd
+
+    path = Path(path)
+    if path.is_dir():
+        names = (ecd.EVENTS_FILE, ecd.IMU_FILE, ecd.GT_FILE, ecd.CALIB_FILE, ecd.SIDECAR_FILE, "metadata.yaml")
+        return [path / n for n in names if (path / n).is_file()] + sorted(path.glob("*.db3")) + sorted(path.glob("*.mcap"))
+    if path.suffix.lower() in (".h5", ".hdf5") and path.is_file() and _is_hdf5(path):
+        from evpose.io import event_h5, h5
+
+        return [] if h5.is_recording_h5(path) else event_h5.sibling_files(path)
+    return []
+
+
 def open_stream(path: str | Path, width: int | None = None, height: int | None = None, **options) -> RecordingStream:
     """Open ``path`` for streaming. ``width``/``height`` state the sensor size where the format lacks it.
 

@@ -129,3 +129,20 @@ def test_the_viewer_and_its_warm_up_stop_without_a_traceback(tmp_path: Path, how
         time.sleep(0.1)
     else:
         raise AssertionError("a process of the viewer's group (the warm-up?) was left running")
+
+
+@pytest.mark.parametrize("text, message", [
+    ('{"name": "mine", "panels": [', "mine.json: line 1: not valid JSON"),
+    ('{"name": "mine", "bogus": 1}', "mine.json: bogus: unknown key"),
+])
+def test_a_broken_saved_layout_is_a_one_line_error_before_the_server_starts(monkeypatch, capsys, tmp_path, text, message):
+    import app.layouts
+    from evpose.cli.main import run
+
+    (tmp_path / "mine.json").write_text(text)
+    monkeypatch.setattr(app.layouts, "LAYOUT_DIR", tmp_path)
+    started = _capture_config(monkeypatch)
+    assert run(["app", "--data", "demo_data", "--port", "0", "--layout", "mine"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert message in err and len(err.splitlines()) == 1
+    assert not started

@@ -224,3 +224,16 @@ def test_non_finite_or_out_of_range_numbers_are_one_line_errors(files, capsys, a
     est, gt = files
     assert run(["eval", str(est), str(gt), "--quiet", *args]) == 2
     assert message in one_line_error(capsys)
+
+
+@pytest.mark.parametrize("delta", ["0.5", "2.7"])
+def test_fractional_rpe_delta_in_frames_is_a_one_line_error(files, capsys, delta):
+    # 0.5 frames was a ZeroDivisionError traceback from evo, 2.7 frames silently became 2.
+    est, gt = files
+    assert run(["eval", str(est), str(gt), "--quiet", "--rpe-delta", delta]) == 2
+    assert one_line_error(capsys).endswith(f"--rpe-delta in frames must be a whole number of poses (1 = consecutive), got {delta}")
+
+
+def test_fractional_rpe_delta_in_metres_is_accepted(files, capsys):
+    est, gt = files
+    assert run(["eval", str(est), str(gt), "--quiet", "--rpe-delta", "0.5", "--rpe-delta-unit", "meters"]) == 0

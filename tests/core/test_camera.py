@@ -115,3 +115,31 @@ def test_non_finite_or_non_positive_calibration_is_an_input_error():
 def test_from_dict_names_the_missing_field_and_the_file():
     with pytest.raises(InputError, match="cal.json: calibration is missing the field 'fx'"):
         CameraCalibration.from_dict({"width": 1, "height": 1, "fy": 1, "cx": 0, "cy": 0}, source="cal.json")
+
+
+@pytest.mark.parametrize("scale", [2.0, -1.0])
+def test_extrinsic_that_is_not_a_rotation_is_an_input_error(scale):
+    T = np.eye(4)
+    T[0, 0] = scale  # scaled, or a reflection (det -1)
+    with pytest.raises(InputError, match="T_cam_imu rotation is not a rotation matrix"):
+        CameraCalibration(10, 10, 5.0, 5.0, 5.0, 5.0, T_cam_imu=T)
+
+
+def test_extrinsic_with_a_projective_bottom_row_is_an_input_error():
+    T = np.eye(4)
+    T[3, 0] = 0.5
+    with pytest.raises(InputError, match="bottom row"):
+        CameraCalibration(10, 10, 5.0, 5.0, 5.0, 5.0, T_cam_imu=T)
+
+
+def test_extrinsic_rotation_printed_with_four_decimals_is_accepted():
+    from scipy.spatial.transform import Rotation
+
+    T = np.eye(4)
+    T[:3, :3] = np.round(Rotation.from_euler("xyz", [0.3, -0.2, 1.1]).as_matrix(), 4)
+    CameraCalibration(10, 10, 5.0, 5.0, 5.0, 5.0, T_cam_imu=T)
+
+
+def test_principal_point_outside_the_sensor_is_an_input_error():
+    with pytest.raises(InputError, match=r"principal point \(5000, 5\) px lies outside the 10x10 sensor"):
+        CameraCalibration(10, 10, 5.0, 5.0, 5000.0, 5.0)

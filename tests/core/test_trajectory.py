@@ -46,3 +46,14 @@ def test_validate_rejects_non_increasing_time_and_nan():
         Trajectory.from_arrays([5, 5], np.zeros((2, 3)), [[0, 0, 0, 1]] * 2).validate()
     with pytest.raises(InputError, match="pose 0: NaN"):
         Trajectory.from_arrays([5], [[np.nan, 0, 0]], [[0, 0, 0, 1]]).validate()
+
+
+def test_infinite_quaternion_is_reported_by_validate_without_numpy_warnings():
+    import warnings
+
+    q = np.array([[0.0, 0.0, 0.0, 1.0], [np.inf, 0.0, 0.0, 1.0]])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a RuntimeWarning printed before the one-line error
+        traj = Trajectory.from_arrays(np.array([0, 1]), np.zeros((2, 3)), q)
+    with pytest.raises(InputError, match="pose 1: NaN or infinite value"):
+        traj.validate()

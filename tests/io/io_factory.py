@@ -19,7 +19,7 @@ def make_recording(n=20_000, seed=0, width=240, height=180, t0=1_000_000, durati
     gt = Trajectory.from_arrays(tg, rng.normal(size=(tg.size, 3)), q)
     T = np.eye(4)
     T[:3, 3] = [0.01, 0.002, -0.03]
-    cal = CameraCalibration(width, height, 199.1, 198.7, 119.5, 89.5, DistortionModel.RADTAN, (-0.33, 0.12, 0.0004, -0.0002, 0.0), T, 250) if with_calibration else None
+    cal = CameraCalibration(width, height, 199.1, 198.7, (width - 1) / 2, (height - 1) / 2, DistortionModel.RADTAN, (-0.33, 0.12, 0.0004, -0.0002, 0.0), T, 250) if with_calibration else None
     meta = {"scenario": "unit-test", "seed": seed} if with_calibration else {"width": width, "height": height}
     return Recording(ev, imu, gt, cal, meta)
 

@@ -62,3 +62,44 @@ def test_check_outputs_refuses_inputs_folders_and_files_in_the_way_before_any_wo
         check_outputs((), folders=(src,))
     check_outputs((None, tmp_path / "new" / "deeper" / "o.txt"), inputs=(src, None), folders=(tmp_path / "d", None))
     assert src.read_text() == "keep" and not (tmp_path / "new").exists()
+
+
+def test_files_an_ecd_folder_is_read_from_are_never_replaced(tmp_path):
+    from evpose.io.atomic import check_outputs
+
+    ecd = tmp_path / "ecd"
+    ecd.mkdir()
+    events = ecd / "events.txt"
+    events.write_text("keep")
+    (ecd / "rec.h5").write_text("an earlier conversion")
+    with pytest.raises(InputError, match="events.txt: refusing to overwrite a file the input recording .*ecd is read from"):
+        check_outputs((events,), inputs=(ecd,))
+    with pytest.raises(InputError, match="refusing to overwrite a file the input recording"):
+        with atomic_path(events, inputs=(ecd,)) as tmp:
+            tmp.write_text("replaced")
+    assert events.read_text() == "keep"
+    with atomic_path(ecd / "rec.h5", inputs=(ecd,)) as tmp:  # not read by the recording: replaced as any output
+        tmp.write_text("converted again")
+    assert (ecd / "rec.h5").read_text() == "converted again"
+
+
+def test_sibling_files_an_event_h5_is_read_from_are_never_replaced(tmp_path):
+    from evpose.core.events import EventArray
+    from evpose.io.atomic import check_outputs
+    from evpose.io.event_h5 import write_event_h5
+
+    write_event_h5(tmp_path / "seq-events_left.h5", EventArray.from_arrays([1, 2], [0, 0], [0, 0], [1, 0]))
+    (tmp_path / "mocap_data.txt").write_text("keep")
+    with pytest.raises(InputError, match="mocap_data.txt: refusing to overwrite a file the input recording"):
+        check_outputs((tmp_path / "mocap_data.txt",), inputs=(tmp_path / "seq-events_left.h5",))
+    check_outputs((tmp_path / "est.txt",), inputs=(tmp_path / "seq-events_left.h5",))
+
+
+def test_the_same_path_for_two_outputs_is_refused(tmp_path):
+    from evpose.io.atomic import check_outputs
+
+    with pytest.raises(InputError, match="a.txt: given for two outputs"):
+        check_outputs((tmp_path / "a.txt", tmp_path / "d" / ".." / "a.txt"))
+    with pytest.raises(InputError, match="given for two outputs"):
+        check_outputs((tmp_path / "o",), folders=(tmp_path / "o",))
+    check_outputs((tmp_path / "a.txt", None, None, tmp_path / "b.txt"))

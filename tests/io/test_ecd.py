@@ -135,3 +135,20 @@ def test_write_is_atomic_and_never_overwrites_the_input_folder(tmp_path, recordi
     with pytest.raises(InputError, match="refusing to overwrite an input"):
         write_ecd_folder(tmp_path / "seq", rec)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["seq"]
+
+
+def test_write_replaces_an_earlier_ecd_folder_but_never_a_folder_with_other_files(tmp_path, recording):
+    write_ecd_folder(tmp_path / "seq", recording)
+    write_ecd_folder(tmp_path / "seq", recording)  # a rerun replaces its own output
+    (tmp_path / "data").mkdir()
+    (tmp_path / "data" / "precious.bag").write_text("keep")
+    with pytest.raises(InputError, match=r"data: refusing to replace a folder that is not an ECD recording \(it holds 'precious.bag'\)"):
+        write_ecd_folder(tmp_path / "data", recording)
+    assert (tmp_path / "data" / "precious.bag").read_text() == "keep"
+
+
+def test_sensor_size_flags_that_contradict_the_sidecar_calibration_name_the_sidecar(tmp_path, recording):
+    write_ecd_folder(tmp_path / "seq", recording)  # 240x180, principal point (119.5, 89.5)
+    with pytest.raises(InputError, match=r"seq/evpose.json: calibration's principal point \(119.5, 89.5\) px lies outside the 100x80 sensor"
+                                         r" \(sensor size 100x80 from --width/--height\)"):
+        read_ecd_folder(tmp_path / "seq", 100, 80)

@@ -128,3 +128,29 @@ def test_bad_sibling_calibration_is_named(tmp_path):
     (tmp_path / "camchain.yaml").write_text(yaml.safe_dump({"cam0": {"intrinsics": [1, 2, 3], "resolution": [640, 480]}}))
     with pytest.raises(InputError, match="camchain.yaml: cam0: not a kalibr camera calibration"):
         open_recording(tmp_path / "e.h5")
+
+
+def test_nan_timestamp_in_a_float_time_column_is_named_without_numpy_warnings(tmp_path):
+    import warnings
+
+    with h5py.File(tmp_path / "f.h5", "w") as f:
+        for c, v in (("x", [0, 0, 0]), ("y", [0, 0, 0]), ("t", [0.0, np.nan, 2.0]), ("p", [1, 0, 1])):
+            f[f"events/{c}"] = np.array(v)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # numpy's cast warning was printed before the error
+        with pytest.raises(InputError, match=r"f.h5: event 1: timestamp nan is not a finite number"):
+            open_recording(tmp_path / "f.h5", 640, 480)
+
+
+@pytest.mark.parametrize("name, text, message", [
+    ("camchain.yaml", yaml.safe_dump({"cam0": {"intrinsics": [float("nan"), 2, 3, 4], "resolution": [640, 480]}}),
+     "camchain.yaml: cam0: calibration has NaN or infinite values"),
+    ("camera-calibration.json", json.dumps({"value0": {"intrinsics": [{"camera_type": "pinhole", "intrinsics": {"fx": -5, "fy": 5, "cx": 320, "cy": 240}}],
+                                                       "resolution": [[640, 480]]}}),
+     "camera-calibration.json: calibration needs positive size and focal lengths"),
+])
+def test_invalid_values_in_a_sibling_calibration_name_the_file(tmp_path, name, text, message):
+    write_event_h5(tmp_path / "e.h5", EventArray.from_arrays([1], [0], [0], [1]))
+    (tmp_path / name).write_text(text)
+    with pytest.raises(InputError, match=message):
+        open_recording(tmp_path / "e.h5")

@@ -96,3 +96,20 @@ def test_info_of_an_evpose_h5_without_events_is_an_input_error(tmp_path):
     write_recording_h5(path, dataclasses.replace(make_recording(n=10), events=EventArray.empty()))
     with pytest.raises(InputError, match="empty.h5: contains no events"):
         summarize_recording(path)
+
+
+def test_recording_files_lists_what_each_recording_is_read_from(tmp_path):
+    from evpose.io.open import recording_files
+
+    rec = make_recording(n=100)
+    write_ecd_folder(tmp_path / "ecd", rec)
+    (tmp_path / "ecd" / "notes.md").write_text("not read")
+    assert [p.name for p in recording_files(tmp_path / "ecd")] == ["events.txt", "imu.txt", "groundtruth.txt", "calib.txt", "evpose.json"]
+    tv = tmp_path / "tv"
+    tv.mkdir()
+    write_event_h5(tv / "seq-events_left.h5", rec.events)
+    for name in ("camera-calibrationA.json", "mocap_data.txt", "imu_data.txt", "est.txt"):
+        (tv / name).write_text("")
+    assert [p.name for p in recording_files(tv / "seq-events_left.h5")] == ["camera-calibrationA.json", "mocap_data.txt", "imu_data.txt"]
+    write_recording_h5(tmp_path / "r.h5", rec)
+    assert recording_files(tmp_path / "r.h5") == [] and recording_files(tmp_path / "map.ply") == []
