@@ -61,6 +61,8 @@ class EdgeTrackingConfig:
     """Longest stretch of edge-tracked MCIs since the last MCI tracked from point tracks (PnP), seconds."""
     resets_coast: bool = True
     """An edge-tracked MCI restarts the coast's clock (``TrackingConfig.coast_s``) as a PnP-tracked one does."""
+    adjust_keyframes: bool = False
+    """The keyframe made at an edge-tracked MCI gets a local BA (off: none, as for a coasted one)."""
     border_px: int = field(default=4, metadata={"min": 1, "max": 50, "step": 1, "unit": "px"})
     """Projections this close to the image border are left out, pixels."""
 
@@ -102,6 +104,10 @@ def search_across(img8: np.ndarray, patch: np.ndarray, uv: np.ndarray, n: np.nda
     centres = uv[None, :] + offs[:, None] * n[None, :]
     if not ((centres[:, 0] >= r) & (centres[:, 0] < w - r - 1) & (centres[:, 1] >= r) & (centres[:, 1] < h - r - 1)).all():
         return None
+    x0, y0 = np.floor(centres.min(axis=0)).astype(int) - r
+    x1, y1 = np.ceil(centres.max(axis=0)).astype(int) + r + 2
+    if not img8[max(y0, 0):y1, max(x0, 0):x1].any():
+        return None  # no event near the line (most map points indoors: their edges make no events while the camera yaws)
     t = patch.astype(np.float32).ravel()
     t = t - t.mean()
     tn = float(np.linalg.norm(t))
@@ -132,6 +138,8 @@ def measure_across_edges(img8: np.ndarray, K: np.ndarray, T_cw: np.ndarray, Xw: 
     inside = (z > 0) & (proj[:, 0] >= b) & (proj[:, 0] < w - b) & (proj[:, 1] >= b) & (proj[:, 1] < h - b)
     idx, uv, nrm = [], [], []
     for i in np.flatnonzero(inside):
+        if not patches[i].any():
+            continue
         n, straight = edge_normal(patches[i])
         if straight < cfg.min_straightness:
             continue

@@ -121,6 +121,6 @@ class VisualFailureHandling:
             self._last_visual_t, self._blank_us, self._after_blank_t = mci.t_us, 0, None
         self._inliers = res.n_on_edge
         m.add_pose(mci.t_us, T_wc)
-        T_wc = self._new_keyframe(m, mci.t_us, T_wc, mci.image8, adjust=False)
+        T_wc = self._new_keyframe(m, mci.t_us, T_wc, mci.image8, adjust=ec.adjust_keyframes)
         return (SlamStatus.OK, f"edge-tracked: {res.n_on_edge} of {res.n_view} map points on edges, {res.info_gain:.0f}x the "
                 f"prior ({n_refound} re-found by projection), map {m.id}", T_wc.copy(), True)
