@@ -14,6 +14,7 @@ from evpose.slam.inertial import InertialConfig
 from evpose.slam.map_restructure import RestructureConfig
 from evpose.slam.projection_search import ProjectionSearchConfig
 from evpose.slam.visual_gyro import VisualGyroConfig
+from evpose.slam.edge_tracking import EdgeTrackingConfig
 # The feature and tracking settings live in their own modules; re-exported here, where they were (imports and docs name
 # them here).
 from evpose.slam.feature_config import FeatureConfig  # noqa: F401
@@ -355,6 +356,8 @@ class SlamConfig:
     """Re-finding untracked local-map points by projection and patch search."""
     visual_gyro: VisualGyroConfig = field(default_factory=VisualGyroConfig)
     """Event-only coasting on the rotation measured between consecutive MCIs' edges."""
+    edge_tracking: EdgeTrackingConfig = field(default_factory=EdgeTrackingConfig)
+    """Event-only maps starved of point tracks tracked from map points on the MCI's edges (:mod:`evpose.slam.edge_tracking`)."""
     restructure: RestructureConfig = field(default_factory=RestructureConfig)
     """Re-initialising a young event-only map from a wide-baseline keyframe pair."""
     seed: int = 0

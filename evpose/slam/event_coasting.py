@@ -99,7 +99,8 @@ the depth of the map points near them: open loop (seeds 0-3, ``coast2.py``) rota
 MCIs only; closed loop worse, not run through the harness). A point on a vertical edge gives one coordinate; what is
 left is a map of points on lines (free along the line) and a pose solver taking pitch and the vertical translation
 from a motion prior while only vertical edges are seen. The coast's rotation is another matter:
-:mod:`evpose.slam.visual_gyro`.
+:mod:`evpose.slam.visual_gyro`. Session 19 built that pose solver on the map's existing points
+(:mod:`evpose.slam.edge_tracking`, off): too few of them show in the MCIs of those stretches to correct the pose.
 """
 
 from __future__ import annotations

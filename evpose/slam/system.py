@@ -109,6 +109,8 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling):
         """Time the event window rejected for a low event rate since the last MCI tracked visually (``TrackingConfig.coast_blank_s``), us."""
         self._after_blank_t: int | None = None
         """Time of the first MCI after the last blank wall since the last MCI tracked visually (``coast_after_blank_s``), us."""
+        self._last_pnp_t = 0
+        """Time of the last MCI placed by PnP on point tracks (``EdgeTrackingConfig.max_span_s``), us."""
         self._prev_mci: tuple = (None, 0)
         """The previous MCI (8-bit image, time in us) while the current one is processed (``VisualGyroConfig``)."""
 
@@ -147,7 +149,7 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling):
             "state": self._state, "last_t": self._last_t, "imu_init": self.last_imu_init, "n_results": len(self.results),
             "last_visual_t": self._last_visual_t, "prev_hypothesis": self._prev_hypothesis,
             "scale_refinement": self.last_scale_refinement, "rejoin": self._rejoin, "blank_us": self._blank_us,
-            "after_blank_t": self._after_blank_t,
+            "after_blank_t": self._after_blank_t, "last_pnp_t": self._last_pnp_t,
         })
 
     def restore(self, snap: dict) -> None:
@@ -163,6 +165,7 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling):
         self.last_scale_refinement = s.get("scale_refinement")
         self._rejoin = s.get("rejoin")
         self._blank_us, self._after_blank_t = s.get("blank_us", 0), s.get("after_blank_t")
+        self._last_pnp_t = s.get("last_pnp_t", 0)
         del self.results[s["n_results"]:]
 
     # ------------------------------------------------------------- pipeline
@@ -317,6 +320,7 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling):
         fe.init_ref = None
         self._state = SlamStatus.OK
         self._last_visual_t, self._blank_us, self._after_blank_t = mci.t_us, 0, None
+        self._last_pnp_t = mci.t_us
         if self._rejoin is not None:
             joined = self._try_rejoin(m)
             if joined is not None:
@@ -382,6 +386,7 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling):
             fe.track_to_point.pop(int(fe.ids[sel[k]]), None)
         T_wc = est.T_wc
         self._last_visual_t, self._blank_us, self._after_blank_t = mci.t_us, 0, None
+        self._last_pnp_t = mci.t_us
         m.add_pose(mci.t_us, T_wc)
         n_tracked = self._inliers = int(est.inliers.sum())
         keyframe = False

@@ -12,7 +12,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from evpose.core.trajectory import invert_pose
 from evpose.slam.coasting import camera_frame_velocity, coast_pose, drop_contradicted
+from evpose.slam.edge_tracking import measure_across_edges, solve_pose_across_edges
 from evpose.slam.event_coasting import drop_unconfirmed_poses, event_only_coast_pose
 from evpose.slam.inertial import InertialConfiguration
 from evpose.slam.map_rejoin import RejoinCandidate
@@ -88,8 +90,37 @@ class VisualFailureHandling:
         if R_wc is not None:
             T_wc = T_wc.copy()
             T_wc[:3, :3] = R_wc
+        edge = self._edge_track(m, mci, T_wc)
+        if edge is not None:
+            return edge
         drop_contradicted(m, self.K, T_wc, fe.ids, fe.uv, fe.track_to_point, 2.0 * tc.reprojection_threshold_px)
         m.add_pose(mci.t_us, T_wc)
         # No BA on a keyframe at a predicted pose (InertialConfig.coast_ba: with one fixed keyframe it slid along the scale).
         T_wc = self._new_keyframe(m, mci.t_us, T_wc, mci.image8, adjust=False)
         return SlamStatus.COASTING, f"visual tracking failed ({reason}); pose coasted on the map's recent motion, map {m.id} kept", T_wc.copy(), True
+
+    def _edge_track(self, m, mci: MciResult, T_pred: np.ndarray) -> tuple[SlamStatus, str, np.ndarray, bool] | None:
+        """Event-only: the pose of ``mci`` from the map's points on its edges with ``T_pred`` (the coast) as the prior
+        (:mod:`evpose.slam.edge_tracking`); None when it is off, too long since the last PnP pose, or not accepted."""
+        ec, tc, fe = self.cfg.edge_tracking, self.cfg.tracking, self.fe
+        if not ec.enabled or (mci.t_us - self._last_pnp_t) / 1e6 > ec.max_span_s or not m.points:
+            return None
+        pts = [p for _, p in sorted(m.points.items()) if p.patch is not None]
+        if len(pts) < ec.min_points:
+            return None
+        Xw = np.stack([p.xyz for p in pts])
+        T_pred_cw = invert_pose(T_pred)
+        idx, uv, nrm = measure_across_edges(mci.image8, self.K, T_pred_cw, Xw, [p.patch for p in pts], ec)
+        res = solve_pose_across_edges(self.K, Xw[idx], uv, nrm, T_pred_cw, ec)
+        if not res.ok:
+            return None
+        T_wc = invert_pose(res.T_cw)
+        drop_contradicted(m, self.K, T_wc, fe.ids, fe.uv, fe.track_to_point, 2.0 * tc.reprojection_threshold_px)
+        n_refound = self._refind(m, mci, T_wc, self.cfg.search.refine_radius_px)
+        if ec.resets_coast:
+            self._last_visual_t, self._blank_us, self._after_blank_t = mci.t_us, 0, None
+        self._inliers = res.n_on_edge
+        m.add_pose(mci.t_us, T_wc)
+        T_wc = self._new_keyframe(m, mci.t_us, T_wc, mci.image8, adjust=ec.adjust_keyframes)
+        return (SlamStatus.OK, f"edge-tracked: {res.n_on_edge} of {res.n_view} map points on edges, {res.info_gain:.0f}x the "
+                f"prior ({n_refound} re-found by projection), map {m.id}", T_wc.copy(), True)

@@ -120,3 +120,47 @@ def test_a_measured_orientation_replaces_the_coasted_one(early_map):
     status, _, pose, _ = slam._bridge_or_lose(mci, "no tracks", R)
     assert status is SlamStatus.COASTING
     np.testing.assert_allclose(pose[:3, :3], R, atol=1e-12)
+
+
+def _paste_patches(slam, m, T_wc: np.ndarray) -> np.ndarray:
+    """An MCI showing each map point's template where ``T_wc`` projects it."""
+    from evpose.core.trajectory import invert_pose
+    from evpose.slam.geometry import project
+
+    img = np.zeros((slam.height, slam.width), np.uint8)
+    pts = [p for _, p in sorted(m.points.items()) if p.patch is not None]
+    uv, z = project(slam.K, invert_pose(T_wc), np.stack([p.xyz for p in pts]))
+    for p, (u, v), d in zip(pts, uv, z):
+        r = p.patch.shape[0] // 2
+        x, y = int(round(u)), int(round(v))
+        if d > 0 and r <= x < slam.width - r and r <= y < slam.height - r:
+            img[y - r:y + r + 1, x - r:x + r + 1] = np.maximum(img[y - r:y + r + 1, x - r:x + r + 1], p.patch)
+    return img
+
+
+def test_a_starved_map_is_edge_tracked_when_its_points_show_in_the_mci(early_map):
+    from evpose.slam.event_coasting import event_only_coast_pose
+
+    for enabled, expected in ((False, SlamStatus.COASTING), (True, SlamStatus.OK)):
+        cfg = SlamConfig()
+        cfg.edge_tracking.enabled = enabled
+        slam = EventSlam(cfg, early_map.calibration)
+        slam.step(early_map.events)
+        m = slam.atlas.active
+        t = m.traj_t[-1] + 4000
+        T_pred = event_only_coast_pose(m, t, int(slam.cfg.tracking.coast_span_s * 1e6))
+        mci = SimpleNamespace(t_us=t, image8=_paste_patches(slam, m, T_pred))
+        status, reason, pose, _ = slam._bridge_or_lose(mci, "no tracks")
+        assert status is expected, reason
+        if enabled:
+            assert reason.startswith("edge-tracked") and slam._last_visual_t == t and m.traj_t[-1] == t
+            # The MCI agrees with the prediction, so the edges keep the pose there.
+            assert np.degrees(Rotation.from_matrix(pose[:3, :3].T @ T_pred[:3, :3]).magnitude()) < 0.2
+
+
+def test_edge_tracking_declines_a_blank_mci_and_the_map_coasts(early_map):
+    slam, m, _ = _fail(early_map, None, 4000)
+    slam.cfg.edge_tracking.enabled = True
+    mci = SimpleNamespace(t_us=m.traj_t[-1] + 4000, image8=np.zeros((slam.height, slam.width), np.uint8))
+    status, _, _, _ = slam._bridge_or_lose(mci, "no tracks")
+    assert status is SlamStatus.COASTING
