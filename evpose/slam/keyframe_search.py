@@ -82,7 +82,9 @@ def klt_near(src8: np.ndarray, img8: np.ndarray, src: np.ndarray, guess: np.ndar
 
     The same result as :func:`track_features` followed by the radius test, bit for bit (KLT tracks each point on its
     own), but the backward pass runs only for the forward results that passed: about 3 % of the candidates land within
-    the radius, and the backward pass of the rest was half the search's KLT time.
+    the radius, and the backward pass of the rest was half the search's KLT time. Session 19 (``/tmp/s19/turn9/cpu.py``,
+    landing event-only seeds 0-3 twice, the two versions alternated in one process): main-thread CPU per MCI median
+    27.75 -> 23.72 ms (mean 33.69 -> 29.89 ms), same trajectories.
     """
     n = len(src)
     if n == 0:
