@@ -65,7 +65,7 @@ class ProjectionSearchConfig:
     40-55 untracked points of keyframes older than ``local_window`` project into each MCI after the turn, against about
     20 tracked) -> seeds 0-23 2.09 % (17 within 2 %), paired +0.26 +- 0.23, CPU per MCI 25.4 -> 32.4 ms median; the
     newest 12 -> 2.14 % (17), +0.32 +- 0.22, 28.3 ms; both turned the same four seeds (4, 14, 15, 19: 1.7-2.5 %) into
-    4.1-4.9 % runs; not kept."""
+    4.1-4.9 % runs; the newest 4 -> 2.32 % (12), +0.50 +- 0.25, 21.2 ms; not kept."""
     fuse_radius_px: float = field(default=0.0, metadata={"min": 0.0, "max": 10.0, "step": 0.1, "unit": "px"})
     """Event-only: after each pose estimate, live tracks without a map point take over an untracked map point projecting
     within this distance, when the pair is unambiguous (:mod:`evpose.slam.track_fusion`; 0: off), pixels. Session 19
