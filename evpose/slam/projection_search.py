@@ -75,8 +75,9 @@ class ProjectionSearchConfig:
     1.35-2.06 %, others failed instead (43, 44, 52, 66: 4.6-5.1 %), the first-leg collapses (27, 36, 60, 67) stayed.
     On seeds 0-23 the summed keyframe-to-keyframe x-rotation error fell from 7.0 to 6.1 deg (mean), the RMS keyframe
     rotation error from 1.40 to 1.30 deg, the median PnP inliers after 2 s rose from 34.2 to 36.6. With
-    ``TrackingConfig.ba_huber_px`` 1.9 (seeds 0-47) -0.21 +- 0.20, with 2.1 +0.17 +- 0.21: the 168 runs 2.34 -> 2.29 %
-    (median 1.78 -> 1.70, within 2 % 101 -> 105), paired -0.05 +- 0.10. Radius 1.0 / 2.5 on seeds 0-23: 1.96 / 2.07 %
+    ``TrackingConfig.ba_huber_px`` 1.9 (seeds 0-47) -0.21 +- 0.20, seeds 48-71 -0.11 +- 0.21, with 2.1 (seeds 0-47)
+    +0.17 +- 0.21: the 192 runs 2.36 -> 2.31 % (median 1.78 -> 1.71, within 2 % 116 -> 118), paired -0.05 +- 0.09
+    (better in 103). Radius 1.0 / 2.5 on seeds 0-23: 1.96 / 2.07 %
     (+0.13 +- 0.19 / +0.25 +- 0.20); also giving the point the new track's observations in earlier keyframes (within
     5 px): 1.91 % (+0.09 +- 0.19). Indoor seeds 0-7 with 1.5: 6.83 -> 6.84 %, from the events 40.7 -> 39.6 %. Within
     the noise: off. CPU per MCI unchanged (landing median 23-25 ms)."""
