@@ -61,7 +61,10 @@ class FeatureConfig:
     Session 14, re-tracking every MCI-to-MCI track at full resolution with an 11 px window from the 23 px result
     (kept when within 2 px): 2.87 % (5 of 12, worst 5.39); dropping tracks that refinement moved over 0.7 px left
     seeds 0-3 59.7-91.8 % tracked at 5.5-7.1 % ATE (removed). Session 17, indoor event-only seeds 0-7: 31 -> time
-    tracked from the events 44.7 -> 49.4 % but ATE 7.39 -> 10.55 % (:mod:`evpose.slam.event_coasting`), pixels."""
+    tracked from the events 44.7 -> 49.4 % but ATE 7.39 -> 10.55 % (:mod:`evpose.slam.event_coasting`). Session 19,
+    starting event-only MCI-to-MCI KLT where the map's constant-velocity pose moves each mapped track (the others by the
+    homography those moves fit), against the along-edge lag of tracks started at zero flow (removed): landing seeds
+    0-23 1.82 -> 2.81 % (within 2 % 19 -> 14, paired +0.98 +- 0.52, worst 10.82 %, 2-3 maps on four seeds), pixels."""
     klt_levels: int = field(default=2, metadata={"min": 0, "max": 5, "step": 1, "unit": "levels"})
     """KLT pyramid levels above the base image, levels."""
     klt_max_bidir_error_px: float = field(default=1.0, metadata={"min": 0.1, "max": 5.0, "step": 0.1, "unit": "px"})

@@ -26,7 +26,8 @@ import numpy as np
 from evpose.core.trajectory import invert_pose
 from evpose.slam.atlas import SlamMap
 from evpose.slam.config import FeatureConfig
-from evpose.slam.features import track_features
+import cv2
+
 from evpose.slam.geometry import project
 
 
@@ -56,8 +57,7 @@ def klt_refind_points(m: SlamMap, img8: np.ndarray, K: np.ndarray, T_wc: np.ndar
         if not len(idx):
             continue
         src = np.array([m.points[cand[i]].obs[kf.id] for i in idx], np.float32)
-        found, ok = track_features(kf.image8, img8, src, fcfg, guess=proj[idx].astype(np.float32), guess_back=True)
-        ok &= np.linalg.norm(found.astype(np.float64) - proj[idx], axis=1) <= radius
+        found, ok = klt_near(kf.image8, img8, src, proj[idx], radius, fcfg)
         for k in np.flatnonzero(ok):
             pids_out.append(cand[idx[k]])
             uv_out.append(found[k].astype(np.float64))
@@ -73,6 +73,40 @@ def klt_refind_points(m: SlamMap, img8: np.ndarray, K: np.ndarray, T_wc: np.ndar
         keep &= np.linalg.norm(uv[:, None] - np.asarray(occupied_uv, np.float64)[None], axis=2).min(axis=1) >= 2.0
     order = np.argsort(np.array(pids_out)[keep], kind="stable")
     return [pids_out[i] for i in np.flatnonzero(keep)[order]], uv[keep][order]
+
+
+def klt_near(src8: np.ndarray, img8: np.ndarray, src: np.ndarray, guess: np.ndarray, radius: float,
+             fcfg: FeatureConfig) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`track_features` with ``guess_back`` from ``src8`` into ``img8``, started at ``guess``, whose forward results
+    must also land within ``radius`` px of ``guess``: (positions (N, 2) float32, ok mask (N,)).
+
+    The same result as :func:`track_features` followed by the radius test, bit for bit (KLT tracks each point on its
+    own), but the backward pass runs only for the forward results that passed: about 3 % of the candidates land within
+    the radius, and the backward pass of the rest was half the search's KLT time. Session 19 (``/tmp/s19/turn9/cpu.py``,
+    landing event-only seeds 0-3 twice, the two versions alternated in one process): main-thread CPU per MCI median
+    27.75 -> 23.72 ms (mean 33.69 -> 29.89 ms), same trajectories.
+    """
+    n = len(src)
+    if n == 0:
+        return np.zeros((0, 2), np.float32), np.zeros(0, bool)
+    p0 = np.ascontiguousarray(src, np.float32).reshape(-1, 1, 2)
+    p1_init = np.ascontiguousarray(guess, np.float32).reshape(-1, 1, 2).copy()
+    win = (int(fcfg.klt_window_px), int(fcfg.klt_window_px))
+    crit = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 30, 0.01)
+    p1, st1, _ = cv2.calcOpticalFlowPyrLK(src8, img8, p0, p1_init, winSize=win, maxLevel=int(fcfg.klt_levels), criteria=crit,
+                                          flags=cv2.OPTFLOW_USE_INITIAL_FLOW)
+    found = p1.reshape(-1, 2)
+    h, w = img8.shape
+    ok = (st1.ravel() == 1) & (found[:, 0] >= 0) & (found[:, 0] <= w - 1) & (found[:, 1] >= 0) & (found[:, 1] <= h - 1)
+    ok &= np.linalg.norm(found.astype(np.float64) - np.asarray(guess, np.float64), axis=1) <= radius
+    idx = np.flatnonzero(ok)
+    if len(idx):
+        p0_init = (p0[idx] + (p1[idx] - p1_init[idx])).astype(np.float32)
+        p0b, st2, _ = cv2.calcOpticalFlowPyrLK(img8, src8, np.ascontiguousarray(p1[idx]), p0_init, winSize=win,
+                                               maxLevel=int(fcfg.klt_levels), criteria=crit, flags=cv2.OPTFLOW_USE_INITIAL_FLOW)
+        fb = np.linalg.norm(p0b.reshape(-1, 2) - p0[idx].reshape(-1, 2), axis=1)
+        ok[idx] = (st2.ravel() == 1) & (fb <= fcfg.klt_max_bidir_error_px)
+    return found.astype(np.float32), ok
 
 
 def keep_keyframe_image(m: SlamMap, kf, img8: np.ndarray, window: int) -> None:

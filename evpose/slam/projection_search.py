@@ -60,7 +60,27 @@ class ProjectionSearchConfig:
     (median 2.93), 1 3.03 % (median 2.50), keyframes. Searching the points of the newest 12 / 15 keyframes instead of
     ``TrackingConfig.local_window`` (their MCIs kept as sources; session 11, landing seeds 0-11, 60 runs with
     ``MciConfig.reference_fraction`` 1.0): mean ATE 3.34 -> 3.06 / 3.32 %, 9 -> 13 / 10 of 60 within 2 %, paired
-    -0.28 +- 0.21 points (12), at 4-8 ms more CPU per MCI; not kept."""
+    -0.28 +- 0.21 points (12), at 4-8 ms more CPU per MCI; not kept. Session 19 (``/tmp/s19/turn9/``, against
+    defaults 1.82 %, 19 of 24 within 2 %): the points of the newest 40 keyframes (every point of a 3 s landing map;
+    40-55 untracked points of keyframes older than ``local_window`` project into each MCI after the turn, against about
+    20 tracked) -> seeds 0-23 2.09 % (17 within 2 %), paired +0.26 +- 0.23, CPU per MCI 25.4 -> 32.4 ms median; the
+    newest 12 -> 2.14 % (17), +0.32 +- 0.22, 28.3 ms; both turned the same four seeds (4, 14, 15, 19: 1.7-2.5 %) into
+    4.1-4.9 % runs; the newest 4 -> 2.32 % (12), +0.50 +- 0.25, 21.2 ms; not kept."""
+    fuse_radius_px: float = field(default=0.0, metadata={"min": 0.0, "max": 10.0, "step": 0.1, "unit": "px"})
+    """Event-only: after each pose estimate, live tracks without a map point take over an untracked map point projecting
+    within this distance, when the pair is unambiguous (:mod:`evpose.slam.track_fusion`; 0: off), pixels. Session 19
+    (``/tmp/s19/turn9/``, landing event-only 3 s, against defaults): 1.5 -> seeds 0-23 1.82 -> 1.63 % (within 2 %
+    19 -> 20, worst 4.58 -> 2.65), 24-47 2.86 -> 2.73 % (14 -> 15), 48-71 2.51 -> 2.57 % (13 -> 13); the 72 runs paired
+    -0.09 +- 0.14 points (better in 40); the runs failing after the turn (10, 31, 32, 37, 38: 3.8-4.7 %) all came to
+    1.35-2.06 %, others failed instead (43, 44, 52, 66: 4.6-5.1 %), the first-leg collapses (27, 36, 60, 67) stayed.
+    On seeds 0-23 the summed keyframe-to-keyframe x-rotation error fell from 7.0 to 6.1 deg (mean), the RMS keyframe
+    rotation error from 1.40 to 1.30 deg, the median PnP inliers after 2 s rose from 34.2 to 36.6. With
+    ``TrackingConfig.ba_huber_px`` 1.9 (seeds 0-47) -0.21 +- 0.20, seeds 48-71 -0.11 +- 0.21, with 2.1 (seeds 0-47)
+    +0.17 +- 0.21: the 192 runs 2.36 -> 2.31 % (median 1.78 -> 1.71, within 2 % 116 -> 118), paired -0.05 +- 0.09
+    (better in 103). Radius 1.0 / 2.5 on seeds 0-23: 1.96 / 2.07 %
+    (+0.13 +- 0.19 / +0.25 +- 0.20); also giving the point the new track's observations in earlier keyframes (within
+    5 px): 1.91 % (+0.09 +- 0.19). Indoor seeds 0-7 with 1.5: 6.83 -> 6.84 %, from the events 40.7 -> 39.6 %. Within
+    the noise: off. CPU per MCI unchanged (landing median 23-25 ms)."""
     patch_px: int = field(default=11, metadata={"min": 5, "max": 31, "step": 2, "unit": "px"})
     """Side of the template cut around a point's observation in its keyframe MCI, pixels (odd)."""
     radius_px: int = field(default=6, metadata={"min": 1, "max": 30, "step": 1, "unit": "px"})

@@ -52,6 +52,7 @@ from evpose.slam.step_result import SlamFailure, SlamStatus, SlamStepResult
 from evpose.slam.system_failures import VisualFailureHandling
 from evpose.slam.system_gyro import GyroAids
 from evpose.slam.system_inertial import InertialMaps
+from evpose.slam.track_fusion import fuse_tracks
 from evpose.slam.tracking import PoseEstimate, estimate_pose
 
 
@@ -374,9 +375,13 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling):
             self._failure = SlamFailure.REJECTED
             return self._bridge_or_lose(mci, est.reason, R_coast)
         more = self._refind(m, mci, est.T_wc, self.cfg.search.refine_radius_px)
+        n_refound += more
+        fused = ""
+        if self.imu is None and self.cfg.search.fuse_radius_px > 0:
+            n_fused = fuse_tracks(m, self.K, est.T_wc, fe.ids, fe.uv, fe.track_to_point, self.cfg.search.fuse_radius_px, mci.image8.shape)
+            more, fused = more + n_fused, f", {n_fused} taken over by new tracks"
         if more:
             # Second pass with the estimated pose (ORB-SLAM's local-map search): re-solve with the new associations.
-            n_refound += more
             sel2 = [i for i, t in enumerate(fe.ids.tolist()) if fe.track_to_point.get(t) in m.points]
             est2, sel2 = self._estimate(m, mci, sel2, est.T_wc, R_prior)
             if est2.ok:
@@ -393,7 +398,7 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling):
         if need_keyframe(m, fe.ids, fe.uv, n_tracked, tc):
             keyframe = True
             T_wc = self._new_keyframe(m, mci.t_us, T_wc, mci.image8)
-        return SlamStatus.OK, f"{n_tracked} inliers ({n_refound} re-found by projection), rms {est.rms_px:.2f} px", T_wc.copy(), keyframe
+        return SlamStatus.OK, f"{n_tracked} inliers ({n_refound} re-found by projection{fused}), rms {est.rms_px:.2f} px", T_wc.copy(), keyframe
 
     def _estimate(self, m: SlamMap, mci: MciResult, sel: list[int], guess: np.ndarray, R_prior: np.ndarray | None) -> tuple[PoseEstimate, list[int]]:
         """Pose from the map points of the tracks ``sel`` (indices into the frontend's tracks), gyro-refined when a prior exists."""

@@ -79,7 +79,11 @@ class TrackingConfig:
     about one standard error and the indoor seeds 0-3 got worse with the defaults. Landing seeds 0-11 with the defaults:
     2 -> 2.44 % (6 within 2 %; indoor 0-3 10.52 %), 10 -> 2.73 (7), 30 -> 3.31 (5); 3 only in maps with more than
     ``local_window`` keyframes -> 2.62 (5; indoor 0-3 9.35); 3 with the tensor over KLT's 23 px window -> 2.74 (5;
-    indoor 9.98). Event-inertial runs never use it, pixels."""
+    indoor 9.98). Session 19 (``/tmp/s19/turn9/edge_pnp.py``, removed): every MCI's PnP pose re-solved by Gauss-Newton
+    with the same along-edge sigma from the current MCI's structure tensor: landing seeds 0-23 (defaults 1.82 %, 19
+    within 2 %) 3 -> 2.66 % (15; seed 3 15.5 %), 1.5 -> 2.39 % (16), paired +0.84 +- 0.63 / +0.57 +- 0.37; the summed
+    keyframe x-rotation error fell (mean 7.0 -> 5.3 deg) but the RMS keyframe rotation error rose (1.40 -> 1.54 deg).
+    Event-inertial runs never use it, pixels."""
     ba_edge_max_ratio: float = field(default=0.1, metadata={"min": 0.0, "max": 1.0, "step": 0.01, "unit": "ratio"})
     """An observation is on a straight edge when the smaller eigenvalue of the MCI's structure tensor (11 px square)
     there is below this share of the larger, ratio. With ``ba_edge_along_sigma_px`` 3, 0.05 -> landing event-only seeds

@@ -7,7 +7,7 @@ import numpy as np
 from evpose.slam.atlas import Keyframe, MapPoint, SlamMap
 from evpose.slam.config import FeatureConfig
 from evpose.slam.features import track_features
-from evpose.slam.keyframe_search import keep_keyframe_image, klt_refind_points
+from evpose.slam.keyframe_search import keep_keyframe_image, klt_near, klt_refind_points
 from test_projection_search import K, _image, _scene
 
 
@@ -64,3 +64,17 @@ def test_a_guided_backward_pass_checks_matches_beyond_klt_reach():
     found, ok = track_features(a, b, c.astype(np.float32), cfg, guess=guess, guess_back=True)
     assert not ok_plain.any()
     assert ok.all() and np.linalg.norm(found - (c + shift), axis=1).max() < 0.7
+
+
+def test_klt_near_equals_track_features_with_the_radius_test_bit_for_bit():
+    Xw, T1, T2, uv1, uv2 = _scene()
+    src8, img8 = _image(uv1, seed=5), _image(uv2, seed=5)
+    rng = np.random.default_rng(3)
+    guess = uv2 + rng.normal(0.0, 2.0, uv2.shape)  # projections a few pixels off, as by an estimated pose
+    fcfg = FeatureConfig()
+    found, ok = klt_near(src8, img8, uv1.astype(np.float32), guess, 3.0, fcfg)
+    ref, ref_ok = track_features(src8, img8, uv1.astype(np.float32), fcfg, guess=guess.astype(np.float32), guess_back=True)
+    ref_ok &= np.linalg.norm(ref.astype(np.float64) - guess, axis=1) <= 3.0
+    assert ok.any() and not ok.all()
+    np.testing.assert_array_equal(ok, ref_ok)
+    np.testing.assert_array_equal(found[ok], ref[ref_ok])
