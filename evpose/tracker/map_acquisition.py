@@ -33,10 +33,20 @@ def unacquired_s(steps: Iterable[tuple[int, Mapping[str, int]]], t0_us: int) -> 
     return None if last is None else (int(last) - int(t0_us)) * 1e-6
 
 
-def map_mismatch(steps: Iterable[tuple[int, Mapping[str, int]]], t0_us: int, acquire_s: float = DEFAULT_ACQUIRE_S) -> float | None:
+def map_mismatch(steps: Iterable[tuple[int, Mapping[str, int]]], t0_us: int, acquire_s: float = DEFAULT_ACQUIRE_S,
+                 finished: bool = False) -> float | None:
     """The seconds without a registration when they reach ``acquire_s`` (the map does not look like this
-    recording's), else None. ``acquire_s <= 0`` never reports."""
+    recording's), else None. ``finished``: ``steps`` are all the recording has, so a recording shorter than
+    ``acquire_s`` that never registered is reported too (as ``evpose track`` does). ``acquire_s <= 0`` never reports."""
     if acquire_s <= 0:
         return None
     s = unacquired_s(steps, t0_us)
-    return s if s is not None and s >= acquire_s else None
+    return s if s is not None and (s >= acquire_s or finished) else None
+
+
+def mismatch_problem(seconds: float, recording_name: str, reason: str = "") -> str:
+    """The one-line problem every command reports for a map :func:`map_mismatch` flags (``reason``: the last
+    update's, in parentheses when given)."""
+    why = f" ({reason})" if reason else ""
+    return (f"no update registered against this map in the first {seconds:.2f} s of {recording_name}{why}:"
+            " is it this recording's map, in its frame?")
