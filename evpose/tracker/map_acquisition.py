@@ -25,15 +25,16 @@ first update that registered                    always 1st   1st - never
 
 No threshold on any of them separates the two, so none is applied. A wrong map registers by chance wherever
 events cover the image densely enough for the tracker's acceptance (``registration.min_inlier_ratio``: 10 % of
-the map points used on recent events): under flicker (0.63-0.84 of the updates, from the first one), in a textured scene (0.47-0.81), with
-moving objects (from the first update in the 0.3 s runs), and elsewhere from update 6-120; a right map can lose
-registration early (indoor at 240x180: 0.49-0.50 of its first second, all four seeds). So the rule catches 19 of
-the 70 wrong pairings (every demo recording with the other map; indoor with the landing map; three landing
-runs), none of the right ones, and lets through e.g. a 0.3 s 240x180 landing with ``indoor_map.ply`` (updates
-15-43 register). A share threshold below the right maps' 0.49 would catch more without a false alarm in these
-runs (share < 0.25: 39 of 70; < 0.4: 47), but with no margin to speak of against a right map losing track half
-way through the window it is not applied. Separating them would take comparing the inlier share with the
-chance level set by how much of the image the recent events cover, which the tracker does not count.
+the map points used on recent events): under flicker (0.63-0.84 of the updates, from the first one), in a
+textured scene (0.47-0.81), with moving objects (from the first update in the 0.3 s runs), and elsewhere from
+update 7-121 on; a right map can lose registration early (indoor at 240x180: 0.49-0.50 of its first second, all
+four seeds). So the rule catches 19 of the 70 wrong pairings (every demo recording with the other map; indoor
+with the landing map; three landing runs), none of the right ones, and lets through e.g. a 0.3 s 240x180 landing
+with ``indoor_map.ply`` (updates 16-44 of 53 register). A share threshold below the right maps' 0.49 would catch
+more without a false alarm in these runs (share < 0.25: 39 of 70; < 0.4: 47), but with no margin to speak of
+against a right map losing track half way through the window it is not applied. Separating them would take
+comparing the inlier share with the chance level set by how much of the image the recent events cover, which the
+tracker does not count.
 """
 
 from __future__ import annotations
