@@ -174,6 +174,11 @@ class TrackerEngine(DiskSnapshotsMixin, Engine):
         return self._summaries[: self._shown + 1]
 
     @property
+    def known_summaries(self) -> list[StepSummary]:
+        """Summaries of every step from the start known so far (computed by either session or read from disk)."""
+        return self._summaries
+
+    @property
     def current_t_us(self) -> int:
         return self._summaries[self._shown].t_us if self._shown >= 0 else self.t_start_us
 

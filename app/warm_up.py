@@ -74,13 +74,24 @@ class PrepareResult:
 
 def prepare_pair(recording, contour_map, paths: tuple[Path, Path], disk, frames=None,
                  on_progress: Callable[[float], None] | None = None, keep_going: Callable[[], bool] | None = None,
-                 slice_steps: int = 25) -> PrepareResult:
+                 slice_steps: int = 25, acquire_s: float = 0.0) -> PrepareResult:
     """Fill the disk cache entry of ``recording`` tracked against ``contour_map`` with the default configuration, as
     the viewer opens it (``paths``: their files, which the entry is keyed by; ``frames``: the viewer's frame cache
-    settings). ``on_progress(fraction)`` after each slice of ``slice_steps`` steps; ``keep_going()`` False stops."""
+    settings). ``on_progress(fraction)`` after each slice of ``slice_steps`` steps; ``keep_going()`` False stops.
+    ``acquire_s > 0``: raise :class:`InputError` naming the map, as ``evpose track --acquire-s`` does, when no
+    update registers within that many seconds (:mod:`evpose.tracker.map_acquisition`); the steps computed until
+    then stay in the cache. 0 (the warm-up's): never (the viewer shows such a pairing, with a warning)."""
     from app.engine_factory import engine_factory
     from app.tracker_engine import TrackerEngine
     from evpose.errors import InputError
+    from evpose.tracker.map_acquisition import map_mismatch, mismatch_problem
+
+    def check_map(engine, finished: bool) -> None:
+        known = engine.known_summaries
+        s = map_mismatch(((h.t_us, h.counts) for h in known), engine.session.t0_us, acquire_s, finished)
+        if s is not None:
+            engine.flush_disk_snapshots()
+            raise InputError(paths[1], mismatch_problem(s, paths[0].name), f"updates 1-{len(known)}")
 
     t0 = time.perf_counter()
     engine = engine_factory(recording, contour_map, "tracking", frames, disk, paths)(None)
@@ -90,10 +101,12 @@ def prepare_pair(recording, contour_map, paths: tuple[Path, Path], disk, frames=
         raise InputError(None, "the disk cache is off: there is nothing to prepare into")
     n = engine.n_steps
     if engine.disk_steps >= n:
+        check_map(engine, True)
         return PrepareResult(n, False, time.perf_counter() - t0, True)
     while engine.prefetch(slice_steps):
         if engine.disk.error:
             raise InputError(engine.disk.dir, engine.disk.error)
+        check_map(engine, len(engine.known_summaries) >= n)
         if on_progress is not None:
             on_progress(engine.frontier / max(n, 1))
         if keep_going is not None and not keep_going():
@@ -101,6 +114,7 @@ def prepare_pair(recording, contour_map, paths: tuple[Path, Path], disk, frames=
             return PrepareResult(n, True, time.perf_counter() - t0, False)
     if engine.disk.error:
         raise InputError(engine.disk.dir, engine.disk.error)
+    check_map(engine, True)
     complete = len(engine.disk.written) == math.ceil(n / engine.disk.chunk_steps)
     return PrepareResult(n, True, time.perf_counter() - t0, complete)
 

@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+import math
 import signal
 import time
 from pathlib import Path
+
+from evpose.tracker.map_acquisition import DEFAULT_ACQUIRE_S
 
 
 _DEFAULT_DATA = (Path("demo_data"), Path("maps"))
@@ -44,8 +47,14 @@ def check_arguments(data: list[Path], port: int, layout: str, export_dir: Path, 
     check_outputs((), folders=(export_dir, cache_dir))
 
 
-def prepare_recording(recording: Path, map_path: Path | None, data: list[Path], cache) -> int:
-    """``evpose app --prepare``: fill the disk cache for ``recording`` (and its map) as the warm-up does, printing progress."""
+def prepare_recording(recording: Path, map_path: Path | None, data: list[Path], cache, acquire_s: float = DEFAULT_ACQUIRE_S) -> int:
+    """``evpose app --prepare``: fill the disk cache for ``recording`` (and its map) as the warm-up does, printing progress.
+
+    A map no update registers against within ``acquire_s`` is an error (exit 2), not the viewer's warning: the
+    viewer must go on showing what the tracker does with the pairing, but a preparation run is unattended (often a
+    script over a folder, the map guessed from ``--data``), its only product is a cache of motion-model poses
+    nobody asked for, and a warning scrolled past in its output would be missed. The steps computed until then
+    stay in the cache; the viewer still opens the pairing (and warns)."""
     from app.browser import DataEntry, DataRoots, EntryKind, guess_map_for, load_recording
     from app.warm_up import prepare_pair
 
@@ -55,6 +64,8 @@ def prepare_recording(recording: Path, map_path: Path | None, data: list[Path], 
 
     if not cache.enabled:
         raise InputError(None, "--prepare fills the disk cache: it cannot be used with --no-disk-cache")
+    if not math.isfinite(acquire_s):
+        raise InputError(None, f"--acquire-s must be a finite number of seconds (0 = never give up), got {acquire_s}")
     check_outputs((), folders=(cache.folder(),))
     for p in (recording, map_path):
         if p is not None and not p.exists():
@@ -76,7 +87,7 @@ def prepare_recording(recording: Path, map_path: Path | None, data: list[Path], 
             shown[0] = int(fraction * 10)
             print(f"  {100 * fraction:.0f} %", flush=True)
 
-    result = prepare_pair(rec, read_contour_map(map_path), (rec_path, map_path), cache, None, progress)
+    result = prepare_pair(rec, read_contour_map(map_path), (rec_path, map_path), cache, None, progress, acquire_s=acquire_s)
     how = f"computed in {result.seconds:.1f} s" if result.computed else "already in the disk cache"
     print(f"evpose app: prepared {result.steps} steps ({how})", flush=True)
     return 0
@@ -99,6 +110,7 @@ def main(
     warm_up: bool = True,
     prepare: Path | None = None,
     map: Path | None = None,  # noqa: A002 - the option is --map
+    acquire_s: float = DEFAULT_ACQUIRE_S,
 ) -> int:
     """Start the browser-based viewer: browse, play, step and tune the tracker on recordings and maps.
 
@@ -116,6 +128,8 @@ def main(
             before it was ever opened (``--no-warm-up``: only what the player computes is kept; off with ``--no-disk-cache``).
         prepare: Instead of serving, prepare this recording into the cache folder now (in the foreground) and exit.
         map: The contour map for ``--prepare`` (default: the one the viewer would open it with, from ``--data``).
+        acquire_s: ``--prepare`` stops with an error, as ``evpose track`` does, if no update registers against the map
+            within this many seconds of the start (a wrong map; the viewer only warns, as it must show the pairing); 0 = never.
     """
     from app.disk_cache import DiskCacheConfig
     from app.server import AppConfig, ViewerApp
@@ -123,7 +137,7 @@ def main(
     data = default_data_folders(list(data))
     cache = DiskCacheConfig(enabled=disk_cache, directory=cache_dir)
     if prepare is not None:
-        return prepare_recording(prepare, map, data, cache)
+        return prepare_recording(prepare, map, data, cache, acquire_s)
     check_arguments(data, port, layout, export_dir, cache_dir)
     viewer = ViewerApp(AppConfig(data=list(data), host=host, port=port, layout=layout, export_dir=export_dir,
                                  disk_cache=cache, warm_up=warm_up))

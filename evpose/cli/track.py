@@ -10,7 +10,7 @@ import numpy as np
 import tyro
 
 from evpose.errors import InputError
-from evpose.tracker.map_acquisition import DEFAULT_ACQUIRE_S, registered as update_registered
+from evpose.tracker.map_acquisition import DEFAULT_ACQUIRE_S, mismatch_problem, registered as update_registered
 
 
 def parse_init(text: str) -> np.ndarray | None:
@@ -164,8 +164,7 @@ def main(
                 lost.append(r)
             registered[0] = registered[0] or update_registered(r.counts)
             if not registered[0] and (r.t_us >= acquire_until or session.done):
-                raise InputError(map, f"no update registered against this map in the first {(r.t_us - session.t0_us) / 1e6:.2f} s"
-                                 f" of {recording.name} ({r.reason}): is it this recording's map, in its frame?",
+                raise InputError(map, mismatch_problem((r.t_us - session.t0_us) / 1e6, recording.name, r.reason),
                                  f"updates 1-{len(session.results)}")
             bar.update(1)
 

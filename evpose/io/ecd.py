@@ -192,6 +192,12 @@ def read_ecd_context(folder: str | Path, width: int | None = None, height: int |
         calibration = CameraCalibration.from_dict(side["calibration"], source=str(folder / SIDECAR_FILE))
     size = None
     if width is not None and height is not None:
+        from evpose.io.open import check_size_flags
+
+        if calibration is not None:
+            check_size_flags(folder / SIDECAR_FILE, (calibration.width, calibration.height), width, height, "its calibration")
+        elif "width" in metadata and "height" in metadata:
+            check_size_flags(folder / SIDECAR_FILE, (int(metadata["width"]), int(metadata["height"])), width, height, "its metadata")
         size = (int(width), int(height))
     elif calibration is not None:
         size = (calibration.width, calibration.height)
@@ -208,14 +214,6 @@ def read_ecd_context(folder: str | Path, width: int | None = None, height: int |
             metadata["ecd_calib_txt"] = vals
     if size is not None and calibration is None:
         metadata["width"], metadata["height"] = size
-    if size is not None:
-        if calibration is not None and (calibration.width, calibration.height) != size:
-            d = calibration.to_dict()
-            d["width"], d["height"] = size
-            try:
-                calibration = CameraCalibration.from_dict(d, source=str(folder / SIDECAR_FILE))
-            except InputError as exc:  # named no file: the size comes from the flags, the rest from the sidecar
-                raise InputError(exc.path, f"{exc.problem} (sensor size {size[0]}x{size[1]} from --width/--height)") from None
     imu = None
     if (folder / IMU_FILE).is_file():
         t, v = read_table(folder / IMU_FILE, 7)

@@ -262,8 +262,9 @@ def open_event_h5_stream(path: str | Path, width: int | None = None, height: int
     if gt_path is not None:
         metadata["ground_truth_file"] = gt_path.name
     if width is not None and height is not None:
-        if cal is not None and (cal.width, cal.height) != (width, height):
-            raise InputError(path, f"--width/--height {width}x{height} contradict {cal_path.name} ({cal.width}x{cal.height})")
+        from evpose.io.open import check_size_flags
+
+        check_size_flags(path, None if cal is None else (cal.width, cal.height), width, height, f"the calibration {cal_path.name if cal_path else ''}")
         if cal is None:
             metadata["width"], metadata["height"] = int(width), int(height)
     ctx = Recording(EventArray.empty(), imu, gt, cal, metadata, source=path)

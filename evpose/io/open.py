@@ -136,6 +136,23 @@ def open_stream(path: str | Path, width: int | None = None, height: int | None =
     return stream
 
 
+def check_size_flags(path: Path, stated: tuple[int, int] | None, width: int | None, height: int | None, by: str) -> None:
+    """Refuse ``--width/--height`` that contradict the sensor size a recording states (``by`` says where): the
+    flags are for formats that do not state it, and silently preferring either side tracks with a wrong image size."""
+    if width is None or height is None or stated is None:
+        return
+    if (int(stated[0]), int(stated[1])) != (int(width), int(height)):
+        raise InputError(path, f"--width/--height {width}x{height} contradict the {stated[0]}x{stated[1]} sensor stated by {by}")
+
+
+def apply_size_flags(path: Path, rec: Recording, width: int | None, height: int | None) -> None:
+    """An evpose HDF5 file states its size in its calibration or metadata; flags may only agree, or fill it in."""
+    by = "its calibration" if rec.calibration is not None else "its metadata"
+    check_size_flags(path, rec.sensor_size, width, height, by)
+    if width is not None and height is not None and rec.sensor_size is None:
+        rec.metadata["width"], rec.metadata["height"] = int(width), int(height)
+
+
 def _open_stream(path: str | Path, width: int | None = None, height: int | None = None, **options) -> RecordingStream:
     path = Path(path)
     if (width is None) != (height is None):
@@ -156,6 +173,7 @@ def _open_stream(path: str | Path, width: int | None = None, height: int | None 
         with H5RecordingReader(path) as r:
             ctx = Recording(EventArray.empty(), r.imu, r.ground_truth, r.calibration, dict(r.metadata), source=path)
             n = r.n_events
+        apply_size_flags(path, ctx, width, height)
 
         size = ctx.sensor_size
 
@@ -176,7 +194,7 @@ def _open_stream(path: str | Path, width: int | None = None, height: int | None 
         return event_h5.open_event_h5_stream(path, width, height)
     from evpose.io import rosbag
 
-    return rosbag.open_bag_stream(path, **options)
+    return rosbag.open_bag_stream(path, width=width, height=height, **options)
 
 
 def open_recording(path: str | Path, width: int | None = None, height: int | None = None, **options) -> Recording:
@@ -187,7 +205,10 @@ def open_recording(path: str | Path, width: int | None = None, height: int | Non
     if detect_format(path) is SourceFormat.EVPOSE_H5:
         from evpose.io.h5 import read_recording_h5
 
+        if (width is None) != (height is None):
+            raise ConfigError("give both width and height of the sensor, or neither")
         rec = read_recording_h5(path)
+        apply_size_flags(path, rec, width, height)
     else:
         stream = open_stream(path, width, height, **options)
         rec = stream.context

@@ -189,11 +189,13 @@ def _calibration_from_info(msg, size) -> CameraCalibration | None:
     return CameraCalibration(w, h, float(k[0]), float(k[4]), float(k[2]), float(k[5]), model, dist)
 
 
-def open_bag_stream(path: str | Path, events_topic: str | None = None, imu_topic: str | None = None, pose_topic: str | None = None):
-    """A :class:`~evpose.io.open.RecordingStream` over a ROS1 ``.bag`` or ROS2 bag (folder, ``.db3``, ``.mcap``)."""
+def open_bag_stream(path: str | Path, events_topic: str | None = None, imu_topic: str | None = None, pose_topic: str | None = None,
+                    width: int | None = None, height: int | None = None):
+    """A :class:`~evpose.io.open.RecordingStream` over a ROS1 ``.bag`` or ROS2 bag (folder, ``.db3``, ``.mcap``).
+    ``width``/``height`` give the sensor size when the bag states none (EventArray size 0x0, no camera_info)."""
     from rosbags.highlevel import AnyReader, AnyReaderError
 
-    from evpose.io.open import RecordingStream, SourceFormat
+    from evpose.io.open import RecordingStream, SourceFormat, check_size_flags
 
     path = Path(path)
     paths = _bag_paths(path)
@@ -254,6 +256,9 @@ def open_bag_stream(path: str | Path, events_topic: str | None = None, imu_topic
             if w > 0 and h > 0:
                 size = (w, h)
             break
+        check_size_flags(path, size, width, height, f"its EventArray messages ({ev_conns[0].topic})")
+        if size is None and width is not None and height is not None:
+            size = (int(width), int(height))
         calibration = None
         if info_conns:
             for c, _, raw in reader.messages(connections=info_conns):
@@ -266,6 +271,8 @@ def open_bag_stream(path: str | Path, events_topic: str | None = None, imu_topic
         metadata["imu_topic"] = imu_conns[0].topic
     if pose_conns:
         metadata["pose_topic"] = pose_conns[0].topic
+    if calibration is not None:
+        check_size_flags(path, (calibration.width, calibration.height), width, height, f"its camera_info ({info_conns[0].topic})")
     if size is not None and calibration is None:
         metadata["width"], metadata["height"] = size
     ctx = Recording(EventArray.empty(), imu, gt, calibration, metadata, source=path)

@@ -12,7 +12,7 @@ from evpose.errors import InputError
 
 def summarize_recording(path: str | Path, width: int | None = None, height: int | None = None, progress: bool | None = None, **options) -> dict:
     """The keys of :meth:`Recording.summary`, streaming the events (evpose HDF5 reads only its index and polarity)."""
-    from evpose.io.open import SourceFormat, check_events, detect_format, open_stream
+    from evpose.io.open import SourceFormat, apply_size_flags, check_events, detect_format, open_stream
 
     path = Path(path)
     fmt = detect_format(path)
@@ -22,6 +22,11 @@ def summarize_recording(path: str | Path, width: int | None = None, height: int 
         with H5RecordingReader(path) as r:
             rec = r.to_recording(0, 0)
             rec.imu, rec.ground_truth = r.imu, r.ground_truth
+            if (width is None) != (height is None):
+                from evpose.errors import ConfigError
+
+                raise ConfigError("give both width and height of the sensor, or neither")
+            apply_size_flags(path, rec, width, height)
             n, t0, t1 = r.n_events, r.t_start_us, r.t_end_us
             pos, offset, last, size = 0, 0, None, rec.sensor_size
             for b in r.iter_chunks():

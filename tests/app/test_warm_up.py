@@ -169,6 +169,27 @@ def test_evpose_app_prepare_fills_the_cache_for_a_recording_and_guesses_its_map(
     assert run(["app", "--prepare", str(data_root / "squares.h5"), "--data", str(data_root), "--no-disk-cache"]) == 2
 
 
+def test_evpose_app_prepare_with_a_map_no_update_registers_against_is_a_one_line_error_naming_the_map(data_root, tmp_path, capsys):
+    import dataclasses
+
+    from evpose.cli.main import run
+
+    cmap = load_map(data_root / "squares_map.ply")
+    n = 300  # a patch of edgeless ground under the start pose: in view, but not this scene's map
+    patch = np.c_[np.random.default_rng(0).uniform(-0.04, 0.04, (n, 2)), np.full(n, cmap.points[:, 2].mean())]
+    wrong = dataclasses.replace(cmap, points=patch, **{k: getattr(cmap, k)[:n] for k in
+                                                       ("edge_normal", "plane_normal", "region_id", "curvature", "brightness_sign")})
+    write_contour_map(tmp_path / "wrong_map.ply", wrong)
+    args = ["app", "--prepare", str(data_root / "squares.h5"), "--map", str(tmp_path / "wrong_map.ply"), "--cache-dir", str(tmp_path / "cache")]
+    capsys.readouterr()
+    assert run([*args, "--acquire-s", "0.05"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    assert (f"{tmp_path / 'wrong_map.ply'}: updates 1-25: no update registered against this map in the first 0.12 s of squares.h5:"
+            " is it this recording's map, in its frame?") in err
+    assert run([*args, "--acquire-s", "0"]) == 0  # 0 = never give up: the pairing is prepared, as the viewer shows it
+
+
 def _chunk_contents(folder):
     """Every chunk of the one entry under ``folder``, without the wall-clock timings (they differ run to run)."""
     import pickle

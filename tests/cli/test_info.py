@@ -63,3 +63,14 @@ def test_text_file_that_is_not_a_trajectory_exits_2(tmp_path, capsys):
     (tmp_path / "x.txt").write_text("hello world\n")
     code, _, err = info(capsys, tmp_path / "x.txt")
     assert code == 2 and "not a TUM trajectory" in err
+
+
+def test_evpose_h5_with_contradicting_width_height_is_a_one_line_error_naming_file_and_flags(tmp_path, capsys):
+    from evpose.io.h5 import write_recording_h5
+
+    t = np.arange(0, 100_000, 100)
+    write_recording_h5(tmp_path / "r.h5", Recording(EventArray.from_arrays(t, t % 200, t % 100, t % 2), metadata={"width": 240, "height": 180}))
+    code, _, err = info(capsys, tmp_path / "r.h5", "--width", "346", "--height", "260")
+    assert code == 2
+    assert err.strip().endswith("r.h5: --width/--height 346x260 contradict the 240x180 sensor stated by its metadata") and err.count("\n") == 1
+    assert info(capsys, tmp_path / "r.h5", "--width", "240", "--height", "180")[0] == 0

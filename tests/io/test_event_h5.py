@@ -154,3 +154,13 @@ def test_invalid_values_in_a_sibling_calibration_name_the_file(tmp_path, name, t
     (tmp_path / name).write_text(text)
     with pytest.raises(InputError, match=message):
         open_recording(tmp_path / "e.h5")
+
+
+def test_sensor_size_flags_that_contradict_the_sibling_calibration_name_file_and_flags(tmp_path):
+    rec = make_recording(n=200, duration_us=20_000)
+    write_event_h5(tmp_path / "seq-events_left.h5", rec.events)
+    intr = {"camera_type": "pinhole", "intrinsics": {"fx": 200.0, "fy": 200.0, "cx": 119.5, "cy": 89.5}}
+    (tmp_path / "camera-calibration.json").write_text(json.dumps({"value0": {"intrinsics": [intr], "resolution": [[240, 180]]}}))
+    assert open_recording(tmp_path / "seq-events_left.h5", 240, 180).sensor_size == (240, 180)
+    with pytest.raises(InputError, match=r"seq-events_left.h5: --width/--height 346x260 contradict the 240x180 sensor stated by the calibration camera-calibration.json"):
+        open_recording(tmp_path / "seq-events_left.h5", 346, 260)

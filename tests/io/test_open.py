@@ -113,3 +113,29 @@ def test_recording_files_lists_what_each_recording_is_read_from(tmp_path):
     assert [p.name for p in recording_files(tv / "seq-events_left.h5")] == ["camera-calibrationA.json", "mocap_data.txt", "imu_data.txt"]
     write_recording_h5(tmp_path / "r.h5", rec)
     assert recording_files(tmp_path / "r.h5") == [] and recording_files(tmp_path / "map.ply") == []
+
+
+def _write_each_format(tmp_path, with_calibration):
+    rec = make_recording(n=200, duration_us=20_000, with_calibration=with_calibration)  # 240x180
+    write_ecd_folder(tmp_path / "ecd", rec)
+    write_recording_h5(tmp_path / "r.h5", rec)
+    write_rosbag(tmp_path / "b.bag", rec)
+    write_rosbag(tmp_path / "b2", rec, ros2=True)
+    return rec
+
+
+@pytest.mark.parametrize("with_calibration", [True, False])
+@pytest.mark.parametrize("name, named", [("ecd", "ecd/evpose.json"), ("r.h5", "r.h5"), ("b.bag", "b.bag"), ("b2", "b2")])
+def test_sensor_size_flags_that_contradict_the_recording_are_an_error_naming_file_and_flags(tmp_path, name, named, with_calibration):
+    _write_each_format(tmp_path, with_calibration)
+    with pytest.raises(InputError, match=rf"{named}: --width/--height 346x260 contradict the 240x180 sensor stated by") as exc:
+        open_recording(tmp_path / name, width=346, height=260)
+    assert "\n" not in str(exc.value)
+
+
+@pytest.mark.parametrize("name", ["ecd", "r.h5", "b.bag", "b2"])
+def test_sensor_size_flags_that_agree_with_the_recording_are_accepted(tmp_path, name):
+    rec = _write_each_format(tmp_path, True)
+    back = open_recording(tmp_path / name, width=240, height=180)
+    assert back.sensor_size == (240, 180)
+    assert (back.events.x == rec.events.x).all() and (back.events.t == rec.events.t).all()

@@ -1,6 +1,6 @@
 """The wrong-map rule: no registration from the start for ``acquire_s`` seconds; one registration clears it."""
 
-from evpose.tracker.map_acquisition import map_mismatch, registered, unacquired_s
+from evpose.tracker.map_acquisition import map_mismatch, mismatch_problem, registered, unacquired_s
 
 
 def test_a_map_never_registered_against_is_reported_once_the_window_is_reached():
@@ -18,3 +18,15 @@ def test_one_registered_update_means_the_map_fits():
 def test_steps_without_the_count_count_as_registered_and_no_steps_say_nothing():
     assert registered({}) and not registered({"registered": 0})
     assert unacquired_s([], 0) is None
+
+
+def test_a_recording_shorter_than_the_window_that_never_registered_is_reported_once_finished():
+    steps = [(5_000 * k, {"registered": 0}) for k in range(60)]  # 0.3 s
+    assert map_mismatch(steps, 0) is None
+    assert map_mismatch(steps, 0, finished=True) == 0.295
+    assert map_mismatch(steps, 0, acquire_s=0.0, finished=True) is None
+
+
+def test_the_mismatch_problem_names_the_recording_the_window_and_the_reason():
+    assert mismatch_problem(0.125, "rec.h5", "coasting") == ("no update registered against this map in the first 0.12 s of rec.h5"
+                                                             " (coasting): is it this recording's map, in its frame?")
