@@ -151,12 +151,18 @@ def load_recording(path: Path) -> Recording:
         open_recording = None
     if open_recording is not None:
         rec = open_recording(path)
-        return rec if isinstance(rec, Recording) else rec.to_recording()
-    if path.suffix.lower() in (".h5", ".hdf5"):
+        rec = rec if isinstance(rec, Recording) else rec.to_recording()
+    elif path.suffix.lower() in (".h5", ".hdf5"):
         from evpose.io.h5 import read_recording_h5
 
-        return read_recording_h5(path)
-    raise InputError(path, "no reader for this format in this build")
+        rec = read_recording_h5(path)
+    else:
+        raise InputError(path, "no reader for this format in this build")
+    if len(rec.events) == 0:
+        # Refused as `evpose info` does: opened, it was a 0 s recording of black panels whose only word on why
+        # was in the parameters panel, and the warm-up called it "Tracking cannot start".
+        raise InputError(path, "contains no events")
+    return rec
 
 
 def load_map(path: Path) -> ContourMap:

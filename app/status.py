@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from app.engine import Engine
+from app.engine_factory import NO_MAP_NOTE
 from app.frame import Frame
 from evpose.tracker.map_acquisition import map_mismatch
 
@@ -51,7 +52,9 @@ def status_markdown(frame: Frame, engine: Engine, stats: dict) -> str:
     """Markdown of the status line under the playback controls."""
     text = (f"t = {frame.t_us / 1e6:.3f} s, step {frame.index}, **{frame.status}**"
             # A dash, not parentheses: the reasons carry their own ("40 inliers (2 re-found by projection)").
-            + (f" — {frame.reason}" if frame.reason and frame.status != "events only" else "")
+            # Events only for want of a map: said under the recording list. Any other reason (no calibration, a
+            # rejected configuration) is said here, where the eye goes when nothing is tracked.
+            + (f" — {frame.reason}" if frame.reason and frame.reason != NO_MAP_NOTE else "")
             + f"\n\n{stats.get('state', '')} at {stats.get('speed', 1):.1f}x")
     if stats.get("real_time_factor", 0) > 0:  # 0 until something is played: "real-time factor 0.00" read as a stall
         text += f", real-time factor {stats['real_time_factor']:.2f}"

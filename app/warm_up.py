@@ -199,7 +199,9 @@ def _worker(jobs: list[DataEntry], maps: list[DataEntry], open_path: Path | None
             result = prepare_pair(recording, load_map(map_entry.path), (entry.path, map_entry.path), disk, frames,
                                   progress, lambda p=entry.path: wait_while_held() and state["open"] != p)
         except Exception as exc:  # one unreadable recording must not stop the others
-            say(entry.label, f"failed: {getattr(exc, 'problem', None) or exc}")
+            # The record too ("IMU sample 5: NaN ..."): the problem alone did not say where. Not the path: the label is it.
+            where = [getattr(exc, "record", None), getattr(exc, "problem", None)]
+            say(entry.label, "failed: " + (": ".join(w for w in where if w) if where[1] else str(exc)))
             continue
         if result.complete:
             how = f"computed in {result.seconds:.1f} s" if result.computed else "found in the disk cache"
