@@ -102,7 +102,9 @@ def main(
         height: Sensor height, for formats that do not state it.
         progress: Show a progress bar on the terminal.
         acquire_s: If no update registers against the map within this many seconds of the start, stop with an error
-            (a wrong map, or one in another frame; the fused modes would otherwise write IMU dead reckoning); 0 = never.
+            (a wrong map, or one in another frame; the fused modes would otherwise write IMU dead reckoning), and also
+            if the registrations in those seconds are no better than chance (a wrong map where events cover the image
+            densely: flicker, texture; see evpose.tracker.map_acquisition); 0 = never.
 
     Exit code 0 if every update tracked, 1 if the track was lost in some update
     (those updates are left out of the trajectory and reported on stderr).
