@@ -9,8 +9,9 @@ from their first update). The CLI stops with an error then; the viewer, which
 must keep showing what the tracker sees, warns.
 
 Two rules, both over the first ``acquire_s`` seconds: (1) not one update registers; (2) the registrations are no
-better than chance (:func:`chance_mismatch`, ``evpose track`` only: the viewer and ``app --prepare`` do not count the
-chance level and keep rule 1).
+better than chance (:func:`chance_mismatch`; the tracker counts the chance level only within the window its caller
+sets, ``Tracker.chance_until_us``: ``evpose track`` the ``--acquire-s`` window, the viewer's engine the first
+second, which ``app --prepare`` reads whatever its ``--acquire-s``).
 
 Why rule 1 alone is not enough, measured (session 19; /tmp/s19/qa19b/measure.py, measure_seeds.py and
 summary.py): ten ``evpose simulate`` scenarios (seed 0) at 240x180 and 346x260 for 0.3, 0.5 and 1 s, indoor
