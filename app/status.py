@@ -5,7 +5,7 @@ from __future__ import annotations
 from app.engine import Engine
 from app.engine_factory import NO_MAP_NOTE
 from app.frame import Frame
-from evpose.tracker.map_acquisition import map_mismatch
+from evpose.tracker.map_acquisition import chance_mismatch, map_mismatch
 
 
 def run_ahead_note(engine: Engine) -> str:
@@ -36,16 +36,23 @@ def run_ahead_note(engine: Engine) -> str:
 
 def map_mismatch_note(engine: Engine) -> str:
     """A warning when no update has registered against the map since the start for as long as ``evpose track``
-    allows (:mod:`evpose.tracker.map_acquisition`); empty for engines without a map, or once one has registered."""
+    allows, or when the registrations of that first second are no better than chance (both rules of
+    :mod:`evpose.tracker.map_acquisition`); empty for engines without a map, or for a map that passes both."""
     history = getattr(engine, "history", None)
     if getattr(engine, "contour_map", None) is None or not history:
         return ""
     session = getattr(engine, "session", None)  # tracking starts at the first ground-truth pose, as in the CLI
-    s = map_mismatch(((h.t_us, h.counts) for h in history), getattr(session, "t0_us", engine.t_start_us))
-    if s is None:
+    t0 = getattr(session, "t0_us", engine.t_start_us)
+    steps = [(h.t_us, h.counts) for h in history]
+    s = map_mismatch(steps, t0)
+    if s is not None:
+        return (f"**no update has registered against this map in the first {s:.2f} s**: is it this recording's map, in "
+                "its frame? The poses shown are the motion model's (`evpose track` stops here with an error).")
+    z = chance_mismatch(steps, t0)
+    if z is None:
         return ""
-    return (f"**no update has registered against this map in the first {s:.2f} s**: is it this recording's map, in its "
-            "frame? The poses shown are the motion model's (`evpose track` stops here with an error).")
+    return (f"**this map's points lie on recent events hardly more often than chance in the first second** (z {z:.1f}):"
+            " is it this recording's map, in its frame? (`evpose track` stops here with an error.)")
 
 
 def status_markdown(frame: Frame, engine: Engine, stats: dict) -> str:

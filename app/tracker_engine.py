@@ -127,7 +127,12 @@ class TrackerEngine(DiskSnapshotsMixin, Engine):
     def _new_session(self):
         from evpose.tracker.session import TrackingSession
 
-        return TrackingSession(self.recording, self.contour_map, self.config, initial_pose=None)
+        from evpose.tracker.map_acquisition import DEFAULT_ACQUIRE_S
+
+        s = TrackingSession(self.recording, self.contour_map, self.config, initial_pose=None)
+        # The acquisition window's updates count their chance level: the wrong-map warning and ``--prepare`` read it.
+        s.tracker.chance_until_us = s.t0_us + int(round(DEFAULT_ACQUIRE_S * 1e6))
+        return s
 
     def _new_ahead(self):
         """The run-ahead session; with a disk cache its fusion journals its calls for the disk snapshots."""

@@ -84,14 +84,18 @@ def prepare_pair(recording, contour_map, paths: tuple[Path, Path], disk, frames=
     from app.engine_factory import engine_factory
     from app.tracker_engine import TrackerEngine
     from evpose.errors import InputError
-    from evpose.tracker.map_acquisition import map_mismatch, mismatch_problem
+    from evpose.tracker.map_acquisition import chance_mismatch, chance_problem, map_mismatch, mismatch_problem
 
     def check_map(engine, finished: bool) -> None:
         known = engine.known_summaries
-        s = map_mismatch(((h.t_us, h.counts) for h in known), engine.session.t0_us, acquire_s, finished)
-        if s is not None:
+        steps = [(h.t_us, h.counts) for h in known]
+        s = map_mismatch(steps, engine.session.t0_us, acquire_s, finished)
+        z = None if s is not None else chance_mismatch(steps, engine.session.t0_us, acquire_s, finished)
+        if s is not None or z is not None:
             engine.flush_disk_snapshots()
-            raise InputError(paths[1], mismatch_problem(s, paths[0].name), f"updates 1-{len(known)}")
+            problem = (mismatch_problem(s, paths[0].name) if s is not None else
+                       chance_problem(z, min(acquire_s, (steps[-1][0] - engine.session.t0_us) / 1e6), paths[0].name))
+            raise InputError(paths[1], problem, f"updates 1-{len(known)}")
 
     t0 = time.perf_counter()
     engine = engine_factory(recording, contour_map, "tracking", frames, disk, paths)(None)

@@ -10,7 +10,8 @@ import numpy as np
 import tyro
 
 from evpose.errors import InputError
-from evpose.tracker.map_acquisition import DEFAULT_ACQUIRE_S, mismatch_problem, registered as update_registered
+from evpose.tracker.map_acquisition import (DEFAULT_ACQUIRE_S, chance_mismatch, chance_problem, mismatch_problem,
+                                            registered as update_registered)
 
 
 def parse_init(text: str) -> np.ndarray | None:
@@ -101,7 +102,9 @@ def main(
         height: Sensor height, for formats that do not state it.
         progress: Show a progress bar on the terminal.
         acquire_s: If no update registers against the map within this many seconds of the start, stop with an error
-            (a wrong map, or one in another frame; the fused modes would otherwise write IMU dead reckoning); 0 = never.
+            (a wrong map, or one in another frame; the fused modes would otherwise write IMU dead reckoning), and also
+            if the registrations in those seconds are no better than chance (a wrong map where events cover the image
+            densely: flicker, texture; see evpose.tracker.map_acquisition); 0 = never.
 
     Exit code 0 if every update tracked, 1 if the track was lost in some update
     (those updates are left out of the trajectory and reported on stderr).
@@ -158,14 +161,27 @@ def main(
     lost = []
     acquire_until = session.t0_us + int(round(max(float(acquire_s), 0.0) * 1e6))
     registered = [acquire_s <= 0]
+    # The window's updates also count their inlier share's chance level, which the test below reads once.
+    window: list | None = None if acquire_s <= 0 else []
+    session.tracker.chance_until_us = None if window is None else acquire_until
     with tqdm(total=session.total_steps, unit="upd", disable=not progress or None, file=sys.stderr, dynamic_ncols=True) as bar:
         def tick(r):
+            nonlocal window
             if r.status is TrackStatus.LOST:
                 lost.append(r)
             registered[0] = registered[0] or update_registered(r.counts)
-            if not registered[0] and (r.t_us >= acquire_until or session.done):
+            ends = r.t_us >= acquire_until or session.done
+            if not registered[0] and ends:
                 raise InputError(map, mismatch_problem((r.t_us - session.t0_us) / 1e6, recording.name, r.reason),
                                  f"updates 1-{len(session.results)}")
+            if window is not None:
+                window.append((r.t_us, r.counts))
+                if ends:
+                    z = chance_mismatch(window, session.t0_us, acquire_s, finished=session.done)
+                    if z is not None:
+                        raise InputError(map, chance_problem(z, (r.t_us - session.t0_us) / 1e6, recording.name),
+                                         f"updates 1-{len(session.results)}")
+                    window = None
             bar.update(1)
 
         session.run(progress=tick)

@@ -36,6 +36,7 @@ from evpose.frontend.noise_filter import ConsistencyNoiseFilter
 from evpose.frontend.time_surface import SeparatedTimeSurface
 from evpose.fusion import aligned_field
 from evpose.fusion.aligned_surface import AlignedTimeSurface
+from evpose.tracker.chance_level import chance_counts
 from evpose.tracker.config import MotionModel, TrackerConfig
 from evpose.tracker.ego_motion_events import ego_motion_keep, empty_ego_history
 from evpose.tracker.edge_offsets import EdgeOffsetLearner
@@ -160,6 +161,9 @@ class Tracker:
         self._pose: np.ndarray | None = None
         self._t_us: int | None = None
         self._steps = 0
+        self.chance_until_us: int | None = None
+        """Updates up to this time (microseconds) also count the chance level of their inlier share
+        (:mod:`evpose.tracker.chance_level`), None = none do: the acquisition window asks for it."""
         self._ego_history = empty_ego_history()
         """Recent noise-filtered events (ideal x, y, t us) the ego-motion filter judges new ones against."""
 
@@ -415,6 +419,8 @@ class Tracker:
             counts["weak_run"] = self.hold.weak_streak
         if reg is not None:
             counts.update(inliers=reg.inliers, iterations=reg.iterations, points_in_image=reg.points_used)
+            if self.chance_until_us is not None and until <= self.chance_until_us:
+                counts.update(chance_counts(levels[-1], reg.uv, field_polarity, self._registration.inlier_threshold))
         else:
             counts.update(inliers=0, iterations=0, points_in_image=0)
         timings["total"] = elapsed_ms(t_total)

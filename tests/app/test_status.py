@@ -87,6 +87,23 @@ def test_a_map_nothing_registers_against_for_a_second_is_flagged_as_possibly_the
     assert "registered against this map" not in status_markdown(f, no_map, {})
 
 
+def test_a_map_registering_no_better_than_chance_for_a_second_is_flagged_too():
+    z = np.zeros((2, 2), np.float32)
+    f = Frame(200, 2_000_000, z, z, z, EventArray.empty(), EventArray.empty(), status="ok")
+
+    def counts(inliers, hits):  # 500 points in view; hits of 800 displaced samples
+        return {"registered": 1, "inliers": inliers, "points_in_image": 500, "chance_hits": hits, "chance_samples": 800}
+
+    eng = _tracker_like([True] * 201)
+    for h in eng.history:  # dense events: 60 % inliers where 60 % of the displaced samples land on events too
+        h.counts = counts(300, 480)
+    text = status_markdown(f, eng, {"state": "paused", "speed": 1.0})
+    assert "hardly more often than chance in the first second" in text and "this recording's map" in text
+    for h in eng.history:  # a right map: 40 % inliers where 10 % would land by chance
+        h.counts = counts(200, 80)
+    assert "than chance" not in status_markdown(f, eng, {"state": "paused", "speed": 1.0})
+
+
 def test_the_reason_follows_the_status_without_nesting_its_own_parentheses():
     z = np.zeros((2, 2), np.float32)
     f = Frame(159, 800_000, z, z, z, EventArray.empty(), EventArray.empty(), status="ok",

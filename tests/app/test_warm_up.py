@@ -190,6 +190,35 @@ def test_evpose_app_prepare_with_a_map_no_update_registers_against_is_a_one_line
     assert run([*args, "--acquire-s", "0"]) == 0  # 0 = never give up: the pairing is prepared, as the viewer shows it
 
 
+def test_evpose_app_prepare_refuses_a_map_registering_only_by_chance_under_dense_events(tmp_path, capsys):
+    import dataclasses
+
+    from app_scenes import map_scene
+    from evpose.cli.main import run
+    from evpose.core.events import EventArray
+
+    rec, cmap = map_scene()
+    # 5e5 noise events/s over 160x120 (26 per pixel per second): the edgeless patch registers 43 of 93 updates.
+    e, rng, m = rec.events, np.random.default_rng(1), 250_000
+    t, x, y, p = (np.r_[e.t, rng.integers(e.t[0], e.t[-1], m)], np.r_[e.x, rng.integers(0, 160, m)],
+                  np.r_[e.y, rng.integers(0, 120, m)], np.r_[e.p, rng.choice([-1, 1], m)])
+    o = np.argsort(t, kind="stable")
+    write_recording_h5(tmp_path / "noisy.h5", dataclasses.replace(rec, events=EventArray.from_arrays(t[o], x[o], y[o], p[o])))
+    write_contour_map(tmp_path / "map.ply", cmap)
+    n = 300
+    patch = np.c_[np.random.default_rng(0).uniform(-0.04, 0.04, (n, 2)), np.full(n, cmap.points[:, 2].mean())]
+    wrong = dataclasses.replace(cmap, points=patch, **{k: getattr(cmap, k)[:n] for k in
+                                                       ("edge_normal", "plane_normal", "region_id", "curvature", "brightness_sign")})
+    write_contour_map(tmp_path / "wrong_map.ply", wrong)
+    capsys.readouterr()
+    assert run(["app", "--prepare", str(tmp_path / "noisy.h5"), "--map", str(tmp_path / "wrong_map.ply"), "--cache-dir",
+                str(tmp_path / "cache")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and f"{tmp_path / 'wrong_map.ply'}: updates 1-" in err and "than chance" in err
+    assert run(["app", "--prepare", str(tmp_path / "noisy.h5"), "--map", str(tmp_path / "map.ply"), "--cache-dir",
+                str(tmp_path / "cache")]) == 0
+
+
 def _chunk_contents(folder):
     """Every chunk of the one entry under ``folder``, without the wall-clock timings (they differ run to run)."""
     import pickle

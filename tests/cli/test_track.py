@@ -106,6 +106,30 @@ def test_track_with_a_map_that_never_registers_fails_with_one_line_and_writes_no
     assert not out.exists()
 
 
+def test_track_refuses_a_wrong_map_that_registers_only_by_chance_under_dense_events(tmp_path, capsys):
+    import dataclasses
+
+    # 2e6 noise events/s cover the image densely: a patch of bare ground registers every update, by chance alone.
+    rec, cmap, _ = generate(duration_s=0.12, seed=4, noise_rate_hz=2e6)
+    write_recording_h5(tmp_path / "rec.h5", rec)
+    write_contour_map(tmp_path / "map.ply", cmap)
+    n = 300
+    patch = np.c_[np.random.default_rng(0).uniform(-0.04, 0.04, (n, 2)) + [0.0, -0.55], np.zeros(n)]
+    wrong = dataclasses.replace(cmap, points=patch, **{k: getattr(cmap, k)[:n] for k in
+                                                       ("edge_normal", "plane_normal", "region_id", "curvature", "brightness_sign")})
+    write_contour_map(tmp_path / "wrong.ply", wrong)
+    out = tmp_path / "e.txt"
+    code = run(["track", str(tmp_path / "rec.h5"), "--map", str(tmp_path / "wrong.ply"), "--out", str(out), "--mode", "stpe",
+                "--no-progress"])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1 and "wrong.ply: updates 1-" in err and "than chance" in err
+    assert not out.exists()
+    # The right map, under the same events, is accepted.
+    code = run(["track", str(tmp_path / "rec.h5"), "--map", str(tmp_path / "map.ply"), "--out", str(out), "--mode", "stpe",
+                "--no-progress"])
+    assert code == 0 and out.exists()
+
+
 def test_track_in_a_fused_mode_without_imu_is_a_one_line_error(files, tmp_path, capsys):
     d, _ = files
     code = run(["track", str(d / "rec.h5"), "--map", str(d / "map.ply"), "--out", str(tmp_path / "e.txt"), "--mode", "full", "--no-progress"])
