@@ -174,4 +174,5 @@ def chance_problem(evidence: float, seconds: float, recording_name: str, config:
     cfg = config if config is not None else MapAcquisitionConfig()
     return (f"this map's points lie on recent events hardly more often than chance in the first {seconds:.2f} s of"
             f" {recording_name} (best {cfg.run_updates}-update median {evidence:.1f} standard deviations above the"
-            f" chance level, need {cfg.min_chance_z:g}): is it this recording's map, in its frame?")
+            f" chance level, need {cfg.min_chance_z:g}): is it this recording's map, in its frame?"
+            " (--acquire-s 0 skips this check)")
