@@ -120,13 +120,21 @@ def scan_note(entries: list[DataEntry], roots: DataRoots, cache_note: str = "") 
 
 
 def probe(kind: EntryKind, path: Path) -> str | None:
-    """Cheap readability check: the reason a file cannot be read, or None."""
+    """Cheap readability check: the reason a file cannot be read, or None.
+
+    Headers only, never the events: an evpose h5's event count is its dataset's shape; an ECD folder's events.txt
+    is checked by its first line (and calib.txt, evpose.json, which are a few bytes). Files that would be refused
+    only when opened (no events, a text folder whose events cannot be parsed) were listed as normal.
+    """
     try:
         if kind == EntryKind.RECORDING and path.suffix.lower() in (".h5", ".hdf5"):
             from evpose.io.h5 import H5RecordingReader
 
-            with H5RecordingReader(path):
-                pass
+            with H5RecordingReader(path) as reader:
+                if reader.n_events == 0:
+                    return "contains no events"
+        elif kind == EntryKind.RECORDING and path.is_dir():
+            return _probe_ecd(path)
         elif kind in (EntryKind.MAP, EntryKind.CLOUD):
             with open(path, "rb") as fh:
                 head = fh.read(256)
@@ -140,6 +148,44 @@ def probe(kind: EntryKind, path: Path) -> str | None:
         return getattr(exc, "problem", str(exc))
     except (OSError, ValueError, KeyError) as exc:
         return f"{type(exc).__name__}: {exc}"
+    return None
+
+
+def _probe_ecd(folder: Path) -> str | None:
+    """What is wrong with an ECD folder that can be seen without reading its events (None: nothing)."""
+    from evpose.io.ecd import CALIB_FILE, EVENTS_FILE, read_ecd_calib, read_ecd_sidecar
+
+    events = folder / EVENTS_FILE
+    if not events.is_file():  # a dangling link, or a folder named events.txt
+        return f"{EVENTS_FILE}: no such file"
+    with open(events, "rb") as fh:
+        head = fh.read(4096)
+        whole = not fh.read(1)
+    lines = head.split(b"\n")
+    if not whole:
+        lines = lines[:-1]  # cut mid-line
+    # The reader skips blank lines and '#' comments; the first other line must be 't x y p'.
+    for number, line in enumerate(lines, 1):
+        words = line.split()
+        if not words or words[0].startswith(b"#"):
+            continue
+        try:
+            [float(w) for w in words]
+        except ValueError:
+            words = []
+        if len(words) != 4:
+            text = line[:80].decode("utf-8", "replace").strip()
+            return f"{EVENTS_FILE}: line {number}: expected 4 numbers 't x y p', got {text!r}"
+        break
+    else:
+        if whole:
+            return f"{EVENTS_FILE}: contains no events"
+    try:
+        read_ecd_sidecar(folder)
+        if (folder / CALIB_FILE).is_file():
+            read_ecd_calib(folder / CALIB_FILE)
+    except InputError as exc:  # which of the folder's files
+        return f"{Path(exc.path).name}: {exc.problem}" if exc.path else exc.problem
     return None
 
 

@@ -132,10 +132,13 @@ class EventsOnlyEngine(Engine):
     exactly from the start (one pass of a numba kernel).
     """
 
-    def __init__(self, recording: Recording, config: EventsViewConfig | None = None, explanation: str = ""):
+    def __init__(self, recording: Recording, config: EventsViewConfig | None = None, explanation: str = "",
+                 cause: Exception | None = None):
         self.recording = recording
         self.config = config if isinstance(config, EventsViewConfig) else EventsViewConfig()
         self.explanation = explanation
+        self.cause = cause
+        """The error that kept the tracker from starting (None: there was no map, or no tracker in this build)."""
         size = recording.sensor_size
         if size is None:
             ev = recording.events

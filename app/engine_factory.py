@@ -60,6 +60,6 @@ def engine_factory(recording, contour_map, mode: str = "tracking", cache: FrameC
             return TrackerEngine(recording, contour_map, cfg, cache=cache, disk=entry)
         except EvposeError as exc:
             # Still show events and time surfaces, and say why tracking cannot run.
-            return EventsOnlyEngine(recording, None, explanation=f"Tracking cannot start: {exc}")
+            return EventsOnlyEngine(recording, None, explanation=f"Tracking cannot start: {exc}", cause=exc)
 
     return make

@@ -82,6 +82,9 @@ class Player:
         """The seek being computed in slices, if any."""
         self.last_catch_up: dict = {}
         """The last catch-up: target, steps, wall and thread CPU seconds, and whether it finished or was cancelled."""
+        self.computing = False
+        """The worker thread is in a command or a slice of work, which commands queue behind (a first step loads the
+        compiled kernels: 0.3 s, a minute or more on a cold numba cache, and cannot be interrupted)."""
         self._thread = threading.Thread(target=self._run, name="evpose-player", daemon=True)
         self._running = True
         self._thread.start()
@@ -384,10 +387,12 @@ class Player:
 
     def _run(self) -> None:
         while self._running:
+            self.computing = False
             try:
                 cmd = self._queue.get(timeout=self._timeout())
             except queue.Empty:
                 cmd = None
+            self.computing = True
             if cmd is not None:
                 if cmd[0] == "stop":
                     break

@@ -67,6 +67,8 @@ class ViewerApp:
         self.last_frame: Frame | None = None
         self._open_displays: tuple[str, str] | None = None
         """(recording, map) dropdown values of what is open."""
+        self._shown_label = ""
+        """Label of the recording the player works on (set on its thread when it gets to an opening)."""
         self._select_lock = threading.Lock()
         self._cloud_lock = threading.Lock()
         self._cloud_entry: DataEntry | None = None
@@ -158,8 +160,17 @@ class ViewerApp:
         self.rec_dropdown.value = entry.display
         self.map_dropdown.value = map_entry.display if map_entry is not None else NO_MAP
         self._open_displays = (self.rec_dropdown.value, self.map_dropdown.value)
-        # Until its first step is drawn (a first step loads the compiled kernels: 0.3 s, a minute on a cold cache).
-        self.status.content = f"{OPENING}`{entry.label}`: computing its first step..._"
+        opening = f"{OPENING}`{entry.label}`: computing its first step..._"
+        if self.player is not None and self.player.computing and self.recording is not None:
+            # The player finishes what it computes first (a first step loads the compiled kernels: 0.3 s, a minute or
+            # more on a cold numba cache, and cannot be interrupted; the next recording needs the same kernels anyway).
+            of = f" of `{self._shown_label}`" if self._shown_label else ""
+            self.status.content = (f"{OPENING}`{entry.label}`: waiting for the step{of} being computed to finish "
+                                   "(a first step loads the compiled kernels: up to a minute or more on a cold cache)..._")
+            self.param_info.content = (f"Opening `{entry.label}` once the player is free: the parameters below are "
+                                       f"still those{of or ' of the recording shown'}.")
+        else:
+            self.status.content = opening  # until its first step is drawn
         s = recording.summary()
         self.rec_info.content = (f"`{entry.label}`: {s['events']:,} events, {s['duration_s']:.2f} s, "
                                  f"{s['sensor_size']}; map: {map_entry.label if map_entry else 'none'}"
@@ -172,7 +183,8 @@ class ViewerApp:
 
         def reset_view(_engine=None):
             # Runs on the player thread (or before it exists) so no frame of the old recording is drawn over it.
-            self.recording, self.contour_map = recording, cmap
+            self.status.content = opening  # the player has got to it
+            self.recording, self.contour_map, self._shown_label = recording, cmap, entry.label
             self.scene.load(cmap, None, recording.ground_truth, recording.calibration)
             self.scene.apply_toggles()
             self.plots.remove()

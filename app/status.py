@@ -37,22 +37,33 @@ def run_ahead_note(engine: Engine) -> str:
 def map_mismatch_note(engine: Engine) -> str:
     """A warning when no update has registered against the map since the start for as long as ``evpose track``
     allows, or when the registrations of that first second are no better than chance (both rules of
-    :mod:`evpose.tracker.map_acquisition`); empty for engines without a map, or for a map that passes both."""
+    :mod:`evpose.tracker.map_acquisition`), or, once every step is computed, in the whole of a recording shorter than
+    that (``evpose track`` and ``app --prepare`` report it at the end); empty for engines without a map, or for a map
+    that passes."""
     history = getattr(engine, "history", None)
     if getattr(engine, "contour_map", None) is None or not history:
         return ""
     session = getattr(engine, "session", None)  # tracking starts at the first ground-truth pose, as in the CLI
-    t0 = getattr(session, "t0_us", engine.t_start_us)
+    t0_us = getattr(session, "t0_us", engine.t_start_us)
     steps = [(h.t_us, h.counts) for h in history]
-    s = map_mismatch(steps, t0)
+    s = map_mismatch(steps, t0_us)
     if s is not None:
         return (f"**no update has registered against this map in the first {s:.2f} s**: is it this recording's map, in "
                 "its frame? The poses shown are the motion model's (`evpose track` stops here with an error).")
-    z = chance_mismatch(steps, t0)
-    if z is None:
+    z = chance_mismatch(steps, t0_us)
+    if z is not None:
+        return (f"**this map's points lie on recent events hardly more often than chance in the first second** (z {z:.1f}):"
+                " is it this recording's map, in its frame? (`evpose track` stops here with an error.)")
+    known = getattr(engine, "known_summaries", None)
+    n = getattr(engine, "n_steps", None)
+    # Whatever step is shown: the run-ahead has seen every step, and the recording ended before acquire-s.
+    if not known or not n or len(known) < n:
         return ""
-    return (f"**this map's points lie on recent events hardly more often than chance in the first second** (z {z:.1f}):"
-            " is it this recording's map, in its frame? (`evpose track` stops here with an error.)")
+    s = map_mismatch(((h.t_us, h.counts) for h in known), t0_us, finished=True)
+    if s is None:
+        return ""
+    return (f"**no update registered against this map in the whole recording ({s:.2f} s)**: is it this recording's "
+            "map, in its frame? The poses shown are the motion model's (`evpose track` ends with an error).")
 
 
 def status_markdown(frame: Frame, engine: Engine, stats: dict) -> str:

@@ -100,6 +100,9 @@ def prepare_pair(recording, contour_map, paths: tuple[Path, Path], disk, frames=
     t0 = time.perf_counter()
     engine = engine_factory(recording, contour_map, "tracking", frames, disk, paths)(None)
     if not isinstance(engine, TrackerEngine):
+        cause = getattr(engine, "cause", None)
+        if isinstance(cause, InputError):  # its record and problem, without the explanation's repeat of the path
+            raise InputError(paths[0], f"tracking cannot start: {cause.problem}", cause.record)
         raise InputError(paths[0], engine.explanation or "cannot be tracked")
     if engine.disk is None:
         raise InputError(None, "the disk cache is off: there is nothing to prepare into")

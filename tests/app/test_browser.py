@@ -59,3 +59,34 @@ def test_map_is_guessed_from_the_recording_name_and_recordings_load(data_dir):
     maps = [e for e in entries if e.kind == EntryKind.MAP]
     assert guess_map_for(rec, maps).path.name == "squares_map.ply"
     assert len(load_recording(rec.path).events) > 0
+
+
+def test_recordings_refused_on_opening_are_marked_at_scan_time_from_their_headers(data_dir, bar_recording):
+    import dataclasses
+
+    from evpose.core.events import EventArray
+    from evpose.io.ecd import write_ecd_folder
+
+    write_recording_h5(data_dir / "no_events.h5", dataclasses.replace(bar_recording, events=EventArray.empty()))
+    write_ecd_folder(data_dir / "ecd_good", bar_recording)
+    bad = {"ecd_empty": "", "ecd_comments": "# t x y p\n\n", "ecd_words": "# t x y p\ntime x y polarity\n0.1 2 3 1\n",
+           "ecd_three": "0.1 2 3\n"}
+    for name, text in bad.items():
+        (data_dir / name).mkdir()
+        (data_dir / name / "events.txt").write_text(text)
+    (data_dir / "ecd_calib").mkdir()
+    (data_dir / "ecd_calib" / "events.txt").write_text("0.1 2 3 1\n")
+    (data_dir / "ecd_calib" / "calib.txt").write_text("200 200 nan 100\n")
+    (data_dir / "ecd_link").mkdir()
+    os.symlink(data_dir / "gone.txt", data_dir / "ecd_link" / "events.txt")
+    errors = {e.path.name: e.error for e in DataRoots([data_dir]).scan() if e.kind == EntryKind.RECORDING}
+    assert errors["no_events.h5"] == "contains no events"
+    assert errors["ecd_good"] is None and errors["squares_run1.h5"] is None
+    assert errors["ecd_empty"] == errors["ecd_comments"] == "events.txt: contains no events"
+    assert errors["ecd_words"] == "events.txt: line 2: expected 4 numbers 't x y p', got 'time x y polarity'"
+    assert errors["ecd_three"] == "events.txt: line 1: expected 4 numbers 't x y p', got '0.1 2 3'"
+    assert errors["ecd_calib"] == "calib.txt: NaN or infinite calibration value"
+    assert errors["ecd_link"] == "events.txt: no such file"
+    for name in ("no_events.h5", "ecd_empty", "ecd_three"):  # what opening says too: the scan does not invent problems
+        with pytest.raises(InputError):
+            load_recording(data_dir / name)

@@ -112,6 +112,8 @@ def _page_text(page):
 
 def test_bad_recordings_and_maps_give_a_one_line_error_and_the_good_recording_still_plays(page, viewer, capfd):
     wait_for(lambda: viewer.last_frame is not None and viewer.recording is not None, timeout=90, what="squares opened")
+    # What the headers tell is in the list before anything is opened.
+    assert _option(viewer, viewer.rec_dropdown, "squares_no_events.h5").endswith("(unreadable: contains no events)")
     for name, said in BAD_RECORDINGS.items():
         choose(page, "recording", _option(viewer, viewer.rec_dropdown, name))
         wait_for(lambda: said in _page_text(page), timeout=20, what=f"{name} refused", detail=lambda: viewer.rec_info.content)
@@ -141,13 +143,15 @@ def test_bad_recordings_and_maps_give_a_one_line_error_and_the_good_recording_st
 
 def test_the_warm_up_reports_each_bad_recording_on_one_line_naming_the_record_and_goes_on(page, viewer):
     root = viewer.roots.roots[0].name
-    bad = [f"{root}/{n}" for n in BAD_RECORDINGS if n != "squares_trunc.h5"]  # listed as unreadable, never queued
+    unreadable = ("squares_trunc.h5", "squares_no_events.h5")  # marked by the scan, never queued
+    bad = [f"{root}/{n}" for n in [*BAD_RECORDINGS, "squares_no_calib.h5"] if n not in unreadable]
     settled = lambda: all(viewer.warm_up.states.get(b, "").startswith("failed") for b in bad)
     wait_for(settled, timeout=90, what="the warm-up went through the bad recordings", detail=lambda: viewer.warm_up.states)
     states = viewer.warm_up.states
     assert states[f"{root}/squares_nan_imu.h5"] == "failed: IMU sample 5: NaN or infinite value"
     assert states[f"{root}/squares_unsorted.h5"].startswith("failed: event 101: timestamp")
-    assert states[f"{root}/squares_no_events.h5"] == "failed: contains no events"
-    assert f"{root}/squares_trunc.h5" not in states
+    assert states[f"{root}/squares_no_calib.h5"] == ("failed: tracking cannot start: the recording has no camera "
+                                                     "calibration; tracking needs intrinsics")  # the label, not the path
+    assert all(f"{root}/{n}" not in states for n in unreadable)
     assert all("\n" not in v for v in states.values())
     page.get_by_text("failed: IMU sample 5: NaN or infinite value").first.wait_for(timeout=10_000)

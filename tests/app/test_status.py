@@ -110,3 +110,15 @@ def test_the_reason_follows_the_status_without_nesting_its_own_parentheses():
               reason="40 inliers (2 re-found by projection), rms 1.30 px")
     text = status_markdown(f, SimpleNamespace(is_last=lambda frame: False), {"state": "paused", "speed": 1.0})
     assert "**ok** \u2014 40 inliers (2 re-found by projection), rms 1.30 px" in text and "((" not in text and "))" not in text
+
+
+def test_a_recording_shorter_than_acquire_s_that_never_registers_is_flagged_once_every_step_is_computed():
+    z = np.zeros((2, 2), np.float32)
+    f = Frame(20, 1_100_000, z, z, z, EventArray.empty(), EventArray.empty(), status="degraded", reason="few points")
+    eng = _tracker_like([False] * 21)  # shown: 0.10 s, short of acquire-s
+    eng.known_summaries, eng.n_steps = _tracker_like([False] * 61).history, 100
+    assert "registered against this map" not in status_markdown(f, eng, {})  # 61 of 100 steps known: it may still
+    eng.n_steps = 61  # the run-ahead has every step, 0.30 s from the first pose, and none registered
+    assert "no update registered against this map in the whole recording (0.30 s)" in status_markdown(f, eng, {})
+    eng.known_summaries = eng.known_summaries[:60] + [SimpleNamespace(t_us=1_300_000, counts={"registered": 1})]
+    assert "registered against this map" not in status_markdown(f, eng, {})

@@ -123,6 +123,18 @@ def test_an_unreadable_recording_is_reported_and_the_warm_up_goes_on(data_root, 
     assert states[jobs[1].label].startswith(PREPARED)
 
 
+def test_a_recording_without_calibration_is_reported_by_its_problem_without_repeating_its_path(data_root, tmp_path, squares_scene):
+    import dataclasses
+
+    rec = tmp_path / "squares_no_calib.h5"
+    write_recording_h5(rec, dataclasses.replace(squares_scene[0], calibration=None))
+    entries = _entries(data_root)
+    jobs = [DataEntry(EntryKind.RECORDING, rec, "x/squares_no_calib.h5")]
+    states = _run_worker(entries, DiskCacheConfig(directory=tmp_path / "cache"), jobs=jobs)
+    assert states["x/squares_no_calib.h5"] == ("failed: tracking cannot start: the recording has no camera calibration; "
+                                              "tracking needs intrinsics")
+
+
 def test_the_open_recording_is_deferred_until_another_is_opened(data_root, tmp_path):
     disk = DiskCacheConfig(directory=tmp_path / "cache", chunk_steps=20)
     entries = _entries(data_root)
