@@ -129,7 +129,13 @@ def probe(kind: EntryKind, path: Path) -> str | None:
     try:
         if kind == EntryKind.RECORDING and path.suffix.lower() in (".h5", ".hdf5"):
             from evpose.io.h5 import H5RecordingReader
+            from evpose.io.open import SourceFormat, detect_format
 
+            try:
+                if detect_format(path) is SourceFormat.EVENT_H5:
+                    return None  # another event h5 layout (TUM-VIE, VECtor, DSEC): checked when opened
+            except EvposeError:
+                pass  # not HDF5 at all: the reader below says so
             with H5RecordingReader(path) as reader:
                 if reader.n_events == 0:
                     return "contains no events"

@@ -90,3 +90,11 @@ def test_recordings_refused_on_opening_are_marked_at_scan_time_from_their_header
     for name in ("no_events.h5", "ecd_empty", "ecd_three"):  # what opening says too: the scan does not invent problems
         with pytest.raises(InputError):
             load_recording(data_dir / name)
+
+
+def test_event_h5_files_of_other_layouts_are_listed_as_readable(data_dir, bar_recording):
+    from evpose.io.event_h5 import write_event_h5
+
+    write_event_h5(data_dir / "events_left.h5", bar_recording.events)
+    entry = {e.path.name: e for e in DataRoots([data_dir]).scan()}["events_left.h5"]
+    assert entry.kind == EntryKind.RECORDING and entry.error is None
