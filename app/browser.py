@@ -132,10 +132,10 @@ def probe(kind: EntryKind, path: Path) -> str | None:
             from evpose.io.open import SourceFormat, detect_format
 
             try:
-                if detect_format(path) is SourceFormat.EVENT_H5:
+                if detect_format(path) is SourceFormat.EVENT_H5 and _opens_as_hdf5(path):
                     return None  # another event h5 layout (TUM-VIE, VECtor, DSEC): checked when opened
             except EvposeError:
-                pass  # not HDF5 at all: the reader below says so
+                pass  # not HDF5 at all, or truncated: the reader below says so
             with H5RecordingReader(path) as reader:
                 if reader.n_events == 0:
                     return "contains no events"
@@ -155,6 +155,17 @@ def probe(kind: EntryKind, path: Path) -> str | None:
     except (OSError, ValueError, KeyError) as exc:
         return f"{type(exc).__name__}: {exc}"
     return None
+
+
+def _opens_as_hdf5(path: Path) -> bool:
+    """Whether h5py opens ``path`` (a truncated file keeps its HDF5 signature but does not)."""
+    import h5py
+
+    try:
+        with h5py.File(path, "r"):
+            return True
+    except (OSError, ValueError):
+        return False
 
 
 def _probe_ecd(folder: Path) -> str | None:

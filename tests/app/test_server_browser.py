@@ -1,7 +1,6 @@
 """The viewer in a real headless Chromium: panels, playback, stepping, parameters, recordings, layouts, 3D canvas."""
 
 import io
-import socket
 import time
 
 import numpy as np
@@ -9,21 +8,9 @@ import pytest
 
 from app.tracker_engine import TrackerEngine
 from app.player import PlayerConfig
-from app.server import AppConfig, ViewerApp
+from browser_session import choose, running_viewer, viewer_page, wait_for
 
 pytestmark = pytest.mark.browser
-
-CHROMIUM_ARGS = ["--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage", "--disable-background-networking",
-                 "--disable-component-update", "--disable-sync", "--no-first-run"]
-
-
-def wait_for(cond, timeout=40.0, what="condition", detail=None):
-    end = time.time() + timeout
-    while time.time() < end:
-        if cond():
-            return
-        time.sleep(0.05)
-    raise AssertionError(f"timed out waiting for {what}" + (f" ({detail()})" if detail else ""))
 
 
 @pytest.fixture(scope="module")
@@ -36,32 +23,15 @@ def viewer(tmp_path_factory, squares_scene):
 
     for f in LAYOUT_DIR.glob("*.json"):
         (layouts / f.name).write_text(f.read_text())
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        port = s.getsockname()[1]
     # No idle-time prefetch here (tested in test_engine): it would compete for the CPU with the browser.
-    app = ViewerApp(AppConfig(data=[root], port=port, export_dir=tmp_path_factory.mktemp("exports"), layout_dir=layouts,
-                              player=PlayerConfig(prefetch=False)))
-    yield app
-    app.stop()
+    with running_viewer(tmp_path_factory, root, layout_dir=layouts, player=PlayerConfig(prefetch=False)) as app:
+        yield app
 
 
 @pytest.fixture(scope="module")
 def page(viewer):
-    from playwright.sync_api import sync_playwright
-
-    with sync_playwright() as p:
-        browser = p.chromium.launch(executable_path="/usr/bin/chromium", args=CHROMIUM_ARGS)
-        pg = browser.new_page(viewport={"width": 1400, "height": 900})
-        pg.goto(f"http://127.0.0.1:{viewer.cfg.port}")
-        pg.get_by_text("SP-TS positive").first.wait_for(timeout=30_000)
+    with viewer_page(viewer) as pg:
         yield pg
-        browser.close()
-
-
-def choose(page, label, option):
-    page.get_by_label(label, exact=True).click()
-    page.get_by_role("option", name=option, exact=True).click()
 
 
 def control_row(page, label):

@@ -3,15 +3,13 @@ record and the problem, no traceback, and the viewer goes on (the good recording
 
 import dataclasses
 import shutil
-import socket
 
 import numpy as np
 import pytest
 
 from app.player import PlayerConfig
-from app.server import AppConfig, ViewerApp
 from app.tracker_engine import TrackerEngine
-from test_server_browser import CHROMIUM_ARGS, choose, wait_for
+from browser_session import choose, running_viewer, viewer_page, wait_for
 
 pytestmark = pytest.mark.browser
 
@@ -80,26 +78,14 @@ def write_bad_data_root(root, squares_scene):
 @pytest.fixture(scope="module")
 def viewer(tmp_path_factory, squares_scene):
     root = write_bad_data_root(tmp_path_factory.mktemp("data"), squares_scene)
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        port = s.getsockname()[1]
-    app = ViewerApp(AppConfig(data=[root], port=port, export_dir=tmp_path_factory.mktemp("exports"), warm_up=True,
-                              player=PlayerConfig(prefetch=False)))
-    yield app
-    app.stop()
+    with running_viewer(tmp_path_factory, root, warm_up=True, player=PlayerConfig(prefetch=False)) as app:
+        yield app
 
 
 @pytest.fixture(scope="module")
 def page(viewer):
-    from playwright.sync_api import sync_playwright
-
-    with sync_playwright() as p:
-        browser = p.chromium.launch(executable_path="/usr/bin/chromium", args=CHROMIUM_ARGS)
-        pg = browser.new_page(viewport={"width": 1400, "height": 900})
-        pg.goto(f"http://127.0.0.1:{viewer.cfg.port}")
-        pg.get_by_text("SP-TS positive").first.wait_for(timeout=30_000)
+    with viewer_page(viewer) as pg:
         yield pg
-        browser.close()
 
 
 def _option(viewer, dropdown, file_name):

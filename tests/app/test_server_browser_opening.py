@@ -2,15 +2,14 @@
 a recording shorter than ``--acquire-s``: the status line says what is going on in both cases."""
 
 import dataclasses
-import socket
 import threading
 
 import numpy as np
 import pytest
 
 from app.player import PlayerConfig
-from app.server import OPENING, AppConfig, ViewerApp
-from test_server_browser import CHROMIUM_ARGS, choose, wait_for
+from app.server import OPENING
+from browser_session import choose, running_viewer, viewer_page, wait_for
 
 pytestmark = pytest.mark.browser
 
@@ -37,26 +36,14 @@ def viewer(tmp_path_factory, squares_scene):
     short = map_scene(duration_s=0.2)[0]
     write_recording_h5(root / "wrong.h5", dataclasses.replace(short, metadata={"scene": "wrong"}))
     write_contour_map(root / "wrong_map.ply", wrong_map(cmap))
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        port = s.getsockname()[1]
-    app = ViewerApp(AppConfig(data=[root], port=port, export_dir=tmp_path_factory.mktemp("exports"), warm_up=False,
-                              player=PlayerConfig(prefetch=True)))
-    yield app
-    app.stop()
+    with running_viewer(tmp_path_factory, root, warm_up=False, player=PlayerConfig(prefetch=True)) as app:
+        yield app
 
 
 @pytest.fixture(scope="module")
 def page(viewer):
-    from playwright.sync_api import sync_playwright
-
-    with sync_playwright() as p:
-        browser = p.chromium.launch(executable_path="/usr/bin/chromium", args=CHROMIUM_ARGS)
-        pg = browser.new_page(viewport={"width": 1400, "height": 900})
-        pg.goto(f"http://127.0.0.1:{viewer.cfg.port}")
-        pg.get_by_text("SP-TS positive").first.wait_for(timeout=30_000)
+    with viewer_page(viewer) as pg:
         yield pg
-        browser.close()
 
 
 def _option(viewer, name):
