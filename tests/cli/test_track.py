@@ -85,19 +85,22 @@ def test_track_with_a_map_in_another_frame_fails_with_one_line(files, tmp_path, 
     assert err.split(": ")[2] == str(tmp_path / "far.ply")  # "evpose track: error: MAP: ...": the map is named, it is what is wrong
 
 
-def test_track_with_a_map_that_never_registers_fails_with_one_line_and_writes_nothing(files, tmp_path, capsys):
-    d, rec = files
+def bare_ground_map(cmap, n=300):
+    """A patch of ``cmap``'s ground with no edge, in view of the start pose: a wrong map, not one in another frame."""
     import dataclasses
 
+    patch = np.c_[np.random.default_rng(0).uniform(-0.04, 0.04, (n, 2)) + [0.0, -0.55], np.zeros(n)]
+    return dataclasses.replace(cmap, points=patch, **{k: getattr(cmap, k)[:n] for k in
+                                                      ("edge_normal", "plane_normal", "region_id", "curvature", "brightness_sign")})
+
+
+def test_track_with_a_map_that_never_registers_fails_with_one_line_and_writes_nothing(files, tmp_path, capsys):
+    d, rec = files
     from evpose.io.map_ply import read_contour_map
 
     cmap = read_contour_map(d / "map.ply")
     # In view of the start pose, but on bare ground with no edge: a wrong map, not one in another frame.
-    n = 300
-    patch = np.c_[np.random.default_rng(0).uniform(-0.04, 0.04, (n, 2)) + [0.0, -0.55], np.zeros(n)]
-    wrong = dataclasses.replace(cmap, points=patch, **{k: getattr(cmap, k)[:n] for k in
-                                                       ("edge_normal", "plane_normal", "region_id", "curvature", "brightness_sign")})
-    write_contour_map(tmp_path / "wrong.ply", wrong)
+    write_contour_map(tmp_path / "wrong.ply", bare_ground_map(cmap))
     out = tmp_path / "e.txt"
     code = run(["track", str(d / "rec.h5"), "--map", str(tmp_path / "wrong.ply"), "--out", str(out), "--mode", "stpe",
                 "--acquire-s", "0.05", "--no-progress"])
@@ -107,17 +110,11 @@ def test_track_with_a_map_that_never_registers_fails_with_one_line_and_writes_no
 
 
 def test_track_refuses_a_wrong_map_that_registers_only_by_chance_under_dense_events(tmp_path, capsys):
-    import dataclasses
-
     # 2e6 noise events/s cover the image densely: a patch of bare ground registers every update, by chance alone.
     rec, cmap, _ = generate(duration_s=0.12, seed=4, noise_rate_hz=2e6)
     write_recording_h5(tmp_path / "rec.h5", rec)
     write_contour_map(tmp_path / "map.ply", cmap)
-    n = 300
-    patch = np.c_[np.random.default_rng(0).uniform(-0.04, 0.04, (n, 2)) + [0.0, -0.55], np.zeros(n)]
-    wrong = dataclasses.replace(cmap, points=patch, **{k: getattr(cmap, k)[:n] for k in
-                                                       ("edge_normal", "plane_normal", "region_id", "curvature", "brightness_sign")})
-    write_contour_map(tmp_path / "wrong.ply", wrong)
+    write_contour_map(tmp_path / "wrong.ply", bare_ground_map(cmap))
     out = tmp_path / "e.txt"
     code = run(["track", str(tmp_path / "rec.h5"), "--map", str(tmp_path / "wrong.ply"), "--out", str(out), "--mode", "stpe",
                 "--no-progress"])
