@@ -51,6 +51,10 @@ def capture_registrations(recording, contour_map, mode: str, every: int = 10, li
     return calls
 
 
+PER_POINT_KWARGS = ("tangents_world", "trail_offsets_px")
+"""``register_to_map`` keyword arguments with one row per map point: they follow the subset as the points do."""
+
+
 def registration_cost_table(calls: list[tuple], repeats: int = 5) -> dict:
     """Latency per point count (median over the calls of the min-of-``repeats`` CPU time) and the fitted split."""
     from evpose.tracker.registration import register_to_map, subsample_indices
@@ -65,11 +69,12 @@ def registration_cost_table(calls: list[tuple], repeats: int = 5) -> dict:
             if len(a) > 3 and a[3] is not None:  # per-point polarity follows the subset
                 a[3] = np.asarray(a[3])[idx]
             pts = points[idx]
-            res = register_to_map(levels, pts, *a, **kwargs)  # first call: caches warm, kernels loaded
+            kw = {k: (np.asarray(v)[idx] if k in PER_POINT_KWARGS and v is not None else v) for k, v in kwargs.items()}
+            res = register_to_map(levels, pts, *a, **kw)  # first call: caches warm, kernels loaded
             best = np.inf
             for _ in range(repeats):
                 c0 = time.thread_time()
-                register_to_map(levels, pts, *a, **kwargs)
+                register_to_map(levels, pts, *a, **kw)
                 best = min(best, time.thread_time() - c0)
             us = best * 1e6
             lat.append(us)
