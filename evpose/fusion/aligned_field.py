@@ -34,14 +34,29 @@ from evpose.frontend.distance_field import TemporalDistanceField, field_derivati
 from evpose.fusion.aligned_surface import AlignedTimeSurface
 
 
+@nb.njit(cache=True, inline="always")
+def _lut_span(lut, shift, t_us):
+    """(half, oldest, top) of the decay table at ``t_us``: the rounding half-bin, the newest timestamp that reads the
+    table's last bin (``top``) as ``_tdf_kernel`` bins them."""
+    n_lut = lut.shape[0]
+    half = np.int64(1) << max(shift - 1, 0) if shift > 0 else np.int64(0)
+    return half, t_us - ((np.int64(n_lut - 1) << shift) - half), lut[n_lut - 1]
+
+
+@nb.njit(cache=True, inline="always")
+def _lut_value(lut, shift, half, t_us, s):
+    """The table's value for a pixel last fired at ``s`` (a timestamp newer than the span's ``oldest``)."""
+    d = t_us - s
+    if d < 0:
+        d = 0
+    return lut[(d + half) >> shift]
+
+
 @nb.njit(cache=True)
 def _sparse_tdf(touched, times, n, t_us, lut, shift, r0, r1, c0, c1, out):
     """TDF of the box (r0:r1, c0:c1) into ``out`` (its shape): the table's last bin (never fired or older than it)
     everywhere but at the listed pixels, whose timestamps are looked up exactly as ``_tdf_kernel`` does."""
-    n_lut = lut.shape[0]
-    half = np.int64(1) << max(shift - 1, 0) if shift > 0 else np.int64(0)
-    oldest = t_us - ((np.int64(n_lut - 1) << shift) - half)
-    top = lut[n_lut - 1]
+    half, oldest, top = _lut_span(lut, shift, t_us)
     out[:, :] = top
     for i in range(n):
         r = touched[i, 0]
@@ -51,10 +66,7 @@ def _sparse_tdf(touched, times, n, t_us, lut, shift, r0, r1, c0, c1, out):
         s = times[i]
         if s <= oldest:
             continue  # already ``top``
-        d = t_us - s
-        if d < 0:
-            d = 0
-        out[r - r0, c - c0] = lut[(d + half) >> shift]
+        out[r - r0, c - c0] = _lut_value(lut, shift, half, t_us, s)
 
 
 @nb.njit(cache=True)
@@ -62,10 +74,7 @@ def _scatter_tdf(touched, times, n, t_us, lut, shift, r0, r1, c0, c1, buf, writt
     """:func:`_sparse_tdf` into the whole-image ``buf`` that reads the table's last bin everywhere but at the flat
     pixel offsets ``written[:n_written]`` (the last call's): those are put back first, then this call's pixels other
     than the last bin are written and listed in ``written``; returns how many."""
-    n_lut = lut.shape[0]
-    half = np.int64(1) << max(shift - 1, 0) if shift > 0 else np.int64(0)
-    oldest = t_us - ((np.int64(n_lut - 1) << shift) - half)
-    top = lut[n_lut - 1]
+    half, oldest, top = _lut_span(lut, shift, t_us)
     flat = buf.reshape(-1)
     width = buf.shape[1]
     for i in range(n_written):
@@ -79,11 +88,8 @@ def _scatter_tdf(touched, times, n, t_us, lut, shift, r0, r1, c0, c1, buf, writt
         s = times[i]
         if s <= oldest:
             continue
-        d = t_us - s
-        if d < 0:
-            d = 0
         p = r * width + c
-        flat[p] = lut[(d + half) >> shift]
+        flat[p] = _lut_value(lut, shift, half, t_us, s)
         written[m] = p
         m += 1
     return m
