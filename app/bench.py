@@ -24,7 +24,7 @@ CHROMIUM_ARGS = ["--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage", "--
                  "--disable-component-update", "--disable-sync", "--no-first-run"]
 
 
-def _free_port() -> int:
+def free_port() -> int:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         return s.getsockname()[1]
@@ -74,7 +74,7 @@ def _viewer(rec: Path, cmap: Path, work_dir: Path, prefetch: bool = True):
     from app.player import PlayerConfig
     from app.server import AppConfig, ViewerApp
 
-    app = ViewerApp(AppConfig(data=sorted({rec.parent.resolve(), cmap.parent.resolve()}), port=_free_port(),
+    app = ViewerApp(AppConfig(data=sorted({rec.parent.resolve(), cmap.parent.resolve()}), port=free_port(),
                               export_dir=work_dir / "exports", player=PlayerConfig(prefetch=prefetch),
                               disk_cache=DiskCacheConfig(directory=_cache_dir(work_dir))))
     rec_entry = next(e for e in app.entries if e.path == rec.resolve())

@@ -22,7 +22,7 @@ WAIT_S = 5.0
 def measure_once(rec: Path, cmap: Path, work_dir: Path) -> dict:
     """In this process: build the viewer on ``rec`` and ``cmap`` and time its run-ahead's first step."""
     import app.tracker_engine as te
-    from app.bench import _free_port
+    from app.bench import free_port
     from app.disk_cache import DiskCacheConfig
     from app.server import AppConfig, ViewerApp
 
@@ -38,7 +38,7 @@ def measure_once(rec: Path, cmap: Path, work_dir: Path) -> dict:
     shutil.rmtree(work_dir / "start_cache", ignore_errors=True)
     load0 = os.getloadavg()[0]
     t0 = time.perf_counter()
-    app = ViewerApp(AppConfig(data=sorted({rec.parent.resolve(), cmap.parent.resolve()}), port=_free_port(),
+    app = ViewerApp(AppConfig(data=sorted({rec.parent.resolve(), cmap.parent.resolve()}), port=free_port(),
                               export_dir=work_dir / "exports", disk_cache=DiskCacheConfig(directory=work_dir / "start_cache")))
     built = time.perf_counter() - t0
     time.sleep(max(0.0, WAIT_S - built))

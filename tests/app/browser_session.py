@@ -4,17 +4,9 @@
 from __future__ import annotations
 
 import contextlib
-import socket
 import time
 
-CHROMIUM_ARGS = ["--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage", "--disable-background-networking",
-                 "--disable-component-update", "--disable-sync", "--no-first-run"]
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
+from app.bench import CHROMIUM_ARGS, free_port
 
 
 @contextlib.contextmanager

@@ -1,20 +1,13 @@
 """3D scene: trajectories go out in bounded chunks (unchanged chunks are not resent), small frustum texture, map colours."""
 
-import socket
-
 import numpy as np
 import pytest
 import viser
 
+from app.bench import free_port
 from app.frame import StepSummary
 from app.scene import (FRUSTUM_IMAGE_WIDTH, GREY, SLAM_POINT_RANGE, SLAM_POINT_SPACING, TRAJECTORY_CHUNK, SceneView, frustum_image,
                        keyframe_axes_length, map_colours, slam_point_size, trajectory_chunks)
-
-
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 def _summaries(n: int) -> list[StepSummary]:
@@ -28,7 +21,7 @@ def _summaries(n: int) -> list[StepSummary]:
 
 @pytest.fixture(scope="module")
 def scene():
-    server = viser.ViserServer(host="127.0.0.1", port=_free_port(), verbose=False)
+    server = viser.ViserServer(host="127.0.0.1", port=free_port(), verbose=False)
     yield SceneView(server)
     server.stop()
 
