@@ -129,7 +129,8 @@ def main(
         prepare: Instead of serving, prepare this recording into the cache folder now (in the foreground) and exit.
         map: The contour map for ``--prepare`` (default: the one the viewer would open it with, from ``--data``).
         acquire_s: ``--prepare`` stops with an error, as ``evpose track`` does, if no update registers against the map
-            within this many seconds of the start (a wrong map; the viewer only warns, as it must show the pairing); 0 = never.
+            within this many seconds of the start, or the registrations there are no better than chance (a wrong map;
+            the viewer only warns, as it must show the pairing); 0 = never.
     """
     from app.disk_cache import DiskCacheConfig
     from app.server import AppConfig, ViewerApp
