@@ -15,6 +15,7 @@ from evpose.slam.map_restructure import RestructureConfig
 from evpose.slam.projection_search import ProjectionSearchConfig
 from evpose.slam.visual_gyro import VisualGyroConfig
 from evpose.slam.edge_tracking import EdgeTrackingConfig
+from evpose.slam.line_landmarks import LineLandmarkConfig
 # The feature and tracking settings live in their own modules; re-exported here, where they were (imports and docs name
 # them here).
 from evpose.slam.feature_config import FeatureConfig  # noqa: F401
@@ -358,6 +359,8 @@ class SlamConfig:
     """Event-only coasting on the rotation measured between consecutive MCIs' edges."""
     edge_tracking: EdgeTrackingConfig = field(default_factory=EdgeTrackingConfig)
     """Event-only maps starved of point tracks tracked from map points on the MCI's edges (:mod:`evpose.slam.edge_tracking`)."""
+    lines: LineLandmarkConfig = field(default_factory=LineLandmarkConfig)
+    """Straight MCI edges tracked as 3-D lines that place starved event-only maps (:mod:`evpose.slam.line_landmarks`)."""
     restructure: RestructureConfig = field(default_factory=RestructureConfig)
     """Re-initialising a young event-only map from a wide-baseline keyframe pair."""
     seed: int = 0

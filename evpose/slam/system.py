@@ -52,11 +52,13 @@ from evpose.slam.step_result import SlamFailure, SlamStatus, SlamStepResult
 from evpose.slam.system_failures import VisualFailureHandling
 from evpose.slam.system_gyro import GyroAids
 from evpose.slam.system_inertial import InertialMaps
+from evpose.slam.system_lines import LineAids
+from evpose.slam.line_landmarks import LineMap
 from evpose.slam.track_fusion import fuse_tracks
 from evpose.slam.tracking import PoseEstimate, estimate_pose
 
 
-class EventSlam(GyroAids, InertialMaps, VisualFailureHandling):
+class EventSlam(GyroAids, InertialMaps, VisualFailureHandling, LineAids):
     """Map-free event(-inertial) SLAM. Feed events with :meth:`step`; read maps from :attr:`atlas`."""
 
     def __init__(self, config: SlamConfig, calibration: CameraCalibration, imu: ImuSamples | None = None):
@@ -114,6 +116,8 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling):
         """Time of the last MCI placed by PnP on point tracks (``EdgeTrackingConfig.max_span_s``), us."""
         self._prev_mci: tuple = (None, 0)
         """The previous MCI (8-bit image, time in us) while the current one is processed (``VisualGyroConfig``)."""
+        self._lines = LineMap()
+        """Line tracks and 3-D lines of the active map (``SlamConfig.lines``)."""
 
     # --------------------------------------------------------------- public
     def step(self, events: EventArray) -> SlamStepResult:
@@ -150,7 +154,7 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling):
             "state": self._state, "last_t": self._last_t, "imu_init": self.last_imu_init, "n_results": len(self.results),
             "last_visual_t": self._last_visual_t, "prev_hypothesis": self._prev_hypothesis,
             "scale_refinement": self.last_scale_refinement, "rejoin": self._rejoin, "blank_us": self._blank_us,
-            "after_blank_t": self._after_blank_t, "last_pnp_t": self._last_pnp_t,
+            "after_blank_t": self._after_blank_t, "last_pnp_t": self._last_pnp_t, "lines": self._lines,
         })
 
     def restore(self, snap: dict) -> None:
@@ -167,6 +171,7 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling):
         self._rejoin = s.get("rejoin")
         self._blank_us, self._after_blank_t = s.get("blank_us", 0), s.get("after_blank_t")
         self._last_pnp_t = s.get("last_pnp_t", 0)
+        self._lines = s.get("lines", LineMap())
         del self.results[s["n_results"]:]
 
     # ------------------------------------------------------------- pipeline
@@ -398,6 +403,7 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling):
         if need_keyframe(m, fe.ids, fe.uv, n_tracked, tc):
             keyframe = True
             T_wc = self._new_keyframe(m, mci.t_us, T_wc, mci.image8)
+        self._lines_after_pose(m, mci, T_wc)
         return SlamStatus.OK, f"{n_tracked} inliers ({n_refound} re-found by projection{fused}), rms {est.rms_px:.2f} px", T_wc.copy(), keyframe
 
     def _estimate(self, m: SlamMap, mci: MciResult, sel: list[int], guess: np.ndarray, R_prior: np.ndarray | None) -> tuple[PoseEstimate, list[int]]:

@@ -90,13 +90,15 @@ class VisualFailureHandling:
         if R_wc is not None:
             T_wc = T_wc.copy()
             T_wc[:3, :3] = R_wc
-        edge = self._edge_track(m, mci, T_wc)
+        edge = self._line_track(m, mci, T_wc) or self._edge_track(m, mci, T_wc)
         if edge is not None:
             return edge
         drop_contradicted(m, self.K, T_wc, fe.ids, fe.uv, fe.track_to_point, 2.0 * tc.reprojection_threshold_px)
         m.add_pose(mci.t_us, T_wc)
         # No BA on a keyframe at a predicted pose (InertialConfig.coast_ba: with one fixed keyframe it slid along the scale).
         T_wc = self._new_keyframe(m, mci.t_us, T_wc, mci.image8, adjust=False)
+        if self.cfg.lines.update_from_coast:
+            self._lines_after_pose(m, mci, T_wc)
         return SlamStatus.COASTING, f"visual tracking failed ({reason}); pose coasted on the map's recent motion, map {m.id} kept", T_wc.copy(), True
 
     def _edge_track(self, m, mci: MciResult, T_pred: np.ndarray) -> tuple[SlamStatus, str, np.ndarray, bool] | None:
