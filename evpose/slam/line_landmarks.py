@@ -17,6 +17,39 @@ edges become landmarks:
 - tracking: when the map is starved, its 3-D lines are projected at the coasted pose, matched to the MCI's segments,
   and each matched line gives two 1-D residuals, the distances of its projected end points from the detected line
   (free along the line), solved with the coast as a Gaussian prior by :func:`evpose.slam.edge_tracking.solve_pose_across_edges`.
+
+Measured (session 20, ``/tmp/s20/lines9b``: ``exp.py`` is the lead's harness, ``diag.py`` / ``dbg*.py`` / ``chk*.py``
+log each attempt against the truth). Indoor, event-only, seeds 0-7, defaults: ATE 6.83 %, from the events 40.7 %, 30
+maps, CPU per MCI median 15.1 ms.
+
+- Diagnosis. 61 coasted stretches over the 8 runs, median 61 ms, 75th percentile 394 ms, longest 627 ms; 90 % of the
+  coasted time lies in stretches over 100 ms. Every one of the 22 map ends is a starved map (0-5 tracked map points) at
+  the end of a coast or after a blank wall. The coasted MCIs do show straight edges (seed 0: a median 4 segments over
+  20 px, all near vertical; tracked MCIs 12); a line track follows them through a coast for 20-30 MCIs.
+- Why the lines do not carry the pose: they are rarely triangulated. The edges seen while coasting are met during the
+  coast, and over a track's life the camera's translation gives under about 1 deg of across-edge parallax for a far
+  vertical edge (seed 0, a 110 px edge tracked over 16 MCIs: triangulation angle 0.05-1.2 deg, depth of either sign),
+  while the poses it is observed from disagree with its image motion by 4-5 px (about 1 deg). The PnP poses are no
+  steadier: between PnP-placed MCIs 40-60 ms apart (seeds 0, 3, 4) the relative rotation is off the truth by a median
+  1.86 deg for a true 3.00 deg (estimated 4.18; 5-25 ms apart: 0.71 for 0.82; landing seeds 0-1, 40-60 ms: 0.97 for
+  1.35). Of 369 line-tracking attempts (seeds 0, 3, 5; ``update_from_coast``, ``match_px`` 12, ``ambiguity_ratio``
+  0.8), 242 found fewer than ``min_lines`` 3-D lines in the map, 21 matched too few, 4 were rejected by the solver, 32
+  came after ``max_span_s``, and 70 were placed.
+- Where 3-D lines are matched, the solved pose stays at the coast: rotation relative to the last PnP pose against the
+  truth (seeds 0-7, ``update_from_coast``, ``shift_search_px`` 30, 139 line-tracked MCIs) median coast / solved 1.86 /
+  1.93 deg within 50 ms of the last PnP pose, 9.68 / 9.64 within 50-150 ms, 16.0 / 15.6 within 150-400 ms, mostly yaw;
+  with ``EdgeTrackingConfig.sigma_rotation_deg`` 5 the same (seed 3). The lines agree with the map they were
+  triangulated in, and so with its coast.
+- Indoor seeds 0-7 (ATE % / from the events % / maps, line-tracked MCIs of about 1500): on with the defaults 7.38 /
+  41.5 / 31, 29; ``shift_search_px`` 30 7.56 / 42.3 / 31, 35; ``update_from_coast`` 8.50 / 42.6 / 28, 125; with
+  ``shift_search_px`` 30 8.42 / 44.0 / 28, 139; with ``match_px`` 12 and ``ambiguity_ratio`` 0.8 instead 7.24 / 45.9 /
+  28, 119 (held-out seeds 8-11: 7.98 -> 7.75 %, from the events 44.3 -> 48.6 %); ``refine_pnp`` 7.02 / 41.2 / 31.
+  Per seed the ATE moves by up to 10 points either way (seed 4 7.37 -> 13.30 % with 10 line-tracked MCIs): a handful
+  of line-tracked MCIs redraws which MCIs re-localise afterwards. CPU per MCI median 16.2-19.4 ms (single runs, not
+  paired).
+
+Off by default: no variant lowers the ATE. What limits the lines is the precision of the poses they are triangulated
+from, not their detection.
 """
 
 from __future__ import annotations
@@ -34,7 +67,8 @@ class LineLandmarkConfig:
     """Line landmarks of event-only maps (:mod:`evpose.slam.line_landmarks`)."""
 
     enabled: bool = False
-    """Track straight MCI edges as 3-D lines, and place a starved event-only map's MCI on them before coasting."""
+    """Track straight MCI edges as 3-D lines, and place a starved event-only map's MCI on them before coasting. Off:
+    indoor seeds 0-7 ATE 6.83 -> 7.38 % (module docstring)."""
     min_length_px: float = field(default=25.0, metadata={"min": 5.0, "max": 300.0, "step": 1.0, "unit": "px"})
     """Shortest detected segment used, pixels."""
     blur_sigma_px: float = field(default=1.5, metadata={"min": 0.0, "max": 5.0, "step": 0.1, "unit": "px"})
@@ -63,8 +97,21 @@ class LineLandmarkConfig:
     """Fewest 3-D lines agreeing with the solved pose for a starved MCI to be placed on them, lines."""
     max_span_s: float = field(default=0.4, metadata={"min": 0.0, "max": 5.0, "step": 0.05, "unit": "s"})
     """Longest stretch of line-tracked MCIs since the last MCI placed by PnP on point tracks, seconds."""
+    shift_search_px: float = field(default=0.0, metadata={"min": 0.0, "max": 100.0, "step": 1.0, "unit": "px"})
+    """Before matching the 3-D lines of a starved MCI, the image shift (up to this far) that brings most of their
+    predicted segments onto detected ones is applied to all of them (a coasted yaw error moves every line alike);
+    0: off (30: indoor seeds 0-7 7.38 -> 7.56 %), pixels."""
+    refine_pnp: bool = False
+    """A PnP-placed MCI's pose is re-solved with its inlier points and the matched 3-D lines together (1-D residuals,
+    Huber ``EdgeTrackingConfig.huber_px``), the PnP pose as a loose prior (on: indoor seeds 0-7 7.38 -> 7.02 %, against
+    6.83 % with lines off)."""
+    refine_sigma_rotation_deg: float = field(default=5.0, metadata={"min": 0.01, "max": 90.0, "step": 0.1, "unit": "deg"})
+    """Sigma of that prior's rotation about each camera axis, degrees."""
+    refine_sigma_translation_ratio: float = field(default=0.05, metadata={"min": 0.0001, "max": 1.0, "step": 0.001, "unit": "ratio"})
+    """Sigma of that prior's translation along each camera axis, as a share of the median depth of the points, ratio."""
     update_from_coast: bool = False
-    """Coasted MCIs add observations and new tracks too, at the coasted pose (off: only placed MCIs do)."""
+    """Coasted MCIs add observations and new tracks too, at the coasted pose (off: only placed MCIs do; on: indoor seeds
+    0-7 7.38 -> 8.50 %, line-tracked MCIs 29 -> 125)."""
     update_from_lines: bool = True
     """Line-tracked MCIs add observations and new tracks too (off: only PnP-placed MCIs do, so the lines in use were
     all born before the starved stretch)."""
@@ -181,6 +228,28 @@ def match_segments(pred: list[np.ndarray], segs: np.ndarray, cfg: LineLandmarkCo
             out[i] = j
             taken.add(j)
     return out
+
+
+def common_shift(pred: list[np.ndarray], segs: np.ndarray, cfg: LineLandmarkConfig) -> np.ndarray:
+    """The image shift (2,) within ``shift_search_px`` that puts the most predicted segments within ``match_px / 2`` of
+    a detected one of similar direction (ties: the smallest shift); zero when no shift brings two of them onto lines."""
+    cands = [np.zeros(2)]
+    for p in pred:
+        n = _normal(p)
+        for s in segs:
+            d, ang, _ = _relation(p, s)
+            if ang < cfg.match_angle_deg:
+                off = float(n @ (0.5 * (s[:2] + s[2:]) - p[:2]))
+                if abs(off) <= cfg.shift_search_px:
+                    cands.append(off * n)
+    best, best_key = np.zeros(2), (0, 0.0)
+    for c in cands:
+        moved = [p + np.r_[c, c] for p in pred]
+        hits = sum(any(_relation(q, s)[0] < 0.5 * cfg.match_px and _relation(q, s)[1] < cfg.match_angle_deg for s in segs) for q in moved)
+        key = (hits, -float(np.linalg.norm(c)))
+        if key > best_key:
+            best, best_key = c, key
+    return best if best_key[0] >= 2 else np.zeros(2)
 
 
 def backproject_plane(K: np.ndarray, T_wc: np.ndarray, seg: np.ndarray) -> np.ndarray:
@@ -326,6 +395,9 @@ def line_measurements(lm: LineMap, K: np.ndarray, T_cw: np.ndarray, segs: np.nda
     a pixel of the detected line for each (2M, 2), its normal (2M, 2), the detected segment's index per track)."""
     h, w = size
     tracks, pred = predict(lm, K, T_cw, w, h, landmarks_only=True)
+    if cfg.shift_search_px > 0 and len(segs) and tracks:
+        c = common_shift(pred, segs, cfg)
+        pred = [p + np.r_[c, c] for p in pred]
     match = match_segments(pred, segs, cfg) if len(segs) and tracks else []
     used, Xw, uv, nrm, idx = [], [], [], [], []
     for t, j in zip(tracks, match):

@@ -394,7 +394,11 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling, LineAids):
                 self._map_tracks = len(sel2)
         for k in np.flatnonzero(~est.inliers):
             fe.track_to_point.pop(int(fe.ids[sel[k]]), None)
-        T_wc = est.T_wc
+        T_wc, segs = est.T_wc, None
+        if self._lines_enabled() and self.cfg.lines.refine_pnp:
+            inl = [sel[k] for k in np.flatnonzero(est.inliers)]
+            Xw = np.stack([m.points[fe.track_to_point[int(fe.ids[i])]].xyz for i in inl])
+            T_wc, segs = self._refine_with_lines(m, mci, T_wc, Xw, fe.uv[inl].astype(np.float64))
         self._last_visual_t, self._blank_us, self._after_blank_t = mci.t_us, 0, None
         self._last_pnp_t = mci.t_us
         m.add_pose(mci.t_us, T_wc)
@@ -403,7 +407,7 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling, LineAids):
         if need_keyframe(m, fe.ids, fe.uv, n_tracked, tc):
             keyframe = True
             T_wc = self._new_keyframe(m, mci.t_us, T_wc, mci.image8)
-        self._lines_after_pose(m, mci, T_wc)
+        self._lines_after_pose(m, mci, T_wc, segs)
         return SlamStatus.OK, f"{n_tracked} inliers ({n_refound} re-found by projection{fused}), rms {est.rms_px:.2f} px", T_wc.copy(), keyframe
 
     def _estimate(self, m: SlamMap, mci: MciResult, sel: list[int], guess: np.ndarray, R_prior: np.ndarray | None) -> tuple[PoseEstimate, list[int]]:

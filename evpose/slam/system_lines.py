@@ -70,3 +70,23 @@ class LineAids:
             update_tracks(lm, self.K, T_wc, segs, mci.image8.shape, lc)
         return (SlamStatus.OK, f"line-tracked: {len(tracks)} lines, {res.n_on_edge} of {res.n_view} end points on them, "
                 f"{res.info_gain:.0f}x the prior ({n_refound} re-found by projection), map {m.id}", T_wc.copy(), True)
+
+    def _refine_with_lines(self, m: SlamMap, mci: MciResult, T_wc: np.ndarray, Xw: np.ndarray, uv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The PnP pose ``T_wc`` re-solved with its inlier points (``Xw`` at ``uv``) and the map's matched 3-D lines
+        together, the PnP pose as a loose prior (``LineLandmarkConfig.refine_pnp``); also returns the MCI's segments."""
+        lc = self.cfg.lines
+        segs = detect_segments(mci.image8, lc)
+        lm = self._line_map(m)
+        T_cw = invert_pose(T_wc)
+        tracks, Xl, uvl, nrml, _ = line_measurements(lm, self.K, T_cw, segs, mci.image8.shape, lc)
+        if len(tracks) < lc.min_lines:
+            return T_wc, segs
+        # A point is two 1-D residuals, across x and across y.
+        ex, ey = np.tile([1.0, 0.0], (len(Xw), 1)), np.tile([0.0, 1.0], (len(Xw), 1))
+        X_all = np.concatenate([Xw, Xw, Xl])
+        uv_all = np.concatenate([uv, uv, uvl])
+        n_all = np.concatenate([ex, ey, nrml])
+        ec = replace(self.cfg.edge_tracking, sigma_rotation_deg=lc.refine_sigma_rotation_deg,
+                     sigma_translation_ratio=lc.refine_sigma_translation_ratio, min_points=1, min_inlier_ratio=0.0, min_info_gain=1.0)
+        res = solve_pose_across_edges(self.K, X_all, uv_all, n_all, T_cw, ec)
+        return (invert_pose(res.T_cw), segs) if res.T_cw is not None else (T_wc, segs)
