@@ -394,11 +394,7 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling, LineAids):
                 self._map_tracks = len(sel2)
         for k in np.flatnonzero(~est.inliers):
             fe.track_to_point.pop(int(fe.ids[sel[k]]), None)
-        T_wc, segs = est.T_wc, None
-        if self._lines_enabled() and self.cfg.lines.refine_pnp:
-            inl = [sel[k] for k in np.flatnonzero(est.inliers)]
-            Xw = np.stack([m.points[fe.track_to_point[int(fe.ids[i])]].xyz for i in inl])
-            T_wc, segs = self._refine_with_lines(m, mci, T_wc, Xw, fe.uv[inl].astype(np.float64))
+        T_wc, segs = self._pnp_pose_with_lines(m, mci, est.T_wc, [sel[k] for k in np.flatnonzero(est.inliers)])
         self._last_visual_t, self._blank_us, self._after_blank_t = mci.t_us, 0, None
         self._last_pnp_t = mci.t_us
         m.add_pose(mci.t_us, T_wc)

@@ -71,10 +71,15 @@ class LineAids:
         return (SlamStatus.OK, f"line-tracked: {len(tracks)} lines, {res.n_on_edge} of {res.n_view} end points on them, "
                 f"{res.info_gain:.0f}x the prior ({n_refound} re-found by projection), map {m.id}", T_wc.copy(), True)
 
-    def _refine_with_lines(self, m: SlamMap, mci: MciResult, T_wc: np.ndarray, Xw: np.ndarray, uv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The PnP pose ``T_wc`` re-solved with its inlier points (``Xw`` at ``uv``) and the map's matched 3-D lines
-        together, the PnP pose as a loose prior (``LineLandmarkConfig.refine_pnp``); also returns the MCI's segments."""
-        lc = self.cfg.lines
+    def _pnp_pose_with_lines(self, m: SlamMap, mci: MciResult, T_wc: np.ndarray, inliers: list[int]) -> tuple[np.ndarray, np.ndarray | None]:
+        """The PnP pose ``T_wc`` re-solved with its inlier tracks (indices into the frontend's tracks) and the map's
+        matched 3-D lines together, the PnP pose as a loose prior (``LineLandmarkConfig.refine_pnp``; else ``T_wc``
+        itself); also returns the MCI's segments when it detected them."""
+        lc, fe = self.cfg.lines, self.fe
+        if not self._lines_enabled() or not lc.refine_pnp or not inliers:
+            return T_wc, None
+        Xw = np.stack([m.points[fe.track_to_point[int(fe.ids[i])]].xyz for i in inliers])
+        uv = fe.uv[inliers].astype(np.float64)
         segs = detect_segments(mci.image8, lc)
         lm = self._line_map(m)
         T_cw = invert_pose(T_wc)

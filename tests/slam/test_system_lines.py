@@ -94,3 +94,23 @@ def test_placed_mcis_feed_line_tracks_and_snapshots_keep_them(early_map):
     off = _run(early_map, False)
     off._lines_after_pose(m, mci, T_pred)
     assert len(off._lines.tracks) == 0
+
+
+def test_refine_pnp_keeps_a_pose_its_points_and_lines_agree_with(early_map):
+    from evpose.slam.geometry import project
+
+    slam = _run(early_map, True)
+    m, T_pred, mci = _starved_mci(slam)
+    pids = sorted(m.points)[:20]
+    uv, _ = project(slam.K, invert_pose(T_pred), np.stack([m.points[p].xyz for p in pids]))
+    fe = slam.fe
+    fe.ids = np.arange(1000, 1000 + len(pids), dtype=np.int64)
+    fe.uv = uv.astype(np.float32)
+    fe.track_to_point = {1000 + i: p for i, p in enumerate(pids)}
+    same, segs = slam._pnp_pose_with_lines(m, mci, T_pred, list(range(len(pids))))
+    assert same is T_pred and segs is None  # refine_pnp is off by default
+    slam.cfg.lines.refine_pnp = True
+    pose, segs = slam._pnp_pose_with_lines(m, mci, T_pred, list(range(len(pids))))
+    assert len(segs) == 3
+    # Within the sub-pixel error of the drawn lines (0.3 deg is 1.3 px at this focal length).
+    assert np.degrees(Rotation.from_matrix(pose[:3, :3].T @ T_pred[:3, :3]).magnitude()) < 0.3
