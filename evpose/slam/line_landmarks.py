@@ -96,7 +96,9 @@ class LineLandmarkConfig:
     max_observations: int = field(default=30, metadata={"min": 2, "max": 500, "step": 1, "unit": "MCIs"})
     """Newest observations (planes) kept per track for its triangulation, MCIs."""
     min_lines: int = field(default=2, metadata={"min": 1, "max": 50, "step": 1, "unit": "lines"})
-    """Fewest 3-D lines agreeing with the solved pose for a starved MCI to be placed on them, lines."""
+    """Fewest 3-D lines agreeing with the solved pose for a starved MCI to be placed on them (1, with
+    ``update_from_coast``, ``match_px`` 12 and ``ambiguity_ratio`` 0.8: indoor seeds 0-7 7.24 -> 7.76 %, from the events
+    45.9 -> 49.0 %), lines."""
     max_span_s: float = field(default=0.4, metadata={"min": 0.0, "max": 5.0, "step": 0.05, "unit": "s"})
     """Longest stretch of line-tracked MCIs since the last MCI placed by PnP on point tracks, seconds."""
     shift_search_px: float = field(default=0.0, metadata={"min": 0.0, "max": 100.0, "step": 1.0, "unit": "px"})
