@@ -140,6 +140,9 @@ the diagonal 7.98, only the couplings 7.00, ``S`` x 0.5 / x 1.5 6.97 / 14.06 mm)
 4.97 / 6.98 / 3.95), as trusting the registrations more does. 346x260 seeds 0-7 (5.305 / 0.0589) with its own ``S``
 5.283 / 0.0594; with ``fusion.registration_covariance_scale`` 15 / 10 5.324 / 5.342, with 240x180's ``S`` at 10 5.424.
 Not kept: a fixed ``S`` is a property of the benchmark's seeds, and an online one would cost a registration per axis.
+What was kept instead: the fused modes' prior towards the prediction widens on coarse sensors
+(``registration.fused_prior_reference_pixel_mrad``), which takes the echo's cause (the prior's larger share at
+240x180) at its source.
 """
 
 from __future__ import annotations
