@@ -172,7 +172,9 @@ class RegistrationConfig:
     -> 6.807 / 0.0796 (5.79 6.62 2.79 12.22 -> 6.30 6.78 3.51 10.64), 3 s landing seeds 0-3 18.91 / 0.162 -> 18.64 /
     0.186 mm (23.41 18.50 13.80 19.93 -> 20.56 16.59 15.76 21.64; ~150 updates lost in every run either way). A
     modest gain, on the seeds with large errors; 346x260 and the demos are bit-identical. Exponent 3 (x 2.99) 7.008 /
-    0.0776 (seeds 0-7); the stds scaled by hand x 1.44 / x 2 7.134 / 0.0775, 6.964 / 0.0762."""
+    0.0776 (seeds 0-7); the stds scaled by hand x 1.44 / x 2 7.134 / 0.0775, 6.964 / 0.0762. The echo with it on
+    (same probe, seeds 0 and 4): diagonal 0.50 / 0.27 / 0.26, 0.46 / 0.58 / 0.35 -> 0.48 / 0.22 / 0.22, 0.34 / 0.39 /
+    0.34; the rest is not the prior's. The EKF backend, seeds 0-7: 7.371 / 0.0788 -> 7.125 / 0.0783 (the graph 7.007)."""
     fused_prior_pixel_exponent: float = field(default=2.0, metadata={"min": 0.0, "max": 4.0, "step": 0.1, "unit": "ratio"})
     """Power of the pixel-angle ratio the prior's stds grow by (``fused_prior_reference_pixel_mrad``); 2 follows the
     events' information (Jacobian squared times the event count, each ~``fx^2``), 1 the field's (its points capped
