@@ -121,6 +121,28 @@ Split again by the map point's edge class (``crease_radius_m``, ``/tmp/s17/edgec
 creases trail ~0.26 px, those of the other points where the camera sees past their edge lead ~0.35 px, the rest trail
 ~0.1 px; half the crease split with the seen-past lead +0.5 px took the four 2 s sets to 5.84 / 4.76 / 7.29 / 7.36 mm
 (6.565 -> 6.313).
+
+Session 20 (``/tmp/s20/res7/``): how much of its start's error a whole ``full`` step (T_align, field, events, priors)
+keeps, by re-running it from the prediction moved 0.1 deg / 5 mm along each camera-frame tangent axis, the previous
+pose moved alike so the motion twist stays (``probe.py``; every 20th update of seeds 0 and 4, 38 probes per
+resolution). The mean echo ``S`` (result moved per start moved; rotation then translation, rad and m) has the diagonal
+0.50 / 0.27 / 0.26, 0.46 / 0.58 / 0.35 at 240x180 and 0.29 / 0.26 / 0.18, 0.32 / 0.30 / 0.23 at 346x260, plus
+tilt-to-shift couplings (``ty`` from ``rx``, ``tx`` from ``ry``, ``tz`` from ``ry``, ``tz`` from ``rx``) of 0.73 / -0.70 /
+0.46 / 0.41 and 0.37 / -0.71 / 0.75 / 0.23 m/rad; single probes scatter by 0.13-0.34 about these means. (Moving the
+prediction alone, which also changes the twist the events are placed along, the diagonal reads 0.75-1.1.) So at
+240x180 a registration keeps about twice the share of the prediction's error that it keeps at 346x260. Handing the
+fusion what that model says the registration measured, ``z' = P Exp(G^-1 Log(P^-1 z))`` with covariance
+``G^-1 C G^-T``, ``G = I - S``, ``P`` the prediction (``run_deecho.py``; ``full``, 2 s landing, mean ATE mm / ARE deg):
+240x180 seeds 0-7 7.325 / 0.0802 -> 6.874 / 0.0838 (the mean ``S`` in the tracker instead of the median 6.838; only
+the diagonal 7.98, only the couplings 7.00, ``S`` x 0.5 / x 1.5 6.97 / 14.06 mm), but held-out seeds 8-11 6.855 /
+0.0744 -> 7.486 / 0.0909 (``S`` x 0.5 6.944): it cuts the seeds with large errors (seeds 0 / 2 / 4 / 11 10.65 / 9.60
+/ 11.71 / 12.22 -> 9.05 / 6.69 / 10.08 / 11.81) and costs the good ones about 1 mm (3 / 8 / 10: 4.07 / 5.79 / 2.79 ->
+4.97 / 6.98 / 3.95), as trusting the registrations more does. 346x260 seeds 0-7 (5.305 / 0.0589) with its own ``S``
+5.283 / 0.0594; with ``fusion.registration_covariance_scale`` 15 / 10 5.324 / 5.342, with 240x180's ``S`` at 10 5.424.
+Not kept: a fixed ``S`` is a property of the benchmark's seeds, and an online one would cost a registration per axis.
+What was kept instead: the fused modes' prior towards the prediction widens on coarse sensors
+(``registration.fused_prior_reference_pixel_mrad``), which takes the echo's cause (the prior's larger share at
+240x180) at its source.
 """
 
 from __future__ import annotations

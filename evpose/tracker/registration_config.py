@@ -155,6 +155,30 @@ class RegistrationConfig:
     (``prior_translation_m`` 0, field and events) 6.95 mm; the priors kept but their information left out of the
     reported covariances 6.43 mm; session 18, the same at 240x180 seeds 0-7 (both priors' information subtracted
     from the field's and the events' Hessians, eigenvalues floored at 1e-6 of the largest) 7.44 mm against 7.325."""
+    fused_prior_reference_pixel_mrad: float = field(default=4.05, metadata={"min": 0.0, "max": 100.0, "step": 0.01, "unit": "mrad"})
+    """In the fused modes, on a sensor whose pixel subtends more than this angle (``1 / fx``), both stds of the prior
+    towards the prediction (``prior_rotation_deg``, ``prior_translation_m``; the field's and the events') grow by
+    ``(pixel / this) ** fused_prior_pixel_exponent``, milliradians (0 = never). The stds were tuned on the simulated
+    346x260 70 deg camera (4.05 mrad: unchanged, as the bundled demos); its 240x180 sibling has 5.83 mrad.
+
+    The data's information per point falls with the pixel (the image Jacobian goes as ``fx``, squared in the normal
+    equations) and a coarser sensor fires fewer events, while the prior stays as strong in pose units: at 240x180 the
+    prior holds a larger share of the registration, which keeps about twice as much of the prediction's error as at
+    346x260 (the echo measured in :mod:`evpose.tracker.event_registration`, session 20).
+
+    Session 20, ``full`` from ground truth, mean ATE mm / ARE deg at 240x180 (``/tmp/s20/res7/run.py``, ``run3.py``),
+    off -> on (exponent 2, stds x 2.08): 2 s landing seeds 0-7 7.325 / 0.0802 -> 7.007 / 0.0771 (per seed 10.65 4.85
+    9.60 4.07 11.71 4.87 6.56 6.30 -> 10.35 4.87 8.89 4.17 10.13 5.32 6.10 6.23), held-out seeds 8-11 6.855 / 0.0744
+    -> 6.807 / 0.0796 (5.79 6.62 2.79 12.22 -> 6.30 6.78 3.51 10.64), 3 s landing seeds 0-3 18.91 / 0.162 -> 18.64 /
+    0.186 mm (23.41 18.50 13.80 19.93 -> 20.56 16.59 15.76 21.64; ~150 updates lost in every run either way). A
+    modest gain, on the seeds with large errors; 346x260 and the demos are bit-identical. Exponent 3 (x 2.99) 7.008 /
+    0.0776 (seeds 0-7); the stds scaled by hand x 1.44 / x 2 7.134 / 0.0775, 6.964 / 0.0762. The echo with it on
+    (same probe, seeds 0 and 4): diagonal 0.50 / 0.27 / 0.26, 0.46 / 0.58 / 0.35 -> 0.48 / 0.22 / 0.22, 0.34 / 0.39 /
+    0.34; the rest is not the prior's. The EKF backend, seeds 0-7: 7.371 / 0.0788 -> 7.125 / 0.0783 (the graph 7.007)."""
+    fused_prior_pixel_exponent: float = field(default=2.0, metadata={"min": 0.0, "max": 4.0, "step": 0.1, "unit": "ratio"})
+    """Power of the pixel-angle ratio the prior's stds grow by (``fused_prior_reference_pixel_mrad``); 2 follows the
+    events' information (Jacobian squared times the event count, each ~``fx^2``), 1 the field's (its points capped
+    at ``max_points``), ratio."""
     prior_residual_sigma: float = field(default=0.2, metadata={"min": 0.01, "max": 1.0, "step": 0.01, "unit": "TDF"})
     """Typical TDF residual of one point, which converts the prior stds into the cost's units, TDF units."""
     residual_variance: ResidualVariance = ResidualVariance.ALL
@@ -365,3 +389,12 @@ class RegistrationConfig:
     the pose, +0.03-0.10 px on average, 0.13-0.23 px from update to update; applied, 12.4 / 15.3 mm (per update),
     11.5 / 20.4 mm (averaged over ~50 updates). The offsets at the minimum are not what biases the pose: the knobs
     sit at an empirical optimum."""
+
+
+def prior_widening(config: RegistrationConfig, pixel_mrad: float) -> float:
+    """Factor on the fused modes' prior stds for a sensor whose pixel subtends ``pixel_mrad`` (see
+    ``RegistrationConfig.fused_prior_reference_pixel_mrad``): 1 at or below the reference."""
+    ref = float(config.fused_prior_reference_pixel_mrad)
+    if not ref > 0 or not pixel_mrad > ref:
+        return 1.0
+    return float((pixel_mrad / ref) ** float(config.fused_prior_pixel_exponent))

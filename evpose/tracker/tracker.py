@@ -49,6 +49,7 @@ from evpose.tracker.point_selection import registered_points
 from evpose.tracker.polarity_stage import align_to_polarity, learn_polarity_signs
 from evpose.tracker.predictor import ConstantVelocityPredictor, MotionPredictor
 from evpose.tracker.registration import polarity_trail, register_to_map
+from evpose.tracker.registration_config import prior_widening
 from evpose.tracker.step_result import StepResult, TrackStatus, elapsed_ms, step_debug
 from evpose.tracker.stpe_pose import stpe_pose
 from evpose.tracker.track_hold import ACQUIRE_UPDATES, TrackHold  # noqa: F401 (ACQUIRE_UPDATES re-exported)
@@ -111,6 +112,10 @@ class Tracker:
         self._registration = (dataclasses.replace(rc, min_inlier_ratio=rc.fused_min_inlier_ratio, lag_floor_px=rc.fused_lag_floor_px)
                               if self.components.drives_pose else rc)
         """The registration settings this tracker's mode uses (the fused modes' own inlier test)."""
+        widen = prior_widening(rc, 1e3 / float(self.K[0, 0])) if self.components.drives_pose else 1.0
+        if widen != 1.0:
+            self._registration = dataclasses.replace(self._registration, prior_rotation_deg=rc.prior_rotation_deg * widen,
+                                                     prior_translation_m=rc.prior_translation_m * widen)
         self._weak_test = (not self.components.drives_pose and config.motion_model is MotionModel.KALMAN and predictor is None
                            and 0.0 < float(rc.weak_inlier_ratio) < float(rc.min_inlier_ratio))
         """``stpe`` with the Kalman filter: registrations between ``weak_inlier_ratio`` and ``min_inlier_ratio`` are
