@@ -147,7 +147,21 @@ class TrackingConfig:
     first-leg collapses (27, 36, 60, 67) runs over 2 % in 0 / 1 / 2 / 3 / 4 / 5 of them for 16 / 20 / 17 / 9 / 6 / 0
     seeds, against 10.7 / 24.0 / 21.4 / 9.6 / 2.1 / 0.2 for independent draws at the mean rate 0.31: mostly chance,
     with some seeds (4, 21, 38, 45, 52, 71) failing in four of five. Every variant mended most of the defaults'
-    runaways and sent a like number of other seeds away."""
+    runaways and sent a like number of other seeds away. Oracles (``pnporacle.py``, ``baoracle.py``, ``both_oracle.py``;
+    seeds 10, 31, 32, 37, 38 at 4.58 / 4.56 / 4.03 / 4.65 / 3.81 %), from 2.2 s on: each MCI's PnP pose replaced by
+    the newest keyframe's pose and the true motion since it -> 2.90 / 2.11 / 1.69 / 5.27 / 1.29 %, its rotation only
+    -> 2.31 / 2.49 / 1.50 / 4.67 / 3.01 %; the true keyframe-to-keyframe rotations as 0.2 deg BA priors -> 2.19 / 3.08 /
+    1.22 / 4.80 / 1.25 %; both -> 2.19 / 2.21 / 1.04 / - / 1.06 % (seed 37 loses its map anyway). From 1.5 s the BA
+    priors alone bring seeds 10 / 31 to 1.83 / 1.09 %, so the damage starts in the turn; at 0.5 deg they give 1.81 /
+    2.00 / 1.40 / 3.33 % (seeds 10, 31, 32, 38) and at 1 deg 2.47 / 4.74 / 1.64 / 3.19 %: the keyframe observations
+    pull against a true rotation held to 1 deg, so it is the data, not a flat cost, that turns the chain. Why the turn:
+    event-image corners are not fixed scene points. Tracks 3-12 MCIs old within 1.5-2.4 s (seeds 10 / 2, error against
+    the ray-cast of their birth pixel, ``te_turn.py``) are off by a median 1.27 / 0.92 px when the image motion turned
+    by under 15 deg since their birth, 1.79 / 1.78 px at 15-40 deg and 2.85 / 2.44 px beyond 40 deg (in the legs 0.90 /
+    0.92, 0.98 / 1.15 and 1.48 / 1.53 px): what KLT follows slides with the motion's direction, alike for every track of
+    the turn. Ending a track's tie to its map point once its own MCI-to-MCI steps turned by over 35 / 60 deg since its
+    first step (``dircut.py``; seeds 10, 31, 32, 38, 2, 0, 5, 7 at 2.88 %): 4.54 / 3.47 % (the sparse turn starves
+    into coasting; at 60 deg seed 2 lost its map)."""
     ba_fixed_keyframes: int = field(default=1, metadata={"min": 1, "max": 5, "step": 1, "unit": "keyframes"})
     """Event-only local BA holds this many of the window's oldest keyframes fixed once the map has more keyframes than
     the window (before that, only the first keyframe and ``ba_scale_anchor``); with two or more the fixed poses also
