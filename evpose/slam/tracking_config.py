@@ -163,7 +163,8 @@ class TrackingConfig:
     first step (``dircut.py``; seeds 10, 31, 32, 38, 2, 0, 5, 7 at 2.88 %): 4.54 / 3.47 % (the sparse turn starves
     into coasting; at 60 deg seed 2 lost its map). Giving BA observations a sigma of 1 px plus 1 px per 30 deg the
     keyframes' image motion turned since the point's first keyframe, at most 3 px (``dirsig.py`` with
-    ``/tmp/s20/post9/obs_sigmas.patch``): those eight seeds 2.71 %, within 2 % 4 -> 2, RPE higher on all but one."""
+    ``/tmp/s20/post9/obs_sigmas.patch``): those eight seeds 2.71 % (10, 31, 32: 2.83 / 2.15 / 2.16 %;
+    2, 38: 4.03 / 4.74 %), within 2 % 4 -> 2, RPE higher on six of them."""
     ba_fixed_keyframes: int = field(default=1, metadata={"min": 1, "max": 5, "step": 1, "unit": "keyframes"})
     """Event-only local BA holds this many of the window's oldest keyframes fixed once the map has more keyframes than
     the window (before that, only the first keyframe and ``ba_scale_anchor``); with two or more the fixed poses also
