@@ -29,7 +29,9 @@ median 1.75 -> 1.63), +0.27 +- 0.24, with new losses of the map in the turn (see
 points at 2.06-2.4 s); every MCI, 1 px -> 2.60 % (47), +0.21 +- 0.23 (36 / 36; 2.69 / 2.54 / 2.57 %). The last
 mended every run of the defaults that runs away after the turn (seeds 10, 24, 31, 32, 37, 38, 55, 63, 65: 2.75-4.65
 -> 1.06-1.88 %) and sent as many others away (1, 4, 9, 17, 21, 28, 44, 56, 58, 61: 1.16-2.38 -> 3.18-11.34 %): the
-outcome after the turn is reshuffled, not stabilised. Main-thread CPU per MCI (median of the runs' medians, unpaired)
+outcome after the turn is reshuffled, not stabilised; nor were the tracks more precise (1 px, every MCI; seeds 10 /
+2, median error 4-8 MCIs after birth 1.16 / 1.23 -> 1.29 / 1.20 px, 16-32 MCIs 2.06 / 1.82 -> 2.24 / 1.86 px): the
+error that grows with a track's age is not KLT's step-by-step drift (:attr:`TrackingConfig.ba_window`). Main-thread CPU per MCI (median of the runs' medians, unpaired)
 22.3 -> 23.5 / 27.6 / 28.3 ms.
 """
 
