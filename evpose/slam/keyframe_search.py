@@ -31,8 +31,9 @@ mended every run of the defaults that runs away after the turn (seeds 10, 24, 31
 -> 1.06-1.88 %) and sent as many others away (1, 4, 9, 17, 21, 28, 44, 56, 58, 61: 1.16-2.38 -> 3.18-11.34 %): the
 outcome after the turn is reshuffled, not stabilised; nor were the tracks more precise (1 px, every MCI; seeds 10 /
 2, median error 4-8 MCIs after birth 1.16 / 1.23 -> 1.29 / 1.20 px, 16-32 MCIs 2.06 / 1.82 -> 2.24 / 1.86 px): the
-error that grows with a track's age is not KLT's step-by-step drift (:attr:`TrackingConfig.ba_window`). Main-thread CPU per MCI (median of the runs' medians, unpaired)
-22.3 -> 23.5 / 27.6 / 28.3 ms.
+error that grows with a track's age is not KLT's step-by-step drift
+(:attr:`evpose.slam.tracking_config.TrackingConfig.ba_window`). Main-thread CPU per MCI (median of the runs' medians,
+unpaired) 22.3 -> 23.5 / 27.6 / 28.3 ms.
 """
 
 from __future__ import annotations
