@@ -332,6 +332,17 @@ class InitializationConfig:
     0.81 -> 0.61 % (RPE at most 0.0031 m/m, 0.0014 deg/m)."""
     min_parallax_deg_inertial: float = field(default=1.0, metadata={"min": 0.1, "max": 10.0, "step": 0.1, "unit": "deg"})
     """``min_parallax_deg`` of event-inertial runs (see ``homography_fit_share_inertial``), degrees."""
+    plane_min_parallax_deg: float = field(default=0.0, metadata={"min": 0.0, "max": 10.0, "step": 0.05, "unit": "deg"})
+    """``min_parallax_deg`` of a homography whose chosen decomposition puts the points on a plane seen face-on (depth
+    spread at most ``plane_depth_spread``; 0: ``min_parallax_deg`` applies), degrees."""
+    ambiguity_rival_max_spread: float = field(default=0.0, metadata={"min": 0.0, "max": 10.0, "step": 0.05, "unit": "ratio"})
+    """When the best homography decomposition puts the points on a face-on plane (see ``plane_depth_spread``),
+    a rival decomposition whose depths spread more than this does not make it ambiguous (``ambiguity_ratio``; 0: every
+    rival counts), ratio."""
+    plane_depth_spread: float = field(default=0.3, metadata={"min": 0.0, "max": 5.0, "step": 0.05, "unit": "ratio"})
+    """A homography's chosen decomposition puts the points on a plane seen face-on, for ``plane_min_parallax_deg`` and
+    ``ambiguity_rival_max_spread``, when its good triangulated depths spread at most this (standard deviation over
+    median), ratio."""
     min_triangulated: int = field(default=15, metadata={"min": 8, "max": 500, "step": 1, "unit": "points"})
     """Fewest good triangulated points to accept the map, points."""
     max_frames: int = field(default=8, metadata={"min": 1, "max": 100, "step": 1, "unit": "MCIs"})
