@@ -152,16 +152,16 @@ def _ground_views(seed: int, baseline_m: float, n: int = 60, noise: float = 0.3)
 
 def test_plane_min_parallax_accepts_a_face_on_ground_plane_over_a_short_baseline():
     Kl, p1, p2, T_true = _ground_views(1, 0.06)
-    strict = initialize_two_view(Kl, p1, p2, InitializationConfig())
+    strict = initialize_two_view(Kl, p1, p2, InitializationConfig(plane_min_parallax_deg=0.0))
     assert not strict.ok and "parallax" in strict.reason
-    res = initialize_two_view(Kl, p1, p2, InitializationConfig(plane_min_parallax_deg=0.25, plane_depth_spread=0.2))
+    res = initialize_two_view(Kl, p1, p2, InitializationConfig())
     assert res.ok and res.model == "homography", res.reason
     assert res.median_parallax_deg < InitializationConfig().min_parallax_deg
     assert np.degrees(Rotation.from_matrix(res.T_wc2[:3, :3].T @ T_true[:3, :3]).magnitude()) < 0.5
     t_est = res.T_wc2[:3, 3] / np.linalg.norm(res.T_wc2[:3, 3])
     assert np.degrees(np.arccos(np.clip(t_est @ T_true[:3, 3] / np.linalg.norm(T_true[:3, 3]), -1, 1))) < 20.0
     # The relaxed bound is only for a face-on plane: with no decomposition spreading that little, min_parallax_deg holds.
-    res = initialize_two_view(Kl, p1, p2, InitializationConfig(plane_min_parallax_deg=0.25, plane_depth_spread=0.001))
+    res = initialize_two_view(Kl, p1, p2, InitializationConfig(plane_depth_spread=0.001))
     assert not res.ok and "parallax" in res.reason
 
 
@@ -173,8 +173,8 @@ def test_ambiguity_rival_max_spread_discounts_a_rival_that_scatters_the_depths()
         return count, np.ones(len(z), bool), np.c_[np.zeros((len(z), 2)), z], np.eye(4)
 
     plane, tilted = cand(48, [1.0, 1.05, 0.95, 1.0]), cand(45, [0.2, 1.0, 3.0, 6.0])
-    assert _rival_count([plane, tilted], plane, InitializationConfig()) == 45
-    assert _rival_count([plane, tilted], plane, InitializationConfig(ambiguity_rival_max_spread=1.0)) == 0
+    assert _rival_count([plane, tilted], plane, InitializationConfig(ambiguity_rival_max_spread=0.0)) == 45
+    assert _rival_count([plane, tilted], plane, InitializationConfig()) == 0
     # A best decomposition that is no face-on plane keeps every rival.
     scattered = cand(48, [0.5, 1.0, 2.0, 0.7])
-    assert _rival_count([scattered, tilted], scattered, InitializationConfig(ambiguity_rival_max_spread=1.0, plane_depth_spread=0.2)) == 45
+    assert _rival_count([scattered, tilted], scattered, InitializationConfig()) == 45
