@@ -20,7 +20,8 @@ map's structure later does not replace it (:mod:`evpose.slam.map_restructure`).
 The landing's first-leg collapses (session 20, event-only, seeds 27, 36, 60, 67 at 7.2-11.3 %; scripts in
 ``/tmp/s20/init9/``) are a runaway of the first map: its keyframes' rotation error grows by 25-40 deg/s (seed 27: 4.6 deg
 at 0.23 s, 32 at 0.94 s, 85 at 2.5 s, while the truth never turns more than 11 deg from the start) and its scale shrinks
-10-80 times (0.5 s segment scales 10.8 -> 88 on seed 27, steady within 2-6 on sound seeds). All four maps start from a
+6-20 times over the map (Umeyama scale of 0.5 s segments 10.8 -> 88 on seed 27, 5.9 -> 123 on seed 36; within a factor
+1.6 on seeds 0-2). All four maps start from a
 "+fit" homography 43-75 ms after the reference whose two well-supported decompositions put the ground's normal 33-74 deg
 off (depth spreads 0.23-0.73; the chosen one's translation 21-50 deg off, the essential matrix's 44-65 deg); the true
 relative pose on that same pair takes seeds 27 / 36 to 1.81 / 2.06 % (the true translation direction alone: 7.76 /
