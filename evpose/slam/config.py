@@ -346,7 +346,8 @@ class InitializationConfig:
     1.72 / 1.40 / 1.71 %, but 4, 15, 44, 49, 56 (1.35-2.19 %) 4.10-7.99 % (good starts, 0.13-0.23 deg off; 4, 15 and
     44 run away after the turn). Over the 144 runs 2.45 -> 2.13 % (-0.32 +- 0.16), within 2 % 88 -> 94, runs over 6 %
     9 -> 2. Indoor seeds 0-11 7.21 -> 7.22 % (10 unchanged), tracked 92.8 -> 93.0 %; E-I-C2 landing seeds 0-3 0.81 ->
-    0.57 % (RPE at most 0.0031 -> 0.0027 m/m, 0.0015 -> 0.0014 deg/m), indoor seeds 0-3 19.53 -> 19.20 % (only
+    0.57 %, 0-23 0.83 -> 0.82 % (median 0.73 -> 0.62 %, 23 of 24 within 2 % either way, RPE at most 0.0050 m/m and
+    0.0022 -> 0.0021 deg/m), indoor seeds 0-3 19.53 -> 19.20 % (only
     seed 0 changed: RPE 0.0053 -> 0.0045 m/m, 0.0036 -> 0.0012 deg/m; from the events 41.8 -> 34.9 %). With
     ``plane_depth_spread`` 0.3: landing 2.24 % (-0.15 +- 0.27, within 2 % 45; new runaways 21 and 52, see the module
     docstring); ``ambiguity_rival_max_spread`` 1 alone (spread 0.3): 2.23 % (-0.17 +- 0.17, within 2 % 47; 36 and 60
