@@ -130,3 +130,51 @@ def test_two_view_initialisation_survives_an_opencv_solver_assertion(monkeypatch
     monkeypatch.setattr(cv2, "findHomography", raising)
     res = initialize_two_view(K, p1, p2, InitializationConfig())
     assert not res.ok and res.reason
+
+
+def _ground_views(seed: int, baseline_m: float, n: int = 60, noise: float = 0.3):
+    """Ground 6.6 m below a camera looking straight down (the landing's start, 346x260 optics): a few centimetres of
+    sideways motion and a few tenths of a degree of turn give well under 0.5 deg of parallax."""
+    rng = np.random.default_rng(seed)
+    X = np.c_[rng.uniform(-4.5, 4.5, n), rng.uniform(-3.4, 3.4, n), 6.6 + rng.normal(0, 0.05, n)]
+    T_wc2 = np.eye(4)
+    T_wc2[:3, :3] = Rotation.from_rotvec([0.002, 0.004, 0.003]).as_matrix()
+    T_wc2[:3, 3] = np.array([1.0, 0.3, -0.1]) * baseline_m
+    Kl = np.array([[247.0, 0, 172.5], [0, 247.0, 129.5], [0, 0, 1]])
+
+    def proj(T_wc):
+        T_cw = invert_pose(T_wc)
+        Xc = X @ T_cw[:3, :3].T + T_cw[:3, 3]
+        return Xc[:, :2] / Xc[:, 2:3] @ Kl[:2, :2].T + Kl[:2, 2]
+
+    return Kl, proj(np.eye(4)) + rng.normal(0, noise, (n, 2)), proj(T_wc2) + rng.normal(0, noise, (n, 2)), T_wc2
+
+
+def test_plane_min_parallax_accepts_a_face_on_ground_plane_over_a_short_baseline():
+    Kl, p1, p2, T_true = _ground_views(1, 0.06)
+    strict = initialize_two_view(Kl, p1, p2, InitializationConfig(plane_min_parallax_deg=0.0))
+    assert not strict.ok and "parallax" in strict.reason
+    res = initialize_two_view(Kl, p1, p2, InitializationConfig())
+    assert res.ok and res.model == "homography", res.reason
+    assert res.median_parallax_deg < InitializationConfig().min_parallax_deg
+    assert np.degrees(Rotation.from_matrix(res.T_wc2[:3, :3].T @ T_true[:3, :3]).magnitude()) < 0.5
+    t_est = res.T_wc2[:3, 3] / np.linalg.norm(res.T_wc2[:3, 3])
+    assert np.degrees(np.arccos(np.clip(t_est @ T_true[:3, 3] / np.linalg.norm(T_true[:3, 3]), -1, 1))) < 20.0
+    # The relaxed bound is only for a face-on plane: with no decomposition spreading that little, min_parallax_deg holds.
+    res = initialize_two_view(Kl, p1, p2, InitializationConfig(plane_depth_spread=0.001))
+    assert not res.ok and "parallax" in res.reason
+
+
+def test_ambiguity_rival_max_spread_discounts_a_rival_that_scatters_the_depths():
+    from evpose.slam.initialization import _rival_count
+
+    def cand(count, depths):
+        z = np.asarray(depths, float)
+        return count, np.ones(len(z), bool), np.c_[np.zeros((len(z), 2)), z], np.eye(4)
+
+    plane, tilted = cand(48, [1.0, 1.05, 0.95, 1.0]), cand(45, [0.2, 1.0, 3.0, 6.0])
+    assert _rival_count([plane, tilted], plane, InitializationConfig(ambiguity_rival_max_spread=0.0)) == 45
+    assert _rival_count([plane, tilted], plane, InitializationConfig()) == 0
+    # A best decomposition that is no face-on plane keeps every rival.
+    scattered = cand(48, [0.5, 1.0, 2.0, 0.7])
+    assert _rival_count([scattered, tilted], scattered, InitializationConfig()) == 45
