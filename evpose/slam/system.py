@@ -89,7 +89,8 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling, LineAids):
         self.mci_gen = MciGenerator(mcfg, config.image, self.K, self.width, self.height, config.seed)
         icfg = config.initialization
         self._init_cfg = icfg if self.imu is None else replace(icfg, homography_fit_share=icfg.homography_fit_share_inertial,
-                                                                min_parallax_deg=icfg.min_parallax_deg_inertial)
+                                                                min_parallax_deg=icfg.min_parallax_deg_inertial,
+                                                                plane_min_parallax_deg=icfg.plane_min_parallax_deg_inertial)
         """Two-view settings of this run's mode (event-inertial runs keep their own parallax and decomposition choice)."""
         self.atlas = Atlas()
         self.fe = FrontendTracks()

@@ -109,3 +109,16 @@ def test_c2_rejoins_a_map_lost_before_the_imu_initialisation(scene_switch):
     # One trajectory across the gap in one frame and scale (the new scene's map placed by the coasting).
     assert m.tracked_fraction > 0.9
     assert m.ate_percent < 10.0
+
+
+def test_event_inertial_runs_keep_their_own_parallax_for_face_on_planes(scene_switch):
+    """Event-only runs accept a face-on homography at ``plane_min_parallax_deg``; event-inertial runs keep their
+    ``min_parallax_deg_inertial`` for it too (indoor E-I-C2 seed 6 broke its RPE target with the lower value)."""
+    cfg = SlamConfig()
+    icfg = cfg.initialization
+    assert 0 < icfg.plane_min_parallax_deg < icfg.min_parallax_deg_inertial
+    only = EventSlam(cfg, scene_switch.calibration)
+    inertial = EventSlam(_config(InertialConfiguration.C2), scene_switch.calibration, scene_switch.imu)
+    assert only._init_cfg.plane_min_parallax_deg == icfg.plane_min_parallax_deg
+    assert inertial._init_cfg.plane_min_parallax_deg == icfg.plane_min_parallax_deg_inertial == 0.0
+    assert inertial._init_cfg.min_parallax_deg == icfg.min_parallax_deg_inertial
