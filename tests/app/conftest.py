@@ -38,3 +38,12 @@ def pair_files(tmp_path):
     rec.write_bytes(b"recording bytes")
     cmap.write_bytes(b"map bytes")
     return rec, cmap
+
+
+@pytest.fixture(scope="module")
+def page(viewer):
+    """A headless Chromium page on the test module's own ``viewer`` fixture (the browser tests)."""
+    from browser_session import viewer_page  # Playwright only where a test asks for a page
+
+    with viewer_page(viewer) as pg:
+        yield pg

@@ -8,7 +8,7 @@ import pytest
 
 from app.tracker_engine import TrackerEngine
 from app.player import PlayerConfig
-from browser_session import choose, running_viewer, viewer_page, wait_for
+from browser_session import choose, running_viewer, wait_for
 
 pytestmark = pytest.mark.browser
 
@@ -26,12 +26,6 @@ def viewer(tmp_path_factory, squares_scene):
     # No idle-time prefetch here (tested in test_engine): it would compete for the CPU with the browser.
     with running_viewer(tmp_path_factory, root, layout_dir=layouts, player=PlayerConfig(prefetch=False)) as app:
         yield app
-
-
-@pytest.fixture(scope="module")
-def page(viewer):
-    with viewer_page(viewer) as pg:
-        yield pg
 
 
 def control_row(page, label):

@@ -9,7 +9,7 @@ import pytest
 
 from app.player import PlayerConfig
 from app.tracker_engine import TrackerEngine
-from browser_session import choose, running_viewer, viewer_page, wait_for
+from browser_session import choose, running_viewer, wait_for
 
 pytestmark = pytest.mark.browser
 
@@ -80,12 +80,6 @@ def viewer(tmp_path_factory, squares_scene):
     root = write_bad_data_root(tmp_path_factory.mktemp("data"), squares_scene)
     with running_viewer(tmp_path_factory, root, warm_up=True, player=PlayerConfig(prefetch=False)) as app:
         yield app
-
-
-@pytest.fixture(scope="module")
-def page(viewer):
-    with viewer_page(viewer) as pg:
-        yield pg
 
 
 def _option(viewer, dropdown, file_name):

@@ -9,7 +9,7 @@ import pytest
 
 from app.player import PlayerConfig
 from app.server import OPENING
-from browser_session import choose, running_viewer, viewer_page, wait_for
+from browser_session import choose, running_viewer, wait_for
 
 pytestmark = pytest.mark.browser
 
@@ -38,12 +38,6 @@ def viewer(tmp_path_factory, squares_scene):
     write_contour_map(root / "wrong_map.ply", wrong_map(cmap))
     with running_viewer(tmp_path_factory, root, warm_up=False, player=PlayerConfig(prefetch=True)) as app:
         yield app
-
-
-@pytest.fixture(scope="module")
-def page(viewer):
-    with viewer_page(viewer) as pg:
-        yield pg
 
 
 def _option(viewer, name):
