@@ -238,8 +238,10 @@ def _judge_events(x, y, p, keep, width, lut, gen, tag, owner, dist2, box, polari
     for i in range(n_ev):
         ahead = i + PREFETCH_AHEAD
         if ahead < n_ev:  # the grid at an event's pixel, fetched ahead: the events come in time order, scattered
-            q = lut[np.int64(y[ahead]) * width + np.int64(x[ahead])] if lut.shape[0] else np.int64(y[ahead]) * width + np.int64(x[ahead])
-            if q >= 0:
+            q = np.int64(y[ahead]) * width + np.int64(x[ahead])
+            if lut.shape[0]:
+                q = lut[q]
+            if 0 <= q < tag_flat.shape[0]:
                 prefetch_read(tag_flat, q)
                 prefetch_read(owner_flat, q)
                 prefetch_read(dist2_flat, q)
