@@ -7,7 +7,10 @@ Used by ``T_align``'s kernels (:mod:`evpose.fusion.aligned_surface_kernels`; fig
 at 346x260) at ~13,000 patch pixels per update in patch order, the event pass the grid at each event's pixel in time
 order, the marking the rows of each point's patch. Not kept there: ``_scatter_tdf``
 (:mod:`evpose.fusion.aligned_field`) prefetching its TDF scratch for writing, 0.058-0.073 -> 0.070-0.077 ms per
-update in a run (three alternated pairs, ``stpe+filter`` 346x260 seed 0).
+update in a run (three alternated pairs, ``stpe+filter`` 346x260 seed 0); registration's linearisation
+(:func:`~evpose.tracker.registration_kernels._linearise`) prefetching the field's rows at the projection of the point
+8 on (one more projection per point), 0.294-0.295 -> 0.311-0.314 ms per update in a run (``full`` 346x260 seed 0,
+three alternated pairs): the field is already in cache after the first of its ~3.5 linearisations.
 """
 
 from __future__ import annotations
