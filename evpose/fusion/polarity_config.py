@@ -93,7 +93,9 @@ class PolarityFilterConfig:
     load 1.7-3.8; 240x180 four pairs): ``stpe+filter``'s ``stpe_latency`` 1.362 -> 1.280 ms (``T_align`` 0.432 ->
     0.384, labelling 0.101 -> 0.089) and 1.098 -> 1.055 ms; ``filter_stpe_latency_change_pct`` +126.7 -> +124.2 % and
     +114.2 -> +106.1 % (``stpe``'s code unchanged: 0.602 / 0.584 and 0.499 / 0.505 ms; per-run figures spread by
-    +-30 points with the load, paired per round the front end gains a median 0.089 / 0.035 ms). Tried, not kept (figures
+    +-30 points with the load, paired per round the front end gains a median 0.089 / 0.035 ms). Textured landing
+    (346x260 seed 0, three pairs, 63.5 % of the events removed): 1.366 -> 1.263 ms against ``stpe``'s 0.679 ms,
+    +101.2 -> +88.4 %; ATE unchanged everywhere (27.356 / 24.612 / 7.477 mm there). Tried, not kept (figures
     in :mod:`evpose.fusion.aligned_field` and :mod:`evpose.fusion.aligned_surface`): the field blurred only in the tiles
     near the patches (0.155 -> 0.227 ms), branch-free or per-row-run marking, and a branch-free selecting pass
     (in a run, three alternated pairs: 0.122 / 0.112 / 0.157 against 0.129 / 0.115 / 0.138 ms)."""
