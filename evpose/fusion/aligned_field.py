@@ -22,6 +22,13 @@ picked its three rows by ``row % 3`` from one (3, w) array did not vectorise: 19
 Not kept (in-process A/B, ``full`` 346x260 seed 0, 4 rounds, same poses): the TDF scattered into the scratch by
 ``T_align``'s time-selecting pass instead of a second pass over the patch list here, CPU per update -0.010 / +0.023 /
 +0.026 / +0.011 ms median paired: the cost is the scratch's cache lines, not the list.
+Not kept either (session 21, ``stpe+filter`` 346x260 seed 0, bit for bit the same field): the blur and gradients only
+in the 8 px tiles within two pixels of a TDF pixel that is not the table's last bin (median 5,174 such pixels in a
+89,960-pixel box; 367 of 1,452 tiles, 25 % of the box), the slot images kept at the empty field's values everywhere
+else (``top``, no gradient) and the last step's tiles put back. Hot on one step's inputs: 56 us against 42-44 us for
+the whole box in :func:`_blur3_field` (a run of tiles gives short rows, whose loops do not pay for vectorising; a first
+version with clamped indices in the inner loops did not vectorise at all: 440 us for the whole box), and marking the
+tiles in :func:`_scatter_tdf` added ~46 us in a run: the field went from 0.155 to 0.227 ms per update.
 """
 
 from __future__ import annotations

@@ -11,6 +11,12 @@ import numba as nb
 import numpy as np
 
 from evpose.frontend.noise_filter import NEVER_US
+from evpose.fusion.prefetch import prefetch_read, prefetch_write
+
+PREFETCH_AHEAD = 16
+"""How many patch pixels (events) ahead the selecting (judging) kernels prefetch the maps they read there."""
+MARK_AHEAD = 4
+"""How many points ahead :func:`_mark_patches` prefetches the rows of a point's patch."""
 
 
 @nb.njit(cache=True)
@@ -48,7 +54,12 @@ def _mark_patches(points, R_cw, t_cw, fx, fy, cx, cy, polarity, radius, box, gen
     owner_flat = owner.reshape(-1)
     gen_bits = np.uint16(gen << 2)
     dxx = np.empty(2 * rad + 1)
-    for k in range(points.shape[0]):
+    # Projections first, so the patch rows of the point MARK_AHEAD on are prefetched while this one is marked.
+    m = points.shape[0]
+    us = np.empty(m)
+    vs = np.empty(m)
+    in_box = np.zeros(m, np.bool_)
+    for k in range(m):
         X = R_cw[0, 0] * points[k, 0] + R_cw[0, 1] * points[k, 1] + R_cw[0, 2] * points[k, 2] + t_cw[0]
         Y = R_cw[1, 0] * points[k, 0] + R_cw[1, 1] * points[k, 1] + R_cw[1, 2] * points[k, 2] + t_cw[1]
         Z = R_cw[2, 0] * points[k, 0] + R_cw[2, 1] * points[k, 1] + R_cw[2, 2] * points[k, 2] + t_cw[2]
@@ -56,8 +67,22 @@ def _mark_patches(points, R_cw, t_cw, fx, fy, cx, cy, polarity, radius, box, gen
             continue
         u = fx * X / Z + cx
         v = fy * Y / Z + cy
-        if not (u > c0 - radius - 1 and u < c1 + radius and v > r0 - radius - 1 and v < r1 + radius):
+        if u > c0 - radius - 1 and u < c1 + radius and v > r0 - radius - 1 and v < r1 + radius:
+            us[k], vs[k], in_box[k] = u, v, True
+    for k in range(m):
+        ahead = k + MARK_AHEAD
+        if ahead < m and in_box[ahead]:
+            x0 = min(max(int(np.floor(us[ahead] + 0.5)) - rad, c0), width - 1)
+            cv = int(np.floor(vs[ahead] + 0.5))
+            for yy in range(max(cv - rad, r0), min(cv + rad + 1, r1)):
+                q = yy * width + x0
+                prefetch_write(tag_flat, q)
+                prefetch_write(dist2_flat, q)
+                prefetch_write(owner_flat, q)
+        if not in_box[k]:
             continue
+        u = us[k]
+        v = vs[k]
         flag = np.uint16(1) if polarity[k] > 0 else (np.uint16(2) if polarity[k] < 0 else np.uint16(3))
         new_tag = np.uint16(gen_bits | flag)
         cu = int(np.floor(u + 0.5))
@@ -101,6 +126,18 @@ def _flat_views(tag, owner, last_on, last_off, last_comb):
             last_comb.reshape(-1))
 
 
+@nb.njit(cache=True, inline="always")
+def _prefetch_maps(touched, j, n, width, on_flat, off_flat, comb_flat):
+    """Prefetch the three SP-TS maps at patch pixel ``j`` (when ``j < n``): the selecting passes read them there
+    ``PREFETCH_AHEAD`` pixels later. The patch pixels come in marking order, scattered over the maps' rows, and the maps
+    are out of cache by then (0.7 MB each at 346x260)."""
+    if j < n:
+        q = np.uint64(touched[j, 0]) * width + np.uint64(touched[j, 1])
+        prefetch_read(on_flat, q)
+        prefetch_read(off_flat, q)
+        prefetch_read(comb_flat, q)
+
+
 @nb.njit(cache=True)
 def _select_times(touched, n, tag, owner, last_on, last_off, last_comb, recent_us, times, has_events):
     """``times[i]``: the last timestamp the accepted polarity of patch pixel ``touched[i]`` selects (every other
@@ -111,6 +148,7 @@ def _select_times(touched, n, tag, owner, last_on, last_off, last_comb, recent_u
     # the same reads, ~45 % less time with the maps out of cache (session 12, 20 demo steps: 320-350 -> 175 us).
     width, tag_flat, owner_flat, on_flat, off_flat, comb_flat = _flat_views(tag, owner, last_on, last_off, last_comb)
     for i in range(n):
+        _prefetch_maps(touched, i + PREFETCH_AHEAD, n, width, on_flat, off_flat, comb_flat)
         p = np.uint64(touched[i, 0]) * width + np.uint64(touched[i, 1])
         a = tag_flat[p] & 3
         if a == 1:
@@ -137,6 +175,7 @@ def _select_times_reopening(touched, n, tag, owner, last_on, last_off, last_comb
     ~0.15 ms per update in ``stpe+filter`` at 346x260, session 14)."""
     width, tag_flat, owner_flat, on_flat, off_flat, comb_flat = _flat_views(tag, owner, last_on, last_off, last_comb)
     for i in range(n):
+        _prefetch_maps(touched, i + PREFETCH_AHEAD, n, width, on_flat, off_flat, comb_flat)
         p = np.uint64(touched[i, 0]) * width + np.uint64(touched[i, 1])
         a = tag_flat[p] & 3
         k = owner_flat[p]
@@ -195,7 +234,17 @@ def _judge_events(x, y, p, keep, width, lut, gen, tag, owner, dist2, box, polari
     owner_flat = owner.reshape(-1)
     dist2_flat = dist2.reshape(-1)
     m = 0
-    for i in range(x.shape[0]):
+    n_ev = x.shape[0]
+    for i in range(n_ev):
+        ahead = i + PREFETCH_AHEAD
+        if ahead < n_ev:  # the grid at an event's pixel, fetched ahead: the events come in time order, scattered
+            q = np.int64(y[ahead]) * width + np.int64(x[ahead])
+            if lut.shape[0]:
+                q = lut[q]
+            if 0 <= q < tag_flat.shape[0]:
+                prefetch_read(tag_flat, q)
+                prefetch_read(owner_flat, q)
+                prefetch_read(dist2_flat, q)
         if not keep[i]:
             continue
         out_label[m] = -1

@@ -80,7 +80,25 @@ class PolarityFilterConfig:
     ATE unchanged to 0.001 mm), so within one design the filter still costs 2.16x / 2.07x ``stpe``; and the
     painted-edge refiner and the event labelling then need passes of their own after the pose (CPU per update 3.53
     -> 3.85 / 3.96 -> 4.61 ms). Turning this switch off (per-point
-    polarity fields over the box, no reopening, no refiner) costs 12.00 -> 22.38 mm (plain landing)."""
+    polarity fields over the box, no reopening, no refiner) costs 12.00 -> 22.38 mm (plain landing).
+
+    Session 21, where the filtered front end spends its CPU per update (346x260 seed 0, plain landing, medians; ``stpe``:
+    field 0.18 + registration 0.40 = 0.58-0.60 ms): polarity prediction 0.20 ms (the IMU propagation to the update
+    time and its fused state ~0.10, the per-point kernel 0.085), ``T_align`` 0.38-0.43 ms (marking 0.23, selecting
+    0.11-0.13), field 0.14 ms, registration 0.43 ms (the same ~840 points x 3.4 linearisations as ``stpe``'s ~900 x
+    3.35), labelling after the pose 0.09-0.10 ms. Registration alone exceeds 0.6 x ``stpe``'s whole front end (0.35
+    ms), so no cheaper filter or field reaches the >= 40 % cut while registration's work follows the points.
+    ``T_align``'s kernels now prefetch what they read next (:mod:`evpose.fusion.aligned_surface`, bit for bit the same outputs); this
+    code against the code before, separate processes alternated, medians of the runs' medians (346x260 eight pairs,
+    load 1.7-3.8; 240x180 four pairs): ``stpe+filter``'s ``stpe_latency`` 1.362 -> 1.280 ms (``T_align`` 0.432 ->
+    0.384, labelling 0.101 -> 0.089) and 1.098 -> 1.055 ms; ``filter_stpe_latency_change_pct`` +126.7 -> +124.2 % and
+    +114.2 -> +106.1 % (``stpe``'s code unchanged: 0.602 / 0.584 and 0.499 / 0.505 ms; per-run figures spread by
+    +-30 points with the load, paired per round the front end gains a median 0.089 / 0.035 ms). Textured landing
+    (346x260 seed 0, three pairs, 63.5 % of the events removed): 1.366 -> 1.263 ms against ``stpe``'s 0.679 ms,
+    +101.2 -> +88.4 %; ATE unchanged everywhere (27.356 / 24.612 / 7.477 mm there). Tried, not kept (figures
+    in :mod:`evpose.fusion.aligned_field` and :mod:`evpose.fusion.aligned_surface`): the field blurred only in the tiles
+    near the patches (0.155 -> 0.227 ms), branch-free or per-row-run marking, and a branch-free selecting pass
+    (in a run, three alternated pairs: 0.122 / 0.112 / 0.157 against 0.129 / 0.115 / 0.138 ms)."""
     drop_empty_points: bool = False
     """Registration skips map points whose ``T_align`` patch shows no accepted event younger than
     ``empty_after_eta`` (50-60 % of the used points on the simulated landing); points whose patch shows only the
