@@ -61,6 +61,7 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
+from evpose.slam.affine_refine import AffineTracks
 from evpose.slam.config import FeatureConfig
 
 
@@ -282,6 +283,10 @@ class FrontendTracks:
     """Track id -> (image velocity of its last step px/s, the warp shift removed from it px) (``FeatureConfig.klt_curvature_gain``)."""
     prev_step_s: float = 0.0
     """Time between the last two MCIs tracked across, s (0 before the first step)."""
+    affine: AffineTracks = field(default_factory=AffineTracks)
+    """The tracks' reference patches (``FeatureConfig.affine_refine``)."""
+    prev_blur: np.ndarray | None = None
+    """``prev8`` blurred, float32 (``FeatureConfig.affine_refine``)."""
 
     def remove_curvature_shift(self, new: np.ndarray, ok: np.ndarray, t_us: int, cfg: FeatureConfig, overlap: float) -> np.ndarray:
         """:func:`remove_curvature_shift` on the step from ``uv`` (at ``prev_t``) to ``new`` (at ``t_us``), keeping its
