@@ -162,26 +162,6 @@ class FeatureConfig:
     at 70-86 %. With two of the four off by more than 3 px: indoor seeds 0-2 10.59 / 6.49 / 4.25 % (defaults 7.84 /
     3.61 / 9.89), landing seeds 0-5 3.95 / 4.70 / 3.78 / 3.50 / 6.83 / 6.91 % (1.50 / 1.72 / 1.87 / 3.06 / 5.58 /
     1.96). So off, ratio."""
-    affine_refine: bool = False
-    """After each MCI-to-MCI KLT step, align every track's birth patch to the new MCI by an affine ECC fit and move the
-    track to it (:mod:`evpose.slam.affine_refine`)."""
-    affine_previous: bool = False
-    """``affine_refine``: align the patch around the track in the previous MCI instead of its birth patch."""
-    affine_fit_linear: bool = True
-    """``affine_refine``: fit the warp's linear part too; False holds it at the prediction (the step homographies'
-    Jacobians chained since birth) and fits only the translation."""
-    affine_min_age: int = field(default=1, metadata={"min": 1, "max": 50, "step": 1, "unit": "MCIs"})
-    """``affine_refine``: only tracks carried through at least this many MCI-to-MCI steps are aligned, MCIs."""
-    affine_patch_px: int = field(default=15, metadata={"min": 5, "max": 41, "step": 2, "unit": "px"})
-    """``affine_refine``: side of the reference patch, pixels (odd)."""
-    affine_blur_px: float = field(default=1.0, metadata={"min": 0.0, "max": 4.0, "step": 0.25, "unit": "px"})
-    """``affine_refine``: Gaussian sigma the MCIs are blurred by before the alignment, pixels."""
-    affine_min_cc: float = field(default=0.7, metadata={"min": 0.0, "max": 1.0, "step": 0.05, "unit": "ratio"})
-    """``affine_refine``: least correlation coefficient of an alignment that moves its track, ratio."""
-    affine_max_shift_px: float = field(default=2.0, metadata={"min": 0.1, "max": 10.0, "step": 0.1, "unit": "px"})
-    """``affine_refine``: farthest an alignment may move a track from KLT's result, pixels."""
-    affine_iterations: int = field(default=30, metadata={"min": 1, "max": 100, "step": 1, "unit": "iterations"})
-    """``affine_refine``: most ECC iterations per track and MCI, iterations."""
     target_tracks: int = field(default=150, metadata={"min": 20, "max": 1000, "step": 10, "unit": "tracks"})
     """New features are detected on an MCI when fewer tracks survive, tracks. Session 17, indoor event-only seeds
     0-7: 300 -> ATE 7.39 -> 8.02 %, time tracked from the events 44.7 -> 40.2 % (:mod:`evpose.slam.event_coasting`)."""

@@ -30,7 +30,6 @@ from evpose.core.events import EventArray
 from evpose.core.imu import ImuSamples
 from evpose.core.trajectory import invert_pose
 from evpose.errors import InputError
-from evpose.slam.affine_refine import blurred
 from evpose.slam.atlas import Atlas, Keyframe, MapPoint, SlamMap
 from evpose.slam.bundle_adjustment import local_bundle_adjustment
 from evpose.slam.coasting import constant_velocity_pose
@@ -229,18 +228,12 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling, LineAids):
             fc = self.cfg.features
             if fc.klt_min_support_ratio > 0 and self.imu is None and self._state is SlamStatus.OK:  # event-only, on a map
                 ok &= has_support(mci.image, new, fc.support_window_px, fc.klt_min_support_ratio)
-            if fc.affine_refine and fe.prev_blur is not None:
-                fe.affine.adopt(fe.ids, fe.uv, fe.prev_blur, fc)
-                new = fe.affine.refine(fe.ids, fe.uv, new, ok, fe.prev_blur, blurred(mci.image8, fc.affine_blur_px), fc)
             if self.cfg.features.klt_curvature_gain > 0:
                 new = fe.remove_curvature_shift(new, ok, mci.t_us, self.cfg.features, self.cfg.window.overlap)
             fe.ids, fe.uv = fe.ids[ok], new[ok]
             if gate:  # only the gate reads which tracks have stepped: no per-MCI set otherwise
                 fe.stepped = set(fe.ids.tolist())
         fe.prev8, fe.prev_t = mci.image8, mci.t_us
-        if self.cfg.features.affine_refine:
-            fe.affine.prune(fe.ids)
-            fe.prev_blur = blurred(mci.image8, self.cfg.features.affine_blur_px)
         self._prev_hypothesis = mci.hypothesis.value
         return mci
 
