@@ -52,6 +52,29 @@ before the pose is estimated (``oracle3.py``, indoor seeds 0-7, defaults 7.39 %,
 empty-patch tracks 7.62 % (median 5.76; 1.66-14.99 %, seed 0 tracked 74.0 %), the supported depth-step ones 9.03 %,
 every supported track 8.76 %; session 15's oracle of every track (3.94 %, seeds 0-3) needs them all at once, and
 tracked less (70.9 %).
+
+Session 21 (``/tmp/s21/affineklt9/``: ``trk.py``, session 15's harness adapted, with ``an.py`` for the errors by age and
+``pairs.py`` for KLT's position against the refined one at the same step; ``exp.py`` / ``paired.py`` for the ATE; the
+removed implementation is ``affine_refine.patch``): an affine template refinement after each MCI-to-MCI KLT step. Each
+track's birth patch (15 px of its birth MCI blurred by 1 px) was aligned to the new MCI by OpenCV's affine ECC
+(``findTransformECC``, blind to brightness gain and offset), started at KLT's result and at the track's affine
+chained through the Jacobians of every step's RANSAC homography of all tracks; the track moved to the aligned centre
+when ECC converged at a correlation of at least 0.7 within 2 px of KLT. On a synthetic corner rotated by 12 deg,
+scaled by 1.15 and sheared it finds the corner within 0.2 px. Event-only landing seeds 1, 2, 3, 7 (observations
+within 10 px of the truth; median / 90th percentile error against the true projection of the birth ray-cast): the
+defaults 1.58-1.61 / 6.25-6.78 px; affine 1.78-1.91 / 6.12-6.79 px, and of the tracks it moved (median 0.53 px) 42-43
+% ended closer to the truth than KLT's position; aligning the previous MCI's patch instead (an affine KLT step)
+1.88-1.94 px (43-45 %); the linear part held at the chained homography prediction and only the shift fitted
+1.44-1.63 px (46 %, moves 0.31 px): tracks 16-32 MCIs old 2.22-2.62 -> 1.15-1.98 px but 1-2 MCIs old 0.92-1.05 ->
+1.03-1.20 px; that only for tracks at least 8 MCIs old 1.31-1.52 px, at least 16 1.49-1.55 px (moving about 300
+tracks a run). None comes near the 1 px the oracles ask for, and the ATE got worse with each, landing seeds 0-23
+(defaults 1.80 %, median 1.54, 20 within 2 %): affine 2.32 % (15 within 2 %; paired +0.52 +- 0.38 points, 10 better);
+shift only 3.34 % (13; +1.55 +- 0.59, five runs lose their map in the turn and coast); shift only from 8 MCIs 2.20 %
+(16; +0.40 +- 0.34), from 16 MCIs 2.37 % (16; +0.57 +- 0.38). Main-thread CPU per MCI (median of the runs' medians,
+unpaired) 27.1 -> 50.5 / 33.5 / 27.9 / 26.1 ms. A corner's birth patch is no steadier an image of its scene point
+than the previous MCI's: what the tracks follow changes its look with the motion, not only by a warp (as the
+re-tracking from the first MCI of session 14 and the keyframe re-anchoring of :mod:`evpose.slam.keyframe_search`
+found).
 """
 
 from __future__ import annotations
