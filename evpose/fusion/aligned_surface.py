@@ -65,7 +65,7 @@ us (hot 127): the cost is the ~2,000 cache lines the patches cover, whatever the
 event pass after the pose; ``stpe+filter`` only, see :meth:`MapPolaritySelector.align
 <evpose.fusion.map_polarity_selector.MapPolaritySelector.align>`) moves work, it does not save any: the grid is colder
 by then.
-Session 21 (kept, bit for bit the same outputs): the kernels prefetch what they read next (:mod:`evpose.fusion.prefetch`):
+Session 21 (kept, bit for bit the same outputs): the kernels prefetch what they read next (:mod:`evpose.fusion.cache_prefetch`):
 ``_select_times_reopening`` the three SP-TS maps 16 patch pixels ahead, ``_judge_events`` the grid 16 events ahead,
 ``_mark_patches`` the patch rows of the point 4 points on (projections first, in their own pass). CPU per update in a
 run, ``stpe+filter`` 346x260 seed 0, this code and the code before alternated in separate processes, three pairs:

@@ -11,7 +11,7 @@ import numba as nb
 import numpy as np
 
 from evpose.frontend.noise_filter import NEVER_US
-from evpose.fusion.prefetch import prefetch_read, prefetch_write
+from evpose.fusion.cache_prefetch import prefetch_read, prefetch_write
 
 PREFETCH_AHEAD = 16
 """How many patch pixels (events) ahead the selecting (judging) kernels prefetch the maps they read there."""

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from numba.core.errors import TypingError
 
-from evpose.fusion.prefetch import prefetch_read, prefetch_write
+from evpose.fusion.cache_prefetch import prefetch_read, prefetch_write
 
 
 @nb.njit
