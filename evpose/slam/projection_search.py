@@ -9,6 +9,19 @@ last observed the point; a match must be strong and unique (the second-best
 peak, away from the best, clearly weaker). Event images of the same edges
 under similar motion look alike up to brightness and contrast, which NCC
 ignores; the patch is not warped (the local map spans a few degrees).
+
+Re-associating the first leg's points after the landing's turn (session 21, ``/tmp/s21/revisit9/``, event-only):
+points made before 1.5 s (true positions triangulated at the true keyframe poses) that project into the MCI at the
+true pose after 2.0 s number 30-46 per MCI (median; seeds 0, 2, 10, 31, 32, 38), the system tracks 0-9 of them among
+26-39 tracked points. Given as extra keyframe observations to the local BA at their true pixels + 0.7 px noise
+(``oracle.py ba``; map positions as the SLAM has them) they mend the drift: seeds 0-23 1.80 -> 1.27 % (within 2 %
+20 -> 23 of 24, better in 24); 10 % of them within 10 px of the predicted projection 1.51 % (21); 3 px noise
+on all of them, six seeds 3.38 -> 1.38 %. As per-MCI PnP pairs instead they did not (six seeds 3.38 -> 2.87 %, map lost
+on seed 10). No real matcher supplies them: their projection by the SLAM's pose lies a median 3-8 px off (8-45 %
+within 3 px); the stored template reaches NCC 0.8 at the true pixel for 18-36 % of the (point, MCI) pairs (median
+NCC 0.19-0.64), and this module's NCC search (10 px) finds 4.8 % of them right (within 2 px) and 4.9 % wrong; templates cut from the keyframe MCI through the ground-plane homography at the TRUE
+poses did no better (the views differ by only 8-10 deg; ``match.py``): the event images of the legs differ, not the
+geometry. The real search at keyframes (``oracle.py ncc``) gave 1.80 -> 2.00 % (16 of 24 within 2 %).
 """
 
 from __future__ import annotations
