@@ -9,6 +9,22 @@ last observed the point; a match must be strong and unique (the second-best
 peak, away from the best, clearly weaker). Event images of the same edges
 under similar motion look alike up to brightness and contrast, which NCC
 ignores; the patch is not warped (the local map spans a few degrees).
+
+Re-associating the first leg's points after the landing's turn (session 21, ``/tmp/s21/revisit9/``, event-only):
+points made before 1.5 s (true positions triangulated at the true keyframe poses) that project into the MCI at the
+true pose after 2.0 s number 30-46 per MCI (median; seeds 0, 2, 10, 31, 32, 38), the system tracks 0-9 of them among
+26-39 tracked points. Given as extra keyframe observations to the local BA at their true pixels + 0.7 px noise
+(``oracle.py ba``; map positions as the SLAM has them) they mend the drift: seeds 0-23 1.80 -> 1.27 % (within 2 %
+20 -> 23 of 24, better in 24); 10 % of them (about 24 observations a run) within 10 px of the predicted projection,
+1 px noise: 1.51 % (21); all of them with 3 px noise, six seeds 3.38 -> 1.38 %. As per-MCI PnP pairs instead they
+did not help (six seeds 3.38 -> 2.87 %, map lost on seed 10). No matcher here supplies them: their projection by the
+SLAM's pose lies a median 3-8 px off (8-45 % within 3 px); the stored template reaches NCC 0.8 at the true pixel for
+18-36 % of the (point, MCI) pairs (median NCC 0.19-0.64), and this module's search (10 px) finds 4.8 % of them right
+(within 2 px) and 4.9 % wrong; templates cut from the keyframe MCI through the ground-plane homography at the TRUE
+poses did no better (the views differ by only 8-10 deg; ``match.py``): the legs' event images differ, not the
+geometry. Searching the old points at each keyframe (``oracle.py ncc``): 1.80 -> 2.00 % (16 of 24 within 2 %),
+307 matches in 24 runs, 28 of them within 2 px of the truth; keeping only those (a precision oracle) 1.82 %: the
+yield, not only the precision, is some 20 times short.
 """
 
 from __future__ import annotations
