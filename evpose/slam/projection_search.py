@@ -25,6 +25,21 @@ poses did no better (the views differ by only 8-10 deg; ``match.py``): the legs'
 geometry. Searching the old points at each keyframe (``oracle.py ncc``): 1.80 -> 2.00 % (16 of 24 within 2 %),
 307 matches in 24 runs, 28 of them within 2 px of the truth; keeping only those (a precision oracle) 1.82 %: the
 yield, not only the precision, is some 20 times short.
+
+A geometric association without appearance does not work either (session 21, ``/tmp/s21/fuse9/oracle.py geo``): at each
+keyframe after 2.0 s the points last observed before the local window are projected with the keyframe's SLAM pose,
+paired with the keyframe's features within 12 px, a 2-D similarity fitted to the pairs by RANSAC (2 px), and each point
+given the unique feature within 2 px of its corrected projection (second-nearest >= 4 px) as a local-BA observation.
+Seeds 0-23: 1.80 -> 1.83 % (paired +0.04 +- 0.10, better 10, worse 14; within 2 % 20 -> 17), 2.0 associations per
+keyframe (260 keyframes), 40 of the 344 with a true position within 2 px of it (median 6.0 px off); the six hard seeds'
+3.38 -> 2.71 % (5 of 6 better) did not carry over. Two reasons, both measured: (1) the keyframe's features are not
+where the old points are: a feature lies within 1 / 2 / 3 px of an old point's true pixel for 3 / 10 / 19 % of the
+5330 (point, keyframe) pairs; (2) the projection error is not a smooth field: the best 2-D model fitted by least
+squares to the TRUE pixels leaves a median 2.2-6.9 px (shift), 2.2-5.7 (similarity), 1.7-4.4 (affine, 23-55 % within
+2 px), 1.8-5.1 (homography) of the raw 3.0-8.8 px (seeds 0, 2, 10, 31, 32, 38): the old points' own map positions
+are off, point by point. The RANSAC model fitted to the feature pairs fits chance coincidences (median 8 inliers) and
+leaves the projections no nearer the truth (similarity, seeds 10 / 0 / 2: 8.8 -> 9.1, 3.0 -> 7.4, 6.2 -> 9.2 px;
+shift 8.7 -> 7.0, 2.9 -> 7.0, 6.2 -> 6.4; homography 13-25 px).
 """
 
 from __future__ import annotations
