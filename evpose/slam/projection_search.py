@@ -40,6 +40,18 @@ squares to the TRUE pixels leaves a median 2.2-6.9 px (shift), 2.2-5.7 (similari
 are off, point by point. The RANSAC model fitted to the feature pairs fits chance coincidences (median 8 inliers) and
 leaves the projections no nearer the truth (similarity, seeds 10 / 0 / 2: 8.8 -> 9.1, 3.0 -> 7.4, 6.2 -> 9.2 px;
 shift 8.7 -> 7.0, 2.9 -> 7.0, 6.2 -> 6.4; homography 13-25 px).
+
+A binary descriptor does not supply them either (session 21, ``/tmp/s21/desc9/desc.py``; seeds 0-7, 10, 31, 32, 38:
+4425 (old point, post-turn keyframe MCI) pairs over 151 keyframes). OpenCV ORB (upright, one level, 31 or 15 px patch)
+at the point's pixel in its last first-leg keyframe MCI, best Hamming match with a ratio test over every pixel (or
+FAST corner) within 10-15 px of the projection by the SLAM's pose, on the raw MCI, blurred (sigma 1.5) or its
+gradient magnitude, optionally with a mutual back-search: the descriptor at the true pixel differs from the source by
+a median 74-83 of 256 bits; best precision 35 % (15 px, at most 48 bits, ratio 0.7, mutual: 4.0 % of pairs right,
+7.2 % wrong, 1.2 right per keyframe); three right per keyframe only at 23 % precision (10 wrong per keyframe). This
+module's NCC search on the same pairs: 3.7 % right, 4.2 % wrong (47 %). Within the first leg (sources at least 0.3 s
+older) ORB's 31 px patch reaches 75 % precision at 4.1 % right; after the turn 25 %: a change of motion direction
+breaks descriptors as it breaks templates. Untried: a matcher learnt on MCIs of both motion directions, or the old
+events re-warped with the new motion before matching.
 """
 
 from __future__ import annotations
