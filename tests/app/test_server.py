@@ -246,28 +246,35 @@ def test_the_layout_folder_docks_and_sizes_panels_and_a_saved_layout_restores_th
 
 def test_a_layout_change_sends_the_edge_widths_again_later_for_a_browser_that_drew_the_moves_late(tmp_path, monkeypatch):
     import app.layout_gui as layout_gui
+    from browser_session import wait_for
 
-    monkeypatch.setattr(layout_gui, "RESEND_S", 0.02)
-    monkeypatch.setattr(layout_gui, "LATE_RESEND_S", (0.2, 0.4))
+    monkeypatch.setattr(layout_gui, "LATE_RESEND_S", (1.0, 1.5))
     app, _ = _app_with_copied_layouts(tmp_path)
     lg = app.layout_gui
-    sent: list[tuple[float, str, float]] = []
+    sent: list[float] = []
+    late: list[list[float]] = []  # the widths each late resend sent
     try:
-        for name, handle in lg.panels.items():
-            monkeypatch.setattr(handle, "set_width", lambda w, n=name, send=handle.set_width: (sent.append((time.monotonic(), n, w)), send(w)))
-        start = time.monotonic()
+        for handle in lg.panels.values():
+            monkeypatch.setattr(handle, "set_width", lambda w, send=handle.set_width: (sent.append(w), send(w)))
+        resend = lg._resend_edges
+
+        def counted():
+            before = len(sent)
+            resend()
+            late.append(sent[before:])
+
+        monkeypatch.setattr(lg, "_resend_edges", counted)
         assert app.apply_layout_name("debug")
-        time.sleep(0.7)
+        wait_for(lambda: len(late) == len(layout_gui.LATE_RESEND_S), timeout=20, what="the late resends", detail=lambda: late)
         totals = app.layout.region_widths()
-        late = [(n, w) for t, n, w in sent if t - start >= 0.15]
-        # Both edges again at each late send, each at its whole edge's width (viser shares it among the edge's columns).
-        assert len(late) == 2 * len(layout_gui.LATE_RESEND_S)
-        assert sorted(w for _, w in late) == sorted([totals["left"], totals["right"]] * 2)
-        # A second change within the delays restarts the late sends instead of adding to them.
-        sent.clear()
+        # Each late resend sends both edges, each at its whole edge's width (viser shares it among the edge's columns).
+        assert all(sorted(widths) == sorted([totals["left"], totals["right"]]) for widths in late)
+        # A second change before they run restarts them instead of adding to them.
+        late.clear()
         assert app.apply_layout_name("teaching") and app.apply_layout_name("debug")
-        time.sleep(0.7)
-        assert len([1 for t, _, _ in sent if t - sent[0][0] >= 0.15]) == 2 * len(layout_gui.LATE_RESEND_S)
+        wait_for(lambda: len(late) == len(layout_gui.LATE_RESEND_S), timeout=20, what="the restarted late resends", detail=lambda: late)
+        time.sleep(1.0)
+        assert len(late) == len(layout_gui.LATE_RESEND_S)
     finally:
         app.stop()
 
