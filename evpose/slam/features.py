@@ -104,11 +104,14 @@ edge-like patches above 2.22 % (18), only on the others 1.82 % (22); the whole e
 flow only in the turn (MCIs at 1.1-2.2 s) 1.49 % (median 1.32, 20 within 2 %, worst 2.53; -0.31 +- 0.15 points, 19
 better), only from 2.2 s 1.62 % (21; -0.17 +- 0.09, 17 better), only before 1.1 s 2.25 % (19; +0.45 +- 0.41). So the
 error that drives the drift after the turn lies across the flow, enters mostly in the turn, and no one patch class
-holds it. The correction the hypothesis asks for, a lead ``b u`` removed along the true flow after each KLT step (only
-its change since the track's last MCI, so a track keeps the shift it was born with; the true flow bounds what a flow
-estimated from the tracks could do), is no better: b +0.25 / +0.5 / -0.5 px 1.88 / 2.00 / 2.77 % (18 / 19 / 14 within 2
-%; +0.08 +- 0.21 / +0.20 +- 0.36 / +0.97 +- 0.44 points), so none was added. (Signed-polarity MCIs on those five seeds:
-ATE 2.17-8.05 % against 1.52-4.58 %.)
+holds it. Nor is it a common shift towards the inside of the flow's turn (the warp's curvature shift of
+:func:`remove_curvature_shift`): the tracked map points' mean across-flow error per MCI, signed towards the inside,
+averaged in 0.2 s bins over seeds 0-4 and 10 (``an6.py``), runs from -0.86 to +0.84 px (per-MCI s.e. 0.15-0.48) with no
+sign holding. The correction the hypothesis asks for, a lead ``b u`` removed along the true flow after each KLT step
+(only its change since the track's last MCI, so a track keeps the shift it was born with; the true flow bounds what a
+flow estimated from the tracks could do), is no better: b +0.25 / +0.5 / -0.5 px 1.88 / 2.00 / 2.77 % (18 / 19 / 14
+within 2 %; +0.08 +- 0.21 / +0.20 +- 0.36 / +0.97 +- 0.44 points), so none was added. (Signed-polarity MCIs on those
+five seeds: ATE 2.17-8.05 % against 1.52-4.58 %.)
 """
 
 from __future__ import annotations
