@@ -75,6 +75,43 @@ unpaired) 27.1 -> 50.5 / 33.5 / 27.9 / 26.1 ms. A corner's birth patch is no ste
 than the previous MCI's: what the tracks follow changes its look with the motion, not only by a warp (as the
 re-tracking from the first MCI of session 14 and the keyframe re-anchoring of :mod:`evpose.slam.keyframe_search`
 found).
+
+Session 22 (``/tmp/s22/lead9/``: ``rec.py`` records every MCI's tracks in a default run with the true projection of
+each track's birth ray-cast, the true image flow now and at birth, the nearest visible projected true corner (an
+endpoint of the scene's edges, within 3 px) and the MCI's structure tensor; ``an.py``-``an5.py`` analyse it;
+``oracle.py`` runs SLAM with the tracks moved by the truth; event-only landing, ATE bit-identical to the defaults): is
+a corner shown led or lagged along the image flow (the contrast threshold fires only after an edge has moved), so that
+the ~90 deg turn of the flow shifts every track at once by ``b (u_now - u_birth)``? No. Against the true corners (37-42
+box corners, 658-834 observations a run) the along-flow error's mean is +0.20 / -0.06 / -0.26 / -0.24 / +0.11 / -0.03
+px on seeds 0 / 1 / 2 / 3 / 4 / 10 (s.e. 0.05; freshly detected -0.15 to +0.23, at 30-150 / 150-400 px/s -0.07 to +0.47
+/ -0.35 to +0.19 px: no sign holds), and with signed-polarity MCIs (``EventImageConfig.use_polarity``) -0.10 to +0.14
+px on seeds 0-3, 10. The slide fitted as ``e = a (u_now - u_birth)`` (unit flows) gives a = -0.11 to +0.63 px (0.07-1.9
+% of the slide's variance; per MCI, the median error of the tracked map points against the mean of ``u_now - u_birth``:
+a -0.09 to +0.23, R2 under 5 %), and its shape is not that of a fixed bias: tracks whose flow turned 80 deg or more are
+ahead along the current flow by +0.59 to +1.65 px (mean) but also along their birth flow by -0.28 to +0.87 px (a fixed
+bias gives -b there); tracks on a straight stretch are level at 1-7 MCIs old (mean -0.13 to -0.34, median ~0 px) and
+ahead by +0.15 to +0.87 px from 8 MCIs on: a lead along the motion that grows with age, not a function of the flow
+direction. Nor is it the window's event-time centroid: the mean event time lies -5 to +5 ms (5-95 %) off the MCI's time
+and ``(tbar - t_ref) f`` explains at most 1.4 % of the slide. The patch shape says where the error lies: edge-like
+patches (eigenvalue ratio under 0.1) whose gradient lies along the flow, the edges an event image mostly shows, are
+29-33 % of the used observations and are off across the flow by 1.22-1.45 px (median) but along it by 0.62-0.78 px,
+against 0.62-1.04 / 0.85-2.20 px for the other classes (seeds 0-3, 10): they slide along their edge. Oracles, landing
+seeds 0-23 (defaults 1.80 %, median 1.54, 20 within 2 %; paired against them): every track's error removed along the
+true flow after each KLT step 2.42 % (median 1.58, 16 within 2 %; +0.62 +- 0.42 points, 11 better; seed 10 7.46 %);
+across it 1.65 % (median 1.18, 22 within 2 %, 20 of 24 better; -0.15 +- 0.33 points, as seeds 3 and 21 collapse to 6.0
+/ 6.6 %; failing seeds 4 / 9 / 10 / 13 2.41 / 2.38 / 4.58 / 2.11 -> 1.20 / 0.98 / 1.90 / 1.09 %); across only on the
+edge-like patches above 2.22 % (18), only on the others 1.82 % (22); the whole error (seeds 0-11) 0.38 %. Across the
+flow only in the turn (MCIs at 1.1-2.2 s) 1.49 % (median 1.32, 20 within 2 %, worst 2.53; -0.31 +- 0.15 points, 19
+better), only from 2.2 s 1.62 % (21; -0.17 +- 0.09, 17 better), only before 1.1 s 2.25 % (19; +0.45 +- 0.41). So the
+error that drives the drift after the turn lies across the flow, enters mostly in the turn, and no one patch class
+holds it. Nor is it a common shift towards the inside of the flow's turn (the warp's curvature shift of
+:func:`remove_curvature_shift`): the tracked map points' mean across-flow error per MCI, signed towards the inside,
+averaged in 0.2 s bins over seeds 0-4 and 10 (``an6.py``), runs from -0.86 to +0.84 px (per-MCI s.e. 0.15-0.48) with no
+sign holding. The correction the hypothesis asks for, a lead ``b u`` removed along the true flow after each KLT step
+(only its change since the track's last MCI, so a track keeps the shift it was born with; the true flow bounds what a
+flow estimated from the tracks could do), is no better: b +0.25 / +0.5 / -0.5 px 1.88 / 2.00 / 2.77 % (18 / 19 / 14
+within 2 %; +0.08 +- 0.21 / +0.20 +- 0.36 / +0.97 +- 0.44 points), so none was added. (Signed-polarity MCIs on those
+five seeds: ATE 2.17-8.05 % against 1.52-4.58 %.)
 """
 
 from __future__ import annotations

@@ -164,7 +164,11 @@ class TrackingConfig:
     into coasting; at 60 deg seed 2 lost its map). Giving BA observations a sigma of 1 px plus 1 px per 30 deg the
     keyframes' image motion turned since the point's first keyframe, at most 3 px (``dirsig.py`` with
     ``/tmp/s20/post9/obs_sigmas.patch``): those eight seeds 2.71 % (10, 31, 32: 2.83 / 2.15 / 2.16 %;
-    2, 38: 4.03 / 4.74 %), within 2 % 4 -> 2, RPE higher on six of them."""
+    2, 38: 4.03 / 4.74 %), within 2 % 4 -> 2, RPE higher on six of them. Session 22 (``/tmp/s22/lead9/``, figures in
+    :mod:`evpose.slam.features`): the slide is no lead or lag of the corners along the image flow (against true
+    corners -0.26 to +0.20 px), and removing each track's error along the true flow leaves the drift (seeds 0-23 1.80
+    -> 2.42 %) while removing it across the flow mends the four failing seeds (1.65 %, 22 of 24 within 2 %), in the
+    turn's MCIs alone (1.1-2.2 s) 1.49 %, 19 of 24 better."""
     ba_fixed_keyframes: int = field(default=1, metadata={"min": 1, "max": 5, "step": 1, "unit": "keyframes"})
     """Event-only local BA holds this many of the window's oldest keyframes fixed once the map has more keyframes than
     the window (before that, only the first keyframe and ``ba_scale_anchor``); with two or more the fixed poses also
