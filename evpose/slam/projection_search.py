@@ -54,6 +54,36 @@ breaks descriptors as it breaks templates. Untried: a matcher learnt on MCIs of 
 leg rendered as the new motion would show it (the event set itself carries the old motion's direction, so re-warping
 the old events is not enough: a log-intensity map integrated from them with their known flow, differentiated along the
 new motion).
+
+Rendering the first leg as the new motion would show it does not supply them either (session 22, ``/tmp/s22/render9/``:
+``capture.py`` runs the defaults keeping every keyframe's MCI, its signed twin and the map, ``oracle.py`` /
+``render.py`` match; seeds 0, 2, 10, 31, 32, 38, 1368 (old point, keyframe after 2.0 s) pairs over 76 keyframes, an old
+point having at least two keyframe observations, all before 1.6 s, triangulated at the true poses within 3 px; the truth
+is the source observation carried to the keyframe by the true poses at the point's depth; search 12 px around the
+projection by the keyframe's PnP pose, NCC >= 0.8, uniqueness 0.9, right within 2 px). 11 px templates: plain 0.11 right
+per keyframe at 16 % precision (NCC at the truth, best within 2 px: median 0.42, 25 % >= 0.8); (a) the source MCI
+reweighted by ``sqrt(v_new' J v_new / v_old' J v_old)`` (``J`` its structure tensor, ``v`` the true flow directions at
+the point) 0.03 at 3 %; (b) the signed (ON - OFF) source patch integrated along ``v_old`` and differentiated along
+``v_new`` 0.00 (NCC median 0.32: streaks along ``v_old``); as source the first-leg keyframe whose true flow direction at
+the point is nearest the new one (over the first leg it turns a median 64-82 deg at a point, and comes within a median
+4-11 deg of the new direction; seeds 0, 2, 10) 0.04 at 5 %, among the keyframes that observed the point 0.09 at 12 %.
+The premise does not hold: NCC at the truth does not depend on how far the flow direction turned between source and
+keyframe (post-turn pairs in 15 deg bins from 0 to 90 deg: median 0.35 / 0.52 / 0.39 / 0.31 / 0.40 / 0.51), and old
+points are as hard to re-find within the first leg (``CONTROL=1``: keyframes 0.9-1.6 s, sources >= 0.3 s older; seeds 0,
+2, 10, 10 px: median 0.44, 28 % >= 0.8, 13-15 % precision). What limits the search is the aperture: the templates are
+edge segments (structure-tensor coherence median 0.96 for those matching at the truth), and of the 342 pairs whose
+template reaches 0.8 at the truth the best peak within 12 px lies elsewhere for 287; 9 are right and unique
+(``diag.py``). Wide templates warped into the new view (31 px, plane at the point facing the new camera, the SLAM's
+poses) do better: 0.33 right per keyframe at 47 % (NCC 0.8), 0.50 at 37 % (0.6); at the true poses 0.34 at 44 %;
+reweighted (a) on top 0.33 at 48 %; unwarped 31 px 0.01 at 4 %, warped 11 px 0.04 at 6 %. Wired as a search of the
+points last observed before the local window at each new keyframe (event-only, matches as keyframe observations before
+the local BA; ``revisit_search.py``, commit 9a820a3 on branch ``s22-render9``, removed;
+``/tmp/s22/render9/revisit.patch``), 31 px, 12 px radius: seeds 0-23 1.80 -> 1.85 % (within 2 % 20 -> 18), paired +0.05
++- 0.21 (better 14; 10: 4.58 -> 2.32, 13: 2.11 -> 1.11, but 5: 1.41 -> 4.89, 19: 1.86 -> 3.25, 12: 1.46 -> 2.69), 111
+matches in 24 runs, 33 within 2 px of the point's truth (``insitu.py``); NCC 0.7: 1.85 % (18), +0.06 +- 0.19, 200
+matches, 51 right; seeds 24-35 (31 px) 2.23 -> 2.19 % (8 -> 8), -0.04 +- 0.29, 73 matches, 12 right. Four to eight
+matches a run, a third of them right, reshuffle the runs after the turn; the session-21 oracle that helped gave about 24
+right observations a run.
 """
 
 from __future__ import annotations
