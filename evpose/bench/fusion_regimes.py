@@ -38,9 +38,8 @@ still a tie. One registration in ten moved by 3 cm / 1 deg costs both about 3 mm
 / 10.85 mm at 240x180 (``steady`` in the same runs 5.30 / 5.32 and 6.97 / 7.08 mm), ARE 0.077 / 0.076 and 0.100 / 0.100
 deg; over the 16 pairs -0.10 +- 0.17 mm (the graph lower on 10), ARE +0.0006 +- 0.0015 deg (lower on 6); per set of four
 seeds -0.30 / -0.06 / -0.60 / +0.54 mm. Moved by 1 cm / 0.3 deg (346x260 seeds 0-3) 6.76 / 6.78 mm, 0.064 / 0.062
-deg. Both backends down-weight the same residuals by the same Huber kernel (``FusionConfig.registration_loss``); what
-the graph could revisit later the filter has mostly discounted at once, since the wrong pose is 3-10 standard
-deviations from a prediction that the IMU keeps within a few millimetres.
+deg. Both backends down-weight a wrong pose by the same Huber kernel (``FusionConfig.registration_loss``) when it
+arrives; that the graph may re-weight it later, against the registrations after it, did not show in the figures.
 """
 
 from __future__ import annotations
