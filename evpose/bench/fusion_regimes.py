@@ -34,7 +34,7 @@ The simulated 3 s landings (turn bridged by degraded updates, seeds 0-7 at 346x2
 0.1266 deg (the graph lower on 4 of 8).
 
 Session 22 (``outliers``, ``/tmp/s22/lead/outl.py``, 2 s landings, seeds 0-7 at 346x260 and 240x180, graph / EKF):
-still a tie. One registration in ten moved by 3 cm / 1 deg costs both about 3 mm: ATE 8.02 / 8.20 mm at 346x260, 10.82
+still a tie. One registration in ten moved by 3 cm / 1 deg costs both 2.7-3.8 mm: ATE 8.02 / 8.20 mm at 346x260, 10.82
 / 10.85 mm at 240x180 (``steady`` in the same runs 5.30 / 5.32 and 6.97 / 7.08 mm), ARE 0.077 / 0.076 and 0.100 / 0.100
 deg; over the 16 pairs -0.10 +- 0.17 mm (the graph lower on 10), ARE +0.0006 +- 0.0015 deg (lower on 6); per set of four
 seeds -0.30 / -0.06 / -0.60 / +0.54 mm. Moved by 1 cm / 0.3 deg (346x260 seeds 0-3) 6.76 / 6.78 mm, 0.064 / 0.062
