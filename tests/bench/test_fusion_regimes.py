@@ -72,3 +72,33 @@ def test_the_benchmark_is_registered_under_fusion(monkeypatch):
     out = fr.bench_fusion_regimes(BenchContext(quick=True, work_dir=Path("unused"), seed=3))
     assert out["240x180_n"] == 1 and calls == [((240, 180), 2.0, 3)]
     assert out["240x180_regimes"] == list(fr.QUICK_REGIMES)
+
+
+def test_the_outlier_regime_moves_every_nth_registration_by_exactly_its_offsets_and_passes_failures_through():
+    calls = []
+    regime = fr.Regime("outliers", outlier_every=3, outlier_m=0.03, outlier_deg=1.0)
+    report = fr.altered_report(lambda t, T, cov: calls.append((t, T, cov)), regime, 0, 0, seed=2)
+    T = np.eye(4)
+    cov = np.eye(6)
+    for t in range(7):
+        report(t, T, cov)
+    report(7, None, None)  # a failed registration is passed on and not counted
+    report(8, T, cov)
+    report(9, T, cov)
+    moved = [t for t, P, _ in calls if P is not None and not np.array_equal(P, T)]
+    assert moved == [2, 5, 9]
+    for t, P, c in calls:
+        if t in moved:
+            assert np.linalg.norm(P[:3, 3]) == pytest.approx(0.03)
+            assert np.degrees(Rotation.from_matrix(P[:3, :3]).magnitude()) == pytest.approx(1.0)
+            assert c is cov
+    assert calls[7] == (7, None, None)
+
+
+def test_an_outage_report_withholds_only_inside_its_window():
+    calls = []
+    regime = fr.Regime("outage", outage_start_s=0.1, outage_s=0.1)
+    report = fr.altered_report(lambda t, T, cov: calls.append(T is None), regime, 100, 200, seed=0)
+    for t in (50, 100, 199, 200):
+        report(t, np.eye(4), np.eye(6))
+    assert calls == [False, True, True, False]
