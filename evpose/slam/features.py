@@ -135,7 +135,14 @@ between tracks, which a pose absorbs least. What the figures pointed to, landing
 local BA or deferred (``TrackingConfig.ba_huber_px``, ``keyframe_tracked_ratio``) 1.85-2.47 %. None helped: the wider
 KLT window quietens the steps, but the map points' observations stay as far off across the flow (median over seeds 0, 4,
 10: 1.48 px at 1.8-2.2 s and 0.67 px at 2.2-2.6 s with the defaults; 1.63 / 0.56 with windows cut at 0.4 px, 1.47 / 0.68
-with KLT 31 px, 1.41 / 0.62 with 31 px into MCIs under 0.6 of the median).
+with KLT 31 px, 1.41 / 0.62 with 31 px into MCIs under 0.6 of the median). Where the error after the turn sits, by the
+track's birth (``rec.py`` records, seeds 0-4, 10; used observations, median across-flow error): at 2.2-2.6 s the tracks
+born before 1.1 s are off by 2.0-5.4 px and those born at 1.1-1.8 s by 0.8-5.3 px (together 15-30 % of the
+observations), those born in the sharp turn (1.8-2.2 s) by 0.55-0.92 px and the newer ones by 0.2-0.3 px: the drift
+comes from the tracks that live through the flow's ~90 deg turn, whose slide along their edge on the first leg lies
+across the flow on the second. Ending a track once its step runs more than 60 / 80 deg off the direction of its first 6
+px (``options_turned.patch``): 3.73 / 2.34 % (11 / 15 within 2 %; paired +1.93 +- 0.82 / +0.54 +- 0.34): the map loses
+the points it tracks through the turn.
 """
 
 from __future__ import annotations
