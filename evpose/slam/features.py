@@ -139,10 +139,12 @@ with KLT 31 px, 1.41 / 0.62 with 31 px into MCIs under 0.6 of the median). Where
 track's birth (``rec.py`` records, seeds 0-4, 10; used observations, median across-flow error): at 2.2-2.6 s the tracks
 born before 1.1 s are off by 2.0-5.4 px and those born at 1.1-1.8 s by 0.8-5.3 px (together 15-30 % of the
 observations), those born in the sharp turn (1.8-2.2 s) by 0.55-0.92 px and the newer ones by 0.2-0.3 px: the drift
-comes from the tracks that live through the flow's ~90 deg turn, whose slide along their edge on the first leg lies
-across the flow on the second. Ending a track once its step runs more than 60 / 80 deg off the direction of its first 6
-px (``options_turned.patch``): 3.73 / 2.34 % (11 / 15 within 2 %; paired +1.93 +- 0.82 / +0.54 +- 0.34): the map loses
-the points it tracks through the turn.
+comes from the tracks that live through the flow's ~90 deg turn. Their error lies mostly along the flow they were born
+in (tracks born before 1.1 s, at 2.2-2.6 s, flow turned 78-86 deg since birth: 2.1-5.1 px along the birth flow against
+1.6-3.2 px across it, medians per seed), which the turn makes across the current flow; when along the birth flow it was
+picked up (first leg or turn) these records do not say. Ending a track once its step runs more than 60 / 80 deg off the
+direction of its first 6 px (``options_turned.patch``): 3.73 / 2.34 % (11 / 15 within 2 %; paired +1.93 +- 0.82 / +0.54
++- 0.34): the map loses the points it tracks through the turn.
 """
 
 from __future__ import annotations
