@@ -64,7 +64,12 @@ class FeatureConfig:
     tracked from the events 44.7 -> 49.4 % but ATE 7.39 -> 10.55 % (:mod:`evpose.slam.event_coasting`). Session 19,
     starting event-only MCI-to-MCI KLT where the map's constant-velocity pose moves each mapped track (the others by the
     homography those moves fit), against the along-edge lag of tracks started at zero flow (removed): landing seeds
-    0-23 1.82 -> 2.81 % (within 2 % 19 -> 14, paired +0.98 +- 0.52, worst 10.82 %, 2-3 maps on four seeds), pixels."""
+    0-23 1.82 -> 2.81 % (within 2 % 19 -> 14, paired +0.98 +- 0.52, worst 10.82 %, 2-3 maps on four seeds). Session 22
+    (``/tmp/s22/turn9``, removed: ``options.patch``; the turn's step errors, module notes of :mod:`evpose.slam.features`),
+    landing seeds 0-23 (defaults 1.80 %, 20 within 2 %), paired: 31 px 2.13 % (18; +0.33 +- 0.27), though in the sharp
+    turn (seeds 0, 4, 10) the median across-flow step fell 0.58 -> 0.47 px (7.0 -> 3.8 px^2/s); 31 px only into MCIs
+    with fewer events than 0.5 / 0.6 / 0.7 / 0.75 of the last 20 MCIs' median 2.04 / 1.83 / 2.24 / 1.97 % (14 / 17 / 15 /
+    12; +0.24 +- 0.16 / +0.04 +- 0.14 / +0.45 +- 0.25 / +0.17 +- 0.18), 41 px at 0.6 2.34 % (13; +0.54 +- 0.32), pixels."""
     klt_levels: int = field(default=2, metadata={"min": 0, "max": 5, "step": 1, "unit": "levels"})
     """KLT pyramid levels above the base image, levels."""
     klt_max_bidir_error_px: float = field(default=1.0, metadata={"min": 0.1, "max": 5.0, "step": 0.1, "unit": "px"})

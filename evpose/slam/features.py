@@ -112,6 +112,39 @@ sign holding. The correction the hypothesis asks for, a lead ``b u`` removed alo
 flow estimated from the tracks could do), is no better: b +0.25 / +0.5 / -0.5 px 1.88 / 2.00 / 2.77 % (18 / 19 / 14
 within 2 %; +0.08 +- 0.21 / +0.20 +- 0.36 / +0.97 +- 0.44 points), so none was added. (Signed-polarity MCIs on those
 five seeds: ATE 2.17-8.05 % against 1.52-4.58 %.)
+
+Session 22, why the turn's KLT steps move the tracks across the flow (``/tmp/s22/turn9/``: ``step.py`` turns
+``rec.py``'s records into per-step figures, the across-flow change of each track's error between consecutive MCIs;
+``pj.py`` pairs ``exp.py`` runs; the removed options are ``options.patch``). Landing seeds 0-4, 10, median over a step's
+tracks: 0.13-0.21 px per step on the legs, 0.35 px at 1.1-1.8 s, 0.58 px at 1.8-2.2 s (0.7-1.0 px on the sharpest steps,
+where the flow turns 15-20 deg from one MCI to the next and the windows hold 3000-6000 events over 80-170 ms, against
+11000-23000 over 40-60 ms on the legs), 0.13 px from 2.2 s. Over the turn's 120 steps, a log-linear fit on the window's
+event count, its duration, the image speed and the flow's turn within the window gives exponents -1.0 / +1.0 / +0.9 /
++0.1 (R2 0.47): the error grows as the events per pixel of motion fall; at equal event counts the bend adds some
+(9000-20000 events: 0.26 / 0.32 / 0.42 px at under 10 / 10-20 / 20-50 deg). The hypothesis hardly matters (H2 0.40, H5
+0.38 px). About 10 % of the steps' across-flow variance is a shift common to an MCI's tracks, with a sign that holds
+across the six seeds but flips within the turn: outwards of the flow's turn by 0.4-0.5 px per step at 1.5-1.65 s,
+inwards by 0.5 px at 1.95-2.05 s (s.e. 0.15-0.2; so no one curvature sign); the rest differs from track to track, about
+1 px RMS per step in the turn against 0.5-0.8 elsewhere. The oracle of session 22 (``oracle.py across_common``) removing
+only that common part, in the MCIs at 1.1-2.2 s, is worse: 2.08 % (median 1.79, 17 of 24 within 2 %; paired +0.29 +-
+0.24 points, 9 better; the whole across-flow error there: 1.49 %), so what drives the drift is the part that differs
+between tracks, which a pose absorbs least. What the figures pointed to, landing seeds 0-23 against the defaults (1.80
+%, median 1.54, 20 within 2 %), paired: shorter windows where the flow bends
+(``EventWindowConfig.feature_displacement_px``) 1.92-2.47 %; a wider KLT window into the MCIs with few events
+(``FeatureConfig.klt_window_px``), which does quieten the steps, 1.83-2.34 %; sparse keyframes down-weighted in the
+local BA or deferred (``TrackingConfig.ba_huber_px``, ``keyframe_tracked_ratio``) 1.85-2.47 %. None helped: the wider
+KLT window quietens the steps, but the map points' observations stay as far off across the flow (median over seeds 0, 4,
+10: 1.48 px at 1.8-2.2 s and 0.67 px at 2.2-2.6 s with the defaults; 1.63 / 0.56 with windows cut at 0.4 px, 1.47 / 0.68
+with KLT 31 px, 1.41 / 0.62 with 31 px into MCIs under 0.6 of the median). Where the error after the turn sits, by the
+track's birth (``rec.py`` records, seeds 0-4, 10; used observations, median across-flow error): at 2.2-2.6 s the tracks
+born before 1.1 s are off by 2.0-5.4 px and those born at 1.1-1.8 s by 0.8-5.3 px (together 15-30 % of the
+observations), those born in the sharp turn (1.8-2.2 s) by 0.55-0.92 px and the newer ones by 0.2-0.3 px: the drift
+comes from the tracks that live through the flow's ~90 deg turn. Their error lies mostly along the flow they were born
+in (tracks born before 1.1 s, at 2.2-2.6 s, flow turned 78-86 deg since birth: 2.1-5.1 px along the birth flow against
+1.6-3.2 px across it, medians per seed), which the turn makes across the current flow; when along the birth flow it was
+picked up (first leg or turn) these records do not say. Ending a track once its step runs more than 60 / 80 deg off the
+direction of its first 6 px (``options_turned.patch``): 3.73 / 2.34 % (11 / 15 within 2 %; paired +1.93 +- 0.82 / +0.54
++- 0.34): the map loses the points it tracks through the turn.
 """
 
 from __future__ import annotations
