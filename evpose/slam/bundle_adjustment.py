@@ -26,8 +26,7 @@ def local_bundle_adjustment(m: SlamMap, K: np.ndarray, window: int, iterations: 
                             rotation_priors: dict | None = None, rotation_sigma_rad: float = 1e-3, scale_anchor: float = 0.0,
                             rotation_sigmas_rad: dict | None = None, velocity_sigma_ratio: float = 0.0,
                             rotation_rate_sigma_rad_s: float = 0.0, edge_along_sigma_px: float = 0.0,
-                            edge_max_ratio: float = 0.1, birth_flow_sigma_px: float = 0.0,
-                            birth_flow_min_obs: int = 3) -> BaReport:
+                            edge_max_ratio: float = 0.1) -> BaReport:
     """Optimise the last ``window`` keyframes of ``m`` and the points they see, in place.
 
     The ``n_fixed`` oldest keyframes of the window (two while the map has only
@@ -72,12 +71,9 @@ def local_bundle_adjustment(m: SlamMap, K: np.ndarray, window: int, iterations: 
             continue
         used_pts.append(pid)
         values.insert(L(pid), gtsam.Point3(*p.xyz))
-        birth_noise = _birth_flow_noise(gtsam, obs, birth_flow_sigma_px, huber_px) if birth_flow_sigma_px > 0 else None
-        for i, (kid, uv) in enumerate(obs):
+        for kid, uv in obs:
             nm = noise
-            if birth_noise is not None and i >= birth_flow_min_obs:
-                nm = birth_noise
-            elif edge_along_sigma_px > 0:
+            if edge_along_sigma_px > 0:
                 nm = _edge_noise(gtsam, kf_by_id.get(kid), uv, tensors, edge_along_sigma_px, edge_max_ratio, huber_px) or noise
             graph.add(gtsam.GenericProjectionFactorCal3_S2(np.asarray(uv, np.float64), nm, X(kid), L(pid), cal))
             used_kfs.add(kid)
@@ -127,17 +123,6 @@ def local_bundle_adjustment(m: SlamMap, K: np.ndarray, window: int, iterations: 
     for pid in used_pts:
         m.points[pid].xyz = np.asarray(result.atPoint3(L(pid)), np.float64)
     return BaReport(n_free, len(used_pts), e0, graph.error(result))
-
-
-def _birth_flow_noise(gtsam, obs: list, along_px: float, huber_px: float):
-    """Anisotropic Huber noise loose along the point's image motion at birth (its first two keyframe observations)."""
-    d = np.asarray(obs[1][1], np.float64) - np.asarray(obs[0][1], np.float64)
-    n = float(np.hypot(d[0], d[1]))
-    if not n > 0.5:
-        return None
-    e = d / n
-    C = np.eye(2) + (along_px**2 - 1.0) * np.outer(e, e)
-    return gtsam.noiseModel.Robust.Create(gtsam.noiseModel.mEstimator.Huber.Create(huber_px), gtsam.noiseModel.Gaussian.Covariance(C))
 
 
 def _edge_noise(gtsam, kf, uv, tensors: dict, along_px: float, max_ratio: float, huber_px: float):

@@ -480,9 +480,7 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling, LineAids):
                                     velocity_sigma_ratio=tc.ba_velocity_prior if self.imu is None else 0.0,
                                     rotation_rate_sigma_rad_s=np.radians(tc.ba_rotation_rate_prior_deg_s) if self.imu is None else 0.0,
                                     edge_along_sigma_px=tc.ba_edge_along_sigma_px if self.imu is None else 0.0,
-                                    edge_max_ratio=tc.ba_edge_max_ratio,
-                                    birth_flow_sigma_px=tc.ba_birth_flow_sigma_px if self.imu is None else 0.0,
-                                    birth_flow_min_obs=tc.ba_birth_flow_min_obs)
+                                    edge_max_ratio=tc.ba_edge_max_ratio)
         if before is not None:
             carry_relative_scale(m, before)
         cull_points(m, self.K, fe.track_to_point, tc)

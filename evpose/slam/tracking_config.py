@@ -63,13 +63,6 @@ class TrackingConfig:
     solution nearest the BA's) was worse than the BA (seed 9: 3.4-3.8 against 2.7 deg RMS), so it was not fed in.
     Session 11 (``MciConfig.reference_fraction`` 0.5, landing seeds 0-11, 60 runs): on -> mean ATE 2.60 -> 2.58 %,
     within 2 % 30 -> 22 of 60."""
-    ba_birth_flow_sigma_px: float = field(default=0.0, metadata={"min": 0.0, "max": 50.0, "step": 0.5, "unit": "px"})
-    """Event-only local BA: a point's observations from its ``ba_birth_flow_min_obs``-th keyframe on get this sigma along
-    its image motion at birth (the direction between its first two keyframe observations; one pixel across it; 0: off),
-    pixels. Old tracks that live through the landing's turn are off mostly along their birth flow (see
-    :mod:`evpose.slam.features`, session 22)."""
-    ba_birth_flow_min_obs: int = field(default=3, metadata={"min": 1, "max": 50, "step": 1, "unit": "observations"})
-    """The first observation (0-based, in keyframe order) that ``ba_birth_flow_sigma_px`` loosens, observations."""
     ba_edge_along_sigma_px: float = field(default=0.0, metadata={"min": 0.0, "max": 50.0, "step": 0.5, "unit": "px"})
     """Event-only local BA: observations on a straight edge of their keyframe's MCI get this sigma along the edge (one
     pixel across it; 0: isotropic like every other observation), pixels. KLT on an edge measures only the motion across
