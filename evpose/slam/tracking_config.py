@@ -86,7 +86,13 @@ class TrackingConfig:
     with the same along-edge sigma from the current MCI's structure tensor: landing seeds 0-23 (defaults 1.82 %, 19
     within 2 %) 3 -> 2.66 % (15; seed 3 15.5 %), 1.5 -> 2.39 % (16), paired +0.84 +- 0.63 / +0.57 +- 0.37; the summed
     keyframe x-rotation error fell (mean 7.0 -> 5.3 deg) but the RMS keyframe rotation error rose (1.40 -> 1.54 deg).
-    Event-inertial runs never use it, pixels."""
+    Event-inertial runs never use it, pixels. Session 22 (lead, ``/tmp/s22/birth/``): a loose sigma
+    along each old point's image motion at birth instead (the direction between its first two keyframe observations;
+    its observations from the 3rd / 5th / 8th keyframe on; the turn9 study in :mod:`evpose.slam.features` found the
+    tracks that live through the landing's turn off mostly along their birth flow), landing seeds 0-23 against the
+    defaults' 1.80 % (20 within 2 %): 3 px from the 3rd 2.45 % (11; paired +0.65 +- 0.23 points, 5 better), 3 px from
+    the 5th 2.21 % (16; +0.42 +- 0.34), 1.5 px from the 5th 2.43 % (14; +0.63 +- 0.36), 2 px from the 8th 2.07 % (17;
+    +0.27 +- 0.23), so not kept (code in commit eabb109, reverted)."""
     ba_edge_max_ratio: float = field(default=0.1, metadata={"min": 0.0, "max": 1.0, "step": 0.01, "unit": "ratio"})
     """An observation is on a straight edge when the smaller eigenvalue of the MCI's structure tensor (11 px square)
     there is below this share of the larger, ratio. With ``ba_edge_along_sigma_px`` 3, 0.05 -> landing event-only seeds
