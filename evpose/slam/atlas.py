@@ -20,8 +20,6 @@ class Keyframe:
     """Track id -> ideal-pinhole pixel (2,) in this keyframe."""
     image8: np.ndarray | None = None
     """The keyframe's MCI (uint8) while the keyframe is in the local window, for KLT re-finding of its points; else None."""
-    sigma_px: float = 1.0
-    """Standard deviation of this keyframe's observations in the visual local BA (``TrackingConfig.ba_sparse_sigma_power``), pixels."""
 
 
 @dataclass

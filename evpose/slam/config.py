@@ -81,10 +81,6 @@ class EventWindowConfig:
     """``th_fd``: median feature displacement that triggers an MCI, pixels. Session 15, landing event-only seeds 0-11
     (4: mean ATE 2.52 %, 5 within 2 %; seeds 12-23 3.62 %, 3): 3 -> 7.50 % (0), 4.5 -> 3.24 % (5; seeds 12-23 3.06 %,
     5), 5 -> 3.65 % (1)."""
-    turn_dispatch_px: float = field(default=0.0, metadata={"min": 0.0, "max": 5.0, "step": 0.1, "unit": "px"})
-    """A window is also dispatched once the features' median displacement, past half of ``th_fd``, has moved this far
-    across the previous window's direction (0: off), pixels. An MCI's events span its own window and the overlap with
-    the previous one, all warped by one constant motion; where the image flow turns, they lie along a bent path."""
     min_features: int = field(default=8, metadata={"min": 3, "max": 200, "step": 1, "unit": "features"})
     """Fewest tracked features for a tiny frame to count, features."""
     reference_features: int = field(default=80, metadata={"min": 8, "max": 500, "step": 4, "unit": "features"})

@@ -123,8 +123,6 @@ class WindowState:
     """Positions of all reference features in each of those frames, float32 (M, 2) px (only when carried)."""
     carried: _Carried | None = None
     """The previous window's features, continued through this one (only when carried)."""
-    prev_dir: np.ndarray | None = None
-    """Unit median feature displacement of the previous window's own part, (2,) (``turn_dispatch_px``)."""
 
 
 def _empty_chunk() -> _Chunk:
@@ -215,8 +213,6 @@ class EventWindowSelector:
     def _reset(self, keep_overlap: bool) -> None:
         s = self.state
         s.prev_window = _cat(s.chunks) if keep_overlap and s.chunks else None
-        if not keep_overlap:
-            s.prev_dir = None
         s.carried = None
         if self.carry_tracks and s.prev_window is not None and s.alive is not None and s.prev8 is not None and len(s.hist_t):
             keep = np.flatnonzero(s.alive)
@@ -278,24 +274,11 @@ class EventWindowSelector:
         s.median_displacement_px = float(np.median(np.linalg.norm(s.cur_pts[alive] - s.ref_pts[alive], axis=1)))  # eq. (7)
         if s.median_displacement_px > cfg.feature_displacement_px:
             return self._dispatch(forced=False)
-        if self._turned(alive):
-            # Not a measure of the camera's speed: ``N_e`` stays (eq. 8 on these few frames would shrink it for good).
-            return self._dispatch(forced=False, adapt=False)
         if s.n_frames >= cfg.max_tiny_frames * 4:
             # Bounded memory for a camera that emits events without moving its features (flicker, noise).
             return self._dispatch(forced=True)
         self.last_event = WindowEvent.TRACKING
         return None
-
-    def _turned(self, alive: np.ndarray) -> bool:
-        """``turn_dispatch_px``: the features' median displacement since the reference, past half of ``th_fd``, has
-        moved that far across the previous window's direction (the MCI, overlapping that window, would blur its
-        events along a bent path that one constant motion cannot undo)."""
-        s, lim = self.state, self.cfg.turn_dispatch_px
-        if lim <= 0 or s.prev_dir is None or s.median_displacement_px <= 0.5 * self.cfg.feature_displacement_px:
-            return False
-        d = np.median(s.cur_pts[alive] - s.ref_pts[alive], axis=0)
-        return abs(float(d[0] * s.prev_dir[1] - d[1] * s.prev_dir[0])) > lim
 
     def _record(self, img8: np.ndarray, t_mid: int) -> None:
         """Keeps this tiny frame's feature positions and moves the carried features into it (``carry_tracks``)."""
@@ -345,7 +328,7 @@ class EventWindowSelector:
         if mask is not None:
             s.alive[alive[mask.ravel() == 0]] = False
 
-    def _dispatch(self, forced: bool, adapt: bool = True) -> ReconstructionWindow:
+    def _dispatch(self, forced: bool) -> ReconstructionWindow:
         s, cfg = self.state, self.cfg
         cur = _cat(s.chunks)
         parts = []
@@ -367,12 +350,7 @@ class EventWindowSelector:
             whole_pts=whole_pts, whole_t_us=whole_t,
         )
         s.blank_us = 0
-        s.prev_dir = None
-        if s.ref_pts is not None and alive.any():
-            d = np.median(s.cur_pts[alive] - s.ref_pts[alive], axis=0).astype(np.float64)
-            n = float(np.linalg.norm(d))
-            s.prev_dir = d / n if n > 1e-6 else None
-        if not forced and adapt and cfg.adapt_events:
+        if not forced and cfg.adapt_events:
             # eq. (8): fewer frames than expected -> the camera is fast -> smaller tiny windows, and vice versa.
             n_new = (s.n_frames * s.n_events) // cfg.expected_frames
             s.n_events = int(np.clip(n_new, cfg.min_events, cfg.max_events))

@@ -65,14 +65,6 @@ class FeatureConfig:
     starting event-only MCI-to-MCI KLT where the map's constant-velocity pose moves each mapped track (the others by the
     homography those moves fit), against the along-edge lag of tracks started at zero flow (removed): landing seeds
     0-23 1.82 -> 2.81 % (within 2 % 19 -> 14, paired +0.98 +- 0.52, worst 10.82 %, 2-3 maps on four seeds), pixels."""
-    klt_sparse_ratio: float = field(default=0.0, metadata={"min": 0.0, "max": 1.0, "step": 0.05, "unit": "ratio"})
-    """An MCI whose event count is below this share of the median of the last ``klt_sparse_history`` MCIs' counts is
-    tracked into with ``klt_sparse_window_px`` (0: off), ratio. The landing's turn gives MCIs with few events, whose
-    KLT steps move the tracks across the image flow (the module notes of :mod:`evpose.slam.features`)."""
-    klt_sparse_window_px: int = field(default=31, metadata={"min": 5, "max": 51, "step": 2, "unit": "px"})
-    """``klt_sparse_ratio``: KLT block size into a sparse MCI, pixels (odd)."""
-    klt_sparse_history: int = field(default=20, metadata={"min": 4, "max": 200, "step": 1, "unit": "MCIs"})
-    """``klt_sparse_ratio``: how many recent MCIs the median event count is taken over, MCIs."""
     klt_levels: int = field(default=2, metadata={"min": 0, "max": 5, "step": 1, "unit": "levels"})
     """KLT pyramid levels above the base image, levels."""
     klt_max_bidir_error_px: float = field(default=1.0, metadata={"min": 0.1, "max": 5.0, "step": 0.1, "unit": "px"})

@@ -104,12 +104,6 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling, LineAids):
         self.last_scale_refinement = None
         """Outcome of the last scale refinement (``InertialConfig.refine_after_s``)."""
         self._prev_hypothesis: str | None = None
-        self._mci_events: list[int] = []
-        """Event counts of the last MCIs (``FeatureConfig.klt_sparse_ratio``)."""
-        self._sparsity = 1.0
-        """The current MCI's event count over the recent median (:meth:`_note_events`)."""
-        self._kf_deferred = 0
-        """Keyframes deferred in a row for sparse MCIs (``TrackingConfig.keyframe_sparse_ratio``)."""
         """Hypothesis of the previous MCI ("H1".."H5")."""
         self._last_visual_t = 0
         """Time of the last MCI tracked visually (C2/C3 bound their IMU bridges by it), us."""
@@ -215,18 +209,16 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling, LineAids):
     def _track_mci(self, mci: MciResult) -> MciResult:
         """KLT from the previous MCI; returns the MCI actually used (the previous hypothesis's image may replace the sharpest)."""
         fe = self.fe
-        self._note_events(mci)
         if fe.prev8 is not None and len(fe.ids):
             guess = self._gyro_flow(fe.prev_t, mci.t_us, fe.uv)
             min_ncc = self.cfg.features.klt_min_ncc
-            kcfg = self._klt_config(mci)
-            new, ok = track_features(fe.prev8, mci.image8, fe.uv, kcfg, guess=guess, min_ncc=min_ncc)
+            new, ok = track_features(fe.prev8, mci.image8, fe.uv, self.cfg.features, guess=guess, min_ncc=min_ncc)
             keep = self.cfg.mci.keep_hypothesis_survival
             prev_h = self._prev_hypothesis
             if keep > 0 and prev_h is not None and prev_h != mci.hypothesis.value and prev_h in mci.candidates and ok.sum() < keep * len(ok):
                 img = mci.candidates[prev_h]
                 alt = replace(mci, image=img, image8=to_uint8(img), hypothesis=Hypothesis(prev_h))
-                new2, ok2 = track_features(fe.prev8, alt.image8, fe.uv, kcfg, guess=guess, min_ncc=min_ncc)
+                new2, ok2 = track_features(fe.prev8, alt.image8, fe.uv, self.cfg.features, guess=guess, min_ncc=min_ncc)
                 if ok2.sum() > ok.sum():
                     mci, new, ok = alt, new2, ok2
             gate = self.cfg.features.klt_first_step_max_residual_px > 0
@@ -244,22 +236,6 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling, LineAids):
         fe.prev8, fe.prev_t = mci.image8, mci.t_us
         self._prev_hypothesis = mci.hypothesis.value
         return mci
-
-    def _note_events(self, mci: MciResult) -> None:
-        """``_sparsity``: this MCI's event count against the median of the last ``klt_sparse_history`` MCIs' (1 while
-        fewer than four are known)."""
-        hist = self._mci_events
-        self._sparsity = mci.n_events / float(np.median(hist)) if len(hist) >= 4 else 1.0
-        hist.append(int(mci.n_events))
-        del hist[:-self.cfg.features.klt_sparse_history]
-
-    def _klt_config(self, mci: MciResult):
-        """The feature settings for this MCI's KLT step: ``klt_sparse_window_px`` when it holds few events for its run
-        (below ``klt_sparse_ratio`` of the recent median)."""
-        fc = self.cfg.features
-        if fc.klt_sparse_ratio <= 0 or self._sparsity >= fc.klt_sparse_ratio:
-            return fc
-        return replace(fc, klt_window_px=fc.klt_sparse_window_px)
 
     def _replenish(self, img8: np.ndarray, img: np.ndarray | None = None) -> None:
         fe = self.fe
@@ -425,7 +401,7 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling, LineAids):
         m.add_pose(mci.t_us, T_wc)
         n_tracked = self._inliers = int(est.inliers.sum())
         keyframe = False
-        if need_keyframe(m, fe.ids, fe.uv, n_tracked, tc) and not self._defer_keyframe(tc):
+        if need_keyframe(m, fe.ids, fe.uv, n_tracked, tc):
             keyframe = True
             T_wc = self._new_keyframe(m, mci.t_us, T_wc, mci.image8)
         self._lines_after_pose(m, mci, T_wc, segs)
@@ -473,21 +449,10 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling, LineAids):
         fe.uv = np.concatenate([fe.uv, uv.astype(np.float32)])
         return len(pids)
 
-    def _defer_keyframe(self, tc) -> bool:
-        """``keyframe_sparse_ratio``: a keyframe due on a sparse MCI waits for the next one, at most
-        ``keyframe_sparse_defer`` MCIs in a row."""
-        if tc.keyframe_sparse_ratio <= 0 or self._sparsity >= tc.keyframe_sparse_ratio or self._kf_deferred >= tc.keyframe_sparse_defer:
-            self._kf_deferred = 0
-            return False
-        self._kf_deferred += 1
-        return True
-
     def _new_keyframe(self, m: SlamMap, t_us: int, T_wc: np.ndarray, img8: np.ndarray | None = None, adjust: bool = True) -> np.ndarray:
         """Insert a keyframe, triangulate, run local (inertial) BA, cull, try the IMU initialisation; returns the adjusted pose."""
         fe, tc = self.fe, self.cfg.tracking
         kf = insert_keyframe(m, t_us, T_wc, fe.ids, fe.uv.astype(np.float64), fe.track_to_point)
-        if tc.ba_sparse_sigma_power > 0 and self._sparsity < 1.0:
-            kf.sigma_px = float(min(self._sparsity ** -tc.ba_sparse_sigma_power, tc.ba_sparse_sigma_max))
         self._next_point = triangulate_new_points(m, self.K, kf, fe.track_to_point, tc, self._next_point)
         if img8 is not None:
             store_patches(m, kf.id, img8, self.cfg.search.patch_px)

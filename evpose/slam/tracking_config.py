@@ -30,16 +30,6 @@ class TrackingConfig:
     (median 1.77, 9 of 12), 60 runs 2.39 % (33 of 60 within 2 %, baseline 2.62 % and 27), paired -0.23 +- 0.18
     points (better in 31, equal in 4), keyframe rotation error 1.82 -> 1.45 deg, at more CPU per MCI (29.2 against
     27.4 ms median under the same load, not paired): within the spread."""
-    keyframe_sparse_ratio: float = field(default=0.0, metadata={"min": 0.0, "max": 1.0, "step": 0.05, "unit": "ratio"})
-    """Event-only: a keyframe due on an MCI with fewer events than this share of the recent median
-    (:meth:`evpose.slam.system.EventSlam._note_events`) waits for the next MCI (0: off), ratio."""
-    keyframe_sparse_defer: int = field(default=1, metadata={"min": 1, "max": 10, "step": 1, "unit": "MCIs"})
-    """``keyframe_sparse_ratio``: most MCIs in a row a keyframe waits, MCIs."""
-    ba_sparse_sigma_power: float = field(default=0.0, metadata={"min": 0.0, "max": 2.0, "step": 0.25, "unit": "power"})
-    """Visual local BA: a keyframe made from an MCI with ``r`` times the recent median event count (``r`` < 1) gets
-    observation sigma ``r ** -power`` px, at most ``ba_sparse_sigma_max`` (0: off), power."""
-    ba_sparse_sigma_max: float = field(default=3.0, metadata={"min": 1.0, "max": 10.0, "step": 0.5, "unit": "px"})
-    """``ba_sparse_sigma_power``: largest sigma, pixels."""
     min_triangulation_deg: float = field(default=1.0, metadata={"min": 0.1, "max": 10.0, "step": 0.1, "unit": "deg"})
     """New map points need this parallax between keyframes, degrees. Session 12, landing event-only seeds 0-11
     (defaults 2.53 %, 5 of 12 within 2 %): 2 -> 2.92 % (2 of 12); 17 of the 60 perturbed runs paired +0.31 +- 0.40
