@@ -65,9 +65,6 @@ class FeatureConfig:
     starting event-only MCI-to-MCI KLT where the map's constant-velocity pose moves each mapped track (the others by the
     homography those moves fit), against the along-edge lag of tracks started at zero flow (removed): landing seeds
     0-23 1.82 -> 2.81 % (within 2 % 19 -> 14, paired +0.98 +- 0.52, worst 10.82 %, 2-3 maps on four seeds), pixels."""
-    klt_max_turn_deg: float = field(default=0.0, metadata={"min": 0.0, "max": 180.0, "step": 5.0, "unit": "deg"})
-    """MCI-to-MCI tracks whose step runs more than this off the direction they first moved in (their first 6 px) end
-    (0: off), degrees."""
     klt_levels: int = field(default=2, metadata={"min": 0, "max": 5, "step": 1, "unit": "levels"})
     """KLT pyramid levels above the base image, levels."""
     klt_max_bidir_error_px: float = field(default=1.0, metadata={"min": 0.1, "max": 5.0, "step": 0.1, "unit": "px"})

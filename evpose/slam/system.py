@@ -104,8 +104,6 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling, LineAids):
         self.last_scale_refinement = None
         """Outcome of the last scale refinement (``InertialConfig.refine_after_s``)."""
         self._prev_hypothesis: str | None = None
-        self._track_p0: dict[int, np.ndarray] = {}
-        self._track_dir0: dict[int, np.ndarray] = {}
         """Hypothesis of the previous MCI ("H1".."H5")."""
         self._last_visual_t = 0
         """Time of the last MCI tracked visually (C2/C3 bound their IMU bridges by it), us."""
@@ -232,36 +230,12 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling, LineAids):
                 ok &= has_support(mci.image, new, fc.support_window_px, fc.klt_min_support_ratio)
             if self.cfg.features.klt_curvature_gain > 0:
                 new = fe.remove_curvature_shift(new, ok, mci.t_us, self.cfg.features, self.cfg.window.overlap)
-            if self.cfg.features.klt_max_turn_deg > 0:
-                ok &= self._not_turned(fe.ids, fe.uv, new, ok)
             fe.ids, fe.uv = fe.ids[ok], new[ok]
             if gate:  # only the gate reads which tracks have stepped: no per-MCI set otherwise
                 fe.stepped = set(fe.ids.tolist())
         fe.prev8, fe.prev_t = mci.image8, mci.t_us
         self._prev_hypothesis = mci.hypothesis.value
         return mci
-
-    def _not_turned(self, ids, uv, new, ok) -> np.ndarray:
-        """False for tracks whose step runs more than ``klt_max_turn_deg`` off the direction they first moved in."""
-        keep = np.ones(len(ids), bool)
-        cos_lim = np.cos(np.radians(self.cfg.features.klt_max_turn_deg))
-        p0s, d0s = self._track_p0, self._track_dir0
-        for i, t in enumerate(ids.tolist()):
-            if not ok[i]:
-                continue
-            p0 = p0s.setdefault(t, uv[i].astype(np.float64))
-            d0 = d0s.get(t)
-            if d0 is None:
-                v = new[i] - p0
-                n = float(np.hypot(v[0], v[1]))
-                if n >= 6.0:
-                    d0s[t] = v / n
-                continue
-            st = new[i] - uv[i]
-            n = float(np.hypot(st[0], st[1]))
-            if n >= 2.0 and float(st @ d0) / n < cos_lim:
-                keep[i] = False
-        return keep
 
     def _replenish(self, img8: np.ndarray, img: np.ndarray | None = None) -> None:
         fe = self.fe
