@@ -80,7 +80,7 @@ class EventWindowConfig:
     feature_displacement_px: float = field(default=4.0, metadata={"min": 1.0, "max": 20.0, "step": 0.5, "unit": "px"})
     """``th_fd``: median feature displacement that triggers an MCI, pixels. Session 15, landing event-only seeds 0-11
     (4: mean ATE 2.52 %, 5 within 2 %; seeds 12-23 3.62 %, 3): 3 -> 7.50 % (0), 4.5 -> 3.24 % (5; seeds 12-23 3.06 %,
-    5), 5 -> 3.65 % (1). Session 22 (``/tmp/s22/turn9``, removed: ``options.patch``), shorter windows only where the
+    5), 5 -> 3.65 % (1). Session 22 (``/tmp/s22/turn9``, removed: commit d6c2af7), shorter windows only where the
     flow bends, to keep one constant motion from blurring events along a bent path: a window was also dispatched once
     the median displacement, past half of ``th_fd``, had moved X px across the previous window's direction, without
     the eq. (8) adaptation (with it, the few-frame dispatches shrank ``N_e`` for good: 63-89 MCIs per 0.5 s). Landing

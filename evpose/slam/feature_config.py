@@ -65,7 +65,7 @@ class FeatureConfig:
     starting event-only MCI-to-MCI KLT where the map's constant-velocity pose moves each mapped track (the others by the
     homography those moves fit), against the along-edge lag of tracks started at zero flow (removed): landing seeds
     0-23 1.82 -> 2.81 % (within 2 % 19 -> 14, paired +0.98 +- 0.52, worst 10.82 %, 2-3 maps on four seeds). Session 22
-    (``/tmp/s22/turn9``, removed: ``options.patch``; the turn's step errors, module notes of :mod:`evpose.slam.features`),
+    (``/tmp/s22/turn9``, removed: commit d6c2af7; the turn's step errors, module notes of :mod:`evpose.slam.features`),
     landing seeds 0-23 (defaults 1.80 %, 20 within 2 %), paired: 31 px 2.13 % (18; +0.33 +- 0.27), though in the sharp
     turn (seeds 0, 4, 10) the median across-flow step fell 0.58 -> 0.47 px (7.0 -> 3.8 px^2/s); 31 px only into MCIs
     with fewer events than 0.5 / 0.6 / 0.7 / 0.75 of the last 20 MCIs' median 2.04 / 1.83 / 2.24 / 1.97 % (14 / 17 / 15 /

@@ -115,7 +115,7 @@ five seeds: ATE 2.17-8.05 % against 1.52-4.58 %.)
 
 Session 22, why the turn's KLT steps move the tracks across the flow (``/tmp/s22/turn9/``: ``step.py`` turns
 ``rec.py``'s records into per-step figures, the across-flow change of each track's error between consecutive MCIs;
-``pj.py`` pairs ``exp.py`` runs; the removed options are ``options.patch``). Landing seeds 0-4, 10, median over a step's
+``pj.py`` pairs ``exp.py`` runs; removed options: commit d6c2af7). Landing seeds 0-4, 10, median over a step's
 tracks: 0.13-0.21 px per step on the legs, 0.35 px at 1.1-1.8 s, 0.58 px at 1.8-2.2 s (0.7-1.0 px on the sharpest steps,
 where the flow turns 15-20 deg from one MCI to the next and the windows hold 3000-6000 events over 80-170 ms, against
 11000-23000 over 40-60 ms on the legs), 0.13 px from 2.2 s. Over the turn's 120 steps, a log-linear fit on the window's
@@ -143,7 +143,7 @@ comes from the tracks that live through the flow's ~90 deg turn. Their error lie
 in (tracks born before 1.1 s, at 2.2-2.6 s, flow turned 78-86 deg since birth: 2.1-5.1 px along the birth flow against
 1.6-3.2 px across it, medians per seed), which the turn makes across the current flow; when along the birth flow it was
 picked up (first leg or turn) these records do not say. Ending a track once its step runs more than 60 / 80 deg off the
-direction of its first 6 px (``options_turned.patch``): 3.73 / 2.34 % (11 / 15 within 2 %; paired +1.93 +- 0.82 / +0.54
+direction of its first 6 px (commit 56635a7): 3.73 / 2.34 % (11 / 15 within 2 %; paired +1.93 +- 0.82 / +0.54
 +- 0.34): the map loses the points it tracks through the turn.
 """
 

@@ -77,8 +77,8 @@ template reaches 0.8 at the truth the best peak within 12 px lies elsewhere for 
 poses) do better: 0.33 right per keyframe at 47 % (NCC 0.8), 0.50 at 37 % (0.6); at the true poses 0.34 at 44 %;
 reweighted (a) on top 0.33 at 48 %; unwarped 31 px 0.01 at 4 %, warped 11 px 0.04 at 6 %. Wired as a search of the
 points last observed before the local window at each new keyframe (event-only, matches as keyframe observations before
-the local BA; ``revisit_search.py``, commit 9a820a3 on branch ``s22-render9``, removed;
-``/tmp/s22/render9/revisit.patch``), 31 px, 12 px radius: seeds 0-23 1.80 -> 1.85 % (within 2 % 20 -> 18), paired +0.05
+the local BA; ``revisit_search.py``, commit 9a820a3,
+removed by the next), 31 px, 12 px radius: seeds 0-23 1.80 -> 1.85 % (within 2 % 20 -> 18), paired +0.05
 +- 0.21 (better 14; 10: 4.58 -> 2.32, 13: 2.11 -> 1.11, but 5: 1.41 -> 4.89, 19: 1.86 -> 3.25, 12: 1.46 -> 2.69), 111
 matches in 24 runs, 33 within 2 px of the point's truth (``insitu.py``); NCC 0.7: 1.85 % (18), +0.06 +- 0.19, 200
 matches, 51 right; seeds 24-35 (31 px) 2.23 -> 2.19 % (8 -> 8), -0.04 +- 0.29, 73 matches, 12 right. Four to eight

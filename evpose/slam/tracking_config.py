@@ -25,7 +25,7 @@ class TrackingConfig:
     keyframe_tracked_ratio: float = field(default=0.7, metadata={"min": 0.1, "max": 1.0, "step": 0.05, "unit": "ratio"})
     """New keyframe when tracked map points drop below this share of the last keyframe's, ratio. In the landing's sharp
     turn nearly every MCI becomes a keyframe, from the sparsest MCIs (3000-6000 events). Session 22 (``/tmp/s22/turn9``,
-    removed: ``options.patch``): a keyframe due on an MCI with fewer events than 0.6 of the last 20 MCIs' median waited
+    removed: commit d6c2af7): a keyframe due on an MCI with fewer events than 0.6 of the last 20 MCIs' median waited
     one MCI: landing seeds 0-23 1.80 -> 2.47 % (20 -> 16 within 2 %; paired +0.67 +- 0.34, 6 better)."""
     keyframe_displacement_px: float = field(default=20.0, metadata={"min": 2.0, "max": 100.0, "step": 1.0, "unit": "px"})
     """New keyframe when the median key-point displacement from the last keyframe exceeds this, pixels. Session 12,
@@ -305,7 +305,7 @@ class TrackingConfig:
     ba_huber_px: float = field(default=2.0, metadata={"min": 0.1, "max": 10.0, "step": 0.1, "unit": "px"})
     """Huber threshold of the reprojection factors, pixels. Session 14, landing event-only seeds 0-11 (defaults 2.52 %,
     5 within 2 %): 1.0 -> 2.51 % (5; seeds 1, 3, 4, 10 better, seed 7 7.16 % in two maps, 8 3.70 %). Session 22
-    (``/tmp/s22/turn9``, removed: ``options.patch``): a keyframe made from an MCI with ``r`` < 1 times the last 20 MCIs'
+    (``/tmp/s22/turn9``, removed: commit d6c2af7): a keyframe made from an MCI with ``r`` < 1 times the last 20 MCIs'
     median event count observed with sigma ``min(r ** -p, 3)`` px: landing seeds 0-23 (1.80 %, 20 within 2 %) p 0.5 /
     1.0 -> 1.85 / 2.40 % (19 / 11; paired +0.05 +- 0.18 / +0.60 +- 0.36)."""
     ba_scale_anchor: float = field(default=0.02, metadata={"min": 0.0, "max": 0.5, "step": 0.005, "unit": "ratio"})
