@@ -34,15 +34,6 @@ class MapPoint:
     created_kf: int = 0
     patch: np.ndarray | None = None
     """Template (uint8, square) around the point's newest keyframe observation, for re-finding it by projection."""
-    context: np.ndarray | None = None
-    """Wider cut (uint8, square, centred on the observation) of the newest keyframe MCI that observed the point, kept while
-    ``ProjectionSearchConfig.revisit_patch_px`` > 0: the source of the warped template the revisit search looks for."""
-    context_kf: int = -1
-    """Id of the keyframe :attr:`context` was cut from (-1: none)."""
-    edge_obs: dict[int, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
-    """Keyframe id -> (pixel (2,), covariance (2, 2) px^2): 1-D observations on an edge from the revisit search
-    (``ProjectionSearchConfig.revisit_along_sigma_px`` > 0), tight across the edge and loose along it. Only the local BA
-    reads them: kept apart from :attr:`obs`, whose pixels culling, templates and KLT take as 2-D positions."""
 
 
 @dataclass
