@@ -84,6 +84,35 @@ matches in 24 runs, 33 within 2 px of the point's truth (``insitu.py``); NCC 0.7
 matches, 51 right; seeds 24-35 (31 px) 2.23 -> 2.19 % (8 -> 8), -0.04 +- 0.29, 73 matches, 12 right. Four to eight
 matches a run, a third of them right, reshuffle the runs after the turn; the session-21 oracle that helped gave about 24
 right observations a run.
+
+The revisit matches as 1-D observations across the template's edge do not help either (session 23, ``/tmp/s23/edge9/``:
+``edge_oracle.py`` on render9's captures and pairs, ``insitu1d.py``, ``oracle1d.py``, ``exp.py`` runs; code in commit
+afae798 on top of 9a820a3's search, both reverted by the next). A template of an edge matches anywhere along it, and
+the old points' error after the turn does lie mostly across their edges (the projection by the keyframe's PnP pose is a
+median 4.6 px off across the warped 31 px template's edge, 3.3 px along it; 1124 pairs over 76 keyframes, seeds 0, 2,
+10, 31, 32, 38, truth as render9's), so a match was tried as an observation only across the edge: normal from the warped
+template's structure tensor (Gaussian 3 px about its centre), uniqueness asked only of peaks more than 2 px across it,
+a local-BA factor with sigma 1 px across and 10 px along (``revisit_along_sigma_px``; kept apart from the 2-D ``obs``,
+which culling, templates and KLT read). Oracle (NCC 0.8, 12 px): 4.80 matches per keyframe, 1.95 right across within
+1 px (41 %), 2.99 within 2 px (62 %), median 1.40 px across and 5.1 along, against render9's 2-D search's 0.30 right
+within 2 px at 45 % here (0.26 within 1 px across, 39 %) and the projection's own 13 / 25 % within 1 / 2 px across on
+the same pairs; no uniqueness test 2.18 (39 %) / 3.36 (60 %); stricter NCC (0.85-0.95) or uniqueness (0.7-0.8) leave
+the precision at 34-38 % within 1 px; the straightest templates (coherence >= 0.9) 33 %; 11 px templates 2.01 at 34 %;
+the triangulated truth 37 %. By the true new flow at the point: where it runs within 20 deg of the edge (the
+hypothesis's case, the old edge across its birth flow) 51 of 309 pairs match, 55 % within 1 px and 80 % within 2 px;
+20-45 deg 45 / 65 %; beyond 45 deg 36 / 58 % (245 of 621). So the yield rose sixfold, the precision did not. In situ
+(landing seeds 0-23 against the defaults' 1.80 %, 20 within 2 %): all matches, 2.24 % (12; paired +0.45 +- 0.18 points,
+better 7; 0: 1.79 -> 4.05, 12: 1.46 -> 4.58, 10: 4.58 -> 3.54), 78-139 matches a run right across within 1 / 2 px for
+26 / 43 % against the projection's own 20 / 37 % (seeds 0, 2, 4, 10, 11, 12; in the oracle's population 32 / 51 % against
+25 / 46 %); only where the flow predicted by the last two keyframes' poses runs within 20 deg of the edge
+(``revisit_max_flow_across`` 0.34), 2.11 % (19; +0.31 +- 0.24, better 10; 9: 2.38 -> 7.06, 20: 1.59 -> 3.96), 15-21
+matches a run, 22 / 43 % right against the projection's 23 / 38 %. Nor would a better matcher do much: the true pixels
+(+ 0.7 px per axis) as 1-D observations (template normal, 1 / 10 px) of every first-leg point (all observations before
+1.6 s, consistent within 3 px) at every keyframe after 2.0 s give 1.60 % (21 within 2 %, median 1.35; -0.20 +- 0.19,
+better 18, but 20: 1.59 -> 4.50, 17: 1.86 -> 2.88), 158 observations a run; as 2-D observations (joining ``obs``, so a
+point leaves the revisit set after its first: 31 a run) 1.46 % (23; -0.34 +- 0.13). Across the edge alone the old points
+pin the new keyframes less than the 2-D oracle does, and the matches found in situ are hardly nearer the truth across
+the edge than the projection they start from.
 """
 
 from __future__ import annotations
