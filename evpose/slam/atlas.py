@@ -20,9 +20,6 @@ class Keyframe:
     """Track id -> ideal-pinhole pixel (2,) in this keyframe."""
     image8: np.ndarray | None = None
     """The keyframe's MCI (uint8) while the keyframe is in the local window, for KLT re-finding of its points; else None."""
-    sigma_px: dict = field(default_factory=dict)
-    """Point id -> sigma of its observation here in the event-only local BA (``TrackingConfig.ba_track_sigma_gain``;
-    absent: one pixel), pixels."""
 
 
 @dataclass

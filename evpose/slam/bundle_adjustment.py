@@ -73,9 +73,6 @@ def local_bundle_adjustment(m: SlamMap, K: np.ndarray, window: int, iterations: 
         values.insert(L(pid), gtsam.Point3(*p.xyz))
         for kid, uv in obs:
             nm = noise
-            sig = kf_by_id[kid].sigma_px.get(pid) if kid in kf_by_id else None
-            if sig is not None and sig != 1.0:
-                nm = gtsam.noiseModel.Robust.Create(gtsam.noiseModel.mEstimator.Huber.Create(huber_px), gtsam.noiseModel.Isotropic.Sigma(2, float(sig)))
             if edge_along_sigma_px > 0:
                 nm = _edge_noise(gtsam, kf_by_id.get(kid), uv, tensors, edge_along_sigma_px, edge_max_ratio, huber_px) or noise
             graph.add(gtsam.GenericProjectionFactorCal3_S2(np.asarray(uv, np.float64), nm, X(kid), L(pid), cal))

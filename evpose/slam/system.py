@@ -231,7 +231,7 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling, LineAids):
             if self.cfg.features.klt_curvature_gain > 0:
                 new = fe.remove_curvature_shift(new, ok, mci.t_us, self.cfg.features, self.cfg.window.overlap)
             fe.ids, fe.uv = fe.ids[ok], new[ok]
-            if max(self.cfg.tracking.pnp_track_sigma_gain, self.cfg.tracking.ba_track_sigma_gain) > 0 and self.imu is None:
+            if self.cfg.tracking.pnp_track_sigma_gain > 0 and self.imu is None:
                 fe.add_inverse_mass(mci.image, fc.support_window_px)
             if gate:  # only the gate reads which tracks have stepped: no per-MCI set otherwise
                 fe.stepped = set(fe.ids.tolist())
@@ -462,9 +462,6 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling, LineAids):
         fe, tc = self.fe, self.cfg.tracking
         kf = insert_keyframe(m, t_us, T_wc, fe.ids, fe.uv.astype(np.float64), fe.track_to_point)
         self._next_point = triangulate_new_points(m, self.K, kf, fe.track_to_point, tc, self._next_point)
-        if tc.ba_track_sigma_gain > 0 and self.imu is None:
-            tp = [(fe.track_to_point[t], fe.inverse_mass.get(t, 0.0)) for t in kf.obs if t in fe.track_to_point]
-            kf.sigma_px = dict(zip([p for p, _ in tp], track_sigma_px([v for _, v in tp], [()] * len(tp), replace(tc, pnp_track_sigma_gain=tc.ba_track_sigma_gain)).tolist()))
         if img8 is not None:
             store_patches(m, kf.id, img8, self.cfg.search.patch_px)
             if self._matcher() is SearchMatcher.KLT:

@@ -28,10 +28,6 @@ class TrackingConfig:
     pnp_track_sigma_scale: float = field(default=0.05, metadata={"min": 0.001, "max": 10.0, "step": 0.005, "unit": "1/events"})
     """``pnp_track_sigma_gain``: the summed inverse event mass at which a track's variance is half way to its cap,
     1/events (the squared error against the truth rises steeply to about 0.1 and slowly beyond)."""
-    ba_track_sigma_gain: float = field(default=0.0, metadata={"min": 0.0, "max": 20.0, "step": 0.5, "unit": "px^2"})
-    """Event-only local BA: a keyframe's observation of a point has sigma ``sqrt(1 + g v / (v + pnp_track_sigma_scale))``
-    pixels, ``v`` its track's summed inverse event mass at that keyframe (``pnp_track_sigma_gain``), ``g`` this gain
-    (0: one pixel), px^2. Measured in :mod:`evpose.slam.features` (session 23)."""
     pnp_residual_sigma_gain: float = field(default=0.0, metadata={"min": 0.0, "max": 5.0, "step": 0.1, "unit": "ratio"})
     """Event-only: each tracked map point's sigma in the final refinement of the MCI's PnP pose is at least this times
     the median of its track's last ``pnp_residual_history`` PnP reprojection errors (at least one pixel; 0 disables;
