@@ -391,16 +391,6 @@ class FrontendTracks:
         inv = 1.0 / np.maximum(patch_event_mass(support, self.uv, window_px).astype(np.float64), 1.0)
         self.inverse_mass = {t: self.inverse_mass.get(t, 0.0) + float(v) for t, v in zip(self.ids.tolist(), inv)}
 
-    pnp_residuals: dict = field(default_factory=dict)
-    """Track id -> its newest PnP reprojection errors, oldest first, pixels (:attr:`TrackingConfig.pnp_residual_sigma_gain`)."""
-
-    def add_pnp_residuals(self, ids: np.ndarray, errors_px: np.ndarray, keep: int) -> None:
-        """Append each of ``ids``' PnP error to its history (the newest ``keep``); tracks no longer live are dropped."""
-        live = set(self.ids.tolist())
-        self.pnp_residuals = {t: h for t, h in self.pnp_residuals.items() if t in live}
-        for t, e in zip(np.asarray(ids).tolist(), np.asarray(errors_px, np.float64)):
-            self.pnp_residuals[t] = (self.pnp_residuals.get(t, ()) + (float(e),))[-int(keep):]
-
     def remove_curvature_shift(self, new: np.ndarray, ok: np.ndarray, t_us: int, cfg: FeatureConfig, overlap: float) -> np.ndarray:
         """:func:`remove_curvature_shift` on the step from ``uv`` (at ``prev_t``) to ``new`` (at ``t_us``), keeping its
         state; each window spans the MCI spacing over ``1 - overlap``."""

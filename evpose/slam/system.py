@@ -395,8 +395,6 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling, LineAids):
             if est2.ok:
                 est, sel = est2, sel2
                 self._map_tracks = len(sel2)
-        if tc.pnp_residual_sigma_gain > 0 and self.imu is None:
-            fe.add_pnp_residuals(fe.ids[sel], est.errors_px, tc.pnp_residual_history)
         for k in np.flatnonzero(~est.inliers):
             fe.track_to_point.pop(int(fe.ids[sel[k]]), None)
         T_wc, segs = self._pnp_pose_with_lines(m, mci, est.T_wc, [sel[k] for k in np.flatnonzero(est.inliers)])
@@ -417,9 +415,8 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling, LineAids):
         Xw = np.stack([m.points[fe.track_to_point[int(fe.ids[i])]].xyz for i in sel])
         uv = fe.uv[sel].astype(np.float64)
         tc = self._pose_tc(m)
-        ids = fe.ids[sel].tolist()
-        sig = None if max(tc.pnp_track_sigma_gain, tc.pnp_residual_sigma_gain) <= 0 or self.imu is not None else track_sigma_px(
-            [fe.inverse_mass.get(t, 0.0) for t in ids], [fe.pnp_residuals.get(t, ()) for t in ids], tc)
+        sig = None if tc.pnp_track_sigma_gain <= 0 or self.imu is not None else track_sigma_px(
+            [fe.inverse_mass.get(int(fe.ids[i]), 0.0) for i in sel], tc.pnp_track_sigma_gain, tc.pnp_track_sigma_scale)
         est = estimate_pose(self.K, Xw, uv, guess, tc, self.cfg.seed, sigma_px=sig)
         sigma_deg = self.cfg.inertial.gyro_prior_deg if m.imu_initialised else self.cfg.inertial.gyro_prior_uninit_deg
         if est.ok and R_prior is not None and sigma_deg > 0:

@@ -22,8 +22,6 @@ class PoseEstimate:
     reason: str = ""
     rms_px: float = float("nan")
     """RMS reprojection error of the inliers, pixels."""
-    errors_px: np.ndarray | None = None
-    """Reprojection error of every pair under the pose (N,), pixels."""
 
 
 def estimate_pose(K: np.ndarray, Xw: np.ndarray, uv: np.ndarray, T_wc_guess: np.ndarray, cfg: TrackingConfig, seed: int = 0,
@@ -73,7 +71,7 @@ def estimate_pose(K: np.ndarray, Xw: np.ndarray, uv: np.ndarray, T_wc_guess: np.
         return PoseEstimate(False, reason=f"{int(inliers.sum())} inliers after refinement < {cfg.min_inliers}")
     if inliers.sum() < cfg.min_inlier_ratio * n:
         return PoseEstimate(False, reason=f"only {int(inliers.sum())} of {n} tracked map points agree with the pose")
-    return PoseEstimate(True, invert_pose(T_cw), inliers, rms_px=float(np.sqrt(np.mean(err[inliers] ** 2))), errors_px=err)
+    return PoseEstimate(True, invert_pose(T_cw), inliers, rms_px=float(np.sqrt(np.mean(err[inliers] ** 2))))
 
 
 def refine_pose_weighted(K: np.ndarray, Xw: np.ndarray, uv: np.ndarray, rvec: np.ndarray, tvec: np.ndarray, sigma_px: np.ndarray,
@@ -112,15 +110,8 @@ def refine_pose_weighted(K: np.ndarray, Xw: np.ndarray, uv: np.ndarray, rvec: np
     return rv, tv
 
 
-def track_sigma_px(inverse_mass: np.ndarray, residuals: list, cfg: TrackingConfig) -> np.ndarray:
-    """Per-track PnP sigma, pixels: the larger of ``sqrt(1 + g v / (v + scale))`` from each track's summed inverse event
-    mass ``v`` (:attr:`TrackingConfig.pnp_track_sigma_gain`; one pixel for a fresh track, at most ``sqrt(1 + g)``) and
-    ``max(1, r median)`` of its recorded PnP residuals (:attr:`TrackingConfig.pnp_residual_sigma_gain`; one pixel
-    without any); a gain of 0 leaves its term at one pixel."""
+def track_sigma_px(inverse_mass: np.ndarray, gain: float, scale: float) -> np.ndarray:
+    """Per-track PnP sigma ``sqrt(1 + gain v / (v + scale))`` pixels from each track's summed inverse event mass ``v``
+    (:attr:`TrackingConfig.pnp_track_sigma_gain`): one pixel for a fresh track, saturating at ``sqrt(1 + gain)``."""
     v = np.asarray(inverse_mass, np.float64)
-    g, r = cfg.pnp_track_sigma_gain, cfg.pnp_residual_sigma_gain
-    sig = np.sqrt(1.0 + g * v / (v + max(cfg.pnp_track_sigma_scale, 1e-12)))
-    if r > 0:
-        med = np.array([float(np.median(h)) if len(h) else 0.0 for h in residuals])
-        sig = np.maximum(sig, np.maximum(1.0, r * med))
-    return sig
+    return np.sqrt(1.0 + gain * v / (v + max(scale, 1e-12)))

@@ -28,12 +28,6 @@ class TrackingConfig:
     pnp_track_sigma_scale: float = field(default=0.05, metadata={"min": 0.001, "max": 10.0, "step": 0.005, "unit": "1/events"})
     """``pnp_track_sigma_gain``: the summed inverse event mass at which a track's variance is half way to its cap,
     1/events (the squared error against the truth rises steeply to about 0.1 and slowly beyond)."""
-    pnp_residual_sigma_gain: float = field(default=0.0, metadata={"min": 0.0, "max": 5.0, "step": 0.1, "unit": "ratio"})
-    """Event-only: each tracked map point's sigma in the final refinement of the MCI's PnP pose is at least this times
-    the median of its track's last ``pnp_residual_history`` PnP reprojection errors (at least one pixel; 0 disables;
-    the larger of this and ``pnp_track_sigma_gain``'s), ratio. Measured in :mod:`evpose.slam.features` (session 23)."""
-    pnp_residual_history: int = field(default=5, metadata={"min": 1, "max": 50, "step": 1, "unit": "MCIs"})
-    """``pnp_residual_sigma_gain``: how many of a track's newest PnP errors its median takes, MCIs."""
     min_inlier_ratio: float = field(default=0.5, metadata={"min": 0.0, "max": 1.0, "step": 0.05, "unit": "ratio"})
     """Tracking is lost when fewer than this share of the tracked map points are pose inliers (tracks jumped to other features), ratio."""
     keyframe_tracked_ratio: float = field(default=0.7, metadata={"min": 0.1, "max": 1.0, "step": 0.05, "unit": "ratio"})

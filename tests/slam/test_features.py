@@ -169,25 +169,3 @@ def test_has_support_is_false_on_a_blank_patch_and_true_on_an_edge():
     assert has_support(img, uv, 7, 2.0).tolist() == [True, False, False]
     # The mean mass per 7x7 square is 181 * 49 / 4800 = 1.85 events: a lone event is below one mean, the edge far above.
     assert has_support(img, uv, 7, 0.5).tolist() == [True, False, True]
-
-
-def test_inverse_mass_sums_over_steps_and_forgets_dead_tracks():
-    img = np.zeros((40, 40), np.float32)
-    img[10, 10] = 4.0
-    fe = FrontendTracks(ids=np.array([1, 2]), uv=np.array([[10.0, 10.0], [30.0, 30.0]], np.float32))
-    fe.add_inverse_mass(img, 7)
-    fe.add_inverse_mass(img, 7)
-    assert fe.inverse_mass == {1: 0.5, 2: 2.0}
-    fe.ids, fe.uv = fe.ids[:1], fe.uv[:1]
-    fe.add_inverse_mass(img, 7)
-    assert fe.inverse_mass == {1: 0.75}
-
-
-def test_pnp_residual_history_keeps_the_newest_and_forgets_dead_tracks():
-    fe = FrontendTracks(ids=np.array([1, 2]), uv=np.zeros((2, 2), np.float32))
-    for e in (1.0, 2.0, 3.0):
-        fe.add_pnp_residuals(np.array([1, 2]), np.array([e, e + 10]), keep=2)
-    assert fe.pnp_residuals == {1: (2.0, 3.0), 2: (12.0, 13.0)}
-    fe.ids = fe.ids[1:]
-    fe.add_pnp_residuals(np.array([2]), np.array([5.0]), keep=2)
-    assert fe.pnp_residuals == {2: (13.0, 5.0)}
