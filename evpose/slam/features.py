@@ -218,20 +218,14 @@ def detect_features(img8: np.ndarray, cfg: FeatureConfig, existing: np.ndarray |
 def has_support(support: np.ndarray, uv: np.ndarray, window_px: int, min_ratio: float) -> np.ndarray:
     """True where the ``window_px`` square (odd) around the nearest pixel of ``uv`` holds at least ``min_ratio`` times
     the image's mean event mass per such square; ``support`` is the float event image (each event adds a mass of one)."""
-    k = int(window_px) | 1
-    mean_mass = float(np.abs(np.asarray(support, np.float32)).sum()) * k * k / support.size
-    return patch_event_mass(support, uv, window_px) >= min_ratio * mean_mass
-
-
-def patch_event_mass(support: np.ndarray, uv: np.ndarray, window_px: int) -> np.ndarray:
-    """Event mass of the ``window_px`` square (odd) around the nearest pixel of each ``uv`` in the float event image
-    ``support`` (each event adds a mass of one), float32 (N,)."""
     h, w = support.shape
     k = int(window_px) | 1
-    mass = cv2.boxFilter(np.abs(np.asarray(support, np.float32)), -1, (k, k), normalize=False, borderType=cv2.BORDER_CONSTANT)
+    sup = np.abs(np.asarray(support, np.float32))
+    mass = cv2.boxFilter(sup, -1, (k, k), normalize=False, borderType=cv2.BORDER_CONSTANT)
+    mean_mass = float(sup.sum()) * k * k / sup.size
     iu = np.clip(np.asarray(uv)[:, 0].round().astype(int), 0, w - 1)
     iv = np.clip(np.asarray(uv)[:, 1].round().astype(int), 0, h - 1)
-    return mass[iv, iu]
+    return mass[iv, iu] >= min_ratio * mean_mass
 
 
 def track_features(prev8: np.ndarray, cur8: np.ndarray, pts: np.ndarray, cfg: FeatureConfig, guess: np.ndarray | None = None,
@@ -381,15 +375,6 @@ class FrontendTracks:
     """Track id -> (image velocity of its last step px/s, the warp shift removed from it px) (``FeatureConfig.klt_curvature_gain``)."""
     prev_step_s: float = 0.0
     """Time between the last two MCIs tracked across, s (0 before the first step)."""
-    inverse_mass: dict = field(default_factory=dict)
-    """Live track id -> summed 1 / (event mass of its square) over the MCI-to-MCI steps since its birth, 1/events
-    (:attr:`TrackingConfig.pnp_track_sigma_gain`; absent: no step yet)."""
-
-    def add_inverse_mass(self, support: np.ndarray, window_px: int) -> None:
-        """Add each live track's 1 / (event mass of its ``window_px`` square in ``support``, at least one) to
-        ``inverse_mass`` (KLT's per-step error across an edge grows as the events fall); dead tracks are dropped."""
-        inv = 1.0 / np.maximum(patch_event_mass(support, self.uv, window_px).astype(np.float64), 1.0)
-        self.inverse_mass = {t: self.inverse_mass.get(t, 0.0) + float(v) for t, v in zip(self.ids.tolist(), inv)}
 
     def remove_curvature_shift(self, new: np.ndarray, ok: np.ndarray, t_us: int, cfg: FeatureConfig, overlap: float) -> np.ndarray:
         """:func:`remove_curvature_shift` on the step from ``uv`` (at ``prev_t``) to ``new`` (at ``t_us``), keeping its

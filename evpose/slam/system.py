@@ -55,7 +55,7 @@ from evpose.slam.system_inertial import InertialMaps
 from evpose.slam.system_lines import LineAids
 from evpose.slam.line_landmarks import LineMap
 from evpose.slam.track_fusion import fuse_tracks
-from evpose.slam.tracking import PoseEstimate, estimate_pose, track_sigma_px
+from evpose.slam.tracking import PoseEstimate, estimate_pose
 
 
 class EventSlam(GyroAids, InertialMaps, VisualFailureHandling, LineAids):
@@ -231,8 +231,6 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling, LineAids):
             if self.cfg.features.klt_curvature_gain > 0:
                 new = fe.remove_curvature_shift(new, ok, mci.t_us, self.cfg.features, self.cfg.window.overlap)
             fe.ids, fe.uv = fe.ids[ok], new[ok]
-            if self.cfg.tracking.pnp_track_sigma_gain > 0 and self.imu is None:
-                fe.add_inverse_mass(mci.image, fc.support_window_px)
             if gate:  # only the gate reads which tracks have stepped: no per-MCI set otherwise
                 fe.stepped = set(fe.ids.tolist())
         fe.prev8, fe.prev_t = mci.image8, mci.t_us
@@ -414,10 +412,7 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling, LineAids):
         fe = self.fe
         Xw = np.stack([m.points[fe.track_to_point[int(fe.ids[i])]].xyz for i in sel])
         uv = fe.uv[sel].astype(np.float64)
-        tc = self._pose_tc(m)
-        sig = None if tc.pnp_track_sigma_gain <= 0 or self.imu is not None else track_sigma_px(
-            [fe.inverse_mass.get(int(fe.ids[i]), 0.0) for i in sel], tc.pnp_track_sigma_gain, tc.pnp_track_sigma_scale)
-        est = estimate_pose(self.K, Xw, uv, guess, tc, self.cfg.seed, sigma_px=sig)
+        est = estimate_pose(self.K, Xw, uv, guess, self._pose_tc(m), self.cfg.seed)
         sigma_deg = self.cfg.inertial.gyro_prior_deg if m.imu_initialised else self.cfg.inertial.gyro_prior_uninit_deg
         if est.ok and R_prior is not None and sigma_deg > 0:
             est = self._refine_with_gyro(est, Xw, uv, R_prior, sigma_deg)

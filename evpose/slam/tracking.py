@@ -24,8 +24,7 @@ class PoseEstimate:
     """RMS reprojection error of the inliers, pixels."""
 
 
-def estimate_pose(K: np.ndarray, Xw: np.ndarray, uv: np.ndarray, T_wc_guess: np.ndarray, cfg: TrackingConfig, seed: int = 0,
-                  sigma_px: np.ndarray | None = None) -> PoseEstimate:
+def estimate_pose(K: np.ndarray, Xw: np.ndarray, uv: np.ndarray, T_wc_guess: np.ndarray, cfg: TrackingConfig, seed: int = 0) -> PoseEstimate:
     """Pose from 2D-3D pairs, started from ``T_wc_guess`` (constant-velocity prediction).
 
     The final Levenberg-Marquardt refinement starts at RANSAC's pose. Session 20 (``/tmp/s20/post9/lmguess.py``): started
@@ -34,9 +33,6 @@ def estimate_pose(K: np.ndarray, Xw: np.ndarray, uv: np.ndarray, T_wc_guess: np.
     (seeds 0-23 1.82 -> 2.75 %, 24-47 2.86 -> 2.23 %, 48-71 2.51 -> 2.43 %): the start moves where the solver stops
     along the flat rotation-translation valley after the turn, and reshuffles which seeds run away
     (:attr:`TrackingConfig.ba_window`); not kept.
-
-    ``sigma_px`` (N,) gives each pair its own sigma in that final refinement (:func:`refine_pose_weighted`;
-    :attr:`TrackingConfig.pnp_track_sigma_gain`); RANSAC and the inlier tests stay unweighted.
     """
     n = len(Xw)
     if n < cfg.min_inliers:
@@ -52,10 +48,7 @@ def estimate_pose(K: np.ndarray, Xw: np.ndarray, uv: np.ndarray, T_wc_guess: np.
         if not ok or inl is None or len(inl) < cfg.min_inliers:
             return PoseEstimate(False, reason=f"PnP found {0 if inl is None else len(inl)} inliers < {cfg.min_inliers}")
         idx = inl.ravel()
-        if sigma_px is None:
-            rvec, tvec = cv2.solvePnPRefineLM(obj[idx], img[idx], K, None, rvec, tvec)
-        else:
-            rvec, tvec = refine_pose_weighted(K, obj[idx].reshape(-1, 3), img[idx].reshape(-1, 2), rvec, tvec, np.asarray(sigma_px)[idx])
+        rvec, tvec = cv2.solvePnPRefineLM(obj[idx], img[idx], K, None, rvec, tvec)
     except cv2.error as exc:
         # OpenCV's solvers assert on degenerate samples (seen with its five-point solver, see
         # :func:`evpose.slam.initialization.initialize_two_view`): a failed estimate, never an exception out of a run.
@@ -72,46 +65,3 @@ def estimate_pose(K: np.ndarray, Xw: np.ndarray, uv: np.ndarray, T_wc_guess: np.
     if inliers.sum() < cfg.min_inlier_ratio * n:
         return PoseEstimate(False, reason=f"only {int(inliers.sum())} of {n} tracked map points agree with the pose")
     return PoseEstimate(True, invert_pose(T_cw), inliers, rms_px=float(np.sqrt(np.mean(err[inliers] ** 2))))
-
-
-def refine_pose_weighted(K: np.ndarray, Xw: np.ndarray, uv: np.ndarray, rvec: np.ndarray, tvec: np.ndarray, sigma_px: np.ndarray,
-                         iterations: int = 20) -> tuple[np.ndarray, np.ndarray]:
-    """Levenberg-Marquardt on the camera pose (``rvec``, ``tvec``: world to camera) minimising the reprojection errors
-    of ``Xw`` (N, 3) against ``uv`` (N, 2), each scaled by its ``sigma_px`` (N,); returns the refined (rvec, tvec).
-
-    OpenCV's ``solvePnPRefineLM`` weighs every pair alike; with equal sigmas this reaches the same minimum.
-    """
-    rv, tv = np.asarray(rvec, np.float64).reshape(3, 1).copy(), np.asarray(tvec, np.float64).reshape(3, 1).copy()
-    w = 1.0 / np.maximum(np.repeat(np.asarray(sigma_px, np.float64), 2), 1e-6) ** 2
-    obs = np.asarray(uv, np.float64).ravel()
-
-    def residual(r_, t_):
-        p, J = cv2.projectPoints(np.asarray(Xw, np.float64), r_, t_, K, None)
-        return p.ravel() - obs, J[:, :6]
-
-    r, J = residual(rv, tv)
-    cost, lam = float(np.sum(w * r * r)), 1e-3
-    for _ in range(int(iterations)):
-        A = J.T @ (J * w[:, None])
-        g = J.T @ (w * r)
-        step = np.linalg.solve(A + lam * np.diag(np.maximum(np.diag(A), 1e-12)), -g)
-        rv2, tv2 = rv + step[:3, None], tv + step[3:, None]
-        r2, J2 = residual(rv2, tv2)
-        cost2 = float(np.sum(w * r2 * r2))
-        if cost2 < cost:
-            converged = cost - cost2 < 1e-10 * max(cost, 1e-12)
-            rv, tv, r, J, cost, lam = rv2, tv2, r2, J2, cost2, lam * 0.1
-            if converged:
-                break
-        else:
-            lam *= 10.0
-            if lam > 1e8:
-                break
-    return rv, tv
-
-
-def track_sigma_px(inverse_mass: np.ndarray, gain: float, scale: float) -> np.ndarray:
-    """Per-track PnP sigma ``sqrt(1 + gain v / (v + scale))`` pixels from each track's summed inverse event mass ``v``
-    (:attr:`TrackingConfig.pnp_track_sigma_gain`): one pixel for a fresh track, saturating at ``sqrt(1 + gain)``."""
-    v = np.asarray(inverse_mass, np.float64)
-    return np.sqrt(1.0 + gain * v / (v + max(scale, 1e-12)))

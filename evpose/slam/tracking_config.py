@@ -20,14 +20,6 @@ class TrackingConfig:
     2): indoor 0-7, 32 runs (:mod:`evpose.slam.event_coasting`) ATE 8.62 -> 8.17 % (paired -0.45 +- 1.06), tracked 93.0
     -> 93.1 %; landing event-only 0-11 2.52 -> 2.47 % (worst 4.63 -> 5.33, 5 of 12 within 2 % either way); E-I-C2
     landing 0-7 ATE 1.06 -> 1.05 %, RPE within target. Within the noise everywhere: not changed."""
-    pnp_track_sigma_gain: float = field(default=0.0, metadata={"min": 0.0, "max": 20.0, "step": 0.5, "unit": "px^2"})
-    """Event-only: each tracked map point's sigma in the final refinement of the MCI's PnP pose is ``sqrt(1 + g v / (v
-    + pnp_track_sigma_scale))`` pixels, ``v`` the track's summed 1 / (event mass of its ``FeatureConfig.support_window_px``
-    square) over its MCI-to-MCI steps (a random-walk variance: KLT's step error grows as the events fall), ``g`` this
-    gain (0: every point one pixel, OpenCV's refinement), px^2. Measured in :mod:`evpose.slam.features` (session 23)."""
-    pnp_track_sigma_scale: float = field(default=0.05, metadata={"min": 0.001, "max": 10.0, "step": 0.005, "unit": "1/events"})
-    """``pnp_track_sigma_gain``: the summed inverse event mass at which a track's variance is half way to its cap,
-    1/events (the squared error against the truth rises steeply to about 0.1 and slowly beyond)."""
     min_inlier_ratio: float = field(default=0.5, metadata={"min": 0.0, "max": 1.0, "step": 0.05, "unit": "ratio"})
     """Tracking is lost when fewer than this share of the tracked map points are pose inliers (tracks jumped to other features), ratio."""
     keyframe_tracked_ratio: float = field(default=0.7, metadata={"min": 0.1, "max": 1.0, "step": 0.05, "unit": "ratio"})
