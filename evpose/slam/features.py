@@ -145,6 +145,42 @@ in (tracks born before 1.1 s, at 2.2-2.6 s, flow turned 78-86 deg since birth: 2
 picked up (first leg or turn) these records do not say. Ending a track once its step runs more than 60 / 80 deg off the
 direction of its first 6 px (commit 56635a7): 3.73 / 2.34 % (11 / 15 within 2 %; paired +1.93 +- 0.82 / +0.54
 +- 0.34): the map loses the points it tracks through the turn.
+
+Session 23, per-point weights in the pose and the BA (``/tmp/s23/pnpw9/``: ``rec.py``, session 22's ``rec.py`` with the
+candidate signals recorded online at each MCI; ``an.py``-``an4.py`` analyse them; ``lmcmp.py`` compares the solvers;
+``pj.py`` / ``pj3.py`` pair ``exp.py`` runs; the removed options: commits 8447227, 368f929, dc4968f, reverted). Which
+signal says which tracks carry the error? Landing seeds 0-4, 10, used observations (map-point tracks in tracked MCIs,
+under 10 px off; 15544-15980, 3710-3935 in the turn at 1.1-2.2 s), Spearman rho against the error from the true
+projection of the birth ray-cast, its part across the true flow, and the per-step change of that part, pooled / with
+both ranked within their MCI (what a weight inside one PnP can use): the summed 1 / (event mass of the track's 7 px
+square) over its MCI-to-MCI steps since birth (a random-walk variance, ``v``) +0.48 / +0.33 / +0.11 pooled, +0.43 /
++0.29 / +0.15 within (turn +0.48 / +0.31 / +0.25, within +0.44 / +0.28 / +0.18); the track's age +0.34 / +0.34 / -0.15
+(within +0.40 / +0.39; turn +0.25 / +0.27, after 2.2 s +0.50 / +0.50); 1 - NCC of its birth patch against now +0.47 /
++0.38 / +0.18 (within +0.35 / +0.28; turn +0.30 / +0.19); its PnP residual in the previous MCI +0.31 / +0.27 / +0.19
+(the median of its history +0.30 / +0.28; turn +0.26-0.28 / +0.20-0.22); the forward-backward error +0.24 / +0.15 /
++0.43 (turn +0.20 / +0.13 / +0.32: it sees the step, not the sum); minus the Shi-Tomasi eigenvalue +0.26-0.28 / +0.21
+/ +0.15; minus this MCI's event mass +0.27 / +0.10 / +0.17; KLT's final residual +0.01 / +0.07 / +0.19; 1 - NCC
+against the previous MCI +0.17 / +0.08 / +0.19; minus the eigenvalue ratio 0.00 / +0.11 / -0.01. ``v`` keeps +0.31
+to +0.60 within age bins (across the flow +0.14 to +0.43); its quintiles' median error 0.69 / 1.43 / 1.89 / 3.08 /
+3.48 px (across 0.41 / 0.84 / 0.89 / 1.25 / 1.52; turn 1.04-4.71 / 0.57-1.78 px), the mean squared across-flow error
+rising from 1.0 px^2 at ``v`` 0.01 to 3.3 at 0.07, then slowly to 5-6: a saturating variance ``1 + g v / (v +
+0.05)`` px^2. But ``v`` hardly predicts the track's residual under the MCI's PnP pose (rho +0.14, turn +0.06; age
++0.08 / +0.01): the error a track has gathered is in the map point triangulated from it, so the pose finds the two
+consistent. Wired as per-point sigmas in the final refinement of each MCI's PnP pose (RANSAC and the inlier tests
+unweighted), by a weighted Levenberg-Marquardt that with equal sigmas stops within 1.5e-4 deg of OpenCV's
+``solvePnPRefineLM`` (seed 10's 109 problems) yet alone moves seeds 0-23 1.80 -> 2.10 % (20 -> 13 within 2 %; paired
++0.30 +- 0.17 points, 8 better): a run's outcome is chaotic in the pose, so each setting is paired against that solver
+with equal sigmas under three neutral perturbations, the defaults and ``TrackingConfig.ba_huber_px`` 1.9 / 2.1 (equal
+sigmas 2.10 / 1.98 / 1.93 %, 13 / 18 / 16 within 2 %). Landing seeds 0-23: ``sqrt(1 + g v / (v + 0.05))`` px at g 1
+2.42 / 2.13 / 2.07 % (15 / 15 / 18 within 2 %; the 72 runs paired +0.20 +- 0.18 points, 43 better, worst 10.24 %), g 4
+(defaults only) 2.83 % (13; +0.74 +- 0.41); the median of the track's last five PnP errors as its sigma (at least 1
+px) 2.48 / 2.13 / 2.34 % (17 / 19 / 17; +0.31 +- 0.23, 34 of 72 better, worst 10.40 %). In the local BA instead (each
+keyframe observation ``sqrt(1 + v / (v + 0.05))`` px from its track's ``v`` then; PnP as by default), paired against
+the defaults under five perturbations (defaults, ``ba_huber_px`` 1.9 / 2.1, ``reprojection_threshold_px`` 2.4 / 2.6:
+1.80 / 2.55 / 2.00 / 2.68 / 1.99 %): 2.07 / 1.98 / 2.30 / 2.33 / 2.33 % (the 120 runs paired +0.00 +- 0.18 points, 54
+better; median 1.61 -> 1.84 %, within 2 % 85 -> 71). None kept: down-weighting the tracks that lived through the turn
+hands the pose to the newer points, triangulated from the turn's drifted poses, so the drift stays (as session 15's BA
+sigma from the step residuals and session 22's loose old observations found).
 """
 
 from __future__ import annotations

@@ -32,7 +32,8 @@ def estimate_pose(K: np.ndarray, Xw: np.ndarray, uv: np.ndarray, T_wc_guess: np.
     2 %) gave 2.47 % (50 within 2 %, median 1.75 either way), paired +0.07 +- 0.25 points, 36 better and 36 worse
     (seeds 0-23 1.82 -> 2.75 %, 24-47 2.86 -> 2.23 %, 48-71 2.51 -> 2.43 %): the start moves where the solver stops
     along the flat rotation-translation valley after the turn, and reshuffles which seeds run away
-    (:attr:`TrackingConfig.ba_window`); not kept.
+    (:attr:`TrackingConfig.ba_window`); not kept. Session 23: per-point sigmas in this refinement (from each track's
+    summed inverse event mass or its PnP residual history) made the landing worse; figures in :mod:`evpose.slam.features`.
     """
     n = len(Xw)
     if n < cfg.min_inliers:
