@@ -50,10 +50,10 @@ a median 74-83 of 256 bits; best precision 35 % (15 px, at most 48 bits, ratio 0
 7.2 % wrong, 1.2 right per keyframe); three right per keyframe only at 23 % precision (10 wrong per keyframe). This
 module's NCC search on the same pairs: 3.7 % right, 4.2 % wrong (47 %). Within the first leg (sources at least 0.3 s
 older) ORB's 31 px patch reaches 75 % precision at 4.1 % right; after the turn 25 %: a change of motion direction
-breaks descriptors as it breaks templates. Untried: a matcher learnt on MCIs of both motion directions, or the first
-leg rendered as the new motion would show it (the event set itself carries the old motion's direction, so re-warping
-the old events is not enough: a log-intensity map integrated from them with their known flow, differentiated along the
-new motion).
+breaks descriptors as it breaks templates. Untried then (both tried since, below): a matcher learnt on MCIs of both
+motion directions (session 23), or the first leg rendered as the new motion would show it (the event set itself
+carries the old motion's direction, so re-warping the old events is not enough: a log-intensity map integrated from
+them with their known flow, differentiated along the new motion; session 22).
 
 Rendering the first leg as the new motion would show it does not supply them either (session 22, ``/tmp/s22/render9/``:
 ``capture.py`` runs the defaults keeping every keyframe's MCI, its signed twin and the map, ``oracle.py`` /
