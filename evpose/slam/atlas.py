@@ -39,10 +39,6 @@ class MapPoint:
     ``ProjectionSearchConfig.revisit_patch_px`` > 0: the source of the warped template the revisit search looks for."""
     context_kf: int = -1
     """Id of the keyframe :attr:`context` was cut from (-1: none)."""
-    edge_obs: dict[int, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
-    """Keyframe id -> (pixel (2,), covariance (2, 2) px^2): 1-D observations on an edge from the revisit search
-    (``ProjectionSearchConfig.revisit_along_sigma_px`` > 0), tight across the edge and loose along it. Only the local BA
-    reads them: kept apart from :attr:`obs`, whose pixels culling, templates and KLT take as 2-D positions."""
 
 
 @dataclass

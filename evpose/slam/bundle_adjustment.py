@@ -43,8 +43,7 @@ def local_bundle_adjustment(m: SlamMap, K: np.ndarray, window: int, iterations: 
     (:mod:`evpose.slam.motion_prior`), that share of the speed as sigma; ``rotation_rate_sigma_rad_s`` > 0 adds
     constant-rotation-rate factors with that sigma, rad/s. ``edge_along_sigma_px`` > 0 gives observations on a straight
     edge of a keyframe MCI (structure-tensor eigenvalue ratio below ``edge_max_ratio``; keyframes that keep their
-    ``image8``) that sigma along the edge, pixels: KLT measures only the motion across an edge. Points' ``edge_obs``
-    (the revisit search's 1-D observations) add factors with their own covariance.
+    ``image8``) that sigma along the edge, pixels: KLT measures only the motion across an edge.
     """
     import gtsam
     from gtsam.symbol_shorthand import L, X
@@ -56,7 +55,7 @@ def local_bundle_adjustment(m: SlamMap, K: np.ndarray, window: int, iterations: 
     fixed_ids = set(free_ids[: max(n_fixed, 2 if len(m.keyframes) <= 2 else n_fixed)])
     kf_by_id = {kf.id: kf for kf in m.keyframes}
     in_window = set(free_ids)
-    pt_ids = sorted({pid for pid, p in m.points.items() if any(k in in_window for k in p.obs) or any(k in in_window for k in p.edge_obs)})
+    pt_ids = sorted({pid for pid, p in m.points.items() if any(k in in_window for k in p.obs)})
     cal = gtsam.Cal3_S2(K[0, 0], K[1, 1], 0.0, K[0, 2], K[1, 2])
     noise = gtsam.noiseModel.Robust.Create(gtsam.noiseModel.mEstimator.Huber.Create(huber_px), gtsam.noiseModel.Isotropic.Sigma(2, 1.0))
     tight = gtsam.noiseModel.Isotropic.Sigma(6, 1e-6)
@@ -78,12 +77,6 @@ def local_bundle_adjustment(m: SlamMap, K: np.ndarray, window: int, iterations: 
                 nm = _edge_noise(gtsam, kf_by_id.get(kid), uv, tensors, edge_along_sigma_px, edge_max_ratio, huber_px) or noise
             graph.add(gtsam.GenericProjectionFactorCal3_S2(np.asarray(uv, np.float64), nm, X(kid), L(pid), cal))
             used_kfs.add(kid)
-        for kid, (uv, C) in sorted(p.edge_obs.items(), key=lambda kv: kv[0]):
-            # The revisit search's 1-D observations: their covariance is tight across an edge only.
-            if kid in kf_by_id:
-                nm = gtsam.noiseModel.Robust.Create(gtsam.noiseModel.mEstimator.Huber.Create(huber_px), gtsam.noiseModel.Gaussian.Covariance(C))
-                graph.add(gtsam.GenericProjectionFactorCal3_S2(np.asarray(uv, np.float64), nm, X(kid), L(pid), cal))
-                used_kfs.add(kid)
     if not used_pts:
         return BaReport()
     n_free = 0

@@ -241,17 +241,6 @@ class ProjectionSearchConfig:
     """Search radius of the revisit search around the projection by the new keyframe's pose, pixels."""
     revisit_min_ncc: float = field(default=0.8, metadata={"min": 0.0, "max": 1.0, "step": 0.01, "unit": "NCC"})
     """Smallest normalised cross-correlation the revisit search accepts (uniqueness as ``max_second_ratio``), NCC."""
-    revisit_along_sigma_px: float = field(default=0.0, metadata={"min": 0.0, "max": 100.0, "step": 0.5, "unit": "px"})
-    """Revisit matches as 1-D observations: the local BA gets each with this sigma along the edge of the warped template
-    (its centre's structure tensor) and ``revisit_across_sigma_px`` across it, and uniqueness is asked only across the
-    edge (a template of an edge matches anywhere along it); 0: 2-D observations as any other, pixels. See the module
-    docstring for the session-23 measurements."""
-    revisit_across_sigma_px: float = field(default=1.0, metadata={"min": 0.1, "max": 10.0, "step": 0.1, "unit": "px"})
-    """Sigma of a 1-D revisit observation across the template's edge (the BA's other observations have 1), pixels."""
-    revisit_max_flow_across: float = field(default=1.0, metadata={"min": 0.0, "max": 1.0, "step": 0.01, "unit": "ratio"})
-    """1-D revisit matches are kept only where the point's image flow (its projections by the previous and the new
-    keyframe's poses, as a unit vector) runs across the template's edge by at most this share: where the new motion
-    runs along an old edge, the case the turn's drift asks for (1: all kept), ratio."""
 
 
 def cut_patch(img8: np.ndarray, uv: np.ndarray, size: int) -> np.ndarray | None:
@@ -264,12 +253,8 @@ def cut_patch(img8: np.ndarray, uv: np.ndarray, size: int) -> np.ndarray | None:
     return cv2.getRectSubPix(img8, (size, size), (u, v))
 
 
-def search_patch(img8: np.ndarray, patch: np.ndarray, uv: np.ndarray, radius: int, cfg: ProjectionSearchConfig,
-                 normal: np.ndarray | None = None) -> tuple[np.ndarray | None, float]:
-    """Where ``patch`` matches ``img8`` within ``radius`` px of ``uv``: (sub-pixel position or None, best NCC).
-
-    With a unit ``normal`` (an edge's) uniqueness is asked only of peaks more than two pixels across the edge from the
-    best: along the edge the template matches anyway."""
+def search_patch(img8: np.ndarray, patch: np.ndarray, uv: np.ndarray, radius: int, cfg: ProjectionSearchConfig) -> tuple[np.ndarray | None, float]:
+    """Where ``patch`` matches ``img8`` within ``radius`` px of ``uv``: (sub-pixel position or None, best NCC)."""
     size = patch.shape[0]
     r = size // 2
     h, w = img8.shape
@@ -291,11 +276,7 @@ def search_patch(img8: np.ndarray, patch: np.ndarray, uv: np.ndarray, radius: in
     if not (0 < iy < score.shape[0] - 1 and 0 < ix < score.shape[1] - 1):
         return None, best  # the maximum on the search border is the flank of something outside the radius, not a peak
     away = score.copy()
-    if normal is None:
-        away[max(iy - 2, 0):iy + 3, max(ix - 2, 0):ix + 3] = -1.0
-    else:
-        yy, xx = np.mgrid[0:score.shape[0], 0:score.shape[1]]
-        away[np.abs((xx - ix) * float(normal[0]) + (yy - iy) * float(normal[1])) <= 2.0] = -1.0
+    away[max(iy - 2, 0):iy + 3, max(ix - 2, 0):ix + 3] = -1.0
     if away.size and float(away.max()) >= cfg.max_second_ratio * best:
         return None, best
     # Sub-pixel peak by a parabola through the neighbours on each axis.

@@ -9,10 +9,7 @@ poses. The wide template carries line ends and corners that break the aperture
 ambiguity of a small one, and the warp undoes the in-plane turn of the views,
 which a wide template does not tolerate. Matches become keyframe observations
 of the old points for the local BA (its keyframes outside the window count as
-fixed). With ``revisit_along_sigma_px`` > 0 a match is a 1-D observation
-instead (:attr:`evpose.slam.atlas.MapPoint.edge_obs`): tight across the
-warped template's edge, loose along it, since a template of an edge is
-unambiguous only across it. Measurements: :mod:`evpose.slam.projection_search`'s docstring.
+fixed). Measurements: :mod:`evpose.slam.projection_search`'s docstring.
 """
 
 from __future__ import annotations
@@ -48,23 +45,6 @@ def store_contexts(m: SlamMap, kf_id: int, img8: np.ndarray, cfg: ProjectionSear
                 p.context, p.context_kf = c, kf_id
 
 
-EDGE_SIGMA_PX = 3.0
-"""Gaussian weight (about the template's centre) of the structure tensor that gives a 1-D match its edge normal, pixels."""
-
-
-def edge_normal(tpl: np.ndarray) -> np.ndarray:
-    """Unit normal (the dominant gradient direction) of the edge at the centre of ``tpl``: the structure tensor's
-    leading eigenvector, Gaussian-weighted about the centre."""
-    g = tpl.astype(np.float32)
-    gx = cv2.Sobel(g, cv2.CV_32F, 1, 0, ksize=3)
-    gy = cv2.Sobel(g, cv2.CV_32F, 0, 1, ksize=3)
-    c = g.shape[0] // 2
-    yy, xx = np.mgrid[0:g.shape[0], 0:g.shape[1]]
-    w = np.exp(-((xx - c) ** 2 + (yy - c) ** 2) / (2.0 * EDGE_SIGMA_PX**2))
-    S = np.array([[np.sum(w * gx * gx), np.sum(w * gx * gy)], [np.sum(w * gx * gy), np.sum(w * gy * gy)]], np.float64)
-    return np.linalg.eigh(S)[1][:, 1]
-
-
 def warp_template(context: np.ndarray, K: np.ndarray, T_src_wc: np.ndarray, T_wc: np.ndarray, X: np.ndarray, uv: np.ndarray,
                   size: int) -> np.ndarray:
     """The ``size`` x ``size`` view around ``uv`` in camera ``T_wc`` of the context cut around ``X``'s observation in
@@ -89,8 +69,7 @@ def warp_template(context: np.ndarray, K: np.ndarray, T_src_wc: np.ndarray, T_wc
 
 def revisit_points(m: SlamMap, kf: Keyframe, img8: np.ndarray, K: np.ndarray, window: int, cfg: ProjectionSearchConfig) -> int:
     """Search the points of ``m`` last observed before the last ``window`` keyframes in ``kf``'s MCI ``img8`` near their
-    projection by ``kf.T_wc``; each unambiguous match becomes the point's observation in ``kf`` (with
-    ``cfg.revisit_along_sigma_px`` > 0 a 1-D one in :attr:`MapPoint.edge_obs`). Returns how many.
+    projection by ``kf.T_wc``; each unambiguous match becomes the point's observation in ``kf``. Returns how many.
 
     A match within 2 px of another match or of a point ``kf`` observes already is dropped as a conflict.
     """
@@ -110,25 +89,16 @@ def revisit_points(m: SlamMap, kf: Keyframe, img8: np.ndarray, K: np.ndarray, wi
     inside = (z > 0) & (proj[:, 0] >= b) & (proj[:, 0] < w - b) & (proj[:, 1] >= b) & (proj[:, 1] < h - b)
     img = img8.astype(np.float32)
     scfg = ProjectionSearchConfig(min_ncc=cfg.revisit_min_ncc, max_second_ratio=cfg.max_second_ratio, min_texture=cfg.min_texture)
-    one_d = cfg.revisit_along_sigma_px > 0
-    if one_d and cfg.revisit_max_flow_across < 1.0:
-        prev = project(K, invert_pose(m.keyframes[-2].T_wc), Xw)[0] if len(m.keyframes) >= 2 else proj
-        flow = proj - prev
-        flow /= np.maximum(np.linalg.norm(flow, axis=1, keepdims=True), 1e-9)
-    found_pid, found_uv, found_n = [], [], []
+    found_pid, found_uv = [], []
     for i in np.flatnonzero(inside):
         p = m.points[pids[i]]
         tpl = warp_template(p.context, K, poses[p.context_kf], kf.T_wc, p.xyz, proj[i], size)
         if float(tpl.std()) < cfg.min_texture:
             continue
-        n = edge_normal(tpl) if one_d else None
-        if one_d and cfg.revisit_max_flow_across < 1.0 and abs(float(flow[i] @ n)) > cfg.revisit_max_flow_across:
-            continue
-        uv, _ = search_patch(img, tpl, proj[i], int(cfg.revisit_radius_px), scfg, normal=n)
+        uv, _ = search_patch(img, tpl, proj[i], int(cfg.revisit_radius_px), scfg)
         if uv is not None:
             found_pid.append(pids[i])
             found_uv.append(uv)
-            found_n.append(n)
     if not found_pid:
         return 0
     uv = np.array(found_uv)
@@ -140,11 +110,5 @@ def revisit_points(m: SlamMap, kf: Keyframe, img8: np.ndarray, K: np.ndarray, wi
     if len(taken):
         keep &= np.linalg.norm(uv[:, None] - taken[None], axis=2).min(axis=1) >= 2.0
     for k in np.flatnonzero(keep):
-        if one_d:
-            n = found_n[k]
-            e = np.array([-n[1], n[0]])
-            C = cfg.revisit_across_sigma_px**2 * np.outer(n, n) + cfg.revisit_along_sigma_px**2 * np.outer(e, e)
-            m.points[found_pid[k]].edge_obs[kf.id] = (uv[k].copy(), C)
-        else:
-            m.points[found_pid[k]].obs[kf.id] = uv[k].copy()
+        m.points[found_pid[k]].obs[kf.id] = uv[k].copy()
     return int(keep.sum())

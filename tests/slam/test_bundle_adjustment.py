@@ -110,21 +110,3 @@ def test_an_observation_on_a_straight_edge_gets_the_along_edge_sigma_and_a_corne
     assert _edge_noise(gtsam, kf, (30.0, 45.0), tensors, 5.0, 0.1, 2.0) is None  # corner
     assert _edge_noise(gtsam, kf, (70.0, 10.0), tensors, 5.0, 0.1, 2.0) is None  # blank: no gradient
     assert _edge_noise(gtsam, SimpleNamespace(id=1, image8=None), (30.0, 15.0), {}, 5.0, 0.1, 2.0) is None
-
-
-def test_an_edge_observation_pulls_an_old_point_across_its_edge_only():
-    # Keyframes 0-1 (outside the window, fixed) observed the point; keyframe 3 has a 1-D observation of it whose pixel is
-    # right across a vertical edge (u) but 6 px off along it (v).
-    m, X, true_T = _map(seed=2, n_kf=4, pose_noise=0.0)
-    for k in (2, 3):
-        for p in m.points.values():
-            p.obs.pop(k, None)
-    p = m.points[0]
-    p.xyz = X[0] + np.array([0.15, 0.1, 0.0])
-    uv_true = project(K, invert_pose(true_T[3]), X[0][None])[0][0]
-    sig = np.diag([1.0, 30.0**2])  # tight across (u), loose along (v)
-    p.edge_obs[3] = (uv_true + np.array([0.0, 6.0]), sig)
-    local_bundle_adjustment(m, K, window=2, iterations=30, huber_px=2.0, n_fixed=2)
-    uv = project(K, invert_pose(true_T[3]), p.xyz[None])[0][0]
-    assert abs(uv[0] - uv_true[0]) < 0.3
-    assert abs(uv[1] - uv_true[1]) < 2.0  # the first-leg views, not the loose v, place it along the edge

@@ -85,26 +85,3 @@ def test_revisit_is_off_by_default_and_skips_points_of_the_local_window():
     assert revisit_points(m, kf, img, K, window=3, cfg=ProjectionSearchConfig()) == 0
     # With a local window reaching keyframe 0 the points are the ordinary search's, not the revisit's.
     assert revisit_points(m, kf, img, K, window=5, cfg=cfg) == 0
-
-
-def test_one_d_revisit_matches_are_edge_observations_right_across_the_edge():
-    segs = _plane_segments()
-    m, T0, n = _map(segs, n_window=3)
-    cfg = ProjectionSearchConfig(revisit_patch_px=31, revisit_along_sigma_px=10.0)
-    store_contexts(m, 0, _view(T0, segs, seed=1), cfg)
-    T1 = _pose(15.0, [0.3, -0.2, 0.4])
-    kf = Keyframe(4, 4, T1)
-    m.keyframes.append(kf)
-    true = {pid: project(K, invert_pose(T1), p.xyz[None])[0][0] for pid, p in m.points.items()}
-    for p in m.points.values():
-        p.xyz = p.xyz + np.array([0.06, -0.04, 0.0])
-    found = revisit_points(m, kf, _view(T1, segs, seed=2), K, window=3, cfg=cfg)
-    hits = {pid: p.edge_obs[4] for pid, p in m.points.items() if 4 in p.edge_obs}
-    assert found == len(hits) and found >= n // 3
-    assert all(4 not in p.obs for p in m.points.values())  # 1-D matches stay out of the 2-D observations
-    across = []
-    for pid, (uv, C) in hits.items():
-        ev, V = np.linalg.eigh(C)
-        assert np.allclose(ev, [1.0, 100.0])
-        across.append(abs((uv - true[pid]) @ V[:, 0]))  # the tight direction is the edge normal
-    assert np.mean(np.array(across) < 1.0) >= 0.9
