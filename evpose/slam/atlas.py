@@ -34,11 +34,6 @@ class MapPoint:
     created_kf: int = 0
     patch: np.ndarray | None = None
     """Template (uint8, square) around the point's newest keyframe observation, for re-finding it by projection."""
-    context: np.ndarray | None = None
-    """Wider cut (uint8, square, centred on the observation) of the newest keyframe MCI that observed the point, kept while
-    ``ProjectionSearchConfig.revisit_patch_px`` > 0: the source of the warped template the revisit search looks for."""
-    context_kf: int = -1
-    """Id of the keyframe :attr:`context` was cut from (-1: none)."""
 
 
 @dataclass

@@ -281,15 +281,6 @@ class ProjectionSearchConfig:
     """The best peak outside two pixels of the best match must score below this share of the best (uniqueness), ratio."""
     min_texture: float = field(default=4.0, metadata={"min": 0.0, "max": 64.0, "step": 0.5, "unit": "grey levels"})
     """Templates with a lower standard deviation are not searched (a blank patch matches anything), grey levels."""
-    revisit_patch_px: int = field(default=0, metadata={"min": 0, "max": 51, "step": 2, "unit": "px"})
-    """Event-only: at each new keyframe, points last observed before the local window are searched in its MCI with a
-    template of this side warped from their newest keyframe MCI through the SLAM's relative pose, and matches become
-    keyframe observations for the local BA (:mod:`evpose.slam.revisit_search`; 0: off), pixels (odd). See the module
-    docstring for the session-22 measurements."""
-    revisit_radius_px: int = field(default=12, metadata={"min": 1, "max": 30, "step": 1, "unit": "px"})
-    """Search radius of the revisit search around the projection by the new keyframe's pose, pixels."""
-    revisit_min_ncc: float = field(default=0.8, metadata={"min": 0.0, "max": 1.0, "step": 0.01, "unit": "NCC"})
-    """Smallest normalised cross-correlation the revisit search accepts (uniqueness as ``max_second_ratio``), NCC."""
 
 
 def cut_patch(img8: np.ndarray, uv: np.ndarray, size: int) -> np.ndarray | None:

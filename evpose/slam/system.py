@@ -48,7 +48,6 @@ from evpose.slam.mci import Hypothesis, MciGenerator, MciResult, MotionPrior
 from evpose.slam.parallax_warp import points_in_view
 from evpose.slam.keyframe_search import keep_keyframe_image, klt_refind_points
 from evpose.slam.projection_search import SearchMatcher, refind_points, store_patches
-from evpose.slam.revisit_search import revisit_points, store_contexts
 from evpose.slam.step_result import SlamFailure, SlamStatus, SlamStepResult
 from evpose.slam.system_failures import VisualFailureHandling
 from evpose.slam.system_gyro import GyroAids
@@ -322,7 +321,6 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling, LineAids):
         local_bundle_adjustment(m, self.K, 2, tc.ba_iterations, tc.ba_huber_px, n_fixed=2)
         cull_points(m, self.K, fe.track_to_point, tc)
         store_patches(m, kf1.id, mci.image8, self.cfg.search.patch_px)
-        store_contexts(m, kf1.id, mci.image8, self.cfg.search)
         if self._matcher() is SearchMatcher.KLT:
             keep_keyframe_image(m, kf1, mci.image8, tc.local_window)
         m.add_pose(kf1.t_us, kf1.T_wc)
@@ -457,9 +455,6 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling, LineAids):
         kf = insert_keyframe(m, t_us, T_wc, fe.ids, fe.uv.astype(np.float64), fe.track_to_point)
         self._next_point = triangulate_new_points(m, self.K, kf, fe.track_to_point, tc, self._next_point)
         if img8 is not None:
-            if self.imu is None:
-                revisit_points(m, kf, img8, self.K, tc.local_window, self.cfg.search)  # no-op unless revisit_patch_px > 0
-            store_contexts(m, kf.id, img8, self.cfg.search)
             store_patches(m, kf.id, img8, self.cfg.search.patch_px)
             if self._matcher() is SearchMatcher.KLT:
                 keep_keyframe_image(m, kf, img8, tc.local_window)
