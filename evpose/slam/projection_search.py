@@ -192,6 +192,35 @@ such matches HURT (1.85-2.24 %) where this model at their rate is neutral: their
 projection (the ``pred`` rows) or correlated across the keyframe; made for any point last observed before the local
 window, not only the consistent first-leg points the oracle draws from). Untried: measure the in-situ matches' error
 distribution and population against this model before building another matcher.
+
+The in-situ matches' errors are worse than that model in four of the five ways (session 23, err9: ``record.py``,
+``analyse.py`` and logs in commit 8d78c8b, ``experiments/s23_err9/``, run on main f82efc6 + 9a820a3 cherry-picked as
+65a1e68, both reverted by the next). Render9's 2-D search as it ran (31 px warped templates, 12 px, NCC 0.8; its in-situ
+ATEs reproduced: 10: 2.317 %, 12: 2.694 %), every accepted match logged with the point's truth (triangulated at the true
+poses of its earlier observations, projected at the keyframe's true pose, as ``insitu.py`` / ``need.py``), the
+projection by the keyframe's SLAM pose (the search's centre) and the warped template's edge (edge9's structure tensor).
+Landing seeds 0-23 (in brackets seeds 0, 2, 4, 10, 11, 12, 26 matches): 111 matches, 4.6 a run (not the model's 8),
+22 of them at keyframes before 2.0 s (outside the oracle's window); within 1 / 2 / 3 px of the truth 6 / 30 / 42 %,
+median 3.6 px (4 / 19 / 35 %, 4.4 px), against the projections they started from 5 / 16 / 32 %, 4.2 px. So the
+precision is 30 %, not the 45 % modelled, and (1) the "right" ones are a median 1.42 px off (6 % of all within 1 px),
+not the model's 0.82 (0.7 px per axis). (2) The wrong ones (78): median 4.8 px, quartiles 3.5 / 8.7, 18 % beyond 10 px
+(33 %), up to 35 px; (3) not mainly along the edge as modelled: median 40 deg from it, 34 within 30 deg of along, 30
+beyond 60 deg (across 2.6, along 3.0 px median). (4) Not pulled to the drift: 21 of 78 lie nearer the SLAM's projection
+than the truth does, 5 within 2 px of it, the cosine of the match's error with the projection's error a median 0.12
+(0.70 over the six seeds' 21; the right ones 0.06): not the ``pred`` rows' failure. (5) Correlated within a keyframe:
+84 keyframes have matches (63 one, 17 two, 2 three, 2 four); over the 35 same-keyframe pairs the error vectors'
+cosine is a median 0.64, and over the 16 pairs both wrong 0.97 (11 above 0.7), nearly all neighbouring points 2.6-7 px apart
+(seeds 14, 19, 23) matched to one wrong place by one shared offset -- one error counted up to four times (seed 19, 12
+matches: 1.86 -> 3.25 %). (6) Population: 82 of the 111 are need9's first-leg points (all observations before 1.6 s,
+consistent within 3 px; no old point last seen before 1.6 s was inconsistent), 37 % right (60 at post-2.0 s keyframes,
+40 %, median 2.65 px); the other 29 are points last observed at 1.6 s or later (during the turn), 10 % right, median
+5.6 px. Hence need9's candidate reasons: right matches 2 px rather than 0.7 px off, wrong ones beyond 10 px (a fifth),
+correlated within a keyframe, and matches of points seen during the turn all hold; the pull towards the drifted
+projection does not. The precision in the oracle's own population and window (40 %, 1 a run) is near the model's 45 %
+row; the 22 pre-2.0 s matches, the 29 turn-time points at 10 % and the clusters of neighbours sharing one wrong offset
+are what the model lacked. Untried: the model re-run with these recorded error vectors, and the search restricted to
+first-leg points at post-2.0 s keyframes with one match per 8 px neighbourhood (at 40 % precision it would still be
+short of the 80-90 % a clear gain needs).
 """
 
 from __future__ import annotations
