@@ -395,14 +395,30 @@ class H5RecordingReader:
         i0, i1, _ = self._locate(t0_us, t1_us)
         return i0, i1
 
+    def _events(self, i0: int, columns: dict[str, np.ndarray]) -> EventArray:
+        """The columns of events ``i0:...`` in the schema's dtypes. A column of another integer dtype (the schema's
+        check admits any) is cast only when every value fits: an int32 x of -3 passed the sensor-bounds check (which
+        tests x >= width) and the kernels then indexed pixel -3."""
+        for name, dtype in _EVENT_COLUMNS:
+            col = columns[name]
+            if col.dtype != dtype:
+                lim = np.iinfo(dtype)
+                bad = np.flatnonzero((col < lim.min) | (col > lim.max))
+                if bad.size:
+                    i = int(bad[0])
+                    raise H5FormatError(self.path, f"{name}={col[i]} does not fit the schema's {np.dtype(dtype).name} (see docs/recording_h5.md)",
+                                        f"event {i0 + i}")
+                columns[name] = col.astype(dtype)
+        return EventArray(*(np.ascontiguousarray(columns[c]) for c in "txyp"))
+
     def read_slice(self, i0: int, i1: int) -> EventArray:
         """Events ``i0:i1`` by index."""
-        return EventArray(*(np.ascontiguousarray(self._read(self._cols[c], i0, i1)) for c in "txyp"))
+        return self._events(i0, {c: self._read(self._cols[c], i0, i1) for c in "txyp"})
 
     def read_events(self, t0_us: int | None = None, t1_us: int | None = None) -> EventArray:
         """Events with ``t0 <= t < t1`` (None = open end)."""
         i0, i1, t = self._locate(t0_us, t1_us)
-        return EventArray(np.ascontiguousarray(t), *(np.ascontiguousarray(self._read(self._cols[c], i0, i1)) for c in "xyp"))
+        return self._events(i0, {"t": t, **{c: self._read(self._cols[c], i0, i1) for c in "xyp"}})
 
     def iter_chunks(self, chunk_events: int = 1 << 22):
         """Yield the events as consecutive batches of at most ``chunk_events``."""
