@@ -26,7 +26,7 @@ from evpose.core.camera import CameraCalibration, DistortionModel
 from evpose.core.events import EventArray
 from evpose.core.imu import ImuSamples
 from evpose.core.recording import Recording
-from evpose.core.trajectory import Trajectory
+from evpose.core.trajectory import Trajectory, quaternion_problem
 from evpose.errors import InputError
 from evpose.io import ecd_text
 from evpose.io.atomic import atomic_path
@@ -225,9 +225,9 @@ def read_ecd_context(folder: str | Path, width: int | None = None, height: int |
         t, v = read_table(folder / GT_FILE, 8)
         if t.size == 0:
             raise InputError(folder / GT_FILE, "contains no poses")
-        if np.any(np.linalg.norm(v[:, 3:7], axis=1) < 1e-9):
-            i = int(np.flatnonzero(np.linalg.norm(v[:, 3:7], axis=1) < 1e-9)[0])
-            raise InputError(folder / GT_FILE, "quaternion has zero length", f"pose {i}")
+        bad = quaternion_problem(v[:, 3:7])
+        if bad is not None:
+            raise InputError(folder / GT_FILE, bad[1], f"pose {bad[0]}")
         gt = Trajectory.from_arrays(t, v[:, 0:3], v[:, 3:7])
     rec = Recording(EventArray.empty(), imu, gt, calibration, metadata, source=folder)
     return rec, size

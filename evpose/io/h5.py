@@ -31,7 +31,7 @@ from evpose.core.camera import CameraCalibration
 from evpose.core.events import EventArray
 from evpose.core.imu import ImuSamples
 from evpose.core.recording import Recording
-from evpose.core.trajectory import Trajectory
+from evpose.core.trajectory import Trajectory, quaternion_problem
 from evpose.errors import InputError
 from evpose.io.atomic import atomic_path
 
@@ -343,9 +343,9 @@ class H5RecordingReader:
             gt = self._typed(g + "t", "iu")
             m = gt.shape[0]
             q = self._read(self._typed(g + "quat_xyzw", "iuf", 4, m))
-            bad = np.flatnonzero(np.linalg.norm(q, axis=1) < 1e-9)
-            if bad.size:
-                raise H5FormatError(self.path, "quaternion has zero length", f"ground-truth pose {int(bad[0])}")
+            bad = quaternion_problem(q)
+            if bad is not None:
+                raise H5FormatError(self.path, bad[1], f"ground-truth pose {bad[0]}")
             self.ground_truth = Trajectory.from_arrays(self._read(gt), self._read(self._typed(g + "position", "iuf", 3, m)), q)
 
     def _read(self, ds, i0: int | None = None, i1: int | None = None) -> np.ndarray:

@@ -57,3 +57,12 @@ def test_infinite_quaternion_is_reported_by_validate_without_numpy_warnings():
         traj = Trajectory.from_arrays(np.array([0, 1]), np.zeros((2, 3)), q)
     with pytest.raises(InputError, match="pose 1: NaN or infinite value"):
         traj.validate()
+
+
+@pytest.mark.parametrize("q", [[1e300, 0.0, 0.0, 1.0], [0.0, 0.0, 0.0, 0.0]])
+def test_quaternion_that_cannot_be_normalised_is_named_not_a_scipy_traceback(q):
+    quats = np.tile([0.0, 0.0, 0.0, 1.0], (3, 1))
+    quats[1] = q
+    traj = Trajectory.from_arrays([0, 1, 2], np.zeros((3, 3)), quats)
+    with pytest.raises(InputError, match="gt.txt: pose 1: quaternion has zero length or one beyond the float range"):
+        traj.validate("gt.txt")
