@@ -35,6 +35,11 @@ def invert_pose(T: np.ndarray) -> np.ndarray:
     return out
 
 
+MAX_COORDINATE_M = 1e7
+"""Largest coordinate magnitude a map, cloud or trajectory may have, metres (beyond the Earth's radius: not metres, or
+garbage; 1e300 overflowed the KD-tree of a map with a traceback, and evo's alignment of a trajectory with numpy's warnings)."""
+
+
 def quaternion_problem(quat_xyzw: np.ndarray) -> tuple[int, str] | None:
     """(index, problem) of the first quaternion that cannot be normalised, or None; NaNs are left to ``validate``.
 
@@ -120,6 +125,9 @@ class Trajectory:
         if len(self) == 0:
             return
         check_series(self.t, np.isfinite(self.position).all(axis=1) & np.isfinite(self.quat_xyzw).all(axis=1), source, "pose")
+        bad = np.flatnonzero(np.abs(self.position).max(axis=1) > MAX_COORDINATE_M)
+        if bad.size:
+            raise InputError(source, f"position {self.position[bad[0]].tolist()} is beyond {MAX_COORDINATE_M:g} m (not metres?)", f"pose {int(bad[0])}")
         # from_arrays normalised every quaternion; one that is not unit now had zero length or a length beyond the
         # float range (1e300: the norm overflowed), and scipy's Rotation then failed with a traceback.
         bad = np.flatnonzero(np.abs(np.einsum("ij,ij->i", self.quat_xyzw, self.quat_xyzw) - 1.0) > 1e-6)

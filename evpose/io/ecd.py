@@ -25,7 +25,7 @@ import numpy as np
 from evpose.core.camera import CameraCalibration, DistortionModel
 from evpose.core.events import EventArray
 from evpose.core.imu import ImuSamples
-from evpose.core.recording import Recording
+from evpose.core.recording import Recording, metadata_sensor_size
 from evpose.core.trajectory import Trajectory, quaternion_problem
 from evpose.errors import InputError
 from evpose.io import ecd_text
@@ -197,12 +197,12 @@ def read_ecd_context(folder: str | Path, width: int | None = None, height: int |
         if calibration is not None:
             check_size_flags(folder / SIDECAR_FILE, (calibration.width, calibration.height), width, height, "its calibration")
         elif "width" in metadata and "height" in metadata:
-            check_size_flags(folder / SIDECAR_FILE, (int(metadata["width"]), int(metadata["height"])), width, height, "its metadata")
+            check_size_flags(folder / SIDECAR_FILE, metadata_sensor_size(metadata, folder / SIDECAR_FILE), width, height, "its metadata")
         size = (int(width), int(height))
     elif calibration is not None:
         size = (calibration.width, calibration.height)
     elif "width" in metadata and "height" in metadata:
-        size = (int(metadata["width"]), int(metadata["height"]))
+        size = metadata_sensor_size(metadata, folder / SIDECAR_FILE)
     if size is not None and (size[0] <= 0 or size[1] <= 0):
         raise InputError(folder, f"sensor size must be positive, got {size[0]}x{size[1]}")
     calib_path = folder / CALIB_FILE

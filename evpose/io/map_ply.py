@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from evpose.core.contour_map import ContourMap
+from evpose.core.trajectory import MAX_COORDINATE_M  # noqa: F401 - the bound shared with trajectories
 from evpose.errors import InputError
 from evpose.io.atomic import atomic_path
 
@@ -143,9 +144,6 @@ def _read_vertices(path: Path) -> np.ndarray | None:
         return None
 
 
-MAX_COORDINATE_M = 1e7
-"""Largest coordinate magnitude a map or cloud may have, metres (beyond the Earth's radius: not metres, or garbage;
-1e300 overflowed the KD-tree with a traceback)."""
 
 
 def _check_points(points: np.ndarray, path: Path) -> None:

@@ -21,7 +21,13 @@ def read_tum(path: str | Path, unit: TimeUnit = TimeUnit.SECONDS) -> Trajectory:
     bad = quaternion_problem(v[:, 3:7])
     if bad is not None:
         raise InputError(path, bad[1], f"line {lines[bad[0]]}")
-    return Trajectory.from_arrays(t, v[:, 0:3], v[:, 3:7])
+    traj = Trajectory.from_arrays(t, v[:, 0:3], v[:, 3:7])
+    try:
+        traj.validate(str(path))  # e.g. a position beyond the Earth (`evpose info` described a 1e12 m trajectory)
+    except InputError as exc:
+        pose = exc.record.split()[-1] if exc.record and exc.record.startswith("pose ") else None
+        raise InputError(path, exc.problem, f"line {lines[int(pose)]}" if pose is not None else exc.record) from None
+    return traj
 
 
 def write_tum(path: str | Path, traj: Trajectory, inputs: tuple = ()) -> None:

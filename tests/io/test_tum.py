@@ -66,3 +66,10 @@ def test_quaternion_beyond_the_float_range_names_its_line_without_numpy_warnings
         warnings.simplefilter("error")  # np.linalg.norm's overflow warning was printed before the error line
         with pytest.raises(InputError, match=r"est.txt: line 2: quaternion's length is beyond the float range"):
             read_tum(path)
+
+
+def test_position_beyond_the_earth_names_its_line(tmp_path):
+    path = tmp_path / "est.txt"
+    path.write_text("# t tx ty tz qx qy qz qw\n0.0 0 0 0 0 0 0 1\n0.1 1e12 0 0 0 0 0 1\n")
+    with pytest.raises(InputError, match=r"est.txt: line 3: position \[1000000000000.0, 0.0, 0.0\] is beyond 1e\+07 m"):
+        read_tum(path)
