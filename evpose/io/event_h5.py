@@ -70,6 +70,10 @@ class EventH5Reader:
             self.n_events = int(n)
             self.t_offset_us = self._read_t_offset()
             self._ms_to_idx = np.asarray(self._f["ms_to_idx"][()], dtype=np.int64) if "ms_to_idx" in self._f else None
+            idx = self._ms_to_idx
+            if idx is not None and (idx.ndim != 1 or (idx.size and (idx[0] < 0 or idx[-1] > n or np.any(np.diff(idx) < 0)))):
+                # Windowed reads trusted it: a reversed or overlong index silently gave wrong windows.
+                raise EventH5Error(self.path, f"ms_to_idx is not a non-decreasing index into the {n} events (the file is damaged)")
         except BaseException:
             self._f.close()
             raise
