@@ -255,7 +255,7 @@ class H5RecordingReader:
     def __init__(self, path: str | Path):
         self.path = Path(path)
         if not self.path.is_file():
-            raise H5FormatError(self.path, "no such file")
+            raise H5FormatError(self.path, "is a folder, not a file" if self.path.is_dir() else "no such file")
         try:
             # A chunk cache larger than one chunk of every column keeps small consecutive windows from decompressing the same chunk again.
             self._file = h5py.File(self.path, "r", rdcc_nbytes=32 << 20)

@@ -189,7 +189,7 @@ def read_contour_map(path: str | Path) -> ContourMap:
     """Read a contour map written by :func:`write_contour_map`, or any point cloud open3d reads."""
     path = Path(path)
     if not path.is_file():
-        raise MapFileError(path, "no such file")
+        raise MapFileError(path, "is a folder, not a file" if path.is_dir() else "no such file")
     verts = None
     if path.suffix.lower() == ".ply":
         try:
@@ -259,7 +259,7 @@ def read_point_cloud(path: str | Path) -> tuple[np.ndarray, dict[str, np.ndarray
 
     path = Path(path)
     if not path.is_file():
-        raise MapFileError(path, "no such file")
+        raise MapFileError(path, "is a folder, not a file" if path.is_dir() else "no such file")
     if path.suffix.lower() not in (".ply", ".pcd", ".xyz", ".xyzn", ".xyzrgb", ".pts"):
         raise MapFileError(path, f"not a point-cloud file (unknown suffix {path.suffix!r})")
     with open(path, "rb") as fh:

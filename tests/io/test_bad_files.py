@@ -142,3 +142,14 @@ def test_config_key_given_twice_or_a_falsy_document_is_refused_not_read_as_defau
     with pytest.raises(InputError) as info:
         read_config(TrackerConfig, path)
     assert message in _one_line(info, path)
+
+
+def test_a_folder_given_for_a_map_or_a_table_is_called_a_folder_not_missing(tmp_path):
+    from evpose.io.text_table import read_table
+
+    (tmp_path / "map.ply").mkdir()
+    (tmp_path / "gt.txt").mkdir()
+    with pytest.raises(InputError, match="map.ply: is a folder, not a file"):
+        read_contour_map(tmp_path / "map.ply")
+    with pytest.raises(InputError, match="gt.txt: is a folder, not a file"):
+        read_table(tmp_path / "gt.txt", 8)
