@@ -28,7 +28,7 @@ import hdf5plugin  # registers the Blosc filter for reading and writing
 import numpy as np
 
 from evpose.core.camera import CameraCalibration
-from evpose.core.events import EventArray
+from evpose.core.events import MAX_SPAN_US, EventArray
 from evpose.core.imu import ImuSamples
 from evpose.core.recording import Recording
 from evpose.core.trajectory import Trajectory, quaternion_problem
@@ -37,7 +37,7 @@ from evpose.io.atomic import atomic_path
 
 FORMAT_NAME = "recording"
 FORMAT_VERSION = 1
-_MAX_INDEX_MS = 1 << 27  # ~37 hours of millisecond index entries (1 GiB)
+_MAX_INDEX_MS = MAX_SPAN_US // 1000  # ~37 hours of millisecond index entries (1 GiB)
 _EVENT_COLUMNS = (("t", np.int64), ("x", np.uint16), ("y", np.uint16), ("p", np.int8))
 
 

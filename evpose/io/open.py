@@ -12,7 +12,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Iterator
 
-from evpose.core.events import EventArray
+from evpose.core.events import EventArray, check_span
 from evpose.core.recording import Recording
 from evpose.errors import ConfigError, InputError
 
@@ -215,4 +215,5 @@ def open_recording(path: str | Path, width: int | None = None, height: int | Non
         rec.events = EventArray.concatenate(list(stream.batches(None)))
     rec.validate()
     check_nonnegative_times(rec.events, path)
+    check_span(rec.events.t, path)  # what `convert` refuses (the HDF5 index's span), every reader refuses
     return rec
