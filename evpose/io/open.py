@@ -125,11 +125,13 @@ def open_stream(path: str | Path, width: int | None = None, height: int | None =
     inner = stream.batches
 
     def batches(cb=None):
-        first = True
+        t_first, offset = None, 0
         for b in inner(cb):
-            if first and len(b):
+            if t_first is None and len(b):
                 check_nonnegative_times(b, path)  # batches are sorted: the first event is the earliest
-                first = False
+                t_first = int(b.t[0])
+            check_span(b.t, path, offset, t_first)  # `info` described a stray event 11 days on as the recording's end
+            offset += len(b)
             yield b
 
     stream.batches = batches

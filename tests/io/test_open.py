@@ -7,7 +7,7 @@ from evpose.errors import InputError
 from evpose.io.ecd import write_ecd_folder
 from evpose.io.event_h5 import write_event_h5
 from evpose.io.h5 import write_recording_h5
-from evpose.io.open import SourceFormat, detect_format, open_recording
+from evpose.io.open import SourceFormat, detect_format, open_recording, open_stream
 from evpose.io.rosbag import write_rosbag
 
 
@@ -149,3 +149,5 @@ def test_a_stray_far_future_event_is_refused_by_every_reader_not_tracked_through
         fh.write("1000000.0 5 5 1\n")
     with pytest.raises(InputError, match=r"seq: event 500: events span 277.8 hours \(from \d+ to 1000000000000 us\); timestamps look wrong"):
         open_recording(tmp_path / "seq")
+    with pytest.raises(InputError, match=r"seq: event 500: events span 277.8 hours"):  # `info` and `convert` stream it
+        list(open_stream(tmp_path / "seq").batches(None))
