@@ -48,6 +48,15 @@ def _terminate(signum, frame) -> None:
     raise _Terminated
 
 
+def _interrupted(name: str, exc: KeyboardInterrupt) -> int:
+    """One line and the shell's exit code for a Ctrl+C (130) or a SIGTERM (143)."""
+    if isinstance(exc, _Terminated):
+        print(f"evpose {name}: terminated", file=sys.stderr)
+        return 128 + signal.SIGTERM
+    print(f"evpose {name}: interrupted", file=sys.stderr)
+    return 130
+
+
 def run(argv: list[str]) -> int:
     """Run one subcommand; returns the process exit code."""
     if not argv or argv[0] in ("-h", "--help", "help"):
@@ -77,12 +86,15 @@ def run(argv: list[str]) -> int:
         # Output piped into e.g. `head`, which closed early: not an error of ours.
         sys.stderr.close()
         return 0
-    except _Terminated:
-        print(f"evpose {name}: terminated", file=sys.stderr)
-        return 128 + signal.SIGTERM
-    except KeyboardInterrupt:
-        print(f"evpose {name}: interrupted", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as exc:
+        return _interrupted(name, exc)
+    except SystemError as exc:
+        # A Ctrl+C or SIGTERM landing while a numba dispatcher runs Python code (typing, its cache) surfaces as
+        # "CPUDispatcher(...) returned a result with an exception set", caused by the KeyboardInterrupt: seen once
+        # in `simulate` as a 30-line traceback.
+        if isinstance(exc.__cause__, KeyboardInterrupt):
+            return _interrupted(name, exc.__cause__)
+        raise
     finally:
         if previous is not None:
             signal.signal(signal.SIGTERM, previous)

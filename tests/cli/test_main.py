@@ -41,3 +41,14 @@ def test_sigterm_while_an_output_is_written_removes_its_temporary_file_and_exits
     assert capsys.readouterr().err.strip().splitlines() == ["evpose fake: terminated"]
     assert list(tmp_path.iterdir()) == []
     assert signal.getsignal(signal.SIGTERM) is before
+
+
+def test_ctrl_c_inside_a_numba_dispatcher_is_one_line_not_a_system_error(monkeypatch, capsys):
+    # CPython reports a KeyboardInterrupt raised while a C function (numba's dispatcher) runs Python code as a
+    # SystemError "returned a result with an exception set", caused by it: a 30-line traceback in `simulate`.
+    def interrupted_import(name, *args):
+        raise SystemError("CPUDispatcher(<function _shade>) returned a result with an exception set") from KeyboardInterrupt()
+
+    monkeypatch.setattr(importlib, "import_module", interrupted_import)
+    assert cli_main.run(["simulate", "--scenario", "landing", "--out", "x.h5"]) == 130
+    assert capsys.readouterr().err.strip().splitlines() == ["evpose simulate: interrupted"]
