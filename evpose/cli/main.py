@@ -90,8 +90,8 @@ def run(argv: list[str]) -> int:
         return _interrupted(name, exc)
     except SystemError as exc:
         # A Ctrl+C or SIGTERM landing while a numba dispatcher runs Python code (typing, its cache) surfaces as
-        # "CPUDispatcher(...) returned a result with an exception set", caused by the KeyboardInterrupt: seen once
-        # in `simulate` as a 30-line traceback.
+        # "CPUDispatcher(...) returned a result with an exception set", caused by the KeyboardInterrupt (CPython chains
+        # it as __cause__): seen once in `simulate` (`_shade`), as a traceback and exit 1.
         if isinstance(exc.__cause__, KeyboardInterrupt):
             return _interrupted(name, exc.__cause__)
         raise

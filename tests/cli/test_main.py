@@ -45,7 +45,7 @@ def test_sigterm_while_an_output_is_written_removes_its_temporary_file_and_exits
 
 def test_ctrl_c_inside_a_numba_dispatcher_is_one_line_not_a_system_error(monkeypatch, capsys):
     # CPython reports a KeyboardInterrupt raised while a C function (numba's dispatcher) runs Python code as a
-    # SystemError "returned a result with an exception set", caused by it: a 30-line traceback in `simulate`.
+    # SystemError "returned a result with an exception set", caused by it: a traceback and exit 1 in `simulate`.
     def interrupted_import(name, *args):
         raise SystemError("CPUDispatcher(<function _shade>) returned a result with an exception set") from KeyboardInterrupt()
 
