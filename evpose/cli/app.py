@@ -64,8 +64,8 @@ def prepare_recording(recording: Path, map_path: Path | None, data: list[Path], 
 
     if not cache.enabled:
         raise InputError(None, "--prepare fills the disk cache: it cannot be used with --no-disk-cache")
-    if not math.isfinite(acquire_s):
-        raise InputError(None, f"--acquire-s must be a finite number of seconds (0 = never give up), got {acquire_s}")
+    if not math.isfinite(acquire_s) or acquire_s < 0:  # -1 ran as 0 (never give up) silently
+        raise InputError(None, f"--acquire-s must be a finite number of seconds >= 0 (0 = never give up), got {acquire_s}")
     check_outputs((), folders=(cache.folder(),))
     for p in (recording, map_path):
         if p is not None and not p.exists():

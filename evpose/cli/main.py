@@ -9,7 +9,9 @@ Errors caused by input (:class:`~evpose.errors.EvposeError`) print one line and 
 from __future__ import annotations
 
 import importlib
+import signal
 import sys
+import threading
 
 from evpose.errors import EvposeError
 
@@ -37,6 +39,24 @@ def _usage() -> str:
     return "\n".join(lines)
 
 
+class _Terminated(KeyboardInterrupt):
+    """SIGTERM (``kill``, ``timeout``, a service manager), unwound as Ctrl+C is: Python's default ended the process at
+    once, leaving the hidden temporary file of an output being written (``.OUT.XXXX.tmp``) behind."""
+
+
+def _terminate(signum, frame) -> None:
+    raise _Terminated
+
+
+def _interrupted(name: str, exc: KeyboardInterrupt) -> int:
+    """One line and the shell's exit code for a Ctrl+C (130) or a SIGTERM (143)."""
+    if isinstance(exc, _Terminated):
+        print(f"evpose {name}: terminated", file=sys.stderr)
+        return 128 + signal.SIGTERM
+    print(f"evpose {name}: interrupted", file=sys.stderr)
+    return 130
+
+
 def run(argv: list[str]) -> int:
     """Run one subcommand; returns the process exit code."""
     if not argv or argv[0] in ("-h", "--help", "help"):
@@ -51,6 +71,8 @@ def run(argv: list[str]) -> int:
     if name not in COMMANDS:
         print(f"evpose: error: unknown command {name!r}\n\n{_usage()}", file=sys.stderr)
         return 2
+    # Only the main thread may set a handler (tests and the viewer's workers call run() from others).
+    previous = signal.signal(signal.SIGTERM, _terminate) if threading.current_thread() is threading.main_thread() else None
     try:
         # Importing a command takes about a second (numba, gtsam, open3d): a Ctrl+C then printed a 40-line traceback.
         import tyro
@@ -64,9 +86,18 @@ def run(argv: list[str]) -> int:
         # Output piped into e.g. `head`, which closed early: not an error of ours.
         sys.stderr.close()
         return 0
-    except KeyboardInterrupt:
-        print(f"evpose {name}: interrupted", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as exc:
+        return _interrupted(name, exc)
+    except SystemError as exc:
+        # A Ctrl+C or SIGTERM landing while a numba dispatcher runs Python code (typing, its cache) surfaces as
+        # "CPUDispatcher(...) returned a result with an exception set", caused by the KeyboardInterrupt (CPython chains
+        # it as __cause__): seen once in `simulate` (`_shade`), as a traceback and exit 1.
+        if isinstance(exc.__cause__, KeyboardInterrupt):
+            return _interrupted(name, exc.__cause__)
+        raise
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
     return int(result) if isinstance(result, int) else 0
 
 

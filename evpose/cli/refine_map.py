@@ -72,6 +72,7 @@ def main(
     from evpose.io.open import open_recording
     from evpose.mapping.refine_from_events import EventRefineConfig, measure_edge_offsets, refine_map
     from evpose.tracker.config import TrackerMode
+    from evpose.tracker.session import MapOutOfViewError
 
     check_outputs((out, report), inputs=(recording, map, config, refine_config))
     if out.suffix.lower() != ".ply":
@@ -91,9 +92,12 @@ def main(
     rounds = []
     for it in range(iterations):
         t0 = time.perf_counter()
-        traj, registered = track_for_refinement(rec, cmap, mode, config, progress=not quiet)
+        try:
+            traj, registered = track_for_refinement(rec, cmap, mode, config, progress=not quiet)
+        except MapOutOfViewError as exc:  # named the recording; `evpose track` names the map, the likelier culprit
+            raise InputError(map, f"{exc.problem} (recording {recording})") from None
         if registered.size == 0:
-            raise InputError(recording, f"iteration {it + 1}: no update registered against the map")
+            raise InputError(map, f"iteration {it + 1}: no update registered against this map (recording {recording})")
         offsets = measure_edge_offsets(rec.events, traj, registered, rec.calibration, cmap, rcfg)
         result = refine_map(cmap, offsets)
         cmap = result.contour_map

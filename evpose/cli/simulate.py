@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import re
 from pathlib import Path
@@ -75,6 +76,11 @@ def main(
 
     if not (cloud_density > 0 and range_noise >= 0):
         raise ConfigError(f"cloud density must be positive and range noise non-negative, got {cloud_density} and {range_noise}")
+    # The config's slider range: --cloud-density 1e12 ended in a MemoryError traceback (22 PiB of points).
+    limits = {f.name: f.metadata for f in dataclasses.fields(LidarConfig)}
+    for flag, value, meta in (("--cloud-density", cloud_density, limits["density_per_m2"]), ("--range-noise", range_noise, limits["range_noise_m"])):
+        if not meta["min"] <= value <= meta["max"]:
+            raise ConfigError(f"{flag} must be within {meta['min']:g}..{meta['max']:g} {meta['unit']}, got {value:g}")
 
     cfg = SimulationConfig(
         scenario=scenario,

@@ -142,8 +142,8 @@ def main(
     from evpose.io.config_file import check_config
 
     check_config(cfg)  # --rate-hz inf would run a million updates per second of recording
-    if not np.isfinite(acquire_s):
-        raise InputError(None, f"--acquire-s must be a finite number of seconds (0 = never give up), got {acquire_s}")
+    if not np.isfinite(acquire_s) or acquire_s < 0:  # -1 ran as 0 (never give up) silently
+        raise InputError(None, f"--acquire-s must be a finite number of seconds >= 0 (0 = never give up), got {acquire_s}")
     initial = parse_init(init)
     cmap = read_contour_map(map)
     rec = open_recording(recording, width, height)

@@ -94,9 +94,24 @@ def _kb_theta_from_distorted(thd, k1, k2, k3, k4, iters):
     return out
 
 
+MAX_SENSOR_PX = 65536
+"""Largest sensor width or height, pixels: event columns are uint16 (the same bound as ``--width/--height``)."""
+_FOCAL_PER_PX = (1e-3, 1e3)
+"""Plausible focal lengths, in sensor widths (heights for fy)."""
+MAX_EXTRINSIC_M = 100.0
+"""Largest camera-IMU translation accepted in ``T_cam_imu``, metres."""
+
 _RIGID_TOL = 5e-3
 """Largest deviation of ``R^T R`` from the identity (and of the bottom row from 0 0 0 1) accepted in ``T_cam_imu``: loose
 enough for rotations printed with 3-4 decimals, tight enough to refuse a scaled or sheared matrix."""
+
+
+def _whole(value, name: str) -> int:
+    """An integer field of a calibration file: 346.5 pixels or 12.5 us were truncated silently."""
+    number = float(value)
+    if not number.is_integer():
+        raise InputError(None, f"calibration's {name} {value!r} is not a whole number")
+    return int(number)
 
 
 def _check_rigid(T: np.ndarray) -> None:
@@ -150,6 +165,19 @@ class CameraCalibration:
             raise InputError(None, "calibration has NaN or infinite values")
         if self.width <= 0 or self.height <= 0 or self.fx <= 0 or self.fy <= 0:
             raise InputError(None, f"calibration needs positive size and focal lengths, got {self.width}x{self.height}, fx={self.fx}, fy={self.fy}")
+        # Pixel columns are uint16 (a width of 1e9 allocated terabytes for the first time surface, with a traceback).
+        if self.width > MAX_SENSOR_PX or self.height > MAX_SENSOR_PX:
+            raise InputError(None, f"calibration's sensor size {self.width}x{self.height} is beyond {MAX_SENSOR_PX} pixels")
+        # Focal lengths outside 1e-3..1e3 sensor widths are fields of view beyond 179.9 deg or under 0.06 deg: garbage
+        # or another unit (fx=1e-300 overflowed the projection with a traceback).
+        for name, f, size in (("fx", self.fx, self.width), ("fy", self.fy, self.height)):
+            if not _FOCAL_PER_PX[0] * size <= f <= _FOCAL_PER_PX[1] * size:
+                raise InputError(None, f"calibration's {name}={f:g} px is not a focal length for a {size} px sensor side"
+                                       f" (expected {_FOCAL_PER_PX[0] * size:g}..{_FOCAL_PER_PX[1] * size:g} px)")
+        # Camera and IMU sit on one rig: a translation beyond MAX_EXTRINSIC_M is garbage (1e300 printed numpy's overflow
+        # warnings and the tracker then blamed the map).
+        if np.abs(T[:3, 3]).max() > MAX_EXTRINSIC_M:
+            raise InputError(None, f"calibration's T_cam_imu translation {T[:3, 3].tolist()} m is beyond {MAX_EXTRINSIC_M:g} m (not metres?)")
         # A principal point off the sensor projects nothing onto it: the tracker then blamed the map ("no map point in view").
         if not (0.0 <= self.cx <= self.width and 0.0 <= self.cy <= self.height):
             raise InputError(None, f"calibration's principal point ({self.cx:g}, {self.cy:g}) px lies outside the {self.width}x{self.height} sensor")
@@ -271,8 +299,8 @@ class CameraCalibration:
     def from_dict(cls, d: dict, source: str | None = None) -> "CameraCalibration":
         try:
             return cls(
-                width=int(d["width"]),
-                height=int(d["height"]),
+                width=_whole(d["width"], "width"),
+                height=_whole(d["height"], "height"),
                 fx=float(d["fx"]),
                 fy=float(d["fy"]),
                 cx=float(d["cx"]),
@@ -280,7 +308,7 @@ class CameraCalibration:
                 model=DistortionModel(d.get("model", "none")),
                 dist=tuple(d.get("dist", ())),
                 T_cam_imu=np.asarray(d.get("T_cam_imu", np.eye(4)), dtype=np.float64),
-                time_offset_us=int(d.get("time_offset_us", 0)),
+                time_offset_us=_whole(d.get("time_offset_us", 0), "time_offset_us"),
             )
         except KeyError as exc:
             raise InputError(source, f"calibration is missing the field {exc.args[0]!r}") from None

@@ -9,6 +9,20 @@ import numpy as np
 from evpose.errors import InputError
 
 EVENT_DTYPES = {"t": np.int64, "x": np.uint16, "y": np.uint16, "p": np.int8}
+MAX_SPAN_US = (1 << 27) * 1000
+"""Longest span of one recording's events, microseconds (~37 hours, what the evpose HDF5 millisecond index holds):
+beyond it a timestamp is wrong, and one stray far-future event made `evpose track` run updates through empty time."""
+
+
+def check_span(t: np.ndarray, source, offset: int = 0, t_first: int | None = None) -> None:
+    """Raise :class:`InputError` naming the first event more than :data:`MAX_SPAN_US` after the first one
+    (``t_first``, default ``t[0]``; ``offset``: global index of ``t[0]``)."""
+    if not len(t):
+        return
+    t0 = int(t[0]) if t_first is None else int(t_first)
+    if int(t[-1]) - t0 > MAX_SPAN_US:
+        i = int(np.argmax(t - t0 > MAX_SPAN_US))
+        raise InputError(source, f"events span {(int(t[-1]) - t0) / 3.6e9:.1f} hours (from {t0} to {int(t[-1])} us); timestamps look wrong", f"event {offset + i}")
 
 
 @dataclass(frozen=True)

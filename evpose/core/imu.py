@@ -68,7 +68,7 @@ class ImuSamples:
         # Far beyond any IMU's range (MEMS parts saturate at 16-32 g and 35-70 rad/s): a unit or scale error, which
         # would otherwise end in an indeterminate factor graph.
         for name, values, limit, unit in (("acceleration", self.acc, MAX_ACCELERATION, "m/s^2"), ("angular rate", self.gyro, MAX_ANGULAR_RATE, "rad/s")):
-            mag = np.linalg.norm(values, axis=1)
+            mag = np.hypot.reduce(values, axis=1)  # np.linalg.norm overflowed on 1e300, with numpy's warning on stderr
             bad = np.flatnonzero(mag > limit)
             if bad.size:
                 i = int(bad[0])

@@ -7,10 +7,22 @@ from pathlib import Path
 
 import numpy as np
 
-from evpose.core.camera import CameraCalibration
+from evpose.core.camera import MAX_SENSOR_PX, CameraCalibration
 from evpose.core.events import EventArray
 from evpose.core.imu import ImuSamples
 from evpose.core.trajectory import Trajectory
+from evpose.errors import InputError
+
+
+def metadata_sensor_size(metadata: dict, source: str | Path | None) -> tuple[int, int] | None:
+    """(width, height) stated by a recording's metadata, or None; checked, since a file's metadata is free-form JSON
+    (a width of "big" ended in int()'s ValueError traceback)."""
+    if "width" not in metadata or "height" not in metadata:
+        return None
+    w, h = metadata["width"], metadata["height"]
+    if not all(isinstance(v, (int, float)) and not isinstance(v, bool) and float(v).is_integer() and 1 <= v <= MAX_SENSOR_PX for v in (w, h)):
+        raise InputError(source, f"metadata width/height {w!r} x {h!r} is not a sensor size (1..{MAX_SENSOR_PX} pixels)")
+    return int(w), int(h)
 
 
 @dataclass
@@ -35,9 +47,7 @@ class Recording:
         """(width, height) from the calibration, else from metadata, else None."""
         if self.calibration is not None:
             return self.calibration.width, self.calibration.height
-        if "width" in self.metadata and "height" in self.metadata:
-            return int(self.metadata["width"]), int(self.metadata["height"])
-        return None
+        return metadata_sensor_size(self.metadata, self.source)
 
     @property
     def t_start_us(self) -> int:

@@ -8,6 +8,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation, Slerp
 
 from evpose.core.timestamps import check_series, window_slice
+from evpose.errors import InputError
 
 
 def pose_matrix(rotation: Rotation, position: np.ndarray) -> np.ndarray:
@@ -32,6 +33,25 @@ def invert_pose(T: np.ndarray) -> np.ndarray:
     out[..., :3, 3] = -np.einsum("...ij,...j->...i", Rt, t)
     out[..., 3, 3] = 1.0
     return out
+
+
+MAX_COORDINATE_M = 1e7
+"""Largest coordinate magnitude a map, cloud or trajectory may have, metres (beyond the Earth's radius: not metres, or
+garbage; 1e300 overflowed the KD-tree of a map with a traceback, and evo's alignment of a trajectory with numpy's warnings)."""
+
+
+def quaternion_problem(quat_xyzw: np.ndarray) -> tuple[int, str] | None:
+    """(index, problem) of the first quaternion that cannot be normalised, or None; NaNs are left to ``validate``.
+
+    ``np.linalg.norm`` overflows on a component of 1e300 (numpy's warning on stderr, and the quaternion normalised to
+    zeros); readers call this before :meth:`Trajectory.from_arrays` to name the record with the problem."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        norms = np.linalg.norm(quat_xyzw, axis=1)
+    bad = np.flatnonzero((norms < 1e-9) | (norms == np.inf))
+    if not bad.size:
+        return None
+    i = int(bad[0])
+    return i, "quaternion has zero length" if norms[i] < 1e-9 else "quaternion's length is beyond the float range"
 
 
 @dataclass(frozen=True)
@@ -105,3 +125,11 @@ class Trajectory:
         if len(self) == 0:
             return
         check_series(self.t, np.isfinite(self.position).all(axis=1) & np.isfinite(self.quat_xyzw).all(axis=1), source, "pose")
+        bad = np.flatnonzero(np.abs(self.position).max(axis=1) > MAX_COORDINATE_M)
+        if bad.size:
+            raise InputError(source, f"position {self.position[bad[0]].tolist()} is beyond {MAX_COORDINATE_M:g} m (not metres?)", f"pose {int(bad[0])}")
+        # from_arrays normalised every quaternion; one that is not unit now had zero length or a length beyond the
+        # float range (1e300: the norm overflowed), and scipy's Rotation then failed with a traceback.
+        bad = np.flatnonzero(np.abs(np.einsum("ij,ij->i", self.quat_xyzw, self.quat_xyzw) - 1.0) > 1e-6)
+        if bad.size:
+            raise InputError(source, "quaternion has zero length or one beyond the float range", f"pose {int(bad[0])}")

@@ -23,7 +23,7 @@ def load_estimate(path: str | Path) -> Trajectory:
 
     path = Path(path)
     if not path.exists():
-        raise InputError(path, "no such file")
+        raise InputError(path, "is a folder, not a file" if path.is_dir() else "no such file")
     traj = read_tum(path)
     traj.validate(str(path))
     return traj

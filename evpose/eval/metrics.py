@@ -195,7 +195,9 @@ def evaluate(est: Trajectory, ref: Trajectory, config: EvalConfig = EvalConfig()
         raise InputError(est_name, f"no pose within {config.max_time_diff_s} s of a ground-truth pose (trajectories do not associate)") from None
     n = traj_est.num_poses
     if n < config.min_poses:
-        raise InputError(est_name, f"only {n} poses associate with the ground truth (need at least {config.min_poses})")
+        if len(ref) < config.min_poses:  # reported against the estimate's file before
+            raise InputError(ref_name, f"the ground truth has only {len(ref)} pose{'' if len(ref) == 1 else 's'} (need at least {config.min_poses})")
+        raise InputError(est_name, f"only {n} {'pose associates' if n == 1 else 'poses associate'} with the ground truth (need at least {config.min_poses})")
 
     alignment = np.eye(4)
     scale = 1.0

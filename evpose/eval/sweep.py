@@ -35,11 +35,15 @@ class SweepTarget:
     """Default metric (key of the job's ``metrics``) that ranks configurations."""
     minimize: bool
     """True when a lower score is better."""
+    metrics: tuple[str, ...]
+    """The metrics the job returns, any of which ``--score`` may name (checked before the jobs run)."""
 
 
 TARGETS: dict[str, SweepTarget] = {
-    "tracking": SweepTarget("evpose.tracker.config:TrackerConfig", "evpose.eval.suite:tracking_job", "ate_mean_m", True),
-    "noise-filter": SweepTarget("evpose.frontend.noise_filter:NoiseFilterConfig", "evpose.eval.jobs:noise_filter_job", "kept_share", False),
+    "tracking": SweepTarget("evpose.tracker.config:TrackerConfig", "evpose.eval.suite:tracking_job", "ate_mean_m", True,
+                            ("are_mean_deg", "ate_mean_m", "filtered_share", "ok_share", "rre_mean_deg", "rte_mean_m")),
+    "noise-filter": SweepTarget("evpose.frontend.noise_filter:NoiseFilterConfig", "evpose.eval.jobs:noise_filter_job", "kept_share", False,
+                                ("events", "events_kept", "kept_share")),
 }
 
 
@@ -175,6 +179,9 @@ def run_sweep(target_name: str, grid_items: list[str], recordings: list[str], ou
     if not recordings:
         raise ConfigError("a sweep needs at least one recording")
     target = TARGETS[target_name]
+    if score is not None and score not in target.metrics:
+        # Checked only once every job had run (minutes of work, and OUT/jobs written) before.
+        raise ConfigError(f"score {score!r} is not a metric of this sweep (metrics: {', '.join(target.metrics)})")
     configs = build_configs(target, parse_grid(grid_items))
     jobs = sweep_jobs(target, configs, recordings)
     out_dir = Path(out_dir)

@@ -74,10 +74,12 @@ def check_outputs(outputs, inputs=(), folders=()) -> None:
 
 
 @contextlib.contextmanager
-def atomic_path(dst: str | Path, inputs: tuple[str | Path, ...] = (), is_dir: bool = False):
+def atomic_path(dst: str | Path, inputs: tuple[str | Path, ...] = (), is_dir: bool = False, same_name: bool = False):
     """Yield a temporary path next to ``dst``; on success rename it onto ``dst``, on error delete it.
 
-    ``inputs`` are files this output must never replace.
+    ``inputs`` are files this output must never replace. ``same_name``: the temporary path has ``dst``'s own name,
+    inside a temporary folder, and is not created (for writers that name what they write after their path: a ROS2
+    bag's storage file and its metadata carried the random temporary name).
     """
     dst = Path(dst)
     _check_not_input(dst, tuple(Path(p) for p in inputs))
@@ -90,7 +92,11 @@ def atomic_path(dst: str | Path, inputs: tuple[str | Path, ...] = (), is_dir: bo
             raise InputError(dst, f"cannot create the output folder ({exc.strerror})") from None
     if not os.access(parent, os.W_OK):
         raise InputError(dst, "output folder is not writable")
-    if is_dir:
+    holder = None
+    if same_name:
+        holder = Path(tempfile.mkdtemp(prefix=f".{dst.name}.", suffix=".tmp", dir=parent))
+        tmp = holder / dst.name
+    elif is_dir:
         tmp = Path(tempfile.mkdtemp(prefix=f".{dst.name}.", suffix=".tmp", dir=parent))
     else:
         fd, name = tempfile.mkstemp(prefix=f".{dst.name}.", suffix=".tmp" + dst.suffix, dir=parent)
@@ -110,3 +116,6 @@ def atomic_path(dst: str | Path, inputs: tuple[str | Path, ...] = (), is_dir: bo
             with contextlib.suppress(FileNotFoundError):
                 tmp.unlink()
         raise
+    finally:
+        if holder is not None:
+            shutil.rmtree(holder, ignore_errors=True)

@@ -111,6 +111,32 @@ def _check_range(value, meta) -> None:
         raise ValueError(f"{value!r} is outside the allowed range {lo}..{hi}{unit}")
 
 
+def _unique_keys(pairs: list) -> dict:
+    """JSON object hook: a key given twice is an error (both parsers kept the last value silently)."""
+    keys = [k for k, _ in pairs]
+    dup = next((k for i, k in enumerate(keys) if k in keys[:i]), None)
+    if dup is not None:
+        raise ValueError(f"duplicate key {dup!r}")
+    return dict(pairs)
+
+
+def _load_yaml(text: str):
+    """``yaml.safe_load`` refusing a key given twice in one mapping, with the line of the second."""
+    import yaml
+
+    class UniqueKeyLoader(yaml.SafeLoader):
+        def construct_mapping(self, node, deep=False):
+            seen = set()
+            for key_node, _ in node.value:
+                key = self.construct_object(key_node, deep=True)
+                if key in seen:
+                    raise yaml.constructor.ConstructorError(None, None, f"duplicate key {key!r}", key_node.start_mark)
+                seen.add(key)
+            return super().construct_mapping(node, deep)
+
+    return yaml.load(text, Loader=UniqueKeyLoader)  # noqa: S506 - a SafeLoader subclass
+
+
 def read_config(cls, path: str | Path):
     """Read dataclass ``cls`` from ``.yaml``/``.yml``/``.json``; missing keys keep their defaults."""
     path = Path(path)
@@ -122,11 +148,9 @@ def read_config(cls, path: str | Path):
         raise InputError(path, "not a text file (a config file is UTF-8 YAML or JSON)") from None
     try:
         if path.suffix.lower() == ".json":
-            data = json.loads(text)
+            data = json.loads(text, object_pairs_hook=_unique_keys)
         else:
-            import yaml
-
-            data = yaml.safe_load(text)
+            data = _load_yaml(text)
     except Exception as exc:  # noqa: BLE001 - any parser error is bad input
         # Both parsers know where they stopped (JSONDecodeError.lineno, YAML's problem_mark): name that line.
         mark = getattr(exc, "problem_mark", None)
@@ -134,7 +158,8 @@ def read_config(cls, path: str | Path):
         what = "JSON" if path.suffix.lower() == ".json" else "YAML"
         detail = getattr(exc, "problem", None) or getattr(exc, "msg", None) or str(exc).splitlines()[0]
         raise InputError(path, f"not valid {what} ({detail})", f"line {line}" if line else None) from None
-    return config_from_dict(cls, data or {}, str(path))
+    # `data or {}` read a file holding `false` or `0` as the defaults.
+    return config_from_dict(cls, {} if data is None else data, str(path))
 
 
 def write_config(cfg, path: str | Path) -> None:

@@ -25,8 +25,8 @@ import numpy as np
 from evpose.core.camera import CameraCalibration, DistortionModel
 from evpose.core.events import EventArray
 from evpose.core.imu import ImuSamples
-from evpose.core.recording import Recording
-from evpose.core.trajectory import Trajectory
+from evpose.core.recording import Recording, metadata_sensor_size
+from evpose.core.trajectory import Trajectory, quaternion_problem
 from evpose.errors import InputError
 from evpose.io import ecd_text
 from evpose.io.atomic import atomic_path
@@ -197,12 +197,12 @@ def read_ecd_context(folder: str | Path, width: int | None = None, height: int |
         if calibration is not None:
             check_size_flags(folder / SIDECAR_FILE, (calibration.width, calibration.height), width, height, "its calibration")
         elif "width" in metadata and "height" in metadata:
-            check_size_flags(folder / SIDECAR_FILE, (int(metadata["width"]), int(metadata["height"])), width, height, "its metadata")
+            check_size_flags(folder / SIDECAR_FILE, metadata_sensor_size(metadata, folder / SIDECAR_FILE), width, height, "its metadata")
         size = (int(width), int(height))
     elif calibration is not None:
         size = (calibration.width, calibration.height)
     elif "width" in metadata and "height" in metadata:
-        size = (int(metadata["width"]), int(metadata["height"]))
+        size = metadata_sensor_size(metadata, folder / SIDECAR_FILE)
     if size is not None and (size[0] <= 0 or size[1] <= 0):
         raise InputError(folder, f"sensor size must be positive, got {size[0]}x{size[1]}")
     calib_path = folder / CALIB_FILE
@@ -225,9 +225,9 @@ def read_ecd_context(folder: str | Path, width: int | None = None, height: int |
         t, v = read_table(folder / GT_FILE, 8)
         if t.size == 0:
             raise InputError(folder / GT_FILE, "contains no poses")
-        if np.any(np.linalg.norm(v[:, 3:7], axis=1) < 1e-9):
-            i = int(np.flatnonzero(np.linalg.norm(v[:, 3:7], axis=1) < 1e-9)[0])
-            raise InputError(folder / GT_FILE, "quaternion has zero length", f"pose {i}")
+        bad = quaternion_problem(v[:, 3:7])
+        if bad is not None:
+            raise InputError(folder / GT_FILE, bad[1], f"pose {bad[0]}")
         gt = Trajectory.from_arrays(t, v[:, 0:3], v[:, 3:7])
     rec = Recording(EventArray.empty(), imu, gt, calibration, metadata, source=folder)
     return rec, size

@@ -68,8 +68,12 @@ class EventH5Reader:
             if any(len(ds.shape) != 1 or ds.shape[0] != n for ds in self._cols.values()):
                 raise EventH5Error(self.path, "events/x, y, t, p differ in length or are not 1-D")
             self.n_events = int(n)
-            self.t_offset_us = int(np.asarray(self._f["t_offset"][()]).reshape(-1)[0]) if "t_offset" in self._f else 0
+            self.t_offset_us = self._read_t_offset()
             self._ms_to_idx = np.asarray(self._f["ms_to_idx"][()], dtype=np.int64) if "ms_to_idx" in self._f else None
+            idx = self._ms_to_idx
+            if idx is not None and (idx.ndim != 1 or (idx.size and (idx[0] < 0 or idx[-1] > n or np.any(np.diff(idx) < 0)))):
+                # Windowed reads trusted it: a reversed or overlong index silently gave wrong windows.
+                raise EventH5Error(self.path, f"ms_to_idx is not a non-decreasing index into the {n} events (the file is damaged)")
         except BaseException:
             self._f.close()
             raise
@@ -82,6 +86,17 @@ class EventH5Reader:
 
     def __exit__(self, *exc) -> None:
         self.close()
+
+    def _read_t_offset(self) -> int:
+        """``t_offset`` in us (0 if absent): a NaN one ended in a ValueError traceback, an array silently gave its first value."""
+        if "t_offset" not in self._f:
+            return 0
+        ds = self._f["t_offset"]
+        values = np.asarray(ds[()]).reshape(-1) if isinstance(ds, h5py.Dataset) else np.zeros(0)
+        if values.size != 1 or values.dtype.kind not in "iuf" or not np.isfinite(values[0]):
+            got = repr(values[0].item()) if values.size == 1 else f"{values.size} values" if isinstance(ds, h5py.Dataset) else "a group"
+            raise EventH5Error(self.path, f"t_offset must be one finite number of microseconds, got {got}")
+        return int(values[0])
 
     def _times(self, i0: int, i1: int) -> np.ndarray:
         """Absolute times (int64 us) of events ``i0:i1``; a NaN in a float column was cast to -2**63 (with numpy's

@@ -28,16 +28,16 @@ import hdf5plugin  # registers the Blosc filter for reading and writing
 import numpy as np
 
 from evpose.core.camera import CameraCalibration
-from evpose.core.events import EventArray
+from evpose.core.events import MAX_SPAN_US, EventArray
 from evpose.core.imu import ImuSamples
 from evpose.core.recording import Recording
-from evpose.core.trajectory import Trajectory
+from evpose.core.trajectory import Trajectory, quaternion_problem
 from evpose.errors import InputError
 from evpose.io.atomic import atomic_path
 
 FORMAT_NAME = "recording"
 FORMAT_VERSION = 1
-_MAX_INDEX_MS = 1 << 27  # ~37 hours of millisecond index entries (1 GiB)
+_MAX_INDEX_MS = MAX_SPAN_US // 1000  # ~37 hours of millisecond index entries (1 GiB)
 _EVENT_COLUMNS = (("t", np.int64), ("x", np.uint16), ("y", np.uint16), ("p", np.int8))
 
 
@@ -255,7 +255,7 @@ class H5RecordingReader:
     def __init__(self, path: str | Path):
         self.path = Path(path)
         if not self.path.is_file():
-            raise H5FormatError(self.path, "no such file")
+            raise H5FormatError(self.path, "is a folder, not a file" if self.path.is_dir() else "no such file")
         try:
             # A chunk cache larger than one chunk of every column keeps small consecutive windows from decompressing the same chunk again.
             self._file = h5py.File(self.path, "r", rdcc_nbytes=32 << 20)
@@ -343,9 +343,9 @@ class H5RecordingReader:
             gt = self._typed(g + "t", "iu")
             m = gt.shape[0]
             q = self._read(self._typed(g + "quat_xyzw", "iuf", 4, m))
-            bad = np.flatnonzero(np.linalg.norm(q, axis=1) < 1e-9)
-            if bad.size:
-                raise H5FormatError(self.path, "quaternion has zero length", f"ground-truth pose {int(bad[0])}")
+            bad = quaternion_problem(q)
+            if bad is not None:
+                raise H5FormatError(self.path, bad[1], f"ground-truth pose {bad[0]}")
             self.ground_truth = Trajectory.from_arrays(self._read(gt), self._read(self._typed(g + "position", "iuf", 3, m)), q)
 
     def _read(self, ds, i0: int | None = None, i1: int | None = None) -> np.ndarray:
@@ -395,14 +395,30 @@ class H5RecordingReader:
         i0, i1, _ = self._locate(t0_us, t1_us)
         return i0, i1
 
+    def _events(self, i0: int, columns: dict[str, np.ndarray]) -> EventArray:
+        """The columns of events ``i0:...`` in the schema's dtypes. A column of another integer dtype (the schema's
+        check admits any) is cast only when every value fits: an int32 x of -3 passed the sensor-bounds check (which
+        tests x >= width) and the kernels then indexed pixel -3."""
+        for name, dtype in _EVENT_COLUMNS:
+            col = columns[name]
+            if col.dtype != dtype:
+                lim = np.iinfo(dtype)
+                bad = np.flatnonzero((col < lim.min) | (col > lim.max))
+                if bad.size:
+                    i = int(bad[0])
+                    raise H5FormatError(self.path, f"{name}={col[i]} does not fit the schema's {np.dtype(dtype).name} (see docs/recording_h5.md)",
+                                        f"event {i0 + i}")
+                columns[name] = col.astype(dtype)
+        return EventArray(*(np.ascontiguousarray(columns[c]) for c in "txyp"))
+
     def read_slice(self, i0: int, i1: int) -> EventArray:
         """Events ``i0:i1`` by index."""
-        return EventArray(*(np.ascontiguousarray(self._read(self._cols[c], i0, i1)) for c in "txyp"))
+        return self._events(i0, {c: self._read(self._cols[c], i0, i1) for c in "txyp"})
 
     def read_events(self, t0_us: int | None = None, t1_us: int | None = None) -> EventArray:
         """Events with ``t0 <= t < t1`` (None = open end)."""
         i0, i1, t = self._locate(t0_us, t1_us)
-        return EventArray(np.ascontiguousarray(t), *(np.ascontiguousarray(self._read(self._cols[c], i0, i1)) for c in "xyp"))
+        return self._events(i0, {"t": t, **{c: self._read(self._cols[c], i0, i1) for c in "xyp"}})
 
     def iter_chunks(self, chunk_events: int = 1 << 22):
         """Yield the events as consecutive batches of at most ``chunk_events``."""

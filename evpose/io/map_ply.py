@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from evpose.core.contour_map import ContourMap
+from evpose.core.trajectory import MAX_COORDINATE_M  # noqa: F401 - the bound shared with trajectories
 from evpose.errors import InputError
 from evpose.io.atomic import atomic_path
 
@@ -143,9 +144,6 @@ def _read_vertices(path: Path) -> np.ndarray | None:
         return None
 
 
-MAX_COORDINATE_M = 1e7
-"""Largest coordinate magnitude a map or cloud may have, metres (beyond the Earth's radius: not metres, or garbage;
-1e300 overflowed the KD-tree with a traceback)."""
 
 
 def _check_points(points: np.ndarray, path: Path) -> None:
@@ -191,7 +189,7 @@ def read_contour_map(path: str | Path) -> ContourMap:
     """Read a contour map written by :func:`write_contour_map`, or any point cloud open3d reads."""
     path = Path(path)
     if not path.is_file():
-        raise MapFileError(path, "no such file")
+        raise MapFileError(path, "is a folder, not a file" if path.is_dir() else "no such file")
     verts = None
     if path.suffix.lower() == ".ply":
         try:
@@ -261,7 +259,7 @@ def read_point_cloud(path: str | Path) -> tuple[np.ndarray, dict[str, np.ndarray
 
     path = Path(path)
     if not path.is_file():
-        raise MapFileError(path, "no such file")
+        raise MapFileError(path, "is a folder, not a file" if path.is_dir() else "no such file")
     if path.suffix.lower() not in (".ply", ".pcd", ".xyz", ".xyzn", ".xyzrgb", ".pts"):
         raise MapFileError(path, f"not a point-cloud file (unknown suffix {path.suffix!r})")
     with open(path, "rb") as fh:

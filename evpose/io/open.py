@@ -12,7 +12,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Iterator
 
-from evpose.core.events import EventArray
+from evpose.core.events import EventArray, check_span
 from evpose.core.recording import Recording
 from evpose.errors import ConfigError, InputError
 
@@ -125,11 +125,13 @@ def open_stream(path: str | Path, width: int | None = None, height: int | None =
     inner = stream.batches
 
     def batches(cb=None):
-        first = True
+        t_first, offset = None, 0
         for b in inner(cb):
-            if first and len(b):
+            if t_first is None and len(b):
                 check_nonnegative_times(b, path)  # batches are sorted: the first event is the earliest
-                first = False
+                t_first = int(b.t[0])
+            check_span(b.t, path, offset, t_first)  # `info` described a stray event 11 days on as the recording's end
+            offset += len(b)
             yield b
 
     stream.batches = batches
@@ -215,4 +217,5 @@ def open_recording(path: str | Path, width: int | None = None, height: int | Non
         rec.events = EventArray.concatenate(list(stream.batches(None)))
     rec.validate()
     check_nonnegative_times(rec.events, path)
+    check_span(rec.events.t, path)  # what `convert` refuses (the HDF5 index's span), every reader refuses
     return rec

@@ -20,7 +20,6 @@ plus int64 conversions dominated). Layouts:
 
 from __future__ import annotations
 
-import shutil
 from pathlib import Path
 from typing import Iterator
 
@@ -405,11 +404,9 @@ def write_rosbag(
         return Header(stamp=stamp(t_us), frame_id=frame, **extra)
 
     inputs = (recording.source,) if recording.source is not None else ()
-    with atomic_path(path, inputs=inputs, is_dir=ros2) as tmp:
-        if ros2:
-            shutil.rmtree(tmp)  # the writer creates the folder itself
-        else:
-            tmp.unlink()
+    # same_name: rosbags names a ROS2 bag's storage file (and records it in metadata.yaml and the database) after the
+    # folder: a temporary folder's name made it a hidden ".NAME.x1y2z3.tmp.db3", different on every run.
+    with atomic_path(path, inputs=inputs, is_dir=ros2, same_name=True) as tmp:
         ser = store.serialize_cdr if ros2 else store.serialize_ros1
         writer = Writer2(tmp, version=9) if ros2 else Writer1(tmp)
         with writer:

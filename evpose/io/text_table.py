@@ -52,7 +52,7 @@ def read_table(path: str | Path, n_cols: int, unit: TimeUnit = TimeUnit.SECONDS,
     """
     path = Path(path)
     if not path.is_file():
-        raise InputError(path, "no such file")
+        raise InputError(path, "is a folder, not a file" if path.is_dir() else "no such file")
     ts: list[int] = []
     rows: list[list[float]] = []
     try:

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from evpose.core.trajectory import Trajectory
+from evpose.core.trajectory import Trajectory, quaternion_problem
 from evpose.errors import InputError
 from evpose.io.atomic import atomic_path
 from evpose.io.text_table import TimeUnit, read_table, write_table
@@ -18,11 +18,16 @@ def read_tum(path: str | Path, unit: TimeUnit = TimeUnit.SECONDS) -> Trajectory:
     t, v = read_table(path, 8, unit=unit, line_numbers=lines)
     if t.size == 0:
         raise InputError(path, "contains no poses")
-    norms = np.linalg.norm(v[:, 3:7], axis=1)
-    bad = np.flatnonzero(norms < 1e-9)
-    if bad.size:
-        raise InputError(path, "quaternion has zero length", f"line {lines[int(bad[0])]}")
-    return Trajectory.from_arrays(t, v[:, 0:3], v[:, 3:7])
+    bad = quaternion_problem(v[:, 3:7])
+    if bad is not None:
+        raise InputError(path, bad[1], f"line {lines[bad[0]]}")
+    traj = Trajectory.from_arrays(t, v[:, 0:3], v[:, 3:7])
+    try:
+        traj.validate(str(path))  # e.g. a position beyond the Earth (`evpose info` described a 1e12 m trajectory)
+    except InputError as exc:
+        pose = exc.record.split()[-1] if exc.record and exc.record.startswith("pose ") else None
+        raise InputError(path, exc.problem, f"line {lines[int(pose)]}" if pose is not None else exc.record) from None
+    return traj
 
 
 def write_tum(path: str | Path, traj: Trajectory, inputs: tuple = ()) -> None:

@@ -12,3 +12,43 @@ def test_ctrl_c_while_the_command_imports_is_one_line_not_a_traceback(monkeypatc
     monkeypatch.setattr(importlib, "import_module", interrupted_import)
     assert cli_main.run(["convert", "in", "out.h5"]) == 130
     assert capsys.readouterr().err.strip().splitlines() == ["evpose convert: interrupted"]
+
+
+def test_sigterm_while_an_output_is_written_removes_its_temporary_file_and_exits_143(monkeypatch, tmp_path, capsys):
+    # Python's default SIGTERM (kill, timeout) ended the process at once and left `.OUT.XXXX.tmp` behind.
+    import os
+    import signal
+    import sys
+    import time
+    import types
+    from pathlib import Path
+
+    from evpose.io.atomic import atomic_path
+
+    def main(out: Path) -> int:
+        with atomic_path(out) as tmp:
+            tmp.write_text("half")
+            os.kill(os.getpid(), signal.SIGTERM)
+            time.sleep(5)  # the handler raises at the next bytecode: never reached
+        return 0
+
+    module = types.ModuleType("fake_command")
+    module.main = main
+    monkeypatch.setitem(sys.modules, "fake_command", module)
+    monkeypatch.setitem(cli_main.COMMANDS, "fake", ("fake_command", "writes an output, then is terminated"))
+    before = signal.getsignal(signal.SIGTERM)
+    assert cli_main.run(["fake", "--out", str(tmp_path / "est.txt")]) == 143
+    assert capsys.readouterr().err.strip().splitlines() == ["evpose fake: terminated"]
+    assert list(tmp_path.iterdir()) == []
+    assert signal.getsignal(signal.SIGTERM) is before
+
+
+def test_ctrl_c_inside_a_numba_dispatcher_is_one_line_not_a_system_error(monkeypatch, capsys):
+    # CPython reports a KeyboardInterrupt raised while a C function (numba's dispatcher) runs Python code as a
+    # SystemError "returned a result with an exception set", caused by it: a traceback and exit 1 in `simulate`.
+    def interrupted_import(name, *args):
+        raise SystemError("CPUDispatcher(<function _shade>) returned a result with an exception set") from KeyboardInterrupt()
+
+    monkeypatch.setattr(importlib, "import_module", interrupted_import)
+    assert cli_main.run(["simulate", "--scenario", "landing", "--out", "x.h5"]) == 130
+    assert capsys.readouterr().err.strip().splitlines() == ["evpose simulate: interrupted"]

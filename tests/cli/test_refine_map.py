@@ -61,3 +61,14 @@ def test_refine_map_without_edge_normals_is_a_one_line_error(landing_files, tmp_
     err = capsys.readouterr().err
     assert code == 2 and "edge normals" in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "r.ply").exists()
+
+
+def test_refine_map_with_a_map_in_another_frame_names_the_map_like_track(landing_files, tmp_path, capsys):
+    # The error named the recording; `evpose track` names the map (with the recording), the likelier culprit.
+    d = landing_files
+    cmap = read_contour_map(d / "map.ply")
+    write_contour_map(tmp_path / "far.ply", dataclasses.replace(cmap, points=cmap.points + 100.0))
+    code = run(["refine-map", str(d / "rec.h5"), "--map", str(tmp_path / "far.ply"), "--out", str(tmp_path / "r.ply"), "--quiet"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1
+    assert err[0].startswith(f"evpose refine-map: error: {tmp_path / 'far.ply'}: only 0 map points are in view") and "(recording " in err[0]

@@ -202,6 +202,7 @@ def test_track_out_onto_a_folder_is_refused_before_tracking(files, tmp_path, cap
     (["--rate-hz", "inf"], "rate_hz: expected a finite number, got inf"),
     (["--rate-hz", "5000"], "rate_hz: 5000.0 is outside the allowed range 10.0..1000.0 Hz"),
     (["--acquire-s", "nan"], "--acquire-s must be a finite number"),
+    (["--acquire-s", "-1"], "--acquire-s must be a finite number of seconds >= 0"),
 ])
 def test_track_numbers_from_flags_are_checked_like_config_files(files, tmp_path, capsys, args, message):
     # --rate-hz inf ran ~1e6 updates per recorded second (a hang); --acquire-s nan was a ValueError traceback.

@@ -143,3 +143,30 @@ def test_extrinsic_rotation_printed_with_four_decimals_is_accepted():
 def test_principal_point_outside_the_sensor_is_an_input_error():
     with pytest.raises(InputError, match=r"principal point \(5000, 5\) px lies outside the 10x10 sensor"):
         CameraCalibration(10, 10, 5.0, 5.0, 5000.0, 5.0)
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    # fx=1e-300 overflowed the projection, a width of 1e9 allocated terabytes: both tracebacks.
+    ({"fx": 1e-300}, r"calibration's fx=1e-300 px is not a focal length for a 346 px sensor side \(expected 0.346..346000 px\)"),
+    ({"fy": 1e300}, r"calibration's fy=1e\+300 px is not a focal length for a 260 px sensor side"),
+    ({"width": 1_000_000_000}, r"calibration's sensor size 1000000000x260 is beyond 65536 pixels"),
+])
+def test_implausible_focal_length_or_sensor_size_is_an_input_error(kwargs, message):
+    args = {"width": 346, "height": 260, "fx": 247.0, "fy": 247.0, "cx": 172.5, "cy": 129.5, **kwargs}
+    with pytest.raises(InputError, match=message):
+        CameraCalibration(**args)
+
+
+def test_extrinsic_translation_beyond_a_rig_is_an_input_error():
+    T = np.eye(4)
+    T[0, 3] = 1e300  # numpy's overflow warnings were printed and the tracker blamed the map
+    with pytest.raises(InputError, match=r"T_cam_imu translation \[1e\+300, 0.0, 0.0\] m is beyond 100 m"):
+        CameraCalibration(10, 10, 5.0, 5.0, 5.0, 5.0, T_cam_imu=T)
+
+
+@pytest.mark.parametrize("field, value", [("width", 346.5), ("time_offset_us", 12.5)])
+def test_from_dict_refuses_a_fractional_integer_field_instead_of_truncating_it(field, value):
+    d = CameraCalibration(346, 260, 247.0, 247.0, 172.5, 129.5).to_dict()
+    d[field] = value
+    with pytest.raises(InputError, match=rf"cal.json: calibration's {field} {value} is not a whole number"):
+        CameraCalibration.from_dict(d, source="cal.json")

@@ -28,3 +28,14 @@ def test_validate_rejects_repeated_timestamps_and_nan():
     acc[1, 2] = np.inf
     with pytest.raises(InputError, match="IMU sample 1: NaN or infinite"):
         ImuSamples.from_arrays([0, 1], acc, np.zeros((2, 3))).validate()
+
+
+def test_huge_sample_is_named_with_its_magnitude_and_no_overflow_warning():
+    import warnings
+
+    acc = np.zeros((3, 3))
+    acc[2, 1] = 1e300  # np.linalg.norm overflowed here and numpy printed a RuntimeWarning before the error line
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(InputError, match=r"IMU sample 2: acceleration 1e\+300 m/s\^2 is beyond any IMU's range"):
+            ImuSamples.from_arrays([0, 1, 2], acc, np.zeros((3, 3))).validate()

@@ -35,3 +35,11 @@ def test_summary_reports_counts_rates_and_duration():
     assert s["imu_rate_hz"] == pytest.approx(500.0)
     assert s["positive_share"] == pytest.approx(0.5, abs=1e-3)
     assert s["ground_truth_poses"] == 0 and s["calibration"] is None
+
+
+@pytest.mark.parametrize("width, height", [("big", 260), (-5, 260), (346.5, 260), (True, 260), (346, 10**6)])
+def test_metadata_sensor_size_that_is_not_one_is_an_input_error_naming_the_file(width, height):
+    # A width of "big" in a file's metadata ended in int()'s ValueError traceback.
+    rec = Recording(EventArray.empty(), metadata={"width": width, "height": height}, source="rec.h5")
+    with pytest.raises(InputError, match=r"rec.h5: metadata width/height .* is not a sensor size \(1..65536 pixels\)"):
+        rec.sensor_size

@@ -57,3 +57,21 @@ def test_infinite_quaternion_is_reported_by_validate_without_numpy_warnings():
         traj = Trajectory.from_arrays(np.array([0, 1]), np.zeros((2, 3)), q)
     with pytest.raises(InputError, match="pose 1: NaN or infinite value"):
         traj.validate()
+
+
+@pytest.mark.parametrize("q", [[1e300, 0.0, 0.0, 1.0], [0.0, 0.0, 0.0, 0.0]])
+def test_quaternion_that_cannot_be_normalised_is_named_not_a_scipy_traceback(q):
+    quats = np.tile([0.0, 0.0, 0.0, 1.0], (3, 1))
+    quats[1] = q
+    traj = Trajectory.from_arrays([0, 1, 2], np.zeros((3, 3)), quats)
+    with pytest.raises(InputError, match="gt.txt: pose 1: quaternion has zero length or one beyond the float range"):
+        traj.validate("gt.txt")
+
+
+def test_position_beyond_the_earth_is_named():
+    # 1e300 went through evo's alignment with numpy's overflow warnings on stderr and an 'inf' table.
+    pos = np.zeros((3, 3))
+    pos[2, 0] = 1e12
+    traj = Trajectory.from_arrays([0, 1, 2], pos, np.tile([0.0, 0.0, 0.0, 1.0], (3, 1)))
+    with pytest.raises(InputError, match=r"gt.txt: pose 2: position \[1000000000000.0, 0.0, 0.0\] is beyond 1e\+07 m \(not metres\?\)"):
+        traj.validate("gt.txt")

@@ -154,3 +154,9 @@ def test_empty_estimate_is_an_input_error():
     gt = helix(n=20)
     with pytest.raises(InputError, match="no poses"):
         evaluate(Trajectory.empty(), gt, est_name="est.txt")
+
+
+def test_a_ground_truth_too_short_to_evaluate_is_named_not_the_estimate():
+    gt = helix(n=50)
+    with pytest.raises(InputError, match=r"^gt.txt: the ground truth has only 1 pose \(need at least 3\)"):
+        evaluate(gt, gt[10:11], est_name="est.txt", ref_name="gt.txt")

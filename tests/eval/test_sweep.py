@@ -127,3 +127,20 @@ def test_sweep_cli_rejects_unknown_field_with_exit_code_2(tmp_path, recordings, 
     assert code == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "unknown config field 'window'" in err[0]
+
+
+def test_unknown_score_is_refused_before_any_job_runs(tmp_path, recordings, monkeypatch):
+    # It was found only in the finished table: every job had run and OUT/jobs was written before the error.
+    import evpose.eval.sweep as sweep_mod
+
+    monkeypatch.setattr(sweep_mod, "run_jobs", lambda *a, **k: pytest.fail("a job ran"))
+    with pytest.raises(ConfigError, match=r"score 'nonsense' is not a metric of this sweep \(metrics: events, events_kept, kept_share\)"):
+        run_sweep("noise-filter", ["window_us=[1000]"], recordings[:1], tmp_path / "out", RunnerConfig(workers=0), score="nonsense")
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("target", ["tracking", "noise-filter"])
+def test_each_targets_metrics_list_holds_its_default_score(target):
+    from evpose.eval.sweep import TARGETS
+
+    assert TARGETS[target].score in TARGETS[target].metrics

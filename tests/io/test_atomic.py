@@ -103,3 +103,16 @@ def test_the_same_path_for_two_outputs_is_refused(tmp_path):
     with pytest.raises(InputError, match="given for two outputs"):
         check_outputs((tmp_path / "o",), folders=(tmp_path / "o",))
     check_outputs((tmp_path / "a.txt", None, None, tmp_path / "b.txt"))
+
+
+def test_same_name_yields_the_output_name_inside_a_temporary_folder_that_never_stays(tmp_path):
+    with atomic_path(tmp_path / "bag", is_dir=True, same_name=True) as tmp:
+        assert tmp.name == "bag" and not tmp.exists()
+        tmp.mkdir()
+        (tmp / "bag.db3").write_text("x")
+    assert [p.name for p in tmp_path.iterdir()] == ["bag"] and (tmp_path / "bag" / "bag.db3").read_text() == "x"
+    with pytest.raises(RuntimeError):
+        with atomic_path(tmp_path / "other.bag", same_name=True) as tmp:
+            tmp.write_text("half")
+            raise RuntimeError
+    assert [p.name for p in tmp_path.iterdir()] == ["bag"]

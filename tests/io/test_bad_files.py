@@ -128,3 +128,28 @@ def test_check_config_walks_nested_numbers_and_names_the_dotted_field():
     setattr(sub, field, float("nan"))
     with pytest.raises(InputError, match=rf"{nested}\.{field}: expected a finite number, got nan"):
         check_config(cfg)
+
+
+@pytest.mark.parametrize("name, text, message", [
+    ("cfg.yaml", "rate_hz: 200\nregistration:\n  max_iterations: 5\nrate_hz: 300\n", "line 4: not valid YAML (duplicate key 'rate_hz')"),
+    ("cfg.json", '{"rate_hz": 200, "rate_hz": 300}', "not valid JSON (duplicate key 'rate_hz')"),
+    ("cfg.yaml", "false\n", "expected a mapping, got bool"),
+])
+def test_config_key_given_twice_or_a_falsy_document_is_refused_not_read_as_defaults(tmp_path, name, text, message):
+    # The parsers kept the last of two values silently; `false` or `0` was read as an empty file (all defaults).
+    path = tmp_path / name
+    path.write_text(text)
+    with pytest.raises(InputError) as info:
+        read_config(TrackerConfig, path)
+    assert message in _one_line(info, path)
+
+
+def test_a_folder_given_for_a_map_or_a_table_is_called_a_folder_not_missing(tmp_path):
+    from evpose.io.text_table import read_table
+
+    (tmp_path / "map.ply").mkdir()
+    (tmp_path / "gt.txt").mkdir()
+    with pytest.raises(InputError, match="map.ply: is a folder, not a file"):
+        read_contour_map(tmp_path / "map.ply")
+    with pytest.raises(InputError, match="gt.txt: is a folder, not a file"):
+        read_table(tmp_path / "gt.txt", 8)

@@ -151,3 +151,16 @@ def test_sensor_size_flags_that_contradict_the_sidecar_calibration_name_the_side
     write_ecd_folder(tmp_path / "seq", recording)  # 240x180
     with pytest.raises(InputError, match=r"seq/evpose.json: --width/--height 100x80 contradict the 240x180 sensor stated by its calibration"):
         read_ecd_folder(tmp_path / "seq", 100, 80)
+
+
+def test_sidecar_metadata_size_that_is_not_a_size_names_the_sidecar(tmp_path, recording):
+    import dataclasses
+    import json
+
+    write_ecd_folder(tmp_path / "seq", dataclasses.replace(recording, calibration=None, metadata={"width": 240, "height": 180}))
+    side = tmp_path / "seq" / "evpose.json"
+    doc = json.loads(side.read_text())
+    doc["metadata"]["width"] = "big"  # int("big") was a ValueError traceback
+    side.write_text(json.dumps(doc))
+    with pytest.raises(InputError, match=r"seq/evpose.json: metadata width/height 'big' x 180 is not a sensor size"):
+        read_ecd_folder(tmp_path / "seq")

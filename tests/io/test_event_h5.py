@@ -164,3 +164,25 @@ def test_sensor_size_flags_that_contradict_the_sibling_calibration_name_file_and
     assert open_recording(tmp_path / "seq-events_left.h5", 240, 180).sensor_size == (240, 180)
     with pytest.raises(InputError, match=r"seq-events_left.h5: --width/--height 346x260 contradict the 240x180 sensor stated by the calibration camera-calibration.json"):
         open_recording(tmp_path / "seq-events_left.h5", 346, 260)
+
+
+@pytest.mark.parametrize("offset, got", [(np.float64(np.nan), "got nan"), (np.arange(3), "got 3 values"), (np.bytes_(b"soon"), "got b'soon'")])
+def test_a_t_offset_that_is_not_one_number_is_named(tmp_path, offset, got):
+    # NaN ended in a ValueError traceback, an array silently gave its first value.
+    write_event_h5(tmp_path / "e.h5", EventArray.from_arrays([1, 2], [0, 1], [0, 1], [1, -1]))
+    with h5py.File(tmp_path / "e.h5", "r+") as f:
+        del f["t_offset"]
+        f["t_offset"] = offset
+    with pytest.raises(InputError, match=rf"e.h5: t_offset must be one finite number of microseconds, {got}"):
+        open_recording(tmp_path / "e.h5", 640, 480)
+
+
+@pytest.mark.parametrize("damage", ["reversed", "beyond"])
+def test_a_damaged_ms_to_idx_is_named_not_trusted_by_windowed_reads(tmp_path, damage):
+    write_event_h5(tmp_path / "e.h5", EventArray.from_arrays(np.arange(0, 5000, 10), np.zeros(500), np.zeros(500), np.ones(500)))
+    with h5py.File(tmp_path / "e.h5", "r+") as f:
+        idx = f["ms_to_idx"][()]
+        del f["ms_to_idx"]
+        f["ms_to_idx"] = idx[::-1].copy() if damage == "reversed" else idx + 1000
+    with pytest.raises(InputError, match=r"e.h5: ms_to_idx is not a non-decreasing index into the 500 events"):
+        EventH5Reader(tmp_path / "e.h5")

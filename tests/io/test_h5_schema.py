@@ -57,6 +57,32 @@ def test_string_pixel_column_is_refused(h5copy):
     assert "dataset 'events/x' is dtype |S1" in _error(h5copy)
 
 
+
+@pytest.mark.parametrize("column, dtype, value, message", [
+    ("x", np.int32, -3, "x=-3 does not fit the schema's uint16"),
+    ("y", np.int64, 70_000, "y=70000 does not fit the schema's uint16"),
+    ("p", np.int16, 257, "p=257 does not fit the schema's int8"),
+])
+def test_event_column_of_another_integer_dtype_is_checked_before_the_cast(h5copy, column, dtype, value, message):
+    # An int32 x of -3 passed the bounds check (x >= width) and the kernels indexed pixel -3; p=257 became +1.
+    def fn(f):
+        col = f[f"events/{column}"][()].astype(dtype)
+        col[7] = value
+        _replace(f, f"events/{column}", col)
+
+    _edit(h5copy, fn)
+    assert f"event 7: {message}" in _error(h5copy)
+    with H5RecordingReader(h5copy) as r:
+        with pytest.raises(InputError, match="event 7"):
+            r.read_events(None, None)
+
+
+def test_event_column_of_another_integer_dtype_that_fits_reads_in_the_schema_dtypes(h5copy):
+    _edit(h5copy, lambda f: _replace(f, "events/x", f["events/x"][()].astype(np.int32)))
+    rec = read_recording_h5(h5copy)
+    assert rec.events.x.dtype == np.uint16 and np.array_equal(rec.events.x, _REC.events.x)
+
+
 def test_two_dimensional_event_column_names_its_shape(h5copy):
     _edit(h5copy, lambda f: _replace(f, "events/y", np.stack([f["events/y"][()]] * 2, axis=1)))
     msg = _error(h5copy)

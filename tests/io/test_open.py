@@ -7,7 +7,7 @@ from evpose.errors import InputError
 from evpose.io.ecd import write_ecd_folder
 from evpose.io.event_h5 import write_event_h5
 from evpose.io.h5 import write_recording_h5
-from evpose.io.open import SourceFormat, detect_format, open_recording
+from evpose.io.open import SourceFormat, detect_format, open_recording, open_stream
 from evpose.io.rosbag import write_rosbag
 
 
@@ -139,3 +139,15 @@ def test_sensor_size_flags_that_agree_with_the_recording_are_accepted(tmp_path, 
     back = open_recording(tmp_path / name, width=240, height=180)
     assert back.sensor_size == (240, 180)
     assert (back.events.x == rec.events.x).all() and (back.events.t == rec.events.t).all()
+
+
+def test_a_stray_far_future_event_is_refused_by_every_reader_not_tracked_through(tmp_path):
+    # `convert` refused it (the HDF5 index's span); `track` read the ECD folder and ran updates through 11 days.
+    rec = make_recording(n=500, duration_us=100_000)
+    write_ecd_folder(tmp_path / "seq", rec)
+    with open(tmp_path / "seq" / "events.txt", "a") as fh:
+        fh.write("1000000.0 5 5 1\n")
+    with pytest.raises(InputError, match=r"seq: event 500: events span 277.8 hours \(from \d+ to 1000000000000 us\); timestamps look wrong"):
+        open_recording(tmp_path / "seq")
+    with pytest.raises(InputError, match=r"seq: event 500: events span 277.8 hours"):  # `info` and `convert` stream it
+        list(open_stream(tmp_path / "seq").batches(None))

@@ -135,3 +135,15 @@ def test_ros2_metadata_yaml_error_is_reported_in_one_line(tmp_path):
     with pytest.raises(InputError, match="cannot open bag") as info:
         open_recording(d)
     assert "\n" not in str(info.value)
+
+
+def test_ros2_bag_is_the_same_bytes_on_every_write_with_its_storage_file_named_after_the_bag(tmp_path):
+    # The storage file was named after the temporary folder (".b.x1y2z3.tmp.db3"): hidden, and new on every run.
+    rec = make_recording(n=300, duration_us=20_000)
+    write_rosbag(tmp_path / "one" / "b", rec, ros2=True)
+    write_rosbag(tmp_path / "two" / "b", rec, ros2=True)
+    files = sorted(p.name for p in (tmp_path / "one" / "b").iterdir())
+    assert files == ["b.db3", "metadata.yaml"]
+    for name in files:
+        assert (tmp_path / "one" / "b" / name).read_bytes() == (tmp_path / "two" / "b" / name).read_bytes()
+    assert len(open_recording(tmp_path / "two" / "b").events) == 300

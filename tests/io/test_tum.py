@@ -55,3 +55,21 @@ def test_zero_quaternion_names_its_line_like_every_other_tum_error(tmp_path):
     path.write_text("# header\n0.0 0 0 0 0 0 0 1\n\n0.1 0 0 0 0 0 0 0\n")
     with pytest.raises(InputError, match=r"est.txt: line 4: quaternion has zero length"):
         read_tum(path)
+
+
+def test_quaternion_beyond_the_float_range_names_its_line_without_numpy_warnings(tmp_path):
+    import warnings
+
+    path = tmp_path / "est.txt"
+    path.write_text("0.0 0 0 0 0 0 0 1\n0.1 0 0 0 1e300 0 0 1\n")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # np.linalg.norm's overflow warning was printed before the error line
+        with pytest.raises(InputError, match=r"est.txt: line 2: quaternion's length is beyond the float range"):
+            read_tum(path)
+
+
+def test_position_beyond_the_earth_names_its_line(tmp_path):
+    path = tmp_path / "est.txt"
+    path.write_text("# t tx ty tz qx qy qz qw\n0.0 0 0 0 0 0 0 1\n0.1 1e12 0 0 0 0 0 1\n")
+    with pytest.raises(InputError, match=r"est.txt: line 3: position \[1000000000000.0, 0.0, 0.0\] is beyond 1e\+07 m"):
+        read_tum(path)

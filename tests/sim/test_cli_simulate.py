@@ -35,6 +35,9 @@ def test_simulate_writes_readable_h5(tmp_path):
         (["--scenario", "landing", "--resolution", "346by260"], "WIDTHxHEIGHT"),
         (["--scenario", "landing", "--seconds", "-2"], "duration must be positive"),
         (["--scenario", "landing", "--cloud-density", "0"], "cloud density must be positive"),
+        # 1e12 points per m^2 ended in a MemoryError traceback (22 PiB of points).
+        (["--scenario", "landing", "--cloud-density", "1e12"], "--cloud-density must be within 1..5000 points/m^2, got 1e+12"),
+        (["--scenario", "landing", "--range-noise", "5"], "--range-noise must be within 0..0.1 m, got 5"),
     ],
 )
 def test_bad_input_prints_one_line_and_exits_2(tmp_path, capsys, args, message):
