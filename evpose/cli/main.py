@@ -75,10 +75,10 @@ def run(argv: list[str]) -> int:
     previous = signal.signal(signal.SIGTERM, _terminate) if threading.current_thread() is threading.main_thread() else None
     try:
         # Importing a command takes about a second (numba, gtsam, open3d): a Ctrl+C then printed a 40-line traceback.
-        import tyro
+        from evpose.cli.argument_errors import run_tyro
 
         module = importlib.import_module(COMMANDS[name][0])
-        result = tyro.cli(module.main, args=argv[1:], prog=f"evpose {name}")
+        result = run_tyro(module.main, argv[1:], f"evpose {name}")
     except EvposeError as exc:
         print(f"evpose {name}: error: {exc}", file=sys.stderr)
         return 2
