@@ -101,6 +101,9 @@ _FOCAL_PER_PX = (1e-3, 1e3)
 MAX_EXTRINSIC_M = 100.0
 """Largest camera-IMU translation accepted in ``T_cam_imu``, metres."""
 
+_LENS_ANGLE_RATIO = (0.1, 10.0)
+"""Plausible ratios of the off-axis angle a lens model gives the sensor's farthest pixels to the pinhole's angle."""
+
 _RIGID_TOL = 5e-3
 """Largest deviation of ``R^T R`` from the identity (and of the bottom row from 0 0 0 1) accepted in ``T_cam_imu``: loose
 enough for rotations printed with 3-4 decimals, tight enough to refuse a scaled or sheared matrix."""
@@ -182,6 +185,44 @@ class CameraCalibration:
         if not (0.0 <= self.cx <= self.width and 0.0 <= self.cy <= self.height):
             raise InputError(None, f"calibration's principal point ({self.cx:g}, {self.cy:g}) px lies outside the {self.width}x{self.height} sensor")
         _check_rigid(T)
+        self._check_invertible()
+
+    def _check_invertible(self) -> None:
+        """Refuse distortion coefficients that fold the image or shrink / widen it beyond any lens: along rays from the
+        principal point, within the largest disc around it that the sensor holds, the angle from the optical axis must
+        grow, the undistortion must distort back to its pixel, and the disc's edge must lie within 0.1-10x the angle a
+        pinhole with the same K gives it. Coefficients from another lens or unit (k1 = 1e9) passed, and the tracker then
+        blamed the map ("no update registered against this map"). The corners beyond the disc are not checked: a
+        calibration fitted on a wide lens may fold there, where its target rarely reached, and still serve the rest."""
+        if self.model is DistortionModel.NONE:
+            return
+        pc = np.array([self.cx, self.cy])
+        radius = min(self.cx, self.width - 1.0 - self.cx, self.cy, self.height - 1.0 - self.cy)
+        if radius < 1.0:
+            return
+        directions = np.exp(1j * np.linspace(0.0, 2.0 * np.pi, 16, endpoint=False))
+        steps = np.linspace(0.0, radius, 65)[1:]
+        offsets = directions[:, None] * steps[None, :]
+        uv = pc + np.stack([offsets.real.ravel(), offsets.imag.ravel()], axis=1)
+        with np.errstate(all="ignore"):
+            rays = self.unproject(uv)
+            back = self.project(rays)
+            angle = np.arccos(np.clip(rays[:, 2], -1.0, 1.0)).reshape(len(directions), -1)
+            off = np.hypot(*(back - uv).T)
+            md = (uv - pc) / (self.fx, self.fy)
+            pinhole = np.arctan(np.hypot(md[:, 0], md[:, 1])).reshape(len(directions), -1)[:, -1]
+            ratio = angle[:, -1] / pinhole
+        coeffs = " ".join(f"{d:g}" for d in self.dist)
+        folds = not np.isfinite(angle).all() or (np.diff(angle, axis=1) < -1e-9).any()
+        worst = float(np.nanmax(off)) if np.isfinite(off).any() else np.inf
+        if folds or not np.isfinite(off).all() or worst > 0.01:
+            raise InputError(None, f"calibration's {self.model.value} distortion ({coeffs}) does not invert within "
+                                   f"{radius:.0f} px of the principal point (a pixel comes back {worst:.3g} px off"
+                                   f"{' and the image folds' if folds else ''}): coefficients of another lens or unit?")
+        if not (_LENS_ANGLE_RATIO[0] <= ratio.min() and ratio.max() <= _LENS_ANGLE_RATIO[1]):
+            raise InputError(None, f"calibration's {self.model.value} distortion ({coeffs}) puts a pixel {radius:.0f} px "
+                                   f"from the principal point {np.degrees(angle[:, -1].max()):.3g} deg off the axis, "
+                                   f"against {np.degrees(pinhole.max()):.3g} deg without it: coefficients of another lens or unit?")
 
     # ------------------------------------------------------------------ basics
     @property

@@ -170,3 +170,22 @@ def test_from_dict_refuses_a_fractional_integer_field_instead_of_truncating_it(f
     d[field] = value
     with pytest.raises(InputError, match=rf"cal.json: calibration's {field} {value} is not a whole number"):
         CameraCalibration.from_dict(d, source="cal.json")
+
+
+@pytest.mark.parametrize("dist, message", [
+    # k1 = 1e9 shrank a 55 deg field of view to 0.05 deg; the tracker then blamed the map.
+    ((1e9, 0.0, 0.0, 0.0, 0.0), r"puts a pixel 129 px from the principal point 0.0459 deg off the axis, against 27.3 deg"),
+    # k1 = -3 folds the image 83 px from the principal point.
+    ((-3.0, 0.0, 0.0, 0.0, 0.0), r"does not invert within 129 px of the principal point .* and the image folds"),
+])
+def test_distortion_of_another_lens_or_unit_is_an_input_error(dist, message):
+    with pytest.raises(InputError, match=message):
+        CameraCalibration(346, 260, 250.0, 250.0, 173.0, 130.0, DistortionModel.RADTAN, dist)
+
+
+def test_real_wide_lens_calibrations_are_accepted_even_if_they_fold_in_the_corners():
+    # The Event Camera Dataset's DAVIS240C calibration (shapes_6dof's calib.txt).
+    CameraCalibration(240, 180, 199.092366542, 198.82882047, 132.192071378, 110.712660011, DistortionModel.RADTAN,
+                      (-0.368436311798, 0.150947243557, -0.000296130534385, -0.000759431726241, 0.0))
+    # k1 alone at -0.3 folds 422 px from the centre: only the corners of a 640x480 sensor, beyond its 239 px disc.
+    CameraCalibration(640, 480, 400.0, 400.0, 320.0, 240.0, DistortionModel.RADTAN, (-0.3, 0.0, 0.0, 0.0, 0.0))
