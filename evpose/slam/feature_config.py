@@ -70,6 +70,19 @@ class FeatureConfig:
     turn (seeds 0, 4, 10) the median across-flow step fell 0.58 -> 0.47 px (7.0 -> 3.8 px^2/s); 31 px only into MCIs
     with fewer events than 0.5 / 0.6 / 0.7 / 0.75 of the last 20 MCIs' median 2.04 / 1.83 / 2.24 / 1.97 % (14 / 17 / 15 /
     12; +0.24 +- 0.16 / +0.04 +- 0.14 / +0.45 +- 0.25 / +0.17 +- 0.18), 41 px at 0.6 2.34 % (13; +0.54 +- 0.32), pixels."""
+    klt_upsample: float = field(default=1.0, metadata={"min": 1.0, "max": 4.0, "step": 0.25, "unit": "ratio"})
+    """Event-only and event-inertial MCI-to-MCI KLT runs on the MCI rendered again on a grid this many times finer than
+    the sensor's, its events splatted at their warped sub-pixel positions with ``klt_upsample_sigma_px`` (1: the MCI
+    itself, off), ratio. FAST detection, keyframe images and everything else keep the sensor-grid MCI."""
+    klt_upsample_sigma_px: float = field(default=0.6, metadata={"min": 0.3, "max": 2.0, "step": 0.05, "unit": "px"})
+    """``klt_upsample``: the fine MCI's splat, sensor pixels (the sensor-grid MCI's is ``EventImageConfig.sigma_px``)."""
+    klt_upsample_window_px: int = field(default=0, metadata={"min": 0, "max": 101, "step": 2, "unit": "px"})
+    """``klt_upsample``: KLT block size on the fine grid, fine pixels (odd; 0: ``klt_window_px`` scaled, rounded up to odd)."""
+    klt_upsample_levels: int = field(default=3, metadata={"min": 0, "max": 6, "step": 1, "unit": "levels"})
+    """``klt_upsample``: pyramid levels above the fine image, levels."""
+    klt_upsample_refine: bool = False
+    """``klt_upsample``: track on the sensor-grid MCIs as usual, then refine each result by single-level KLT on the fine
+    grid started there (the forward-backward test on the fine pass), instead of a full pyramid on the fine grid."""
     klt_levels: int = field(default=2, metadata={"min": 0, "max": 5, "step": 1, "unit": "levels"})
     """KLT pyramid levels above the base image, levels."""
     klt_max_bidir_error_px: float = field(default=1.0, metadata={"min": 0.1, "max": 5.0, "step": 0.1, "unit": "px"})

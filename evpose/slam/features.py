@@ -198,12 +198,13 @@ lower the mean at several times the CPU, and still not bring every run within 2 
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import cv2
 import numpy as np
 
 from evpose.slam.config import FeatureConfig
+from evpose.slam.event_image import fine_coords, sensor_coords
 
 
 def detect_features(img8: np.ndarray, cfg: FeatureConfig, existing: np.ndarray | None = None, max_total: int | None = None,
@@ -315,6 +316,37 @@ def track_features(prev8: np.ndarray, cur8: np.ndarray, pts: np.ndarray, cfg: Fe
     return p1.astype(np.float32), ok
 
 
+def fine_klt_config(cfg: FeatureConfig) -> FeatureConfig:
+    """``cfg`` for KLT on the grid ``cfg.klt_upsample`` times finer (``FeatureConfig.klt_upsample``): its window,
+    levels and forward-backward threshold in fine pixels."""
+    s = float(cfg.klt_upsample)
+    win = int(cfg.klt_upsample_window_px) or int(np.ceil(cfg.klt_window_px * s))
+    return replace(cfg, klt_window_px=win | 1, klt_levels=int(cfg.klt_upsample_levels), klt_max_bidir_error_px=cfg.klt_max_bidir_error_px * s)
+
+
+def track_features_fine(prev_fine8: np.ndarray, cur_fine8: np.ndarray, pts: np.ndarray, cfg: FeatureConfig,
+                        guess: np.ndarray | None = None, min_ncc: float = 0.0, prev8: np.ndarray | None = None,
+                        cur8: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`track_features` on MCIs rendered ``cfg.klt_upsample`` times finer (``MciResult.fine_image``); ``pts``,
+    ``guess`` and the result in sensor pixels, the forward-backward threshold still ``klt_max_bidir_error_px`` of them.
+    With ``cfg.klt_upsample_refine`` the sensor-grid MCIs ``prev8`` -> ``cur8`` are tracked first and the fine pass,
+    single-level, starts at their result (the tracks it loses stay lost)."""
+    s = float(cfg.klt_upsample)
+    fcfg = fine_klt_config(cfg)
+    g = None if guess is None else fine_coords(guess, s).astype(np.float32)
+    back = False
+    if cfg.klt_upsample_refine and prev8 is not None and cur8 is not None:
+        coarse, ok0 = track_features(prev8, cur8, pts, cfg, guess=guess, min_ncc=min_ncc)
+        g, back, fcfg = fine_coords(coarse, s).astype(np.float32), True, replace(fcfg, klt_levels=0)
+    new, ok = track_features(prev_fine8, cur_fine8, fine_coords(pts, s).astype(np.float32), fcfg, guess=g, guess_back=back, min_ncc=min_ncc)
+    if back:
+        ok &= ok0
+    new = sensor_coords(new, s).astype(np.float32)
+    w, h = (cur_fine8.shape[1] + 0.5) / s - 0.5, (cur_fine8.shape[0] + 0.5) / s - 0.5  # the sensor's last pixel centre
+    ok &= (new[:, 0] >= 0) & (new[:, 0] <= w - 1) & (new[:, 1] >= 0) & (new[:, 1] <= h - 1)
+    return new, ok
+
+
 def step_consistent(p0: np.ndarray, p1: np.ndarray, ok: np.ndarray, judge: np.ndarray, max_residual_px: float,
                     min_tracks: int = 12) -> np.ndarray:
     """False for the ``judge`` steps ``p0`` -> ``p1`` farther than ``max_residual_px`` from a RANSAC homography of the
@@ -412,6 +444,8 @@ class FrontendTracks:
     prev8: np.ndarray | None = None
     prev_t: int = 0
     """Time of the MCI ``prev8`` was made from, us."""
+    prev_fine8: np.ndarray | None = None
+    """``prev8``'s MCI on the finer grid KLT runs on (``FeatureConfig.klt_upsample``; None when off)."""
     next_id: int = 0
     track_to_point: dict = field(default_factory=dict)
     init_ref: dict | None = None
