@@ -23,7 +23,7 @@ import cv2
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from evpose.slam.config import EventImageConfig, MciConfig
+from evpose.slam.config import EventImageConfig, FeatureConfig, MciConfig
 from evpose.slam.event_image import event_image, local_std_score, to_uint8
 from evpose.slam.event_window import ReconstructionWindow
 from evpose.slam.parallax_warp import depth_field, fit_twist, sample_depth, warp_events
@@ -89,6 +89,12 @@ class MciResult:
         """``hypothesis``'s image on the grid ``scale`` times finer with a splat of ``sigma_px`` sensor pixels, float32
         (``FeatureConfig.klt_upsample``)."""
         return self.splats[hypothesis].render(scale, sigma_px)
+
+    def fine8(self, hypothesis: str, features: FeatureConfig) -> np.ndarray | None:
+        """``hypothesis``'s image on the grid KLT runs on, 8 bits (None when ``FeatureConfig.klt_upsample`` is off)."""
+        if features.klt_upsample <= 1.0:
+            return None
+        return to_uint8(self.fine_image(hypothesis, features.klt_upsample, features.klt_upsample_sigma_px))
 
 
 @dataclass

@@ -234,29 +234,19 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling, LineAids):
             if gate:  # only the gate reads which tracks have stepped: no per-MCI set otherwise
                 fe.stepped = set(fe.ids.tolist())
         else:
-            fine8 = self._fine8(mci, mci.hypothesis.value)
+            fine8 = mci.fine8(mci.hypothesis.value, self.cfg.features)
         fe.prev8, fe.prev_t, fe.prev_fine8 = mci.image8, mci.t_us, fine8
         self._prev_hypothesis = mci.hypothesis.value
         return mci
 
-    def _fine8(self, mci: MciResult, hypothesis: str) -> np.ndarray | None:
-        """``hypothesis``'s MCI on the finer KLT grid, 8 bits (None when ``FeatureConfig.klt_upsample`` is off)."""
-        fc = self.cfg.features
-        if fc.klt_upsample <= 1.0 or hypothesis not in mci.splats:
-            return None
-        return to_uint8(mci.fine_image(hypothesis, fc.klt_upsample, fc.klt_upsample_sigma_px))
-
     def _klt(self, mci: MciResult, hypothesis: str, guess: np.ndarray | None, min_ncc: float) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
         """MCI-to-MCI KLT of the tracks into ``mci`` (on the finer grid when ``FeatureConfig.klt_upsample`` is on and the
         previous MCI has a fine image); returns (positions, ok, the fine image or None)."""
-        fe = self.fe
-        fine8 = self._fine8(mci, hypothesis)
+        fe, fc = self.fe, self.cfg.features
+        fine8 = mci.fine8(hypothesis, fc)
         if fine8 is not None and fe.prev_fine8 is not None and fe.prev_fine8.shape == fine8.shape:
-            new, ok = track_features_fine(fe.prev_fine8, fine8, fe.uv, self.cfg.features, guess=guess, min_ncc=min_ncc,
-                                          prev8=fe.prev8, cur8=mci.image8)
-        else:
-            new, ok = track_features(fe.prev8, mci.image8, fe.uv, self.cfg.features, guess=guess, min_ncc=min_ncc)
-        return new, ok, fine8
+            return (*track_features_fine(fe.prev_fine8, fine8, fe.uv, fc, guess, min_ncc, fe.prev8, mci.image8), fine8)
+        return (*track_features(fe.prev8, mci.image8, fe.uv, fc, guess=guess, min_ncc=min_ncc), fine8)
 
     def _replenish(self, img8: np.ndarray, img: np.ndarray | None = None) -> None:
         fe = self.fe
