@@ -222,7 +222,10 @@ seeds 24-47 1.78 / 1.80 / 1.76 / 1.98 / 1.81 % (120 runs: 2.25 -> 1.83 %, median
 -0.43 +- 0.18, 74 better; seed 36 runs away under all five, 6.2-8.7 %). Over the 240 runs: 2.23 -> 1.95 %, median 1.69 ->
 1.52, within 2 % 163 -> 204, paired -0.28 +- 0.14, 147 better, over 5 % 11 -> 15 (the defaults' runaways scatter over
 the seeds, these gather on seeds 17, 19 and 36). In the runaways the turn's MCIs mostly pick H2 over H5 (seed 17, 1.3-2.2
-s: 12 of 16 against 6) and the map tracks fall to 17-25 (against 40-53). 1.5x, sigma 0.5, the same
+s: 12 of 16 against 6), the map tracks fall to 17-25 (against 40-53) and the path drifts steadily from 1.0-1.2 s on
+(``errt.py``), while the fine grid's steps on those seeds are as much more precise as elsewhere (re-tracked in the
+defaults' runs, seeds 17 / 36, sharp turn median across-flow error 0.499 / 0.496 -> 0.416 / 0.473 px, all steps 0.191 /
+0.209 -> 0.149 / 0.174). 1.5x, sigma 0.5, the same
 240 runs: seeds 0-23 2.44 / 2.25 / 2.20 / 2.07 / 2.38 %, 24-47 1.99 / 1.86 / 1.79 / 2.19 / 1.83 %; 2.23 -> 2.10 %, median
 1.69 -> 1.48, within 2 % 163 -> 199, paired -0.13 +- 0.17, 148 better, over 5 % 11 -> 21, again gathered on a few seeds
 but other ones (0, 6, 23, 37: 5.9-10.6 % under nearly every setting), so a seed's runaway follows the tracking, not the
