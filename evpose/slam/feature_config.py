@@ -70,11 +70,35 @@ class FeatureConfig:
     turn (seeds 0, 4, 10) the median across-flow step fell 0.58 -> 0.47 px (7.0 -> 3.8 px^2/s); 31 px only into MCIs
     with fewer events than 0.5 / 0.6 / 0.7 / 0.75 of the last 20 MCIs' median 2.04 / 1.83 / 2.24 / 1.97 % (14 / 17 / 15 /
     12; +0.24 +- 0.16 / +0.04 +- 0.14 / +0.45 +- 0.25 / +0.17 +- 0.18), 41 px at 0.6 2.34 % (13; +0.54 +- 0.32), pixels."""
+    klt_upsample: float = field(default=1.0, metadata={"min": 1.0, "max": 4.0, "step": 0.25, "unit": "ratio"})
+    """MCI-to-MCI KLT (event-only and event-inertial; measured event-only) runs on the MCI rendered again on a grid this
+    many times finer than the sensor's, its events splatted at their warped sub-pixel positions with
+    ``klt_upsample_sigma_px`` (1: the MCI itself, off), ratio. FAST detection, keyframe images and everything else keep
+    the sensor-grid MCI. Session 24 (full
+    figures in the module notes of :mod:`evpose.slam.features`): 2x with sigma 0.5 cuts the per-step across-flow error
+    about 20 % on the landing's legs but only 6-10 % in its sharp turn; over 240 landing runs (seeds 0-47 under the
+    defaults and four neutral perturbations) it moves the mean ATE 2.23 -> 1.95 % (paired -0.28 +- 0.14 points), the
+    median 1.69 -> 1.52 and the runs within 2 % 163 -> 204, but the runs over 5 % 11 -> 15, gathered on seeds 17, 19
+    and 36; with the defaults on seeds 0-23 1.80 -> 2.10 %; indoor seeds 0-7 6.84 -> 11.23 %; CPU per MCI 21.7 ->
+    43-45 ms. 1.5x (28 ms): 2.23 -> 2.10 % (-0.13 +- 0.17), within 2 % 163 -> 199, over 5 % 11 -> 21. Hence off."""
+    klt_upsample_sigma_px: float = field(default=0.6, metadata={"min": 0.3, "max": 2.0, "step": 0.05, "unit": "px"})
+    """``klt_upsample``: the fine MCI's splat, sensor pixels (the sensor-grid MCI's is ``EventImageConfig.sigma_px``)."""
+    klt_upsample_window_px: int = field(default=0, metadata={"min": 0, "max": 101, "step": 2, "unit": "px"})
+    """``klt_upsample``: KLT block size on the fine grid, fine pixels (odd; 0: ``klt_window_px`` scaled, rounded up to odd)."""
+    klt_upsample_levels: int = field(default=3, metadata={"min": 0, "max": 6, "step": 1, "unit": "levels"})
+    """``klt_upsample``: pyramid levels above the fine image, levels."""
+    klt_upsample_refine: bool = False
+    """``klt_upsample``: track on the sensor-grid MCIs as usual, then refine each result by single-level KLT on the fine
+    grid started there (the forward-backward test on the fine pass), instead of a full pyramid on the fine grid."""
     klt_levels: int = field(default=2, metadata={"min": 0, "max": 5, "step": 1, "unit": "levels"})
     """KLT pyramid levels above the base image, levels."""
     klt_max_bidir_error_px: float = field(default=1.0, metadata={"min": 0.1, "max": 5.0, "step": 0.1, "unit": "px"})
     """Tracks whose forward-backward KLT error exceeds this are dropped, pixels. Landing event-only seeds 0-11, 60 runs
-    (see ``MciConfig.reference_fraction``; 1.0 there): 0.5 -> mean ATE 3.34 -> 3.38 %, within 2 % 9 -> 3 of 60."""
+    (see ``MciConfig.reference_fraction``; 1.0 there): 0.5 -> mean ATE 3.34 -> 3.38 %, within 2 % 9 -> 3 of 60. Session 24
+    (``/tmp/s24/sr9``, whether ``klt_upsample``'s gain in typical runs came from the more steps it keeps): 1.5 keeps 0.675
+    of the steps (defaults 0.652, 2x grid 0.736; landing seeds 0, 4, 10) and over landing seeds 0-23 under the defaults
+    and ``TrackingConfig.ba_huber_px`` 1.9 / 2.1 gives 2.63 / 2.41 / 2.00 % (72 runs: 2.11 -> 2.35 %, median 1.60 ->
+    1.74, within 2 % 50 -> 46, paired +0.23 +- 0.23 points, 35 better)."""
     klt_first_step_max_residual_px: float = field(default=0.0, metadata={"min": 0.0, "max": 10.0, "step": 0.1, "unit": "px"})
     """A new track whose first MCI-to-MCI step lies farther than this from a RANSAC homography of the older tracks'
     steps is dropped (0: no test), pixels. Session 14 (``/tmp/s14/tracknoise``): the event-only landing's per-track

@@ -23,7 +23,7 @@ import cv2
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from evpose.slam.config import EventImageConfig, MciConfig
+from evpose.slam.config import EventImageConfig, FeatureConfig, MciConfig
 from evpose.slam.event_image import event_image, local_std_score, to_uint8
 from evpose.slam.event_window import ReconstructionWindow
 from evpose.slam.parallax_warp import depth_field, fit_twist, sample_depth, warp_events
@@ -82,6 +82,35 @@ class MciResult:
     """Scene depth of the H3 fit, map units."""
     candidates: dict = field(default_factory=dict, repr=False)
     """Every rendered hypothesis ("H1".."H5") -> float32 image: the tracker may prefer the previous MCI's hypothesis."""
+    splats: dict = field(default_factory=dict, repr=False)
+    """Every rendered hypothesis -> its :class:`Splat`, to render it again on a finer grid (:meth:`fine_image`)."""
+
+    def fine_image(self, hypothesis: str, scale: float, sigma_px: float) -> np.ndarray:
+        """``hypothesis``'s image on the grid ``scale`` times finer with a splat of ``sigma_px`` sensor pixels, float32
+        (``FeatureConfig.klt_upsample``)."""
+        return self.splats[hypothesis].render(scale, sigma_px)
+
+    def fine8(self, hypothesis: str, features: FeatureConfig) -> np.ndarray | None:
+        """``hypothesis``'s image on the grid KLT runs on, 8 bits (None when ``FeatureConfig.klt_upsample`` is off)."""
+        if features.klt_upsample <= 1.0:
+            return None
+        return to_uint8(self.fine_image(hypothesis, features.klt_upsample, features.klt_upsample_sigma_px))
+
+
+@dataclass
+class Splat:
+    """How one hypothesis's image is rendered: the events (raw, or already warped for H5), their weights and warps."""
+
+    x: np.ndarray
+    y: np.ndarray
+    p: np.ndarray | None
+    width: int
+    height: int
+    idx: np.ndarray | None = None
+    H: np.ndarray | None = None
+
+    def render(self, scale: float, sigma_px: float) -> np.ndarray:
+        return event_image(self.x, self.y, self.p, self.width, self.height, sigma_px, self.idx, self.H, scale)
 
 
 def reference_time_us(t: np.ndarray, fraction: float = 1.0) -> int:
@@ -201,12 +230,13 @@ class MciGenerator:
         self.height = int(height)
         self.seed = int(seed)
 
-    def _render(self, rw: ReconstructionWindow, idx: np.ndarray | None, H: np.ndarray | None) -> np.ndarray:
+    def _render(self, rw: ReconstructionWindow, idx: np.ndarray | None, H: np.ndarray | None) -> tuple[np.ndarray, Splat]:
         p = rw.p if self.icfg.use_polarity else None
-        return event_image(rw.x, rw.y, p, self.width, self.height, self.icfg.sigma_px, idx, H)
+        sp = Splat(rw.x, rw.y, p, self.width, self.height, idx, H)
+        return sp.render(1.0, self.icfg.sigma_px), sp
 
     def _parallax(self, rw: ReconstructionWindow, prior: MotionPrior, idx: np.ndarray, dts: np.ndarray, track_s: float,
-                  sim2: np.ndarray | None) -> np.ndarray | None:
+                  sim2: np.ndarray | None) -> tuple[np.ndarray, Splat] | None:
         """H5's image, or None without enough map points or tracks (``MciConfig.parallax_min_points``)."""
         c = self.cfg
         if not c.use_parallax or prior.point_uv is None or len(prior.point_uv) < c.parallax_min_points or track_s <= 0:
@@ -239,11 +269,13 @@ class MciGenerator:
                 return None
         return self._parallax_image(rw, field, idx, dts, xi / track_s)
 
-    def _parallax_image(self, rw: ReconstructionWindow, field: np.ndarray, idx: np.ndarray, dts: np.ndarray, rate: np.ndarray) -> np.ndarray:
+    def _parallax_image(self, rw: ReconstructionWindow, field: np.ndarray, idx: np.ndarray, dts: np.ndarray,
+                        rate: np.ndarray) -> tuple[np.ndarray, Splat]:
         # A constant twist: points seen dts before the reference time move by Exp(omega dts)^T (X - v dts).
         u, v = warp_events(self.K, rw.x, rw.y, sample_depth(field, rw.x, rw.y), idx, np.outer(dts, rate[:3]), np.outer(dts, rate[3:]))
         p = rw.p if self.icfg.use_polarity else None
-        return event_image(u, v, p, self.width, self.height, self.icfg.sigma_px)
+        sp = Splat(u, v, p, self.width, self.height)
+        return sp.render(1.0, self.icfg.sigma_px), sp
 
     def _has_whole(self, rw: ReconstructionWindow) -> bool:
         """The window carries enough tracks from its start (``MciConfig.whole_window_min_tracks``)."""
@@ -251,7 +283,7 @@ class MciGenerator:
 
     def generate(self, rw: ReconstructionWindow, prior: MotionPrior | None = None) -> MciResult:
         prior = prior or MotionPrior()
-        cands: dict[Hypothesis, np.ndarray] = {}
+        cands: dict[Hypothesis, tuple[np.ndarray, Splat]] = {}
         frac = self.cfg.reference_fraction
         idx, dts = _slices(rw.t, self.cfg.time_slices, frac)
         track_s = (rw.t_cur_us - rw.t_ref_us) / 1e6
@@ -283,10 +315,10 @@ class MciGenerator:
         if h5 is not None:
             cands[Hypothesis.H5_PARALLAX] = h5
         cands[Hypothesis.H4_NONE] = self._render(rw, None, None)
-        scores = {h.value: local_std_score(img, self.cfg.patch_px) for h, img in cands.items()}
+        scores = {h.value: local_std_score(img, self.cfg.patch_px) for h, (img, _) in cands.items()}
         # Highest score wins; ties go to the earlier hypothesis in H1..H5 order (deterministic).
         best = max(sorted(cands, key=lambda h: h.value), key=lambda h: scores[h.value])
-        img = cands[best]
+        img = cands[best][0]
         t_ref = reference_time_us(rw.t, frac) if len(rw.t) else rw.t_end_us
         return MciResult(t_us=t_ref, image=img, image8=to_uint8(img), hypothesis=best, scores=scores, n_events=len(rw.t), sim2=sim2, depth=depth,
-                         candidates={h.value: im for h, im in cands.items()})
+                         candidates={h.value: im for h, (im, _) in cands.items()}, splats={h.value: sp for h, (_, sp) in cands.items()})

@@ -35,7 +35,7 @@ from evpose.slam.bundle_adjustment import local_bundle_adjustment
 from evpose.slam.coasting import constant_velocity_pose
 from evpose.slam.config import SlamConfig, SlamMode
 from evpose.slam.event_window import WINDOW_REASONS, EventWindowSelector, ReconstructionWindow
-from evpose.slam.features import FrontendTracks, detect_features, has_support, step_consistent, track_features
+from evpose.slam.features import FrontendTracks, detect_features, has_support, step_consistent, track_features, track_features_fine
 from evpose.slam.inertial import InertialConfiguration
 from evpose.slam.inertial_ba import inertial_local_bundle_adjustment
 from evpose.slam.inertial_trajectory import carry_relative_scale, keyframe_positions
@@ -212,15 +212,15 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling, LineAids):
         if fe.prev8 is not None and len(fe.ids):
             guess = self._gyro_flow(fe.prev_t, mci.t_us, fe.uv)
             min_ncc = self.cfg.features.klt_min_ncc
-            new, ok = track_features(fe.prev8, mci.image8, fe.uv, self.cfg.features, guess=guess, min_ncc=min_ncc)
+            new, ok, fine8 = self._klt(mci, mci.hypothesis.value, guess, min_ncc)
             keep = self.cfg.mci.keep_hypothesis_survival
             prev_h = self._prev_hypothesis
             if keep > 0 and prev_h is not None and prev_h != mci.hypothesis.value and prev_h in mci.candidates and ok.sum() < keep * len(ok):
                 img = mci.candidates[prev_h]
                 alt = replace(mci, image=img, image8=to_uint8(img), hypothesis=Hypothesis(prev_h))
-                new2, ok2 = track_features(fe.prev8, alt.image8, fe.uv, self.cfg.features, guess=guess, min_ncc=min_ncc)
+                new2, ok2, fine2 = self._klt(alt, prev_h, guess, min_ncc)
                 if ok2.sum() > ok.sum():
-                    mci, new, ok = alt, new2, ok2
+                    mci, new, ok, fine8 = alt, new2, ok2, fine2
             gate = self.cfg.features.klt_first_step_max_residual_px > 0
             if gate:
                 first = np.array([t not in fe.stepped for t in fe.ids.tolist()], bool)
@@ -233,9 +233,20 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling, LineAids):
             fe.ids, fe.uv = fe.ids[ok], new[ok]
             if gate:  # only the gate reads which tracks have stepped: no per-MCI set otherwise
                 fe.stepped = set(fe.ids.tolist())
-        fe.prev8, fe.prev_t = mci.image8, mci.t_us
+        else:
+            fine8 = mci.fine8(mci.hypothesis.value, self.cfg.features)
+        fe.prev8, fe.prev_t, fe.prev_fine8 = mci.image8, mci.t_us, fine8
         self._prev_hypothesis = mci.hypothesis.value
         return mci
+
+    def _klt(self, mci: MciResult, hypothesis: str, guess: np.ndarray | None, min_ncc: float) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+        """MCI-to-MCI KLT of the tracks into ``mci`` (on the finer grid when ``FeatureConfig.klt_upsample`` is on and the
+        previous MCI has a fine image); returns (positions, ok, the fine image or None)."""
+        fe, fc = self.fe, self.cfg.features
+        fine8 = mci.fine8(hypothesis, fc)
+        if fine8 is not None and fe.prev_fine8 is not None and fe.prev_fine8.shape == fine8.shape:
+            return (*track_features_fine(fe.prev_fine8, fine8, fe.uv, fc, guess, min_ncc, fe.prev8, mci.image8), fine8)
+        return (*track_features(fe.prev8, mci.image8, fe.uv, fc, guess=guess, min_ncc=min_ncc), fine8)
 
     def _replenish(self, img8: np.ndarray, img: np.ndarray | None = None) -> None:
         fe = self.fe

@@ -196,3 +196,17 @@ def test_support_gate_drops_tracks_on_empty_patches_only_while_a_map_is_tracked(
     ok = lambda run: sum(r.status is SlamStatus.OK for r in run.results)
     assert 0 < ok(gated) < ok(radtan_run)
     assert any(r.status is SlamStatus.OK and "initialised" in r.reason for r in gated.results)
+
+
+@pytest.mark.parametrize("refine", [False, True])
+def test_fine_grid_klt_tracks_the_recording_and_changes_the_tracks(radtan_recording, radtan_run, refine):
+    cfg = SlamConfig()
+    cfg.features.klt_upsample = 2.0
+    cfg.features.klt_upsample_refine = refine
+    run = run_slam(radtan_recording, cfg)
+    m = atlas_metrics(run.trajectories(), radtan_recording.ground_truth, correct_scale=True, duration_s=run.duration_s)
+    assert len(m.maps) == 1 and m.tracked_fraction >= 0.8 and m.ate_percent <= 2.0
+    # Track positions stay in sensor pixels, but differ from the sensor-grid KLT's.
+    r = run.results[-1]
+    assert r.features.shape[1] == 2 and r.features.max(axis=0)[0] < 240 and r.features.max(axis=0)[1] < 180
+    assert not all(np.array_equal(a.features, b.features) for a, b in zip(run.results, radtan_run.results))
