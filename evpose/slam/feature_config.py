@@ -87,6 +87,9 @@ class FeatureConfig:
     """``klt_upsample``: KLT block size on the fine grid, fine pixels (odd; 0: ``klt_window_px`` scaled, rounded up to odd)."""
     klt_upsample_levels: int = field(default=3, metadata={"min": 0, "max": 6, "step": 1, "unit": "levels"})
     """``klt_upsample``: pyramid levels above the fine image, levels."""
+    klt_upsample_scale_stride: int = field(default=0, metadata={"min": 0, "max": 8, "step": 1, "unit": "px"})
+    """``klt_upsample``: the fine image's 8-bit robust maximum from every this-many-th row and column only (0: all of
+    them, as the sensor-grid MCI; :func:`evpose.slam.fine_grid.fine_to_uint8`), fine pixels."""
     klt_upsample_refine: bool = False
     """``klt_upsample``: track on the sensor-grid MCIs as usual, then refine each result by single-level KLT on the fine
     grid started there (the forward-backward test on the fine pass), instead of a full pyramid on the fine grid."""

@@ -244,13 +244,12 @@ the map tracks lost there) is the question to answer before it could be turned o
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
 
 from evpose.slam.config import FeatureConfig
-from evpose.slam.event_image import fine_coords, sensor_coords
 
 
 def detect_features(img8: np.ndarray, cfg: FeatureConfig, existing: np.ndarray | None = None, max_total: int | None = None,
@@ -360,37 +359,6 @@ def track_features(prev8: np.ndarray, cur8: np.ndarray, pts: np.ndarray, cfg: Fe
         idx = np.flatnonzero(ok)
         ok[idx[patch_ncc(prev8, cur8, p0.reshape(-1, 2)[idx], p1[idx]) < min_ncc]] = False
     return p1.astype(np.float32), ok
-
-
-def fine_klt_config(cfg: FeatureConfig) -> FeatureConfig:
-    """``cfg`` for KLT on the grid ``cfg.klt_upsample`` times finer (``FeatureConfig.klt_upsample``): its window,
-    levels and forward-backward threshold in fine pixels."""
-    s = float(cfg.klt_upsample)
-    win = int(cfg.klt_upsample_window_px) or int(np.ceil(cfg.klt_window_px * s))
-    return replace(cfg, klt_window_px=win | 1, klt_levels=int(cfg.klt_upsample_levels), klt_max_bidir_error_px=cfg.klt_max_bidir_error_px * s)
-
-
-def track_features_fine(prev_fine8: np.ndarray, cur_fine8: np.ndarray, pts: np.ndarray, cfg: FeatureConfig,
-                        guess: np.ndarray | None = None, min_ncc: float = 0.0, prev8: np.ndarray | None = None,
-                        cur8: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`track_features` on MCIs rendered ``cfg.klt_upsample`` times finer (``MciResult.fine_image``); ``pts``,
-    ``guess`` and the result in sensor pixels, the forward-backward threshold still ``klt_max_bidir_error_px`` of them.
-    With ``cfg.klt_upsample_refine`` the sensor-grid MCIs ``prev8`` -> ``cur8`` are tracked first and the fine pass,
-    single-level, starts at their result (the tracks it loses stay lost)."""
-    s = float(cfg.klt_upsample)
-    fcfg = fine_klt_config(cfg)
-    g = None if guess is None else fine_coords(guess, s).astype(np.float32)
-    back = False
-    if cfg.klt_upsample_refine and prev8 is not None and cur8 is not None:
-        coarse, ok0 = track_features(prev8, cur8, pts, cfg, guess=guess, min_ncc=min_ncc)
-        g, back, fcfg = fine_coords(coarse, s).astype(np.float32), True, replace(fcfg, klt_levels=0)
-    new, ok = track_features(prev_fine8, cur_fine8, fine_coords(pts, s).astype(np.float32), fcfg, guess=g, guess_back=back, min_ncc=min_ncc)
-    if back:
-        ok &= ok0
-    new = sensor_coords(new, s).astype(np.float32)
-    w, h = (cur_fine8.shape[1] + 0.5) / s - 0.5, (cur_fine8.shape[0] + 0.5) / s - 0.5  # the sensor's last pixel centre
-    ok &= (new[:, 0] >= 0) & (new[:, 0] <= w - 1) & (new[:, 1] >= 0) & (new[:, 1] <= h - 1)
-    return new, ok
 
 
 def step_consistent(p0: np.ndarray, p1: np.ndarray, ok: np.ndarray, judge: np.ndarray, max_residual_px: float,
