@@ -8,7 +8,7 @@ px. CPU per MCI: defaults 22.9 ms; 47 px window, 3 levels, full 8-bit scaling (t
 with the robust maximum from every 2nd row and column and OpenCV scaling (:func:`fine_to_uint8`) 42.0 (synthetic 5.9 ->
 1.1 ms; the real MCIs have few non-zero pixels, so the percentile costs less than the first estimate of 5 ms); with that
 and a 41 / 35 / 31 px window 29.7 / 28.3 / 29.4 (the 47 px window's KLT is where the cost was: forward and backward
-15.7 ms synthetic, 7.4 at 35 px); 35 px with 2 levels 21.7. Landing ATE, paired per seed against the 47 px variant
+15.7 ms synthetic, 7.4 at 35 px); 35 px with 2 levels 21.7. Seeds 4-7 (``cpubench2.py``, the new defaults): 22.6 / 44.2 (47 px, full scaling) / 29.3. Landing ATE, paired per seed against the 47 px variant
 (``/tmp/s24/sr9``: ``f2s05*.json``) and the defaults under the defaults and session 23's four perturbations
 (``TrackingConfig.ba_huber_px`` 1.9 / 2.1, ``reprojection_threshold_px`` 2.4 / 2.6), seeds 0-23 / 24-47, 35 px and
 stride 2: 1.59 / 1.96 / 2.04 / 1.77 / 1.93 % and 1.86 / 1.91 / 1.81 / 2.18 / 1.42 % (47 px: 2.10 / 2.44 / 2.12 / 2.12 /
