@@ -80,13 +80,34 @@ class FeatureConfig:
     defaults and four neutral perturbations) it moves the mean ATE 2.23 -> 1.95 % (paired -0.28 +- 0.14 points), the
     median 1.69 -> 1.52 and the runs within 2 % 163 -> 204, but the runs over 5 % 11 -> 15, gathered on seeds 17, 19
     and 36; with the defaults on seeds 0-23 1.80 -> 2.10 %; indoor seeds 0-7 6.84 -> 11.23 %; CPU per MCI 21.7 ->
-    43-45 ms. 1.5x (28 ms): 2.23 -> 2.10 % (-0.13 +- 0.17), within 2 % 163 -> 199, over 5 % 11 -> 21. Hence off."""
-    klt_upsample_sigma_px: float = field(default=0.6, metadata={"min": 0.3, "max": 2.0, "step": 0.05, "unit": "px"})
-    """``klt_upsample``: the fine MCI's splat, sensor pixels (the sensor-grid MCI's is ``EventImageConfig.sigma_px``)."""
-    klt_upsample_window_px: int = field(default=0, metadata={"min": 0, "max": 101, "step": 2, "unit": "px"})
-    """``klt_upsample``: KLT block size on the fine grid, fine pixels (odd; 0: ``klt_window_px`` scaled, rounded up to odd)."""
+    43-45 ms. 1.5x (28 ms): 2.23 -> 2.10 % (-0.13 +- 0.17), within 2 % 163 -> 199, over 5 % 11 -> 21. With the
+    cheaper fine pass that is now the default (``klt_upsample_window_px`` 35, ``klt_upsample_scale_stride`` 2; session
+    24, ``fine9``): 28.3 ms per MCI (the defaults 22.9, 47 px 42.6, same process), the 240 runs 1.85 % (within 2 % 204,
+    over 5 % 12, gathered on seeds 10 and 36), seeds 0-23 with the defaults 1.80 -> 1.59 % (20 -> 23 within 2 %), 24-47
+    2.09 -> 1.86 % (15 -> 21); indoor seeds 0-7 6.84 -> 8.93 % (6 of 8 worse). Still off: indoor worse, runaways."""
+    klt_upsample_sigma_px: float = field(default=0.5, metadata={"min": 0.3, "max": 2.0, "step": 0.05, "unit": "px"})
+    """``klt_upsample``: the fine MCI's splat, sensor pixels (the sensor-grid MCI's is ``EventImageConfig.sigma_px``).
+    0.5 (was 0.6 before session 24's ``fine9``, which measured every 240-run figure at 0.5)."""
+    klt_upsample_window_px: int = field(default=35, metadata={"min": 0, "max": 101, "step": 2, "unit": "px"})
+    """``klt_upsample``: KLT block size on the fine grid, fine pixels (odd; 0: ``klt_window_px`` scaled, rounded up to
+    odd: 47 at 2x). Session 24 (``/tmp/s24/fine9``, 2x, sigma 0.5, ``klt_upsample_scale_stride`` 2; CPU per MCI by
+    ``cpubench.py``, landing seeds 0-3 alternating in one process, against the defaults' 22.9 ms): 47 px 42.0 ms, 41 px
+    29.7, 35 px 28.3, 31 px 29.4 (KLT forward and backward, synthetic, 15.7 / 7.4 / 8.1 ms at 47 / 35 / 31 px). 35 px
+    over the 240 landing runs of ``klt_upsample`` (seeds 0-47 under the defaults and session 23's four perturbations):
+    mean ATE 1.85 % (47 px: 1.95, ``klt_upsample`` off: 2.23), median 1.41 (1.52, 1.69), within 2 % 204 (204, 163), over
+    5 % 12 (15, 11; seeds 10 and 36), paired against 47 px -0.10 +- 0.13 points (142 better), against off -0.38 +- 0.15
+    (169 better); so 35 (was 0). 41 px, defaults only: seeds 0-23 1.33 % (24 within 2 %), 24-47 2.30 % (19; 26 / 36
+    9.2 / 10.8 %)."""
     klt_upsample_levels: int = field(default=3, metadata={"min": 0, "max": 6, "step": 1, "unit": "levels"})
-    """``klt_upsample``: pyramid levels above the fine image, levels."""
+    """``klt_upsample``: pyramid levels above the fine image, levels. Session 24 (``/tmp/s24/fine9``, 35 px window): 2
+    levels 21.7 ms per MCI (3: 28.3, the defaults 22.9) but landing seeds 0-23 / 24-47 8.53 / 8.54 %
+    (0 within 2 %; share of time tracked from the events 0.97 -> 0.46): the 2x grid needs the third level's reach."""
+    klt_upsample_scale_stride: int = field(default=2, metadata={"min": 0, "max": 8, "step": 1, "unit": "px"})
+    """``klt_upsample``: the fine image's 8-bit robust maximum from every this-many-th row and column only, scaled in
+    OpenCV (0: all of them in numpy, as the sensor-grid MCI; :func:`evpose.slam.fine_grid.fine_to_uint8`), fine pixels.
+    Session 24 (``/tmp/s24/fine9``): synthetic 692x520 image 5.9 -> 1.1 ms (stride 1 3.6, 3 0.4), 8-bit values within
+    2; in the pipeline (landing seeds 0-3, few non-zero pixels) only 42.6 -> 42.0 ms per MCI. 2x, sigma 0.5, 47 px,
+    landing seeds 0-23: 2.04 % (20 within 2 %) against 0's 2.10 % (20), paired -0.06 +- 0.45 points; so 2 (was 0)."""
     klt_upsample_refine: bool = False
     """``klt_upsample``: track on the sensor-grid MCIs as usual, then refine each result by single-level KLT on the fine
     grid started there (the forward-backward test on the fine pass), instead of a full pyramid on the fine grid."""

@@ -239,18 +239,19 @@ tracking, median of the runs' medians): 21.7 ms -> 2x 43-45 ms (the fine image's
 forward and backward 16 ms against 4), 1.5x 28.4 ms, 2x refining 30.2 ms. So the finer grid makes the typical landing
 run better and lowers the landing's mean over many runs, but gathers its runaways on a few seeds, is worse with the
 defaults on seeds 0-23 and indoors, and doubles the CPU: off. Why those seeds run away (the H2 / H5 choice in the turn,
-the map tracks lost there) is the question to answer before it could be turned on.
+the map tracks lost there) is the question to answer before it could be turned on. The fine pass fits the 30 ms budget at
+28.3 ms with a 35 px window and a strided 8-bit scaling, as accurate over the same 240 runs (1.85 %; module notes of
+:mod:`evpose.slam.fine_grid`, which now holds the fine-grid KLT).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
 
 from evpose.slam.config import FeatureConfig
-from evpose.slam.event_image import fine_coords, sensor_coords
 
 
 def detect_features(img8: np.ndarray, cfg: FeatureConfig, existing: np.ndarray | None = None, max_total: int | None = None,
@@ -360,37 +361,6 @@ def track_features(prev8: np.ndarray, cur8: np.ndarray, pts: np.ndarray, cfg: Fe
         idx = np.flatnonzero(ok)
         ok[idx[patch_ncc(prev8, cur8, p0.reshape(-1, 2)[idx], p1[idx]) < min_ncc]] = False
     return p1.astype(np.float32), ok
-
-
-def fine_klt_config(cfg: FeatureConfig) -> FeatureConfig:
-    """``cfg`` for KLT on the grid ``cfg.klt_upsample`` times finer (``FeatureConfig.klt_upsample``): its window,
-    levels and forward-backward threshold in fine pixels."""
-    s = float(cfg.klt_upsample)
-    win = int(cfg.klt_upsample_window_px) or int(np.ceil(cfg.klt_window_px * s))
-    return replace(cfg, klt_window_px=win | 1, klt_levels=int(cfg.klt_upsample_levels), klt_max_bidir_error_px=cfg.klt_max_bidir_error_px * s)
-
-
-def track_features_fine(prev_fine8: np.ndarray, cur_fine8: np.ndarray, pts: np.ndarray, cfg: FeatureConfig,
-                        guess: np.ndarray | None = None, min_ncc: float = 0.0, prev8: np.ndarray | None = None,
-                        cur8: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`track_features` on MCIs rendered ``cfg.klt_upsample`` times finer (``MciResult.fine_image``); ``pts``,
-    ``guess`` and the result in sensor pixels, the forward-backward threshold still ``klt_max_bidir_error_px`` of them.
-    With ``cfg.klt_upsample_refine`` the sensor-grid MCIs ``prev8`` -> ``cur8`` are tracked first and the fine pass,
-    single-level, starts at their result (the tracks it loses stay lost)."""
-    s = float(cfg.klt_upsample)
-    fcfg = fine_klt_config(cfg)
-    g = None if guess is None else fine_coords(guess, s).astype(np.float32)
-    back = False
-    if cfg.klt_upsample_refine and prev8 is not None and cur8 is not None:
-        coarse, ok0 = track_features(prev8, cur8, pts, cfg, guess=guess, min_ncc=min_ncc)
-        g, back, fcfg = fine_coords(coarse, s).astype(np.float32), True, replace(fcfg, klt_levels=0)
-    new, ok = track_features(prev_fine8, cur_fine8, fine_coords(pts, s).astype(np.float32), fcfg, guess=g, guess_back=back, min_ncc=min_ncc)
-    if back:
-        ok &= ok0
-    new = sensor_coords(new, s).astype(np.float32)
-    w, h = (cur_fine8.shape[1] + 0.5) / s - 0.5, (cur_fine8.shape[0] + 0.5) / s - 0.5  # the sensor's last pixel centre
-    ok &= (new[:, 0] >= 0) & (new[:, 0] <= w - 1) & (new[:, 1] >= 0) & (new[:, 1] <= h - 1)
-    return new, ok
 
 
 def step_consistent(p0: np.ndarray, p1: np.ndarray, ok: np.ndarray, judge: np.ndarray, max_residual_px: float,

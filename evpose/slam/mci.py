@@ -26,6 +26,7 @@ from scipy.spatial.transform import Rotation
 from evpose.slam.config import EventImageConfig, FeatureConfig, MciConfig
 from evpose.slam.event_image import event_image, local_std_score, to_uint8
 from evpose.slam.event_window import ReconstructionWindow
+from evpose.slam.fine_grid import fine_to_uint8
 from evpose.slam.parallax_warp import depth_field, fit_twist, sample_depth, warp_events
 from evpose.slam.window_fit import fit_twist_rate, whole_span_s
 
@@ -94,7 +95,8 @@ class MciResult:
         """``hypothesis``'s image on the grid KLT runs on, 8 bits (None when ``FeatureConfig.klt_upsample`` is off)."""
         if features.klt_upsample <= 1.0:
             return None
-        return to_uint8(self.fine_image(hypothesis, features.klt_upsample, features.klt_upsample_sigma_px))
+        return fine_to_uint8(self.fine_image(hypothesis, features.klt_upsample, features.klt_upsample_sigma_px),
+                             int(features.klt_upsample_scale_stride))
 
 
 @dataclass

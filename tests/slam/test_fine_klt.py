@@ -7,7 +7,8 @@ import pytest
 
 from evpose.slam.config import FeatureConfig
 from evpose.slam.event_image import event_image, fine_coords, sensor_coords, to_uint8
-from evpose.slam.features import track_features, track_features_fine
+from evpose.slam.features import track_features
+from evpose.slam.fine_grid import fine_to_uint8, track_features_fine
 
 W, H = 160, 120
 RECTS = [(30, 25, 70, 60), (90, 30, 130, 90), (40, 75, 75, 105)]
@@ -57,3 +58,16 @@ def test_fine_grid_tracks_subpixel_shifted_edges_more_precisely_than_sensor_grid
         e2.append(np.linalg.norm(n2 - CORNERS - shift, axis=1))
     rms1, rms2 = (float(np.sqrt(np.mean(np.concatenate(e) ** 2))) for e in (e1, e2))
     assert rms2 < 0.85 * rms1, (rms1, rms2)
+
+
+def test_fine_to_uint8_strided_maximum_matches_the_full_scaling():
+    rng = np.random.default_rng(0)
+    x0, y0 = _edge_events(rng, np.zeros(2))
+    img = event_image(x0, y0, None, W, H, 0.5, scale=2.0)
+    assert np.array_equal(fine_to_uint8(img, 0), to_uint8(img))
+    fast = fine_to_uint8(img, 2)
+    assert fast.dtype == np.uint8 and fast.shape == img.shape
+    assert np.abs(fast.astype(int) - to_uint8(img)).max() <= 12
+    assert not fine_to_uint8(np.zeros((8, 8), np.float32), 2).any()
+    signed = fine_to_uint8(np.array([[-1.0, 0.0], [0.0, 1.0]], np.float32), 1)
+    assert signed[0, 1] == 128 and signed[0, 0] < 10 and signed[1, 1] > 250
