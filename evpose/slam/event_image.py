@@ -101,6 +101,16 @@ def sensor_coords(uv: np.ndarray, scale: float) -> np.ndarray:
     return (np.asarray(uv, np.float64) + 0.5) / scale - 0.5
 
 
+def robust_maximum(magnitudes: np.ndarray) -> float | None:
+    """The 99.5th percentile of the non-zero ``magnitudes`` (their maximum if that is 0), None if all are zero: the value
+    an event image's 8-bit scaling maps to full contrast, so a few hot pixels do not darken the rest."""
+    nz = magnitudes[magnitudes > 0]
+    if nz.size == 0:
+        return None
+    top = float(np.percentile(nz, 99.5))
+    return top if top > 0 else float(nz.max())
+
+
 def to_uint8(img: np.ndarray) -> np.ndarray:
     """Scale an event image to 8 bits for FAST and KLT: robust maximum (99.5th percentile of non-zero pixels) -> 255.
 
@@ -108,12 +118,9 @@ def to_uint8(img: np.ndarray) -> np.ndarray:
     """
     img = np.asarray(img, dtype=np.float32)
     signed = bool((img < 0).any())
-    mag = np.abs(img)
-    nz = mag[mag > 0]
-    if nz.size == 0:
+    top = robust_maximum(np.abs(img))
+    if top is None:
         return np.zeros(img.shape, np.uint8)
-    top = float(np.percentile(nz, 99.5))
-    top = top if top > 0 else float(nz.max())
     if signed:
         out = 128.0 + 127.0 * np.clip(img / top, -1.0, 1.0)
     else:

@@ -28,7 +28,7 @@ import cv2
 import numpy as np
 
 from evpose.slam.config import FeatureConfig
-from evpose.slam.event_image import fine_coords, sensor_coords, to_uint8
+from evpose.slam.event_image import fine_coords, robust_maximum, sensor_coords, to_uint8
 from evpose.slam.features import track_features
 
 
@@ -40,15 +40,11 @@ def fine_to_uint8(img: np.ndarray, stride: int) -> np.ndarray:
     if stride <= 0:
         return to_uint8(img)
     img = np.asarray(img, dtype=np.float32)
-    mag = np.abs(img[::stride, ::stride])
-    nz = mag[mag > 0]
-    if nz.size == 0:
-        mag = np.abs(img)
-        nz = mag[mag > 0]
-        if nz.size == 0:
+    top = robust_maximum(np.abs(img[::stride, ::stride]))
+    if top is None:
+        top = robust_maximum(np.abs(img))
+        if top is None:
             return np.zeros(img.shape, np.uint8)
-    top = float(np.percentile(nz, 99.5))
-    top = top if top > 0 else float(nz.max())
     if (img < 0).any():  # signed: 0 -> 128, saturating at +-top
         return np.clip(np.rint(128.0 + img * np.float32(127.0 / top)), 1, 255).astype(np.uint8)
     return cv2.convertScaleAbs(img, alpha=255.0 / top)
