@@ -50,21 +50,27 @@ def run_tyro(main: Callable[..., Any], args: list[str], prog: str) -> Any:
     real_stderr = sys.stderr
     captured = io.StringIO()
 
+    def restore() -> str:
+        """Ends the capture (once); what tyro wrote meanwhile."""
+        if sys.stderr is captured:
+            sys.stderr = real_stderr
+            return captured.getvalue()
+        return ""
+
     @functools.wraps(main)
     def parsed(*a, **k):
         # tyro calls this only once every argument parsed: from here on the command's own messages are real.
-        sys.stderr = real_stderr
+        real_stderr.write(restore())
         return main(*a, **k)
 
     sys.stderr = captured
     try:
         return tyro.cli(parsed, args=args, prog=prog)
     except SystemExit as exc:
-        if sys.stderr is captured and exc.code == 2:
-            raise ArgumentError(f"{flatten_panel(captured.getvalue())} (see {prog} --help)") from None
+        text = restore()  # empty when the command itself exited: parsing had ended
+        if exc.code == 2 and text:
+            raise ArgumentError(f"{flatten_panel(text)} (see {prog} --help)") from None
+        real_stderr.write(text)
         raise
     finally:
-        if sys.stderr is captured:
-            sys.stderr = real_stderr
-            if captured.getvalue() and sys.exc_info()[0] is None:
-                real_stderr.write(captured.getvalue())
+        real_stderr.write(restore())  # a Ctrl+C while tyro parses
