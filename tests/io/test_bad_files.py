@@ -87,8 +87,12 @@ def test_binary_config_file_is_not_a_text_file(tmp_path):
 @pytest.mark.parametrize("name, text, message", [
     ("cfg.yaml", "rate_hz: [1, 2\n  : :\n", "line 2: not valid YAML (expected ',' or ']', but got ':')"),
     ("cfg.json", '{"rate_hz": }', "line 1: not valid JSON (Expecting value)"),
+    # The parsers kept the last of two values silently; `false` or `0` was read as an empty file (all defaults).
+    ("cfg.yaml", "rate_hz: 200\nregistration:\n  max_iterations: 5\nrate_hz: 300\n", "line 4: not valid YAML (duplicate key 'rate_hz')"),
+    ("cfg.json", '{"rate_hz": 200, "rate_hz": 300}', "not valid JSON (duplicate key 'rate_hz')"),
+    ("cfg.yaml", "false\n", "expected a mapping, got bool"),
 ])
-def test_config_syntax_error_names_its_line(tmp_path, name, text, message):
+def test_malformed_config_syntax_a_key_given_twice_or_a_falsy_document_is_one_line_naming_it(tmp_path, name, text, message):
     path = tmp_path / name
     path.write_text(text)
     with pytest.raises(InputError) as info:
@@ -128,20 +132,6 @@ def test_check_config_walks_nested_numbers_and_names_the_dotted_field():
     setattr(sub, field, float("nan"))
     with pytest.raises(InputError, match=rf"{nested}\.{field}: expected a finite number, got nan"):
         check_config(cfg)
-
-
-@pytest.mark.parametrize("name, text, message", [
-    ("cfg.yaml", "rate_hz: 200\nregistration:\n  max_iterations: 5\nrate_hz: 300\n", "line 4: not valid YAML (duplicate key 'rate_hz')"),
-    ("cfg.json", '{"rate_hz": 200, "rate_hz": 300}', "not valid JSON (duplicate key 'rate_hz')"),
-    ("cfg.yaml", "false\n", "expected a mapping, got bool"),
-])
-def test_config_key_given_twice_or_a_falsy_document_is_refused_not_read_as_defaults(tmp_path, name, text, message):
-    # The parsers kept the last of two values silently; `false` or `0` was read as an empty file (all defaults).
-    path = tmp_path / name
-    path.write_text(text)
-    with pytest.raises(InputError) as info:
-        read_config(TrackerConfig, path)
-    assert message in _one_line(info, path)
 
 
 def test_a_folder_given_for_a_map_or_a_table_is_called_a_folder_not_missing(tmp_path):
