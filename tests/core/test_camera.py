@@ -184,8 +184,17 @@ def test_distortion_of_another_lens_or_unit_is_an_input_error(dist, message):
 
 
 def test_real_wide_lens_calibrations_are_accepted_even_if_they_fold_in_the_corners():
-    # The Event Camera Dataset's DAVIS240C calibration (shapes_6dof's calib.txt).
-    CameraCalibration(240, 180, 199.092366542, 198.82882047, 132.192071378, 110.712660011, DistortionModel.RADTAN,
-                      (-0.368436311798, 0.150947243557, -0.000296130534385, -0.000759431726241, 0.0))
-    # k1 alone at -0.3 folds 422 px from the centre: only the corners of a 640x480 sensor, beyond its 239 px disc.
-    CameraCalibration(640, 480, 400.0, 400.0, 320.0, 240.0, DistortionModel.RADTAN, (-0.3, 0.0, 0.0, 0.0, 0.0))
+    cams = [
+        # The Event Camera Dataset's DAVIS240C calibration (shapes_6dof's calib.txt): invertible over the whole sensor.
+        CameraCalibration(240, 180, 199.092366542, 198.82882047, 132.192071378, 110.712660011, DistortionModel.RADTAN,
+                          (-0.368436311798, 0.150947243557, -0.000296130534385, -0.000759431726241, 0.0)),
+        # k1 alone at -0.3 folds 422 px from the centre: only the corners of a 640x480 sensor, beyond its 239 px disc.
+        CameraCalibration(640, 480, 400.0, 400.0, 320.0, 240.0, DistortionModel.RADTAN, (-0.3, 0.0, 0.0, 0.0, 0.0)),
+    ]
+    for cam in cams:
+        # Inside the checked disc every pixel's ray projects back onto it.
+        edge = np.array([[cam.cx + 0.99 * min(cam.cx, cam.cy), cam.cy], [cam.cx, cam.cy - 0.99 * min(cam.cx, cam.cy)]])
+        assert np.abs(cam.project(cam.unproject(edge)) - edge).max() < 1e-6
+    ecd = cams[0]
+    corners = np.array([[0.0, 0.0], [239.0, 179.0]])
+    assert np.abs(ecd.project(ecd.unproject(corners)) - corners).max() < 1e-6
