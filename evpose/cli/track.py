@@ -52,6 +52,27 @@ def timings_document(results, config) -> dict:
     }
 
 
+def smoothed_over_restarts(cfg, recording, inputs, restarts):
+    """The smoothed trajectory of each stretch the fusion ran without a restart (``session.restarts``: after an event
+    gap the backend starts again, and a replay across the gap would integrate the missing IMU), joined."""
+    from evpose.core.trajectory import Trajectory
+    from evpose.fusion.replay import FusionInputs, smoothed_trajectory
+
+    starts = [(inputs.t0_us, inputs.T0_world_cam, inputs.velocity0_world)] + [(t, T, v) for t, (T, v) in sorted(restarts.items())]
+    parts = []
+    for k, (t0, T0, v0) in enumerate(starts):
+        t1 = starts[k + 1][0] if k + 1 < len(starts) else None
+        reports = [r for r in inputs.reports if r[0] > t0 and (t1 is None or r[0] < t1)]
+        if reports:
+            parts.append(smoothed_trajectory(cfg.fusion, recording.calibration, recording.imu, FusionInputs(t0, T0, v0, reports)))
+    if len(parts) == 1:
+        return parts[0]
+    if not parts:
+        return Trajectory.empty()
+    return Trajectory.from_arrays(np.concatenate([p.t for p in parts]), np.concatenate([p.position for p in parts]),
+                                  np.concatenate([p.quat_xyzw for p in parts]))
+
+
 def _record_fusion_inputs(session, cfg):
     """Have the session's factor graph log what it is fed, for the smoothed trajectory written after the run."""
     from evpose.fusion import FusionBackend
@@ -193,9 +214,7 @@ def main(
     if len(traj):
         write_tum(out, traj, inputs=(recording, map))
     if inputs is not None:
-        from evpose.fusion.replay import smoothed_trajectory
-
-        write_tum(smoothed, smoothed_trajectory(cfg.fusion, rec.calibration, rec.imu, inputs), inputs=(recording, map))
+        write_tum(smoothed, smoothed_over_restarts(cfg, rec, inputs, session.restarts), inputs=(recording, map))
     n = len(session.results)
     if lost:
         first = lost[0]

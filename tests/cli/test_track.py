@@ -236,3 +236,35 @@ def test_track_with_an_absurd_imu_is_a_one_line_error(landing_files, tmp_path, c
     code = run(["track", str(tmp_path / "huge.h5"), "--map", str(d / "map.ply"), "--out", str(tmp_path / "e.txt"), "--no-progress"])
     err = capsys.readouterr().err.strip()
     assert code == 2 and len(err.splitlines()) == 1 and "IMU sample 0: acceleration" in err and "beyond any IMU's range" in err
+
+
+def _paused(rec, at_us: int, gap_us: int):
+    """``rec`` with every stream from ``at_us`` on moved ``gap_us`` later (a recorder paused that long)."""
+    import dataclasses
+
+    from evpose.core.events import EventArray
+    from evpose.core.imu import ImuSamples
+    from evpose.core.trajectory import Trajectory
+
+    def shift(t):
+        return np.where(t >= at_us, t + gap_us, t)
+    ev, gt, imu = rec.events, rec.ground_truth, rec.imu
+    return dataclasses.replace(rec, events=EventArray(shift(ev.t), ev.x, ev.y, ev.p),
+                               ground_truth=Trajectory(shift(gt.t), gt.position, gt.quat_xyzw),
+                               imu=None if imu is None else ImuSamples(shift(imu.t), imu.acc, imu.gyro))
+
+
+def test_track_over_an_hour_long_event_gap_reports_it_once_and_resumes_after_it(landing_files, tmp_path, capsys):
+    d, rec = landing_files
+    write_recording_h5(tmp_path / "paused.h5", _paused(rec, rec.t_start_us + 150_000, 3_600_000_000))
+    code = run(["track", str(tmp_path / "paused.h5"), "--map", str(d / "map.ply"), "--out", str(tmp_path / "e.txt"),
+                "--smoothed", str(tmp_path / "s.txt"), "--no-progress"])
+    err = capsys.readouterr().err
+    assert code == 1 and "lost track in 1 of" in err and "no events for 3600.0" in err
+    est, smooth = read_tum(tmp_path / "e.txt"), read_tum(tmp_path / "s.txt")
+    after = est.t > 3_600_000_000
+    assert after.sum() > 20 and (~after).sum() > 20  # tracked before and after the gap, nothing inside it
+    assert np.array_equal(est.t, smooth.t)
+    truth = rec.ground_truth.interpolate(np.where(est.t > 3_600_000_000, est.t - 3_600_000_000, est.t))
+    for traj in (est, smooth):  # the smoothed stretches are replayed separately: no hour of missing IMU in them
+        assert np.max(np.linalg.norm(traj.position - truth.position, axis=1)) < 0.05

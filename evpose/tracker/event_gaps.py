@@ -1,0 +1,112 @@
+"""Which pose updates a tracking session runs: the regular grid, minus the empty updates inside long event gaps.
+
+A session updates the pose at ``t0 + k * dt`` (``k = 1, 2, ...``). Where the events stop for longer than
+``TrackerConfig.max_event_gap_ms`` (a recorder paused, two flights in one file, a dropped stream) the updates in
+between have nothing to register, and stepping through them was slow and harmful: a 1 h pause in the demo ``landing``
+is 720 000 updates, ~24 min and, with a snapshot every 50 updates, tens of GB of memory; and the fused modes wrote
+each of them to the trajectory as an IMU-bridged ("degraded") pose, with no IMU in the gap either, thousands of km
+off after 60 s (``/tmp/s25/cli25/make_gap.py``). Now the updates up to the one that takes the last event before
+the gap run as before; one update then stands for the whole gap, at the first grid time at least ``warmup_ms``
+after the first event after it. It reports the track lost ("no events for ... s") and restarts the tracker there,
+as at the start of the recording (the session decides from which pose: :meth:`TrackingSession._restart_after_gap`).
+
+:class:`UpdateSchedule` maps the session's update count to grid indices and back in O(log gaps): the cost of a gap
+no longer depends on its length.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+_CHUNK = 1 << 22
+"""Events scanned for gaps per numpy call (bounded temporary memory on long recordings)."""
+
+
+@dataclass(frozen=True)
+class EventGap:
+    """A stretch without events: ``t_last_us`` is the last event before it, ``t_next_us`` the first after it."""
+
+    t_last_us: int
+    t_next_us: int
+
+    @property
+    def seconds(self) -> float:
+        return (self.t_next_us - self.t_last_us) * 1e-6
+
+
+def find_gaps(t: np.ndarray, longer_than_us: int, after_us: int) -> list[EventGap]:
+    """The gaps longer than ``longer_than_us`` between consecutive timestamps ``t`` that end after ``after_us``."""
+    gaps = []
+    n = int(t.shape[0])
+    for i0 in range(0, max(n - 1, 0), _CHUNK):
+        i1 = min(i0 + _CHUNK + 1, n)
+        d = np.diff(t[i0:i1])
+        for j in np.flatnonzero(d > longer_than_us):
+            a, b = int(t[i0 + j]), int(t[i0 + j + 1])
+            if b > after_us:
+                gaps.append(EventGap(a, b))
+    return gaps
+
+
+class UpdateSchedule:
+    """Grid index per update of a session whose events end at ``t_end_us``: update ``u`` (1-based) is at
+    ``t0 + grid(u) * dt``. Updates run in segments of consecutive grid indices; the first update of every segment
+    but one starting at grid index 1 is a gap's update (:meth:`gap_of`)."""
+
+    def __init__(self, gaps: list[EventGap], t0_us: int, dt_us: int, t_end_us: int, warmup_us: int):
+        last = max((int(t_end_us) - int(t0_us)) // int(dt_us), 0)
+        starts: list[int] = []
+        ends: list[int] = []
+        jumps: list[EventGap | None] = []
+        start, jump = 1, None
+        for g in gaps:
+            k_last = max((g.t_last_us - t0_us) // dt_us + 1, 0)  # the update that takes the gap's last event
+            k_restart = min(-((t0_us - g.t_next_us - warmup_us) // dt_us), last)
+            if k_restart <= k_last + 1 or k_restart < start:
+                continue  # no update to skip (a coarse grid), or past the end
+            if k_last < start:
+                # The events between the previous gap and this one end before the previous restart: one update
+                # stands for both gaps.
+                jump = EventGap(jump.t_last_us if jump is not None else g.t_last_us, g.t_next_us)
+            else:
+                starts.append(start), ends.append(k_last), jumps.append(jump)
+                jump = g
+            start = k_restart
+        if start <= last:
+            starts.append(start), ends.append(last), jumps.append(jump)
+        keep = [i for i in range(len(starts)) if ends[i] >= starts[i]]
+        self._k0 = np.array([starts[i] for i in keep], dtype=np.int64)
+        lengths = np.array([ends[i] - starts[i] + 1 for i in keep], dtype=np.int64)
+        self._u0 = np.concatenate([[1], 1 + np.cumsum(lengths)[:-1]]).astype(np.int64) if keep else np.zeros(0, np.int64)
+        self._len = lengths
+        self._gaps = [jumps[i] for i in keep]
+        self.total = int(lengths.sum())
+        """Number of updates a full run makes."""
+
+    @property
+    def gaps(self) -> list[EventGap]:
+        """The gaps one update each stands for, in time order."""
+        return [g for g in self._gaps if g is not None]
+
+    def grid(self, u: int) -> int:
+        """Grid index of update ``u`` (1-based; 0 -> 0, the start)."""
+        if u <= 0 or not self.total:
+            return 0
+        s = int(np.searchsorted(self._u0, u, side="right")) - 1
+        return int(self._k0[s] + (u - self._u0[s]))
+
+    def gap_of(self, u: int) -> EventGap | None:
+        """The gap update ``u`` stands for, None for a regular update."""
+        if u <= 0 or u > self.total:
+            return None
+        s = int(np.searchsorted(self._u0, u, side="right")) - 1
+        return self._gaps[s] if u == self._u0[s] else None
+
+    def updates_until(self, k: int) -> int:
+        """How many updates lie at grid index ``k`` or before."""
+        s = int(np.searchsorted(self._k0, k, side="right")) - 1
+        if s < 0:
+            return 0
+        return int(self._u0[s] + min(k - self._k0[s], self._len[s] - 1))
