@@ -132,7 +132,7 @@ def main(
     """
     from tqdm import tqdm
 
-    from evpose.io.atomic import atomic_path, check_outputs
+    from evpose.io.atomic import atomic_path, check_outputs, output_set
     from evpose.io.map_ply import read_contour_map
     from evpose.tracker.session import MapOutOfViewError
     from evpose.io.open import open_recording
@@ -207,14 +207,17 @@ def main(
 
         session.run(progress=tick)
     traj = session.trajectory()
-    if timings is not None:
-        doc = timings_document(session.results, cfg)
-        with atomic_path(timings, inputs=(recording, map)) as tmp:
-            tmp.write_text(json.dumps(doc, indent=1) + "\n")
-    if len(traj):
-        write_tum(out, traj, inputs=(recording, map))
-    if inputs is not None:
-        write_tum(smoothed, smoothed_over_restarts(cfg, rec, inputs, session.restarts), inputs=(recording, map))
+    # The outputs appear together (a Ctrl+C between two left a new --timings beside the last run's trajectory); with
+    # no pose to write, an earlier run's OUT goes with the set it belonged to.
+    with output_set(remove=() if len(traj) or not out.is_file() else (out,)):
+        if timings is not None:
+            doc = timings_document(session.results, cfg)
+            with atomic_path(timings, inputs=(recording, map)) as tmp:
+                tmp.write_text(json.dumps(doc, indent=1) + "\n")
+        if len(traj):
+            write_tum(out, traj, inputs=(recording, map))
+        if inputs is not None:
+            write_tum(smoothed, smoothed_over_restarts(cfg, rec, inputs, session.restarts), inputs=(recording, map))
     n = len(session.results)
     if lost:
         first = lost[0]

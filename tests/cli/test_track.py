@@ -268,3 +268,18 @@ def test_track_over_an_hour_long_event_gap_reports_it_once_and_resumes_after_it(
     truth = rec.ground_truth.interpolate(np.where(est.t > 3_600_000_000, est.t - 3_600_000_000, est.t))
     for traj in (est, smooth):  # the smoothed stretches are replayed separately: no hour of missing IMU in them
         assert np.max(np.linalg.norm(traj.position - truth.position, axis=1)) < 0.05
+
+
+def test_track_interrupted_between_its_outputs_writes_none_of_them(files, tmp_path, monkeypatch, capsys):
+    import evpose.io.tum as tum
+
+    d, _ = files
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(tum, "write_tum", interrupted)  # after the --timings file was written
+    code = run(["track", str(d / "rec.h5"), "--map", str(d / "map.ply"), "--out", str(tmp_path / "e.txt"), "--mode", "stpe",
+                "--timings", str(tmp_path / "t.json"), "--no-progress"])
+    assert code == 130 and "interrupted" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []
