@@ -12,6 +12,10 @@ sensor size, so the size comes from the caller (``width``/``height``, e.g.
 calibration, so our own folders round-trip losslessly). Without a size the
 calibration stays ``None`` and ``calib.txt``'s values go to
 ``metadata["ecd_calib_txt"]``.
+
+With both, the sidecar's calibration is the one used (it also holds the sensor size, the extrinsic and models
+``calib.txt`` cannot state), but ``calib.txt`` is still read and must be sound and agree with it: it is the file an
+ECD user edits, and a damaged or edited ``calib.txt`` beside the sidecar was silently ignored.
 """
 
 from __future__ import annotations
@@ -163,6 +167,25 @@ def calibration_from_ecd(vals: list[float], width: int, height: int, source: str
         raise InputError(source, exc.problem) from None
 
 
+_CALIB_NAMES = ("fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3")
+
+
+def check_calib_agrees(vals: list[float], calibration: CameraCalibration, calib_path: Path) -> None:
+    """Raise :class:`InputError` naming ``calib.txt`` when its values differ from the sidecar's ``calibration`` (the one
+    used): the intrinsics always, the distortion where the sidecar's model is one ``calib.txt`` states (radtan, none)."""
+    ours = [calibration.fx, calibration.fy, calibration.cx, calibration.cy]
+    if calibration.model in (DistortionModel.RADTAN, DistortionModel.NONE):
+        ours += list(calibration.dist) if calibration.model is DistortionModel.RADTAN else [0.0] * 5
+    elif any(vals[4:]):
+        raise InputError(calib_path, f"states a radtan distortion, but the calibration in {SIDECAR_FILE}, which is the one used,"
+                         f" is {calibration.model.value}: make them agree (or delete one of them)")
+    theirs = list(vals) + [0.0] * (len(ours) - len(vals))  # 4 values: no distortion
+    for name, a, b in zip(_CALIB_NAMES, theirs, ours):
+        if not np.isclose(a, b, rtol=1e-9, atol=1e-12):
+            raise InputError(calib_path, f"{name} {a!r} contradicts the calibration in {SIDECAR_FILE} ({name} {b!r}), which is the"
+                             f" one used: make them agree (or delete one of them)")
+
+
 def read_ecd_sidecar(folder: Path) -> dict:
     path = folder / SIDECAR_FILE
     if not path.is_file():
@@ -206,7 +229,9 @@ def read_ecd_context(folder: str | Path, width: int | None = None, height: int |
     if size is not None and (size[0] <= 0 or size[1] <= 0):
         raise InputError(folder, f"sensor size must be positive, got {size[0]}x{size[1]}")
     calib_path = folder / CALIB_FILE
-    if calibration is None and calib_path.is_file():
+    if calibration is not None and calib_path.is_file():
+        check_calib_agrees(read_ecd_calib(calib_path), calibration, calib_path)
+    elif calib_path.is_file():
         vals = read_ecd_calib(calib_path)
         if size is not None:
             calibration = calibration_from_ecd(vals, *size, source=str(calib_path))
