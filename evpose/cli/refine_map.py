@@ -21,7 +21,7 @@ def track_for_refinement(recording, cmap, mode: str = "full", config: Path | Non
 
     cfg = load_config(config) if config is not None else TrackerConfig()
     cfg.mode = TrackerMode(mode)
-    session = TrackingSession(recording, cmap, cfg)
+    session = TrackingSession(recording, cmap, cfg, seekable=False)
     n = 0
     while session.step() is not None:
         n += 1

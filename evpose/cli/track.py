@@ -169,7 +169,7 @@ def main(
     cmap = read_contour_map(map)
     rec = open_recording(recording, width, height)
     try:
-        session = TrackingSession(rec, cmap, cfg, initial_pose=initial)
+        session = TrackingSession(rec, cmap, cfg, initial_pose=initial, seekable=False)  # memory: see ``seekable``
     except MapOutOfViewError as exc:
         raise InputError(map, f"{exc.problem} (recording {recording})") from None
     if session.total_steps == 0:
