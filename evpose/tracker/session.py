@@ -48,9 +48,10 @@ class TrackingSession:
         """``initial_pose`` None -> the ground-truth pose at the first time with ``warmup_ms`` of events before it
         (the first ground-truth pose when events precede it); else that pose at ``t_start_us`` (default: the first event).
 
-        ``seekable`` False keeps no snapshot but the start's, for a run straight to the end (``evpose track``): one
-        every ``snapshot_every`` updates is ~6 MB at 346x260 in ``full`` mode (1.5 GB over 64 s of recording, so a
-        10-minute recording did not fit in memory); a seek back then replays from the start."""
+        ``seekable`` False keeps no snapshot but the start's, for a run straight to the end (``evpose track``,
+        ``refine-map``): one every ``snapshot_every`` updates is ~4.4 MB at 346x260 in ``full`` mode, so memory grew
+        with the recording (10 min at 200 Hz: ~10 GB); a seek back then replays from the start. Measured (session 25):
+        the demo ``landing`` at ``--rate-hz 1000`` (3 990 updates) peaks at 341 MB instead of 690 MB, same output."""
         self._seekable = bool(seekable)
         self.recording = recording
         self.config = config if config is not None else TrackerConfig()
