@@ -26,6 +26,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+DEFAULT_MAX_EVENT_GAP_MS = 1000.0
+"""``TrackerConfig.max_event_gap_ms``'s default (here so that ``evpose info`` can name it without importing the tracker)."""
+
 _CHUNK = 1 << 22
 """Events scanned for gaps per numpy call (bounded temporary memory on long recordings)."""
 
