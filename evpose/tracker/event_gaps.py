@@ -39,13 +39,28 @@ class EventGap:
 
     t_last_us: int
     t_next_us: int
+    stream: str = "events"
+    """What is missing: "events", "IMU samples" (the fused modes), or both."""
 
     @property
     def seconds(self) -> float:
         return (self.t_next_us - self.t_last_us) * 1e-6
 
 
-def find_gaps(t: np.ndarray, longer_than_us: int, after_us: int) -> list[EventGap]:
+def merge_gaps(gaps: list[EventGap]) -> list[EventGap]:
+    """Overlapping gaps (the events and the IMU of a paused recorder) joined, in time order."""
+    out: list[EventGap] = []
+    for g in sorted(gaps, key=lambda g: (g.t_last_us, g.t_next_us)):
+        if out and g.t_last_us <= out[-1].t_next_us:
+            p = out[-1]
+            stream = p.stream if g.stream == p.stream else "events or IMU samples"
+            out[-1] = EventGap(p.t_last_us, max(p.t_next_us, g.t_next_us), stream)
+        else:
+            out.append(g)
+    return out
+
+
+def find_gaps(t: np.ndarray, longer_than_us: int, after_us: int, stream: str = "events") -> list[EventGap]:
     """The gaps longer than ``longer_than_us`` between consecutive timestamps ``t`` that end after ``after_us``."""
     gaps = []
     n = int(t.shape[0])
@@ -55,7 +70,7 @@ def find_gaps(t: np.ndarray, longer_than_us: int, after_us: int) -> list[EventGa
         for j in np.flatnonzero(d > longer_than_us):
             a, b = int(t[i0 + j]), int(t[i0 + j + 1])
             if b > after_us:
-                gaps.append(EventGap(a, b))
+                gaps.append(EventGap(a, b, stream))
     return gaps
 
 
@@ -78,7 +93,8 @@ class UpdateSchedule:
             if k_last < start:
                 # The events between the previous gap and this one end before the previous restart: one update
                 # stands for both gaps.
-                jump = EventGap(jump.t_last_us if jump is not None else g.t_last_us, g.t_next_us)
+                jump = EventGap(jump.t_last_us if jump is not None else g.t_last_us, g.t_next_us,
+                                g.stream if jump is None or jump.stream == g.stream else "events or IMU samples")
             else:
                 starts.append(start), ends.append(k_last), jumps.append(jump)
                 jump = g

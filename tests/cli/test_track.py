@@ -260,7 +260,7 @@ def test_track_over_an_hour_long_event_gap_reports_it_once_and_resumes_after_it(
     code = run(["track", str(tmp_path / "paused.h5"), "--map", str(d / "map.ply"), "--out", str(tmp_path / "e.txt"),
                 "--smoothed", str(tmp_path / "s.txt"), "--no-progress"])
     err = capsys.readouterr().err
-    assert code == 1 and "lost track in 1 of" in err and "no events for 3600.0" in err
+    assert code == 1 and "lost track in 1 of" in err and "no events or IMU samples for 3600.0" in err
     est, smooth = read_tum(tmp_path / "e.txt"), read_tum(tmp_path / "s.txt")
     after = est.t > 3_600_000_000
     assert after.sum() > 20 and (~after).sum() > 20  # tracked before and after the gap, nothing inside it
@@ -283,3 +283,41 @@ def test_track_interrupted_between_its_outputs_writes_none_of_them(files, tmp_pa
                 "--timings", str(tmp_path / "t.json"), "--no-progress"])
     assert code == 130 and "interrupted" in capsys.readouterr().err
     assert list(tmp_path.iterdir()) == []
+
+
+def _short_gaps(folder):
+    """A tracker config whose gap limit (0.1 s) fits the 0.3-1 s test recordings."""
+    (folder / "gaps.yaml").write_text("max_event_gap_ms: 100\n")
+    return str(folder / "gaps.yaml")
+
+
+def test_track_in_full_mode_stops_where_the_imu_ends_instead_of_holding_its_last_sample(landing_files, tmp_path, capsys):
+    import dataclasses
+
+    d, rec = landing_files
+    cut = rec.t_start_us + 150_000
+    write_recording_h5(tmp_path / "short_imu.h5", dataclasses.replace(rec, imu=rec.imu[rec.imu.t < cut]))
+    code = run(["track", str(tmp_path / "short_imu.h5"), "--map", str(d / "map.ply"), "--out", str(tmp_path / "e.txt"), "--no-progress",
+                "--config", _short_gaps(tmp_path)])
+    err = capsys.readouterr().err
+    assert code == 1 and "the IMU samples end at t=" in err and "--mode stpe needs no IMU" in err
+    est = read_tum(tmp_path / "e.txt")
+    assert est.t[-1] < cut + 10_000 and len(est) > 20
+
+
+def test_track_in_full_mode_restarts_after_a_hole_in_the_imu(sim_landing_small, landing_files, tmp_path, capsys):
+    import dataclasses
+
+    d, _ = landing_files
+    rec = sim_landing_small.recording
+    t0 = rec.t_start_us
+    hole = (rec.imu.t >= t0 + 300_000) & (rec.imu.t < t0 + 500_000)
+    write_recording_h5(tmp_path / "hole.h5", dataclasses.replace(rec, imu=rec.imu[~hole]))
+    code = run(["track", str(tmp_path / "hole.h5"), "--map", str(d / "map.ply"), "--out", str(tmp_path / "e.txt"), "--no-progress",
+                "--config", _short_gaps(tmp_path)])
+    err = capsys.readouterr().err
+    assert code == 1 and "lost track in 1 of" in err and "no IMU samples for 0.2" in err
+    est = read_tum(tmp_path / "e.txt")
+    assert np.sum(est.t > t0 + 500_000) > 50  # tracked again after the hole
+    truth = rec.ground_truth.interpolate(est.t)
+    assert np.max(np.linalg.norm(est.position - truth.position, axis=1)) < 0.05
