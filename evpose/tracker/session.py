@@ -288,6 +288,11 @@ class TrackingSession:
         if motion is not None:
             # Restarted like the session's start (snapshots replay this too: every restart sets it again).
             motion.initial_velocity_world = v0
+            selector = self.tracker.components.polarity_selector
+            if v0 is None and selector is not None and selector.fused_pose:
+                # As at a start without a velocity (build_motion_components): T_align composed from the unknown motion
+                # would keep only the events that agree with it.
+                selector.hold_updates = int(self.config.polarity.unknown_velocity_hold_updates)
             if imu is not None and len(imu):
                 motion.fusion.add_imu(imu)
         self.tracker.feed(events)
