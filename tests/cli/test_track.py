@@ -321,3 +321,16 @@ def test_track_in_full_mode_restarts_after_a_hole_in_the_imu(sim_landing_small, 
     assert np.sum(est.t > t0 + 500_000) > 50  # tracked again after the hole
     truth = rec.ground_truth.interpolate(est.t)
     assert np.max(np.linalg.norm(est.position - truth.position, axis=1)) < 0.05
+
+
+def test_track_without_a_pose_to_write_removes_an_earlier_runs_trajectory_with_its_new_timings(files, tmp_path, capsys):
+    d, rec = files
+    from evpose.io.map_ply import read_contour_map
+
+    write_contour_map(tmp_path / "wrong.ply", bare_ground_map(read_contour_map(d / "map.ply")))
+    out = tmp_path / "e.txt"
+    out.write_text("# an earlier run's trajectory\n")
+    code = run(["track", str(d / "rec.h5"), "--map", str(tmp_path / "wrong.ply"), "--out", str(out), "--mode", "stpe",
+                "--acquire-s", "0", "--timings", str(tmp_path / "t.json"), "--no-progress"])
+    assert code == 1 and "nothing" in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["t.json", "wrong.ply"]  # not the old e.txt beside the new t.json
