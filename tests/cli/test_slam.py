@@ -135,3 +135,24 @@ def test_slam_removes_an_earlier_runs_surplus_map_files(moving_h5, tmp_path):
         (tmp_path / f"est.map{k}.txt").write_text("# an earlier run's map\n")
     assert run(["slam", str(moving_h5), "--out", str(out)]) == 0
     assert sorted(p.name for p in tmp_path.glob("est.map*.txt")) == [f"est.map{k}.txt" for k in range(n)]
+
+
+def test_slam_terminated_while_its_outputs_are_renamed_exits_143_with_the_whole_set(moving_h5, tmp_path, monkeypatch, capsys):
+    import os
+    import signal
+
+    from evpose.io import atomic
+
+    publish = atomic._publish
+    renamed = []
+
+    def publish_then_terminate(tmp, dst, is_dir):
+        if not renamed:
+            os.kill(os.getpid(), signal.SIGTERM)  # `kill` after the first rename: acted on once the set is in place
+        renamed.append(dst.name)
+        publish(tmp, dst, is_dir)
+
+    monkeypatch.setattr(atomic, "_publish", publish_then_terminate)
+    assert run(["slam", str(moving_h5), "--out", str(tmp_path / "est.txt")]) == 143
+    assert "terminated" in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(renamed) and "est.slam.json" in renamed and len(renamed) >= 3
