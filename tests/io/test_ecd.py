@@ -203,3 +203,15 @@ def test_a_calib_txt_that_agrees_with_the_sidecar_is_accepted_however_written(tm
         read_ecd_folder(tmp_path / "seq")
     calib.unlink()  # the sidecar alone
     assert read_ecd_folder(tmp_path / "seq").calibration.to_dict() == recording.calibration.to_dict()
+
+
+def test_a_calib_txt_rounded_for_print_agrees_with_the_sidecar_but_zero_distortion_is_exact(tmp_path, recording):
+    write_ecd_folder(tmp_path / "seq", recording)
+    calib = tmp_path / "seq" / "calib.txt"
+    cal = recording.calibration
+    rounded = [f"{v:.2f}" for v in (cal.fx, cal.fy, cal.cx, cal.cy)] + [f"{v:.3g}" for v in cal.dist]
+    calib.write_text(" ".join(rounded) + "\n")
+    assert read_ecd_folder(tmp_path / "seq").calibration.to_dict() == cal.to_dict()  # the sidecar's exact values
+    calib.write_text(" ".join(rounded[:4] + ["0"] * 5) + "\n")  # "no distortion", beside a sidecar with some
+    with pytest.raises(InputError, match="k1 0.0 contradicts"):
+        read_ecd_folder(tmp_path / "seq")
