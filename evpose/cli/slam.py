@@ -15,15 +15,18 @@ def output_paths(out: Path, n_maps: int) -> list[Path]:
     return [out.with_name(f"{out.stem}.map{k}{out.suffix or '.txt'}") for k in range(n_maps)]
 
 
-def stale_outputs(out: Path, n_maps: int) -> list[Path]:
+def stale_outputs(out: Path, n_maps: int, inputs=()) -> list[Path]:
     """An earlier run's outputs that a run with ``n_maps`` maps does not replace: its ``EST.map<k>`` files from
-    ``k = n_maps`` on (``evpose eval --atlas`` would read them as this run's maps) and, with no map, ``out`` itself."""
+    ``k = n_maps`` on (``evpose eval --atlas`` would read them as this run's maps) and, with no map, ``out`` itself;
+    never one of ``inputs``."""
+    import os
+
     stale = [] if n_maps or not out.is_file() else [out]
     k = n_maps
     while (p := output_paths(out, k + 1)[k]).is_file():
         stale.append(p)
         k += 1
-    return stale
+    return [p for p in stale if not any(Path(i).exists() and os.path.samefile(p, i) for i in inputs)]
 
 
 def main(
@@ -115,7 +118,7 @@ def main(
         doc["metrics"] = atlas_metrics(trajs, rec.ground_truth, correct_scale=slam_mode is SlamMode.EVENT, duration_s=run.duration_s).to_dict()
     summary = summary or out.with_suffix(".slam.json")
     # One set: an interrupt between two files left maps without their summary (or beside the last run's).
-    with output_set(remove=stale_outputs(out, len(trajs))):
+    with output_set(remove=stale_outputs(out, len(trajs), inputs)):
         for path, traj in zip(output_paths(out, len(trajs)), trajs):
             write_tum(path, traj, inputs=inputs)
         if trajs:

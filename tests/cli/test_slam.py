@@ -156,3 +156,13 @@ def test_slam_terminated_while_its_outputs_are_renamed_exits_143_with_the_whole_
     assert run(["slam", str(moving_h5), "--out", str(tmp_path / "est.txt")]) == 143
     assert "terminated" in capsys.readouterr().err
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(renamed) and "est.slam.json" in renamed and len(renamed) >= 3
+
+
+def test_slam_never_removes_an_input_named_like_a_surplus_map_file(tmp_path):
+    from evpose.cli.slam import stale_outputs
+
+    out = tmp_path / "est.txt"
+    for k in (1, 2):
+        (tmp_path / f"est.map{k}.txt").write_text("x\n")
+    assert stale_outputs(out, 1) == [tmp_path / "est.map1.txt", tmp_path / "est.map2.txt"]
+    assert stale_outputs(out, 1, inputs=(tmp_path / "est.map2.txt",)) == [tmp_path / "est.map1.txt"]
