@@ -141,7 +141,7 @@ def main(
         correct_scale: Atlas mode: align each map with scale (sim3), as for event-only runs; --align sim3 implies it.
         duration_s: Atlas mode: span of the recording for the tracked fraction, s (default: from ``EST.slam.json``, else the ground truth's span).
     """
-    from evpose.io.atomic import atomic_path, check_outputs
+    from evpose.io.atomic import atomic_path, check_outputs, output_set
 
     check_outputs((json,), inputs=(estimate, ground_truth, *maps), folders=(plots,))
     check_numbers(max_time_diff_s, time_offset_s, rpe_delta, duration_s, rpe_delta_unit)
@@ -179,11 +179,12 @@ def main(
         print()
         print(format_speed_bins(summary["speed_bins"]))
     inputs = (estimate, ground_truth)
-    if json is not None:
-        with atomic_path(json, inputs=inputs) as tmp:
-            tmp.write_text(jsonlib.dumps(summary, indent=2) + "\n")
-    if plots is not None:
-        from evpose.eval.plots import write_plots
+    with output_set():  # the JSON and the plots of one evaluation appear together
+        if json is not None:
+            with atomic_path(json, inputs=inputs) as tmp:
+                tmp.write_text(jsonlib.dumps(summary, indent=2) + "\n")
+        if plots is not None:
+            from evpose.eval.plots import write_plots
 
-        write_plots(result, gt, plots, inputs=inputs)
+            write_plots(result, gt, plots, inputs=inputs)
     return 0

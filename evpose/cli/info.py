@@ -29,6 +29,7 @@ def _recording_lines(s: dict) -> list[str]:
         f"sensor size   {size_text}",
         f"duration      {s['duration_s']:.6f} s  ({s['t_start_us']} .. {s['t_end_us']} us)",
         f"events        {s['events']}  ({_fmt_rate(s['event_rate_hz'])}ev/s, {100 * s['positive_share']:.1f} % ON)",
+        *_gap_lines(s),
         f"imu           {imu_text}",
         f"ground truth  {gt_text}",
     ]
@@ -40,6 +41,15 @@ def _recording_lines(s: dict) -> list[str]:
         lines.append(f"calibration   {cal['model']}  fx={cal['fx']:.3f} fy={cal['fy']:.3f} cx={cal['cx']:.3f} cy={cal['cy']:.3f}  dist={cal['dist']}")
         lines.append(f"              time offset {cal['time_offset_us']} us, T_cam_imu translation {[round(r[3], 6) for r in cal['T_cam_imu'][:3]]} m")
     return lines
+
+
+def _gap_lines(s: dict) -> list[str]:
+    from evpose.tracker.event_gaps import DEFAULT_MAX_EVENT_GAP_MS
+
+    if s.get("longest_event_gap_s", 0.0) * 1e3 <= DEFAULT_MAX_EVENT_GAP_MS:
+        return []
+    return [f"event gap     {s['longest_event_gap_s']:.6f} s without events after t={s['longest_event_gap_after_us'] * 1e-6:.6f} s"
+            f" (the longest; evpose track restarts after gaps over {DEFAULT_MAX_EVENT_GAP_MS / 1e3:g} s)"]
 
 
 def describe(path: Path, width: int | None = None, height: int | None = None) -> dict:

@@ -21,7 +21,7 @@ def track_for_refinement(recording, cmap, mode: str = "full", config: Path | Non
 
     cfg = load_config(config) if config is not None else TrackerConfig()
     cfg.mode = TrackerMode(mode)
-    session = TrackingSession(recording, cmap, cfg)
+    session = TrackingSession(recording, cmap, cfg, seekable=False)
     n = 0
     while session.step() is not None:
         n += 1
@@ -66,7 +66,7 @@ def main(
         height: Sensor height, for formats that do not state it.
         quiet: No progress or summary.
     """
-    from evpose.io.atomic import atomic_path, check_outputs
+    from evpose.io.atomic import atomic_path, check_outputs, output_set
     from evpose.io.config_file import read_config
     from evpose.io.map_ply import read_contour_map, write_contour_map
     from evpose.io.open import open_recording
@@ -117,10 +117,11 @@ def main(
             r = rounds[-1]
             print(f"evpose refine-map: iteration {r['iteration']}: {r['points_moved']} of {r['points_measured']} measured points"
                   f" moved (median {r['median_shift_mm']} mm, p95 {r['p95_shift_mm']} mm), {r['seconds']} s", file=sys.stderr)
-    write_contour_map(out, cmap, comment=f"evpose contour map refined from the events of {recording.name}")
-    if report is not None:
-        with atomic_path(report, inputs=(recording, map)) as tmp:
-            tmp.write_text(json.dumps({"recording": str(recording), "map": str(map), "rounds": rounds}, indent=1) + "\n")
+    with output_set():  # the map and its report appear together
+        write_contour_map(out, cmap, comment=f"evpose contour map refined from the events of {recording.name}")
+        if report is not None:
+            with atomic_path(report, inputs=(recording, map)) as tmp:
+                tmp.write_text(json.dumps({"recording": str(recording), "map": str(map), "rounds": rounds}, indent=1) + "\n")
     if not quiet:
         print(f"evpose refine-map: wrote {out}", file=sys.stderr)
     return 0

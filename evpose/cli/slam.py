@@ -15,6 +15,20 @@ def output_paths(out: Path, n_maps: int) -> list[Path]:
     return [out.with_name(f"{out.stem}.map{k}{out.suffix or '.txt'}") for k in range(n_maps)]
 
 
+def stale_outputs(out: Path, n_maps: int, inputs=()) -> list[Path]:
+    """An earlier run's outputs that a run with ``n_maps`` maps does not replace: its ``EST.map<k>`` files from
+    ``k = n_maps`` on (``evpose eval --atlas`` would read them as this run's maps) and, with no map, ``out`` itself;
+    never one of ``inputs``."""
+    import os
+
+    stale = [] if n_maps or not out.is_file() else [out]
+    k = n_maps
+    while (p := output_paths(out, k + 1)[k]).is_file():
+        stale.append(p)
+        k += 1
+    return [p for p in stale if not any(Path(i).exists() and os.path.samefile(p, i) for i in inputs)]
+
+
 def main(
     recording: tyro.conf.Positional[Path],
     out: Path,
@@ -31,7 +45,9 @@ def main(
     written to OUT with ``.map<k>`` before the suffix. Event-only maps have an
     arbitrary scale (evaluate with ``--align sim3``). A JSON summary (statuses,
     per-map sizes, per-MCI latencies and, with ground truth, the paper's metrics)
-    goes to SUMMARY (default: OUT with suffix ``.slam.json``).
+    goes to SUMMARY (default: OUT with suffix ``.slam.json``). The files appear
+    together at the end, replacing an earlier run's set (its surplus ``.map<k>``
+    files, and OUT when no map was made, are removed), or, if interrupted, not at all.
 
     Args:
         recording: Anything ``evpose info`` reads (ECD folder, evpose .h5, event .h5, bag); needs a calibration.
@@ -47,7 +63,7 @@ def main(
 
     from evpose.bench.stats import latency_summary
     from evpose.eval.slam_metrics import atlas_metrics
-    from evpose.io.atomic import atomic_path, check_outputs
+    from evpose.io.atomic import atomic_path, check_outputs, output_set
     from evpose.io.open import open_recording
     from evpose.io.tum import write_tum
     from evpose.slam.config import SlamConfig, SlamMode
@@ -81,10 +97,6 @@ def main(
     inputs = tuple(p for p in (recording, config) if p is not None)
     maps = [m for m in run.atlas.maps if m.traj_t]
     trajs = [m.trajectory() for m in maps]
-    for path, traj in zip(output_paths(out, len(trajs)), trajs):
-        write_tum(path, traj, inputs=inputs)
-    if trajs:
-        write_tum(out, max(trajs, key=len), inputs=inputs)
     doc = {
         "recording": str(recording),
         "config": config_to_dict(cfg),
@@ -105,8 +117,14 @@ def main(
     if rec.ground_truth is not None and len(rec.ground_truth) >= 2 and trajs:
         doc["metrics"] = atlas_metrics(trajs, rec.ground_truth, correct_scale=slam_mode is SlamMode.EVENT, duration_s=run.duration_s).to_dict()
     summary = summary or out.with_suffix(".slam.json")
-    with atomic_path(summary, inputs=inputs) as tmp:
-        tmp.write_text(json.dumps(doc, indent=2, default=float) + "\n")
+    # One set: an interrupt between two files left maps without their summary (or beside the last run's).
+    with output_set(remove=stale_outputs(out, len(trajs), inputs)):
+        for path, traj in zip(output_paths(out, len(trajs)), trajs):
+            write_tum(path, traj, inputs=inputs)
+        if trajs:
+            write_tum(out, max(trajs, key=len), inputs=inputs)
+        with atomic_path(summary, inputs=inputs) as tmp:
+            tmp.write_text(json.dumps(doc, indent=2, default=float) + "\n")
     if not trajs:
         reasons = Counter(r.reason for r in run.results if r.reason)
         why = reasons.most_common(1)[0][0] if reasons else "no motion-compensated image was produced (too few events, no texture or a still camera)"

@@ -52,6 +52,27 @@ def timings_document(results, config) -> dict:
     }
 
 
+def smoothed_over_restarts(cfg, recording, inputs, restarts):
+    """The smoothed trajectory of each stretch the fusion ran without a restart (``session.restarts``: after an event
+    gap the backend starts again, and a replay across the gap would integrate the missing IMU), joined."""
+    from evpose.core.trajectory import Trajectory
+    from evpose.fusion.replay import FusionInputs, smoothed_trajectory
+
+    starts = [(inputs.t0_us, inputs.T0_world_cam, inputs.velocity0_world)] + [(t, T, v) for t, (T, v) in sorted(restarts.items())]
+    parts = []
+    for k, (t0, T0, v0) in enumerate(starts):
+        t1 = starts[k + 1][0] if k + 1 < len(starts) else None
+        reports = [r for r in inputs.reports if r[0] > t0 and (t1 is None or r[0] < t1)]
+        if reports:
+            parts.append(smoothed_trajectory(cfg.fusion, recording.calibration, recording.imu, FusionInputs(t0, T0, v0, reports)))
+    if len(parts) == 1:
+        return parts[0]
+    if not parts:
+        return Trajectory.empty()
+    return Trajectory.from_arrays(np.concatenate([p.t for p in parts]), np.concatenate([p.position for p in parts]),
+                                  np.concatenate([p.quat_xyzw for p in parts]))
+
+
 def _record_fusion_inputs(session, cfg):
     """Have the session's factor graph log what it is fed, for the smoothed trajectory written after the run."""
     from evpose.fusion import FusionBackend
@@ -111,7 +132,7 @@ def main(
     """
     from tqdm import tqdm
 
-    from evpose.io.atomic import atomic_path, check_outputs
+    from evpose.io.atomic import atomic_path, check_outputs, output_set
     from evpose.io.map_ply import read_contour_map
     from evpose.tracker.session import MapOutOfViewError
     from evpose.io.open import open_recording
@@ -148,7 +169,7 @@ def main(
     cmap = read_contour_map(map)
     rec = open_recording(recording, width, height)
     try:
-        session = TrackingSession(rec, cmap, cfg, initial_pose=initial)
+        session = TrackingSession(rec, cmap, cfg, initial_pose=initial, seekable=False)  # memory: see ``seekable``
     except MapOutOfViewError as exc:
         raise InputError(map, f"{exc.problem} (recording {recording})") from None
     if session.total_steps == 0:
@@ -186,16 +207,17 @@ def main(
 
         session.run(progress=tick)
     traj = session.trajectory()
-    if timings is not None:
-        doc = timings_document(session.results, cfg)
-        with atomic_path(timings, inputs=(recording, map)) as tmp:
-            tmp.write_text(json.dumps(doc, indent=1) + "\n")
-    if len(traj):
-        write_tum(out, traj, inputs=(recording, map))
-    if inputs is not None:
-        from evpose.fusion.replay import smoothed_trajectory
-
-        write_tum(smoothed, smoothed_trajectory(cfg.fusion, rec.calibration, rec.imu, inputs), inputs=(recording, map))
+    # The outputs appear together (a Ctrl+C between two left a new --timings beside the last run's trajectory); with
+    # no pose to write, an earlier run's OUT goes with the set it belonged to.
+    with output_set(remove=() if len(traj) or not out.is_file() else (out,)):
+        if timings is not None:
+            doc = timings_document(session.results, cfg)
+            with atomic_path(timings, inputs=(recording, map)) as tmp:
+                tmp.write_text(json.dumps(doc, indent=1) + "\n")
+        if len(traj):
+            write_tum(out, traj, inputs=(recording, map))
+        if inputs is not None:
+            write_tum(smoothed, smoothed_over_restarts(cfg, rec, inputs, session.restarts), inputs=(recording, map))
     n = len(session.results)
     if lost:
         first = lost[0]

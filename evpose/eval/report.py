@@ -12,7 +12,7 @@ import platform
 from pathlib import Path
 
 from evpose.eval.suite import SuiteRun, run_name
-from evpose.io.atomic import atomic_path
+from evpose.io.atomic import atomic_path, output_set
 
 NA = "n/a"
 
@@ -274,8 +274,9 @@ def write_report(run: SuiteRun, out_dir: str | Path, runner_desc: str) -> tuple[
     """Write ``report.md`` and ``report.json`` atomically into ``out_dir``."""
     out_dir = Path(out_dir)
     md, js = out_dir / "report.md", out_dir / "report.json"
-    with atomic_path(md) as tmp:
-        tmp.write_text(render_markdown(run, runner_desc))
-    with atomic_path(js) as tmp:
-        tmp.write_text(json.dumps(report_json(run, runner_desc), indent=1) + "\n")
+    with output_set():  # both or neither
+        with atomic_path(md) as tmp:
+            tmp.write_text(render_markdown(run, runner_desc))
+        with atomic_path(js) as tmp:
+            tmp.write_text(json.dumps(report_json(run, runner_desc), indent=1) + "\n")
     return md, js

@@ -20,7 +20,7 @@ from evpose.errors import ConfigError
 from evpose.eval.cache import Job, ResultCache
 from evpose.eval.recordings import label
 from evpose.eval.runner import RunnerConfig, resolve, run_jobs
-from evpose.io.atomic import atomic_path
+from evpose.io.atomic import atomic_path, output_set
 
 
 @dataclass(frozen=True)
@@ -190,13 +190,16 @@ def run_sweep(target_name: str, grid_items: list[str], recordings: list[str], ou
     timing = [{"job": j.name, **(o["result"].get("timing", {}) if o["ok"] else {})} for j, o in zip(jobs, outcomes)]
     best = configs[table["best"]][1] if table["best"] is not None else None
     out_dir.mkdir(parents=True, exist_ok=True)
-    with atomic_path(out_dir / "sweep.json") as tmp:
-        tmp.write_text(json.dumps({"target": target_name, "grid": grid_items, "table": table, "timing": timing}, indent=2) + "\n")
-    with atomic_path(out_dir / "sweep.md") as tmp:
-        tmp.write_text(f"# Sweep: {target_name}\n\nScore: `{table['score']}` ({'lower' if table['minimize'] else 'higher'} is better), mean over recordings.\n\n" + markdown_table(table))
-    if best is not None:
-        import yaml
+    # The three files appear together; without a best configuration an earlier sweep's one would pass for this one's.
+    stale = out_dir / "best_config.yaml"
+    with output_set(remove=(stale,) if best is None and stale.is_file() else ()):
+        with atomic_path(out_dir / "sweep.json") as tmp:
+            tmp.write_text(json.dumps({"target": target_name, "grid": grid_items, "table": table, "timing": timing}, indent=2) + "\n")
+        with atomic_path(out_dir / "sweep.md") as tmp:
+            tmp.write_text(f"# Sweep: {target_name}\n\nScore: `{table['score']}` ({'lower' if table['minimize'] else 'higher'} is better), mean over recordings.\n\n" + markdown_table(table))
+        if best is not None:
+            import yaml
 
-        with atomic_path(out_dir / "best_config.yaml") as tmp:
-            tmp.write_text(yaml.safe_dump(best, sort_keys=False))
+            with atomic_path(out_dir / "best_config.yaml") as tmp:
+                tmp.write_text(yaml.safe_dump(best, sort_keys=False))
     return SweepOutput(table, timing, best)

@@ -1,11 +1,23 @@
-"""Atomic output: write to a temporary sibling, then rename, so no half-written file is ever left."""
+"""Atomic output: write to a temporary sibling, then rename, so no half-written file is ever left.
+
+A command with several outputs (``slam``: a trajectory per map, the longest one and a summary; ``track --timings
+--smoothed``; ``simulate``: recording, cloud and edges; ``eval --json --plots``...) writes them inside
+:func:`output_set`: each :func:`atomic_path` then leaves its finished temporary file in place, and the set renames
+them all onto their names together at the end, with SIGINT and SIGTERM held off while it does. An interrupt before
+that leaves the previous run's outputs as they were and no temporary file; one during it is acted on once every
+output is in place. Written one after the other, a Ctrl+C between two left e.g. ``EST.map0.txt`` without
+``EST.slam.json``, or a new trajectory beside the summary of the run before.
+"""
 
 from __future__ import annotations
 
 import contextlib
+import contextvars
 import os
 import shutil
+import signal
 import tempfile
+import threading
 from pathlib import Path
 
 from evpose.errors import InputError
@@ -73,6 +85,79 @@ def check_outputs(outputs, inputs=(), folders=()) -> None:
         _check_target(dst, is_dir)
 
 
+_PENDING: contextvars.ContextVar[dict | None] = contextvars.ContextVar("evpose_output_set", default=None)
+"""The open :func:`output_set`: its finished outputs ``(tmp, dst, is_dir, holder)`` under "files", the earlier run's
+files it removes under "remove" (None when none is open)."""
+
+
+def _discard(tmp: Path, holder: Path | None) -> None:
+    if tmp.is_dir():
+        shutil.rmtree(tmp, ignore_errors=True)
+    else:
+        with contextlib.suppress(FileNotFoundError):
+            tmp.unlink()
+    if holder is not None:
+        shutil.rmtree(holder, ignore_errors=True)
+
+
+def _publish(tmp: Path, dst: Path, is_dir: bool) -> None:
+    if is_dir and dst.exists():
+        shutil.rmtree(dst) if dst.is_dir() else dst.unlink()
+    os.replace(tmp, dst)
+
+
+@contextlib.contextmanager
+def output_set(remove=()):
+    """Hold back every :func:`atomic_path` output inside the block and rename them all together when it ends without
+    an error (else delete them all): the outputs appear as a set or not at all. ``remove``: files of an earlier run
+    that this one's set replaces by nothing (e.g. ``EST.map3.txt`` after a run with three maps), deleted with it.
+    A set opened inside another joins it."""
+    outer = _PENDING.get()
+    if outer is not None:
+        outer["remove"].extend(remove)
+        yield
+        return
+    pending: dict = {"files": [], "remove": list(remove)}
+    token = _PENDING.set(pending)
+    try:
+        yield
+        with _signals_held():
+            for tmp, dst, is_dir, holder in pending["files"]:
+                _publish(tmp, dst, is_dir)
+                if holder is not None:
+                    shutil.rmtree(holder, ignore_errors=True)
+            for path in pending["remove"]:
+                with contextlib.suppress(FileNotFoundError):
+                    Path(path).unlink()
+    except BaseException:
+        # Also a Ctrl+C between the block's end and the hold: then nothing was renamed yet.
+        for tmp, _, _, holder in pending["files"]:
+            if tmp.exists() or (holder is not None and holder.exists()):
+                _discard(tmp, holder)
+        raise
+    finally:
+        _PENDING.reset(token)
+
+
+@contextlib.contextmanager
+def _signals_held():
+    """SIGINT and SIGTERM held off, not ignored: one arriving in the block is acted on when it ends. Python runs signal
+    handlers in the main thread only (a mask would not do: the kernel may hand the signal to another thread), so
+    elsewhere there is nothing to hold."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    caught: list[int] = []
+    previous = {sig: signal.signal(sig, lambda signum, frame: caught.append(signum)) for sig in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler if handler is not None else signal.SIG_DFL)
+        if caught:
+            signal.raise_signal(caught[0])
+
+
 @contextlib.contextmanager
 def atomic_path(dst: str | Path, inputs: tuple[str | Path, ...] = (), is_dir: bool = False, same_name: bool = False):
     """Yield a temporary path next to ``dst``; on success rename it onto ``dst``, on error delete it.
@@ -102,20 +187,18 @@ def atomic_path(dst: str | Path, inputs: tuple[str | Path, ...] = (), is_dir: bo
         fd, name = tempfile.mkstemp(prefix=f".{dst.name}.", suffix=".tmp" + dst.suffix, dir=parent)
         os.close(fd)
         tmp = Path(name)
+    pending = _PENDING.get()
     try:
         yield tmp
         # mkstemp/mkdtemp create 0600/0700; give the result the permissions a plain open() would.
         os.chmod(tmp, (0o777 if is_dir else 0o666) & ~_umask())
-        if is_dir and dst.exists():
-            shutil.rmtree(dst) if dst.is_dir() else dst.unlink()
-        os.replace(tmp, dst)
+        if pending is not None:
+            pending["files"].append((tmp, dst, is_dir, holder))  # renamed with the rest of the set (or deleted with it)
+            return
+        _publish(tmp, dst, is_dir)
     except BaseException:
-        if tmp.is_dir():
-            shutil.rmtree(tmp, ignore_errors=True)
-        else:
-            with contextlib.suppress(FileNotFoundError):
-                tmp.unlink()
+        _discard(tmp, holder)
         raise
     finally:
-        if holder is not None:
+        if holder is not None and pending is None:
             shutil.rmtree(holder, ignore_errors=True)

@@ -12,11 +12,17 @@ sensor size, so the size comes from the caller (``width``/``height``, e.g.
 calibration, so our own folders round-trip losslessly). Without a size the
 calibration stays ``None`` and ``calib.txt``'s values go to
 ``metadata["ecd_calib_txt"]``.
+
+With both, the sidecar's calibration is the one used (it also holds the sensor size, the extrinsic and models
+``calib.txt`` cannot state), but ``calib.txt`` is still read and must be sound and agree with it to the precision
+its values are written with: it is the file an ECD user edits, and a damaged or edited ``calib.txt`` beside the
+sidecar was silently ignored.
 """
 
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 from typing import Callable, Iterator
 
@@ -163,6 +169,39 @@ def calibration_from_ecd(vals: list[float], width: int, height: int, source: str
         raise InputError(source, exc.problem) from None
 
 
+_CALIB_NAMES = ("fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3")
+
+
+def _printed_tolerance(word: str) -> float:
+    """Half a unit in the last digit ``word`` was written with ("247.07" -> 0.005, "-3.68e-1" -> 0.0005): a value
+    rounded for print agrees with the exact one. A zero is exact ("0 0 0 0 0" is how ``calib.txt`` says "no
+    distortion")."""
+    m = re.fullmatch(r"[+-]?(\d*)(?:\.(\d*))?(?:[eE]([+-]?\d+))?", word.strip())
+    if m is None or float(word) == 0.0:
+        return 0.0
+    return 0.5 * 10.0 ** (int(m.group(3) or 0) - len(m.group(2) or ""))
+
+
+def check_calib_agrees(calib_path: Path, calibration: CameraCalibration) -> None:
+    """Raise :class:`InputError` naming ``calib.txt`` when it is damaged, or when its values differ from the sidecar's
+    ``calibration`` (the one used) by more than their printed precision: the intrinsics always, the distortion where
+    the sidecar's model is one ``calib.txt`` states (radtan, none)."""
+    vals = read_ecd_calib(calib_path)
+    words = calib_path.read_text(encoding="utf-8").split()
+    ours = [calibration.fx, calibration.fy, calibration.cx, calibration.cy]
+    if calibration.model in (DistortionModel.RADTAN, DistortionModel.NONE):
+        ours += list(calibration.dist) if calibration.model is DistortionModel.RADTAN else [0.0] * 5
+    elif any(vals[4:]):
+        raise InputError(calib_path, f"states a radtan distortion, but the calibration in {SIDECAR_FILE}, which is the one used,"
+                         f" is {calibration.model.value}: make them agree (or delete one of them)")
+    theirs = list(vals) + [0.0] * (len(ours) - len(vals))  # 4 values: no distortion
+    tolerance = [_printed_tolerance(w) for w in words] + [0.0] * (len(ours) - len(words))
+    for name, a, b, tol in zip(_CALIB_NAMES, theirs, ours, tolerance):
+        if abs(a - b) > tol + 1e-9 * max(abs(a), abs(b), 1.0):
+            raise InputError(calib_path, f"{name} {a!r} contradicts the calibration in {SIDECAR_FILE} ({name} {b!r}), which is the"
+                             f" one used: make them agree (or delete one of them)")
+
+
 def read_ecd_sidecar(folder: Path) -> dict:
     path = folder / SIDECAR_FILE
     if not path.is_file():
@@ -206,7 +245,9 @@ def read_ecd_context(folder: str | Path, width: int | None = None, height: int |
     if size is not None and (size[0] <= 0 or size[1] <= 0):
         raise InputError(folder, f"sensor size must be positive, got {size[0]}x{size[1]}")
     calib_path = folder / CALIB_FILE
-    if calibration is None and calib_path.is_file():
+    if calibration is not None and calib_path.is_file():
+        check_calib_agrees(calib_path, calibration)
+    elif calib_path.is_file():
         vals = read_ecd_calib(calib_path)
         if size is not None:
             calibration = calibration_from_ecd(vals, *size, source=str(calib_path))

@@ -10,6 +10,21 @@ from evpose.core.trajectory import Trajectory
 from evpose.errors import InputError
 
 
+def _longest_gap(t: np.ndarray, t_before: int | None, best: tuple[int, int]) -> tuple[int, int]:
+    """``best`` = (longest gap between consecutive events so far, us; the time of the event before it), updated with the
+    timestamps ``t`` of the next batch (``t_before``: the last event before it, None for the first batch)."""
+    if not len(t):
+        return best
+    if t_before is not None and int(t[0]) - t_before > best[0]:
+        best = (int(t[0]) - t_before, t_before)
+    if len(t) > 1:
+        d = np.diff(t)
+        i = int(np.argmax(d))
+        if int(d[i]) > best[0]:
+            best = (int(d[i]), int(t[i]))
+    return best
+
+
 def summarize_recording(path: str | Path, width: int | None = None, height: int | None = None, progress: bool | None = None, **options) -> dict:
     """The keys of :meth:`Recording.summary`, streaming the events (evpose HDF5 reads only its index and polarity)."""
     from evpose.io.open import SourceFormat, apply_size_flags, check_events, detect_format, open_stream
@@ -29,9 +44,11 @@ def summarize_recording(path: str | Path, width: int | None = None, height: int 
             apply_size_flags(path, rec, width, height)
             n, t0, t1 = r.n_events, r.t_start_us, r.t_end_us
             pos, offset, last, size = 0, 0, None, rec.sensor_size
+            gap = (0, t0)
             for b in r.iter_chunks():
                 # The same checks as every reader's (``open_recording``): info must not describe a broken file as fine.
                 check_events(b, offset, last, size, path)
+                gap = _longest_gap(b.t, last, gap)
                 offset, last = offset + len(b), (int(b.t[-1]) if len(b) else last)
                 pos += int(np.count_nonzero(b.p > 0))
     else:
@@ -42,6 +59,7 @@ def summarize_recording(path: str | Path, width: int | None = None, height: int 
         stream = open_stream(path, width, height, **options)
         rec = stream.context
         n, pos, t0, t1 = 0, 0, 0, 0
+        gap = (0, 0)
         disable = (not sys.stderr.isatty()) if progress is None else (not progress)
         with tqdm(total=stream.progress_total, unit=stream.progress_unit, unit_scale=True, desc=f"scan {path.name}", file=sys.stderr, disable=disable, mininterval=0.5) as bar:
             for b in stream.batches(bar.update):
@@ -49,6 +67,7 @@ def summarize_recording(path: str | Path, width: int | None = None, height: int 
                     continue
                 if n == 0:
                     t0 = int(b.t[0])
+                gap = _longest_gap(b.t, t1 if n else None, gap)
                 t1 = int(b.t[-1])
                 n += len(b)
                 pos += int(np.count_nonzero(b.p > 0))
@@ -68,6 +87,9 @@ def summarize_recording(path: str | Path, width: int | None = None, height: int 
         duration_s=dur,
         event_rate_hz=n / dur if dur > 0 else 0.0,
         positive_share=pos / n if n else 0.0,
+        # ``evpose track`` restarts after a gap longer than ``max_event_gap_ms``: info names the longest one.
+        longest_event_gap_s=gap[0] / 1e6,
+        longest_event_gap_after_us=gap[1],
         ground_truth=rec.ground_truth is not None and len(rec.ground_truth) > 0,
         metadata=rec.metadata,
     )

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from evpose.io.atomic import output_set
 from evpose.sim.lidar import write_cloud_ply, write_edges_npz
 from evpose.sim.simulator import SimulationResult
 
@@ -22,21 +23,22 @@ def output_paths(out: str | Path) -> dict[str, Path]:
 
 
 def write_simulation(result: SimulationResult, out: str | Path, cloud: bool = True) -> dict[str, Path]:
-    """Write the recording, and (if ``cloud``) the raw cloud and edges; returns the paths written."""
+    """Write the recording, and (if ``cloud``) the raw cloud and edges, as one set (all appear together at the end, or
+    none: an interrupt between two left a new recording beside an earlier seed's cloud); returns the paths written."""
     paths = output_paths(out)
-    if paths["recording"].suffix == ".h5":
-        from evpose.io.h5 import write_recording_h5
-
-        write_recording_h5(paths["recording"], result.recording)
-    else:
-        from evpose.io.ecd import write_ecd_folder
-
-        write_ecd_folder(paths["recording"], result.recording)
     if not cloud:
         del paths["cloud"], paths["edges"]
-        result.files = dict(paths)
-        return paths
-    write_cloud_ply(paths["cloud"], result.cloud_points, result.cloud_intensity)
-    write_edges_npz(paths["edges"], result.edges, result.albedo_edges)
+    with output_set():
+        if paths["recording"].suffix == ".h5":
+            from evpose.io.h5 import write_recording_h5
+
+            write_recording_h5(paths["recording"], result.recording)
+        else:
+            from evpose.io.ecd import write_ecd_folder
+
+            write_ecd_folder(paths["recording"], result.recording)
+        if cloud:
+            write_cloud_ply(paths["cloud"], result.cloud_points, result.cloud_intensity)
+            write_edges_npz(paths["edges"], result.edges, result.albedo_edges)
     result.files = dict(paths)
     return paths

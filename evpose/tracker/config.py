@@ -25,6 +25,7 @@ from evpose.tracker.map_refinement import MapRefinementConfig
 from evpose.tracker.motion_filter_config import MotionFilterConfig
 from evpose.tracker.registration_config import RegistrationConfig
 from evpose.tracker.visible_map import VisibleMapConfig
+from evpose.tracker.event_gaps import DEFAULT_MAX_EVENT_GAP_MS
 
 
 class TrackerMode(str, enum.Enum):
@@ -71,6 +72,12 @@ class TrackerConfig:
     (120, a full time surface at the first update: 240x180 seeds 0-7 7.89 mm against 7.325, from 90 ms later.)"""
     field_margin_px: int = field(default=24, metadata={"min": 0, "max": 200, "step": 1, "unit": "px"})
     """The TDF is built only in the box around the projected visible map, padded by this, pixels."""
+    max_event_gap_ms: float = field(default=DEFAULT_MAX_EVENT_GAP_MS, metadata={"min": 50.0, "max": 3.6e6, "step": 50.0, "unit": "ms"})
+    """A stretch without events (in the fused modes, or without IMU samples) longer than this ends the track: a
+    TrackingSession reports one lost update for the whole gap (not one per empty update: a 1 h pause was 720k updates)
+    and restarts the tracker after it as at the start (the ground-truth pose when it started from ground truth, else the
+    last estimate, velocity unknown), milliseconds. Shorter outages are bridged as before (the fused modes propagate
+    the IMU). See ``evpose.tracker.event_gaps``."""
     snapshot_every: int = field(default=50, metadata={"min": 1, "max": 10000, "step": 1, "unit": "steps"})
     """A TrackingSession keeps a full-state snapshot every this many steps (for seeking), steps."""
     noise_filter: NoiseFilterConfig = field(default_factory=NoiseFilterConfig)

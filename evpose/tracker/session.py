@@ -5,6 +5,10 @@ keeps a full-state snapshot every ``config.snapshot_every`` steps, and can
 ``seek`` to any time by restoring the nearest earlier snapshot and replaying;
 the replayed state equals an uninterrupted run because every stage is
 deterministic. This is the object the CLI, the benchmarks and the viewer use.
+
+Updates run on the grid ``t0 + k * dt`` except inside event gaps longer than ``config.max_event_gap_ms``, where one
+lost update stands for the whole gap and the tracker restarts after it (:mod:`evpose.tracker.event_gaps`): the
+update count is then no longer ``(t - t0) // dt``; :meth:`TrackingSession.steps_until` gives it.
 """
 
 from __future__ import annotations
@@ -16,6 +20,7 @@ from evpose.core.recording import Recording
 from evpose.core.trajectory import Trajectory
 from evpose.errors import InputError
 from evpose.tracker.config import TrackerConfig, TrackerMode
+from evpose.tracker.event_gaps import EventGap, UpdateSchedule, find_gaps, merge_gaps
 from evpose.tracker.modes import build_motion_components
 from evpose.tracker.step_result import StepResult, TrackStatus
 from evpose.tracker.tracker import MotionPredictor, PolaritySelector, Tracker
@@ -38,9 +43,16 @@ class TrackingSession:
         t_start_us: int | None = None,
         predictor: MotionPredictor | None = None,
         polarity_selector: PolaritySelector | None = None,
+        seekable: bool = True,
     ):
         """``initial_pose`` None -> the ground-truth pose at the first time with ``warmup_ms`` of events before it
-        (the first ground-truth pose when events precede it); else that pose at ``t_start_us`` (default: the first event)."""
+        (the first ground-truth pose when events precede it); else that pose at ``t_start_us`` (default: the first event).
+
+        ``seekable`` False keeps no snapshot but the start's, for a run straight to the end (``evpose track``,
+        ``refine-map``): one every ``snapshot_every`` updates is ~4.4 MB at 346x260 in ``full`` mode, so memory grew
+        with the recording (10 min at 200 Hz: ~10 GB); a seek back then replays from the start. Measured (session 25):
+        the demo ``landing`` at ``--rate-hz 1000`` (3 990 updates) peaks at 341 MB instead of 690 MB, same output."""
+        self._seekable = bool(seekable)
         self.recording = recording
         self.config = config if config is not None else TrackerConfig()
         src = str(recording.source) if recording.source else None
@@ -64,12 +76,9 @@ class TrackingSession:
         else:
             pose0 = np.asarray(initial_pose, dtype=np.float64).reshape(4, 4)
             t0 = int(events.t[0]) if t_start_us is None else int(t_start_us)
-        v0 = None
         seed_velocity = initial_pose is None and self.config.initial_velocity_from_ground_truth
-        if seed_velocity:
-            h = 5000  # central difference over +-5 ms of ground truth, microseconds
-            p = gt.interpolate(np.array([max(t0 - h, int(gt.t[0])), min(t0 + h, int(gt.t[-1]))])).position
-            v0 = (p[1] - p[0]) / (2 * h * 1e-6)
+        v0 = _ground_truth_velocity(gt, t0) if seed_velocity else None
+        self._from_ground_truth = initial_pose is None
         components = None
         if predictor is None and polarity_selector is None:
             has_imu = recording.imu is not None and len(recording.imu) > 1
@@ -83,13 +92,8 @@ class TrackingSession:
                 raise InputError(src, f"the IMU samples ({int(recording.imu.t[0])}..{int(recording.imu.t[-1])} us, IMU clock) do not "
                                  f"cover the start of tracking at {t0 + off} us: is the IMU on another clock?", "imu")
             components.motion.fusion.add_imu(recording.imu.time_window(t0 + off - 20_000, t0 + off))
-        fused_pose = components is not None and components.drives_pose
-        if seed_velocity and not fused_pose:
-            # Starting "from ground truth" gives the motion model the true initial velocity too.
-            t_prev = t0 - max(int(round(1e6 / float(self.config.rate_hz))), 1)
-            if t_prev >= int(gt.t[0]):
-                self.tracker.predictor.reset(t_prev, gt.interpolate(t_prev).matrix(0))
-                self.tracker.predictor.update(t0, pose0)
+        if seed_velocity:
+            self._seed_velocity(t0, pose0)
         need = self.config.registration.min_points
         if n_vis < need:
             raise MapOutOfViewError(
@@ -99,8 +103,18 @@ class TrackingSession:
         self.t0_us = t0
         self.dt_us = max(int(round(1e6 / float(self.config.rate_hz))), 1)
         self.t_end_us = int(events.t[-1])
+        warm_us = int(round(self.config.warmup_ms * 1e3))
+        max_gap_us = int(round(float(self.config.max_event_gap_ms) * 1e3))
+        gaps = find_gaps(events.t, max_gap_us, t0)
+        if components is not None and components.motion is not None:
+            gaps = merge_gaps(gaps + _imu_gaps(recording, max_gap_us, t0, self.t_end_us))
+        self.schedule = UpdateSchedule(gaps, t0, self.dt_us, self.t_end_us, warm_us)
+        """Grid index of each update (the empty ones inside long event gaps are skipped)."""
+        self.restarts: dict[int, tuple[np.ndarray, np.ndarray | None]] = {}
+        """Time -> (pose, velocity or None) of every restart after an event gap run so far (the fused modes' backend
+        started again there: ``evpose track --smoothed`` replays each stretch from its own start)."""
         # Warm-up: let the front end see the events just before the start.
-        w0 = t0 - int(round(self.config.warmup_ms * 1e3))
+        w0 = t0 - warm_us
         i0, i1 = events.index_range(w0, t0)
         if i1 > i0:
             self.tracker.feed(events[i0:i1])
@@ -117,7 +131,7 @@ class TrackingSession:
     @property
     def t_us(self) -> int:
         """Time of the last update (the start time before the first)."""
-        return self.t0_us + self._step_index * self.dt_us
+        return self.t0_us + self.schedule.grid(self._step_index) * self.dt_us
 
     @property
     def step_count(self) -> int:
@@ -126,7 +140,11 @@ class TrackingSession:
     @property
     def total_steps(self) -> int:
         """Number of updates a full run makes."""
-        return max((self.t_end_us - self.t0_us) // self.dt_us, 0)
+        return self.schedule.total
+
+    def steps_until(self, t_us: int) -> int:
+        """Number of updates at or before ``t_us`` (``(t_us - t0) // dt`` until the first long event gap)."""
+        return int(np.clip(self.schedule.updates_until((int(t_us) - self.t0_us) // self.dt_us), 0, self.total_steps))
 
     @property
     def done(self) -> bool:
@@ -190,7 +208,7 @@ class TrackingSession:
         """One update at the next grid time; None once the recording's events are exhausted."""
         if self.done:
             return None
-        until = self.t_us + self.dt_us
+        until = self.t0_us + self.schedule.grid(self._step_index + 1) * self.dt_us
         ev = self.recording.events
         i1 = int(np.searchsorted(ev.t, until, side="left"))
         batch = ev[self._cursor : i1]
@@ -198,13 +216,17 @@ class TrackingSession:
         if self.recording.imu is not None:
             off = self.recording.calibration.time_offset_us
             imu = self.recording.imu.time_window(self.t_us + off, until + off)
-        result = self.tracker.step(until, batch, imu=imu, debug=debug)
+        gap = self.schedule.gap_of(self._step_index + 1)
+        if gap is not None:
+            result = self._restart_after_gap(gap, until, batch, imu)
+        else:
+            result = self.tracker.step(until, batch, imu=imu, debug=debug)
         self._cursor = i1
         self._step_index += 1
         self.results.append(result)
         if self._future:
             self._future.pop(0)  # the same result, computed again
-        if self._step_index % int(self.config.snapshot_every) == 0:
+        if self._seekable and self._step_index % int(self.config.snapshot_every) == 0:
             self._take_snapshot()
         return result
 
@@ -221,7 +243,7 @@ class TrackingSession:
         The state afterwards equals an uninterrupted run's; ``debug`` asks for the
         debug products of the update landed on.
         """
-        target = int(np.clip((int(t_us) - self.t0_us) // self.dt_us, 0, self.total_steps))
+        target = self.steps_until(t_us)
         if target < self._step_index:
             self.restore_snapshot(max(k for k in self._snapshots if k <= target))
         elif len(self.results) == self._step_index:
@@ -236,6 +258,52 @@ class TrackingSession:
             last = self.step(debug=debug and self._step_index == target - 1)
         return last
 
+    def _seed_velocity(self, t_us: int, pose: np.ndarray) -> None:
+        """Starting "from ground truth" gives the motion model the true velocity too (the fused modes take it from
+        ``initial_velocity_world`` when their backend starts)."""
+        if self.tracker.components.drives_pose:
+            return
+        gt = self.recording.ground_truth
+        t_prev = t_us - max(int(round(1e6 / float(self.config.rate_hz))), 1)
+        if t_prev >= int(gt.t[0]):
+            self.tracker.predictor.reset(t_prev, gt.interpolate(t_prev).matrix(0))
+            self.tracker.predictor.update(t_us, pose)
+
+    def _restart_after_gap(self, gap: EventGap, until: int, events, imu) -> StepResult:
+        """The update standing for an event gap: the track is lost over it; the tracker starts again at ``until`` (the
+        first grid time ``warmup_ms`` after the gap, ``events`` are those since it) as at the start of the recording:
+        from the ground-truth pose and velocity when the session started from ground truth and it covers ``until``,
+        else from the last estimate with the velocity unknown (the acquisition test then decides whether it holds)."""
+        if gap.t_next_us > self.t_end_us:  # the IMU ended before the events (the schedule's last update)
+            return StepResult(until, self.tracker.pose, TrackStatus.LOST,
+                              f"the IMU samples end at t={gap.t_last_us * 1e-6:.6f} s, {gap.seconds:.3f} s before the events:"
+                              f" the fused modes track no further (--mode stpe needs no IMU)", counts={"events_in": len(events), "registered": 0})
+        gt = self.recording.ground_truth
+        from_truth = self._from_ground_truth and gt is not None and int(gt.t[0]) <= until <= int(gt.t[-1])
+        pose = gt.interpolate(until).matrix(0) if from_truth else self.tracker.pose
+        seed = from_truth and self.config.initial_velocity_from_ground_truth
+        v0 = _ground_truth_velocity(gt, until) if seed else None
+        self.restarts[int(until)] = (pose.copy(), v0)
+        motion = self.tracker.components.motion
+        if motion is not None:
+            # Restarted like the session's start (snapshots replay this too: every restart sets it again).
+            motion.initial_velocity_world = v0
+            selector = self.tracker.components.polarity_selector
+            if v0 is None and selector is not None and selector.fused_pose:
+                # As at a start without a velocity (build_motion_components): T_align composed from the unknown motion
+                # would keep only the events that agree with it.
+                selector.hold_updates = int(self.config.polarity.unknown_velocity_hold_updates)
+            if imu is not None and len(imu):
+                motion.fusion.add_imu(imu)
+        self.tracker.feed(events)
+        self.tracker.start(pose, until)
+        if seed:
+            self._seed_velocity(until, pose)
+        how = "the ground-truth pose" if from_truth else "the last estimate"
+        reason = (f"no {gap.stream} for {gap.seconds:.3f} s (t={gap.t_last_us * 1e-6:.6f} to {gap.t_next_us * 1e-6:.6f} s):"
+                  f" the track is lost over the gap and restarted after it from {how}")
+        return StepResult(until, pose.copy(), TrackStatus.LOST, reason, counts={"events_in": len(events), "registered": 0})
+
     def trajectory(self, include_lost: bool = False) -> Trajectory:
         """Poses of the updates so far (only those with a trustworthy status unless ``include_lost``)."""
         good = (TrackStatus.OK, TrackStatus.DEGRADED)
@@ -243,3 +311,24 @@ class TrackingSession:
         if not sel:
             return Trajectory.empty()
         return Trajectory.from_matrices(np.array([r.t_us for r in sel], dtype=np.int64), np.stack([r.pose for r in sel]))
+
+
+def _imu_gaps(recording: Recording, longer_than_us: int, t0_us: int, t_end_us: int) -> list[EventGap]:
+    """The fused modes' gaps: IMU samples missing for longer than ``longer_than_us``, on the camera clock, including a
+    stretch at the end where the IMU stopped before the events (``t_next_us`` past ``t_end_us``). Without these a hole
+    was bridged by interpolating across it, and after an early end by the last sample held: the demo ``landing`` with
+    its IMU cut at 2 s wrote the other 2 s 0.68 m RMS (2.5 m at most) off, exit 0; a 1 s hole at 1.5 s, 4.4 m."""
+    imu = recording.imu
+    off = recording.calibration.time_offset_us
+    t = imu.t - off
+    gaps = find_gaps(t, longer_than_us, t0_us, "IMU samples")
+    if t_end_us - int(t[-1]) > longer_than_us:
+        gaps.append(EventGap(int(t[-1]), t_end_us + 1, "IMU samples"))
+    return gaps
+
+
+def _ground_truth_velocity(gt: Trajectory, t_us: int) -> np.ndarray:
+    """World velocity of the ground truth at ``t_us``: central difference over +-5 ms (clamped to its span), m/s."""
+    h = 5000
+    p = gt.interpolate(np.array([max(t_us - h, int(gt.t[0])), min(t_us + h, int(gt.t[-1]))])).position
+    return (p[1] - p[0]) / (2 * h * 1e-6)

@@ -199,6 +199,7 @@ class Tracker:
             raise InputError(None, "the initial pose has NaN or infinite values")
         self._pose = T.copy()
         self._t_us = int(t_us)
+        self._ego_history = empty_ego_history()  # a restart after an event gap: those events are long past
         self.hold.start()
         self.predictor.reset(int(t_us), T)
         if self._side_motion() is not None:

@@ -237,3 +237,23 @@ def test_fractional_rpe_delta_in_frames_is_a_one_line_error(files, capsys, delta
 def test_fractional_rpe_delta_in_metres_is_accepted(files, capsys):
     est, gt = files
     assert run(["eval", str(est), str(gt), "--quiet", "--rpe-delta", "0.5", "--rpe-delta-unit", "meters"]) == 0
+
+
+def test_eval_interrupted_while_plotting_writes_neither_the_json_nor_any_plot(tmp_path, files, monkeypatch, capsys):
+    import evpose.eval.plots as plots
+
+    est, gt = files
+    real = plots._save
+    saved = []
+
+    def interrupted_after_two(fig, path, inputs):
+        if len(saved) == 2:
+            raise KeyboardInterrupt
+        saved.append(path)
+        real(fig, path, inputs)
+
+    monkeypatch.setattr(plots, "_save", interrupted_after_two)
+    out = tmp_path / "out"
+    code = run(["eval", str(est), str(gt), "--json", str(out / "e.json"), "--plots", str(out / "plots"), "--quiet"])
+    assert code == 130 and len(saved) == 2
+    assert [p for p in out.rglob("*") if p.is_file()] == []  # the folders made for them may stay, empty

@@ -74,3 +74,29 @@ def test_evpose_h5_with_contradicting_width_height_is_a_one_line_error_naming_fi
     assert code == 2
     assert err.strip().endswith("r.h5: --width/--height 346x260 contradict the 240x180 sensor stated by its metadata") and err.count("\n") == 1
     assert info(capsys, tmp_path / "r.h5", "--width", "240", "--height", "180")[0] == 0
+
+
+def test_info_refuses_an_ecd_folder_whose_calib_txt_contradicts_its_sidecar_in_one_line(tmp_path, capsys):
+    from evpose.core.camera import CameraCalibration
+
+    t = np.arange(0, 1_000_000, 100)
+    rec = Recording(EventArray.from_arrays(t, t % 200, t % 100, t % 2), calibration=CameraCalibration(240, 180, 200.0, 200.0, 120.0, 90.0))
+    write_ecd_folder(tmp_path / "s", rec)
+    (tmp_path / "s" / "calib.txt").write_text("210 200 120 90\n")  # edited by hand; evpose.json still says 200
+    code, out, err = info(capsys, tmp_path / "s")
+    assert code == 2 and out == ""
+    assert err.strip() == (f"evpose info: error: {tmp_path / 's' / 'calib.txt'}: fx 210.0 contradicts the calibration in evpose.json"
+                           " (fx 200.0), which is the one used: make them agree (or delete one of them)")
+
+
+def test_info_names_the_longest_event_gap_when_tracking_would_restart_after_it(tmp_path, capsys):
+    t = np.concatenate([np.arange(0, 500_000, 100), np.arange(7_500_000, 8_000_000, 100)])
+    write_ecd_folder(tmp_path / "s", Recording(EventArray.from_arrays(t, t % 200, t % 100, t % 2)))
+    code, out, _ = info(capsys, tmp_path / "s", "--width", "240", "--height", "180")
+    assert code == 0
+    assert "event gap     7.000100 s without events after t=0.499900 s (the longest; evpose track restarts after gaps over 1 s)" in out
+    code, out, _ = info(capsys, tmp_path / "s", "--width", "240", "--height", "180", "--json-output")
+    assert json.loads(out)["longest_event_gap_s"] == pytest.approx(7.0001)
+    short = np.arange(0, 1_000_000, 100)
+    write_ecd_folder(tmp_path / "u", Recording(EventArray.from_arrays(short, short % 200, short % 100, short % 2)))
+    assert "event gap" not in info(capsys, tmp_path / "u", "--width", "240", "--height", "180")[1]

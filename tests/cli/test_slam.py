@@ -99,3 +99,70 @@ def test_slam_onto_its_input_refuses_before_running_and_leaves_no_map_files(movi
     err = capsys.readouterr().err.strip()
     assert "refusing to overwrite an input file" in err and len(err.splitlines()) == 1
     assert sorted(p.name for p in tmp_path.iterdir()) == ["in.h5"]
+
+
+def _files(folder):
+    return {p.name: p.read_bytes() for p in folder.iterdir()}
+
+
+def test_slam_interrupted_between_its_outputs_leaves_the_earlier_set_and_no_temporary_file(moving_h5, tmp_path, monkeypatch, capsys):
+    import evpose.io.tum as tum
+
+    out = tmp_path / "est.txt"
+    assert run(["slam", str(moving_h5), "--out", str(out)]) == 0
+    before = _files(tmp_path)
+    calls = []
+    write_tum = tum.write_tum
+
+    def interrupted_after_one(path, traj, inputs=()):
+        calls.append(path)
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+        write_tum(path, traj, inputs)
+
+    monkeypatch.setattr(tum, "write_tum", interrupted_after_one)
+    assert run(["slam", str(moving_h5), "--out", str(out)]) == 130
+    assert "interrupted" in capsys.readouterr().err
+    # Not one new map beside the earlier run's summary (which differs from run to run: its wall times).
+    assert _files(tmp_path) == before
+
+
+def test_slam_removes_an_earlier_runs_surplus_map_files(moving_h5, tmp_path):
+    out = tmp_path / "est.txt"
+    assert run(["slam", str(moving_h5), "--out", str(out)]) == 0
+    n = len(json.loads((tmp_path / "est.slam.json").read_text())["maps"])
+    for k in (n, n + 1):  # what a run with more maps left; `evpose eval --atlas` would read them as this run's
+        (tmp_path / f"est.map{k}.txt").write_text("# an earlier run's map\n")
+    assert run(["slam", str(moving_h5), "--out", str(out)]) == 0
+    assert sorted(p.name for p in tmp_path.glob("est.map*.txt")) == [f"est.map{k}.txt" for k in range(n)]
+
+
+def test_slam_terminated_while_its_outputs_are_renamed_exits_143_with_the_whole_set(moving_h5, tmp_path, monkeypatch, capsys):
+    import os
+    import signal
+
+    from evpose.io import atomic
+
+    publish = atomic._publish
+    renamed = []
+
+    def publish_then_terminate(tmp, dst, is_dir):
+        if not renamed:
+            os.kill(os.getpid(), signal.SIGTERM)  # `kill` after the first rename: acted on once the set is in place
+        renamed.append(dst.name)
+        publish(tmp, dst, is_dir)
+
+    monkeypatch.setattr(atomic, "_publish", publish_then_terminate)
+    assert run(["slam", str(moving_h5), "--out", str(tmp_path / "est.txt")]) == 143
+    assert "terminated" in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(renamed) and "est.slam.json" in renamed and len(renamed) >= 3
+
+
+def test_slam_never_removes_an_input_named_like_a_surplus_map_file(tmp_path):
+    from evpose.cli.slam import stale_outputs
+
+    out = tmp_path / "est.txt"
+    for k in (1, 2):
+        (tmp_path / f"est.map{k}.txt").write_text("x\n")
+    assert stale_outputs(out, 1) == [tmp_path / "est.map1.txt", tmp_path / "est.map2.txt"]
+    assert stale_outputs(out, 1, inputs=(tmp_path / "est.map2.txt",)) == [tmp_path / "est.map1.txt"]

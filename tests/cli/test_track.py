@@ -236,3 +236,101 @@ def test_track_with_an_absurd_imu_is_a_one_line_error(landing_files, tmp_path, c
     code = run(["track", str(tmp_path / "huge.h5"), "--map", str(d / "map.ply"), "--out", str(tmp_path / "e.txt"), "--no-progress"])
     err = capsys.readouterr().err.strip()
     assert code == 2 and len(err.splitlines()) == 1 and "IMU sample 0: acceleration" in err and "beyond any IMU's range" in err
+
+
+def _paused(rec, at_us: int, gap_us: int):
+    """``rec`` with every stream from ``at_us`` on moved ``gap_us`` later (a recorder paused that long)."""
+    import dataclasses
+
+    from evpose.core.events import EventArray
+    from evpose.core.imu import ImuSamples
+    from evpose.core.trajectory import Trajectory
+
+    def shift(t):
+        return np.where(t >= at_us, t + gap_us, t)
+    ev, gt, imu = rec.events, rec.ground_truth, rec.imu
+    return dataclasses.replace(rec, events=EventArray(shift(ev.t), ev.x, ev.y, ev.p),
+                               ground_truth=Trajectory(shift(gt.t), gt.position, gt.quat_xyzw),
+                               imu=None if imu is None else ImuSamples(shift(imu.t), imu.acc, imu.gyro))
+
+
+def test_track_over_an_hour_long_event_gap_reports_it_once_and_resumes_after_it(landing_files, tmp_path, capsys):
+    d, rec = landing_files
+    write_recording_h5(tmp_path / "paused.h5", _paused(rec, rec.t_start_us + 150_000, 3_600_000_000))
+    code = run(["track", str(tmp_path / "paused.h5"), "--map", str(d / "map.ply"), "--out", str(tmp_path / "e.txt"),
+                "--smoothed", str(tmp_path / "s.txt"), "--no-progress"])
+    err = capsys.readouterr().err
+    assert code == 1 and "lost track in 1 of" in err and "no events or IMU samples for 3600.0" in err
+    est, smooth = read_tum(tmp_path / "e.txt"), read_tum(tmp_path / "s.txt")
+    after = est.t > 3_600_000_000
+    assert after.sum() > 20 and (~after).sum() > 20  # tracked before and after the gap, nothing inside it
+    assert np.array_equal(est.t, smooth.t)
+    truth = rec.ground_truth.interpolate(np.where(est.t > 3_600_000_000, est.t - 3_600_000_000, est.t))
+    for traj in (est, smooth):  # the smoothed stretches are replayed separately: no hour of missing IMU in them
+        assert np.max(np.linalg.norm(traj.position - truth.position, axis=1)) < 0.05
+
+
+def test_track_interrupted_between_its_outputs_writes_none_of_them(files, tmp_path, monkeypatch, capsys):
+    import evpose.io.tum as tum
+
+    d, _ = files
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(tum, "write_tum", interrupted)  # after the --timings file was written
+    code = run(["track", str(d / "rec.h5"), "--map", str(d / "map.ply"), "--out", str(tmp_path / "e.txt"), "--mode", "stpe",
+                "--timings", str(tmp_path / "t.json"), "--no-progress"])
+    assert code == 130 and "interrupted" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []
+
+
+def _short_gaps(folder):
+    """A tracker config whose gap limit (0.1 s) fits the 0.3-1 s test recordings."""
+    (folder / "gaps.yaml").write_text("max_event_gap_ms: 100\n")
+    return str(folder / "gaps.yaml")
+
+
+def test_track_in_full_mode_stops_where_the_imu_ends_instead_of_holding_its_last_sample(landing_files, tmp_path, capsys):
+    import dataclasses
+
+    d, rec = landing_files
+    cut = rec.t_start_us + 150_000
+    write_recording_h5(tmp_path / "short_imu.h5", dataclasses.replace(rec, imu=rec.imu[rec.imu.t < cut]))
+    code = run(["track", str(tmp_path / "short_imu.h5"), "--map", str(d / "map.ply"), "--out", str(tmp_path / "e.txt"), "--no-progress",
+                "--config", _short_gaps(tmp_path)])
+    err = capsys.readouterr().err
+    assert code == 1 and "the IMU samples end at t=" in err and "--mode stpe needs no IMU" in err
+    est = read_tum(tmp_path / "e.txt")
+    assert est.t[-1] < cut + 10_000 and len(est) > 20
+
+
+def test_track_in_full_mode_restarts_after_a_hole_in_the_imu(sim_landing_small, landing_files, tmp_path, capsys):
+    import dataclasses
+
+    d, _ = landing_files
+    rec = sim_landing_small.recording
+    t0 = rec.t_start_us
+    hole = (rec.imu.t >= t0 + 300_000) & (rec.imu.t < t0 + 500_000)
+    write_recording_h5(tmp_path / "hole.h5", dataclasses.replace(rec, imu=rec.imu[~hole]))
+    code = run(["track", str(tmp_path / "hole.h5"), "--map", str(d / "map.ply"), "--out", str(tmp_path / "e.txt"), "--no-progress",
+                "--config", _short_gaps(tmp_path)])
+    err = capsys.readouterr().err
+    assert code == 1 and "lost track in 1 of" in err and "no IMU samples for 0.2" in err
+    est = read_tum(tmp_path / "e.txt")
+    assert np.sum(est.t > t0 + 500_000) > 50  # tracked again after the hole
+    truth = rec.ground_truth.interpolate(est.t)
+    assert np.max(np.linalg.norm(est.position - truth.position, axis=1)) < 0.05
+
+
+def test_track_without_a_pose_to_write_removes_an_earlier_runs_trajectory_with_its_new_timings(files, tmp_path, capsys):
+    d, rec = files
+    from evpose.io.map_ply import read_contour_map
+
+    write_contour_map(tmp_path / "wrong.ply", bare_ground_map(read_contour_map(d / "map.ply")))
+    out = tmp_path / "e.txt"
+    out.write_text("# an earlier run's trajectory\n")
+    code = run(["track", str(d / "rec.h5"), "--map", str(tmp_path / "wrong.ply"), "--out", str(out), "--mode", "stpe",
+                "--acquire-s", "0", "--timings", str(tmp_path / "t.json"), "--no-progress"])
+    assert code == 1 and "nothing" in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["t.json", "wrong.ply"]  # not the old e.txt beside the new t.json

@@ -164,3 +164,54 @@ def test_sidecar_metadata_size_that_is_not_a_size_names_the_sidecar(tmp_path, re
     side.write_text(json.dumps(doc))
     with pytest.raises(InputError, match=r"seq/evpose.json: metadata width/height 'big' x 180 is not a sensor size"):
         read_ecd_folder(tmp_path / "seq")
+
+
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        ("1 2 3\n", "expected 9 values"),
+        ("200 200 x 130 0 0 0 0 0\n", "not a number"),
+        ("nan 200 170 130\n", "NaN or infinite"),
+        ("", "expected 9 values"),
+    ],
+)
+def test_a_damaged_calib_txt_beside_the_sidecar_is_refused_not_ignored(tmp_path, recording, text, message):
+    write_ecd_folder(tmp_path / "seq", recording)
+    (tmp_path / "seq" / "calib.txt").write_text(text)
+    with pytest.raises(InputError, match=message) as err:
+        read_ecd_folder(tmp_path / "seq")
+    assert str(err.value).startswith(str(tmp_path / "seq" / "calib.txt"))
+
+
+def test_a_calib_txt_that_contradicts_the_sidecar_names_the_value_and_the_file_used(tmp_path, recording):
+    write_ecd_folder(tmp_path / "seq", recording)
+    calib = tmp_path / "seq" / "calib.txt"
+    vals = calib.read_text().split()
+    calib.write_text(" ".join([vals[0], vals[1], "12.5", *vals[3:]]) + "\n")
+    with pytest.raises(InputError, match=r"calib.txt: cx 12.5 contradicts the calibration in evpose.json \(cx .*\), which is the one used"):
+        read_ecd_folder(tmp_path / "seq")
+
+
+def test_a_calib_txt_that_agrees_with_the_sidecar_is_accepted_however_written(tmp_path, recording):
+    write_ecd_folder(tmp_path / "seq", recording)
+    calib = tmp_path / "seq" / "calib.txt"
+    vals = [float(v) for v in calib.read_text().split()]
+    calib.write_text("\t".join(f"{v:.6e}" for v in vals) + "\n\n")  # other spacing and notation, the same numbers
+    assert read_ecd_folder(tmp_path / "seq").calibration.to_dict() == recording.calibration.to_dict()
+    calib.write_text(" ".join(str(v) for v in vals[:4]) + "\n")  # no distortion: the sidecar's lens has some
+    with pytest.raises(InputError, match="calib.txt: k1 0.0 contradicts"):
+        read_ecd_folder(tmp_path / "seq")
+    calib.unlink()  # the sidecar alone
+    assert read_ecd_folder(tmp_path / "seq").calibration.to_dict() == recording.calibration.to_dict()
+
+
+def test_a_calib_txt_rounded_for_print_agrees_with_the_sidecar_but_zero_distortion_is_exact(tmp_path, recording):
+    write_ecd_folder(tmp_path / "seq", recording)
+    calib = tmp_path / "seq" / "calib.txt"
+    cal = recording.calibration
+    rounded = [f"{v:.2f}" for v in (cal.fx, cal.fy, cal.cx, cal.cy)] + [f"{v:.3g}" for v in cal.dist]
+    calib.write_text(" ".join(rounded) + "\n")
+    assert read_ecd_folder(tmp_path / "seq").calibration.to_dict() == cal.to_dict()  # the sidecar's exact values
+    calib.write_text(" ".join(rounded[:4] + ["0"] * 5) + "\n")  # "no distortion", beside a sidecar with some
+    with pytest.raises(InputError, match="k1 0.0 contradicts"):
+        read_ecd_folder(tmp_path / "seq")

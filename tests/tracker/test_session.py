@@ -100,3 +100,15 @@ def test_a_snapshot_handed_to_another_session_replays_the_same_steps(scene):
     for _ in range(4):
         ra, rb = a.step(), b.step()
         assert np.array_equal(ra.pose, rb.pose) and ra.status is rb.status
+
+
+def test_a_session_run_straight_through_keeps_only_the_start_snapshot_and_still_seeks(scene):
+    rec, cmap = scene
+    cfg = TrackerConfig(mode=TrackerMode.STPE, snapshot_every=5)
+    ref = TrackingSession(rec, cmap, cfg).run()
+    s = TrackingSession(rec, cmap, dataclasses.replace(cfg), seekable=False)
+    out = s.run()
+    assert s.snapshot_steps == [0]  # not one per 5 updates: memory grew with the recording's length
+    assert all(np.array_equal(a.pose, b.pose) for a, b in zip(out, ref)) and len(out) == len(ref)
+    r = s.seek(ref[10].t_us)  # replayed from the start
+    assert np.array_equal(r.pose, ref[10].pose)
