@@ -70,6 +70,7 @@ def main(
     from evpose.slam.config_io import config_to_dict, load_slam_config
     from evpose.slam.inertial import InertialConfiguration
     from evpose.slam.run import run_slam
+    from evpose.slam.step_result import SlamFailure
 
     # Every output, the per-map files included, before the run: a refused --out used to leave EST.map<k> files behind.
     check_outputs((out, summary or out.with_suffix(".slam.json"), *output_paths(out, 1)), inputs=(recording, config))
@@ -100,14 +101,14 @@ def main(
     doc = {
         "recording": str(recording),
         "config": config_to_dict(cfg),
-        "mcis": len(run.results),
+        "mcis": sum(1 for r in run.results if r.failure is not SlamFailure.GAP),
         "status_counts": dict(sorted(Counter(r.status.value for r in run.results).items())),
         # Seconds under each status: a map's tracked time also holds its coasted poses; "ok" is what the events tracked.
         "time_by_status_s": run.time_by_status_s(),
         "visual_fraction": run.visual_fraction,
         # The time not tracked from the events, by why (blank view, too few tracked map points, pose rejected, no map).
         "time_by_failure_s": run.time_by_failure_s(),
-        "hypothesis_counts": dict(sorted(Counter(r.hypothesis for r in run.results).items())),
+        "hypothesis_counts": dict(sorted(Counter(r.hypothesis for r in run.results if r.hypothesis).items())),
         "maps": [{"id": m.id, "poses": len(m.traj_t), "keyframes": len(m.keyframes), "points": len(m.points), "lost_reason": m.lost_reason,
                   "imu_initialised": m.imu_initialised, "imu_scale": m.scale} for m in maps],
         "latency_ms": {k: latency_summary([r.timings_ms[k] for r in run.results if k in r.timings_ms]) for k in ("mci", "tracking", "total", "mci_cpu", "tracking_cpu")},

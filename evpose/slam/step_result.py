@@ -37,6 +37,8 @@ class SlamFailure(str, enum.Enum):
     """Too few tracks carried map points for a pose (``TrackingConfig.min_inliers``)."""
     REJECTED = "rejected"
     """Enough tracked map points, but the pose estimate failed its checks (PnP inliers, inlier share)."""
+    GAP = "gap"
+    """The input paused for longer than ``TrackingConfig.lose_after_gap_s``: the map ended there (no MCI)."""
 
 
 @dataclass

@@ -51,6 +51,7 @@ from evpose.slam.keyframe_search import keep_keyframe_image, klt_refind_points
 from evpose.slam.projection_search import SearchMatcher, refind_points, store_patches
 from evpose.slam.step_result import SlamFailure, SlamStatus, SlamStepResult
 from evpose.slam.system_failures import VisualFailureHandling
+from evpose.slam.system_gaps import StreamGaps, imu_holes
 from evpose.slam.system_gyro import GyroAids
 from evpose.slam.system_inertial import InertialMaps
 from evpose.slam.system_lines import LineAids
@@ -59,7 +60,7 @@ from evpose.slam.track_fusion import fuse_tracks
 from evpose.slam.tracking import PoseEstimate, estimate_pose
 
 
-class EventSlam(GyroAids, InertialMaps, VisualFailureHandling, LineAids):
+class EventSlam(GyroAids, InertialMaps, VisualFailureHandling, LineAids, StreamGaps):
     """Map-free event(-inertial) SLAM. Feed events with :meth:`step`; read maps from :attr:`atlas`."""
 
     def __init__(self, config: SlamConfig, calibration: CameraCalibration, imu: ImuSamples | None = None):
@@ -120,10 +121,29 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling, LineAids):
         """The previous MCI (8-bit image, time in us) while the current one is processed (``VisualGyroConfig``)."""
         self._lines = LineMap()
         """Line tracks and 3-D lines of the active map (``SlamConfig.lines``)."""
+        self._gap_last_t: int | None = None
+        """Time of the newest event taken, us (:mod:`evpose.slam.system_gaps`)."""
+        lim = int(round(config.tracking.lose_after_gap_s * 1e6))
+        self._imu_holes = imu_holes(self.imu, calibration.time_offset_us, lim) if self.imu is not None and lim > 0 else []
+        """Stretches without IMU samples on the camera clock (event-inertial mode); the events in them are not used."""
+        self._imu_end_reported = False
 
     # --------------------------------------------------------------- public
     def step(self, events: EventArray) -> SlamStepResult:
-        """Consume a batch of sensor events; returns the result of the last MCI made from them (or the waiting state)."""
+        """Consume a batch of sensor events; returns the result of the last MCI made from them (or, failing that, of a
+        pause of the input that ended the map, or the waiting state)."""
+        last, paused = None, None
+        for part, gap in self._segments(events):
+            if gap is not None:
+                paused = self._end_at_gap(gap)
+            last = self._consume(part)
+            if last.mci is not None:
+                paused = None
+        if last is None:
+            last = self._consume(events[:0])
+        return paused if paused is not None else last
+
+    def _consume(self, events: EventArray) -> SlamStepResult:
         if len(events):
             self._last_t = int(events.t[-1])
         x = events.x.astype(np.float64)
@@ -157,6 +177,7 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling, LineAids):
             "last_visual_t": self._last_visual_t, "prev_hypothesis": self._prev_hypothesis,
             "scale_refinement": self.last_scale_refinement, "rejoin": self._rejoin, "blank_us": self._blank_us,
             "after_blank_t": self._after_blank_t, "last_pnp_t": self._last_pnp_t, "lines": self._lines,
+            "gap_last_t": self._gap_last_t, "imu_end_reported": self._imu_end_reported,
         })
 
     def restore(self, snap: dict) -> None:
@@ -174,6 +195,7 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling, LineAids):
         self._blank_us, self._after_blank_t = s.get("blank_us", 0), s.get("after_blank_t")
         self._last_pnp_t = s.get("last_pnp_t", 0)
         self._lines = s.get("lines", LineMap())
+        self._gap_last_t, self._imu_end_reported = s.get("gap_last_t"), s.get("imu_end_reported", False)
         del self.results[s["n_results"]:]
 
     # ------------------------------------------------------------- pipeline

@@ -319,3 +319,12 @@ class TrackingConfig:
     The subset 0-7 alone got slightly worse (mean 3.7 -> 3.8 %, median 2.7 -> 3.1, but no run split into two maps), and
     indoor seeds 0-3 (maps of a few keyframes) went from 13.0 % to 14.1 % mean ATE at the same tracked time (45-54 %).
     Not applied in event-inertial mode: on landing seeds 0-7 E-I-C2 it raised the mean ATE from 3.7 % to 5.9 %."""
+    lose_after_gap_s: float = field(default=1.0, metadata={"min": 0.0, "max": 3600.0, "step": 0.1, "unit": "s"})
+    """A stretch without events longer than this (in event-inertial mode: or without IMU samples) ends the active map
+    and any two-view initialisation in progress; the first MCIs after it start a new map of the atlas (0: never),
+    seconds. The camera may have moved anywhere meanwhile, and feature tracks, motion priors and IMU bridges do not
+    carry across: after a 60 s pause in the demo ``landing`` (events, IMU and ground truth moved later), an
+    event-inertial run propagated its map through the missing IMU and ended hundreds of km off (ATE 1.5e6 %), and
+    event-only runs counted the whole pause as tracked time. Shorter dropouts only restart the window selection
+    (``EventWindowConfig.max_event_gap_ms``). The simulated recordings and demos never pause: unchanged bit for bit.
+    See :mod:`evpose.slam.system_gaps`."""

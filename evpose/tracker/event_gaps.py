@@ -16,7 +16,7 @@ same stretch 7.44 mm; before the gap unchanged, 12.00 mm). A 1 h gap (720 000 up
 11.0 GB resident, about a tenth of the way (it could not have finished on this machine); now 5.5 s, 0.39 GB, the
 same poses as the 60 s gap. ``evpose slam`` was not slowed by the gap (its windows follow the events: 17 s).
 
-In the fused modes a stretch without IMU samples is a gap too (:func:`merge_gaps` joins it with an event gap it
+In the fused modes a stretch without IMU samples is a gap too (:func:`evpose.core.stream_gaps.merge_gaps` joins it with an event gap it
 overlaps), and so is the end of a recording whose IMU stops before its events (the last update then says so, with
 no restart). They were bridged by interpolating across the hole, or by holding the last sample: the demo ``landing``
 with its IMU cut at 2 s wrote its last 2 s 0.68 m RMS off (2.5 m at most), exit 0, now 394 poses to 2.0 s (12.00 mm)
@@ -37,56 +37,12 @@ no longer depends on its length.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
+
+from evpose.core.stream_gaps import EventGap
 
 DEFAULT_MAX_EVENT_GAP_MS = 1000.0
 """``TrackerConfig.max_event_gap_ms``'s default (here so that ``evpose info`` can name it without importing the tracker)."""
-
-_CHUNK = 1 << 22
-"""Events scanned for gaps per numpy call (bounded temporary memory on long recordings)."""
-
-
-@dataclass(frozen=True)
-class EventGap:
-    """A stretch without events: ``t_last_us`` is the last event before it, ``t_next_us`` the first after it."""
-
-    t_last_us: int
-    t_next_us: int
-    stream: str = "events"
-    """What is missing: "events", "IMU samples" (the fused modes), or both."""
-
-    @property
-    def seconds(self) -> float:
-        return (self.t_next_us - self.t_last_us) * 1e-6
-
-
-def merge_gaps(gaps: list[EventGap]) -> list[EventGap]:
-    """Overlapping gaps (the events and the IMU of a paused recorder) joined, in time order."""
-    out: list[EventGap] = []
-    for g in sorted(gaps, key=lambda g: (g.t_last_us, g.t_next_us)):
-        if out and g.t_last_us <= out[-1].t_next_us:
-            p = out[-1]
-            stream = p.stream if g.stream == p.stream else "events or IMU samples"
-            out[-1] = EventGap(p.t_last_us, max(p.t_next_us, g.t_next_us), stream)
-        else:
-            out.append(g)
-    return out
-
-
-def find_gaps(t: np.ndarray, longer_than_us: int, after_us: int, stream: str = "events") -> list[EventGap]:
-    """The gaps longer than ``longer_than_us`` between consecutive timestamps ``t`` that end after ``after_us``."""
-    gaps = []
-    n = int(t.shape[0])
-    for i0 in range(0, max(n - 1, 0), _CHUNK):
-        i1 = min(i0 + _CHUNK + 1, n)
-        d = np.diff(t[i0:i1])
-        for j in np.flatnonzero(d > longer_than_us):
-            a, b = int(t[i0 + j]), int(t[i0 + j + 1])
-            if b > after_us:
-                gaps.append(EventGap(a, b, stream))
-    return gaps
 
 
 class UpdateSchedule:

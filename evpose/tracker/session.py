@@ -17,10 +17,11 @@ import numpy as np
 
 from evpose.core.contour_map import ContourMap
 from evpose.core.recording import Recording
+from evpose.core.stream_gaps import EventGap, find_gaps, merge_gaps
 from evpose.core.trajectory import Trajectory
 from evpose.errors import InputError
 from evpose.tracker.config import TrackerConfig, TrackerMode
-from evpose.tracker.event_gaps import EventGap, UpdateSchedule, find_gaps, merge_gaps
+from evpose.tracker.event_gaps import UpdateSchedule
 from evpose.tracker.modes import build_motion_components
 from evpose.tracker.step_result import StepResult, TrackStatus
 from evpose.tracker.tracker import MotionPredictor, PolaritySelector, Tracker

@@ -2,7 +2,8 @@
 
 import numpy as np
 
-from evpose.tracker.event_gaps import EventGap, UpdateSchedule, find_gaps, merge_gaps
+from evpose.core.stream_gaps import EventGap
+from evpose.tracker.event_gaps import UpdateSchedule
 
 
 def test_without_gaps_every_grid_step_is_an_update():
@@ -33,14 +34,3 @@ def test_a_short_burst_between_two_gaps_joins_them_into_one_update():
 def test_a_gap_before_the_last_event_ends_the_run_with_its_update():
     s = UpdateSchedule([EventGap(95, 7_000_000)], t0_us=0, dt_us=10, t_end_us=7_000_000, warmup_us=30)
     assert s.total == 11 and s.grid(11) == 700_000 and s.gap_of(11) is not None
-
-
-def test_find_gaps_reports_only_gaps_longer_than_the_limit_ending_after_the_start():
-    t = np.array([0, 5, 2_000, 2_001, 9_000, 9_100], dtype=np.int64)
-    assert find_gaps(t, 1_000, after_us=0) == [EventGap(5, 2_000), EventGap(2_001, 9_000)]
-    assert find_gaps(t, 1_000, after_us=3_000) == [EventGap(2_001, 9_000)]
-
-
-def test_overlapping_gaps_of_the_events_and_the_imu_are_joined():
-    gaps = merge_gaps([EventGap(100, 5_000, "IMU samples"), EventGap(90, 4_000), EventGap(9_000, 12_000, "IMU samples")])
-    assert gaps == [EventGap(90, 5_000, "events or IMU samples"), EventGap(9_000, 12_000, "IMU samples")]
