@@ -89,9 +89,9 @@ class FeatureConfig:
     steps (0.562 -> 0.486; KLT stops converging in the sparse MCIs) and makes them no more precise; so it now waits for
     a warm-up of dense MCIs (``klt_upsample_min_events_per_px``, ``klt_upsample_warmup_mcis``), which the indoor rooms
     never pass. With that, 2 (was 1): landing seeds 0-23 1.80 -> 1.44 % (24 of 24 within 2 %), 24-47 2.09 -> 1.70 %
-    (19), the 240 runs 2.23 -> 1.70 % (within 2 % 209, over 5 % 7; paired -0.53 +- 0.14 points); indoor unchanged (seeds
-    0-7 6.84 %, 8-11 7.98 %); E-I-C2 landing 0-23 ATE 0.82 -> 0.94 %, RPE at most 0.0034 m/m and 0.0020 deg/m; CPU per
-    MCI landing 22.8 -> 28.6 ms, indoor 15.1 -> 15.0."""
+    (19), 48-71 2.17 -> 1.82 % (11 -> 20; seed 66 8.35 %), the 240 runs 2.23 -> 1.70 % (within 2 % 209, over 5 % 7;
+    paired -0.53 +- 0.14 points); indoor unchanged (seeds 0-7 6.84 %, 8-11 7.98 %); E-I-C2 landing 0-23 ATE 0.82 -> 0.94
+    %, RPE at most 0.0034 m/m and 0.0020 deg/m; CPU per MCI landing 22.8 -> 28.6 ms, indoor 15.1 -> 15.0."""
     klt_upsample_sigma_px: float = field(default=0.5, metadata={"min": 0.3, "max": 2.0, "step": 0.05, "unit": "px"})
     """``klt_upsample``: the fine MCI's splat, sensor pixels (the sensor-grid MCI's is ``EventImageConfig.sigma_px``).
     0.5 (was 0.6 before session 24's ``fine9``, which measured every 240-run figure at 0.5)."""
@@ -115,14 +115,16 @@ class FeatureConfig:
     Session 24 (``/tmp/s24/fine9``): synthetic 692x520 image 5.9 -> 1.1 ms (stride 1 3.6, 3 0.4), 8-bit values within
     2; in the pipeline (landing seeds 0-3, few non-zero pixels) only 42.6 -> 42.0 ms per MCI. 2x, sigma 0.5, 47 px,
     landing seeds 0-23: 2.04 % (20 within 2 %) against 0's 2.10 % (20), paired -0.06 +- 0.45 points; so 2 (was 0)."""
-    klt_upsample_min_events_per_px: float = field(default=0.15, metadata={"min": 0.0, "max": 2.0, "step": 0.005, "unit": "events/px"})
+    klt_upsample_min_events_per_px: float = field(default=0.15, metadata={"min": 0.0, "max": 2.0, "step": 0.005,
+                                                                          "unit": "events/px"})
     """``klt_upsample``: the fine grid is used only where the MCIs hold at least this many events per sensor pixel (0:
     always), events per pixel; judged per MCI, or once per recording (``klt_upsample_warmup_mcis``). An MCI without a
     fine image has its KLT steps in and out on the sensor grid. Session 25 (``/tmp/s25/auto9``, module notes of
     :mod:`evpose.slam.fine_grid`): the fine grid loses steps in MCIs under ~3000 events (346x260; 0.81-0.84 of the
     sensor grid's kept), only indoors. Per MCI (warm-up 0): 0.035 landing seeds 0-23 1.59 % (as always on), indoor 0-7
     8.04 % (off 6.84); 0.1 landing 2.29 % (the turn left on the sensor grid), indoor 6.64 %. Once per recording over 10
-    MCIs: 0.15 sits between the indoor rooms' warm-up medians (0.039-0.096) and the landing's (0.22); so 0.15 (was 0)."""
+    MCIs: 0.15 sits between the indoor rooms' warm-up medians (0.039-0.096) and the landing's (0.22); so 0.15 (was
+    0)."""
     klt_upsample_warmup_mcis: int = field(default=10, metadata={"min": 0, "max": 200, "step": 1, "unit": "MCIs"})
     """``klt_upsample_min_events_per_px``: 0 judges every MCI by its own events; N > 0 judges once, by the median over
     the recording's first N MCIs (tracked on the sensor grid), and keeps that choice to the end, MCIs. Session 25
