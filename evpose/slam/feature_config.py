@@ -123,8 +123,8 @@ class FeatureConfig:
     :mod:`evpose.slam.fine_grid`): the fine grid loses steps in MCIs under ~3000 events (346x260; 0.81-0.84 of the
     sensor grid's kept), only indoors. Per MCI (warm-up 0): 0.035 landing seeds 0-23 1.59 % (as always on), indoor 0-7
     8.04 % (off 6.84); 0.1 landing 2.29 % (the turn left on the sensor grid), indoor 6.64 %. Once per recording over 10
-    MCIs: 0.15 sits between the indoor rooms' warm-up medians (0.039-0.096) and the landing's (0.22); so 0.15 (was
-    0)."""
+    MCIs: 0.15 sits between the warm-up medians of the indoor rooms (seeds 0-11: 0.039-0.089) and of the landing (seeds
+    0-71: 0.185-0.247; ``/tmp/s25/auto9/warmup.py``), so any floor between gives the same runs there; 0.15 (was 0)."""
     klt_upsample_warmup_mcis: int = field(default=10, metadata={"min": 0, "max": 200, "step": 1, "unit": "MCIs"})
     """``klt_upsample_min_events_per_px``: 0 judges every MCI by its own events; N > 0 judges once, by the median over
     the recording's first N MCIs (tracked on the sensor grid), and keeps that choice to the end, MCIs. Session 25

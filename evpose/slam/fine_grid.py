@@ -49,11 +49,11 @@ events per pixel (3150 at 346x260; nearly every landing MCI) gives landing seeds
 1.59, seed 6 only differs) but indoor 0-7 8.04 % (6.84 off, 8.93 always; seeds 0 / 7 12.78 / 16.30 %); 0.1, which leaves
 the landing's turn (3000-9000 events) on the sensor grid: landing 2.29 % (16 within 2 %; paired against off +0.49 +-
 0.26 points), indoor 6.64 %. So the turn needs the fine grid, and switching per MCI leaves enough fine steps indoors to
-move its chaotic outcome. Judging once per recording (the defaults): the first 10 MCIs' median is 0.039-0.096 events per
-pixel indoors (seeds 0-7; the rooms start dense and thin out) and 0.22 on the landing (seeds 0, 4, 10, 17), so 0.15
-splits them; the warm-up tracks on the sensor grid. Indoor then stays bit-identical to the sensor grid (seeds 0-7 6.84
-%, held-out 8-11 7.98 %; the fine grid always there: 8.30 %, 2 of 4 worse), and the landing, paired against off under
-the defaults and session 23's four perturbations (``TrackingConfig.ba_huber_px`` 1.9 / 2.1,
+move its chaotic outcome. Judging once per recording (the defaults): the first 10 MCIs' median is 0.039-0.089 events per
+pixel indoors (seeds 0-11; the rooms start denser than they go on) and 0.185-0.247 on the landing (seeds 0-71,
+``warmup.py``), so 0.15 splits them; the warm-up tracks on the sensor grid. Indoor then stays bit-identical to the
+sensor grid (seeds 0-7 6.84 %, held-out 8-11 7.98 %; the fine grid always there: 8.30 %, 2 of 4 worse), and the landing,
+paired against off under the defaults and session 23's four perturbations (``TrackingConfig.ba_huber_px`` 1.9 / 2.1,
 ``reprojection_threshold_px`` 2.4 / 2.6), seeds 0-23 1.44 / 1.67 / 1.67 / 1.69 / 2.00 % (off 1.80 / 2.55 / 2.00 / 2.68 /
 1.99, always 1.59 / 1.96 / 2.04 / 1.77 / 1.93), 24-47 1.70 / 1.70 / 1.63 / 1.80 / 1.71 % (off 2.09 / 1.90 / 1.84 / 2.39
 / 3.04, always 1.86 / 1.91 / 1.81 / 2.18 / 1.42); over the 240 runs 1.70 % (off 2.23, always 1.85), median 1.38 (1.69,
