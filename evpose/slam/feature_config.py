@@ -70,7 +70,7 @@ class FeatureConfig:
     turn (seeds 0, 4, 10) the median across-flow step fell 0.58 -> 0.47 px (7.0 -> 3.8 px^2/s); 31 px only into MCIs
     with fewer events than 0.5 / 0.6 / 0.7 / 0.75 of the last 20 MCIs' median 2.04 / 1.83 / 2.24 / 1.97 % (14 / 17 / 15 /
     12; +0.24 +- 0.16 / +0.04 +- 0.14 / +0.45 +- 0.25 / +0.17 +- 0.18), 41 px at 0.6 2.34 % (13; +0.54 +- 0.32), pixels."""
-    klt_upsample: float = field(default=1.0, metadata={"min": 1.0, "max": 4.0, "step": 0.25, "unit": "ratio"})
+    klt_upsample: float = field(default=2.0, metadata={"min": 1.0, "max": 4.0, "step": 0.25, "unit": "ratio"})
     """MCI-to-MCI KLT (event-only and event-inertial; measured event-only) runs on the MCI rendered again on a grid this
     many times finer than the sensor's, its events splatted at their warped sub-pixel positions with
     ``klt_upsample_sigma_px`` (1: the MCI itself, off), ratio. FAST detection, keyframe images and everything else keep
@@ -84,7 +84,14 @@ class FeatureConfig:
     cheaper fine pass that is now the default (``klt_upsample_window_px`` 35, ``klt_upsample_scale_stride`` 2; session
     24, ``fine9``): 28.3 ms per MCI (the defaults 22.9, 47 px 42.6, same process), the 240 runs 1.85 % (within 2 % 204,
     over 5 % 12, gathered on seeds 10 and 36), seeds 0-23 with the defaults 1.80 -> 1.59 % (20 -> 23 within 2 %), 24-47
-    2.09 -> 1.86 % (15 -> 21); indoor seeds 0-7 6.84 -> 8.93 % (6 of 8 worse). Still off: indoor worse, runaways."""
+    2.09 -> 1.86 % (15 -> 21); indoor seeds 0-7 6.84 -> 8.93 % (6 of 8 worse). Still off: indoor worse, runaways.
+    Session 25 (``/tmp/s25/auto9``; module notes of :mod:`evpose.slam.fine_grid`): indoors the fine grid keeps fewer
+    steps (0.562 -> 0.486; KLT stops converging in the sparse MCIs) and makes them no more precise; so it now waits for
+    a warm-up of dense MCIs (``klt_upsample_min_events_per_px``, ``klt_upsample_warmup_mcis``), which the indoor rooms
+    never pass. With that, 2 (was 1): landing seeds 0-23 1.80 -> 1.44 % (24 of 24 within 2 %), 24-47 2.09 -> 1.70 %
+    (19), 48-71 2.17 -> 1.82 % (11 -> 20; seed 66 8.35 %), the 240 runs 2.23 -> 1.70 % (within 2 % 209, over 5 % 7;
+    paired -0.53 +- 0.14 points); indoor unchanged (seeds 0-7 6.84 %, 8-11 7.98 %); E-I-C2 landing 0-23 ATE 0.82 -> 0.94
+    %, RPE at most 0.0034 m/m and 0.0020 deg/m; CPU per MCI landing 22.8 -> 28.6 ms, indoor 15.1 -> 15.0."""
     klt_upsample_sigma_px: float = field(default=0.5, metadata={"min": 0.3, "max": 2.0, "step": 0.05, "unit": "px"})
     """``klt_upsample``: the fine MCI's splat, sensor pixels (the sensor-grid MCI's is ``EventImageConfig.sigma_px``).
     0.5 (was 0.6 before session 24's ``fine9``, which measured every 240-run figure at 0.5)."""
@@ -108,6 +115,22 @@ class FeatureConfig:
     Session 24 (``/tmp/s24/fine9``): synthetic 692x520 image 5.9 -> 1.1 ms (stride 1 3.6, 3 0.4), 8-bit values within
     2; in the pipeline (landing seeds 0-3, few non-zero pixels) only 42.6 -> 42.0 ms per MCI. 2x, sigma 0.5, 47 px,
     landing seeds 0-23: 2.04 % (20 within 2 %) against 0's 2.10 % (20), paired -0.06 +- 0.45 points; so 2 (was 0)."""
+    klt_upsample_min_events_per_px: float = field(default=0.15, metadata={"min": 0.0, "max": 2.0, "step": 0.005,
+                                                                          "unit": "events/px"})
+    """``klt_upsample``: the fine grid is used only where the MCIs hold at least this many events per sensor pixel (0:
+    always), events per pixel; judged per MCI, or once per recording (``klt_upsample_warmup_mcis``). An MCI without a
+    fine image has its KLT steps in and out on the sensor grid. Session 25 (``/tmp/s25/auto9``, module notes of
+    :mod:`evpose.slam.fine_grid`): the fine grid loses steps in MCIs under ~3000 events (346x260; 0.81-0.84 of the
+    sensor grid's kept), only indoors. Per MCI (warm-up 0): 0.035 landing seeds 0-23 1.59 % (as always on), indoor 0-7
+    8.04 % (off 6.84); 0.1 landing 2.29 % (the turn left on the sensor grid), indoor 6.64 %. Once per recording over 10
+    MCIs: 0.15 sits between the warm-up medians of the indoor rooms (seeds 0-11: 0.039-0.089) and of the landing (seeds
+    0-71: 0.185-0.247; ``/tmp/s25/auto9/warmup.py``), so any floor between gives the same runs there; 0.15 (was 0)."""
+    klt_upsample_warmup_mcis: int = field(default=10, metadata={"min": 0, "max": 200, "step": 1, "unit": "MCIs"})
+    """``klt_upsample_min_events_per_px``: 0 judges every MCI by its own events; N > 0 judges once, by the median over
+    the recording's first N MCIs (tracked on the sensor grid), and keeps that choice to the end, MCIs. Session 25
+    (``/tmp/s25/auto9``), floor 0.15, landing seeds 0-23: 10 MCIs (0.4 s) 1.44 % (24 within 2 %; the fine grid from the
+    first MCI: 1.59, 23), 5 MCIs 1.45 % (median 1.27, 23; worst 4.49), 20 MCIs 1.46 % (median 1.29, 21; worst 2.86);
+    indoor seeds 0-7 6.84 % with 10 and 5 (no room passes either). So 10 (was 0)."""
     klt_upsample_refine: bool = False
     """``klt_upsample``: track on the sensor-grid MCIs as usual, then refine each result by single-level KLT on the fine
     grid started there (the forward-backward test on the fine pass), instead of a full pyramid on the fine grid."""

@@ -241,7 +241,11 @@ run better and lowers the landing's mean over many runs, but gathers its runaway
 defaults on seeds 0-23 and indoors, and doubles the CPU: off. Why those seeds run away (the H2 / H5 choice in the turn,
 the map tracks lost there) is the question to answer before it could be turned on. The fine pass fits the 30 ms budget at
 28.3 ms with a 35 px window and a strided 8-bit scaling, as accurate over the same 240 runs (1.85 %; module notes of
-:mod:`evpose.slam.fine_grid`, which now holds the fine-grid KLT).
+:mod:`evpose.slam.fine_grid`, which now holds the fine-grid KLT). Session 25 found why indoor got worse (the fine grid
+keeps fewer steps in the rooms' sparse MCIs, KLT failing to converge there, and makes none more precise) and turned it
+on for recordings whose first 10 MCIs hold a median of at least 0.15 events per pixel (the landing; no indoor room):
+landing seeds 0-23 1.44 %, 24-47 1.70 %, the 240 runs 1.70 %, indoor unchanged (module notes of
+:mod:`evpose.slam.fine_grid`).
 """
 
 from __future__ import annotations
@@ -461,7 +465,8 @@ class FrontendTracks:
     prev_t: int = 0
     """Time of the MCI ``prev8`` was made from, us."""
     prev_fine8: np.ndarray | None = None
-    """``prev8``'s MCI on the finer grid KLT runs on (``FeatureConfig.klt_upsample``; None when off)."""
+    """``prev8``'s MCI on the finer grid KLT runs on (``FeatureConfig.klt_upsample``; None when off or that MCI got no
+    fine image, :func:`evpose.slam.fine_grid.use_fine_grid`)."""
     next_id: int = 0
     track_to_point: dict = field(default_factory=dict)
     init_ref: dict | None = None
@@ -474,6 +479,10 @@ class FrontendTracks:
     """Track id -> (image velocity of its last step px/s, the warp shift removed from it px) (``FeatureConfig.klt_curvature_gain``)."""
     prev_step_s: float = 0.0
     """Time between the last two MCIs tracked across, s (0 before the first step)."""
+    fine_density: list = field(default_factory=list)
+    """Events per sensor pixel of the recording's first MCIs, while ``FeatureConfig.klt_upsample_warmup_mcis`` counts."""
+    fine_on: bool | None = None
+    """Whether the warm-up let the fine grid on (None while it counts; :func:`evpose.slam.fine_grid.use_fine_grid`)."""
 
     def remove_curvature_shift(self, new: np.ndarray, ok: np.ndarray, t_us: int, cfg: FeatureConfig, overlap: float) -> np.ndarray:
         """:func:`remove_curvature_shift` on the step from ``uv`` (at ``prev_t``) to ``new`` (at ``t_us``), keeping its

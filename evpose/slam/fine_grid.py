@@ -18,7 +18,54 @@ stride 2: 1.59 / 1.96 / 2.04 / 1.77 / 1.93 % and 1.86 / 1.91 / 1.81 / 2.18 / 1.4
 better), -0.38 +- 0.15 against the defaults (169 better). Stride 2 alone (47 px), defaults, seeds 0-23: 2.04 % (20
 within 2 %) against 2.10 (20). 41 px, defaults: 1.33 % (24 within 2 %) and 2.30 % (19; seeds 26 / 36 9.2 / 10.8 %).
 35 px with 2 levels: 8.53 / 8.54 % (0 within 2 %; tracked from the events 0.97 -> 0.46 of the time). Indoor event-only seeds 0-7, 35 px: 8.93 % (defaults 6.84, 47 px 11.23). So 35 px and stride 2 are the
-``klt_upsample_*`` defaults; ``klt_upsample`` itself stays off (indoor, the runaways)."""
+``klt_upsample_*`` defaults; ``klt_upsample`` itself stays off (indoor, the runaways).
+
+Session 25, why indoor got worse and the rule that now turns the fine grid on (``/tmp/s25/auto9``: ``steprec.py``
+re-tracks every MCI-to-MCI step of a default run on both grids from the same start positions, the step's truth being the
+ray-cast of the start pixel at the previous MCI's true pose projected at the current one, ``an.py``-``an5.py`` sum it
+up; ``fail.py`` splits the lost steps by how KLT failed; ``exp.py`` is ``/tmp/s22/lead/exp.py`` with the normalised RPE;
+``pj.py`` / ``agg.py`` pair the runs; ``cpubench.py`` the CPU). Indoor seeds 0-7 (195516 track steps) against landing
+seeds 0, 4, 10, 17 (37874), 2x grid against the sensor grid: the fine grid keeps fewer indoor steps, 0.562 -> 0.486
+(map-point tracks 0.823 -> 0.726), where on the landing it keeps more, 0.654 -> 0.671, and it makes the indoor steps no
+more precise (steps both keep, median across-flow error 0.396 -> 0.387 px, landing 0.239 -> 0.192; tracks on patches
+with over 4 times the mean event mass 0.287 -> 0.286 against 0.205 -> 0.164). What decides it is the MCI's event count:
+indoor MCIs hold 1800 events (median, 5-95 % 1200-8900; 6 ms windows, 3.9 % of the pixels lit), landing ones 12462 (at
+least 3948; 25-56 ms, 14 %). By events per MCI (both scenarios): under 3000 (only indoor) the fine grid keeps 0.81-0.84
+of the sensor grid's steps, 0.76-0.85 of the map-point steps and 0.89-0.91 of those within 1 px of the truth; from 3000
+on 0.94-1.02 / 0.92-0.95 / 0.99-1.15. The lost steps sit on patches with few events (indoor, under half the MCI's mean
+event mass in the 7 px square: kept 0.581 -> 0.429; 0.5-4 times 0.509 -> 0.433; over 4 times 0.648 -> 0.644), and KLT
+stops converging there (OpenCV's status: too little gradient in the window once the events are splatted at sigma 0.5 on
+the finer grid) rather than failing the forward-backward test: indoor seed 0, MCIs under 3000 events, forward not
+converged 0.026 -> 0.056 of the steps, backward 0.192 -> 0.271, over the forward-backward threshold 0.347 -> 0.337
+(landing seeds 0, 4: forward 0.025-0.045 -> 0.018-0.032, backward 0.027-0.051 -> 0.017-0.038). So the sparse noise the
+session-24 note suspected is not taking tracks over: the fine grid drops more of the tracks on empty patches, not fewer.
+(Events with no other in their 3x3 sensor pixels over the window, raw positions, mostly background activity: 9-13 % of
+an indoor window's, 3.5 % of a dense landing one's, 9-12 % in the landing's turn; so this share does not tell the two
+apart.) Even the indoor MCIs with 6000-13000 events gain nothing: their steps are already at 0.10 px across the flow,
+and the fine grid keeps 0.87-0.91 of them.
+
+Judging each MCI by its own events (``klt_upsample_min_events_per_px`` with ``klt_upsample_warmup_mcis`` 0): 0.035
+events per pixel (3150 at 346x260; nearly every landing MCI) gives landing seeds 0-23 1.59 % (the fine grid always:
+1.59, seed 6 only differs) but indoor 0-7 8.04 % (6.84 off, 8.93 always; seeds 0 / 7 12.78 / 16.30 %); 0.1, which leaves
+the landing's turn (3000-9000 events) on the sensor grid: landing 2.29 % (16 within 2 %; paired against off +0.49 +-
+0.26 points), indoor 6.64 %. So the turn needs the fine grid, and switching per MCI leaves enough fine steps indoors to
+move its chaotic outcome. Judging once per recording (the defaults): the first 10 MCIs' median is 0.039-0.089 events per
+pixel indoors (seeds 0-11; the rooms start denser than they go on) and 0.185-0.247 on the landing (seeds 0-71,
+``warmup.py``), so 0.15 splits them; the warm-up tracks on the sensor grid. Indoor then stays bit-identical to the
+sensor grid (seeds 0-7 6.84 %, held-out 8-11 7.98 %; the fine grid always there: 8.30 %, 2 of 4 worse), and the landing,
+paired against off under the defaults and session 23's four perturbations (``TrackingConfig.ba_huber_px`` 1.9 / 2.1,
+``reprojection_threshold_px`` 2.4 / 2.6), seeds 0-23 1.44 / 1.67 / 1.67 / 1.69 / 2.00 % (off 1.80 / 2.55 / 2.00 / 2.68 /
+1.99, always 1.59 / 1.96 / 2.04 / 1.77 / 1.93), 24-47 1.70 / 1.70 / 1.63 / 1.80 / 1.71 % (off 2.09 / 1.90 / 1.84 / 2.39
+/ 3.04, always 1.86 / 1.91 / 1.81 / 2.18 / 1.42); over the 240 runs 1.70 % (off 2.23, always 1.85), median 1.38 (1.69,
+1.41), within 2 % 209 (163, 204), over 5 % 7 (11, 12; no seed more than twice), paired -0.53 +- 0.14 points against off
+(177 better), -0.15 +- 0.12 against always (115 better). With the defaults, seeds 0-23 1.44 % (24 of 24 within 2 %,
+worst 1.98; seed 10 4.58 -> 1.35), 24-47 1.70 % (19; worst 4.72), 48-71 2.17 -> 1.82 % (11 -> 20 within 2 %; paired
+-0.35 +- 0.22 points, 21 better; seed 66 4.45 -> 8.35 %). Event-inertial E-I-C2 (``exp.py ... c2``), landing seeds 0-23:
+ATE 0.82 -> 0.94 % (paired +0.12 +- 0.13, 10 better; always: 1.00 %), 23 of 24 within 2 % either way, RPE at most 0.0050
+-> 0.0034 m/m and 0.0022 -> 0.0020 deg/m (always: 0.0033 / 0.0020); indoor seeds 0-7 unchanged (ATE 19.60 %, RPE at most
+0.0067 m/m, 0.0047 deg/m). Main-thread CPU per MCI (``cpubench.py``, median of the runs' medians, variants alternating
+in one process): landing seeds 0-3 off 22.8 ms, always 29.1, the rule 28.6; indoor seeds 0-1 15.1 / 21.7 / 15.0. The
+warm-up's length: see ``FeatureConfig.klt_upsample_warmup_mcis``."""
 
 from __future__ import annotations
 
@@ -29,7 +76,27 @@ import numpy as np
 
 from evpose.slam.config import FeatureConfig
 from evpose.slam.event_image import fine_coords, robust_maximum, sensor_coords, to_uint8
-from evpose.slam.features import track_features
+from evpose.slam.features import FrontendTracks, track_features
+
+
+def use_fine_grid(fe: FrontendTracks, n_events: int, n_pixels: int, cfg: FeatureConfig) -> bool:
+    """Whether the MCI of ``n_events`` events on a sensor of ``n_pixels`` pixels gets a fine image
+    (``FeatureConfig.klt_upsample``, ``klt_upsample_min_events_per_px``, ``klt_upsample_warmup_mcis``); call once per
+    MCI, in order: the warm-up's state lives in ``fe``."""
+    if cfg.klt_upsample <= 1.0:
+        return False
+    floor = float(cfg.klt_upsample_min_events_per_px)
+    if floor <= 0.0:
+        return True
+    density = n_events / max(n_pixels, 1)
+    if cfg.klt_upsample_warmup_mcis <= 0:
+        return density >= floor
+    if fe.fine_on is None:
+        fe.fine_density.append(density)
+        if len(fe.fine_density) < cfg.klt_upsample_warmup_mcis:
+            return False
+        fe.fine_on = bool(np.median(fe.fine_density) >= floor)
+    return fe.fine_on
 
 
 def fine_to_uint8(img: np.ndarray, stride: int) -> np.ndarray:

@@ -36,7 +36,7 @@ from evpose.slam.coasting import constant_velocity_pose
 from evpose.slam.config import SlamConfig, SlamMode
 from evpose.slam.event_window import WINDOW_REASONS, EventWindowSelector, ReconstructionWindow
 from evpose.slam.features import FrontendTracks, detect_features, has_support, step_consistent, track_features
-from evpose.slam.fine_grid import track_features_fine
+from evpose.slam.fine_grid import track_features_fine, use_fine_grid
 from evpose.slam.inertial import InertialConfiguration
 from evpose.slam.inertial_ba import inertial_local_bundle_adjustment
 from evpose.slam.inertial_trajectory import carry_relative_scale, keyframe_positions
@@ -232,16 +232,17 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling, LineAids, StreamG
     def _track_mci(self, mci: MciResult) -> MciResult:
         """KLT from the previous MCI; returns the MCI actually used (the previous hypothesis's image may replace the sharpest)."""
         fe = self.fe
+        fine = use_fine_grid(fe, mci.n_events, mci.image.size, self.cfg.features)
         if fe.prev8 is not None and len(fe.ids):
             guess = self._gyro_flow(fe.prev_t, mci.t_us, fe.uv)
             min_ncc = self.cfg.features.klt_min_ncc
-            new, ok, fine8 = self._klt(mci, mci.hypothesis.value, guess, min_ncc)
+            new, ok, fine8 = self._klt(mci, mci.hypothesis.value, guess, min_ncc, fine)
             keep = self.cfg.mci.keep_hypothesis_survival
             prev_h = self._prev_hypothesis
             if keep > 0 and prev_h is not None and prev_h != mci.hypothesis.value and prev_h in mci.candidates and ok.sum() < keep * len(ok):
                 img = mci.candidates[prev_h]
                 alt = replace(mci, image=img, image8=to_uint8(img), hypothesis=Hypothesis(prev_h))
-                new2, ok2, fine2 = self._klt(alt, prev_h, guess, min_ncc)
+                new2, ok2, fine2 = self._klt(alt, prev_h, guess, min_ncc, fine)
                 if ok2.sum() > ok.sum():
                     mci, new, ok, fine8 = alt, new2, ok2, fine2
             gate = self.cfg.features.klt_first_step_max_residual_px > 0
@@ -257,16 +258,17 @@ class EventSlam(GyroAids, InertialMaps, VisualFailureHandling, LineAids, StreamG
             if gate:  # only the gate reads which tracks have stepped: no per-MCI set otherwise
                 fe.stepped = set(fe.ids.tolist())
         else:
-            fine8 = mci.fine8(mci.hypothesis.value, self.cfg.features)
+            fine8 = mci.fine8(mci.hypothesis.value, self.cfg.features) if fine else None
         fe.prev8, fe.prev_t, fe.prev_fine8 = mci.image8, mci.t_us, fine8
         self._prev_hypothesis = mci.hypothesis.value
         return mci
 
-    def _klt(self, mci: MciResult, hypothesis: str, guess: np.ndarray | None, min_ncc: float) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
-        """MCI-to-MCI KLT of the tracks into ``mci`` (on the finer grid when ``FeatureConfig.klt_upsample`` is on and the
+    def _klt(self, mci: MciResult, hypothesis: str, guess: np.ndarray | None, min_ncc: float,
+             fine: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+        """MCI-to-MCI KLT of the tracks into ``mci`` (on the finer grid when ``fine``, :func:`use_fine_grid`, and the
         previous MCI has a fine image); returns (positions, ok, the fine image or None)."""
         fe, fc = self.fe, self.cfg.features
-        fine8 = mci.fine8(hypothesis, fc)
+        fine8 = mci.fine8(hypothesis, fc) if fine else None
         if fine8 is not None and fe.prev_fine8 is not None and fe.prev_fine8.shape == fine8.shape:
             return (*track_features_fine(fe.prev_fine8, fine8, fe.uv, fc, guess, min_ncc, fe.prev8, mci.image8), fine8)
         return (*track_features(fe.prev8, mci.image8, fe.uv, fc, guess=guess, min_ncc=min_ncc), fine8)

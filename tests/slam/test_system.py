@@ -198,10 +198,18 @@ def test_support_gate_drops_tracks_on_empty_patches_only_while_a_map_is_tracked(
     assert any(r.status is SlamStatus.OK and "initialised" in r.reason for r in gated.results)
 
 
+@pytest.fixture(scope="module")
+def radtan_sensor_grid_run(radtan_recording):
+    cfg = SlamConfig()
+    cfg.features.klt_upsample = 1.0
+    return run_slam(radtan_recording, cfg)
+
+
 @pytest.mark.parametrize("refine", [False, True])
-def test_fine_grid_klt_tracks_the_recording_and_changes_the_tracks(radtan_recording, radtan_run, refine):
+def test_fine_grid_klt_tracks_the_recording_and_changes_the_tracks(radtan_recording, radtan_sensor_grid_run, refine):
     cfg = SlamConfig()
     cfg.features.klt_upsample = 2.0
+    cfg.features.klt_upsample_min_events_per_px = 0.0  # every MCI on the fine grid
     cfg.features.klt_upsample_refine = refine
     run = run_slam(radtan_recording, cfg)
     m = atlas_metrics(run.trajectories(), radtan_recording.ground_truth, correct_scale=True, duration_s=run.duration_s)
@@ -209,4 +217,19 @@ def test_fine_grid_klt_tracks_the_recording_and_changes_the_tracks(radtan_record
     # Track positions stay in sensor pixels, but differ from the sensor-grid KLT's.
     r = run.results[-1]
     assert r.features.shape[1] == 2 and r.features.max(axis=0)[0] < 240 and r.features.max(axis=0)[1] < 180
-    assert not all(np.array_equal(a.features, b.features) for a, b in zip(run.results, radtan_run.results))
+    assert not all(np.array_equal(a.features, b.features) for a, b in zip(run.results, radtan_sensor_grid_run.results))
+
+
+def test_fine_grid_waits_for_the_warm_up_and_stays_off_on_sparse_recordings(radtan_recording, radtan_run, radtan_sensor_grid_run):
+    # The synthetic recording holds over 1 event per pixel per MCI: the default warm-up lets the fine grid on, so the
+    # tracks match the sensor-grid run's through the warm-up and differ after it.
+    n = SlamConfig().features.klt_upsample_warmup_mcis
+    same = [np.array_equal(a.features, b.features) for a, b in zip(radtan_run.results, radtan_sensor_grid_run.results)]
+    assert all(same[:n]) and not all(same[n:])
+    # A floor above the recording's density keeps it on the sensor grid throughout: the run is the sensor-grid run.
+    cfg = SlamConfig()
+    cfg.features.klt_upsample_min_events_per_px = 100.0
+    sparse = run_slam(radtan_recording, cfg)
+    assert len(sparse.results) == len(radtan_sensor_grid_run.results)
+    assert all(np.array_equal(a.features, b.features) and np.array_equal(a.pose, b.pose)
+               for a, b in zip(sparse.results, radtan_sensor_grid_run.results))
