@@ -294,6 +294,13 @@ class ViewerApp:
             self.status.content = status_markdown(self.last_frame, engine, self.player.stats())
 
     def _rebuild_config_gui(self, engine: Engine) -> None:
+        rejected = getattr(engine, "rejected_config", None)
+        if self.config_gui is not None and rejected is not None and type(rejected) is self.config_gui.cls:
+            # The tracker cannot start with these parameters (visible map min depth at its 10 m maximum: no map point
+            # in view). Its controls stay, so the value can be moved back; replaced by the events-only view's they
+            # could not, and the tuned values were lost.
+            self.param_info.content = f"{engine.explanation} Change the parameters above to try again."
+            return
         if self.config_gui is not None and type(self.config_gui.config) is type(engine.config):
             # The controls are the source of the engine's config; pushing it back would fight a user still dragging.
             note = engine.explanation or f"{type(engine.config).__name__}: changes re-run the tracker."

@@ -124,6 +124,27 @@ def test_recording_with_its_map_runs_the_tracker_and_exports_a_trajectory(viewer
     assert viewer.export("config").read_text().startswith("mode:")
 
 
+def test_parameters_the_tracker_cannot_start_with_keep_its_controls_so_they_can_be_moved_back(viewer):
+    # A visible-map depth limit no map point passes: the tracker cannot start, the events-only view stands in.
+    # Its controls replaced the tracker's, so the slider could not be moved back and the tuned values were lost.
+    assert viewer.select(next(e.display for e in viewer.entries if e.path.name == "squares.h5"))
+    viewer.player.wait_idle()
+    tuned, depth = viewer.config_gui.handles[("rate_hz",)], viewer.config_gui.handles[("visible_map", "max_depth_m")]
+    tuned.value = 150.0
+    viewer.player.wait_idle()
+    depth.value = depth.min
+    viewer.player.wait_idle()
+    assert isinstance(viewer.player.engine, EventsOnlyEngine)
+    assert viewer.config_gui.handles[("visible_map", "max_depth_m")] is depth and depth.value == depth.min
+    assert "Tracking cannot start" in viewer.param_info.content and "Change the parameters" in viewer.param_info.content
+    depth.value = 1000.0
+    viewer.player.wait_idle()
+    assert isinstance(viewer.player.engine, TrackerEngine)
+    assert viewer.player.engine.config.rate_hz == 150.0 and viewer.player.engine.config.visible_map.max_depth_m == 1000.0
+    viewer.config_gui.reset()
+    viewer.player.wait_idle()
+
+
 def test_recording_without_a_map_shows_events_and_says_tracking_needs_one(viewer):
     bar = next(e.display for e in viewer.entries if e.path.name == "bar.h5")
     assert viewer.select(bar, NO_MAP)
