@@ -15,6 +15,7 @@ import functools
 import inspect
 import json
 import textwrap
+import threading
 import types
 import typing
 from dataclasses import dataclass
@@ -209,6 +210,7 @@ class ConfigGui:
         self.on_change = on_change
         self.handles: dict[tuple[str, ...], Any] = {}
         self._muted = False
+        self._lock = threading.Lock()
         self._folders: dict[tuple[str, ...], Any] = {}
         for spec in field_specs(config):
             self._add(spec)
@@ -243,10 +245,14 @@ class ConfigGui:
                 value = coerce(spec, handle.value)
             except ConfigError:
                 return  # half-typed text: wait for a valid value
-            if value == get_path(self.config, spec.path):
-                return
-            self.config = replace_path(self.config, spec.path, value)
-            self.on_change(self.config)
+            # viser runs update callbacks on a thread pool: two controls moved at once (two tabs) each copied the
+            # config without the other's change, and the later write dropped the earlier control's value while its
+            # slider still showed it. Read, write and hand over in one piece, so the last config handed over has both.
+            with self._lock:
+                if value == get_path(self.config, spec.path):
+                    return
+                self.config = replace_path(self.config, spec.path, value)
+                self.on_change(self.config)
 
     def _widget(self, spec: FieldSpec):
         tp, optional = _unwrap_optional(spec.type)

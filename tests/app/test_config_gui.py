@@ -63,6 +63,35 @@ def test_widgets_match_field_types_and_edits_produce_new_configs():
         server.stop()
 
 
+def test_two_controls_moved_at_once_from_two_tabs_both_reach_the_config(monkeypatch):
+    import threading
+    import time
+
+    import app.config_gui as config_gui
+
+    copy = config_gui.replace_path
+
+    def slow_copy(*args):  # widens the window between reading the config and writing it back
+        time.sleep(0.05)
+        return copy(*args)
+
+    monkeypatch.setattr(config_gui, "replace_path", slow_copy)
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    try:
+        seen = []
+        gui = ConfigGui(server.gui, Outer(), seen.append)
+        gain, colour = gui.handles[("inner", "gain")], gui.handles[("colour",)]
+        gain._impl.value, colour._impl.value = 4.5, "blue"  # as viser sets them before calling back, on its thread pool
+        moves = [threading.Thread(target=h._impl.update_cb[0], args=(None,)) for h in (gain, colour)]
+        for t in moves:
+            t.start()
+        for t in moves:
+            t.join()
+        assert gui.config == seen[-1] == Outer(colour=Colour.BLUE, inner=Inner(gain=4.5))
+    finally:
+        server.stop()
+
+
 def test_config_files_round_trip_and_reject_unknown_keys(tmp_path):
     cfg = dataclasses.replace(TrackerConfig(), rate_hz=123.0)
     save_config_file(cfg, tmp_path / "c.yaml")
