@@ -322,20 +322,25 @@ class ViewerApp:
     def _param_action(self, action: str) -> None:
         if self.config_gui is None:
             return
+        typed = self.config_path.value.strip()  # "   " was saved as a file named by three spaces
         try:
+            if action in ("save", "load") and not typed:
+                raise InputError(None, "type a file name in 'config file' first")
             if action == "reset":
                 self.config_gui.reset()
                 self.param_info.content = "configuration reset to defaults"
             elif action == "save":
-                path = write_config(self.config_gui.config, self._export_path(self.config_path.value))
+                path = write_config(self.config_gui.config, self._export_path(typed))
                 self.param_info.content = f"saved `{path}`"
             elif action == "load":
-                path = self._readable_config_path(self.config_path.value)
+                path = self._readable_config_path(typed)
                 cfg = load_config_file(self.config_gui.cls, path)
                 self.config_gui.set_config(cfg)
                 self._config_changed(cfg)
                 self.param_info.content = f"loaded `{path}`"
-        except EvposeError as exc:
+        except (EvposeError, OSError) as exc:
+            # OSError too (a 300-character name: "File name too long"): it ended in a traceback on the server's
+            # console and the panel said nothing.
             self.param_info.content = f"**{action} failed:** {exc}"
 
     def _export_path(self, path: str) -> Path:
@@ -348,6 +353,9 @@ class ViewerApp:
         export = (self.cfg.export_dir / p.name).resolve()
         if export.is_file() and (not p.is_absolute() or p.resolve() == export):
             return export
+        if not p.is_absolute() and not p.exists() and not any((root / p).exists() for root in self.roots.roots):
+            # A mistyped name of a saved file was "refused: outside the data directories", as if it were forbidden.
+            raise InputError(path, f"no such file in the export folder {self.cfg.export_dir} or the data folders")
         return self.roots.check(p)
 
     # ------------------------------------------------------------------ view options
@@ -419,7 +427,7 @@ class ViewerApp:
     def export(self, what: str, client=None) -> Path | None:
         try:
             path = export_action(self, what, client)
-        except (EvposeError, ValueError, TimeoutError) as exc:
+        except (EvposeError, ValueError, TimeoutError, OSError) as exc:
             self.export_info.content = f"**{what} export failed:** {exc}"
             return None
         self.export_info.content = f"wrote `{path}`"

@@ -156,6 +156,25 @@ def test_recording_without_a_map_shows_events_and_says_tracking_needs_one(viewer
     assert viewer.export("trajectory") is None and "no estimated poses" in viewer.export_info.content
 
 
+def test_config_save_and_load_with_a_bad_file_name_say_why_in_the_panel(viewer):
+    viewer.player.wait_idle()
+    cases = {("save", "   "): "type a file name", ("load", ""): "type a file name",
+             # An OSError (the name is too long) was a traceback on the console and nothing in the panel.
+             ("save", "a" * 300 + ".yaml"): "File name too long",
+             # A mistyped name of a saved file read "refused: outside the data directories".
+             ("load", "no_such_saved.yaml"): "no such file in the export folder"}
+    for (action, name), want in cases.items():
+        viewer.config_path.value = name
+        viewer._param_action(action)
+        assert f"**{action} failed:**" in viewer.param_info.content and want in viewer.param_info.content, (name[:20], viewer.param_info.content)
+        assert "\n" not in viewer.param_info.content
+    assert not (viewer.cfg.export_dir / "   ").exists()
+    viewer.config_path.value = " saved.yaml "
+    viewer._param_action("save")
+    viewer._param_action("load")
+    assert viewer.param_info.content.startswith("loaded") and (viewer.cfg.export_dir / "saved.yaml").is_file()
+
+
 def test_screenshot_export_without_a_browser_fails_politely(viewer):
     assert viewer.export("screenshot") is None
     assert "connected browser" in viewer.export_info.content
