@@ -200,6 +200,16 @@ def save_config_file(config, path: str | Path) -> None:
     write_config(config, path)
 
 
+def on_default_grid(lo: int, step: int, default: int) -> int:
+    """The slider minimum for an integer field: the lowest value >= ``lo`` on the default's grid of ``step``.
+
+    A browser slider offers only ``min + k * step``. The TDF blur (default 3, min 0, step 2, odd kernels) offered
+    0, 2, 4..., none of them odd: the slider read 4 while the field blurred with 5 (even sizes are rounded up), and
+    the default could not be dragged back to. SLAM's ``klt_upsample_window_px`` (default 35, odd, 0: automatic) now
+    offers 1, 3, ... 101 and its 0 only in a configuration file; ``event_registration.min_events`` starts at 10."""
+    return lo + (default - lo) % step if step > 0 and lo <= default else lo
+
+
 class ConfigGui:
     """Controls for every leaf field of a config; ``on_change(new_config)`` fires on each edit."""
 
@@ -269,6 +279,7 @@ class ConfigGui:
             if lo is not None and hi is not None:
                 if step is None:
                     step = (hi - lo) / 100.0
+                lo = on_default_grid(lo, step, value) if tp is int else lo
                 return self.gui.add_slider(spec.label, min=lo, max=hi, step=step, initial_value=min(max(value, lo), hi), hint=hint)
             return self.gui.add_number(spec.label, value, min=lo, max=hi, step=step, hint=hint)
         text = "" if value is None else (value if isinstance(value, str) else json.dumps(to_plain(value)))

@@ -92,6 +92,22 @@ def test_two_controls_moved_at_once_from_two_tabs_both_reach_the_config(monkeypa
         server.stop()
 
 
+def test_integer_sliders_offer_their_default_and_odd_kernel_sizes_only_odd_values():
+    # A browser slider offers min + k * step: the TDF blur (min 0, step 2) offered 0, 2, 4... and read 4 while the
+    # field blurred with 5 (even kernels are rounded up), and its default 3 could not be dragged back to.
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    try:
+        gui = ConfigGui(server.gui, TrackerConfig(), lambda cfg: None)
+        blur = gui.handles[("distance_field", "blur_px")]
+        assert blur.min == 1 and blur.step == 2 and (blur.max - blur.min) % 2 == 0
+        for spec in field_specs(TrackerConfig()):
+            h = gui.handles[spec.path]
+            if isinstance(h, viser.GuiSliderHandle) and type(spec.default) is int:
+                assert (spec.default - h.min) % h.step == 0 and h.min >= spec.metadata["min"], spec.name
+    finally:
+        server.stop()
+
+
 def test_config_files_round_trip_and_reject_unknown_keys(tmp_path):
     cfg = dataclasses.replace(TrackerConfig(), rate_hz=123.0)
     save_config_file(cfg, tmp_path / "c.yaml")
