@@ -227,6 +227,20 @@ def _app_with_copied_layouts(tmp_path):
     return app, layouts
 
 
+def test_a_refused_panel_width_note_goes_once_a_valid_width_is_set_and_a_layout_save_is_confirmed(tmp_path, monkeypatch):
+    app, layouts = _app_with_copied_layouts(tmp_path)
+    told = []
+    monkeypatch.setattr(app.layout_gui, "_notify", lambda title, body, color="gray": told.append(body))
+    try:
+        assert not app.layout_gui.set_width("images", 50)
+        assert "outside" in app.layout_gui.note.content
+        assert app.layout_gui.set_width("images", 400)
+        assert "outside" not in app.layout_gui.note.content  # it stayed up, as if 400 had been refused too
+        assert app.layout_gui.save("mine") == layouts / "mine.json" and told == [f"saved {layouts / 'mine.json'}"]
+    finally:
+        app.stop()
+
+
 def test_saving_the_layout_records_what_is_shown_at_run_time_and_loading_restores_it(tmp_path):
     from app.layouts import load_layout
 
