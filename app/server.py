@@ -39,6 +39,8 @@ __all__ = ["AppConfig", "ViewerApp"]
 
 OPENING = "_opening "
 """How the status line starts while a recording's first step is computed."""
+CONFIG_SUFFIXES = (".yaml", ".yml", ".json")
+"""File name endings "save" writes a configuration under (YAML, or JSON for ``.json``)."""
 SLOW_REFRESH_S = 0.25
 """While playing, plots and trajectory polylines refresh at most this often, seconds."""
 
@@ -330,7 +332,7 @@ class ViewerApp:
                 self.config_gui.reset()
                 self.param_info.content = "configuration reset to defaults"
             elif action == "save":
-                path = write_config(self.config_gui.config, self._export_path(typed))
+                path = write_config(self.config_gui.config, self._config_save_path(typed))
                 self.param_info.content = f"saved `{path}`"
             elif action == "load":
                 path = self._readable_config_path(typed)
@@ -347,6 +349,17 @@ class ViewerApp:
         """Writes go to the export folder only, whatever path was typed (by file name)."""
         self.cfg.export_dir.mkdir(parents=True, exist_ok=True)
         return self.cfg.export_dir / Path(path).name
+
+    def _config_save_path(self, typed: str) -> Path:
+        """Where "save" writes a configuration: the export folder, a ``.yaml``/``.yml``/``.json`` name (``.yaml`` added
+        to a name without a suffix). Any other suffix is refused: with ``--export-dir`` on a data folder, saving as
+        ``landing.h5`` replaced the 2.5 MB recording by 4.8 kB of YAML."""
+        path = self._export_path(typed)
+        if not path.suffix:
+            return path.with_name(path.name + ".yaml")
+        if path.suffix.lower() not in CONFIG_SUFFIXES:
+            raise InputError(typed, f"a configuration is saved as {', '.join(CONFIG_SUFFIXES)}, not {path.suffix}")
+        return path
 
     def _readable_config_path(self, path: str) -> Path:
         p = Path(path)

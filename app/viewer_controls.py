@@ -101,7 +101,7 @@ def build_panels(app: ViewerApp) -> None:
     with app.params_tab:
         app.rerun_dropdown = g.add_dropdown("on change re-run from", [r.value for r in RerunFrom], initial_value=RerunFrom.CURRENT.value)
         app.param_buttons = g.add_button_group("configuration", ["reset", "save", "load"])
-        app.config_path = g.add_text("config file", "evpose_exports/config.yaml", hint="Path for save/load (load: inside the data folders or the export folder)")
+        app.config_path = g.add_text("config file", "evpose_exports/config.yaml", hint="A .yaml, .yml or .json file: save writes it to the export folder; load reads it from there or the data folders")
         app.param_info = g.add_markdown("")
     app.param_buttons.on_click(lambda e: app._param_action(e.target.value))
 

@@ -169,6 +169,15 @@ def test_config_save_and_load_with_a_bad_file_name_say_why_in_the_panel(viewer):
         assert f"**{action} failed:**" in viewer.param_info.content and want in viewer.param_info.content, (name[:20], viewer.param_info.content)
         assert "\n" not in viewer.param_info.content
     assert not (viewer.cfg.export_dir / "   ").exists()
+    # Only configuration names: with --export-dir on a data folder, "landing.h5" replaced the recording by YAML.
+    recording = viewer.cfg.export_dir / "rec.h5"
+    recording.write_bytes(b"recording bytes")
+    viewer.config_path.value = "rec.h5"
+    viewer._param_action("save")
+    assert "**save failed:**" in viewer.param_info.content and recording.read_bytes() == b"recording bytes"
+    viewer.config_path.value = "no_suffix"
+    viewer._param_action("save")
+    assert viewer.param_info.content == f"saved `{viewer.cfg.export_dir / 'no_suffix.yaml'}`"
     viewer.config_path.value = " saved.yaml "
     viewer._param_action("save")
     viewer._param_action("load")
