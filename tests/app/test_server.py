@@ -189,6 +189,17 @@ def test_screenshot_export_without_a_browser_fails_politely(viewer):
     assert "connected browser" in viewer.export_info.content
 
 
+def test_a_tab_closed_while_it_renders_an_export_ends_it_with_a_message(viewer):
+    class ClosedTab:  # viser's client handle once its tab has gone away mid-render
+        def get_render(self, **kwargs):
+            raise RuntimeError("Render request failed: the client disconnected before returning a frame.")
+
+    for what in ("screenshot", "GIF"):
+        # It was a traceback on the server's console and every other tab kept reading "rendering ...".
+        assert viewer.export(what, ClosedTab()) is None
+        assert viewer.export_info.content.startswith(f"**{what} export failed:** the browser tab rendering it went away")
+
+
 def test_seek_answers_quickly_and_matches_the_step(viewer):
     sq = next(e.display for e in viewer.entries if e.path.name == "squares.h5")
     viewer.select(sq)
