@@ -255,6 +255,14 @@ class ConfigGui:
                 value = coerce(spec, handle.value)
             except ConfigError:
                 return  # half-typed text: wait for a valid value
+            if (lo := getattr(handle, "min", None)) is not None and isinstance(value, (int, float)) and not isinstance(value, bool):
+                clamped = type(value)(min(max(value, lo), handle.max))
+                if clamped != value:
+                    # Typed into the slider's box past an end (rate 5000 Hz of 10-1000): the box showed it and the
+                    # tracker ran with it, a value a configuration file is refused for. Shown and used at the end;
+                    # the write calls back here at once with it.
+                    handle.value = clamped
+                    return
             # viser runs update callbacks on a thread pool: two controls moved at once (two tabs) each copied the
             # config without the other's change, and the later write dropped the earlier control's value while its
             # slider still showed it. Read, write and hand over in one piece, so the last config handed over has both.

@@ -395,6 +395,16 @@ class ViewerApp:
             frame = self.last_frame
             self.player.call(lambda eng: self._on_frame(frame, eng))
 
+    def _speed_changed(self) -> None:
+        value = self.speed_slider.value
+        speed = float(np.clip(value, self.speed_slider.min, self.speed_slider.max))
+        if speed != value:
+            # Typed into the box past an end (100, 0, -1): the box kept it while the player ran at 10x or 0.1x.
+            self.speed_slider.value = speed  # calls back here at once with the clamped speed
+            return
+        if self.player is not None:
+            self.player.set_speed(speed)
+
     def _nudge_speed(self, factor: float) -> None:
         self.speed_slider.value = float(np.clip(round(self.speed_slider.value * factor, 1), 0.1, 10.0))
 

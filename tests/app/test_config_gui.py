@@ -108,6 +108,21 @@ def test_integer_sliders_offer_their_default_and_odd_kernel_sizes_only_odd_value
         server.stop()
 
 
+def test_a_value_typed_past_a_sliders_end_is_shown_and_used_at_that_end():
+    # The slider's box took 5000 for a 10-1000 Hz rate: shown and run with, a value a config file is refused for.
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    try:
+        seen = []
+        gui = ConfigGui(server.gui, TrackerConfig(), seen.append)
+        rate, blur = gui.handles[("rate_hz",)], gui.handles[("distance_field", "blur_px")]
+        rate.value = 5000.0
+        blur.value = -3
+        assert rate.value == rate.max == gui.config.rate_hz == seen[-1].rate_hz
+        assert blur.value == blur.min == gui.config.distance_field.blur_px
+    finally:
+        server.stop()
+
+
 def test_config_files_round_trip_and_reject_unknown_keys(tmp_path):
     cfg = dataclasses.replace(TrackerConfig(), rate_hz=123.0)
     save_config_file(cfg, tmp_path / "c.yaml")

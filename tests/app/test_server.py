@@ -200,6 +200,13 @@ def test_a_tab_closed_while_it_renders_an_export_ends_it_with_a_message(viewer):
         assert viewer.export_info.content.startswith(f"**{what} export failed:** the browser tab rendering it went away")
 
 
+def test_a_speed_typed_past_the_sliders_ends_is_shown_as_the_speed_played(viewer):
+    for typed, played in ((100.0, 10.0), (-1.0, 0.1), (2.0, 2.0), (1.0, 1.0)):
+        viewer.speed_slider.value = typed  # as the slider's box sends it; it kept 100 while the player ran at 10x
+        viewer.player.wait_idle()
+        assert viewer.player.speed == viewer.speed_slider.value == played
+
+
 def test_seek_answers_quickly_and_matches_the_step(viewer):
     sq = next(e.display for e in viewer.entries if e.path.name == "squares.h5")
     viewer.select(sq)
