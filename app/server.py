@@ -105,9 +105,25 @@ class ViewerApp:
         self.entries = self.roots.scan()
         recs = [e for e in self.entries if e.kind == EntryKind.RECORDING]
         maps = [e for e in self.entries if e.kind == EntryKind.MAP]
-        self.rec_dropdown.options = [e.display for e in recs] or ["(none found)"]
-        self.map_dropdown.options = [NO_MAP] + [e.display for e in maps]
-        self.rec_info.content = self._scan_note()
+        rec_options = [e.display for e in recs] or ["(none found)"]
+        map_options = [NO_MAP] + [e.display for e in maps]
+        gone = []
+        if self._open_displays is not None:
+            # The files of what is shown went away (renamed, deleted) before a rescan: the dropdowns fell back to
+            # their first entry and named a recording that was not the one shown, which choosing did not open (no
+            # change). They keep naming what is shown, said to be from memory.
+            for options, shown in zip((rec_options, map_options), self._open_displays):
+                if shown not in options:
+                    options.append(shown)
+                    gone.append(f"`{shown}`")
+            if rec_options[0] == "(none found)" and len(rec_options) > 1:
+                rec_options.pop(0)
+        self.rec_dropdown.options = rec_options
+        self.map_dropdown.options = map_options
+        if self._open_displays is not None:
+            self.rec_dropdown.value, self.map_dropdown.value = self._open_displays
+        self.rec_info.content = ((f"_{' and '.join(gone)}: shown from memory, no longer found under the data folders._\n\n"
+                                  if gone else "") + self._scan_note())
         self.warm_up.start(self.entries)
 
     def _scan_note(self) -> str:

@@ -219,6 +219,26 @@ def test_seek_answers_quickly_and_matches_the_step(viewer):
     assert time.perf_counter() - t0 < 30  # correctness here; speed is reported by the benchmark, not asserted
 
 
+def test_after_a_rescan_the_dropdowns_still_name_the_recording_shown_when_its_file_went_away(tmp_path, squares_scene):
+    from app_scenes import write_data_root
+
+    root = write_data_root(tmp_path, squares_scene)
+    app = ViewerApp(AppConfig(data=[root], port=free_port(), export_dir=tmp_path / "exports",
+                              player=PlayerConfig(prefetch=False)))
+    try:
+        assert app.select(next(e.display for e in app.entries if e.path.name == "squares.h5"))
+        app.player.wait_idle()
+        shown = app.rec_dropdown.value
+        (root / "squares.h5").rename(root / "renamed.h5")
+        app.refresh_entries()
+        # It named the first recording found, which choosing then did not open (the value did not change).
+        assert app.rec_dropdown.value == shown and app.map_dropdown.value.endswith("squares_map.ply")
+        assert "shown from memory" in app.rec_info.content
+        assert any(o.endswith("renamed.h5") for o in app.rec_dropdown.options)
+    finally:
+        app.stop()
+
+
 def test_empty_data_folders_still_serve(tmp_path):
     app = ViewerApp(AppConfig(data=[tmp_path / "missing", tmp_path], port=free_port(), export_dir=tmp_path / "exp"))
     try:
