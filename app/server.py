@@ -41,6 +41,8 @@ OPENING = "_opening "
 """How the status line starts while a recording's first step is computed."""
 CONFIG_SUFFIXES = (".yaml", ".yml", ".json")
 """File name endings "save" writes a configuration under (YAML, or JSON for ``.json``)."""
+ERROR_NOTE = "**error:** "
+"""How the status line's last paragraph starts when the player has failed since the step shown was drawn."""
 SLOW_REFRESH_S = 0.25
 """While playing, plots and trajectory polylines refresh at most this often, seconds."""
 
@@ -227,6 +229,11 @@ class ViewerApp:
         self._notify("viewer", message, "red")
         if self.status.content.startswith(OPENING):  # the first step failed: no frame will replace the note
             self.status.content = f"**could not show its first step:** {message}"
+        else:
+            # The notification closes after 6 s; the status line then read "paused" with no reason (robust loss
+            # "tukey": "seek failed: Singular matrix"). It keeps the latest error until the next step is drawn.
+            base = self.status.content.split(ERROR_NOTE)[0].rstrip()
+            self.status.content = f"{base}\n\n{ERROR_NOTE}{message}"
 
     def _player_busy(self) -> bool:
         """Playing, computing a seek or running ahead: the warm-up holds still, so it takes no core from the player."""

@@ -91,6 +91,24 @@ def test_a_first_step_that_fails_is_said_in_the_status_line(viewer, monkeypatch)
     assert "step 0" in viewer.status.content
 
 
+def test_a_step_that_fails_later_is_said_in_the_status_line_after_the_notification_closes(viewer, monkeypatch):
+    assert viewer.select(next(e.display for e in viewer.entries if e.path.name == "bar.h5"), NO_MAP)
+    viewer.player.wait_idle()
+
+    def failing(self, index):
+        raise RuntimeError("boom")
+
+    monkeypatch.setattr(EventsOnlyEngine, "seek_step", failing)
+    for _ in range(2):  # the second failure replaces the first line, it does not pile up
+        viewer.player.step_forward()
+        viewer.player.wait_idle()
+    assert viewer.status.content.count("**error:** step failed: boom") == 1 and "step 0" in viewer.status.content
+    monkeypatch.undo()
+    viewer.player.step_forward()
+    viewer.player.wait_idle()
+    assert "error" not in viewer.status.content and "step 1" in viewer.status.content
+
+
 def test_a_layout_that_shows_the_teaching_panel_draws_the_shown_step_into_it(viewer):
     assert viewer.apply_layout_name("debug") and not viewer.panels["teaching"].visible
     viewer.select(next(e.display for e in viewer.entries if e.path.name == "squares.h5"))
