@@ -255,8 +255,9 @@ class ConfigGui:
                 value = coerce(spec, handle.value)
             except ConfigError:
                 return  # half-typed text: wait for a valid value
-            if (lo := getattr(handle, "min", None)) is not None and isinstance(value, (int, float)) and not isinstance(value, bool):
-                clamped = type(value)(min(max(value, lo), handle.max))
+            if isinstance(value, (int, float)) and not isinstance(value, bool):
+                lo, hi = getattr(handle, "min", None), getattr(handle, "max", None)  # number boxes may have one or none
+                clamped = type(value)(min(max(value, lo if lo is not None else value), hi if hi is not None else value))
                 if clamped != value:
                     # Typed into the slider's box past an end (rate 5000 Hz of 10-1000): the box showed it and the
                     # tracker ran with it, a value a configuration file is refused for. Shown and used at the end;

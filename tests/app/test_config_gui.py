@@ -119,6 +119,9 @@ def test_a_value_typed_past_a_sliders_end_is_shown_and_used_at_that_end():
         blur.value = -3
         assert rate.value == rate.max == gui.config.rate_hz == seen[-1].rate_hz
         assert blur.value == blur.min == gui.config.distance_field.blur_px
+        unbounded = ConfigGui(server.gui, Outer(), seen.append)  # a number box without min/max takes any value
+        unbounded.handles[("inner", "count")].value = -40
+        assert unbounded.config.inner.count == -40
     finally:
         server.stop()
 
