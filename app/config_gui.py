@@ -15,6 +15,7 @@ import functools
 import inspect
 import json
 import textwrap
+import threading
 import types
 import typing
 from dataclasses import dataclass
@@ -199,6 +200,16 @@ def save_config_file(config, path: str | Path) -> None:
     write_config(config, path)
 
 
+def on_default_grid(lo: int, step: int, default: int) -> int:
+    """The slider minimum for an integer field: the lowest value >= ``lo`` on the default's grid of ``step``.
+
+    A browser slider offers only ``min + k * step``. The TDF blur (default 3, min 0, step 2, odd kernels) offered
+    0, 2, 4..., none of them odd: the slider read 4 while the field blurred with 5 (even sizes are rounded up), and
+    the default could not be dragged back to. SLAM's ``klt_upsample_window_px`` (default 35, odd, 0: automatic) now
+    offers 1, 3, ... 101 and its 0 only in a configuration file; ``event_registration.min_events`` starts at 10."""
+    return lo + (default - lo) % step if step > 0 and lo <= default else lo
+
+
 class ConfigGui:
     """Controls for every leaf field of a config; ``on_change(new_config)`` fires on each edit."""
 
@@ -209,6 +220,7 @@ class ConfigGui:
         self.on_change = on_change
         self.handles: dict[tuple[str, ...], Any] = {}
         self._muted = False
+        self._lock = threading.Lock()
         self._folders: dict[tuple[str, ...], Any] = {}
         for spec in field_specs(config):
             self._add(spec)
@@ -243,10 +255,23 @@ class ConfigGui:
                 value = coerce(spec, handle.value)
             except ConfigError:
                 return  # half-typed text: wait for a valid value
-            if value == get_path(self.config, spec.path):
-                return
-            self.config = replace_path(self.config, spec.path, value)
-            self.on_change(self.config)
+            if isinstance(value, (int, float)) and not isinstance(value, bool):
+                lo, hi = getattr(handle, "min", None), getattr(handle, "max", None)  # number boxes may have one or none
+                clamped = type(value)(min(max(value, lo if lo is not None else value), hi if hi is not None else value))
+                if clamped != value:
+                    # Typed into the slider's box past an end (rate 5000 Hz of 10-1000): the box showed it and the
+                    # tracker ran with it, a value a configuration file is refused for. Shown and used at the end;
+                    # the write calls back here at once with it.
+                    handle.value = clamped
+                    return
+            # viser runs update callbacks on a thread pool: two controls moved at once (two tabs) each copied the
+            # config without the other's change, and the later write dropped the earlier control's value while its
+            # slider still showed it. Read, write and hand over in one piece, so the last config handed over has both.
+            with self._lock:
+                if value == get_path(self.config, spec.path):
+                    return
+                self.config = replace_path(self.config, spec.path, value)
+                self.on_change(self.config)
 
     def _widget(self, spec: FieldSpec):
         tp, optional = _unwrap_optional(spec.type)
@@ -263,6 +288,7 @@ class ConfigGui:
             if lo is not None and hi is not None:
                 if step is None:
                     step = (hi - lo) / 100.0
+                lo = on_default_grid(lo, step, value) if tp is int else lo
                 return self.gui.add_slider(spec.label, min=lo, max=hi, step=step, initial_value=min(max(value, lo), hi), hint=hint)
             return self.gui.add_number(spec.label, value, min=lo, max=hi, step=step, hint=hint)
         text = "" if value is None else (value if isinstance(value, str) else json.dumps(to_plain(value)))

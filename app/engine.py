@@ -139,6 +139,8 @@ class EventsOnlyEngine(Engine):
         self.explanation = explanation
         self.cause = cause
         """The error that kept the tracker from starting (None: there was no map, or no tracker in this build)."""
+        self.rejected_config = None
+        """The tracker configuration it could not start with, when one was asked for (the viewer keeps its controls)."""
         size = recording.sensor_size
         if size is None:
             ev = recording.events

@@ -53,6 +53,8 @@ def engine_factory(recording, contour_map, mode: str = "tracking", cache: FrameC
         note = f"The tracker is not available in this build ({exc}); showing events only."
         return lambda cfg: EventsOnlyEngine(recording, cfg, explanation=note)
 
+    from evpose.tracker.config import TrackerConfig
+
     entry = disk_entry_maker(disk, *(paths or (None, None)))
 
     def make(cfg):
@@ -60,6 +62,8 @@ def engine_factory(recording, contour_map, mode: str = "tracking", cache: FrameC
             return TrackerEngine(recording, contour_map, cfg, cache=cache, disk=entry)
         except EvposeError as exc:
             # Still show events and time surfaces, and say why tracking cannot run.
-            return EventsOnlyEngine(recording, None, explanation=f"Tracking cannot start: {exc}", cause=exc)
+            fallback = EventsOnlyEngine(recording, None, explanation=f"Tracking cannot start: {exc}", cause=exc)
+            fallback.rejected_config = cfg if isinstance(cfg, TrackerConfig) else None
+            return fallback
 
     return make

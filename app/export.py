@@ -90,6 +90,15 @@ def _render_client(app, client):
     return client
 
 
+def _render(client, **kwargs) -> np.ndarray:
+    """One render of the 3D view by ``client``'s browser. Its tab closed meanwhile: ValueError (viser's RuntimeError
+    was a traceback on the server's console, and every other tab kept reading "rendering a 16-frame GIF...")."""
+    try:
+        return client.get_render(**kwargs)
+    except RuntimeError as exc:
+        raise ValueError(f"the browser tab rendering it went away ({exc})") from None
+
+
 def export_action(app, what: str, client=None, gif_frames: int = 16) -> Path:
     """Run one export of the viewer ``app``: 'trajectory', 'config', 'screenshot' or 'GIF'; returns the file."""
     out_dir = Path(app.cfg.export_dir)
@@ -108,7 +117,7 @@ def export_action(app, what: str, client=None, gif_frames: int = 16) -> Path:
         app.export_info.content = (f"_rendering a {gif_frames}-frame GIF in the browser (a few seconds)..._" if what == "GIF"
                                    else "_rendering the screenshot in the browser..._")
     if what == "screenshot":
-        img = client.get_render(height=540, width=960, transport_format="png", timeout=20.0)
+        img = _render(client, height=540, width=960, transport_format="png", timeout=20.0)
         dark = app.layout is not None and app.layout.dark_mode
         return write_png(img, out_dir / stamped_name("screenshot", ".png"), BACKGROUND_DARK if dark else BACKGROUND_LIGHT)
     if what == "GIF":
@@ -123,6 +132,6 @@ def export_action(app, what: str, client=None, gif_frames: int = 16) -> Path:
             if not was_playing:
                 app.player.step_forward()
                 app.player.wait_idle(10.0)
-            frames.append(client.get_render(height=270, width=480, transport_format="jpeg", timeout=20.0))
+            frames.append(_render(client, height=270, width=480, transport_format="jpeg", timeout=20.0))
         return write_gif(frames, out_dir / stamped_name("view", ".gif"), fps=8.0)
     raise ValueError(f"unknown export {what!r}")

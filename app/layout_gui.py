@@ -230,6 +230,7 @@ class LayoutGui:
             self.note.content = f"_{exc}_"
             return False
         self.layout.panels[name].width = value
+        self._describe(self.shown_docks)  # the note of a refused width stayed up after a valid one was typed
         if self.layout.panels[name].visible and value is not None:
             if self._edge(name) == "float":
                 self.panels[name].set_width(value)
@@ -250,4 +251,5 @@ class LayoutGui:
         self.dropdown.options = sorted(k for k, v in self.available().items() if isinstance(v, Layout))
         self.dropdown.value = name
         self.layout = Layout.from_dict(layout.to_dict())
+        self._notify("layout", f"saved {path}", "green")  # a save said nothing: the button seemed to do nothing
         return path

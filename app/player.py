@@ -247,8 +247,7 @@ class Player:
             done = self.engine.catch_up(c.t_us, self.pc.catch_up_steps, c.exact)
         except Exception as exc:
             self._end_catch_up("failed")
-            self.state = PlayState.PAUSED
-            self._on_error(f"seek failed: {exc}")
+            self._failed(f"seek failed: {exc}")
             return
         c.cpu_s += time.thread_time() - c0
         c.progress = self.engine.catch_up_progress(c.t_us, c.exact)
@@ -267,6 +266,14 @@ class Player:
         if now - self._last_progress >= self.pc.progress_every_s:
             self._last_progress = now
             self._progress()
+
+    def _failed(self, message: str) -> None:
+        """Pause after a failed step or seek, with every tab redrawn at the step still shown (a failed far seek left
+        its preview's "computing 0.0 / 0.3 s ... pause to cancel" up, a failed play step "playing at 1.0x"), then say why."""
+        self.state = PlayState.PAUSED
+        self._ready = self._unpublished = None
+        self._publish(self.last_frame)
+        self._on_error(message)
 
     def _progress(self) -> None:
         try:
@@ -399,8 +406,7 @@ class Player:
                 try:
                     self._handle(cmd)
                 except Exception as exc:
-                    self.state = PlayState.PAUSED
-                    self._on_error(f"{cmd[0]} failed: {exc}")
+                    self._failed(f"{cmd[0]} failed: {exc}")
                 continue
             with self._lock:
                 due_config = self._pending is not None and time.monotonic() >= self._pending_deadline
@@ -450,8 +456,7 @@ class Player:
                 # Wall time per step when frames are computed, not read back (then the speed is the limit).
                 self._step_wall_s = took / steps if steps > 0 and took > 0.5 / self.pc.max_ui_fps else 0.0
             except Exception as exc:
-                self.state = PlayState.PAUSED
-                self._on_error(f"step failed: {exc}")
+                self._failed(f"step failed: {exc}")
                 return
             if self._ready is None:
                 if self.loop:

@@ -39,6 +39,10 @@ __all__ = ["AppConfig", "ViewerApp"]
 
 OPENING = "_opening "
 """How the status line starts while a recording's first step is computed."""
+CONFIG_SUFFIXES = (".yaml", ".yml", ".json")
+"""File name endings "save" writes a configuration under (YAML, or JSON for ``.json``)."""
+ERROR_NOTE = "**error:** "
+"""How the status line's last paragraph starts when the player has failed since the step shown was drawn."""
 SLOW_REFRESH_S = 0.25
 """While playing, plots and trajectory polylines refresh at most this often, seconds."""
 
@@ -103,9 +107,25 @@ class ViewerApp:
         self.entries = self.roots.scan()
         recs = [e for e in self.entries if e.kind == EntryKind.RECORDING]
         maps = [e for e in self.entries if e.kind == EntryKind.MAP]
-        self.rec_dropdown.options = [e.display for e in recs] or ["(none found)"]
-        self.map_dropdown.options = [NO_MAP] + [e.display for e in maps]
-        self.rec_info.content = self._scan_note()
+        rec_options = [e.display for e in recs] or ["(none found)"]
+        map_options = [NO_MAP] + [e.display for e in maps]
+        gone = []
+        if self._open_displays is not None:
+            # The files of what is shown went away (renamed, deleted) before a rescan: the dropdowns fell back to
+            # their first entry and named a recording that was not the one shown, which choosing did not open (no
+            # change). They keep naming what is shown, said to be from memory.
+            for options, shown in zip((rec_options, map_options), self._open_displays):
+                if shown not in options:
+                    options.append(shown)
+                    gone.append(f"`{shown}`")
+            if rec_options[0] == "(none found)" and len(rec_options) > 1:
+                rec_options.pop(0)
+        self.rec_dropdown.options = rec_options
+        self.map_dropdown.options = map_options
+        if self._open_displays is not None:
+            self.rec_dropdown.value, self.map_dropdown.value = self._open_displays
+        self.rec_info.content = ((f"_{' and '.join(gone)}: shown from memory, no longer found under the data folders._\n\n"
+                                  if gone else "") + self._scan_note())
         self.warm_up.start(self.entries)
 
     def _scan_note(self) -> str:
@@ -209,6 +229,11 @@ class ViewerApp:
         self._notify("viewer", message, "red")
         if self.status.content.startswith(OPENING):  # the first step failed: no frame will replace the note
             self.status.content = f"**could not show its first step:** {message}"
+        else:
+            # The notification closes after 6 s; the status line then read "paused" with no reason (robust loss
+            # "tukey": "seek failed: Singular matrix"). It keeps the latest error until the next step is drawn.
+            base = self.status.content.split(ERROR_NOTE)[0].rstrip()
+            self.status.content = f"{base}\n\n{ERROR_NOTE}{message}"
 
     def _player_busy(self) -> bool:
         """Playing, computing a seek or running ahead: the warm-up holds still, so it takes no core from the player."""
@@ -294,6 +319,13 @@ class ViewerApp:
             self.status.content = status_markdown(self.last_frame, engine, self.player.stats())
 
     def _rebuild_config_gui(self, engine: Engine) -> None:
+        rejected = getattr(engine, "rejected_config", None)
+        if self.config_gui is not None and rejected is not None and type(rejected) is self.config_gui.cls:
+            # The tracker cannot start with these parameters (visible map min depth at its 10 m maximum: no map point
+            # in view). Its controls stay, so the value can be moved back; replaced by the events-only view's they
+            # could not, and the tuned values were lost.
+            self.param_info.content = f"{engine.explanation} Change the parameters above to try again."
+            return
         if self.config_gui is not None and type(self.config_gui.config) is type(engine.config):
             # The controls are the source of the engine's config; pushing it back would fight a user still dragging.
             note = engine.explanation or f"{type(engine.config).__name__}: changes re-run the tracker."
@@ -315,20 +347,25 @@ class ViewerApp:
     def _param_action(self, action: str) -> None:
         if self.config_gui is None:
             return
+        typed = self.config_path.value.strip()  # "   " was saved as a file named by three spaces
         try:
+            if action in ("save", "load") and not typed:
+                raise InputError(None, "type a file name in 'config file' first")
             if action == "reset":
                 self.config_gui.reset()
                 self.param_info.content = "configuration reset to defaults"
             elif action == "save":
-                path = write_config(self.config_gui.config, self._export_path(self.config_path.value))
+                path = write_config(self.config_gui.config, self._config_save_path(typed))
                 self.param_info.content = f"saved `{path}`"
             elif action == "load":
-                path = self._readable_config_path(self.config_path.value)
+                path = self._readable_config_path(typed)
                 cfg = load_config_file(self.config_gui.cls, path)
                 self.config_gui.set_config(cfg)
                 self._config_changed(cfg)
                 self.param_info.content = f"loaded `{path}`"
-        except EvposeError as exc:
+        except (EvposeError, OSError) as exc:
+            # OSError too (a 300-character name: "File name too long"): it ended in a traceback on the server's
+            # console and the panel said nothing.
             self.param_info.content = f"**{action} failed:** {exc}"
 
     def _export_path(self, path: str) -> Path:
@@ -336,11 +373,25 @@ class ViewerApp:
         self.cfg.export_dir.mkdir(parents=True, exist_ok=True)
         return self.cfg.export_dir / Path(path).name
 
+    def _config_save_path(self, typed: str) -> Path:
+        """Where "save" writes a configuration: the export folder, a ``.yaml``/``.yml``/``.json`` name (``.yaml`` added
+        to a name without a suffix). Any other suffix is refused: with ``--export-dir`` on a data folder, saving as
+        ``landing.h5`` replaced the 2.5 MB recording by 4.8 kB of YAML."""
+        path = self._export_path(typed)
+        if not path.suffix:
+            return path.with_name(path.name + ".yaml")
+        if path.suffix.lower() not in CONFIG_SUFFIXES:
+            raise InputError(typed, f"a configuration is saved as {', '.join(CONFIG_SUFFIXES)}, not {path.suffix}")
+        return path
+
     def _readable_config_path(self, path: str) -> Path:
         p = Path(path)
         export = (self.cfg.export_dir / p.name).resolve()
         if export.is_file() and (not p.is_absolute() or p.resolve() == export):
             return export
+        if not p.is_absolute() and not p.exists() and not any((root / p).exists() for root in self.roots.roots):
+            # A mistyped name of a saved file was "refused: outside the data directories", as if it were forbidden.
+            raise InputError(path, f"no such file in the export folder {self.cfg.export_dir} or the data folders")
         return self.roots.check(p)
 
     # ------------------------------------------------------------------ view options
@@ -366,6 +417,16 @@ class ViewerApp:
         if self.player is not None and self.last_frame is not None:
             frame = self.last_frame
             self.player.call(lambda eng: self._on_frame(frame, eng))
+
+    def _speed_changed(self) -> None:
+        value = self.speed_slider.value
+        speed = float(np.clip(value, self.speed_slider.min, self.speed_slider.max))
+        if speed != value:
+            # Typed into the box past an end (100, 0, -1): the box kept it while the player ran at 10x or 0.1x.
+            self.speed_slider.value = speed  # calls back here at once with the clamped speed
+            return
+        if self.player is not None:
+            self.player.set_speed(speed)
 
     def _nudge_speed(self, factor: float) -> None:
         self.speed_slider.value = float(np.clip(round(self.speed_slider.value * factor, 1), 0.1, 10.0))
@@ -412,7 +473,7 @@ class ViewerApp:
     def export(self, what: str, client=None) -> Path | None:
         try:
             path = export_action(self, what, client)
-        except (EvposeError, ValueError, TimeoutError) as exc:
+        except (EvposeError, ValueError, TimeoutError, OSError) as exc:
             self.export_info.content = f"**{what} export failed:** {exc}"
             return None
         self.export_info.content = f"wrote `{path}`"

@@ -68,7 +68,7 @@ def _wire_main_panel(app: ViewerApp) -> None:
     app.play_button.on_click(lambda e: app.player and app.player.toggle())
     app.step_buttons.on_click(lambda e: app.player and (app.player.step_back() if e.target.value == "< back" else app.player.step_forward()))
     app.time_slider.on_update(lambda e: e.client is not None and app.player and app.player.seek(app._slider_to_us(app.time_slider.value)))
-    app.speed_slider.on_update(lambda e: app.player and app.player.set_speed(app.speed_slider.value))
+    app.speed_slider.on_update(lambda e: app._speed_changed())
     app.loop_box.on_update(lambda e: app.player and app.player.set_loop(app.loop_box.value))
     for name, box in app.toggle_boxes.items():
         box.on_update(lambda e, name=name, box=box: app._set_toggle(name, box.value))
@@ -101,7 +101,7 @@ def build_panels(app: ViewerApp) -> None:
     with app.params_tab:
         app.rerun_dropdown = g.add_dropdown("on change re-run from", [r.value for r in RerunFrom], initial_value=RerunFrom.CURRENT.value)
         app.param_buttons = g.add_button_group("configuration", ["reset", "save", "load"])
-        app.config_path = g.add_text("config file", "evpose_exports/config.yaml", hint="Path for save/load (load: inside the data folders or the export folder)")
+        app.config_path = g.add_text("config file", "evpose_exports/config.yaml", hint="A .yaml, .yml or .json file: save writes it to the export folder; load reads it from there or the data folders")
         app.param_info = g.add_markdown("")
     app.param_buttons.on_click(lambda e: app._param_action(e.target.value))
 

@@ -63,6 +63,69 @@ def test_widgets_match_field_types_and_edits_produce_new_configs():
         server.stop()
 
 
+def test_two_controls_moved_at_once_from_two_tabs_both_reach_the_config(monkeypatch):
+    import threading
+    import time
+
+    import app.config_gui as config_gui
+
+    copy = config_gui.replace_path
+
+    def slow_copy(*args):  # widens the window between reading the config and writing it back
+        time.sleep(0.05)
+        return copy(*args)
+
+    monkeypatch.setattr(config_gui, "replace_path", slow_copy)
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    try:
+        seen = []
+        gui = ConfigGui(server.gui, Outer(), seen.append)
+        gain, colour = gui.handles[("inner", "gain")], gui.handles[("colour",)]
+        gain._impl.value, colour._impl.value = 4.5, "blue"  # as viser sets them before calling back, on its thread pool
+        moves = [threading.Thread(target=h._impl.update_cb[0], args=(None,)) for h in (gain, colour)]
+        for t in moves:
+            t.start()
+        for t in moves:
+            t.join()
+        assert gui.config == seen[-1] == Outer(colour=Colour.BLUE, inner=Inner(gain=4.5))
+    finally:
+        server.stop()
+
+
+def test_integer_sliders_offer_their_default_and_odd_kernel_sizes_only_odd_values():
+    # A browser slider offers min + k * step: the TDF blur (min 0, step 2) offered 0, 2, 4... and read 4 while the
+    # field blurred with 5 (even kernels are rounded up), and its default 3 could not be dragged back to.
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    try:
+        gui = ConfigGui(server.gui, TrackerConfig(), lambda cfg: None)
+        blur = gui.handles[("distance_field", "blur_px")]
+        assert blur.min == 1 and blur.step == 2 and (blur.max - blur.min) % 2 == 0
+        for spec in field_specs(TrackerConfig()):
+            h = gui.handles[spec.path]
+            if isinstance(h, viser.GuiSliderHandle) and type(spec.default) is int:
+                assert (spec.default - h.min) % h.step == 0 and h.min >= spec.metadata["min"], spec.name
+    finally:
+        server.stop()
+
+
+def test_a_value_typed_past_a_sliders_end_is_shown_and_used_at_that_end():
+    # The slider's box took 5000 for a 10-1000 Hz rate: shown and run with, a value a config file is refused for.
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    try:
+        seen = []
+        gui = ConfigGui(server.gui, TrackerConfig(), seen.append)
+        rate, blur = gui.handles[("rate_hz",)], gui.handles[("distance_field", "blur_px")]
+        rate.value = 5000.0
+        blur.value = -3
+        assert rate.value == rate.max == gui.config.rate_hz == seen[-1].rate_hz
+        assert blur.value == blur.min == gui.config.distance_field.blur_px
+        unbounded = ConfigGui(server.gui, Outer(), seen.append)  # a number box without min/max takes any value
+        unbounded.handles[("inner", "count")].value = -40
+        assert unbounded.config.inner.count == -40
+    finally:
+        server.stop()
+
+
 def test_config_files_round_trip_and_reject_unknown_keys(tmp_path):
     cfg = dataclasses.replace(TrackerConfig(), rate_hz=123.0)
     save_config_file(cfg, tmp_path / "c.yaml")

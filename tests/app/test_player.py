@@ -351,3 +351,27 @@ def test_play_on_a_last_step_before_the_last_event_starts_again_from_the_first(b
         assert any(f.index == 0 for f in frames[frames.index(last) + 1:])
     finally:
         p.stop()
+
+
+def test_a_step_that_fails_while_playing_redraws_the_step_shown_paused_before_the_error(bar_recording, monkeypatch):
+    # The tab's status line was left at "playing" (and a failed far seek at its preview's "computing ...").
+    said = []
+    p, frames = _player(bar_recording, max_ui_fps=60.0)
+    p._on_error = lambda message: said.append((message, p.state, len(frames)))
+    try:
+        p.step_forward()
+        p.wait_idle()
+
+        def failing(self, stride=1):
+            raise RuntimeError("boom")
+
+        monkeypatch.setattr(EventsOnlyEngine, "play_step", failing)
+        p.play()
+        deadline = time.time() + 10
+        while not said and time.time() < deadline:
+            time.sleep(0.02)
+        p.wait_idle()
+        assert said == [("step failed: boom", PlayState.PAUSED, 2)]  # a redraw (frame 2) came before the message
+        assert frames[-1].index == 0 and p.state == PlayState.PAUSED
+    finally:
+        p.stop()

@@ -91,6 +91,24 @@ def test_a_first_step_that_fails_is_said_in_the_status_line(viewer, monkeypatch)
     assert "step 0" in viewer.status.content
 
 
+def test_a_step_that_fails_later_is_said_in_the_status_line_after_the_notification_closes(viewer, monkeypatch):
+    assert viewer.select(next(e.display for e in viewer.entries if e.path.name == "bar.h5"), NO_MAP)
+    viewer.player.wait_idle()
+
+    def failing(self, index):
+        raise RuntimeError("boom")
+
+    monkeypatch.setattr(EventsOnlyEngine, "seek_step", failing)
+    for _ in range(2):  # the second failure replaces the first line, it does not pile up
+        viewer.player.step_forward()
+        viewer.player.wait_idle()
+    assert viewer.status.content.count("**error:** step failed: boom") == 1 and "step 0" in viewer.status.content
+    monkeypatch.undo()
+    viewer.player.step_forward()
+    viewer.player.wait_idle()
+    assert "error" not in viewer.status.content and "step 1" in viewer.status.content
+
+
 def test_a_layout_that_shows_the_teaching_panel_draws_the_shown_step_into_it(viewer):
     assert viewer.apply_layout_name("debug") and not viewer.panels["teaching"].visible
     viewer.select(next(e.display for e in viewer.entries if e.path.name == "squares.h5"))
@@ -124,6 +142,27 @@ def test_recording_with_its_map_runs_the_tracker_and_exports_a_trajectory(viewer
     assert viewer.export("config").read_text().startswith("mode:")
 
 
+def test_parameters_the_tracker_cannot_start_with_keep_its_controls_so_they_can_be_moved_back(viewer):
+    # A visible-map depth limit no map point passes: the tracker cannot start, the events-only view stands in.
+    # Its controls replaced the tracker's, so the slider could not be moved back and the tuned values were lost.
+    assert viewer.select(next(e.display for e in viewer.entries if e.path.name == "squares.h5"))
+    viewer.player.wait_idle()
+    tuned, depth = viewer.config_gui.handles[("rate_hz",)], viewer.config_gui.handles[("visible_map", "max_depth_m")]
+    tuned.value = 150.0
+    viewer.player.wait_idle()
+    depth.value = depth.min
+    viewer.player.wait_idle()
+    assert isinstance(viewer.player.engine, EventsOnlyEngine)
+    assert viewer.config_gui.handles[("visible_map", "max_depth_m")] is depth and depth.value == depth.min
+    assert "Tracking cannot start" in viewer.param_info.content and "Change the parameters" in viewer.param_info.content
+    depth.value = 1000.0
+    viewer.player.wait_idle()
+    assert isinstance(viewer.player.engine, TrackerEngine)
+    assert viewer.player.engine.config.rate_hz == 150.0 and viewer.player.engine.config.visible_map.max_depth_m == 1000.0
+    viewer.config_gui.reset()
+    viewer.player.wait_idle()
+
+
 def test_recording_without_a_map_shows_events_and_says_tracking_needs_one(viewer):
     bar = next(e.display for e in viewer.entries if e.path.name == "bar.h5")
     assert viewer.select(bar, NO_MAP)
@@ -135,9 +174,55 @@ def test_recording_without_a_map_shows_events_and_says_tracking_needs_one(viewer
     assert viewer.export("trajectory") is None and "no estimated poses" in viewer.export_info.content
 
 
+def test_config_save_and_load_with_a_bad_file_name_say_why_in_the_panel(viewer):
+    viewer.player.wait_idle()
+    cases = {("save", "   "): "type a file name", ("load", ""): "type a file name",
+             # An OSError (the name is too long) was a traceback on the console and nothing in the panel.
+             ("save", "a" * 300 + ".yaml"): "File name too long",
+             # A mistyped name of a saved file read "refused: outside the data directories".
+             ("load", "no_such_saved.yaml"): "no such file in the export folder"}
+    for (action, name), want in cases.items():
+        viewer.config_path.value = name
+        viewer._param_action(action)
+        assert f"**{action} failed:**" in viewer.param_info.content and want in viewer.param_info.content, (name[:20], viewer.param_info.content)
+        assert "\n" not in viewer.param_info.content
+    assert not (viewer.cfg.export_dir / "   ").exists()
+    # Only configuration names: with --export-dir on a data folder, "landing.h5" replaced the recording by YAML.
+    recording = viewer.cfg.export_dir / "rec.h5"
+    recording.write_bytes(b"recording bytes")
+    viewer.config_path.value = "rec.h5"
+    viewer._param_action("save")
+    assert "**save failed:**" in viewer.param_info.content and recording.read_bytes() == b"recording bytes"
+    viewer.config_path.value = "no_suffix"
+    viewer._param_action("save")
+    assert viewer.param_info.content == f"saved `{viewer.cfg.export_dir / 'no_suffix.yaml'}`"
+    viewer.config_path.value = " saved.yaml "
+    viewer._param_action("save")
+    viewer._param_action("load")
+    assert viewer.param_info.content.startswith("loaded") and (viewer.cfg.export_dir / "saved.yaml").is_file()
+
+
 def test_screenshot_export_without_a_browser_fails_politely(viewer):
     assert viewer.export("screenshot") is None
     assert "connected browser" in viewer.export_info.content
+
+
+def test_a_tab_closed_while_it_renders_an_export_ends_it_with_a_message(viewer):
+    class ClosedTab:  # viser's client handle once its tab has gone away mid-render
+        def get_render(self, **kwargs):
+            raise RuntimeError("Render request failed: the client disconnected before returning a frame.")
+
+    for what in ("screenshot", "GIF"):
+        # It was a traceback on the server's console and every other tab kept reading "rendering ...".
+        assert viewer.export(what, ClosedTab()) is None
+        assert viewer.export_info.content.startswith(f"**{what} export failed:** the browser tab rendering it went away")
+
+
+def test_a_speed_typed_past_the_sliders_ends_is_shown_as_the_speed_played(viewer):
+    for typed, played in ((100.0, 10.0), (-1.0, 0.1), (2.0, 2.0), (1.0, 1.0)):
+        viewer.speed_slider.value = typed  # as the slider's box sends it; it kept 100 while the player ran at 10x
+        viewer.player.wait_idle()
+        assert viewer.player.speed == viewer.speed_slider.value == played
 
 
 def test_seek_answers_quickly_and_matches_the_step(viewer):
@@ -150,6 +235,26 @@ def test_seek_answers_quickly_and_matches_the_step(viewer):
     viewer.player.wait_idle()
     assert viewer.last_frame.t_us <= t_target
     assert time.perf_counter() - t0 < 30  # correctness here; speed is reported by the benchmark, not asserted
+
+
+def test_after_a_rescan_the_dropdowns_still_name_the_recording_shown_when_its_file_went_away(tmp_path, squares_scene):
+    from app_scenes import write_data_root
+
+    root = write_data_root(tmp_path, squares_scene)
+    app = ViewerApp(AppConfig(data=[root], port=free_port(), export_dir=tmp_path / "exports",
+                              player=PlayerConfig(prefetch=False)))
+    try:
+        assert app.select(next(e.display for e in app.entries if e.path.name == "squares.h5"))
+        app.player.wait_idle()
+        shown = app.rec_dropdown.value
+        (root / "squares.h5").rename(root / "renamed.h5")
+        app.refresh_entries()
+        # It named the first recording found, which choosing then did not open (the value did not change).
+        assert app.rec_dropdown.value == shown and app.map_dropdown.value.endswith("squares_map.ply")
+        assert "shown from memory" in app.rec_info.content
+        assert any(o.endswith("renamed.h5") for o in app.rec_dropdown.options)
+    finally:
+        app.stop()
 
 
 def test_empty_data_folders_still_serve(tmp_path):
@@ -185,6 +290,20 @@ def _app_with_copied_layouts(tmp_path):
     (tmp_path / "data").mkdir()
     app = ViewerApp(AppConfig(data=[tmp_path / "data"], port=free_port(), layout_dir=layouts, export_dir=tmp_path / "exports"))
     return app, layouts
+
+
+def test_a_refused_panel_width_note_goes_once_a_valid_width_is_set_and_a_layout_save_is_confirmed(tmp_path, monkeypatch):
+    app, layouts = _app_with_copied_layouts(tmp_path)
+    told = []
+    monkeypatch.setattr(app.layout_gui, "_notify", lambda title, body, color="gray": told.append(body))
+    try:
+        assert not app.layout_gui.set_width("images", 50)
+        assert "outside" in app.layout_gui.note.content
+        assert app.layout_gui.set_width("images", 400)
+        assert "outside" not in app.layout_gui.note.content  # it stayed up, as if 400 had been refused too
+        assert app.layout_gui.save("mine") == layouts / "mine.json" and told == [f"saved {layouts / 'mine.json'}"]
+    finally:
+        app.stop()
 
 
 def test_saving_the_layout_records_what_is_shown_at_run_time_and_loading_restores_it(tmp_path):
