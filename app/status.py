@@ -16,11 +16,13 @@ def run_ahead_note(engine: Engine) -> str:
     if not n or frontier is None or not step_us:
         return ""
     ready = getattr(engine, "ready_steps", frontier)
-    total = n * step_us / 1e6
+    # Seconds of recording the first k steps cover (past a long event gap no longer k * step_us: the tracker's engine).
+    secs = getattr(engine, "seconds_of_steps", None) or (lambda k: k * step_us / 1e6)
+    total = secs(n)
     disk = getattr(engine, "disk", None)
     note = ""
     if disk is not None and getattr(engine, "disk_steps", 0) > frontier:
-        note = f" ({engine.disk_steps * step_us / 1e6:.2f} s read from the disk cache; exact single steps there need the run-ahead, at {frontier * step_us / 1e6:.2f} s)"
+        note = f" ({secs(engine.disk_steps):.2f} s read from the disk cache; exact single steps there need the run-ahead, at {secs(frontier):.2f} s)"
     if disk is not None and disk.error:
         note += f" ({disk.error})"
     left = getattr(engine, "backfill_left", 0)
@@ -31,7 +33,7 @@ def run_ahead_note(engine: Engine) -> str:
         note += f" ({left} frames a far seek skipped are filled in afterwards)"
     if ready >= n:
         return f"run-ahead done: all {total:.2f} s ready (seeks and 1x playback from memory)" + note
-    return f"run-ahead: {ready * step_us / 1e6:.2f} of {total:.2f} s ready (computing; beyond it, steps are computed live)" + note
+    return f"run-ahead: {secs(ready):.2f} of {total:.2f} s ready (computing; beyond it, steps are computed live)" + note
 
 
 def map_mismatch_note(engine: Engine) -> str:

@@ -150,6 +150,11 @@ class TrackerEngine(DiskSnapshotsMixin, Engine):
     def n_steps(self) -> int:
         return self.session.total_steps
 
+    def seconds_of_steps(self, k: int) -> float:
+        """Seconds of recording the first ``k`` steps cover (``k * step_us`` until the first long event gap)."""
+        s = self.session
+        return (s.time_of(k) - s.time_of(0)) / 1e6
+
     @property
     def shown_index(self) -> int:
         return self._shown
@@ -353,8 +358,8 @@ class TrackerEngine(DiskSnapshotsMixin, Engine):
 
     def _index_at(self, t_us: int) -> int:
         """Index of the last step at or before ``t_us`` (the first step if none)."""
-        s = self.session
-        return int(np.clip((int(t_us) - s.t0_us) // s.dt_us, 1, max(s.total_steps, 1))) - 1
+        # Through the session's schedule: after a long event gap the updates are no longer t0 + k * dt.
+        return max(self.session.steps_until(t_us), 1) - 1
 
     def seek(self, t_us: int) -> Frame | None:
         return self._produce(self._index_at(t_us))
@@ -440,8 +445,8 @@ class TrackerEngine(DiskSnapshotsMixin, Engine):
     def catch_up_progress(self, t_us: int, exact: bool = False) -> tuple[float, float]:
         k = self._target(t_us, exact)
         s = self.session
-        reached = s.t0_us + max(self._start_for(k)[1], 0) * s.dt_us
-        return (reached - self.t_start_us) / 1e6, (s.t0_us + (k + 1) * s.dt_us - self.t_start_us) / 1e6
+        reached = s.time_of(max(self._start_for(k)[1], 0))
+        return (reached - self.t_start_us) / 1e6, (s.time_of(k + 1) - self.t_start_us) / 1e6
 
     def play_step(self, stride: int) -> Frame | None:
         """The next frame for playback, at most ``stride`` steps after the shown one (kept frames first)."""

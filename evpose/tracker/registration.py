@@ -301,6 +301,10 @@ def register_to_map(
     # Points reading TDF ~1 (their edge did not fire) add nothing to H but w r^2 ~ w each: counted in the residual
     # variance they inflate the covariance several times over (see ``ResidualVariance``).
     sigma2 = (swr2[1] if ResidualVariance(config.residual_variance) is ResidualVariance.INLIERS else swr2[0]) / max(inl - 6, 1)
+    if not sigma2 > 0:
+        # Every residual outside the loss's support (Tukey with a scale below the residuals: weight 0): H is the prior's
+        # alone and the covariance would be 0, which made the fused modes raise "Singular matrix" (session 25).
+        return result(False, f"no map point's residual lies within the {RobustLoss(config.robust_loss).value} loss's scale {k:g} (all weights 0)", None)
     if prior is not None and prior_information is not None:
         # The caller fuses the prior itself (a motion filter): report what the events alone say.
         H = H - prior[1]

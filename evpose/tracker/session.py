@@ -132,7 +132,11 @@ class TrackingSession:
     @property
     def t_us(self) -> int:
         """Time of the last update (the start time before the first)."""
-        return self.t0_us + self.schedule.grid(self._step_index) * self.dt_us
+        return self.time_of(self._step_index)
+
+    def time_of(self, update: int) -> int:
+        """Time of update ``update`` (1-based; 0: the start), us: ``t0 + update * dt`` until the first long event gap."""
+        return self.t0_us + self.schedule.grid(update) * self.dt_us
 
     @property
     def step_count(self) -> int:
@@ -209,7 +213,7 @@ class TrackingSession:
         """One update at the next grid time; None once the recording's events are exhausted."""
         if self.done:
             return None
-        until = self.t0_us + self.schedule.grid(self._step_index + 1) * self.dt_us
+        until = self.time_of(self._step_index + 1)
         ev = self.recording.events
         i1 = int(np.searchsorted(ev.t, until, side="left"))
         batch = ev[self._cursor : i1]

@@ -286,3 +286,21 @@ def test_the_grid_frames_a_catch_up_skipped_are_filled_in_after_the_run_ahead(sq
     for k in (5, 25, 55):
         _same_frame(eng.cache.get(k), results[k])
     assert eng.shown_index == 30
+
+
+def test_a_seek_after_a_long_event_gap_lands_on_the_update_at_or_before_it(squares_scene):
+    # The updates after a gap are no longer t0 + k * dt: seeking there used to land on the recording's last update.
+    rec, cmap = squares_scene
+    ev, gt, imu = rec.events, rec.ground_truth, rec.imu
+    at, gap = int(ev.t[0]) + 100_000, 60_000_000
+    later = lambda t: np.where(t >= at, t + gap, t)  # noqa: E731
+    paused = dataclasses.replace(rec, events=type(ev)(later(ev.t), ev.x, ev.y, ev.p), imu=type(imu)(later(imu.t), imu.acc, imu.gyro),
+                                 ground_truth=type(gt)(later(gt.t), gt.position, gt.quat_xyzw))
+    results = _headless(paused, cmap)
+    eng = TrackerEngine(paused, cmap)
+    k = next(i for i, r in enumerate(results) if r.t_us > at + gap) + 3
+    for t_us, want in ((results[k].t_us, k), (results[k].t_us + 1, k), (at + gap // 2, k - 4)):
+        f = eng.seek(t_us)
+        assert f.index == want and f.t_us == results[want].t_us
+    assert eng.catch_up_progress(results[k].t_us, exact=True)[1] == (results[k].t_us - eng.t_start_us) / 1e6
+    assert eng.seconds_of_steps(eng.n_steps) == (results[-1].t_us - eng.session.time_of(0)) / 1e6 > gap / 1e6

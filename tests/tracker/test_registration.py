@@ -103,6 +103,13 @@ def test_registration_without_events_fails_with_a_reason(scene):
     assert not res.success and "recent events" in res.reason
 
 
+def test_registration_whose_residuals_all_lie_beyond_tukeys_scale_fails_with_a_reason(scene):
+    # The prior alone then made H, and the covariance was 0: the fused modes raised "Singular matrix" on inverting it.
+    field, pts, T_gt, cal, coarse = scene
+    res = register_to_map(field, pts, T_gt, cal.K, RegistrationConfig(robust_loss="tukey", robust_scale=0.05))
+    assert not res.success and res.covariance is None and "all weights 0" in res.reason
+
+
 def test_registration_with_the_map_out_of_view_fails(scene):
     field, pts, T_gt, cal, coarse = scene
     res = register_to_map(field, pts + np.array([0.0, 0.0, 50.0]), T_gt, cal.K, RegistrationConfig())
