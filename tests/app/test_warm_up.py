@@ -2,6 +2,7 @@
 cache, equal to a headless run; prepared recordings are skipped, unreadable ones reported, the open one deferred."""
 
 import queue
+import signal
 import socket
 import threading
 
@@ -41,7 +42,12 @@ def _run_worker(entries, disk, open_path=None, jobs=None):
     """The warm-up process's loop, in this process (no niceness change); {label: last state}."""
     commands, reports = queue.Queue(), queue.Queue()
     jobs = jobs if jobs is not None else [e for e in entries if e.kind == EntryKind.RECORDING and e.error is None]
-    _worker(jobs, [e for e in entries if e.kind == EntryKind.MAP], open_path, disk, FrameCacheConfig(), commands, reports, nice=0)
+    # In the main thread the worker ignores Ctrl+C as its own process does: the rest of the test run must not.
+    sigint = signal.getsignal(signal.SIGINT)
+    try:
+        _worker(jobs, [e for e in entries if e.kind == EntryKind.MAP], open_path, disk, FrameCacheConfig(), commands, reports, nice=0)
+    finally:
+        signal.signal(signal.SIGINT, sigint)
     states = {}
     while (msg := reports.get_nowait()) is not None:
         states[msg[0]] = msg[1]
