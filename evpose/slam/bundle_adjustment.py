@@ -8,6 +8,7 @@ import cv2
 import numpy as np
 
 from evpose.slam.atlas import SlamMap
+from evpose.slam.geometry import pose_jump_depths
 
 
 @dataclass
@@ -26,7 +27,7 @@ def local_bundle_adjustment(m: SlamMap, K: np.ndarray, window: int, iterations: 
                             rotation_priors: dict | None = None, rotation_sigma_rad: float = 1e-3, scale_anchor: float = 0.0,
                             rotation_sigmas_rad: dict | None = None, velocity_sigma_ratio: float = 0.0,
                             rotation_rate_sigma_rad_s: float = 0.0, edge_along_sigma_px: float = 0.0,
-                            edge_max_ratio: float = 0.1) -> BaReport:
+                            edge_max_ratio: float = 0.1, max_jump_depths: float = 0.0) -> BaReport:
     """Optimise the last ``window`` keyframes of ``m`` and the points they see, in place.
 
     The ``n_fixed`` oldest keyframes of the window (two while the map has only
@@ -44,6 +45,8 @@ def local_bundle_adjustment(m: SlamMap, K: np.ndarray, window: int, iterations: 
     constant-rotation-rate factors with that sigma, rad/s. ``edge_along_sigma_px`` > 0 gives observations on a straight
     edge of a keyframe MCI (structure-tensor eigenvalue ratio below ``edge_max_ratio``; keyframes that keep their
     ``image8``) that sigma along the edge, pixels: KLT measures only the motion across an edge.
+    ``max_jump_depths`` > 0 leaves the map as it was when the solution moves a free keyframe's camera centre farther
+    than that many median distances of the optimised points from it (:attr:`TrackingConfig.max_jump_depths`).
     """
     import gtsam
     from gtsam.symbol_shorthand import L, X
@@ -117,9 +120,15 @@ def local_bundle_adjustment(m: SlamMap, K: np.ndarray, window: int, iterations: 
     except RuntimeError:
         # An indeterminate system (e.g. a point seen along one ray) leaves the map as it was.
         return BaReport(n_free, len(used_pts), e0, e0)
-    for kid in sorted(used_kfs):
-        if kid in in_window and kid not in fixed_ids:
-            kf_by_id[kid].T_wc = result.atPose3(X(kid)).matrix()
+    moved = [kid for kid in sorted(used_kfs) if kid in in_window and kid not in fixed_ids]
+    if max_jump_depths > 0 and used_pts and moved:
+        Xw = np.stack([m.points[pid].xyz for pid in used_pts])
+        if max(pose_jump_depths(result.atPose3(X(kid)).matrix(), (kf_by_id[kid].T_wc,), Xw) for kid in moved) > max_jump_depths:
+            # A solution that flings a keyframe many scene depths away is a diverged one (a pre-IMU-initialisation
+            # visual BA moved keyframes 81-127 depths, TrackingConfig.max_jump_depths): keep the map as it was.
+            return BaReport(n_free, len(used_pts), e0, e0)
+    for kid in moved:
+        kf_by_id[kid].T_wc = result.atPose3(X(kid)).matrix()
     for pid in used_pts:
         m.points[pid].xyz = np.asarray(result.atPoint3(L(pid)), np.float64)
     return BaReport(n_free, len(used_pts), e0, graph.error(result))

@@ -52,3 +52,13 @@ def pose_from_rt(R: np.ndarray, t: np.ndarray) -> np.ndarray:
     T[:3, :3] = R
     T[:3, 3] = np.ravel(t)
     return T
+
+
+def pose_jump_depths(T_wc: np.ndarray, refs: tuple[np.ndarray, ...], Xw: np.ndarray) -> float:
+    """How far the camera centre of ``T_wc`` lies from the nearest of the reference poses ``refs`` (e.g. the motion
+    prediction and the last pose), in median distances of the map points ``Xw`` from the first reference's camera
+    centre: scale-free, so one bound fits maps of any (unknown) scale, ratio (inf without a usable point distance)."""
+    c = T_wc[:3, 3]
+    step = min(float(np.linalg.norm(c - T[:3, 3])) for T in refs)
+    depth = float(np.median(np.linalg.norm(np.asarray(Xw, np.float64) - refs[0][:3, 3], axis=1))) if len(Xw) else 0.0
+    return step / depth if depth > 0 else (0.0 if step == 0 else float("inf"))

@@ -36,6 +36,7 @@ from evpose.slam.coasting import constant_velocity_pose
 from evpose.slam.config import SlamConfig, SlamMode
 from evpose.slam.event_window import WINDOW_REASONS, EventWindowSelector, ReconstructionWindow
 from evpose.slam.features import FrontendTracks, detect_features, has_support, step_consistent, track_features
+from evpose.slam.geometry import pose_jump_depths
 from evpose.slam.fine_grid import track_features_fine, use_fine_grid
 from evpose.slam.inertial import InertialConfiguration
 from evpose.slam.inertial_ba import inertial_local_bundle_adjustment
@@ -387,6 +388,13 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
         sigma_deg = self.cfg.inertial.gyro_prior_deg if m.imu_initialised else self.cfg.inertial.gyro_prior_uninit_deg
         if est.ok and R_prior is not None and sigma_deg > 0:
             est = self._refine_with_gyro(est, Xw, uv, R_prior, sigma_deg)
+        max_jump = self._pose_tc(m).max_jump_depths
+        if est.ok and max_jump > 0:
+            # Between two MCIs (milliseconds) the camera cannot move a multiple of the scene depth: a pose that far from
+            # both the prediction and the last pose fits a wrong subset of the map (TrackingConfig.max_jump_depths).
+            jump = pose_jump_depths(est.T_wc, (m.traj_T[-1], guess), Xw)
+            if jump > max_jump:
+                est = PoseEstimate(False, reason=f"PnP pose {jump:.1f} median point depths from the last and the predicted pose > {max_jump:g}")
         return est, sel
 
     def _matcher(self) -> SearchMatcher | None:
@@ -451,7 +459,7 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
                                     velocity_sigma_ratio=tc.ba_velocity_prior if self.imu is None else 0.0,
                                     rotation_rate_sigma_rad_s=np.radians(tc.ba_rotation_rate_prior_deg_s) if self.imu is None else 0.0,
                                     edge_along_sigma_px=tc.ba_edge_along_sigma_px if self.imu is None else 0.0,
-                                    edge_max_ratio=tc.ba_edge_max_ratio)
+                                    edge_max_ratio=tc.ba_edge_max_ratio, max_jump_depths=tc.max_jump_depths)
         if before is not None:
             carry_relative_scale(m, before)
         cull_points(m, self.K, fe.track_to_point, tc)
