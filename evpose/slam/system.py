@@ -36,8 +36,8 @@ from evpose.slam.coasting import constant_velocity_pose
 from evpose.slam.config import SlamConfig, SlamMode
 from evpose.slam.event_window import WINDOW_REASONS, EventWindowSelector, ReconstructionWindow
 from evpose.slam.features import FrontendTracks, detect_features, has_support, step_consistent, track_features
-from evpose.slam.geometry import pose_jump_depths
 from evpose.slam.fine_grid import track_features_fine, use_fine_grid
+from evpose.slam.geometry import pose_jump_depths
 from evpose.slam.inertial import InertialConfiguration
 from evpose.slam.inertial_ba import inertial_local_bundle_adjustment
 from evpose.slam.inertial_trajectory import carry_relative_scale, keyframe_positions
