@@ -207,7 +207,7 @@ class ViewerApp:
             self.recording, self.contour_map, self._shown_label = recording, cmap, entry.label
             self.scene.load(cmap, None, recording.ground_truth, recording.calibration)
             self.scene.apply_toggles()
-            self.plots.remove()
+            self.plots.clear()
 
         if self.player is None:
             reset_view()
