@@ -77,6 +77,10 @@ class Player:
         self._play_stats = [0.0, 0]
         """Wall seconds and media microseconds of the current (or last) play, since play was pressed."""
         self._last_advance_wall: float | None = None
+        self._events_until_us: int | None = None
+        """Time of the last frame played that had events (the start of a run of empty frames)."""
+        self.skipped_gap: tuple[int, int] | None = None
+        """(from, to) us of the stretch without events the playback last went over at once (until the next command)."""
         self._prefetching = self.pc.prefetch
         self._catch_up: CatchUp | None = None
         """The seek being computed in slices, if any."""
@@ -176,6 +180,7 @@ class Player:
             "real_time_factor": (media / 1e6) / wall if wall > 0 else 0.0,
             "config_applies": self.config_applies, "last_seek_ms": self.last_seek_ms,
             "catching_up": c.progress if (c := self._catch_up) is not None else None,
+            "skipped_gap": self.skipped_gap,
         }
 
     # ----- worker thread -----
@@ -285,6 +290,8 @@ class Player:
         kind = cmd[0]
         if kind in ("seek", "load"):
             self._ready = None
+        if kind in ("seek", "load", "step", "play", "toggle"):
+            self.skipped_gap = self._events_until_us = None
         if self._catch_up is not None and kind in ("seek", "load", "step", "pause", "cancel") or (
                 kind == "toggle" and self._catch_up is not None and self.state == PlayState.PLAYING):
             # A new seek replaces the target; a step, pause or new recording gives it up (what was computed stays).
@@ -443,6 +450,25 @@ class Player:
             self._last_progress = now
             self._progress()
 
+    def _gap_before(self, frame: Frame) -> tuple[int, int] | None:
+        """(from, to) us of a stretch without events longer than ``skip_gaps_s`` that ends at ``frame`` (None if none):
+        media time between the shown frame and it beyond what its steps cover (the tracker skips a long gap), or a
+        run of frames without events (SLAM steps through it)."""
+        prev = self.last_frame
+        if prev is None or frame.preview:
+            return None
+        step_us = getattr(self.engine, "step_us", None) or 0
+        longer = self.pc.skip_gaps_s * 1e6
+        if frame.t_us - prev.t_us - max(frame.index - prev.index, 0) * step_us > longer:
+            self._events_until_us = None
+            return prev.t_us, frame.t_us
+        if frame.counts.get("events_in", 1) > 0:
+            self._events_until_us = None
+            return None
+        if self._events_until_us is None:
+            self._events_until_us = prev.t_us
+        return (self._events_until_us, frame.t_us) if frame.t_us - self._events_until_us > longer else None
+
     def _advance(self) -> None:
         if self._ready is None:
             try:
@@ -469,6 +495,13 @@ class Player:
                     self._publish(self._unpublished if self._unpublished is not None else self.last_frame)
                 return
         now = time.monotonic()
+        gap = self._gap_before(self._ready)
+        if gap is not None:
+            # No events since the frame shown for longer than skip_gaps_s: shown now, paced from here on.
+            self.skipped_gap = (min(gap[0], self.skipped_gap[0]) if self.skipped_gap and self.skipped_gap[1] >= gap[0]
+                                else gap[0], gap[1])
+            self._anchor = (now, self._ready.t_us)
+            self._last_advance_wall = None  # nor counted in the real-time factor
         due = self._due(self._ready)
         if now < due:
             if self._prefetching and self.pc.prefetch_while_playing:

@@ -29,7 +29,7 @@ from app.player import Player, PlayState, RerunFrom
 from app.plots import plot_context
 from app.scene import SceneView
 from app.slam_engine import slam_markdown
-from app.status import status_markdown
+from app.status import event_gaps, status_markdown
 from app.teaching import STAGE_PANEL, Stage, teaching_markdown
 from app.viewer_controls import NO_MAP, bind_viewer_hotkeys, build_main_panel, build_panels
 from app.warm_up import WarmUp
@@ -73,6 +73,8 @@ class ViewerApp:
         """(recording, map) dropdown values of what is open."""
         self._shown_label = ""
         """Label of the recording the player works on (set on its thread when it gets to an opening)."""
+        self.gaps: list = []
+        """The shown recording's stretches without events (app/status.py: named in the status line)."""
         self._select_lock = threading.Lock()
         self._cloud_lock = threading.Lock()
         self._cloud_entry: DataEntry | None = None
@@ -198,13 +200,14 @@ class ViewerApp:
         self.warm_up.opened(path if self.mode == "tracking" and cmap is not None else None)
         # Whole milliseconds, the slider's step: the end label read "3.999952" (engines clip a seek past the end).
         self.time_slider.max = max(0.001, round((recording.t_end_us - recording.t_start_us) / 1e6, 3))
+        gaps = event_gaps(recording.events.t)
         factory = engine_factory(recording, cmap, self.mode, self.cfg.frame_cache, self.cfg.disk_cache,
                                  (path, map_entry.path) if map_entry is not None else None)
 
         def reset_view(_engine=None):
             # Runs on the player thread (or before it exists) so no frame of the old recording is drawn over it.
             self.status.content = opening  # the player has got to it
-            self.recording, self.contour_map, self._shown_label = recording, cmap, entry.label
+            self.recording, self.contour_map, self._shown_label, self.gaps = recording, cmap, entry.label, gaps
             self.scene.load(cmap, None, recording.ground_truth, recording.calibration)
             self.scene.apply_toggles()
             self.plots.clear()
@@ -294,7 +297,7 @@ class ViewerApp:
                 if frame.slam is None:
                     self.teaching_image.image = imgs[STAGE_PANEL[self.stage]]
             self.time_slider.value = round((frame.t_us - engine.t_start_us) / 1e6, 3)
-            self.status.content = status_markdown(frame, engine, self.player.stats() if self.player else {})
+            self.status.content = status_markdown(frame, engine, self.player.stats() if self.player else {}, self.gaps)
         self.frames_published += 1
         self.last_frame = frame  # last, so whoever sees it also sees everything drawn for it
 
@@ -316,7 +319,7 @@ class ViewerApp:
     def _on_progress(self, engine: Engine) -> None:
         # While paused the run-ahead advances without new frames: refresh the status line alone.
         if self.last_frame is not None and self.player is not None:
-            self.status.content = status_markdown(self.last_frame, engine, self.player.stats())
+            self.status.content = status_markdown(self.last_frame, engine, self.player.stats(), self.gaps)
 
     def _rebuild_config_gui(self, engine: Engine) -> None:
         rejected = getattr(engine, "rejected_config", None)

@@ -122,3 +122,25 @@ def test_a_recording_shorter_than_acquire_s_that_never_registers_is_flagged_once
     assert "no update registered against this map in the whole recording (0.30 s)" in status_markdown(f, eng, {})
     eng.known_summaries = eng.known_summaries[:60] + [SimpleNamespace(t_us=1_300_000, counts={"registered": 1})]
     assert "registered against this map" not in status_markdown(f, eng, {})
+
+
+def test_a_step_at_or_in_a_long_stretch_without_events_says_so(bar_recording):
+    # A seek to 30 s in a recording without events from 2 to 62 s showed the tracker's step at 1.995 s (its steps
+    # skip the gap) and the time slider jumped back there with nothing said; SLAM's steps in it read "waiting".
+    from app.status import event_gaps
+
+    t = np.array([0, 999_000, 1_998_000, 62_000_000, 62_000_500], np.int64)
+    gaps = event_gaps(t)
+    assert [(g.t_last_us, g.t_next_us) for g in gaps] == [(1_998_000, 62_000_000)]  # under a second is no gap
+    eng = EventsOnlyEngine(bar_recording)
+    z = np.zeros((2, 2), np.float32)
+    at = lambda t_us: Frame(3, t_us, z, z, z, EventArray.empty(), EventArray.empty())
+    stats = {"state": "paused", "speed": 1.0}
+    assert "this step lies in it" in status_markdown(at(30_000_000), eng, stats, gaps)
+    assert "no events from 1.998 to 62.000 s (60.0 s): after this step" in status_markdown(at(1_995_000), eng, stats, gaps)
+    tracker = SimpleNamespace(seconds_of_steps=lambda k: k, is_last=lambda f: False, n_steps=None)
+    assert "the tracker's steps skip it (a seek into it shows this step)" in status_markdown(at(1_995_000), tracker, stats, gaps)
+    assert "no events" not in status_markdown(at(1_500_000), eng, stats, gaps)
+    assert "no events" not in status_markdown(at(62_000_000), eng, stats, gaps)
+    played = dict(stats, skipped_gap=(1_990_000, 62_030_000))
+    assert "no events from 1.99 to 62.03 s (60.0 s): not waited for in real time" in status_markdown(at(62_500_000), eng, played, gaps)
