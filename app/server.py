@@ -323,24 +323,23 @@ class ViewerApp:
 
     def _rebuild_config_gui(self, engine: Engine) -> None:
         rejected = getattr(engine, "rejected_config", None)
-        if self.config_gui is not None and rejected is not None and type(rejected) is self.config_gui.cls:
+        if rejected is not None:
             # The tracker cannot start with these parameters (visible map min depth at its 10 m maximum: no map point
-            # in view). Its controls stay, so the value can be moved back; replaced by the events-only view's they
-            # could not, and the tuned values were lost.
-            self.param_info.content = f"{engine.explanation} Change the parameters above to try again."
-            return
-        if self.config_gui is not None and type(self.config_gui.config) is type(engine.config):
+            # in view; mode "full" on a recording without IMU). Its controls stay, or come, so the value can be
+            # changed; replaced by the events-only view's they could not, and tuned values were lost.
+            shown, note = rejected, f"{engine.explanation} Change the parameters below to try again."
+        else:
+            shown, note = engine.config, engine.explanation or f"{type(engine.config).__name__}: changes re-run the tracker."
+        if self.config_gui is not None and type(self.config_gui.config) is type(shown):
             # The controls are the source of the engine's config; pushing it back would fight a user still dragging.
-            note = engine.explanation or f"{type(engine.config).__name__}: changes re-run the tracker."
             if self.param_info.content != note:  # re-rendering the panel would steal a dragging user's focus
                 self.param_info.content = note
             return
         if self.config_gui is not None:
             self.config_gui.remove()
         with self.params_tab:
-            self.config_gui = ConfigGui(self.gui, engine.config, self._config_changed)
+            self.config_gui = ConfigGui(self.gui, shown, self._config_changed)
         self.key_guard.watch(h for h in self.config_gui.handles.values() if isinstance(h, viser.GuiSliderHandle))
-        note = engine.explanation or f"{type(engine.config).__name__}: changes re-run the tracker."
         self.param_info.content = note
 
     def _config_changed(self, config) -> None:
