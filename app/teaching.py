@@ -26,7 +26,8 @@ EXPLANATIONS: dict[Stage, str] = {
         "An event camera does not take pictures. Each pixel reports, on its own, the moment its brightness "
         "changes by a set amount: an **ON** event (red) when it gets brighter, **OFF** (blue) when darker. "
         "Moving edges therefore light up as thin lines of events. A noise filter throws away lonely events "
-        "whose neighbours stayed silent (grey in the *events kept / removed* panel)."
+        "whose neighbours stayed silent, and in mode `full` the ego-motion filter (off by default, `ego motion > enabled`) events "
+        "that do not fit the camera's own motion (both grey in the *events kept / removed* panel)."
     ),
     Stage.SP_TS: (
         "The **separated-polarity time surface** keeps, for every pixel, the time of its latest ON event and, "
@@ -36,7 +37,8 @@ EXPLANATIONS: dict[Stage, str] = {
     ),
     Stage.TDF: (
         "The **temporal distance field** is `1 - time surface`: near 0 exactly on the newest edge, growing behind "
-        "it. It acts as a landscape of valleys along the edges. The contour map points are projected into it "
+        "it, then slightly blurred (`distance field > blur px`). It acts as a landscape of valleys along the edges. "
+        "The contour map points are projected into it "
         "from the current pose guess; each point's height in the landscape is its *residual*."
     ),
     Stage.POLARITY: (
@@ -48,13 +50,16 @@ EXPLANATIONS: dict[Stage, str] = {
     ),
     Stage.REGISTRATION: (
         "**Registration** moves the 6-DoF pose until the projected map points fall into the valleys of the TDF "
-        "(least squares with a robust loss, Gauss-Newton). Points far from any valley get small weights, so "
+        "(robust least squares, Levenberg-Marquardt on SE(3)). Points far from any valley get small weights, so "
         "clutter does not pull the pose. The TDF panel colours each point by its residual (green = on an edge)."
     ),
     Stage.FUSION: (
-        "**Fusion** combines each registration with the IMU in a factor graph (gtsam): the IMU predicts the motion "
-        "between registrations at its high rate (small axes in 3D), registration corrects the drift. The orange "
-        "line is the fused trajectory, purple the raw registrations, green the ground truth."
+        "**Fusion** (mode `full`) combines each registration with the IMU, by default in a factor graph (gtsam; "
+        "`fusion > backend` also offers an EKF): the IMU predicts the motion between registrations at its high rate "
+        "(small axes in 3D), registration corrects the drift. In mode `stpe+filter` the IMU only feeds the polarity "
+        "prediction and in `stpe` it is not used: the `motion model` parameter predicts the next pose (a "
+        "constant-velocity Kalman filter by default). The orange line is the fused trajectory, purple the raw "
+        "registrations, green the ground truth."
     ),
 }
 
