@@ -434,6 +434,12 @@ class Player:
             return 1
         interval = max(1.0 / self.pc.max_ui_fps, self.pc.draw_share_factor * self._draw_s)
         stride = max(1, int(self.speed * interval * 1e6 // step_us))
+        quiet = self._events_until_us is not None and self.last_frame is not None and (
+            self.last_frame.t_us - self._events_until_us > self.pc.skip_gaps_s * 1e6)
+        if quiet and getattr(self.engine, "play_stops_at_events", False):
+            # Gone over at once (SLAM steps through it, 0.7 ms a step, 13 ms a drawn frame): a frame per skip_gaps_s
+            # of it, not per publish interval. The engine stops its stride where events come again.
+            return max(stride, int(self.pc.skip_gaps_s * 1e6 // step_us))
         if self._step_wall_s > 0:
             # Computing steps live (slower than real time): fewer steps per frame keep the frame rate up.
             stride = min(stride, max(1, int(interval / self._step_wall_s)))
