@@ -96,11 +96,11 @@ def pose_errors(history: list[StepSummary], gt: Trajectory | None,
 
 
 def plot_series(history: list[StepSummary], gt: Trajectory | None, window: int = WINDOW_STEPS,
-                alignments: dict[int, Sim3] | None = None) -> dict[str, tuple[tuple[str, ...], tuple[np.ndarray, ...]]]:
+                alignments: dict[int, Sim3] | None = None, t0_us: int = 0) -> dict[str, tuple[tuple[str, ...], tuple[np.ndarray, ...]]]:
     """Plot name -> (series labels, (t_seconds, y1, y2, ...)) over the last ``window`` steps (``alignments``: SLAM mode,
-    see :func:`pose_errors`)."""
+    see :func:`pose_errors`; ``t0_us``: the recording's start, the time axis counts from it as the time slider)."""
     h = history[-window:]
-    t = np.array([s.t_us for s in h], np.float64) / 1e6
+    t = (np.array([s.t_us for s in h], np.int64) - int(t0_us)) / 1e6
     out: dict[str, tuple[tuple[str, ...], tuple[np.ndarray, ...]]] = {}
     pe, re = pose_errors(h, gt, alignments)
     if alignments is None:
@@ -241,11 +241,11 @@ class PlotsView:
         return add(*args, **kwargs)
 
     def update(self, history: list[StepSummary], gt: Trajectory | None, alignments: dict[int, Sim3] | None = None,
-               note: str = "") -> None:
+               note: str = "", t0_us: int = 0) -> None:
         """Draw the plots of the latest window (``alignments``, ``note``: see :func:`plot_series`, :func:`empty_reasons`)."""
         from viser import uplot
 
-        series = plot_series(history, gt, alignments=alignments)
+        series = plot_series(history, gt, alignments=alignments, t0_us=t0_us)
         reasons = empty_reasons(series, history, gt, note)
         for name, (labels, data) in series.items():
             order = float(PLOT_ORDER.index(name) if name in PLOT_ORDER else len(PLOT_ORDER) + list(series).index(name))

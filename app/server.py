@@ -288,12 +288,12 @@ class ViewerApp:
             if slow:
                 self._last_slow = now
                 self.plots.update(history, self.recording.ground_truth if self.recording is not None else None,
-                                  *plot_context(frame, engine))
+                                  *plot_context(frame, engine), t0_us=engine.t_start_us)
             if frame.slam is not None:
-                self.slam_info.content = slam_markdown(frame, self.scene.toggles.slam_aligned)
+                self.slam_info.content = slam_markdown(frame, self.scene.toggles.slam_aligned, engine.t_start_us)
             if show_teaching and (STAGE_PANEL[self.stage] in imgs or frame.slam is not None):
                 # SLAM mode: the stages are the tracker's, which is not running; the text says so (no live image).
-                self.teaching_text.content = teaching_markdown(self.stage, frame)
+                self.teaching_text.content = teaching_markdown(self.stage, frame, engine.t_start_us)
                 if frame.slam is None:
                     self.teaching_image.image = imgs[STAGE_PANEL[self.stage]]
             self.time_slider.value = round((frame.t_us - engine.t_start_us) / 1e6, 3)

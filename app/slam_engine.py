@@ -218,7 +218,7 @@ def slam_engine_factory(recording):
     return make
 
 
-def slam_markdown(frame: Frame, aligned: bool = True) -> str:
+def slam_markdown(frame: Frame, aligned: bool = True, t0_us: int = 0) -> str:
     """The SLAM step in words: selected MCI hypothesis and every hypothesis' score, tracks, keyframe, map size,
     and how the 3D view places the maps (``aligned``: on the ground truth, when there is one)."""
     v = frame.slam
@@ -231,6 +231,6 @@ def slam_markdown(frame: Frame, aligned: bool = True) -> str:
     head = (f"map {v.map_id}: {n_pts} points, {n_kf} keyframes{' (keyframe inserted)' if v.keyframe else ''}" if v.map_id >= 0
             else "no map yet: SLAM starts its first one with a two-view initialisation from the tracked features")
     return (f"{head}\n\n"
-            f"MCI{'' if v.mci_t_us is None else f' at {v.mci_t_us / 1e6:.3f} s'} hypothesis scores (mean local STD): {scores or 'no MCI yet'}\n\n"
+            f"MCI{'' if v.mci_t_us is None else f' at {(v.mci_t_us - t0_us) / 1e6:.3f} s'} hypothesis scores (mean local STD): {scores or 'no MCI yet'}\n\n"
             f"tracked features: {n_feat} ({with_pt} with a map point; green with, yellow without)"
             + (f"\n\n{note}" if (note := alignment_note(v.atlas, aligned, v.has_ground_truth)) else ""))

@@ -82,14 +82,14 @@ def event_gaps(events_t) -> list[EventGap]:
     return find_gaps(events_t, int(GAP_NOTE_S * 1e6) - 1, -(2 ** 62))
 
 
-def gap_note(frame: Frame, gaps: list[EventGap], steps_skip_gaps: bool = False) -> str:
+def gap_note(frame: Frame, gaps: list[EventGap], steps_skip_gaps: bool = False, t0_us: int = 0) -> str:
     """Which gap the step shown lies in or just before, in words (empty if none). A seek to 30 s in a recording
     without events from 2 to 62 s showed the tracker's step at 1.995 s, the time slider jumped back there, and nothing
     said why; SLAM's steps in the gap read "waiting — tracking features in tiny frames" (``steps_skip_gaps``: the
-    engine's steps skip a long gap, the tracker's)."""
+    engine's steps skip a long gap, the tracker's; ``t0_us``: the recording's start, times are said from it)."""
     for g in gaps:
         if g.t_last_us - GAP_BEFORE_S * 1e6 <= frame.t_us < g.t_next_us:
-            head = f"_no events from {g.t_last_us / 1e6:.3f} to {g.t_next_us / 1e6:.3f} s ({g.seconds:.1f} s)"
+            head = f"_no events from {(g.t_last_us - t0_us) / 1e6:.3f} to {(g.t_next_us - t0_us) / 1e6:.3f} s ({g.seconds:.1f} s)"
             if steps_skip_gaps:
                 return f"{head}: the tracker's steps skip it (a seek into it shows this step); play goes over it at once_"
             where = "this step lies in it" if frame.t_us > g.t_last_us else "after this step"
@@ -100,7 +100,10 @@ def gap_note(frame: Frame, gaps: list[EventGap], steps_skip_gaps: bool = False) 
 
 def status_markdown(frame: Frame, engine: Engine, stats: dict, gaps: list[EventGap] = ()) -> str:
     """Markdown of the status line under the playback controls (``gaps``: the recording's, :func:`event_gaps`)."""
-    text = (f"t = {frame.t_us / 1e6:.3f} s, step {frame.index}, **{frame.status}**"
+    # From the recording's start, as the time slider: a recording on a clock of its own (100 s at its first event)
+    # read "t = 101.495 s" beside a slider at 1.495.
+    t0 = getattr(engine, "t_start_us", 0)
+    text = (f"t = {(frame.t_us - t0) / 1e6:.3f} s, step {frame.index}, **{frame.status}**"
             # A dash, not parentheses: the reasons carry their own ("40 inliers (2 re-found by projection)").
             # Events only for want of a map: said under the recording list. Any other reason (no calibration, a
             # rejected configuration) is said here, where the eye goes when nothing is tracked.
@@ -111,12 +114,12 @@ def status_markdown(frame: Frame, engine: Engine, stats: dict, gaps: list[EventG
     if stats.get("state") == "paused" and engine.is_last(frame):
         # Forward did nothing here without a word.
         text += "\n\n_the end of the recording: play starts it again from the beginning_"
-    note = gap_note(frame, gaps, hasattr(engine, "seconds_of_steps"))
+    note = gap_note(frame, gaps, hasattr(engine, "seconds_of_steps"), t0)
     if note:
         text += f"\n\n{note}"
     gap = stats.get("skipped_gap")
     if gap is not None and not note:  # after the gap: what playback did
-        text += (f"\n\n_no events from {gap[0] / 1e6:.2f} to {gap[1] / 1e6:.2f} s "
+        text += (f"\n\n_no events from {(gap[0] - t0) / 1e6:.2f} to {(gap[1] - t0) / 1e6:.2f} s "
                  f"({(gap[1] - gap[0]) / 1e6:.1f} s): not waited for in real time_")
     catching = stats.get("catching_up")
     if catching is not None:

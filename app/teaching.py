@@ -74,12 +74,13 @@ STAGE_PANEL: dict[Stage, str] = {
 """Which live image illustrates each stage."""
 
 
-def live_facts(stage: Stage, frame: Frame | None) -> str:
-    """One or two sentences of figures from the step on screen for ``stage``."""
+def live_facts(stage: Stage, frame: Frame | None, t0_us: int = 0) -> str:
+    """One or two sentences of figures from the step on screen for ``stage`` (its time from ``t0_us``, the
+    recording's start, as the time slider)."""
     if frame is None:
         return "_Press play or step to see live figures._"
     c = frame.counts
-    t = f"At t = {frame.t_us / 1e6:.3f} s (step {frame.index}): "
+    t = f"At t = {(frame.t_us - t0_us) / 1e6:.3f} s (step {frame.index}): "
     if frame.slam is not None:
         return t + ("SLAM mode runs no map-based tracking, so this stage is not computed; SLAM's own images (tiny "
                     "frame, motion-compensated image with its tracked features) are in the images panel's SLAM tab.")
@@ -107,8 +108,8 @@ def live_facts(stage: Stage, frame: Frame | None) -> str:
     return t + f"{n_imu} IMU-rate poses since the last registration; status **{frame.status}**" + (f" ({frame.reason})" if frame.reason else ".")
 
 
-def teaching_markdown(stage: Stage, frame: Frame | None) -> str:
+def teaching_markdown(stage: Stage, frame: Frame | None, t0_us: int = 0) -> str:
     image = "" if frame is not None and frame.slam is not None else f"\n\n_Image: {STAGE_PANEL[stage]}_"  # SLAM: none shown
     if image and "map points" in image and frame is not None and frame.point_index is None:
         image = image[:-1] + " (no map, so no points on it)_"  # the events-only view: a bare TDF under that name
-    return f"### {stage.value}\n\n{EXPLANATIONS[stage]}\n\n**Now:** {live_facts(stage, frame)}{image}"
+    return f"### {stage.value}\n\n{EXPLANATIONS[stage]}\n\n**Now:** {live_facts(stage, frame, t0_us)}{image}"

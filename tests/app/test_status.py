@@ -144,3 +144,24 @@ def test_a_step_at_or_in_a_long_stretch_without_events_says_so(bar_recording):
     assert "no events" not in status_markdown(at(62_000_000), eng, stats, gaps)
     played = dict(stats, skipped_gap=(1_990_000, 62_030_000))
     assert "no events from 1.99 to 62.03 s (60.0 s): not waited for in real time" in status_markdown(at(62_500_000), eng, played, gaps)
+
+
+def test_times_are_said_from_the_recordings_start_as_the_time_slider(bar_recording):
+    # A recording on a clock of its own (first event at 100 s) read "t = 101.495 s" in the status line, the teaching
+    # panel, SLAM's MCI time and the plots' time axis, beside a time slider at 1.495.
+    import dataclasses
+
+    from app.plots import plot_series
+    from app.teaching import Stage, live_facts
+    from app.frame import StepSummary
+
+    ev = bar_recording.events
+    rec = dataclasses.replace(bar_recording, events=EventArray(ev.t + 100_000_000, ev.x, ev.y, ev.p))
+    eng = EventsOnlyEngine(rec)
+    z = np.zeros((2, 2), np.float32)
+    f = Frame(3, eng.t_start_us + 1_495_000, z, z, z, EventArray.empty(), EventArray.empty())
+    assert status_markdown(f, eng, {"state": "paused", "speed": 1.0}).startswith("t = 1.495 s, step 3")
+    assert "At t = 1.495 s (step 3)" in live_facts(Stage.EVENTS, f, eng.t_start_us)
+    steps = [StepSummary(i, eng.t_start_us + i * 5_000, None, None, "ok", {}, {"events_in": 1}) for i in range(3)]
+    t = plot_series(steps, None, t0_us=eng.t_start_us)["events per second"][1][0]
+    assert np.allclose(t, [0.0, 0.005, 0.01])
