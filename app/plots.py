@@ -52,6 +52,9 @@ def _lookup(gt: Trajectory) -> GroundTruthLookup:
     return hit[1]
 
 
+PLOT_GAP_US = 1_000_000
+"""Steps further apart than this (an event gap the tracker's steps skip) start the plots afresh, microseconds."""
+
 POSE_ERROR = "pose error"
 SLAM_POSE_ERROR = "position error (maps aligned to ground truth)"
 """SLAM mode's pose-error plot: each step's position mapped by its map's alignment (as the 3D view's *slam aligned*).
@@ -100,7 +103,13 @@ def plot_series(history: list[StepSummary], gt: Trajectory | None, window: int =
     """Plot name -> (series labels, (t_seconds, y1, y2, ...)) over the last ``window`` steps (``alignments``: SLAM mode,
     see :func:`pose_errors`; ``t0_us``: the recording's start, the time axis counts from it as the time slider)."""
     h = history[-window:]
-    t = (np.array([s.t_us for s in h], np.int64) - int(t0_us)) / 1e6
+    t_us = np.array([s.t_us for s in h], np.int64)
+    jumps = np.flatnonzero(np.diff(t_us) > PLOT_GAP_US)
+    if len(jumps):
+        # The tracker's steps skip a long event gap: drawn across it, the steps after a 60 s gap were squeezed into
+        # the right edge of a 60 s axis, joined to those before by a straight line through the gap.
+        h, t_us = h[jumps[-1] + 1:], t_us[jumps[-1] + 1:]
+    t = (t_us - int(t0_us)) / 1e6
     out: dict[str, tuple[tuple[str, ...], tuple[np.ndarray, ...]]] = {}
     pe, re = pose_errors(h, gt, alignments)
     if alignments is None:

@@ -1,5 +1,7 @@
 """Plot series: bounded windows, pose errors against ground truth (SLAM: after each map's alignment), reasons for empty plots."""
 
+import dataclasses
+
 import numpy as np
 
 from app.frame import StepSummary
@@ -176,3 +178,14 @@ def test_every_plot_is_sent_the_x_range_of_its_latest_window(bar_recording):
     plots = [hd for kind, _, hd in gui.added if kind != "markdown" and not hd.removed]
     assert plots and all(np.allclose(p.scales["x"]["range"], (t[0], t[-1])) for p in plots)
     assert x_range(np.array([0.035])) == (0.035, 0.035 + MIN_X_SPAN_S)  # one step: ticks that differ
+
+
+def test_the_plots_start_afresh_after_a_gap_the_steps_skip(bar_recording):
+    # Drawn across a 60 s event gap, the steps after it were squeezed into the right edge of a 60 s time axis and
+    # joined to those before by a straight line through the gap.
+    gt = bar_recording.ground_truth
+    h = _history(gt, 30)
+    after = [dataclasses.replace(s, index=s.index + 30, t_us=s.t_us + 60_000_000) for s in _history(gt, 5)]
+    t = plot_series(h + after, gt)["events per second"][1][0]
+    assert len(t) == 5 and t[0] >= 60.0
+    assert len(plot_series(h, gt)["events per second"][1][0]) == 30
