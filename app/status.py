@@ -125,7 +125,9 @@ def status_markdown(frame: Frame, engine: Engine, stats: dict, gaps: list[EventG
     if catching is not None:
         shown = ("the images are already the target's time surfaces; its pose and map overlay follow" if frame.preview
                  else "no images on the way")
-        text += (f"\n\n**computing {catching[0]:.1f} / {catching[1]:.1f} s** to reach the seek (tracking is causal: "
+        # "Tracking is causal" was said in SLAM mode too, which tracks no map.
+        what = "SLAM" if frame.slam is not None else "tracking"
+        text += (f"\n\n**computing {catching[0]:.1f} / {catching[1]:.1f} s** to reach the seek ({what} is causal: "
                  f"every step before it is needed; {shown}). Seek elsewhere or pause to cancel.")
     mismatch = map_mismatch_note(engine)
     if mismatch:

@@ -43,8 +43,11 @@ def test_a_far_seek_being_computed_shows_its_progress(bar_recording):
     z = np.zeros((2, 2), np.float32)
     f = Frame(3, 15_000, z, z, z, EventArray.empty(), EventArray.empty())
     text = status_markdown(f, eng, {"state": "paused", "speed": 1.0, "catching_up": (4.2, 9.0)})
-    assert "computing 4.2 / 9.0 s" in text and "cancel" in text
+    assert "computing 4.2 / 9.0 s" in text and "cancel" in text and "tracking is causal" in text
     assert "computing" not in status_markdown(f, eng, {"state": "paused", "catching_up": None})
+    slam = Frame(3, 15_000, z, z, z, EventArray.empty(), EventArray.empty(), slam=SimpleNamespace())
+    text = status_markdown(slam, eng, {"state": "paused", "speed": 1.0, "catching_up": (4.2, 9.0)})
+    assert "SLAM is causal" in text and "tracking" not in text  # it said "tracking is causal" in SLAM mode
 
 
 def test_run_ahead_note_says_frames_a_far_seek_skipped_are_being_filled_in():
