@@ -91,7 +91,7 @@ def gap_note(frame: Frame, gaps: list[EventGap], steps_skip_gaps: bool = False, 
         if g.t_last_us - GAP_BEFORE_S * 1e6 <= frame.t_us < g.t_next_us:
             head = f"_no events from {(g.t_last_us - t0_us) / 1e6:.3f} to {(g.t_next_us - t0_us) / 1e6:.3f} s ({g.seconds:.1f} s)"
             if steps_skip_gaps:
-                return f"{head}: the tracker's steps skip it (a seek into it shows this step); play goes over it at once_"
+                return f"{head}: the tracker's steps skip it (a seek into it shows the last step before it); play goes over it at once_"
             where = "this step lies in it" if frame.t_us > g.t_last_us else "after this step"
             # SLAM steps through a gap: play does not wait for it, but computes its empty steps (0.3x measured).
             return f"{head}: {where}; play does not wait for it in real time, it computes its empty steps_"

@@ -36,6 +36,8 @@ step 0 or from where the run-ahead is.
 
 from __future__ import annotations
 
+import dataclasses
+
 import time
 
 import numpy as np
@@ -225,6 +227,10 @@ class TrackerEngine(DiskSnapshotsMixin, Engine):
         if i == len(self._summaries):
             self._summaries.append(summary_from_result(result, i))
         frame = compact(frame_from_result(result, i)) if result.debug is not None else None
+        if frame is None and debug:
+            # The update standing for a long event gap makes no images. Without a frame, "forward >" at the last
+            # step before a 60 s gap did nothing (the player redrew that step), and "< back" after it likewise.
+            frame = self._imageless_frame(result, i)
         if frame is not None and self.cache.on_grid(i) and self.cache.nbytes < self.cache.budget:
             self.cache.put(frame, near=max(self._shown, 0))
             self._unkept.discard(i)
@@ -235,6 +241,15 @@ class TrackerEngine(DiskSnapshotsMixin, Engine):
             if self.disk is not None:
                 self._maybe_write_chunk(i)
         return frame
+
+    def _imageless_frame(self, result, i: int) -> Frame:
+        """A step without debug products, shown with blank images (the surfaces have faded over the gap it stands
+        for) and its status and reason."""
+        cal = self.recording.calibration
+        w, h = self.recording.sensor_size or (cal.width, cal.height)
+        blank = np.zeros((int(h), int(w)), np.uint8)
+        f = frame_from_result(result, i)
+        return dataclasses.replace(f, ts_positive=blank, ts_negative=blank, tdf=np.full_like(blank, 255))
 
     def _thin_snapshots(self, s) -> None:
         """Keep a run-ahead snapshot every ``_snapshot_spacing`` steps (the session's own regular ones elsewhere go),

@@ -142,7 +142,7 @@ def test_a_step_at_or_in_a_long_stretch_without_events_says_so(bar_recording):
     assert "this step lies in it" in status_markdown(at(30_000_000), eng, stats, gaps)
     assert "no events from 1.998 to 62.000 s (60.0 s): after this step" in status_markdown(at(1_995_000), eng, stats, gaps)
     tracker = SimpleNamespace(seconds_of_steps=lambda k: k, is_last=lambda f: False, n_steps=None)
-    assert "the tracker's steps skip it (a seek into it shows this step)" in status_markdown(at(1_995_000), tracker, stats, gaps)
+    assert "the tracker's steps skip it (a seek into it shows the last step before it)" in status_markdown(at(1_995_000), tracker, stats, gaps)
     assert "no events" not in status_markdown(at(1_500_000), eng, stats, gaps)
     assert "no events" not in status_markdown(at(62_000_000), eng, stats, gaps)
     played = dict(stats, skipped_gap=(1_990_000, 62_030_000))
