@@ -16,7 +16,8 @@ needs every step before it) is a *catch-up*: the engine computes the steps
 plainly, a slice at a time (``Engine.catch_up``), the status line says how far
 it is, commands are heard between slices (a new seek replaces the target;
 pause, a step or a new recording cancels it), and only the target's frame is
-drawn.
+drawn. A stretch of the recording without events is gone over at once, not in
+real time (app/quiet_stretches.py).
 """
 
 from __future__ import annotations
@@ -31,6 +32,7 @@ from app.catch_up import CatchUp
 from app.engine import Engine
 from app.frame import Frame
 from app.player_config import PlayerConfig, PlayState, RerunFrom
+from app.quiet_stretches import QuietStretches
 
 __all__ = ["Player", "PlayerConfig", "PlayState", "RerunFrom"]
 
@@ -77,10 +79,8 @@ class Player:
         self._play_stats = [0.0, 0]
         """Wall seconds and media microseconds of the current (or last) play, since play was pressed."""
         self._last_advance_wall: float | None = None
-        self._events_until_us: int | None = None
-        """Time of the last frame played that had events (the start of a run of empty frames)."""
-        self.skipped_gap: tuple[int, int] | None = None
-        """(from, to) us of the stretch without events the playback last went over at once (until the next command)."""
+        self.quiet = QuietStretches()
+        """Stretches without events playback goes over at once (app/quiet_stretches.py)."""
         self._prefetching = self.pc.prefetch
         self._catch_up: CatchUp | None = None
         """The seek being computed in slices, if any."""
@@ -180,7 +180,7 @@ class Player:
             "real_time_factor": (media / 1e6) / wall if wall > 0 else 0.0,
             "config_applies": self.config_applies, "last_seek_ms": self.last_seek_ms,
             "catching_up": c.progress if (c := self._catch_up) is not None else None,
-            "skipped_gap": self.skipped_gap,
+            "skipped_gap": self.quiet.skipped,
         }
 
     # ----- worker thread -----
@@ -291,7 +291,7 @@ class Player:
         if kind in ("seek", "load"):
             self._ready = None
         if kind in ("seek", "load", "step", "play", "toggle"):
-            self.skipped_gap = self._events_until_us = None
+            self.quiet.reset()
         if self._catch_up is not None and kind in ("seek", "load", "step", "pause", "cancel") or (
                 kind == "toggle" and self._catch_up is not None and self.state == PlayState.PLAYING):
             # A new seek replaces the target; a step, pause or new recording gives it up (what was computed stays).
@@ -434,8 +434,7 @@ class Player:
             return 1
         interval = max(1.0 / self.pc.max_ui_fps, self.pc.draw_share_factor * self._draw_s)
         stride = max(1, int(self.speed * interval * 1e6 // step_us))
-        quiet = self._events_until_us is not None and self.last_frame is not None and (
-            self.last_frame.t_us - self._events_until_us > self.pc.skip_gaps_s * 1e6)
+        quiet = self.last_frame is not None and self.quiet.quiet_for_us(self.last_frame.t_us) > self.pc.skip_gaps_s * 1e6
         if quiet and getattr(self.engine, "play_stops_at_events", False):
             # Gone over at once (SLAM steps through it, 0.7 ms a step, 13 ms a drawn frame): a frame per skip_gaps_s
             # of it, not per publish interval. The engine stops its stride where events come again.
@@ -455,25 +454,6 @@ class Player:
         if self.state == PlayState.PAUSED and (now - self._last_progress >= 1.0 or not self._prefetching):
             self._last_progress = now
             self._progress()
-
-    def _gap_before(self, frame: Frame) -> tuple[int, int] | None:
-        """(from, to) us of a stretch without events longer than ``skip_gaps_s`` that ends at ``frame`` (None if none):
-        media time between the shown frame and it beyond what its steps cover (the tracker skips a long gap), or a
-        run of frames without events (SLAM steps through it)."""
-        prev = self.last_frame
-        if prev is None or frame.preview:
-            return None
-        step_us = getattr(self.engine, "step_us", None) or 0
-        longer = self.pc.skip_gaps_s * 1e6
-        if frame.t_us - prev.t_us - max(frame.index - prev.index, 0) * step_us > longer:
-            self._events_until_us = None
-            return prev.t_us, frame.t_us
-        if frame.counts.get("events_in", 1) > 0:
-            self._events_until_us = None
-            return None
-        if self._events_until_us is None:
-            self._events_until_us = prev.t_us
-        return (self._events_until_us, frame.t_us) if frame.t_us - self._events_until_us > longer else None
 
     def _advance(self) -> None:
         if self._ready is None:
@@ -501,11 +481,11 @@ class Player:
                     self._publish(self._unpublished if self._unpublished is not None else self.last_frame)
                 return
         now = time.monotonic()
-        gap = self._gap_before(self._ready)
+        gap = self.quiet.ending_at(self._ready, self.last_frame, getattr(self.engine, "step_us", None),
+                                   self.pc.skip_gaps_s * 1e6)
         if gap is not None:
             # No events since the frame shown for longer than skip_gaps_s: shown now, paced from here on.
-            self.skipped_gap = (min(gap[0], self.skipped_gap[0]) if self.skipped_gap and self.skipped_gap[1] >= gap[0]
-                                else gap[0], gap[1])
+            self.quiet.went_over(gap)
             self._anchor = (now, self._ready.t_us)
             self._last_advance_wall = None  # nor counted in the real-time factor
         due = self._due(self._ready)

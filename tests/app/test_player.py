@@ -406,8 +406,7 @@ def test_play_goes_over_a_stretch_without_events_at_once_and_says_so(bar_recordi
         # The tracker's steps skip a long gap: the next frame is the step after it, tens of seconds on.
         shown = dataclasses.replace(frames[-1], index=10, t_us=1_000_000, counts={"events_in": 50})
         after = dataclasses.replace(shown, index=11, t_us=61_000_000)
-        p.last_frame = shown
-        assert p._gap_before(after) == (1_000_000, 61_000_000)
-        assert p._gap_before(dataclasses.replace(after, t_us=1_005_000)) is None
+        assert p.quiet.ending_at(after, shown, 5_000, 500_000) == (1_000_000, 61_000_000)
+        assert p.quiet.ending_at(dataclasses.replace(after, t_us=1_005_000), shown, 5_000, 500_000) is None
     finally:
         p.stop()
