@@ -107,7 +107,8 @@ def status_markdown(frame: Frame, engine: Engine, stats: dict, gaps: list[EventG
             # A dash, not parentheses: the reasons carry their own ("40 inliers (2 re-found by projection)").
             # Events only for want of a map: said under the recording list. Any other reason (no calibration, a
             # rejected configuration) is said here, where the eye goes when nothing is tracked.
-            + (f" — {frame.reason}" if frame.reason and frame.reason != NO_MAP_NOTE else "")
+            # The tracker's reasons are the command line's too: "--mode stpe" is the Parameters' *mode* here.
+            + (f" — {frame.reason.replace('--mode stpe', 'mode stpe')}" if frame.reason and frame.reason != NO_MAP_NOTE else "")
             + f"\n\n{stats.get('state', '')} at {stats.get('speed', 1):.1f}x")
     if stats.get("real_time_factor", 0) > 0:  # 0 until something is played: "real-time factor 0.00" read as a stall
         text += f", real-time factor {stats['real_time_factor']:.2f}"

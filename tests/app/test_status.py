@@ -113,6 +113,10 @@ def test_the_reason_follows_the_status_without_nesting_its_own_parentheses():
               reason="40 inliers (2 re-found by projection), rms 1.30 px")
     text = status_markdown(f, SimpleNamespace(is_last=lambda frame: False), {"state": "paused", "speed": 1.0})
     assert "**ok** \u2014 40 inliers (2 re-found by projection), rms 1.30 px" in text and "((" not in text and "))" not in text
+    ended = Frame(159, 800_000, z, z, z, EventArray.empty(), EventArray.empty(), status="lost",
+                  reason="the IMU samples end at t=0.5 s: the fused modes track no further (--mode stpe needs no IMU)")
+    text = status_markdown(ended, SimpleNamespace(is_last=lambda frame: False), {"state": "paused", "speed": 1.0})
+    assert "(mode stpe needs no IMU)" in text and "--mode" not in text  # a command-line flag, in the viewer
 
 
 def test_a_recording_shorter_than_acquire_s_that_never_registers_is_flagged_once_every_step_is_computed():
