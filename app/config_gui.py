@@ -3,7 +3,9 @@
 Walks a dataclass recursively: nested dataclasses become folders, enums
 dropdowns, bools checkboxes, numbers sliders when ``metadata`` gives min/max
 (else number inputs), everything else a text input holding JSON. Each control's
-hint is the field's attribute docstring plus its unit.
+hint is the field's attribute docstring plus its unit. An integer field whose 0
+means something else (``metadata["zero"]``: "off", "automatic") gets a checkbox
+for that 0 under its slider, which then offers the other values only.
 """
 
 from __future__ import annotations
@@ -205,8 +207,8 @@ def on_default_grid(lo: int, step: int, default: int) -> int:
 
     A browser slider offers only ``min + k * step``. The TDF blur (default 3, min 0, step 2, odd kernels) offered
     0, 2, 4..., none of them odd: the slider read 4 while the field blurred with 5 (even sizes are rounded up), and
-    the default could not be dragged back to. SLAM's ``klt_upsample_window_px`` (default 35, odd, 0: automatic) now
-    offers 1, 3, ... 101 and its 0 only in a configuration file; ``event_registration.min_events`` starts at 10."""
+    the default could not be dragged back to. SLAM's ``klt_upsample_window_px`` (default 35, odd, 0: automatic) offers
+    1, 3, ... 101 (its 0 is a checkbox, see ``ConfigGui._zero_box``); ``event_registration.min_events`` starts at 10."""
     return lo + (default - lo) % step if step > 0 and lo <= default else lo
 
 
@@ -222,6 +224,8 @@ class ConfigGui:
         self._muted = False
         self._lock = threading.Lock()
         self._folders: dict[tuple[str, ...], Any] = {}
+        self.zero_boxes: dict[tuple[str, ...], Any] = {}
+        """Field path -> the checkbox that sets it to its special 0 (metadata ``"zero"``: "off", "automatic")."""
         for spec in field_specs(config):
             self._add(spec)
 
@@ -243,35 +247,65 @@ class ConfigGui:
         if folder is not None:
             with folder:
                 handle = self._widget(spec)
+                box = self._zero_box(spec, handle)
         else:
             handle = self._widget(spec)
+            box = self._zero_box(spec, handle)
         self.handles[spec.path] = handle
+        for h in (handle, box) if box is not None else (handle,):
+            h.on_update(lambda _event, spec=spec, handle=handle: self._edited(spec, handle))
 
-        @handle.on_update
-        def _(event, spec=spec, handle=handle):
-            if self._muted:
+    def _zero_box(self, spec: FieldSpec, slider):
+        """For an integer slider whose 0 means something else (metadata ``"zero"``: "off", "automatic"), a checkbox
+        under it that sets that 0; the slider then offers the other values only (odd kernel sizes from 1).
+
+        A slider offers ``min + k * step``: with 0 on its grid a kernel-size slider offered even sizes (the coarse
+        TDF blur: 2 shown, 3 used), and with 1 as its minimum the 0 could be set in a configuration file only
+        (``klt_upsample_window_px`` 0: "automatic")."""
+        zero = spec.metadata.get("zero")
+        if zero is None or not hasattr(slider, "step"):
+            return None
+        box = self.gui.add_checkbox(f"{spec.path[-1].replace('_', ' ')}: {zero}", spec.default == 0,
+                                    hint=f"Checked: {spec.path[-1]} is 0 ({zero}); the slider above is not used. "
+                                         + (spec.doc or ""))
+        slider.disabled = box.value
+        self.zero_boxes[spec.path] = box
+        return box
+
+    def _edited(self, spec: FieldSpec, handle) -> None:
+        if self._muted:
+            return
+        box = self.zero_boxes.get(spec.path)
+        if box is not None:
+            if handle.disabled != box.value:
+                handle.disabled = box.value
+            if box.value:
+                self._hand_over(spec, 0)
                 return
-            try:
-                value = coerce(spec, handle.value)
-            except ConfigError:
-                return  # half-typed text: wait for a valid value
-            if isinstance(value, (int, float)) and not isinstance(value, bool):
-                lo, hi = getattr(handle, "min", None), getattr(handle, "max", None)  # number boxes may have one or none
-                clamped = type(value)(min(max(value, lo if lo is not None else value), hi if hi is not None else value))
-                if clamped != value:
-                    # Typed into the slider's box past an end (rate 5000 Hz of 10-1000): the box showed it and the
-                    # tracker ran with it, a value a configuration file is refused for. Shown and used at the end;
-                    # the write calls back here at once with it.
-                    handle.value = clamped
-                    return
-            # viser runs update callbacks on a thread pool: two controls moved at once (two tabs) each copied the
-            # config without the other's change, and the later write dropped the earlier control's value while its
-            # slider still showed it. Read, write and hand over in one piece, so the last config handed over has both.
-            with self._lock:
-                if value == get_path(self.config, spec.path):
-                    return
-                self.config = replace_path(self.config, spec.path, value)
-                self.on_change(self.config)
+        try:
+            value = coerce(spec, handle.value)
+        except ConfigError:
+            return  # half-typed text: wait for a valid value
+        if isinstance(value, (int, float)) and not isinstance(value, bool):
+            lo, hi = getattr(handle, "min", None), getattr(handle, "max", None)  # number boxes may have one or none
+            clamped = type(value)(min(max(value, lo if lo is not None else value), hi if hi is not None else value))
+            if clamped != value:
+                # Typed into the slider's box past an end (rate 5000 Hz of 10-1000): the box showed it and the
+                # tracker ran with it, a value a configuration file is refused for. Shown and used at the end;
+                # the write calls back here at once with it.
+                handle.value = clamped
+                return
+        self._hand_over(spec, value)
+
+    def _hand_over(self, spec: FieldSpec, value) -> None:
+        # viser runs update callbacks on a thread pool: two controls moved at once (two tabs) each copied the
+        # config without the other's change, and the later write dropped the earlier control's value while its
+        # slider still showed it. Read, write and hand over in one piece, so the last config handed over has both.
+        with self._lock:
+            if value == get_path(self.config, spec.path):
+                return
+            self.config = replace_path(self.config, spec.path, value)
+            self.on_change(self.config)
 
     def _widget(self, spec: FieldSpec):
         tp, optional = _unwrap_optional(spec.type)
@@ -288,6 +322,8 @@ class ConfigGui:
             if lo is not None and hi is not None:
                 if step is None:
                     step = (hi - lo) / 100.0
+                if tp is int and md.get("zero") is not None and lo <= 0:
+                    lo = 1  # 0 is the checkbox's (_zero_box); the slider's grid starts at 1 (odd kernel sizes)
                 lo = on_default_grid(lo, step, value) if tp is int else lo
                 return self.gui.add_slider(spec.label, min=lo, max=hi, step=step, initial_value=min(max(value, lo), hi), hint=hint)
             return self.gui.add_number(spec.label, value, min=lo, max=hi, step=step, hint=hint)
@@ -310,6 +346,11 @@ class ConfigGui:
                     v = json.dumps(to_plain(v))
                 elif v is None:
                     v = ""
+                box = self.zero_boxes.get(spec.path)
+                if box is not None:
+                    box.value = handle.disabled = v == 0
+                    if v == 0:
+                        continue  # the slider keeps its last value, for when the box is unchecked
                 handle.value = v
         finally:
             self._muted = False
@@ -319,8 +360,9 @@ class ConfigGui:
         self.on_change(self.config)
 
     def remove(self) -> None:
-        for h in self.handles.values():
+        for h in (*self.handles.values(), *self.zero_boxes.values()):
             h.remove()
+        self.zero_boxes.clear()
         # Innermost first: removing a folder also removes the folders inside it (a second remove warns).
         for _, f in sorted(self._folders.items(), key=lambda kv: -len(kv[0])):
             f.remove()

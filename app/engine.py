@@ -113,6 +113,10 @@ class Engine(ABC):
         return Trajectory.from_matrices(np.array([r[0] for r in rows]), np.stack([r[1] for r in rows]))
 
 
+QUIET_RUN_US = 1_000_000
+"""Most media time without events the events-only view goes over in one playback step, microseconds."""
+
+
 @dataclass
 class EventsViewConfig:
     """Settings of the events-only view (recordings without a map): the tracker's own front-end stages."""
@@ -188,6 +192,22 @@ class EventsOnlyEngine(Engine):
         self.history.append(StepSummary.of(frame))
         self._next_index = k + 1
         return frame
+
+    def play_step(self, stride: int) -> Frame | None:
+        """The next step; when its window has no events, the run of such windows is gone over (their summaries kept,
+        no images made) up to the first step with events or :data:`QUIET_RUN_US` of them. Made one by one, a 60 s
+        gap took over a minute to play (images and field of every empty step), while there is nothing to see."""
+        ev = self.recording.events
+        k, last, w = self._next_index, self.n_steps - 1, int(self.config.window_us)
+        first = k
+        while k < last and (k - first) * w < QUIET_RUN_US:
+            lo, hi = ev.index_range(self._step_time(k) - w, self._step_time(k))
+            if hi > lo:
+                break
+            self.history.append(StepSummary(k, self._step_time(k), None, None, "events only", {}, {"events_in": 0, "events_kept": 0}))
+            k += 1
+        self._next_index = k
+        return self.step()
 
     def seek_step(self, index: int) -> Frame | None:
         return self.seek(self._step_time(min(max(index, 0), self.n_steps - 1)))

@@ -14,6 +14,11 @@ from evpose.errors import EvposeError
 NO_MAP_NOTE = "No contour map selected: showing events and time surfaces only. Tracking needs a map of the scene."
 
 
+CLI_MODE_HINT = "(use --mode stpe)"
+"""How the tracker says which mode runs without an IMU (evpose/tracker/modes.py), in command-line words ..."""
+GUI_MODE_HINT = "(set **mode** to stpe in the parameters below)"
+"""... and in the viewer's."""
+
 MODES = ("tracking", "slam")
 """Viewer modes: EV-Pose tracking against a map, or map-free event SLAM (``evpose.slam``)."""
 
@@ -62,8 +67,14 @@ def engine_factory(recording, contour_map, mode: str = "tracking", cache: FrameC
             return TrackerEngine(recording, contour_map, cfg, cache=cache, disk=entry)
         except EvposeError as exc:
             # Still show events and time surfaces, and say why tracking cannot run.
-            fallback = EventsOnlyEngine(recording, None, explanation=f"Tracking cannot start: {exc}", cause=exc)
-            fallback.rejected_config = cfg if isinstance(cfg, TrackerConfig) else None
+            why = str(exc)
+            by_mode = CLI_MODE_HINT in why
+            fallback = EventsOnlyEngine(recording, None, explanation=f"Tracking cannot start: {why.replace(CLI_MODE_HINT, GUI_MODE_HINT)}",
+                                        cause=exc)
+            # The tracker's controls stay (or come) when a parameter can change the outcome: the user's tuned ones,
+            # or the defaults when the mode is the cause. A recording without IMU opened first showed the
+            # events-only view's controls and "use --mode stpe", a command-line flag: no control could set it.
+            fallback.rejected_config = cfg if isinstance(cfg, TrackerConfig) else (TrackerConfig() if by_mode else None)
             return fallback
 
     return make

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -107,3 +108,36 @@ class StepSummary:
     @classmethod
     def of(cls, frame: Frame) -> "StepSummary":
         return cls(frame.index, frame.t_us, frame.pose, frame.registration_pose, frame.status, dict(frame.timings_ms), dict(frame.counts))
+
+
+def frame_from_result(result, index: int) -> Frame:
+    """Convert a tracker ``StepResult`` (with debug products) into a displayed frame."""
+    d = result.debug
+    imu = result.imu_poses.matrices() if result.imu_poses is not None and len(result.imu_poses) else None
+    if d is None:
+        empty = np.zeros((1, 1), np.float32)
+        return Frame(index, int(result.t_us), empty, empty, empty, EventArray.empty(), EventArray.empty(),
+                     pose=result.pose, registration_pose=result.registration_pose, status=result.status.value,
+                     reason=result.reason, imu_poses=imu, timings_ms=dict(result.timings_ms), counts=dict(result.counts))
+    return Frame(
+        index=index, t_us=int(result.t_us), ts_positive=d.ts_positive, ts_negative=d.ts_negative, tdf=d.tdf,
+        events_kept=d.events_kept, events_removed=d.events_removed, pose=result.pose,
+        registration_pose=result.registration_pose, status=result.status.value, reason=result.reason,
+        point_index=d.point_index, visible_index=d.visible_index, projected_uv=d.projected_uv,
+        residuals=d.residuals, weights=d.weights, predicted_polarity=d.predicted_polarity, imu_poses=imu,
+        timings_ms=dict(result.timings_ms), counts=dict(result.counts),
+    )
+
+
+def summary_from_result(result, index: int) -> StepSummary:
+    return StepSummary(index, int(result.t_us), result.pose, result.registration_pose, result.status.value,
+                       dict(result.timings_ms), dict(result.counts))
+
+
+def imageless_frame(result, index: int, sensor_size: tuple[int, int]) -> Frame:
+    """A tracker step without debug products (the update standing for a long event gap), shown with blank images of
+    the sensor's size (the surfaces have faded over the gap) and its status and reason."""
+    w, h = sensor_size
+    blank = np.zeros((int(h), int(w)), np.uint8)  # 8-bit as kept frames are (frame_cache.compact); TDF 255: no edge
+    return dataclasses.replace(frame_from_result(result, index), ts_positive=blank, ts_negative=blank,
+                               tdf=np.full_like(blank, 255))

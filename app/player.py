@@ -16,7 +16,8 @@ needs every step before it) is a *catch-up*: the engine computes the steps
 plainly, a slice at a time (``Engine.catch_up``), the status line says how far
 it is, commands are heard between slices (a new seek replaces the target;
 pause, a step or a new recording cancels it), and only the target's frame is
-drawn.
+drawn. A stretch of the recording without events is gone over at once, not in
+real time (app/quiet_stretches.py).
 """
 
 from __future__ import annotations
@@ -31,6 +32,7 @@ from app.catch_up import CatchUp
 from app.engine import Engine
 from app.frame import Frame
 from app.player_config import PlayerConfig, PlayState, RerunFrom
+from app.quiet_stretches import QuietStretches
 
 __all__ = ["Player", "PlayerConfig", "PlayState", "RerunFrom"]
 
@@ -77,6 +79,8 @@ class Player:
         self._play_stats = [0.0, 0]
         """Wall seconds and media microseconds of the current (or last) play, since play was pressed."""
         self._last_advance_wall: float | None = None
+        self.quiet = QuietStretches()
+        """Stretches without events playback goes over at once (app/quiet_stretches.py)."""
         self._prefetching = self.pc.prefetch
         self._catch_up: CatchUp | None = None
         """The seek being computed in slices, if any."""
@@ -176,6 +180,7 @@ class Player:
             "real_time_factor": (media / 1e6) / wall if wall > 0 else 0.0,
             "config_applies": self.config_applies, "last_seek_ms": self.last_seek_ms,
             "catching_up": c.progress if (c := self._catch_up) is not None else None,
+            "skipped_gap": self.quiet.skipped,
         }
 
     # ----- worker thread -----
@@ -285,6 +290,8 @@ class Player:
         kind = cmd[0]
         if kind in ("seek", "load"):
             self._ready = None
+        if kind in ("seek", "load", "step", "play", "toggle"):
+            self.quiet.reset()
         if self._catch_up is not None and kind in ("seek", "load", "step", "pause", "cancel") or (
                 kind == "toggle" and self._catch_up is not None and self.state == PlayState.PLAYING):
             # A new seek replaces the target; a step, pause or new recording gives it up (what was computed stays).
@@ -427,6 +434,11 @@ class Player:
             return 1
         interval = max(1.0 / self.pc.max_ui_fps, self.pc.draw_share_factor * self._draw_s)
         stride = max(1, int(self.speed * interval * 1e6 // step_us))
+        quiet = self.last_frame is not None and self.quiet.quiet_for_us(self.last_frame.t_us) > self.pc.skip_gaps_s * 1e6
+        if quiet and getattr(self.engine, "play_stops_at_events", False):
+            # Gone over at once (SLAM steps through it, 0.7 ms a step, 13 ms a drawn frame): a frame per skip_gaps_s
+            # of it, not per publish interval. The engine stops its stride where events come again.
+            return max(stride, int(self.pc.skip_gaps_s * 1e6 // step_us))
         if self._step_wall_s > 0:
             # Computing steps live (slower than real time): fewer steps per frame keep the frame rate up.
             stride = min(stride, max(1, int(interval / self._step_wall_s)))
@@ -469,6 +481,13 @@ class Player:
                     self._publish(self._unpublished if self._unpublished is not None else self.last_frame)
                 return
         now = time.monotonic()
+        gap = self.quiet.ending_at(self._ready, self.last_frame, getattr(self.engine, "step_us", None),
+                                   self.pc.skip_gaps_s * 1e6)
+        if gap is not None:
+            # No events since the frame shown for longer than skip_gaps_s: shown now, paced from here on.
+            self.quiet.went_over(gap)
+            self._anchor = (now, self._ready.t_us)
+            self._last_advance_wall = None  # nor counted in the real-time factor
         due = self._due(self._ready)
         if now < due:
             if self._prefetching and self.pc.prefetch_while_playing:

@@ -52,3 +52,10 @@ class PlayerConfig:
     (``Engine.preview``)."""
     progress_every_s: float = field(default=0.5, metadata={"min": 0.1, "max": 5.0, "step": 0.1, "unit": "s"})
     """Time between two status-line updates while the engine works with nothing new shown, seconds."""
+    skip_gaps_s: float = field(default=0.5, metadata={"min": 0.05, "max": 60.0, "step": 0.05, "unit": "s"})
+    """While playing, a stretch of the recording without events longer than this is gone over at once instead of in
+    real time, seconds (the status line says so). A 60 s gap held the display still for a minute at "playing at
+    1.0x": the tracker's steps skip a long gap (one update stands for it), so the next frame was due 60 s later;
+    SLAM steps through it with empty steps. Measured as the media time between two frames beyond what their steps
+    cover, or as frames without events in a row (a frame counts its own step's events only, so a sparse recording's
+    frames read 0 now and then: hence a run this long, not one empty frame)."""

@@ -52,6 +52,9 @@ def _lookup(gt: Trajectory) -> GroundTruthLookup:
     return hit[1]
 
 
+PLOT_GAP_US = 1_000_000
+"""Steps further apart than this (an event gap the tracker's steps skip) start the plots afresh, microseconds."""
+
 POSE_ERROR = "pose error"
 SLAM_POSE_ERROR = "position error (maps aligned to ground truth)"
 """SLAM mode's pose-error plot: each step's position mapped by its map's alignment (as the 3D view's *slam aligned*).
@@ -96,11 +99,17 @@ def pose_errors(history: list[StepSummary], gt: Trajectory | None,
 
 
 def plot_series(history: list[StepSummary], gt: Trajectory | None, window: int = WINDOW_STEPS,
-                alignments: dict[int, Sim3] | None = None) -> dict[str, tuple[tuple[str, ...], tuple[np.ndarray, ...]]]:
+                alignments: dict[int, Sim3] | None = None, t0_us: int = 0) -> dict[str, tuple[tuple[str, ...], tuple[np.ndarray, ...]]]:
     """Plot name -> (series labels, (t_seconds, y1, y2, ...)) over the last ``window`` steps (``alignments``: SLAM mode,
-    see :func:`pose_errors`)."""
+    see :func:`pose_errors`; ``t0_us``: the recording's start, the time axis counts from it as the time slider)."""
     h = history[-window:]
-    t = np.array([s.t_us for s in h], np.float64) / 1e6
+    t_us = np.array([s.t_us for s in h], np.int64)
+    jumps = np.flatnonzero(np.diff(t_us) > PLOT_GAP_US)
+    if len(jumps):
+        # The tracker's steps skip a long event gap: drawn across it, the steps after a 60 s gap were squeezed into
+        # the right edge of a 60 s axis, joined to those before by a straight line through the gap.
+        h, t_us = h[jumps[-1] + 1:], t_us[jumps[-1] + 1:]
+    t = (t_us - int(t0_us)) / 1e6
     out: dict[str, tuple[tuple[str, ...], tuple[np.ndarray, ...]]] = {}
     pe, re = pose_errors(h, gt, alignments)
     if alignments is None:
@@ -208,19 +217,31 @@ def plot_context(frame: Frame, engine: Engine) -> tuple[dict | None, str]:
     return alignments, engine.explanation if isinstance(engine, EventsOnlyEngine) else ""
 
 
+PLOT_ORDER = (POSE_ERROR, SLAM_POSE_ERROR, "latency per module [ms]", "events per second", "inliers",
+              "tracks and map points", "share filtered")
+"""Places of the plots in their tab, top to bottom (a mode's pose error first; one of each pair is shown)."""
+
+
 class PlotsView:
-    """uplot handles, created on first use and recreated only when a plot's series change; a plot with nothing to
-    draw is replaced by a line saying why (an empty frame of axes told the user nothing)."""
+    """uplot handles, created on first use and never removed; a plot with nothing to draw is hidden and replaced by
+    a line saying why (an empty frame of axes told the user nothing).
+
+    Never removed (hidden instead, and reused): viser's browser code applies a batch's property updates after its
+    removals, so the plot updates sent just before a recording switch while playing were applied to removed plots
+    ("Tried to update non-existent component ... {data}" in the browser console, 140 in a 12-minute session). A
+    plot's series change (other latency modules) shows another plot made for those series; there are a few per name.
+    """
 
     def __init__(self, gui, container=None):
         self.gui = gui
         self.container = container
         """Tab or folder the plots live in (new plots are added inside it)."""
         self.handles: dict[str, tuple[tuple[str, ...], object]] = {}
+        """Plot name -> (series labels, handle) of the plot shown (or last shown) under that name."""
         self.notes: dict[str, object] = {}
         """Plot name -> markdown saying why the plot is empty, shown in its place."""
-        self._order: dict[str, float] = {}
-        """Plot name -> its place in the tab (a plot recreated, or replaced by its note, stays where it was)."""
+        self._made: dict[tuple[str, tuple[str, ...]], object] = {}
+        """(plot name, series labels) -> every plot made, hidden when not shown."""
 
     def _add(self, add, *args, **kwargs):
         if self.container is not None:
@@ -229,14 +250,14 @@ class PlotsView:
         return add(*args, **kwargs)
 
     def update(self, history: list[StepSummary], gt: Trajectory | None, alignments: dict[int, Sim3] | None = None,
-               note: str = "") -> None:
+               note: str = "", t0_us: int = 0) -> None:
         """Draw the plots of the latest window (``alignments``, ``note``: see :func:`plot_series`, :func:`empty_reasons`)."""
         from viser import uplot
 
-        series = plot_series(history, gt, alignments=alignments)
+        series = plot_series(history, gt, alignments=alignments, t0_us=t0_us)
         reasons = empty_reasons(series, history, gt, note)
         for name, (labels, data) in series.items():
-            order = self._order.setdefault(name, float(len(self._order)))
+            order = float(PLOT_ORDER.index(name) if name in PLOT_ORDER else len(PLOT_ORDER) + list(series).index(name))
             known = self.handles.get(name)
             why = reasons.get(name)
             text = f"**{name}**: {why}" if why else ""
@@ -246,7 +267,8 @@ class PlotsView:
             elif shown is not None:
                 if shown.content != text:
                     shown.content = text
-                shown.visible = bool(why)
+                if shown.visible != bool(why):
+                    shown.visible = bool(why)
             if why:
                 if known is not None and known[1].visible:
                     known[1].visible = False
@@ -256,27 +278,29 @@ class PlotsView:
             # and after a seek then play they drifted off the window (at 3.99 s the axis read 1.0-1.9 s, empty).
             scales = {"x": uplot.Scale(time=False, auto=False, range=x_range(data[0])),
                       "y": uplot.Scale(auto=False, range=y_range(data[1:]))}
-            if known is not None and known[0] == labels:
-                if any(known[1].scales[k]["range"] != scales[k]["range"] for k in scales):
-                    known[1].scales = scales
-                known[1].data = data
-                if not known[1].visible:
-                    known[1].visible = True
+            if known is not None and known[0] != labels:
+                if known[1].visible:
+                    known[1].visible = False
+                known = None
+            handle = known[1] if known is not None else self._made.get((name, labels))
+            if handle is not None:
+                if any(handle.scales[k]["range"] != scales[k]["range"] for k in scales):
+                    handle.scales = scales
+                handle.data = data
+                if not handle.visible:
+                    handle.visible = True
+                self.handles[name] = (labels, handle)
                 continue
-            if known is not None:
-                known[1].remove()
             series_spec = (uplot.Series(label="t [s]"),) + tuple(
                 uplot.Series(label=lab, stroke=PALETTE[i % len(PALETTE)], width=1.5) for i, lab in enumerate(labels))
             # A y-axis wide enough for "1,000" and "0.005" (uplot's default cuts five-character labels).
             kwargs = dict(title=name, scales=scales, aspect=2.2, legend=uplot.Legend(show=True),
                           axes=(uplot.Axis(), uplot.Axis(size=Y_AXIS_PX)), order=order)
-            self.handles[name] = (labels, self._add(self.gui.add_uplot, data, series_spec, **kwargs))
+            handle = self._made[(name, labels)] = self._add(self.gui.add_uplot, data, series_spec, **kwargs)
+            self.handles[name] = (labels, handle)
 
-    def remove(self) -> None:
-        for _, h in self.handles.values():
-            h.remove()
-        for h in self.notes.values():
-            h.remove()
-        self.handles.clear()
-        self.notes.clear()
-        self._order.clear()
+    def clear(self) -> None:
+        """Hide every plot and note (a recording is being opened); the next :meth:`update` shows its own."""
+        for handle in (*self._made.values(), *self.notes.values()):
+            if handle.visible:
+                handle.visible = False

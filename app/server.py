@@ -29,7 +29,7 @@ from app.player import Player, PlayState, RerunFrom
 from app.plots import plot_context
 from app.scene import SceneView
 from app.slam_engine import slam_markdown
-from app.status import status_markdown
+from app.status import event_gaps, status_markdown
 from app.teaching import STAGE_PANEL, Stage, teaching_markdown
 from app.viewer_controls import NO_MAP, bind_viewer_hotkeys, build_main_panel, build_panels
 from app.warm_up import WarmUp
@@ -73,6 +73,8 @@ class ViewerApp:
         """(recording, map) dropdown values of what is open."""
         self._shown_label = ""
         """Label of the recording the player works on (set on its thread when it gets to an opening)."""
+        self.gaps: list = []
+        """The shown recording's stretches without events (app/status.py: named in the status line)."""
         self._select_lock = threading.Lock()
         self._cloud_lock = threading.Lock()
         self._cloud_entry: DataEntry | None = None
@@ -198,16 +200,17 @@ class ViewerApp:
         self.warm_up.opened(path if self.mode == "tracking" and cmap is not None else None)
         # Whole milliseconds, the slider's step: the end label read "3.999952" (engines clip a seek past the end).
         self.time_slider.max = max(0.001, round((recording.t_end_us - recording.t_start_us) / 1e6, 3))
+        gaps = event_gaps(recording.events.t)
         factory = engine_factory(recording, cmap, self.mode, self.cfg.frame_cache, self.cfg.disk_cache,
                                  (path, map_entry.path) if map_entry is not None else None)
 
         def reset_view(_engine=None):
             # Runs on the player thread (or before it exists) so no frame of the old recording is drawn over it.
             self.status.content = opening  # the player has got to it
-            self.recording, self.contour_map, self._shown_label = recording, cmap, entry.label
+            self.recording, self.contour_map, self._shown_label, self.gaps = recording, cmap, entry.label, gaps
             self.scene.load(cmap, None, recording.ground_truth, recording.calibration)
             self.scene.apply_toggles()
-            self.plots.remove()
+            self.plots.clear()
 
         if self.player is None:
             reset_view()
@@ -285,16 +288,16 @@ class ViewerApp:
             if slow:
                 self._last_slow = now
                 self.plots.update(history, self.recording.ground_truth if self.recording is not None else None,
-                                  *plot_context(frame, engine))
+                                  *plot_context(frame, engine), t0_us=engine.t_start_us)
             if frame.slam is not None:
-                self.slam_info.content = slam_markdown(frame, self.scene.toggles.slam_aligned)
+                self.slam_info.content = slam_markdown(frame, self.scene.toggles.slam_aligned, engine.t_start_us)
             if show_teaching and (STAGE_PANEL[self.stage] in imgs or frame.slam is not None):
                 # SLAM mode: the stages are the tracker's, which is not running; the text says so (no live image).
-                self.teaching_text.content = teaching_markdown(self.stage, frame)
+                self.teaching_text.content = teaching_markdown(self.stage, frame, engine.t_start_us)
                 if frame.slam is None:
                     self.teaching_image.image = imgs[STAGE_PANEL[self.stage]]
             self.time_slider.value = round((frame.t_us - engine.t_start_us) / 1e6, 3)
-            self.status.content = status_markdown(frame, engine, self.player.stats() if self.player else {})
+            self.status.content = status_markdown(frame, engine, self.player.stats() if self.player else {}, self.gaps)
         self.frames_published += 1
         self.last_frame = frame  # last, so whoever sees it also sees everything drawn for it
 
@@ -316,28 +319,27 @@ class ViewerApp:
     def _on_progress(self, engine: Engine) -> None:
         # While paused the run-ahead advances without new frames: refresh the status line alone.
         if self.last_frame is not None and self.player is not None:
-            self.status.content = status_markdown(self.last_frame, engine, self.player.stats())
+            self.status.content = status_markdown(self.last_frame, engine, self.player.stats(), self.gaps)
 
     def _rebuild_config_gui(self, engine: Engine) -> None:
         rejected = getattr(engine, "rejected_config", None)
-        if self.config_gui is not None and rejected is not None and type(rejected) is self.config_gui.cls:
+        if rejected is not None:
             # The tracker cannot start with these parameters (visible map min depth at its 10 m maximum: no map point
-            # in view). Its controls stay, so the value can be moved back; replaced by the events-only view's they
-            # could not, and the tuned values were lost.
-            self.param_info.content = f"{engine.explanation} Change the parameters above to try again."
-            return
-        if self.config_gui is not None and type(self.config_gui.config) is type(engine.config):
+            # in view; mode "full" on a recording without IMU). Its controls stay, or come, so the value can be
+            # changed; replaced by the events-only view's they could not, and tuned values were lost.
+            shown, note = rejected, f"{engine.explanation} Change the parameters below to try again."
+        else:
+            shown, note = engine.config, engine.explanation or f"{type(engine.config).__name__}: changes re-run the tracker."
+        if self.config_gui is not None and type(self.config_gui.config) is type(shown):
             # The controls are the source of the engine's config; pushing it back would fight a user still dragging.
-            note = engine.explanation or f"{type(engine.config).__name__}: changes re-run the tracker."
             if self.param_info.content != note:  # re-rendering the panel would steal a dragging user's focus
                 self.param_info.content = note
             return
         if self.config_gui is not None:
             self.config_gui.remove()
         with self.params_tab:
-            self.config_gui = ConfigGui(self.gui, engine.config, self._config_changed)
+            self.config_gui = ConfigGui(self.gui, shown, self._config_changed)
         self.key_guard.watch(h for h in self.config_gui.handles.values() if isinstance(h, viser.GuiSliderHandle))
-        note = engine.explanation or f"{type(engine.config).__name__}: changes re-run the tracker."
         self.param_info.content = note
 
     def _config_changed(self, config) -> None:

@@ -72,6 +72,9 @@ class SlamEngine(Engine):
         """Display alignment of the atlas maps to the ground truth (never fed back into SLAM)."""
         self.step_count = 0
         """Steps applied to ``self.slam`` so far."""
+        self._same_since = 0
+        """Steps since which only empty windows were fed (SLAM's state is then unchanged: an empty window is a no-op,
+        checked bit for bit on a pickled snapshot)."""
 
     # ---------------------------------------------------------------- steps
     @property
@@ -95,14 +98,41 @@ class SlamEngine(Engine):
         result = self.slam.step(window)
         elapsed = (time.perf_counter() - t0) * 1e3
         self.step_count = k + 1
+        if len(window):
+            self._same_since = self.step_count
         if self.step_count % int(self.config.snapshot_every) == 0 and self.step_count not in self._snapshots:
-            self._snapshots[self.step_count] = self.slam.snapshot()
+            # Inside a stretch without events the state is the last snapshot's: shared, not copied again (a deep
+            # copy of the map, 45 ms on the demo landing, every 20 steps of a 60 s gap). restore() copies it.
+            # Seeks into a 60 s gap after 2 s of the demo landing: to 30 s 8.9 -> 3.5 s, then to 61.9 s 8.1 -> 0.9 s.
+            prev = max(j for j in self._snapshots if j < self.step_count)
+            same = prev >= self._same_since
+            self._snapshots[self.step_count] = self._snapshots[prev] if same else self.slam.snapshot()
         timings = dict(result.timings_ms) if result.mcis else {}
         timings["step"] = elapsed
         counts = {**result.counts, "events_in": len(window), "events_kept": len(window), "mcis": result.mcis,
                   "window_events": result.n_events_window, "map_id": result.map_id}
         self._known[k] = StepSummary(k, self._step_t(k), result.pose, None, result.status.value, timings, counts)
         return result, window, elapsed
+
+    play_stops_at_events = True
+    """:meth:`play_step` ends its stride where events come again after a stretch without (the player may then
+    stride far over such a stretch)."""
+
+    @property
+    def step_us(self) -> int:
+        return int(self.config.step_us)
+
+    def play_step(self, stride: int) -> Frame | None:
+        """The step ``stride`` steps on (the last one at most): the steps before it are computed without their
+        display products, which the player would not draw (it draws at most ``max_ui_fps`` frames a second); the
+        atlas alignment of each frame's view cost 8 of the 13 ms of an empty step (a 60 s gap: 156 s at 1x; now
+        ~12 s, ``/tmp/s26/ui26/a1_gap.py``). Playing the demo landing from its start for 10 s (session 26,
+        ``/tmp/s26/ui26/b_slamplay.py``): real-time factor 0.086 -> 0.258, 91 -> 123 frames drawn."""
+        for _ in range(min(max(int(stride), 1), self.n_steps - self.step_count) - 1):
+            if self._same_since < self.step_count and len(self._window(self.step_count)):
+                break  # events again after a stretch without: their first step is shown, not one a long stride on
+            self._advance()
+        return self.step()
 
     def _step_t(self, k: int) -> int:
         return self.t_start_us + (k + 1) * int(self.config.step_us)
@@ -126,10 +156,13 @@ class SlamEngine(Engine):
         """Put SLAM in the state after ``k`` steps: restore the best snapshot at or before k, replay the rest."""
         if not (max(j for j in self._snapshots if j <= max(k, 0)) <= self.step_count <= k):
             base = max(j for j in self._snapshots if j <= k)
-            self.slam.restore(self._snapshots[base])
-            self.step_count = base
+            self._restore(base)
         while self.step_count < k and self._advance() is not None:
             pass
+
+    def _restore(self, k: int) -> None:
+        self.slam.restore(self._snapshots[k])
+        self.step_count = self._same_since = k  # the state is snapshot k's
 
     def _index_at(self, t_us: int) -> int:
         return int(np.clip((int(t_us) - self.t_start_us) // int(self.config.step_us) - 1, 0, self.n_steps - 1))
@@ -148,8 +181,7 @@ class SlamEngine(Engine):
         k = self._index_at(t_us)
         start = self._start_for(k)
         if start != self.step_count:
-            self.slam.restore(self._snapshots[start])
-            self.step_count = start
+            self._restore(start)
         for _ in range(max(int(budget_steps), 1)):
             if self.step_count >= k or self._advance() is None:
                 break
@@ -189,7 +221,7 @@ def slam_engine_factory(recording):
     return make
 
 
-def slam_markdown(frame: Frame, aligned: bool = True) -> str:
+def slam_markdown(frame: Frame, aligned: bool = True, t0_us: int = 0) -> str:
     """The SLAM step in words: selected MCI hypothesis and every hypothesis' score, tracks, keyframe, map size,
     and how the 3D view places the maps (``aligned``: on the ground truth, when there is one)."""
     v = frame.slam
@@ -202,6 +234,6 @@ def slam_markdown(frame: Frame, aligned: bool = True) -> str:
     head = (f"map {v.map_id}: {n_pts} points, {n_kf} keyframes{' (keyframe inserted)' if v.keyframe else ''}" if v.map_id >= 0
             else "no map yet: SLAM starts its first one with a two-view initialisation from the tracked features")
     return (f"{head}\n\n"
-            f"MCI{'' if v.mci_t_us is None else f' at {v.mci_t_us / 1e6:.3f} s'} hypothesis scores (mean local STD): {scores or 'no MCI yet'}\n\n"
+            f"MCI{'' if v.mci_t_us is None else f' at {(v.mci_t_us - t0_us) / 1e6:.3f} s'} hypothesis scores (mean local STD): {scores or 'no MCI yet'}\n\n"
             f"tracked features: {n_feat} ({with_pt} with a map point; green with, yellow without)"
             + (f"\n\n{note}" if (note := alignment_note(v.atlas, aligned, v.has_ground_truth)) else ""))

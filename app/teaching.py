@@ -26,7 +26,8 @@ EXPLANATIONS: dict[Stage, str] = {
         "An event camera does not take pictures. Each pixel reports, on its own, the moment its brightness "
         "changes by a set amount: an **ON** event (red) when it gets brighter, **OFF** (blue) when darker. "
         "Moving edges therefore light up as thin lines of events. A noise filter throws away lonely events "
-        "whose neighbours stayed silent (grey in the *events kept / removed* panel)."
+        "whose neighbours stayed silent, and in mode `full` the ego-motion filter (off by default, `ego motion > enabled`) events "
+        "that do not fit the camera's own motion (both grey in the *events kept / removed* panel)."
     ),
     Stage.SP_TS: (
         "The **separated-polarity time surface** keeps, for every pixel, the time of its latest ON event and, "
@@ -36,7 +37,8 @@ EXPLANATIONS: dict[Stage, str] = {
     ),
     Stage.TDF: (
         "The **temporal distance field** is `1 - time surface`: near 0 exactly on the newest edge, growing behind "
-        "it. It acts as a landscape of valleys along the edges. The contour map points are projected into it "
+        "it, then slightly blurred (`distance field > blur px`). It acts as a landscape of valleys along the edges. "
+        "The contour map points are projected into it "
         "from the current pose guess; each point's height in the landscape is its *residual*."
     ),
     Stage.POLARITY: (
@@ -48,13 +50,16 @@ EXPLANATIONS: dict[Stage, str] = {
     ),
     Stage.REGISTRATION: (
         "**Registration** moves the 6-DoF pose until the projected map points fall into the valleys of the TDF "
-        "(least squares with a robust loss, Gauss-Newton). Points far from any valley get small weights, so "
+        "(robust least squares, Levenberg-Marquardt on SE(3)). Points far from any valley get small weights, so "
         "clutter does not pull the pose. The TDF panel colours each point by its residual (green = on an edge)."
     ),
     Stage.FUSION: (
-        "**Fusion** combines each registration with the IMU in a factor graph (gtsam): the IMU predicts the motion "
-        "between registrations at its high rate (small axes in 3D), registration corrects the drift. The orange "
-        "line is the fused trajectory, purple the raw registrations, green the ground truth."
+        "**Fusion** (mode `full`) combines each registration with the IMU, by default in a factor graph (gtsam; "
+        "`fusion > backend` also offers an EKF): the IMU predicts the motion between registrations at its high rate "
+        "(small axes in 3D), registration corrects the drift. In mode `stpe+filter` the IMU only feeds the polarity "
+        "prediction and in `stpe` it is not used: the `motion model` parameter predicts the next pose (a "
+        "constant-velocity Kalman filter by default). The orange line is the fused trajectory, purple the raw "
+        "registrations, green the ground truth."
     ),
 }
 
@@ -69,12 +74,13 @@ STAGE_PANEL: dict[Stage, str] = {
 """Which live image illustrates each stage."""
 
 
-def live_facts(stage: Stage, frame: Frame | None) -> str:
-    """One or two sentences of figures from the step on screen for ``stage``."""
+def live_facts(stage: Stage, frame: Frame | None, t0_us: int = 0) -> str:
+    """One or two sentences of figures from the step on screen for ``stage`` (its time from ``t0_us``, the
+    recording's start, as the time slider)."""
     if frame is None:
         return "_Press play or step to see live figures._"
     c = frame.counts
-    t = f"At t = {frame.t_us / 1e6:.3f} s (step {frame.index}): "
+    t = f"At t = {(frame.t_us - t0_us) / 1e6:.3f} s (step {frame.index}): "
     if frame.slam is not None:
         return t + ("SLAM mode runs no map-based tracking, so this stage is not computed; SLAM's own images (tiny "
                     "frame, motion-compensated image with its tracked features) are in the images panel's SLAM tab.")
@@ -102,8 +108,8 @@ def live_facts(stage: Stage, frame: Frame | None) -> str:
     return t + f"{n_imu} IMU-rate poses since the last registration; status **{frame.status}**" + (f" ({frame.reason})" if frame.reason else ".")
 
 
-def teaching_markdown(stage: Stage, frame: Frame | None) -> str:
+def teaching_markdown(stage: Stage, frame: Frame | None, t0_us: int = 0) -> str:
     image = "" if frame is not None and frame.slam is not None else f"\n\n_Image: {STAGE_PANEL[stage]}_"  # SLAM: none shown
     if image and "map points" in image and frame is not None and frame.point_index is None:
         image = image[:-1] + " (no map, so no points on it)_"  # the events-only view: a bare TDF under that name
-    return f"### {stage.value}\n\n{EXPLANATIONS[stage]}\n\n**Now:** {live_facts(stage, frame)}{image}"
+    return f"### {stage.value}\n\n{EXPLANATIONS[stage]}\n\n**Now:** {live_facts(stage, frame, t0_us)}{image}"

@@ -43,39 +43,14 @@ import numpy as np
 from app.disk_cache import DiskCache
 from app.disk_snapshots import DiskSnapshotsMixin, array_nbytes, share_snapshot, start_journals
 from app.engine import Engine
-from app.frame import Frame, StepSummary
+from app.frame import Frame, StepSummary, frame_from_result, imageless_frame, summary_from_result
 from app.frame_cache import FrameCache, FrameCacheConfig, compact
 from evpose.core.contour_map import ContourMap
-from evpose.core.events import EventArray
 from evpose.core.recording import Recording
 from evpose.core.trajectory import Trajectory
 
 GOOD_STATUS = ("ok", "degraded")
 """Status values whose poses count as tracked (``TrackStatus.OK`` / ``DEGRADED``)."""
-
-
-def frame_from_result(result, index: int) -> Frame:
-    """Convert a tracker ``StepResult`` (with debug products) into a displayed frame."""
-    d = result.debug
-    imu = result.imu_poses.matrices() if result.imu_poses is not None and len(result.imu_poses) else None
-    if d is None:
-        empty = np.zeros((1, 1), np.float32)
-        return Frame(index, int(result.t_us), empty, empty, empty, EventArray.empty(), EventArray.empty(),
-                     pose=result.pose, registration_pose=result.registration_pose, status=result.status.value,
-                     reason=result.reason, imu_poses=imu, timings_ms=dict(result.timings_ms), counts=dict(result.counts))
-    return Frame(
-        index=index, t_us=int(result.t_us), ts_positive=d.ts_positive, ts_negative=d.ts_negative, tdf=d.tdf,
-        events_kept=d.events_kept, events_removed=d.events_removed, pose=result.pose,
-        registration_pose=result.registration_pose, status=result.status.value, reason=result.reason,
-        point_index=d.point_index, visible_index=d.visible_index, projected_uv=d.projected_uv,
-        residuals=d.residuals, weights=d.weights, predicted_polarity=d.predicted_polarity, imu_poses=imu,
-        timings_ms=dict(result.timings_ms), counts=dict(result.counts),
-    )
-
-
-def summary_from_result(result, index: int) -> StepSummary:
-    return StepSummary(index, int(result.t_us), result.pose, result.registration_pose, result.status.value,
-                       dict(result.timings_ms), dict(result.counts))
 
 
 class TrackerEngine(DiskSnapshotsMixin, Engine):
@@ -225,6 +200,11 @@ class TrackerEngine(DiskSnapshotsMixin, Engine):
         if i == len(self._summaries):
             self._summaries.append(summary_from_result(result, i))
         frame = compact(frame_from_result(result, i)) if result.debug is not None else None
+        if frame is None and debug:
+            # The update standing for a long event gap makes no images. Without a frame, "forward >" at the last
+            # step before a 60 s gap did nothing (the player redrew that step), and "< back" after it likewise.
+            cal = self.recording.calibration
+            frame = imageless_frame(result, i, self.recording.sensor_size or (cal.width, cal.height))
         if frame is not None and self.cache.on_grid(i) and self.cache.nbytes < self.cache.budget:
             self.cache.put(frame, near=max(self._shown, 0))
             self._unkept.discard(i)

@@ -45,8 +45,9 @@ class DistanceFieldConfig:
     (true-edge map: 19.40 / 16.83 / - mm). Session 16, ``full`` (3 px: 6.38 / 5.91 mm at 346x260 seeds 0-3 / 4-7,
     7.25 at 240x180 seeds 0-3): 1 px 6.86 mm (seeds 0-3), 5 px 6.30 / 5.86 / 7.33 mm, 7 px 6.23 mm (seeds 0-3, ARE
     0.075 against 0.066 deg): within the seeds' spread, not changed."""
-    coarse_blur_px: int = field(default=0, metadata={"min": 0, "max": 41, "step": 2, "unit": "px"})
-    """Blur of an extra, coarser field registered first to widen the basin of convergence (0 = single level), pixels.
+    coarse_blur_px: int = field(default=0, metadata={"min": 0, "max": 41, "step": 2, "unit": "px", "zero": "off"})
+    """Blur of an extra, coarser field registered first to widen the basin of convergence (0 = single level), pixels
+    (odd; the viewer offers 1, 3, ... 41 and the 0 as a checkbox, ``zero``).
 
     Session 11, ``stpe`` at 240x180, seeds 0-3 (16.80 mm single level, before ``edge_offsets``): 7 / 11 px gave
     18.10 / 18.13 mm: tracking from the truth needs no wider basin, and the coarse level's pose is a worse start.

@@ -95,9 +95,9 @@ class FeatureConfig:
     klt_upsample_sigma_px: float = field(default=0.5, metadata={"min": 0.3, "max": 2.0, "step": 0.05, "unit": "px"})
     """``klt_upsample``: the fine MCI's splat, sensor pixels (the sensor-grid MCI's is ``EventImageConfig.sigma_px``).
     0.5 (was 0.6 before session 24's ``fine9``, which measured every 240-run figure at 0.5)."""
-    klt_upsample_window_px: int = field(default=35, metadata={"min": 0, "max": 101, "step": 2, "unit": "px"})
+    klt_upsample_window_px: int = field(default=35, metadata={"min": 0, "max": 101, "step": 2, "unit": "px", "zero": "automatic"})
     """``klt_upsample``: KLT block size on the fine grid, fine pixels (odd; 0: ``klt_window_px`` scaled, rounded up to
-    odd: 47 at 2x). Session 24 (``/tmp/s24/fine9``, 2x, sigma 0.5, ``klt_upsample_scale_stride`` 2; CPU per MCI by
+    odd: 47 at 2x; the viewer offers the 0 as a checkbox, ``zero``). Session 24 (``/tmp/s24/fine9``, 2x, sigma 0.5, ``klt_upsample_scale_stride`` 2; CPU per MCI by
     ``cpubench.py``, landing seeds 0-3 alternating in one process, against the defaults' 22.9 ms): 47 px 42.0 ms, 41 px
     29.7, 35 px 28.3, 31 px 29.4 (KLT forward and backward, synthetic, 15.7 / 7.4 / 8.1 ms at 47 / 35 / 31 px). 35 px
     over the 240 landing runs of ``klt_upsample`` (seeds 0-47 under the defaults and session 23's four perturbations):

@@ -6,7 +6,8 @@ import enum
 import pytest
 import viser
 
-from app.config_gui import ConfigGui, field_specs, from_plain, load_config_file, save_config_file, to_plain
+from app.config_gui import ConfigGui, field_specs, from_plain, get_path, load_config_file, replace_path, save_config_file, to_plain
+from app.slam_engine import SlamViewConfig
 from evpose.errors import InputError
 from evpose.tracker.config import TrackerConfig
 
@@ -102,8 +103,36 @@ def test_integer_sliders_offer_their_default_and_odd_kernel_sizes_only_odd_value
         assert blur.min == 1 and blur.step == 2 and (blur.max - blur.min) % 2 == 0
         for spec in field_specs(TrackerConfig()):
             h = gui.handles[spec.path]
-            if isinstance(h, viser.GuiSliderHandle) and type(spec.default) is int:
+            if isinstance(h, viser.GuiSliderHandle) and type(spec.default) is int and "zero" not in spec.metadata:
                 assert (spec.default - h.min) % h.step == 0 and h.min >= spec.metadata["min"], spec.name
+    finally:
+        server.stop()
+
+
+@pytest.mark.parametrize("config, path, zero", [
+    (TrackerConfig(), ("distance_field", "coarse_blur_px"), "off"),
+    (SlamViewConfig(), ("slam", "features", "klt_upsample_window_px"), "automatic"),
+])
+def test_a_kernel_size_whose_0_means_off_or_automatic_offers_odd_sizes_and_a_checkbox_for_the_0(config, path, zero):
+    # The coarse TDF blur's slider (0 = off, step 2) offered 2, 4...: 2 shown, 3 used. SLAM's fine KLT window (0 =
+    # automatic) started at 1 and its 0 could be set in a configuration file only.
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    try:
+        seen = []
+        gui = ConfigGui(server.gui, config, seen.append)
+        slider, box = gui.handles[path], gui.zero_boxes[path]
+        assert slider.min == 1 and slider.step == 2 and (slider.max - slider.min) % 2 == 0
+        assert box.label.endswith(zero) and box.value == (get_path(config, path) == 0) == slider.disabled
+        box.value = True
+        assert get_path(gui.config, path) == 0 and slider.disabled
+        box.value = False
+        assert get_path(gui.config, path) == get_path(seen[-1], path) == slider.value and slider.value % 2 == 1 and not slider.disabled
+        slider.value = 9
+        assert get_path(gui.config, path) == 9
+        gui.set_config(replace_path(config, path, 0))  # a loaded file's 0: the box shows it, the slider keeps 9
+        assert box.value and slider.disabled and slider.value == 9 and get_path(gui.config, path) == 0
+        gui.reset()
+        assert box.value == (get_path(config, path) == 0) and get_path(gui.config, path) == get_path(config, path)
     finally:
         server.stop()
 

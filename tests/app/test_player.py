@@ -375,3 +375,38 @@ def test_a_step_that_fails_while_playing_redraws_the_step_shown_paused_before_th
         assert frames[-1].index == 0 and p.state == PlayState.PAUSED
     finally:
         p.stop()
+
+
+def test_play_goes_over_a_stretch_without_events_at_once_and_says_so(bar_recording):
+    # A 60 s gap held the display still for a minute at "playing at 1.0x" (the tracker's steps skip a long gap, so
+    # its next frame was due 60 s later; the events-only view and SLAM step through it with empty steps).
+    from evpose.core.events import EventArray
+
+    ev = bar_recording.events
+    t = ev.t.copy()
+    t[t >= 300_000] += 3_000_000  # no events from 0.3 to 3.3 s
+    rec = dataclasses.replace(bar_recording, events=EventArray(t, ev.x, ev.y, ev.p))
+    p, frames = _player(rec, max_ui_fps=60.0, prefetch=False)
+    try:
+        p.seek(rec.t_start_us + 250_000)
+        p.wait_idle()
+        p.play()
+        t0 = time.time()
+        while p.last_frame.t_us < rec.t_start_us + 3_350_000 and time.time() - t0 < 2.5:
+            time.sleep(0.02)
+        p.pause()
+        p.wait_idle()
+        assert p.last_frame.t_us >= rec.t_start_us + 3_350_000, "the gap was waited for in real time"
+        lo, hi = p.stats()["skipped_gap"]
+        assert lo <= rec.t_start_us + 300_000 + 500_000 and hi >= rec.t_start_us + 3_000_000
+        assert p.stats()["real_time_factor"] < 3.0  # the gap is not counted in it
+        p.step_back()
+        p.wait_idle()
+        assert p.stats()["skipped_gap"] is None  # said until the next command
+        # The tracker's steps skip a long gap: the next frame is the step after it, tens of seconds on.
+        shown = dataclasses.replace(frames[-1], index=10, t_us=1_000_000, counts={"events_in": 50})
+        after = dataclasses.replace(shown, index=11, t_us=61_000_000)
+        assert p.quiet.ending_at(after, shown, 5_000, 500_000) == (1_000_000, 61_000_000)
+        assert p.quiet.ending_at(dataclasses.replace(after, t_us=1_005_000), shown, 5_000, 500_000) is None
+    finally:
+        p.stop()

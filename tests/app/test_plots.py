@@ -1,5 +1,7 @@
 """Plot series: bounded windows, pose errors against ground truth (SLAM: after each map's alignment), reasons for empty plots."""
 
+import dataclasses
+
 import numpy as np
 
 from app.frame import StepSummary
@@ -130,8 +132,29 @@ def test_a_plot_with_nothing_to_draw_is_replaced_in_place_by_its_reason_and_come
     view.update(_history(gt, 10, offset=0.03), gt)
     assert pose_plot.visible and not note.visible and np.allclose(pose_plot.data[1], 3.0)
     assert np.allclose(pose_plot.scales["y"]["range"], (0.0, 4.4))  # 3 cm: 10 % over a round 4, set here (see y_range)
-    view.remove()
-    assert pose_plot.removed and note.removed and not view.handles and not view.notes
+
+def test_plots_are_hidden_not_removed_when_a_recording_opens_and_reused_after(bar_recording):
+    # viser's browser code applies a batch's updates after its removals: plots removed at a recording switch while
+    # playing got the updates sent just before ("Tried to update non-existent component" in the console).
+    gt = bar_recording.ground_truth
+    gui = _Gui()
+    view = PlotsView(gui)
+    view.update(_history(gt, 10), gt)
+    lost = [StepSummary(s.index, s.t_us, None, None, "lost", s.timings_ms, s.counts) for s in _history(gt, 10)]
+    view.update(lost, gt)
+    made = [h for _, _, h in gui.added]
+    view.clear()
+    assert not any(h.removed or h.visible for h in made)
+    view.update(_history(gt, 10), gt)
+    assert [h for _, _, h in gui.added] == made  # the same plots shown again
+    assert view.handles["pose error"][1].visible and not view.notes["pose error"].visible
+    changed = [StepSummary(s.index, s.t_us, s.pose, None, "ok", {"other module": 1.0}, s.counts) for s in _history(gt, 10)]
+    latency = view.handles["latency per module [ms]"][1]
+    view.update(changed, gt)  # other series: another plot in its place, the first hidden, not removed
+    assert not latency.visible and not latency.removed and view.handles["latency per module [ms]"][1].visible
+    view.update(_history(gt, 10), gt)
+    assert view.handles["latency per module [ms]"][1] is latency and latency.visible
+    assert not any(h.removed for _, _, h in gui.added)
 
 
 def test_y_ranges_are_round_cover_every_value_and_ignore_the_nans_uplot_could_not_range():
@@ -155,3 +178,14 @@ def test_every_plot_is_sent_the_x_range_of_its_latest_window(bar_recording):
     plots = [hd for kind, _, hd in gui.added if kind != "markdown" and not hd.removed]
     assert plots and all(np.allclose(p.scales["x"]["range"], (t[0], t[-1])) for p in plots)
     assert x_range(np.array([0.035])) == (0.035, 0.035 + MIN_X_SPAN_S)  # one step: ticks that differ
+
+
+def test_the_plots_start_afresh_after_a_gap_the_steps_skip(bar_recording):
+    # Drawn across a 60 s event gap, the steps after it were squeezed into the right edge of a 60 s time axis and
+    # joined to those before by a straight line through the gap.
+    gt = bar_recording.ground_truth
+    h = _history(gt, 30)
+    after = [dataclasses.replace(s, index=s.index + 30, t_us=s.t_us + 60_000_000) for s in _history(gt, 5)]
+    t = plot_series(h + after, gt)["events per second"][1][0]
+    assert len(t) == 5 and t[0] >= 60.0
+    assert len(plot_series(h, gt)["events per second"][1][0]) == 30

@@ -430,3 +430,27 @@ def test_the_raw_cloud_is_read_only_when_shown_and_drawn_again_for_each_opening(
         assert reads == ["squares_cloud.ply"] * 2 and "cloud" in app.scene._nodes
     finally:
         app.stop()
+
+
+def test_a_recording_without_imu_opened_first_shows_the_trackers_controls_to_set_its_mode(tmp_path, squares_scene):
+    # Tracking in mode "full" needs an IMU: the events-only view stood in with its own controls and the note said
+    # "use --mode stpe", a command-line flag; no control of the viewer could set the mode.
+    import dataclasses
+
+    from evpose.tracker.config import TrackerConfig
+
+    rec, cmap = squares_scene
+    write_recording_h5(tmp_path / "squares.h5", dataclasses.replace(rec, imu=None, source=None))
+    write_contour_map(tmp_path / "squares_map.ply", cmap)
+    app = ViewerApp(AppConfig(data=[tmp_path], port=free_port(), export_dir=tmp_path / "exports",
+                              player=PlayerConfig(prefetch=False)))
+    try:
+        app.player.wait_idle()
+        assert isinstance(app.player.engine, EventsOnlyEngine) and app.config_gui.cls is TrackerConfig
+        assert "set **mode** to stpe in the parameters below" in app.param_info.content and "--mode" not in app.param_info.content
+        assert "Change the parameters below" in app.param_info.content  # the note sits above the controls
+        app.config_gui.handles[("mode",)].value = "stpe"
+        app.player.wait_idle(60)
+        assert isinstance(app.player.engine, TrackerEngine) and app.player.engine.config.mode.value == "stpe"
+    finally:
+        app.stop()

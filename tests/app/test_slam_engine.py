@@ -114,3 +114,37 @@ def test_slam_export_is_the_active_maps_refined_trajectory_like_the_cli(moving, 
     exported, expected = eng.trajectory(), headless.atlas.active.trajectory(refined=True)
     assert len(exported) == len(expected) > 3
     assert np.array_equal(exported.t, expected.t) and np.array_equal(exported.matrices(), expected.matrices())
+
+
+def test_strided_play_and_a_stretch_without_events_keep_every_step_exact(moving, all_frames):
+    # Play strides over the steps it does not draw (their display products were most of an empty step's cost), and
+    # inside a stretch without events the seek snapshots are shared, not copied: the same states all the same.
+    import dataclasses
+
+    from evpose.core.events import EventArray
+
+    eng, frames = all_frames
+    played = SlamEngine(moving)
+    shown = [played.play_step(7) for _ in range(3)]
+    assert [f.index for f in shown] == [6, 13, 20]
+    assert [s.counts for s in played.history] == [f.counts for f in frames[:21]]
+    assert np.array_equal(shown[-1].pose, frames[20].pose, equal_nan=True) if shown[-1].pose is not None else frames[20].pose is None
+    ev = moving.events
+    t = ev.t.copy()
+    t[t >= ev.t[0] + 300_000] += 400_000  # no events for 0.4 s after 0.3 s
+    gap = dataclasses.replace(moving, events=EventArray(t, ev.x, ev.y, ev.p))
+    cfg = SlamViewConfig(snapshot_every=5)
+    whole = SlamEngine(gap, cfg)
+    ref = [f.pose for f in iter(whole.step, None)]
+    quiet = [k for k, s in enumerate(whole.history) if s.counts["events_in"] == 0]
+    assert len(quiet) >= 70
+    shared = [k for k in whole._snapshots if k and whole._snapshots[k] is whole._snapshots[k - 5]]
+    assert len(shared) >= 10  # in the stretch without events
+    e = SlamEngine(gap, cfg)
+    first = e.play_step(quiet[0] + 2)
+    while e.step_count <= quiet[-1]:
+        f = e.play_step(200)
+    assert f.index == quiet[-1] + 1 and f.counts["events_in"] > 0  # the stride ends where events come again
+    for k in (quiet[0] + 12, quiet[-1] + 3, len(ref) - 1):
+        got = whole.seek_step(k).pose
+        assert (got is None and ref[k] is None) or np.array_equal(got, ref[k]), k

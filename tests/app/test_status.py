@@ -43,8 +43,11 @@ def test_a_far_seek_being_computed_shows_its_progress(bar_recording):
     z = np.zeros((2, 2), np.float32)
     f = Frame(3, 15_000, z, z, z, EventArray.empty(), EventArray.empty())
     text = status_markdown(f, eng, {"state": "paused", "speed": 1.0, "catching_up": (4.2, 9.0)})
-    assert "computing 4.2 / 9.0 s" in text and "cancel" in text
+    assert "computing 4.2 / 9.0 s" in text and "cancel" in text and "tracking is causal" in text
     assert "computing" not in status_markdown(f, eng, {"state": "paused", "catching_up": None})
+    slam = Frame(3, 15_000, z, z, z, EventArray.empty(), EventArray.empty(), slam=SimpleNamespace())
+    text = status_markdown(slam, eng, {"state": "paused", "speed": 1.0, "catching_up": (4.2, 9.0)})
+    assert "SLAM is causal" in text and "tracking" not in text  # it said "tracking is causal" in SLAM mode
 
 
 def test_run_ahead_note_says_frames_a_far_seek_skipped_are_being_filled_in():
@@ -110,6 +113,10 @@ def test_the_reason_follows_the_status_without_nesting_its_own_parentheses():
               reason="40 inliers (2 re-found by projection), rms 1.30 px")
     text = status_markdown(f, SimpleNamespace(is_last=lambda frame: False), {"state": "paused", "speed": 1.0})
     assert "**ok** \u2014 40 inliers (2 re-found by projection), rms 1.30 px" in text and "((" not in text and "))" not in text
+    ended = Frame(159, 800_000, z, z, z, EventArray.empty(), EventArray.empty(), status="lost",
+                  reason="the IMU samples end at t=0.5 s: the fused modes track no further (--mode stpe needs no IMU)")
+    text = status_markdown(ended, SimpleNamespace(is_last=lambda frame: False), {"state": "paused", "speed": 1.0})
+    assert "(mode stpe needs no IMU)" in text and "--mode" not in text  # a command-line flag, in the viewer
 
 
 def test_a_recording_shorter_than_acquire_s_that_never_registers_is_flagged_once_every_step_is_computed():
@@ -122,3 +129,46 @@ def test_a_recording_shorter_than_acquire_s_that_never_registers_is_flagged_once
     assert "no update registered against this map in the whole recording (0.30 s)" in status_markdown(f, eng, {})
     eng.known_summaries = eng.known_summaries[:60] + [SimpleNamespace(t_us=1_300_000, counts={"registered": 1})]
     assert "registered against this map" not in status_markdown(f, eng, {})
+
+
+def test_a_step_at_or_in_a_long_stretch_without_events_says_so(bar_recording):
+    # A seek to 30 s in a recording without events from 2 to 62 s showed the tracker's step at 1.995 s (its steps
+    # skip the gap) and the time slider jumped back there with nothing said; SLAM's steps in it read "waiting".
+    from app.status import event_gaps
+
+    t = np.array([0, 999_000, 1_998_000, 62_000_000, 62_000_500], np.int64)
+    gaps = event_gaps(t)
+    assert [(g.t_last_us, g.t_next_us) for g in gaps] == [(1_998_000, 62_000_000)]  # under a second is no gap
+    eng = EventsOnlyEngine(bar_recording)
+    z = np.zeros((2, 2), np.float32)
+    at = lambda t_us: Frame(3, t_us, z, z, z, EventArray.empty(), EventArray.empty())
+    stats = {"state": "paused", "speed": 1.0}
+    assert "this step lies in it" in status_markdown(at(30_000_000), eng, stats, gaps)
+    assert "no events from 1.998 to 62.000 s (60.0 s): after this step" in status_markdown(at(1_995_000), eng, stats, gaps)
+    tracker = SimpleNamespace(seconds_of_steps=lambda k: k, is_last=lambda f: False, n_steps=None)
+    assert "the tracker's steps skip it (a seek into it shows the last step before it)" in status_markdown(at(1_995_000), tracker, stats, gaps)
+    assert "no events" not in status_markdown(at(1_500_000), eng, stats, gaps)
+    assert "no events" not in status_markdown(at(62_000_000), eng, stats, gaps)
+    played = dict(stats, skipped_gap=(1_990_000, 62_030_000))
+    assert "no events from 1.99 to 62.03 s (60.0 s): not waited for in real time" in status_markdown(at(62_500_000), eng, played, gaps)
+
+
+def test_times_are_said_from_the_recordings_start_as_the_time_slider(bar_recording):
+    # A recording on a clock of its own (first event at 100 s) read "t = 101.495 s" in the status line, the teaching
+    # panel, SLAM's MCI time and the plots' time axis, beside a time slider at 1.495.
+    import dataclasses
+
+    from app.plots import plot_series
+    from app.teaching import Stage, live_facts
+    from app.frame import StepSummary
+
+    ev = bar_recording.events
+    rec = dataclasses.replace(bar_recording, events=EventArray(ev.t + 100_000_000, ev.x, ev.y, ev.p))
+    eng = EventsOnlyEngine(rec)
+    z = np.zeros((2, 2), np.float32)
+    f = Frame(3, eng.t_start_us + 1_495_000, z, z, z, EventArray.empty(), EventArray.empty())
+    assert status_markdown(f, eng, {"state": "paused", "speed": 1.0}).startswith("t = 1.495 s, step 3")
+    assert "At t = 1.495 s (step 3)" in live_facts(Stage.EVENTS, f, eng.t_start_us)
+    steps = [StepSummary(i, eng.t_start_us + i * 5_000, None, None, "ok", {}, {"events_in": 1}) for i in range(3)]
+    t = plot_series(steps, None, t0_us=eng.t_start_us)["events per second"][1][0]
+    assert np.allclose(t, [0.0, 0.005, 0.01])

@@ -21,3 +21,25 @@ def test_the_image_line_says_the_events_only_tdf_has_no_map_points(bar_recording
     frame = EventsOnlyEngine(bar_recording).step()
     assert "_Image: TDF + map points (no map, so no points on it)_" in teaching_markdown(Stage.TDF, frame)
     assert teaching_markdown(Stage.SP_TS, frame).endswith("_Image: SP-TS positive_")
+
+
+def test_the_explanations_name_what_the_tracker_runs_and_controls_that_exist():
+    # Registration was said to be Gauss-Newton (it is Levenberg-Marquardt), fusion always a factor graph (an EKF and
+    # modes without fusion exist), the removed events the noise filter's alone (the ego-motion filter's too).
+    import re
+
+    import evpose.tracker.registration as registration
+    from app.config_gui import field_specs
+    from app.teaching import EXPLANATIONS
+    from evpose.tracker.config import TrackerConfig, TrackerMode
+
+    assert "Levenberg-Marquardt" in registration.__doc__ and "Levenberg-Marquardt" in EXPLANATIONS[Stage.REGISTRATION]
+    assert "ego-motion filter" in EXPLANATIONS[Stage.EVENTS] and "EKF" in EXPLANATIONS[Stage.FUSION]
+    labels = {tuple(p.replace("_", " ") for p in s.path) for s in field_specs(TrackerConfig())}
+    modes = {m.value for m in TrackerMode}
+    for stage, text in EXPLANATIONS.items():
+        for ref in re.findall(r"`([^`]+)`", text):
+            if ref in modes or any(c in ref for c in "-/(="):  # a mode, or a formula
+                continue
+            path = tuple(part.strip() for part in ref.split(">"))
+            assert path in labels, f"{stage.value}: `{ref}` is no tracker parameter"

@@ -304,3 +304,30 @@ def test_a_seek_after_a_long_event_gap_lands_on_the_update_at_or_before_it(squar
         assert f.index == want and f.t_us == results[want].t_us
     assert eng.catch_up_progress(results[k].t_us, exact=True)[1] == (results[k].t_us - eng.t_start_us) / 1e6
     assert eng.seconds_of_steps(eng.n_steps) == (results[-1].t_us - eng.session.time_of(0)) / 1e6 > gap / 1e6
+
+
+def test_stepping_forward_and_back_goes_through_the_update_that_stands_for_a_long_event_gap(squares_scene):
+    # That update makes no images: it had no frame, so "forward >" at the last step before a 60 s gap did nothing
+    # (the player redrew that step) and "< back" from the step after it likewise.
+    from evpose.core.events import EventArray
+    from evpose.core.imu import ImuSamples
+    from evpose.core.trajectory import Trajectory
+
+    rec, cmap = squares_scene
+    cut, gap = rec.t_start_us + 250_000, 3_000_000
+    shift = lambda t: np.where(t >= cut, t + gap, t)
+    ev, gt, imu = rec.events, rec.ground_truth, rec.imu
+    rec = dataclasses.replace(rec, events=EventArray(shift(ev.t), ev.x, ev.y, ev.p),
+                              ground_truth=Trajectory(shift(gt.t), gt.position, gt.quat_xyzw),
+                              imu=ImuSamples(shift(imu.t), imu.acc, imu.gyro), source=None)
+    eng = TrackerEngine(rec, cmap)
+    before = eng.seek(cut - 1)
+    k = before.index
+    while eng.session.schedule.gap_of(k + 2) is None:  # to the last step before the gap
+        k += 1
+    stand = eng.seek_step(k + 1)
+    assert stand is not None and stand.index == k + 1 and stand.status == "lost" and "track is lost over the gap" in stand.reason
+    assert stand.tdf.shape == before.tdf.shape
+    after = eng.step()
+    assert after.index == k + 2 and after.t_us > cut + gap
+    assert eng.seek_step(k + 1).index == k + 1 and eng.seek_step(k).index == k  # and back again
