@@ -294,8 +294,8 @@ class TrackingSession:
                      f" the track is lost over the gap")
         search = self.tracker.reacquisition
         if not from_truth and search is not None:
-            # Where the camera went meanwhile is unknown, and so is its velocity: search for the pose around the last
-            # estimate (evpose.tracker.reacquisition); the tracker restarts once it is found and confirmed.
+            # Where the camera went meanwhile is unknown: search for the pose around the last estimate with the last
+            # velocity (evpose.tracker.reacquisition); the tracker goes on from the trial the search accepts.
             last_v = next((r.velocity for r in reversed(self.results) if r.velocity is not None), None)
             search.begin(pose, self.tracker.t_us, last_v, gap_words)
             motion = self.tracker.components.motion

@@ -172,8 +172,7 @@ class Tracker:
         (:mod:`evpose.tracker.chance_level`), None = none do: the acquisition window asks for it."""
         self._ego_history = empty_ego_history()
         """Recent noise-filtered events (ideal x, y, t us) the ego-motion filter judges new ones against."""
-        self.reacquisition = (Reacquisition(config.reacquisition)
-                              if config.reacquisition.enabled else None)
+        self.reacquisition = Reacquisition(config.reacquisition) if config.reacquisition.enabled else None
         """The search for the pose after a restart without one (:mod:`evpose.tracker.reacquisition`); while it is
         :attr:`~evpose.tracker.reacquisition.Reacquisition.active`, :meth:`step` runs it instead. None when off."""
 
