@@ -35,7 +35,7 @@ Since session 26 such a restart searches for the pose instead (:mod:`evpose.trac
 pose hypotheses around the last estimate, each tracked with the last estimated velocity, the best accepted only with a
 chance-level z of 16 and 1.3 times the runner-up's; until then the updates are lost, naming the search. The splice
 above is found again after 43 updates and written 13.6 mm RMS off (351 poses); where the camera flew on 0.2-1 s
-during the pause (0.7-2.5 m, its velocity 0.8-4.6 m/s changed) it is not found and nothing is written after the gap
+during the pause (0.7-2.5 m on, its velocity changed by 0.8-4.6 m/s) it is not found and nothing is written after the gap
 (before: 3.0-3.8 m RMS off). A velocity that is unknown, not the pose, is what kept the fusion off: from the true pose
 with the velocity unknown it was 3.37 m RMS off too.
 
