@@ -77,7 +77,8 @@ class TrackerConfig:
     """A stretch without events (in the fused modes, or without IMU samples) longer than this ends the track: a
     TrackingSession reports one lost update for the whole gap (not one per empty update: a 1 h pause was 720k updates)
     and restarts the tracker after it as at the start (the ground-truth pose when it started from ground truth, else
-    where the re-acquisition search finds the camera, ``reacquisition``), milliseconds. Shorter outages are bridged as before (the fused modes propagate
+    the last estimate, velocity unknown, or with ``reacquisition.enabled`` where its search finds the camera),
+    milliseconds. Shorter outages are bridged as before (the fused modes propagate
     the IMU). See ``evpose.tracker.event_gaps``."""
     snapshot_every: int = field(default=50, metadata={"min": 1, "max": 10000, "step": 1, "unit": "steps"})
     """A TrackingSession keeps a full-state snapshot every this many steps (for seeking), steps."""

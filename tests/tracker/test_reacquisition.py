@@ -100,6 +100,13 @@ def test_a_scene_that_is_not_the_map_is_never_accepted():
     assert len(post) > 40 and all(r.status is TrackStatus.LOST and "re-acquisition" in r.reason for r in post)
 
 
+def test_the_search_is_off_by_default_and_the_restart_is_from_the_last_estimate(moved):
+    rec, cmap, _, _, _ = moved
+    assert TrackerConfig().reacquisition.enabled is False
+    gap, post = _after_gap(_session(rec, cmap, TrackerConfig(mode=TrackerMode.STPE), rec.t_start_us).run())
+    assert "restarted after it from the last estimate" in gap.reason and not any("re-acquisition" in r.reason for r in post)
+
+
 def test_a_run_without_a_search_is_bit_identical(moved):
     rec, cmap, _, a, _ = moved
     short = dataclasses.replace(rec, events=rec.events.time_window(rec.t_start_us, a))
