@@ -20,6 +20,7 @@ import enum
 from dataclasses import dataclass, field
 
 import cv2
+import numba as nb
 import numpy as np
 from scipy.spatial.transform import Rotation
 
@@ -176,17 +177,52 @@ def se3_homographies(K: np.ndarray, omega: np.ndarray, velocity: np.ndarray, dep
     """Per-slice ``K (R + t e3^T / Z) K^-1`` moving a point seen ``dt`` before the end to the end frame.
 
     ``omega``/``velocity`` are the camera's own-frame rates; a camera rotating by
-    ``R_wc(dt) = Exp(omega dt)`` sees static points rotate by its inverse.
+    ``R_wc(dt) = Exp(omega dt)`` sees static points rotate by its inverse. All slices at once (session 26: one
+    rotation call and stacked products instead of a loop over the slices, bit for bit the same; 0.55 -> 0.03 ms).
     """
     Ki = np.linalg.inv(K)
-    out = np.empty((len(dts), 3, 3))
+    dts = np.asarray(dts, np.float64)
     e3 = np.array([0.0, 0.0, 1.0])
     inv_depth = 1.0 / max(depth, 1e-6)
-    for k, dt in enumerate(dts):
-        R = Rotation.from_rotvec(np.asarray(omega) * dt).as_matrix().T
-        t = -R @ (np.asarray(velocity) * dt)
-        out[k] = K @ (R + np.outer(t, e3) * inv_depth) @ Ki
+    R = Rotation.from_rotvec(np.asarray(omega)[None, :] * dts[:, None]).as_matrix().transpose(0, 2, 1)
+    t = np.matmul(-R, (np.asarray(velocity)[None, :] * dts[:, None])[:, :, None])[:, :, 0]
+    return K @ (R + (t[:, :, None] * e3[None, None, :]) * inv_depth) @ Ki
+
+
+@nb.njit(cache=True, error_model="numpy")
+def _depth_errors(a, b, cur, ws):
+    """For each inverse depth ``w`` of ``ws``: the median over the tracks of ``|(a + w b)_xy / (a + w b)_z - cur|``,
+    numpy's arithmetic (``np.median(np.linalg.norm(uv - cur, axis=1))``); inf where that is not finite."""
+    n = a.shape[0]
+    out = np.empty(ws.shape[0])
+    e = np.empty(n)
+    for k in range(ws.shape[0]):
+        w = ws[k]
+        nan = False
+        for i in range(n):
+            qz = a[i, 2] + w * b[2]
+            dx = (a[i, 0] + w * b[0]) / qz - cur[i, 0]
+            dy = (a[i, 1] + w * b[1]) / qz - cur[i, 1]
+            e[i] = np.sqrt(dx * dx + dy * dy)
+            nan |= np.isnan(e[i])
+        if nan:  # numpy's median is NaN then
+            out[k] = np.inf
+            continue
+        for i in range(1, n):  # insertion sort: a few dozen tracks
+            v = e[i]
+            j = i - 1
+            while j >= 0 and e[j] > v:
+                e[j + 1] = e[j]
+                j -= 1
+            e[j + 1] = v
+        m = n // 2
+        med = e[m] if n % 2 else (e[m - 1] + e[m]) / 2.0
+        out[k] = med if np.isfinite(med) else np.inf
     return out
+
+
+_DEPTH_GRID = np.geomspace(1e-3, 1e3, 241)
+"""The inverse depths :func:`fit_average_depth` tries first."""
 
 
 def fit_average_depth(K: np.ndarray, omega: np.ndarray, velocity: np.ndarray, ref: np.ndarray, cur: np.ndarray, seconds: float) -> float | None:
@@ -194,31 +230,24 @@ def fit_average_depth(K: np.ndarray, omega: np.ndarray, velocity: np.ndarray, re
 
     With a fronto-parallel plane the warped point is ``(a + w b) / (a_z + w b_z)``
     with ``a = K R K^-1 x``, ``b = K t`` and ``w`` the inverse depth, so the robust
-    (median) reprojection error is evaluated for a whole grid of ``w`` at once.
+    (median) reprojection error is evaluated for a whole grid of ``w`` at once (session 26: in numba,
+    :func:`_depth_errors`, bit for bit numpy's; 0.7 -> 0.3 ms).
     """
     if len(ref) < 3 or np.linalg.norm(velocity) < 1e-12 or seconds <= 0:
         return None
     Ki = np.linalg.inv(K)
     R = Rotation.from_rotvec(np.asarray(omega) * seconds).as_matrix().T
     t = -R @ (np.asarray(velocity) * seconds)
-    a = np.c_[ref, np.ones(len(ref))] @ (K @ R @ Ki).T
-    b = K @ t
-
-    def best(ws):
-        q = a[None, :, :] + ws[:, None, None] * b[None, None, :]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            uv = q[..., :2] / q[..., 2:3]
-            err = np.median(np.linalg.norm(uv - cur[None], axis=2), axis=1)
-        err = np.where(np.isfinite(err), err, np.inf)
-        return int(np.argmin(err)), err
-
-    grid = np.geomspace(1e-3, 1e3, 241)
-    k, err = best(grid)
+    a = np.ascontiguousarray(np.c_[ref, np.ones(len(ref))] @ (K @ R @ Ki).T, np.float64)
+    b = np.ascontiguousarray(K @ t, np.float64)
+    cur = np.ascontiguousarray(cur, np.float64)
+    grid = _DEPTH_GRID
+    err = _depth_errors(a, b, cur, grid)
+    k = int(np.argmin(err))
     if not np.isfinite(err[k]):
         return None
     fine = np.linspace(grid[max(k - 1, 0)], grid[min(k + 1, len(grid) - 1)], 101)
-    k2, _ = best(fine)
-    return float(1.0 / fine[k2])
+    return float(1.0 / fine[int(np.argmin(_depth_errors(a, b, cur, fine)))])
 
 
 class MciGenerator:
