@@ -125,17 +125,39 @@ def _nonzero_magnitudes(img, stride):
 
 
 @nb.njit(cache=True)
+def _sift_down(heap, i, m):
+    while True:
+        c = 2 * i + 1
+        if c >= m:
+            return
+        if c + 1 < m and heap[c + 1] < heap[c]:
+            c += 1
+        if heap[c] >= heap[i]:
+            return
+        heap[i], heap[c] = heap[c], heap[i]
+        i = c
+
+
+@nb.njit(cache=True)
 def _order_statistics(values, k):
-    """The ``k``-th and ``k + 1``-th smallest of ``values`` (the second only when it exists, else the first)."""
-    part = np.partition(values, k)
-    a = part[k]
-    b = a
-    if k + 1 < part.shape[0]:
-        b = part[k + 1]
-        for i in range(k + 2, part.shape[0]):
-            if part[i] < b:
-                b = part[i]
-    return a, b
+    """The ``k``-th and ``k + 1``-th smallest of ``values`` (0-based; the second only when it exists, else the first),
+    from a min-heap of the ``n - k`` largest: a high percentile reads a small heap, and numba's ``np.partition`` took
+    20-830 us on the same MCIs."""
+    n = values.shape[0]
+    m = n - k
+    heap = values[:m].copy()
+    for i in range(m // 2 - 1, -1, -1):
+        _sift_down(heap, i, m)
+    for i in range(m, n):
+        if values[i] > heap[0]:
+            heap[0] = values[i]
+            _sift_down(heap, 0, m)
+    a = heap[0]
+    if m < 2:
+        return a, a
+    if m == 2:
+        return a, heap[1]
+    return a, min(heap[1], heap[2])
 
 
 def _percentile_995(nz: np.ndarray) -> float:
