@@ -22,12 +22,12 @@ from dataclasses import dataclass, field
 import cv2
 import numba as nb
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from evpose.slam.config import EventImageConfig, FeatureConfig, MciConfig
 from evpose.slam.event_image import event_image, local_std_score, to_uint8
 from evpose.slam.event_window import ReconstructionWindow
 from evpose.slam.fine_grid import fine_to_uint8
+from evpose.slam.geometry import rotvec_matrices
 from evpose.slam.parallax_warp import depth_field, fit_twist, sample_depth, warp_events
 from evpose.slam.window_fit import fit_twist_rate, whole_span_s
 
@@ -184,7 +184,7 @@ def se3_homographies(K: np.ndarray, omega: np.ndarray, velocity: np.ndarray, dep
     dts = np.asarray(dts, np.float64)
     e3 = np.array([0.0, 0.0, 1.0])
     inv_depth = 1.0 / max(depth, 1e-6)
-    R = Rotation.from_rotvec(np.asarray(omega)[None, :] * dts[:, None]).as_matrix().transpose(0, 2, 1)
+    R = rotvec_matrices(np.asarray(omega)[None, :] * dts[:, None]).transpose(0, 2, 1)
     t = np.matmul(-R, (np.asarray(velocity)[None, :] * dts[:, None])[:, :, None])[:, :, 0]
     return K @ (R + (t[:, :, None] * e3[None, None, :]) * inv_depth) @ Ki
 
@@ -236,7 +236,7 @@ def fit_average_depth(K: np.ndarray, omega: np.ndarray, velocity: np.ndarray, re
     if len(ref) < 3 or np.linalg.norm(velocity) < 1e-12 or seconds <= 0:
         return None
     Ki = np.linalg.inv(K)
-    R = Rotation.from_rotvec(np.asarray(omega) * seconds).as_matrix().T
+    R = rotvec_matrices(np.asarray(omega) * seconds)[0].T
     t = -R @ (np.asarray(velocity) * seconds)
     a = np.ascontiguousarray(np.c_[ref, np.ones(len(ref))] @ (K @ R @ Ki).T, np.float64)
     b = np.ascontiguousarray(K @ t, np.float64)

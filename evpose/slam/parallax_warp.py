@@ -57,7 +57,8 @@ from __future__ import annotations
 import cv2
 import numba as nb
 import numpy as np
-from scipy.spatial.transform import Rotation
+
+from evpose.slam.geometry import rotvec_matrices
 
 
 def points_in_view(Xw: np.ndarray, T_cw: np.ndarray, K: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -128,9 +129,8 @@ def project_moved(K: np.ndarray, X: np.ndarray, xis: np.ndarray) -> np.ndarray:
     calls it about 11 times per MCI, 73 -> 24 us a call.
     """
     xis = np.ascontiguousarray(xis, np.float64)
-    R = Rotation.from_rotvec(xis[:, :3]).as_matrix()  # R_k; a point moves by R_k^T (X - t_k)
-    return _project_moved(np.ascontiguousarray(K, np.float64), np.ascontiguousarray(R, np.float64),
-                          np.ascontiguousarray(X, np.float64), xis)
+    R = rotvec_matrices(xis[:, :3])  # R_k; a point moves by R_k^T (X - t_k)
+    return _project_moved(np.ascontiguousarray(K, np.float64), R, np.ascontiguousarray(X, np.float64), xis)
 
 
 def fit_twist(K: np.ndarray, ref: np.ndarray, cur: np.ndarray, z: np.ndarray, huber_px: float = 1.0,
@@ -204,7 +204,7 @@ def warp_events(K: np.ndarray, x: np.ndarray, y: np.ndarray, z: np.ndarray, slic
     convention with ``rotvec = omega dt``, ``translation = v dt``); events that end behind the camera go far outside
     the image."""
     K = np.asarray(K, np.float64)
-    R = Rotation.from_rotvec(np.asarray(rotvecs, np.float64)).as_matrix().transpose(0, 2, 1)  # (S, 3, 3)
+    R = rotvec_matrices(rotvecs).transpose(0, 2, 1)  # (S, 3, 3)
     M = K @ R @ np.linalg.inv(K)
     b = np.einsum("ij,sjk,sk->si", K, R, np.asarray(translations, np.float64))
     return _warp_kernel(np.ascontiguousarray(x, np.float64), np.ascontiguousarray(y, np.float64), np.ascontiguousarray(z, np.float64),
