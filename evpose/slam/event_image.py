@@ -19,14 +19,14 @@ def _bilinear_votes(x, y, w, slice_idx, H, width, height, scale):
     # Sensor pixel centres map to scale * (u + 0.5) - 0.5 (``fine_coords``): the fine grid covers the same area.
     off = 0.5 * scale - 0.5
     for i in range(x.shape[0]):
-        h = H[slice_idx[i]]
+        s = slice_idx[i]  # indexed in place: a view of H[s] per event cost a third of the kernel (session 26)
         xi = x[i]
         yi = y[i]
-        zw = h[2, 0] * xi + h[2, 1] * yi + h[2, 2]
+        zw = H[s, 2, 0] * xi + H[s, 2, 1] * yi + H[s, 2, 2]
         if zw <= 1e-9:
             continue
-        u = (h[0, 0] * xi + h[0, 1] * yi + h[0, 2]) / zw
-        v = (h[1, 0] * xi + h[1, 1] * yi + h[1, 2]) / zw
+        u = (H[s, 0, 0] * xi + H[s, 0, 1] * yi + H[s, 0, 2]) / zw
+        v = (H[s, 1, 0] * xi + H[s, 1, 1] * yi + H[s, 1, 2]) / zw
         if scale != 1.0:
             u = scale * u + off
             v = scale * v + off

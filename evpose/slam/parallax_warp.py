@@ -183,11 +183,10 @@ def _warp_kernel(x, y, z, slice_idx, M, b):
     u = np.empty(n)
     v = np.empty(n)
     for i in range(n):
-        s = slice_idx[i]
-        m = M[s]
-        qx = z[i] * (m[0, 0] * x[i] + m[0, 1] * y[i] + m[0, 2]) - b[s, 0]
-        qy = z[i] * (m[1, 0] * x[i] + m[1, 1] * y[i] + m[1, 2]) - b[s, 1]
-        qz = z[i] * (m[2, 0] * x[i] + m[2, 1] * y[i] + m[2, 2]) - b[s, 2]
+        s = slice_idx[i]  # M indexed in place, no view per event
+        qx = z[i] * (M[s, 0, 0] * x[i] + M[s, 0, 1] * y[i] + M[s, 0, 2]) - b[s, 0]
+        qy = z[i] * (M[s, 1, 0] * x[i] + M[s, 1, 1] * y[i] + M[s, 1, 2]) - b[s, 1]
+        qz = z[i] * (M[s, 2, 0] * x[i] + M[s, 2, 1] * y[i] + M[s, 2, 2]) - b[s, 2]
         if qz > 1e-9:
             u[i] = qx / qz
             v[i] = qy / qz
