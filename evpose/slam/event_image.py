@@ -4,6 +4,17 @@ Each event votes bilinearly at its (warped) position and the vote image is
 blurred, which equals a Gaussian splat of the configured sigma. One kernel serves tiny frames (identity warp, paper eq. 2) and MCIs (eqs. 3/4):
 each event carries a time-slice index and every slice has a 3x3 pixel homography
 (Sim(2) warps and SE(3) warps with one scene depth are both homographies).
+
+Session 26 (``/tmp/s26/speed26``), CPU: the sharpness score (:func:`local_std_score`, five per MCI), the 8-bit scaling
+(:func:`to_uint8`, :func:`robust_maximum`) and the splat kernel run in numba with numpy's own arithmetic and summation
+order, so every output is bit for bit the same (``tests/slam/test_event_image_kernels.py`` keeps the numpy code as the
+reference; ``ident.py`` hashes the trajectories and every step's tracks, hypothesis, scores and MCI of landing
+event-only seeds 0-3, event-inertial seed 0, indoor event-only seed 0 and E-I-C2 seed 1: identical to main). Per call on
+the MCIs of a default landing run (``t_all.py`` on ``rec_args.py``'s recorded calls, thread CPU, loaded machine):
+score 0.36 -> 0.10-0.15 ms, 8-bit scaling 0.4-0.5 -> 0.10-0.23 ms (numba's ``np.partition`` took 20-830 us for the
+percentile, a heap of the top 0.5 % 8-58 us), splat votes about a third less (no array view per event). With
+:mod:`evpose.slam.mci`'s and :mod:`evpose.slam.parallax_warp`'s kernels, the main thread's CPU per MCI: module notes of
+:mod:`evpose.slam.mci`.
 """
 
 from __future__ import annotations

@@ -12,6 +12,24 @@ powers by matrix exponential, made the simulated landing worse (event-only,
 seeds 0-11, reference fraction 1.0: mean ATE 3.16 -> 5.43 %, tracked at least
 68.6 %): over the few pixels of motion a window spans, its projective terms
 follow the track noise.
+
+Session 26 (``/tmp/s26/speed26``), the main thread's CPU: the MCI stage spent 9-10 ms of the landing's 29-31 ms per
+MCI in numpy and scipy overhead around small arrays, not in the splats. Now in numba or batched, each bit for bit the
+code it replaced (tests named ``test_*_kernels.py`` / ``test_geometry_rotvec.py`` keep that code as the reference):
+the sharpness score and 8-bit scaling (:mod:`evpose.slam.event_image`), :func:`se3_homographies` (one rotation call
+for all slices, 0.55 -> 0.03 ms), :func:`fit_average_depth`'s median search (0.7 -> 0.1-0.3 ms), H5's projection
+(:func:`evpose.slam.parallax_warp.project_moved`, the einsum 73 -> 5-24 us; its twist fit 1.6 -> 0.5 ms a call) and
+every warp's rotation matrices (:func:`evpose.slam.geometry.rotvec_matrices`, scipy's arithmetic without its 10-15 us
+a call). Same trajectories, tracks, hypotheses, scores and MCIs as main (``ident.py`` / ``ident2.py``: landing
+event-only seeds 0-11, event-inertial 0 and 2, E-I-C2 1; indoor event-only 0-3, E-I-C2 1; 22 runs hashed). CPU per MCI
+(``mci_cpu`` + ``tracking_cpu``; ``benchloop.sh`` runs ``bench1.py``, main and this code in strictly alternating
+processes, ABBA, four runs per seed, each the second run of its process; ``benchsum.py``; a loaded machine, so main's
+own figure is above session 25's 28.6 ms): landing seeds 0-3 median of the runs' medians 31.3 -> 26.6 ms (median of
+the runs' means 37.0 -> 31.5; per seed -4.1 to -7.0 ms), the MCI stage alone 9.7 -> 5.0 ms; indoor seeds 0-1 16.4 ->
+12.8 ms (means 20.2 -> 16.5), MCI stage 5.3 -> 2.3 ms. What is left per landing MCI (``split.py``, seed 0): the
+fine-grid KLT about 9 ms and the re-finding KLT about 5 ms (OpenCV, whose Python binding cannot take a pyramid built
+once per image, so each call rebuilds both), a keyframe with its local BA about 22 ms (one MCI in three), PnP 1.6 ms, the
+MCI stage about 4.6 ms (splats and blurs 2.2, H5 1.7).
 """
 
 from __future__ import annotations
