@@ -173,7 +173,7 @@ def _order_statistics(values, k):
 
 def _percentile_995(nz: np.ndarray) -> float:
     """``np.percentile(nz, 99.5)`` (linear, numpy 2's arithmetic in ``nz``'s dtype) bit for bit, for ``nz`` 1-D with no
-    NaN: the two order statistics by partition and numpy's ``_lerp``."""
+    NaN: the two order statistics (:func:`_order_statistics`) and numpy's ``_lerp``."""
     n = nz.shape[0]
     v = (n - 1) * (99.5 / 100)
     prev = int(np.floor(v))
@@ -195,7 +195,7 @@ def robust_maximum(magnitudes: np.ndarray, stride: int = 1) -> float | None:
     an event image's 8-bit scaling maps to full contrast, so a few hot pixels do not darken the rest. Negative values
     count by their magnitude; ``stride`` > 1 reads every ``stride``-th row and column of a 2-D array only. Session 26:
     bit for bit ``np.percentile(m[m > 0], 99.5)`` of ``m = |magnitudes[::stride, ::stride]|`` (the reference in
-    ``tests/slam/test_event_image_kernels.py``) with the partition in numba and no mask or copy of the image."""
+    ``tests/slam/test_event_image_kernels.py``) with the order statistics in numba and no mask or copy of the image."""
     m = np.asarray(magnitudes)
     if m.dtype not in (np.float32, np.float64):  # numpy's own arithmetic for other types
         m = np.abs(m[::stride, ::stride] if stride > 1 else m)

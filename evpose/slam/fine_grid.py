@@ -67,9 +67,10 @@ ATE 0.82 -> 0.94 % (paired +0.12 +- 0.13, 10 better; always: 1.00 %), 23 of 24 w
 in one process): landing seeds 0-3 off 22.8 ms, always 29.1, the rule 28.6; indoor seeds 0-1 15.1 / 21.7 / 15.0. The
 warm-up's length: see ``FeatureConfig.klt_upsample_warmup_mcis``.
 
-Session 26 (``/tmp/s26/speed26``; module notes of :mod:`evpose.slam.mci`): the MCI stage in numba, bit for bit, gives
-the rule landing seeds 0-3 31.3 -> 26.6 ms per MCI (main measured alongside on a loaded machine; its quiet figure is the
-28.6 above), indoor seeds 0-1 16.4 -> 12.8 ms. The fine image's 8-bit scaling reads ``|img|`` in place
+Session 26 (``/tmp/s26/speed26``; module notes of :mod:`evpose.slam.mci`): the MCI stage in numba and KLT without its
+unread error pass, outputs bit for bit the same, give the rule landing seeds 0-3 31.1 -> 25.7 ms per MCI (means 36.2 ->
+30.8; main measured alongside on a loaded machine, its quiet figure being the 28.6 above), indoor seeds 0-1 16.7 ->
+12.2 ms. The fine image's 8-bit scaling reads ``|img|`` in place
 (:func:`fine_to_uint8`; :func:`evpose.slam.event_image.robust_maximum` with a stride). Its KLT, forward and backward on
 the 692x520 images, is now the largest part of a landing MCI that is not a keyframe (about 9 of 25 ms)."""
 
