@@ -21,7 +21,10 @@ for all slices, 0.55 -> 0.03 ms), :func:`fit_average_depth`'s median search (0.7
 (:func:`evpose.slam.parallax_warp.project_moved`, the einsum 73 -> 5-24 us; its twist fit 1.6 -> 0.5 ms a call) and
 every warp's rotation matrices (:func:`evpose.slam.geometry.rotvec_matrices`, scipy's arithmetic without its 10-15 us
 a call). Same trajectories, tracks, hypotheses, scores and MCIs as main (``ident.py`` / ``ident2.py``: landing
-event-only seeds 0-11, event-inertial 0 and 2, E-I-C2 1; indoor event-only 0-3, E-I-C2 1; 22 runs hashed). CPU per MCI
+event-only seeds 0-11, event-inertial 0 and 2, E-I-C2 1; indoor event-only 0-3, E-I-C2 1; 22 runs hashed; and
+``/tmp/s22/lead/exp.py`` landing seeds 0-23, ``main_land.json`` / ``new_land.json``: every seed's ATE, tracked share
+and maps the same, mean 1.44 %, 24 of 24 within 2 %; the whole run's CPU, tiny frames included, 3.84 -> 3.42 s mean).
+CPU per MCI
 (``mci_cpu`` + ``tracking_cpu``; ``benchloop.sh`` runs ``bench1.py``, main and this code in strictly alternating
 processes, ABBA, each the second run of its process; ``benchsum.py``; a loaded machine, so main's own figure is above
 session 25's 28.6 ms). These kernels alone (four runs per seed, ``bench_r2/r3.jsonl``): landing seeds 0-3 median of the
