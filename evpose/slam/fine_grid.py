@@ -68,8 +68,8 @@ in one process): landing seeds 0-3 off 22.8 ms, always 29.1, the rule 28.6; indo
 warm-up's length: see ``FeatureConfig.klt_upsample_warmup_mcis``.
 
 Session 26 (``/tmp/s26/speed26``; module notes of :mod:`evpose.slam.mci`): the MCI stage in numba and KLT without its
-unread error pass, outputs bit for bit the same, give the rule landing seeds 0-3 31.1 -> 25.7 ms per MCI (means 36.2 ->
-30.8; main measured alongside on a loaded machine, its quiet figure being the 28.6 above), indoor seeds 0-1 16.7 ->
+unread error pass, outputs bit for bit the same, give the rule landing seeds 0-3 31.1 -> 25.8 ms per MCI (means 36.2 ->
+30.8; main measured alongside on a loaded machine, its quiet figure being the 28.6 above), indoor seeds 0-1 16.4 ->
 12.2 ms. The fine image's 8-bit scaling reads ``|img|`` in place
 (:func:`fine_to_uint8`; :func:`evpose.slam.event_image.robust_maximum` with a stride). Its KLT, forward and backward on
 the 692x520 images, is now the largest part of a landing MCI that is not a keyframe (about 9 of 25 ms)."""

@@ -30,8 +30,9 @@ processes, ABBA, each the second run of its process; ``benchsum.py``; a loaded m
 session 25's 28.6 ms). These kernels alone (four runs per seed, ``bench_r2/r3.jsonl``): landing seeds 0-3 median of the
 runs' medians 31.3 -> 26.6 ms (median of the runs' means 37.0 -> 31.5; per seed -4.1 to -7.0 ms), the MCI stage alone
 9.7 -> 5.0 ms; indoor seeds 0-1 16.4 -> 12.8 ms (means 20.2 -> 16.5), MCI stage 5.3 -> 2.3 ms. With KLT's unread error
-pass dropped as well (:data:`evpose.slam.features.KLT_NO_ERROR`; two runs per seed, ``bench_r4.jsonl``): landing 31.1 ->
-25.7 ms (means 36.2 -> 30.8), indoor 16.7 -> 12.2 ms (means 20.1 -> 16.0). What is left per landing MCI
+pass dropped as well (:data:`evpose.slam.features.KLT_NO_ERROR`; four runs per seed, ``bench_r4/r5.jsonl``): landing
+31.1 -> 25.8 ms (means 36.2 -> 30.8; per seed -3.8 to -6.5 ms), MCI stage 9.6 -> 5.0 ms; indoor 16.4 -> 12.2 ms (means
+19.7 -> 16.0), MCI stage 5.2 -> 2.2 ms. What is left per landing MCI
 (``split.py``, seed 0): the fine-grid KLT about 9 ms and the re-finding KLT about 5 ms (OpenCV, whose Python binding
 cannot take a pyramid built once per image, so each call rebuilds both), a keyframe with its local BA about 22 ms (one
 MCI in three), PnP 1.6 ms, the MCI stage about 4.6 ms (splats and blurs 2.2, H5 1.7).
