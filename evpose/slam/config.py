@@ -87,7 +87,10 @@ class EventWindowConfig:
     seeds 0-23 (defaults 1.80 %, 20 within 2 %): X 0.4 / 0.6 / 1.0 px 2.47 / 2.05 / 1.92 % (15 / 16 / 19; paired +0.68
     +- 0.43 / +0.25 +- 0.22 / +0.13 +- 0.22). At 0.4 px (seeds 0, 4, 10) the sharp turn (1.8-2.2 s) has 11 MCIs instead
     of 8, each bent by 12 instead of 17 deg but with 4300 instead of 6200 events, and the tracks' across-flow error
-    grows as fast per second (median step squared over its time 7.3 against 7.0 px^2/s): the bend is not the lever."""
+    grows as fast per second (median step squared over its time 7.3 against 7.0 px^2/s): the bend is not the lever.
+    Session 26, the indoor room (event-only seeds 0-7, 4: 6.84 %, tracked 86-97 %; ``/tmp/s25/auto9/exp.py``, results
+    in ``/tmp/s26/lead/in_fd*.json``), to give its sparse MCIs (1800 events) more events: 6 -> 7.07 % but tracked
+    0.59-0.95, 8 -> 9.29 % (tracked 0.32-0.58); smaller, 3 -> 9.05 % (tracked 0.87-0.97). 4 is the best there too."""
     min_features: int = field(default=8, metadata={"min": 3, "max": 200, "step": 1, "unit": "features"})
     """Fewest tracked features for a tiny frame to count, features."""
     reference_features: int = field(default=80, metadata={"min": 8, "max": 500, "step": 4, "unit": "features"})
