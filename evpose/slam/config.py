@@ -39,7 +39,9 @@ class EventImageConfig:
     sigma_px: float = field(default=1.0, metadata={"min": 0.5, "max": 3.0, "step": 0.1, "unit": "px"})
     """Standard deviation of the Gaussian splat of one event, pixels. Landing event-only seeds 0-11, 60 runs
     (``MciConfig.reference_fraction`` 1.0, mean ATE 3.34 %, median 2.88, 9 within 2 %): 1.5 -> 6.06 % (0 within 2 %),
-    0.85 -> 3.17 % (median 2.38, 15), 0.75 -> 3.21 % (2.47, 17), worst runs 11-12 % against 8.3 %."""
+    0.85 -> 3.17 % (median 2.38, 15), 0.75 -> 3.21 % (2.47, 17), worst runs 11-12 % against 8.3 %. Session 26, a wider
+    splat for the indoor room's sparse MCIs (event-only seeds 0-7, 1.0: 6.84 %; ``/tmp/s25/auto9/exp.py``, results in
+    ``/tmp/s26/lead/in_sig*.json``): 1.25 -> 7.47 %, 1.5 -> 7.95 %, tracked from the events about the same (0.27-0.53)."""
     use_polarity: bool = False
     """Sum signed polarities (True) or count events (False)."""
 
