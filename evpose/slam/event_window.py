@@ -6,6 +6,25 @@ splatted into tiny frames, and FAST features of the first frame are tracked by
 KLT through the following ones. When the median feature displacement (eq. 7)
 exceeds ``th_fd`` the collected events form a reconstruction window for an
 MCI, and ``N_e`` becomes ``floor(N_f N_e / N_x)`` (eq. 8).
+
+Session 26 (``/tmp/s26/window26``), CPU, outputs bit for bit those of main (``ident.py`` / ``ident2.py``, copies of
+``/tmp/s26/speed26``'s: trajectories and every step's tracks, hypothesis, scores, MCI and pose of landing event-only
+seeds 0-11, event-inertial 0 and 2 and E-I-C2 1; indoor event-only 0-3 and E-I-C2 1). On landing seed 0 the selection
+(:meth:`EventWindowSelector.push`) took 11.8 ms of main-thread CPU per MCI (``wsplit.py``, thread_time per function):
+KLT 8.3 (399 ``track_features`` calls: 162 for the window's own features, 237 for the carried ones), FAST and
+Shi-Tomasi 0.9, the two-view RANSAC 0.6, 8-bit scaling 0.5, splats 0.5, dispatch 0.5, ``np.mean`` of the tiny
+frames' times 0.2. Kept: the carried features move between the same two tiny frames as the window's own, so both go
+through one KLT call (``features.track_feature_sets``; OpenCV tracks each point on its own, and the two image pyramids
+with their derivatives, 0.27 ms a call, are built once instead of twice); the tiny frame's mean time from an integer
+sum (:func:`mean_time_us`); the per-cell rank of ``detect_features`` without a loop (``features.rank_in_runs``).
+Alternating processes (``wloop.sh`` / ``wbench.py``, 4 runs each, median, loaded machine), selection per MCI main ->
+branch: landing seeds 0-3 11.96 / 12.05 / 12.57 / 12.20 -> 11.47 / 11.43 / 12.07 / 11.16 ms, indoor 0-1 8.55 / 8.67
+-> 8.22 / 7.91 ms; the whole main thread per MCI (``run_slam``'s thread CPU over the MCIs) -0.05 to -2.5 ms. What is
+left is OpenCV's KLT itself (about 7 ms per landing MCI, 30 us per point for both passes, 23 px window, 3 levels):
+its Python binding takes no prebuilt pyramids (a list of levels is refused), so each call still rebuilds both
+pyramids, and cutting the per-point work bit for bit would take a numba port of OpenCV's fixed-point, SIMD-ordered
+``LKTrackerInvoker``. Skipping the backward pass for points that fail the forward one would save under 1 % (147 of
+17797 points, ``t_fail.py``).
 """
 
 from __future__ import annotations
