@@ -304,16 +304,19 @@ def detect_features(img8: np.ndarray, cfg: FeatureConfig, existing: np.ndarray |
     # Sort by cell, then strongest first, ties broken by position: a total order.
     order = np.lexsort((pts[:, 0], pts[:, 1], -resp, cell))
     pts, cell, resp = pts[order], cell[order], resp[order]
-    rank = np.zeros(len(pts), int)
-    starts = np.flatnonzero(np.r_[True, cell[1:] != cell[:-1]])
-    for s, e in zip(starts, np.r_[starts[1:], len(pts)]):
-        rank[s:e] = np.arange(e - s)
-    sel = rank < cfg.per_cell
+    sel = rank_in_runs(cell) < cfg.per_cell
     pts, resp = pts[sel], resp[sel]
     if max_total is not None and len(pts) > max_total:
         top = np.lexsort((pts[:, 0], pts[:, 1], -resp))[:max_total]
         pts = pts[np.sort(top)]
     return np.ascontiguousarray(pts, np.float32)
+
+
+def rank_in_runs(labels: np.ndarray) -> np.ndarray:
+    """Position of each element within its run of equal consecutive ``labels`` (0 at each run's start), int64: the
+    distance to the run's first element, without a Python loop over the runs (session 26)."""
+    first = np.r_[True, labels[1:] != labels[:-1]]
+    return np.arange(len(labels)) - np.flatnonzero(first)[np.cumsum(first) - 1]
 
 
 def has_support(support: np.ndarray, uv: np.ndarray, window_px: int, min_ratio: float) -> np.ndarray:
@@ -375,6 +378,16 @@ def track_features(prev8: np.ndarray, cur8: np.ndarray, pts: np.ndarray, cfg: Fe
         idx = np.flatnonzero(ok)
         ok[idx[patch_ncc(prev8, cur8, p0.reshape(-1, 2)[idx], p1[idx]) < min_ncc]] = False
     return p1.astype(np.float32), ok
+
+
+def track_feature_sets(prev8: np.ndarray, cur8: np.ndarray, sets: list[np.ndarray], cfg: FeatureConfig) -> list[tuple[np.ndarray, np.ndarray]]:
+    """:func:`track_features` of each point set in ``sets`` between the same two images, in one KLT call: OpenCV tracks
+    every point on its own, so the results are bit for bit those of one call per set, without rebuilding the two
+    image pyramids (and their derivatives) for each set."""
+    n = [len(p) for p in sets]
+    new, ok = track_features(prev8, cur8, np.concatenate([np.asarray(p, np.float32).reshape(-1, 2) for p in sets]), cfg)
+    cut = np.cumsum(n)[:-1]
+    return list(zip(np.split(new, cut), np.split(ok, cut)))
 
 
 def step_consistent(p0: np.ndarray, p1: np.ndarray, ok: np.ndarray, judge: np.ndarray, max_residual_px: float,
