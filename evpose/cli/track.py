@@ -113,7 +113,11 @@ def main(
         fusion: Fusion backend of the fused modes: factor_graph (iSAM2 + fixed-lag window), ekf (error-state EKF
             baseline) or imu_only (dead reckoning from the initial state).
         rate_hz: Pose updates per second of recording time (default from the config: 200).
-        init: 'gt' (first ground-truth pose) or 'tx ty tz qx qy qz qw' (pose at the first event).
+        init: 'gt' (first ground-truth pose) or 'tx ty tz qx qy qz qw' (pose at the first event). With a pose given, a
+            restart after a long event gap starts from the last estimate; with ``reacquisition: {enabled: true}`` in
+            --config it searches for the pose around it instead (pose hypotheses tracked side by side, the best
+            accepted only if it clearly beats the others; see evpose.tracker.reacquisition), the updates of the
+            search reported lost ("re-acquisition ...") until one is accepted.
         config: Tracker configuration, YAML or JSON (see ``evpose.tracker.config``).
         timings: Write per-update, per-module latencies (ms) and counts to this JSON file.
         smoothed: Also write the factor graph's smoothed trajectory here (``full`` mode, factor_graph backend only):

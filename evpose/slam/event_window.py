@@ -7,6 +7,25 @@ KLT through the following ones. When the median feature displacement (eq. 7)
 exceeds ``th_fd`` the collected events form a reconstruction window for an
 MCI, and ``N_e`` becomes ``floor(N_f N_e / N_x)`` (eq. 8).
 
+Session 26 (``/tmp/s26/window26``), CPU, outputs bit for bit those of main (``ident.py`` / ``ident2.py``, copies of
+``/tmp/s26/speed26``'s: trajectories and every step's tracks, hypothesis, scores, MCI and pose of landing event-only
+seeds 0-11, event-inertial 0 and 2 and E-I-C2 1; indoor event-only 0-3 and E-I-C2 1). On landing seed 0 the selection
+(:meth:`EventWindowSelector.push`) took 11.8 ms of main-thread CPU per MCI (``wsplit.py``, thread_time per function):
+KLT 8.3 (399 ``track_features`` calls: 162 for the window's own features, 237 for the carried ones), FAST and
+Shi-Tomasi 0.9, the two-view RANSAC 0.6, 8-bit scaling 0.5, splats 0.5, dispatch 0.5, ``np.mean`` of the tiny
+frames' times 0.2. Kept: the carried features move between the same two tiny frames as the window's own, so both go
+through one KLT call (``features.track_feature_sets``; OpenCV tracks each point on its own, and the two image pyramids
+with their derivatives, 0.27 ms a call, are built once instead of twice); the tiny frame's mean time from an integer
+sum (:func:`mean_time_us`); the per-cell rank of ``detect_features`` without a loop (``features.rank_in_runs``).
+Alternating processes (``wloop.sh`` / ``wbench.py``, 4 runs each, median, loaded machine), selection per MCI main ->
+branch: landing seeds 0-3 11.96 / 12.05 / 12.57 / 12.20 -> 11.47 / 11.43 / 12.07 / 11.16 ms, indoor 0-1 8.55 / 8.67
+-> 8.22 / 7.91 ms; the whole main thread per MCI (``run_slam``'s thread CPU over the MCIs) -0.05 to -2.5 ms. What is
+left is OpenCV's KLT itself (about 7 ms per landing MCI, 30 us per point for both passes, 23 px window, 3 levels):
+its Python binding takes no prebuilt pyramids (a list of levels is refused), so each call still rebuilds both
+pyramids, and cutting the per-point work bit for bit would take a numba port of OpenCV's fixed-point, SIMD-ordered
+``LKTrackerInvoker``. Skipping the backward pass for points that fail the forward one would save under 1 % (147 of
+17797 points, ``t_fail.py``).
+
 Why sparser events make the event-only map worse (session 26, ``/tmp/s26/sparse26``; the lab: the simulated landing with
 its events kept with probability 0.4 before 1.2 s, "dimmed", or 0.5 throughout, "thinned", ``dimx.py``; defaults:
 dimmed seeds 0-7 4.38 %, thinned 4.54 %, full 1.44 % over seeds 0-23). Three separate causes, none of them the
@@ -61,7 +80,7 @@ import numpy as np
 
 from evpose.slam.config import EventImageConfig, EventWindowConfig, FeatureConfig
 from evpose.slam.event_image import event_image, to_uint8
-from evpose.slam.features import detect_features, track_features
+from evpose.slam.features import detect_features, track_feature_sets, track_features
 
 
 class WindowEvent(str, enum.Enum):
@@ -166,6 +185,17 @@ class WindowState:
     """Positions of all reference features in each of those frames, float32 (M, 2) px (only when carried)."""
     carried: _Carried | None = None
     """The previous window's features, continued through this one (only when carried)."""
+
+
+def mean_time_us(t: np.ndarray) -> int:
+    """``int(np.mean(t))`` of int64 event times, us, from an integer sum where that is exact: while ``n * max|t|``
+    stays below 2^53 every partial sum of numpy's float64 summation is an integer it holds exactly, so its sum (in
+    any order) is the integer sum and the mean the same one division. numpy's mean of int64 casts the array to
+    float64 in buffered blocks, 75 us per tiny frame of the landing (session 26); else it is still used."""
+    n = len(t)
+    if n and max(abs(int(t.min())), abs(int(t.max()))) * n < 2**53:
+        return int(float(int(t.sum())) / n)
+    return int(np.mean(t))
 
 
 def _empty_chunk() -> _Chunk:
@@ -283,7 +313,7 @@ class EventWindowSelector:
         img = event_image(tiny.x, tiny.y, tiny.p if self.icfg.use_polarity else None, self.width, self.height, self.icfg.sigma_px)
         self.last_tiny_image = img
         img8 = to_uint8(img)
-        t_mid = int(np.mean(tiny.t))
+        t_mid = mean_time_us(tiny.t)
         if s.ref_pts is None:
             pts = detect_features(img8, self.fcfg, max_total=cfg.reference_features, support=img)
             if len(pts) < cfg.min_features:
@@ -300,12 +330,21 @@ class EventWindowSelector:
         s.chunks.append(tiny)
         s.n_frames += 1
         idx = np.flatnonzero(s.alive)
-        new, ok = track_features(s.prev8, img8, s.cur_pts[idx], self.fcfg)
+        c = s.carried if self.carry_tracks else None
+        carried = None
+        if c is not None and c.last8 is s.prev8:
+            # The carried features move between the same two tiny frames: one KLT call for both sets (each point is
+            # tracked on its own, so the positions are those of two calls) saves the image pyramids of a second call.
+            cidx = np.flatnonzero(c.alive)
+            (new, ok), (cnew, cok) = track_feature_sets(s.prev8, img8, [s.cur_pts[idx], c.pts[-1][cidx]], self.fcfg)
+            carried = (cidx, cnew, cok)
+        else:
+            new, ok = track_features(s.prev8, img8, s.cur_pts[idx], self.fcfg)
         s.cur_pts[idx[ok]] = new[ok]
         s.alive[idx[~ok]] = False
         s.prev8, s.t_cur_us = img8, t_mid
         self._reject_outliers()
-        self._record(img8, t_mid)
+        self._record(img8, t_mid, carried)
         alive = np.flatnonzero(s.alive)
         if len(alive) < cfg.min_features:
             # Features vanished (large motion or texture change): dispatch what we have if it spans motion.
@@ -323,8 +362,9 @@ class EventWindowSelector:
         self.last_event = WindowEvent.TRACKING
         return None
 
-    def _record(self, img8: np.ndarray, t_mid: int) -> None:
-        """Keeps this tiny frame's feature positions and moves the carried features into it (``carry_tracks``)."""
+    def _record(self, img8: np.ndarray, t_mid: int, tracked: tuple | None = None) -> None:
+        """Keeps this tiny frame's feature positions and moves the carried features into it (``carry_tracks``);
+        ``tracked``: their KLT result (indices, positions, ok), when already tracked with the window's own features."""
         if not self.carry_tracks:
             return
         s = self.state
@@ -333,8 +373,11 @@ class EventWindowSelector:
         c = s.carried
         if c is None:
             return
-        idx = np.flatnonzero(c.alive)
-        new, ok = track_features(c.last8, img8, c.pts[-1][idx], self.fcfg)
+        if tracked is None:
+            idx = np.flatnonzero(c.alive)
+            new, ok = track_features(c.last8, img8, c.pts[-1][idx], self.fcfg)
+        else:
+            idx, new, ok = tracked
         pts = c.pts[-1].copy()
         pts[idx[ok]] = new[ok]
         c.alive[idx[~ok]] = False

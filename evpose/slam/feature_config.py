@@ -91,7 +91,10 @@ class FeatureConfig:
     never pass. With that, 2 (was 1): landing seeds 0-23 1.80 -> 1.44 % (24 of 24 within 2 %), 24-47 2.09 -> 1.70 %
     (19), 48-71 2.17 -> 1.82 % (11 -> 20; seed 66 8.35 %), the 240 runs 2.23 -> 1.70 % (within 2 % 209, over 5 % 7;
     paired -0.53 +- 0.14 points); indoor unchanged (seeds 0-7 6.84 %, 8-11 7.98 %); E-I-C2 landing 0-23 ATE 0.82 -> 0.94
-    %, RPE at most 0.0034 m/m and 0.0020 deg/m; CPU per MCI landing 22.8 -> 28.6 ms, indoor 15.1 -> 15.0."""
+    %, RPE at most 0.0034 m/m and 0.0020 deg/m; CPU per MCI landing 22.8 -> 28.6 ms, indoor 15.1 -> 15.0. Session 26
+    (``/tmp/s26/speed26``, module notes of :mod:`evpose.slam.mci`): the MCI stage in numba and KLT without its unread
+    error pass, outputs bit-identical: CPU per MCI with this default landing seeds 0-3 31.1 -> 25.8 ms (main alongside,
+    loaded machine; means 36.2 -> 30.8), indoor seeds 0-1 16.4 -> 12.2 ms."""
     klt_upsample_sigma_px: float = field(default=0.5, metadata={"min": 0.3, "max": 2.0, "step": 0.05, "unit": "px"})
     """``klt_upsample``: the fine MCI's splat, sensor pixels (the sensor-grid MCI's is ``EventImageConfig.sigma_px``).
     0.5 (was 0.6 before session 24's ``fine9``, which measured every 240-run figure at 0.5)."""

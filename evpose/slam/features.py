@@ -304,16 +304,19 @@ def detect_features(img8: np.ndarray, cfg: FeatureConfig, existing: np.ndarray |
     # Sort by cell, then strongest first, ties broken by position: a total order.
     order = np.lexsort((pts[:, 0], pts[:, 1], -resp, cell))
     pts, cell, resp = pts[order], cell[order], resp[order]
-    rank = np.zeros(len(pts), int)
-    starts = np.flatnonzero(np.r_[True, cell[1:] != cell[:-1]])
-    for s, e in zip(starts, np.r_[starts[1:], len(pts)]):
-        rank[s:e] = np.arange(e - s)
-    sel = rank < cfg.per_cell
+    sel = rank_in_runs(cell) < cfg.per_cell
     pts, resp = pts[sel], resp[sel]
     if max_total is not None and len(pts) > max_total:
         top = np.lexsort((pts[:, 0], pts[:, 1], -resp))[:max_total]
         pts = pts[np.sort(top)]
     return np.ascontiguousarray(pts, np.float32)
+
+
+def rank_in_runs(labels: np.ndarray) -> np.ndarray:
+    """Position of each element within its run of equal consecutive ``labels`` (0 at each run's start), int64: the
+    distance to the run's first element, without a Python loop over the runs (session 26)."""
+    first = np.r_[True, labels[1:] != labels[:-1]]
+    return np.arange(len(labels)) - np.flatnonzero(first)[np.cumsum(first) - 1]
 
 
 def has_support(support: np.ndarray, uv: np.ndarray, window_px: int, min_ratio: float) -> np.ndarray:
@@ -327,6 +330,16 @@ def has_support(support: np.ndarray, uv: np.ndarray, window_px: int, min_ratio: 
     iu = np.clip(np.asarray(uv)[:, 0].round().astype(int), 0, w - 1)
     iv = np.clip(np.asarray(uv)[:, 1].round().astype(int), 0, h - 1)
     return mass[iv, iu] >= min_ratio * mean_mass
+
+
+KLT_NO_ERROR = cv2.OPTFLOW_LK_GET_MIN_EIGENVALS
+"""``calcOpticalFlowPyrLK`` flag for the KLT calls here and in :func:`evpose.slam.keyframe_search.klt_near`: OpenCV then
+returns the window's minimum eigenvalue as the (unread) error instead of measuring the patch difference in one more pass
+over each window at the end. Positions are the same; the status differs only where that pass finds the end point
+more than half a window outside the image (then 0 without the flag), and such a point fails the in-image test and
+the forward-backward test (under half a window) anyway. Session 26 (``/tmp/s26/speed26/t_eigflag.py`` on the KLT calls
+of a default landing run): the fine-grid calls 673 -> 642 ms (138 calls), the re-finding 326 -> 322 ms (692); the
+trajectories and every step's tracks bit for bit those of main (``ident.py``, ``ident2.py``)."""
 
 
 def track_features(prev8: np.ndarray, cur8: np.ndarray, pts: np.ndarray, cfg: FeatureConfig, guess: np.ndarray | None = None,
@@ -345,16 +358,16 @@ def track_features(prev8: np.ndarray, cur8: np.ndarray, pts: np.ndarray, cfg: Fe
     p0 = np.ascontiguousarray(pts, np.float32).reshape(-1, 1, 2)
     win = (int(cfg.klt_window_px), int(cfg.klt_window_px))
     crit = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 30, 0.01)
-    flags = 0
+    flags = KLT_NO_ERROR
     p1_init = None
     if guess is not None:
         p1_init = np.ascontiguousarray(guess, np.float32).reshape(-1, 1, 2).copy()
-        flags = cv2.OPTFLOW_USE_INITIAL_FLOW
+        flags |= cv2.OPTFLOW_USE_INITIAL_FLOW
     p1, st1, _ = cv2.calcOpticalFlowPyrLK(prev8, cur8, p0, p1_init, winSize=win, maxLevel=int(cfg.klt_levels), criteria=crit, flags=flags)
-    p0_init, flags_b = None, 0
+    p0_init, flags_b = None, KLT_NO_ERROR
     if guess_back and p1_init is not None:
         p0_init = (p0 + (p1 - p1_init)).astype(np.float32)
-        flags_b = cv2.OPTFLOW_USE_INITIAL_FLOW
+        flags_b |= cv2.OPTFLOW_USE_INITIAL_FLOW
     p0b, st2, _ = cv2.calcOpticalFlowPyrLK(cur8, prev8, p1, p0_init, winSize=win, maxLevel=int(cfg.klt_levels), criteria=crit, flags=flags_b)
     p1 = p1.reshape(-1, 2)
     fb = np.linalg.norm(p0b.reshape(-1, 2) - p0.reshape(-1, 2), axis=1)
@@ -365,6 +378,16 @@ def track_features(prev8: np.ndarray, cur8: np.ndarray, pts: np.ndarray, cfg: Fe
         idx = np.flatnonzero(ok)
         ok[idx[patch_ncc(prev8, cur8, p0.reshape(-1, 2)[idx], p1[idx]) < min_ncc]] = False
     return p1.astype(np.float32), ok
+
+
+def track_feature_sets(prev8: np.ndarray, cur8: np.ndarray, sets: list[np.ndarray], cfg: FeatureConfig) -> list[tuple[np.ndarray, np.ndarray]]:
+    """:func:`track_features` of each point set in ``sets`` between the same two images, in one KLT call: OpenCV tracks
+    every point on its own, so the results are bit for bit those of one call per set, without rebuilding the two
+    image pyramids (and their derivatives) for each set."""
+    n = [len(p) for p in sets]
+    new, ok = track_features(prev8, cur8, np.concatenate([np.asarray(p, np.float32).reshape(-1, 2) for p in sets]), cfg)
+    cut = np.cumsum(n)[:-1]
+    return list(zip(np.split(new, cut), np.split(ok, cut)))
 
 
 def step_consistent(p0: np.ndarray, p1: np.ndarray, ok: np.ndarray, judge: np.ndarray, max_residual_px: float,

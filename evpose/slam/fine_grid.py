@@ -65,7 +65,21 @@ ATE 0.82 -> 0.94 % (paired +0.12 +- 0.13, 10 better; always: 1.00 %), 23 of 24 w
 -> 0.0034 m/m and 0.0022 -> 0.0020 deg/m (always: 0.0033 / 0.0020); indoor seeds 0-7 unchanged (ATE 19.60 %, RPE at most
 0.0067 m/m, 0.0047 deg/m). Main-thread CPU per MCI (``cpubench.py``, median of the runs' medians, variants alternating
 in one process): landing seeds 0-3 off 22.8 ms, always 29.1, the rule 28.6; indoor seeds 0-1 15.1 / 21.7 / 15.0. The
-warm-up's length: see ``FeatureConfig.klt_upsample_warmup_mcis``."""
+warm-up's length: see ``FeatureConfig.klt_upsample_warmup_mcis``.
+
+Session 26 (``/tmp/s26/speed26``; module notes of :mod:`evpose.slam.mci`): the MCI stage in numba and KLT without its
+unread error pass, outputs bit for bit the same, give the rule landing seeds 0-3 31.1 -> 25.8 ms per MCI (means 36.2 ->
+30.8; main measured alongside on a loaded machine, its quiet figure being the 28.6 above), indoor seeds 0-1 16.4 ->
+12.2 ms. The fine image's 8-bit scaling reads ``|img|`` in place
+(:func:`fine_to_uint8`; :func:`evpose.slam.event_image.robust_maximum` with a stride). Its KLT, forward and backward on
+the 692x520 images, is now the largest part of a landing MCI that is not a keyframe (about 9 of 25 ms).
+Session 26, a rolling rule for recordings that start sparse (``/tmp/s26/lead``; not kept): the median over the last 10
+MCIs instead of the first 10, the fine grid on once it reaches the floor. On the simulated recordings it changes
+nothing: the indoor rooms' rolling median peaks at 0.094-0.119 events per pixel (seeds 0-11, event-only and E-I-C2
+alike, ``dens.py``), the landing passes at its warm-up. On a landing whose first 1.2 s keep 40 % of their events (a dim
+start, ``dim.py``, seeds 0-7) 4.38 -> 4.36 % (seeds 4 and 5 only moved; the full-brightness runs 1.44 % on 0-23: the dim
+start itself costs seeds 4, 5 and 7, 7-11 %), and on the indoor room followed at once by the landing (``splice.py``, the
+landing part's maps) 6.83 -> 7.80 % (seeds 2 and 3 worse, 0 and 6 better): no gain to show for the change."""
 
 from __future__ import annotations
 
@@ -107,9 +121,9 @@ def fine_to_uint8(img: np.ndarray, stride: int) -> np.ndarray:
     if stride <= 0:
         return to_uint8(img)
     img = np.asarray(img, dtype=np.float32)
-    top = robust_maximum(np.abs(img[::stride, ::stride]))
+    top = robust_maximum(img, stride)  # |img| read in place (session 26; bit for bit the same)
     if top is None:
-        top = robust_maximum(np.abs(img))
+        top = robust_maximum(img)
         if top is None:
             return np.zeros(img.shape, np.uint8)
     if (img < 0).any():  # signed: 0 -> 128, saturating at +-top

@@ -45,6 +45,7 @@ from evpose.slam.atlas import SlamMap
 from evpose.slam.config import FeatureConfig
 import cv2
 
+from evpose.slam.features import KLT_NO_ERROR
 from evpose.slam.geometry import project
 
 
@@ -111,7 +112,7 @@ def klt_near(src8: np.ndarray, img8: np.ndarray, src: np.ndarray, guess: np.ndar
     win = (int(fcfg.klt_window_px), int(fcfg.klt_window_px))
     crit = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 30, 0.01)
     p1, st1, _ = cv2.calcOpticalFlowPyrLK(src8, img8, p0, p1_init, winSize=win, maxLevel=int(fcfg.klt_levels), criteria=crit,
-                                          flags=cv2.OPTFLOW_USE_INITIAL_FLOW)
+                                          flags=cv2.OPTFLOW_USE_INITIAL_FLOW | KLT_NO_ERROR)
     found = p1.reshape(-1, 2)
     h, w = img8.shape
     ok = (st1.ravel() == 1) & (found[:, 0] >= 0) & (found[:, 0] <= w - 1) & (found[:, 1] >= 0) & (found[:, 1] <= h - 1)
@@ -120,7 +121,8 @@ def klt_near(src8: np.ndarray, img8: np.ndarray, src: np.ndarray, guess: np.ndar
     if len(idx):
         p0_init = (p0[idx] + (p1[idx] - p1_init[idx])).astype(np.float32)
         p0b, st2, _ = cv2.calcOpticalFlowPyrLK(img8, src8, np.ascontiguousarray(p1[idx]), p0_init, winSize=win,
-                                               maxLevel=int(fcfg.klt_levels), criteria=crit, flags=cv2.OPTFLOW_USE_INITIAL_FLOW)
+                                               maxLevel=int(fcfg.klt_levels), criteria=crit,
+                                               flags=cv2.OPTFLOW_USE_INITIAL_FLOW | KLT_NO_ERROR)
         fb = np.linalg.norm(p0b.reshape(-1, 2) - p0[idx].reshape(-1, 2), axis=1)
         ok[idx] = (st2.ravel() == 1) & (fb <= fcfg.klt_max_bidir_error_px)
     return found.astype(np.float32), ok

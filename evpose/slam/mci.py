@@ -12,6 +12,30 @@ powers by matrix exponential, made the simulated landing worse (event-only,
 seeds 0-11, reference fraction 1.0: mean ATE 3.16 -> 5.43 %, tracked at least
 68.6 %): over the few pixels of motion a window spans, its projective terms
 follow the track noise.
+
+Session 26 (``/tmp/s26/speed26``), the main thread's CPU: the MCI stage spent 9-10 ms of the landing's 29-31 ms per
+MCI in numpy and scipy overhead around small arrays, not in the splats. Now in numba or batched, each bit for bit the
+code it replaced (tests named ``test_*_kernels.py`` / ``test_geometry_rotvec.py`` keep that code as the reference):
+the sharpness score and 8-bit scaling (:mod:`evpose.slam.event_image`), :func:`se3_homographies` (one rotation call
+for all slices, 0.55 -> 0.03 ms), :func:`fit_average_depth`'s median search (0.7 -> 0.1-0.3 ms), H5's projection
+(:func:`evpose.slam.parallax_warp.project_moved`, the einsum 73 -> 5-24 us; its twist fit 1.6 -> 0.5 ms a call) and
+every warp's rotation matrices (:func:`evpose.slam.geometry.rotvec_matrices`, scipy's arithmetic without its 10-15 us
+a call). Same trajectories, tracks, hypotheses, scores and MCIs as main (``ident.py`` / ``ident2.py``: landing
+event-only seeds 0-11, event-inertial 0 and 2, E-I-C2 1; indoor event-only 0-3, E-I-C2 1; 22 runs hashed; and
+``/tmp/s22/lead/exp.py`` landing seeds 0-23, ``main_land.json`` / ``new_land.json``: every seed's ATE, tracked share
+and maps the same, mean 1.44 %, 24 of 24 within 2 %; the whole run's CPU, tiny frames included, 3.84 -> 3.42 s mean).
+CPU per MCI
+(``mci_cpu`` + ``tracking_cpu``; ``benchloop.sh`` runs ``bench1.py``, main and this code in strictly alternating
+processes, ABBA, each the second run of its process; ``benchsum.py``; a loaded machine, so main's own figure is above
+session 25's 28.6 ms). These kernels alone (four runs per seed, ``bench_r2/r3.jsonl``): landing seeds 0-3 median of the
+runs' medians 31.3 -> 26.6 ms (median of the runs' means 37.0 -> 31.5; per seed -4.1 to -7.0 ms), the MCI stage alone
+9.7 -> 5.0 ms; indoor seeds 0-1 16.4 -> 12.8 ms (means 20.2 -> 16.5), MCI stage 5.3 -> 2.3 ms. With KLT's unread error
+pass dropped as well (:data:`evpose.slam.features.KLT_NO_ERROR`; four runs per seed, ``bench_r4/r5.jsonl``): landing
+31.1 -> 25.8 ms (means 36.2 -> 30.8; per seed -3.8 to -6.5 ms), MCI stage 9.6 -> 5.0 ms; indoor 16.4 -> 12.2 ms (means
+19.7 -> 16.0), MCI stage 5.2 -> 2.2 ms. What is left per landing MCI
+(``split.py``, seed 0): the fine-grid KLT about 9 ms and the re-finding KLT about 5 ms (OpenCV, whose Python binding
+cannot take a pyramid built once per image, so each call rebuilds both), a keyframe with its local BA about 22 ms (one
+MCI in three), PnP 1.6 ms, the MCI stage about 4.6 ms (splats and blurs 2.2, H5 1.7).
 """
 
 from __future__ import annotations
@@ -20,13 +44,14 @@ import enum
 from dataclasses import dataclass, field
 
 import cv2
+import numba as nb
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from evpose.slam.config import EventImageConfig, FeatureConfig, MciConfig
 from evpose.slam.event_image import event_image, local_std_score, to_uint8
 from evpose.slam.event_window import ReconstructionWindow
 from evpose.slam.fine_grid import fine_to_uint8
+from evpose.slam.geometry import rotvec_matrices
 from evpose.slam.parallax_warp import depth_field, fit_twist, sample_depth, warp_events
 from evpose.slam.window_fit import fit_twist_rate, whole_span_s
 
@@ -176,17 +201,52 @@ def se3_homographies(K: np.ndarray, omega: np.ndarray, velocity: np.ndarray, dep
     """Per-slice ``K (R + t e3^T / Z) K^-1`` moving a point seen ``dt`` before the end to the end frame.
 
     ``omega``/``velocity`` are the camera's own-frame rates; a camera rotating by
-    ``R_wc(dt) = Exp(omega dt)`` sees static points rotate by its inverse.
+    ``R_wc(dt) = Exp(omega dt)`` sees static points rotate by its inverse. All slices at once (session 26: one
+    rotation call and stacked products instead of a loop over the slices, bit for bit the same; 0.55 -> 0.03 ms).
     """
     Ki = np.linalg.inv(K)
-    out = np.empty((len(dts), 3, 3))
+    dts = np.asarray(dts, np.float64)
     e3 = np.array([0.0, 0.0, 1.0])
     inv_depth = 1.0 / max(depth, 1e-6)
-    for k, dt in enumerate(dts):
-        R = Rotation.from_rotvec(np.asarray(omega) * dt).as_matrix().T
-        t = -R @ (np.asarray(velocity) * dt)
-        out[k] = K @ (R + np.outer(t, e3) * inv_depth) @ Ki
+    R = rotvec_matrices(np.asarray(omega)[None, :] * dts[:, None]).transpose(0, 2, 1)
+    t = np.matmul(-R, (np.asarray(velocity)[None, :] * dts[:, None])[:, :, None])[:, :, 0]
+    return K @ (R + (t[:, :, None] * e3[None, None, :]) * inv_depth) @ Ki
+
+
+@nb.njit(cache=True, error_model="numpy")
+def _depth_errors(a, b, cur, ws):
+    """For each inverse depth ``w`` of ``ws``: the median over the tracks of ``|(a + w b)_xy / (a + w b)_z - cur|``,
+    numpy's arithmetic (``np.median(np.linalg.norm(uv - cur, axis=1))``); inf where that is not finite."""
+    n = a.shape[0]
+    out = np.empty(ws.shape[0])
+    e = np.empty(n)
+    for k in range(ws.shape[0]):
+        w = ws[k]
+        nan = False
+        for i in range(n):
+            qz = a[i, 2] + w * b[2]
+            dx = (a[i, 0] + w * b[0]) / qz - cur[i, 0]
+            dy = (a[i, 1] + w * b[1]) / qz - cur[i, 1]
+            e[i] = np.sqrt(dx * dx + dy * dy)
+            nan |= np.isnan(e[i])
+        if nan:  # numpy's median is NaN then
+            out[k] = np.inf
+            continue
+        for i in range(1, n):  # insertion sort: a few dozen tracks
+            v = e[i]
+            j = i - 1
+            while j >= 0 and e[j] > v:
+                e[j + 1] = e[j]
+                j -= 1
+            e[j + 1] = v
+        m = n // 2
+        med = e[m] if n % 2 else (e[m - 1] + e[m]) / 2.0
+        out[k] = med if np.isfinite(med) else np.inf
     return out
+
+
+_DEPTH_GRID = np.geomspace(1e-3, 1e3, 241)
+"""The inverse depths :func:`fit_average_depth` tries first."""
 
 
 def fit_average_depth(K: np.ndarray, omega: np.ndarray, velocity: np.ndarray, ref: np.ndarray, cur: np.ndarray, seconds: float) -> float | None:
@@ -194,31 +254,24 @@ def fit_average_depth(K: np.ndarray, omega: np.ndarray, velocity: np.ndarray, re
 
     With a fronto-parallel plane the warped point is ``(a + w b) / (a_z + w b_z)``
     with ``a = K R K^-1 x``, ``b = K t`` and ``w`` the inverse depth, so the robust
-    (median) reprojection error is evaluated for a whole grid of ``w`` at once.
+    (median) reprojection error is evaluated for a whole grid of ``w`` at once (session 26: in numba,
+    :func:`_depth_errors`, bit for bit numpy's; 0.7 -> 0.3 ms).
     """
     if len(ref) < 3 or np.linalg.norm(velocity) < 1e-12 or seconds <= 0:
         return None
     Ki = np.linalg.inv(K)
-    R = Rotation.from_rotvec(np.asarray(omega) * seconds).as_matrix().T
+    R = rotvec_matrices(np.asarray(omega) * seconds)[0].T
     t = -R @ (np.asarray(velocity) * seconds)
-    a = np.c_[ref, np.ones(len(ref))] @ (K @ R @ Ki).T
-    b = K @ t
-
-    def best(ws):
-        q = a[None, :, :] + ws[:, None, None] * b[None, None, :]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            uv = q[..., :2] / q[..., 2:3]
-            err = np.median(np.linalg.norm(uv - cur[None], axis=2), axis=1)
-        err = np.where(np.isfinite(err), err, np.inf)
-        return int(np.argmin(err)), err
-
-    grid = np.geomspace(1e-3, 1e3, 241)
-    k, err = best(grid)
+    a = np.ascontiguousarray(np.c_[ref, np.ones(len(ref))] @ (K @ R @ Ki).T, np.float64)
+    b = np.ascontiguousarray(K @ t, np.float64)
+    cur = np.ascontiguousarray(cur, np.float64)
+    grid = _DEPTH_GRID
+    err = _depth_errors(a, b, cur, grid)
+    k = int(np.argmin(err))
     if not np.isfinite(err[k]):
         return None
     fine = np.linspace(grid[max(k - 1, 0)], grid[min(k + 1, len(grid) - 1)], 101)
-    k2, _ = best(fine)
-    return float(1.0 / fine[k2])
+    return float(1.0 / fine[int(np.argmin(_depth_errors(a, b, cur, fine)))])
 
 
 class MciGenerator:

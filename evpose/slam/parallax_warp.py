@@ -57,7 +57,8 @@ from __future__ import annotations
 import cv2
 import numba as nb
 import numpy as np
-from scipy.spatial.transform import Rotation
+
+from evpose.slam.geometry import rotvec_matrices
 
 
 def points_in_view(Xw: np.ndarray, T_cw: np.ndarray, K: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -97,11 +98,39 @@ def sample_depth(field: np.ndarray, x: np.ndarray, y: np.ndarray, step: int = 2)
     return field[r, c].astype(np.float64)
 
 
+@nb.njit(cache=True, error_model="numpy")
+def _project_moved(K, R, X, xis):
+    """``q = einsum("ij,mkj,mnk->mni", K, R, X - t)`` projected, in numpy's einsum order: ``q_i`` summed from 0 over
+    ``k`` then ``j`` of ``K_ij R_kj y_k`` (the product left to right)."""
+    M, N = R.shape[0], X.shape[0]
+    out = np.empty((M, N, 2))
+    y = np.empty(3)
+    q = np.empty(3)
+    for m in range(M):
+        for n in range(N):
+            for k in range(3):
+                y[k] = X[n, k] - xis[m, 3 + k]
+            for i in range(3):
+                acc = 0.0
+                for k in range(3):
+                    for j in range(3):
+                        acc = K[i, j] * R[m, k, j] * y[k] + acc
+                q[i] = acc
+            out[m, n, 0] = q[0] / q[2]
+            out[m, n, 1] = q[1] / q[2]
+    return out
+
+
 def project_moved(K: np.ndarray, X: np.ndarray, xis: np.ndarray) -> np.ndarray:
-    """Points ``X`` (N, 3) after each motion ``xis`` (M, 6) ``= (omega s, v s)`` (H1's convention), pixels (M, N, 2)."""
-    R = Rotation.from_rotvec(xis[:, :3]).as_matrix()  # R_k; a point moves by R_k^T (X - t_k)
-    q = np.einsum("ij,mkj,mnk->mni", K, R, X[None] - xis[:, None, 3:])
-    return q[..., :2] / q[..., 2:3]
+    """Points ``X`` (N, 3) after each motion ``xis`` (M, 6) ``= (omega s, v s)`` (H1's convention), pixels (M, N, 2).
+
+    Session 26: the projection in numba (:func:`_project_moved`), bit for bit the numpy einsum it replaces (kept as
+    the reference in ``tests/slam/test_parallax_warp_kernels.py``); :func:`evpose.slam.window_fit.fit_twist_rate`
+    calls it about 11 times per MCI, 73 -> 24 us a call.
+    """
+    xis = np.ascontiguousarray(xis, np.float64)
+    R = rotvec_matrices(xis[:, :3])  # R_k; a point moves by R_k^T (X - t_k)
+    return _project_moved(np.ascontiguousarray(K, np.float64), R, np.ascontiguousarray(X, np.float64), xis)
 
 
 def fit_twist(K: np.ndarray, ref: np.ndarray, cur: np.ndarray, z: np.ndarray, huber_px: float = 1.0,
@@ -154,11 +183,10 @@ def _warp_kernel(x, y, z, slice_idx, M, b):
     u = np.empty(n)
     v = np.empty(n)
     for i in range(n):
-        s = slice_idx[i]
-        m = M[s]
-        qx = z[i] * (m[0, 0] * x[i] + m[0, 1] * y[i] + m[0, 2]) - b[s, 0]
-        qy = z[i] * (m[1, 0] * x[i] + m[1, 1] * y[i] + m[1, 2]) - b[s, 1]
-        qz = z[i] * (m[2, 0] * x[i] + m[2, 1] * y[i] + m[2, 2]) - b[s, 2]
+        s = slice_idx[i]  # M indexed in place, no view per event
+        qx = z[i] * (M[s, 0, 0] * x[i] + M[s, 0, 1] * y[i] + M[s, 0, 2]) - b[s, 0]
+        qy = z[i] * (M[s, 1, 0] * x[i] + M[s, 1, 1] * y[i] + M[s, 1, 2]) - b[s, 1]
+        qz = z[i] * (M[s, 2, 0] * x[i] + M[s, 2, 1] * y[i] + M[s, 2, 2]) - b[s, 2]
         if qz > 1e-9:
             u[i] = qx / qz
             v[i] = qy / qz
@@ -175,7 +203,7 @@ def warp_events(K: np.ndarray, x: np.ndarray, y: np.ndarray, z: np.ndarray, slic
     convention with ``rotvec = omega dt``, ``translation = v dt``); events that end behind the camera go far outside
     the image."""
     K = np.asarray(K, np.float64)
-    R = Rotation.from_rotvec(np.asarray(rotvecs, np.float64)).as_matrix().transpose(0, 2, 1)  # (S, 3, 3)
+    R = rotvec_matrices(rotvecs).transpose(0, 2, 1)  # (S, 3, 3)
     M = K @ R @ np.linalg.inv(K)
     b = np.einsum("ij,sjk,sk->si", K, R, np.asarray(translations, np.float64))
     return _warp_kernel(np.ascontiguousarray(x, np.float64), np.ascontiguousarray(y, np.float64), np.ascontiguousarray(z, np.float64),

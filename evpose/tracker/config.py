@@ -23,6 +23,7 @@ from evpose.tracker.edge_offsets import EdgeOffsetConfig
 from evpose.tracker.event_registration_config import EventRegistrationConfig
 from evpose.tracker.map_refinement import MapRefinementConfig
 from evpose.tracker.motion_filter_config import MotionFilterConfig
+from evpose.tracker.reacquisition import ReacquisitionConfig
 from evpose.tracker.registration_config import RegistrationConfig
 from evpose.tracker.visible_map import VisibleMapConfig
 from evpose.tracker.event_gaps import DEFAULT_MAX_EVENT_GAP_MS
@@ -75,8 +76,9 @@ class TrackerConfig:
     max_event_gap_ms: float = field(default=DEFAULT_MAX_EVENT_GAP_MS, metadata={"min": 50.0, "max": 3.6e6, "step": 50.0, "unit": "ms"})
     """A stretch without events (in the fused modes, or without IMU samples) longer than this ends the track: a
     TrackingSession reports one lost update for the whole gap (not one per empty update: a 1 h pause was 720k updates)
-    and restarts the tracker after it as at the start (the ground-truth pose when it started from ground truth, else the
-    last estimate, velocity unknown), milliseconds. Shorter outages are bridged as before (the fused modes propagate
+    and restarts the tracker after it as at the start (the ground-truth pose when it started from ground truth, else
+    the last estimate, velocity unknown, or with ``reacquisition.enabled`` where its search finds the camera),
+    milliseconds. Shorter outages are bridged as before (the fused modes propagate
     the IMU). See ``evpose.tracker.event_gaps``."""
     snapshot_every: int = field(default=50, metadata={"min": 1, "max": 10000, "step": 1, "unit": "steps"})
     """A TrackingSession keeps a full-state snapshot every this many steps (for seeking), steps."""
@@ -99,6 +101,9 @@ class TrackerConfig:
     """IMU fusion (``full``; ``stpe+filter`` uses it only for the motion the polarity filter needs)."""
     ego_motion: EgoMotionConfig = field(default_factory=EgoMotionConfig)
     """Ego-motion infrastructure extraction (``full`` only): drop events the IMU-predicted motion does not explain."""
+    reacquisition: ReacquisitionConfig = field(default_factory=ReacquisitionConfig)
+    """The search for the pose when the tracker restarts without knowing it (after an event gap without ground
+    truth; see ``evpose.tracker.reacquisition``)."""
 
 
 def load_config(path: str | Path) -> TrackerConfig:

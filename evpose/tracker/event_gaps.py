@@ -22,7 +22,7 @@ no restart). They were bridged by interpolating across the hole, or by holding t
 with its IMU cut at 2 s wrote its last 2 s 0.68 m RMS off (2.5 m at most), exit 0, now 394 poses to 2.0 s (12.00 mm)
 and exit 1 naming the IMU's end; with a 1 s hole from 1.5 s it was 4.4 m RMS off after the hole, now 17.4 mm.
 
-Without ground truth (``--init``) the restart is from the last estimate with the velocity unknown, which is right
+Without ground truth (``--init``) the restart was from the last estimate with the velocity unknown, which is right
 for a camera that stood still during the gap. In the splice above the camera moved on at 3.3 m/s, 0.1 m from the
 last estimate when tracking restarted: the fusion did not catch up and wrote the 394 updates after the gap 3.45 m
 RMS off (exit 1 for the gap). Tried and left out: reporting the fused modes' updates after a restart lost until the
@@ -30,6 +30,17 @@ map is acquired again (5 strict registrations in a row): it did not help there (
 strict test, 78 of 759 points; still 4.2 m RMS over the 291 poses written) and cost the restart from ground truth
 37 updates (12.92 against 10.45 mm). The polarity filter's hold for an unknown velocity is set again at such a
 restart, as at a start without one (no change in that run).
+
+Session 26 built a search for the pose for such a restart (:mod:`evpose.tracker.reacquisition`,
+``reacquisition.enabled``, off by default): pose hypotheses around the last estimate, each tracked with the last
+estimated velocity, the best accepted only with a chance-level z of 16 and 1.3 times the runner-up's; until then the
+updates are lost, naming the search. The splice above is found again after 43 updates and written 13.6 mm RMS off (351
+poses); where the camera flew on 0.2-1 s during the pause (0.7-2.5 m on, its velocity changed by 0.8-4.6 m/s) it is
+not found and nothing is written after the gap (the restart from the last estimate: 3.0-3.8 m RMS off). But with the
+pause at 1.0 / 1.5 / 3.0 s the restart from the last estimate recovers by itself (61 / 57 / 46 mm RMS after it) and the
+search did worse (nothing written / a 44 mm lock that then drifted to 790 mm / nothing): hence off. A velocity that is
+unknown, not the pose, is what kept the fusion off at 2 s: from the true pose with the velocity unknown it was 3.37 m
+RMS off too.
 
 :class:`UpdateSchedule` maps the session's update count to grid indices and back in O(log gaps): the cost of a gap
 no longer depends on its length.

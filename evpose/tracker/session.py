@@ -226,6 +226,10 @@ class TrackingSession:
             result = self._restart_after_gap(gap, until, batch, imu)
         else:
             result = self.tracker.step(until, batch, imu=imu, debug=debug)
+        if result.counts.get("reacquired"):
+            # The re-acquisition search restarted the tracker here (``--smoothed`` replays each stretch from its start).
+            t, pose, v = self.tracker.reacquisition.last_restart
+            self.restarts[t] = (pose.copy(), v)
         self._cursor = i1
         self._step_index += 1
         self.results.append(result)
@@ -286,6 +290,21 @@ class TrackingSession:
         gt = self.recording.ground_truth
         from_truth = self._from_ground_truth and gt is not None and int(gt.t[0]) <= until <= int(gt.t[-1])
         pose = gt.interpolate(until).matrix(0) if from_truth else self.tracker.pose
+        gap_words = (f"no {gap.stream} for {gap.seconds:.3f} s (t={gap.t_last_us * 1e-6:.6f} to {gap.t_next_us * 1e-6:.6f} s):"
+                     f" the track is lost over the gap")
+        search = self.tracker.reacquisition
+        if not from_truth and search is not None:
+            # Where the camera went meanwhile is unknown: search for the pose around the last estimate with the last
+            # velocity (evpose.tracker.reacquisition); the tracker goes on from the trial the search accepts.
+            last_v = next((r.velocity for r in reversed(self.results) if r.velocity is not None), None)
+            search.begin(pose, self.tracker.t_us, last_v, gap_words)
+            motion = self.tracker.components.motion
+            if motion is not None and imu is not None and len(imu):
+                motion.fusion.add_imu(imu)
+            self.tracker.feed(events)
+            search.new_round(self.tracker, until)
+            return StepResult(until, pose.copy(), TrackStatus.LOST, f"{gap_words}; searching for the pose around the last"
+                              " estimate (re-acquisition)", counts={"events_in": len(events), "registered": 0})
         seed = from_truth and self.config.initial_velocity_from_ground_truth
         v0 = _ground_truth_velocity(gt, until) if seed else None
         self.restarts[int(until)] = (pose.copy(), v0)
@@ -305,8 +324,7 @@ class TrackingSession:
         if seed:
             self._seed_velocity(until, pose)
         how = "the ground-truth pose" if from_truth else "the last estimate"
-        reason = (f"no {gap.stream} for {gap.seconds:.3f} s (t={gap.t_last_us * 1e-6:.6f} to {gap.t_next_us * 1e-6:.6f} s):"
-                  f" the track is lost over the gap and restarted after it from {how}")
+        reason = f"{gap_words} and restarted after it from {how}"
         return StepResult(until, pose.copy(), TrackStatus.LOST, reason, counts={"events_in": len(events), "registered": 0})
 
     def trajectory(self, include_lost: bool = False) -> Trajectory:

@@ -48,6 +48,7 @@ from evpose.tracker.motion_filter import ConstantVelocityKalman
 from evpose.tracker.point_selection import registered_points
 from evpose.tracker.polarity_stage import align_to_polarity, learn_polarity_signs
 from evpose.tracker.predictor import ConstantVelocityPredictor, MotionPredictor
+from evpose.tracker.reacquisition import Reacquisition
 from evpose.tracker.registration import polarity_trail, register_to_map
 from evpose.tracker.registration_config import prior_widening
 from evpose.tracker.step_result import StepResult, TrackStatus, elapsed_ms, step_debug
@@ -171,6 +172,9 @@ class Tracker:
         (:mod:`evpose.tracker.chance_level`), None = none do: the acquisition window asks for it."""
         self._ego_history = empty_ego_history()
         """Recent noise-filtered events (ideal x, y, t us) the ego-motion filter judges new ones against."""
+        self.reacquisition = Reacquisition(config.reacquisition) if config.reacquisition.enabled else None
+        """The search for the pose after a restart without one (:mod:`evpose.tracker.reacquisition`); while it is
+        :attr:`~evpose.tracker.reacquisition.Reacquisition.active`, :meth:`step` runs it instead. None when off."""
 
     # ------------------------------------------------------------------ state
     @property
@@ -225,6 +229,8 @@ class Tracker:
         state["acquisition"], state["tracking"] = self.hold.snapshot()
         state.update(pose=None if self._pose is None else np.copy(self._pose), t_us=self._t_us, steps=self._steps,
                      ego_history=tuple(np.copy(a) for a in self._ego_history))
+        if self.reacquisition is not None:
+            state["reacquisition"] = self.reacquisition.snapshot()
         return state
 
     def restore(self, state: dict) -> None:
@@ -238,6 +244,8 @@ class Tracker:
         self._steps = state["steps"]
         self._ego_history = tuple(np.copy(a) for a in state["ego_history"])
         self.hold.restore(state["acquisition"], state.get("tracking", (True, 0, True)))
+        if self.reacquisition is not None:
+            self.reacquisition.restore(state.get("reacquisition"))  # None (idle) too: a search restored over stops
 
     def _side_motion(self):
         """The fusion backend when it runs beside (not as) the predictor, as in ``stpe+filter``."""
@@ -251,6 +259,12 @@ class Tracker:
         ``imu`` holds the IMU samples since the previous step (IMU clock); ``stpe`` mode ignores it,
         the fused modes feed it to the fusion backend before predicting.
         """
+        if self.reacquisition is not None and self.reacquisition.active:
+            return self.reacquisition.step(self, int(until_t_us), events, imu)
+        return self.track(until_t_us, events, imu, debug)
+
+    def track(self, until_t_us: int, events: EventArray, imu: ImuSamples | None = None, debug: bool = False) -> StepResult:
+        """:meth:`step` without the re-acquisition search (which runs its pose hypotheses through this)."""
         until = int(until_t_us)
         timings: dict[str, float] = {}
         t_total = time.perf_counter()
