@@ -127,7 +127,15 @@ class FeatureConfig:
     sensor grid's kept), only indoors. Per MCI (warm-up 0): 0.035 landing seeds 0-23 1.59 % (as always on), indoor 0-7
     8.04 % (off 6.84); 0.1 landing 2.29 % (the turn left on the sensor grid), indoor 6.64 %. Once per recording over 10
     MCIs: 0.15 sits between the warm-up medians of the indoor rooms (seeds 0-11: 0.039-0.089) and of the landing (seeds
-    0-71: 0.185-0.247; ``/tmp/s25/auto9/warmup.py``), so any floor between gives the same runs there; 0.15 (was 0)."""
+    0-71: 0.185-0.247; ``/tmp/s25/auto9/warmup.py``), so any floor between gives the same runs there; 0.15 (was 0).
+    Session 26 (``/tmp/s26/sparse26``: ``dens2.py`` the warm-up median, ``dimx.py`` the ATE): a landing with fewer
+    events reads as a room. Dimmed (events before 1.2 s kept with probability 0.4) seeds 0-7: warm-up median
+    0.070-0.089; thinned to 0.5 throughout: 0.083-0.119; so the whole recording runs on the sensor grid, though these
+    MCIs hold 4000-12000 events (under 3000: 0-4 % of them, but 45 % on the dimmed seed 7, whose ``N_e`` runs down:
+    ``EventWindowConfig.noise_residual_px``). The fine grid forced on (0): dimmed 4.38 -> 2.46 % (paired -1.92 +- 0.91,
+    7 of 8 better; seeds 4 / 5 8.36 / 7.17 -> 2.18 / 1.41 %, seed 7 10.65 -> 8.93), thinned 4.54 -> 2.84 % (0 of 8
+    within 2 % either way). The warm-up medians overlap the rooms' (0.039-0.089), so no floor separates them: a floor of
+    0.095 would turn it on for 7 of the 8 thinned runs and none of the dimmed, 0.007 above the highest room."""
     klt_upsample_warmup_mcis: int = field(default=10, metadata={"min": 0, "max": 200, "step": 1, "unit": "MCIs"})
     """``klt_upsample_min_events_per_px``: 0 judges every MCI by its own events; N > 0 judges once, by the median over
     the recording's first N MCIs (tracked on the sensor grid), and keeps that choice to the end, MCIs. Session 25
