@@ -17,6 +17,7 @@ from evpose.core.imu import ImuSamples
 from evpose.core.recording import Recording
 from evpose.core.trajectory import Trajectory, invert_pose
 from evpose.slam.atlas import SlamMap
+from evpose.slam.event_image import event_image, to_uint8
 
 
 def make_points(n: int, seed: int, depth=(3.0, 6.0), half_width: float = 3.0) -> np.ndarray:
@@ -103,3 +104,15 @@ def circle_map(n: int, step_us: int) -> SlamMap:
     for k in range(n):
         m.add_pose(k * step_us, circle_pose(k * step_us / 1e6))
     return m
+
+
+def shifted_image_pair(rng: np.random.Generator, shift, width: int, height: int) -> tuple[np.ndarray, np.ndarray]:
+    """Two 8-bit event images of random blobs and short segments, the second moved by ``shift`` px (some points leave
+    the image): KLT inputs for comparing tracking implementations."""
+    n = 3000
+    x, y = rng.uniform(-20, width + 20, n), rng.uniform(-20, height + 20, n)
+    seg = rng.uniform(0, 1, n)
+    x, y = x + 6 * seg, y + 3 * seg
+    a = to_uint8(event_image(x, y, None, width, height, 1.0))
+    b = to_uint8(event_image(x + shift[0], y + shift[1], None, width, height, 1.0))
+    return a, b

@@ -4,20 +4,15 @@ import numpy as np
 
 import evpose.slam.event_window as event_window
 from evpose.slam.config import EventImageConfig, EventWindowConfig, FeatureConfig
-from evpose.slam.event_image import event_image, to_uint8
 from evpose.slam.event_window import EventWindowSelector
 from evpose.slam.features import track_feature_sets, track_features
-from slam_synthetic import make_recording
+from slam_synthetic import make_recording, shifted_image_pair
 
 W, H = 160, 120
 
 
 def _pair(rng, shift):
-    n = 3000
-    x, y = rng.uniform(-20, W + 20, n), rng.uniform(-20, H + 20, n)
-    seg = rng.uniform(0, 1, n)
-    x, y = x + 6 * seg, y + 3 * seg
-    return to_uint8(event_image(x, y, None, W, H, 1.0)), to_uint8(event_image(x + shift[0], y + shift[1], None, W, H, 1.0))
+    return shifted_image_pair(rng, shift, W, H)
 
 
 def test_track_feature_sets_equals_one_track_features_call_per_set():

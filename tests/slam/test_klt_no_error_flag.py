@@ -3,22 +3,15 @@ import cv2
 import numpy as np
 
 from evpose.slam.config import FeatureConfig
-from evpose.slam.event_image import event_image, to_uint8
 from evpose.slam.features import track_features
 from evpose.slam.keyframe_search import klt_near
+from slam_synthetic import shifted_image_pair
 
 W, H = 160, 120
 
 
 def _pair(rng, shift):
-    """Two event images of random blobs and segments, the second moved by ``shift`` px (some points leave the image)."""
-    n = 3000
-    x, y = rng.uniform(-20, W + 20, n), rng.uniform(-20, H + 20, n)
-    seg = rng.uniform(0, 1, n)
-    x, y = x + 6 * seg, y + 3 * seg
-    a = to_uint8(event_image(x, y, None, W, H, 1.0))
-    b = to_uint8(event_image(x + shift[0], y + shift[1], None, W, H, 1.0))
-    return a, b
+    return shifted_image_pair(rng, shift, W, H)
 
 
 def _track_features_ref(prev8, cur8, pts, cfg, guess=None, guess_back=False):
