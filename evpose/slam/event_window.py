@@ -353,7 +353,7 @@ class EventWindowSelector:
             self._reset(keep_overlap=False)
             self.last_event = WindowEvent.NO_TEXTURE
             return None
-        s.median_displacement_px = float(np.median(np.linalg.norm(s.cur_pts[alive] - s.ref_pts[alive], axis=1)))  # eq. (7)
+        s.median_displacement_px = self._median_displacement(alive)
         if s.median_displacement_px > cfg.feature_displacement_px:
             return self._dispatch(forced=False)
         if s.n_frames >= cfg.max_tiny_frames * 4:
@@ -361,6 +361,11 @@ class EventWindowSelector:
             return self._dispatch(forced=True)
         self.last_event = WindowEvent.TRACKING
         return None
+
+    def _median_displacement(self, alive: np.ndarray) -> float:
+        """``M_fd`` (eq. 7) of the live features ``alive`` (indices), px."""
+        s = self.state
+        return float(np.median(np.linalg.norm(s.cur_pts[alive] - s.ref_pts[alive], axis=1)))
 
     def _record(self, img8: np.ndarray, t_mid: int, tracked: tuple | None = None) -> None:
         """Keeps this tiny frame's feature positions and moves the carried features into it (``carry_tracks``);
