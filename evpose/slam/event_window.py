@@ -82,9 +82,10 @@ chaos (``pool.py``: seeds 0-11 under the defaults and session 23's four perturba
 1.9 / 2.1, ``reprojection_threshold_px`` 2.4 / 2.6; 60 runs each): 7.87 -> 8.68 % (paired +0.81 +- 0.49, 27 better),
 from the events 42.5 -> 41.1 %, tracked 93.3 -> 80.4 % (runs under 80 %: 1 -> 28). So no detector was built. One
 would be easy: the KLT displacement between the odd and the even events of the current tiny window at the live
-features (``floor_diag.py``; the halves share their motion, so it is sampling noise) is 4.8-5.2 px in the rooms' clamp
-windows (seeds 0, 1: ``M_fd`` 6.2, true 1.3-1.4), 2.5 in their others (5.2 against 3.8-4.4), 1.6 on landing seed 0
-(5.1 against 4.8): ``M_fd`` over it 1.3 / 2.1 / 3.2. KLT over-reads the rooms' dense start as well (seed 0's first
+features (``floor_diag.py``; the halves share their motion, so it is sampling noise; medians) is 4.8-5.7 px in the
+rooms' clamp windows (seeds 0-3: ``M_fd`` 6.2-6.3, true 1.3-1.4), 2.4-2.6 in their others (5.2-5.3 against 3.8-4.5),
+1.4-1.6 on landing seeds 0, 7 (5.1-5.2 against 4.7-4.8): ``M_fd`` over it 1.1-1.3 / 2.0-2.2 / 3.2-3.7, for 2.2-2.4 ms
+of main-thread CPU per tiny window (``floor_cpu.py``: two splats, two 8-bit scalings, one KLT call at 40 points). KLT over-reads the rooms' dense start as well (seed 0's first
 0.1 s: ``M_fd`` 4.1-7.6 px at dispatch for a true 1.4-3.8), and those MCIs track. What limits the rooms (``cond.py``,
 the 48 perturbed runs each, 144 s, by the recording's event rate; tracked from the events KLT / oracle): under 50k
 events/s (sparse and blank walls) 31 % of the time, 5-7 / 4-14 %; 100-200k/s (turns, 30-110 deg/s) 24 %, 8-28 /
