@@ -85,16 +85,16 @@ would be easy: the KLT displacement between the odd and the even events of the c
 features (``floor_diag.py``; the halves share their motion, so it is sampling noise; medians) is 4.8-5.7 px in the
 rooms' clamp windows (seeds 0-3: ``M_fd`` 6.2-6.3, true 1.3-1.4), 2.4-2.6 in their others (5.2-5.3 against 3.8-4.5),
 1.4-1.6 on landing seeds 0, 7 (5.1-5.2 against 4.7-4.8): ``M_fd`` over it 1.1-1.3 / 2.0-2.2 / 3.2-3.7, for 2.2-2.4 ms
-of main-thread CPU per tiny window (``floor_cpu.py``: two splats, two 8-bit scalings, one KLT call at 40 points). KLT over-reads the rooms' dense start as well (seed 0's first
-0.1 s: ``M_fd`` 4.1-7.6 px at dispatch for a true 1.4-3.8), and those MCIs track. What limits the rooms (``cond.py``,
-the 48 perturbed runs each, 144 s, by the recording's event rate; tracked from the events KLT / oracle): under 50k
-events/s (sparse and blank walls) 31 % of the time, 5-7 / 4-14 %; 100-200k/s (turns, 30-110 deg/s) 24 %, 8-28 /
-10-21 %; 50-100k/s 36 %, 51-90 / 57-85 %; over 200k/s (the start) 8 %, 74-80 / 47-49 % (seed 0: the oracle keeps
-``N_e`` at 2000, MCIs of 12000 events with 19-30 tracks against 150). The main failure is
-``SlamFailure.STARVED`` (0.7-1.35 s of each 3 s run; blank walls 0.5 s): in seed 0's turn (1.0-1.6 s) 94 keyframes in
-96 MCIs grow the map from 124 to 538 points, yet at most 17 tracks per MCI carry one (``TrackingConfig.min_inliers``
-12) and 1 MCI is tracked (oracle: 2 of 30, at most 14): map-point tracks do not survive between these MCIs (why is
-for the tracker), which no window selection mends.
+of main-thread CPU per tiny window (``floor_cpu.py``: two splats, two 8-bit scalings, one KLT call at 40 points).
+KLT over-reads the rooms' dense start as well (seed 0's first 0.1 s: ``M_fd`` 4.1-7.6 px at dispatch for a true
+1.4-3.8), and those MCIs track. What limits the rooms (``cond.py``, the 48 perturbed runs each, 144 s, by the
+recording's event rate; tracked from the events KLT / oracle): under 50k events/s (sparse and blank walls) 31 % of the
+time, 5-7 / 4-14 %; 100-200k/s (turns, 30-110 deg/s) 24 %, 8-28 / 10-21 %; 50-100k/s 36 %, 51-90 / 57-85 %; over
+200k/s (the start) 8 %, 74-80 / 47-49 % (seed 0: the oracle keeps ``N_e`` at 2000, MCIs of 12000 events with 19-30
+tracks against 150). The main failure is ``SlamFailure.STARVED`` (0.7-1.35 s of each 3 s run; blank walls 0.5 s): in
+seed 0's turn (1.0-1.6 s) 94 keyframes in 96 MCIs grow the map from 124 to 538 points, yet at most 17 tracks per MCI
+carry one (``TrackingConfig.min_inliers`` 12) and 1 MCI is tracked (oracle: 2 of 30, at most 14): map-point tracks do
+not survive between these MCIs (why is for the tracker), which no window selection mends.
 """
 
 from __future__ import annotations
