@@ -93,8 +93,12 @@ time, 5-7 / 4-14 %; 100-200k/s (turns, 30-110 deg/s) 24 %, 8-28 / 10-21 %; 50-10
 200k/s (the start) 8 %, 74-80 / 47-49 % (seed 0: the oracle keeps ``N_e`` at 2000, MCIs of 12000 events with 19-30
 tracks against 150). The main failure is ``SlamFailure.STARVED`` (0.7-1.35 s of each 3 s run; blank walls 0.5 s): in
 seed 0's turn (1.0-1.6 s) 94 keyframes in 96 MCIs grow the map from 124 to 538 points, yet at most 17 tracks per MCI
-carry one (``TrackingConfig.min_inliers`` 12) and 1 MCI is tracked (oracle: 2 of 30, at most 14): map-point tracks do
-not survive between these MCIs (why is for the tracker), which no window selection mends.
+carry one (``TrackingConfig.min_inliers`` 12) and 1 MCI is tracked (oracle: 2 of 30, at most 14). Their tracks die
+between MCIs (``survive.py``, the share of the track ids of one MCI alive in the next): with a map point 0.23-0.52 in
+the turn against 0.77-0.90 where it tracks, all tracks 0.34-0.50 against 0.60-0.77 (tracks without a point die as
+fast, so it is KLT's MCI-to-MCI step that loses them, not the pose's outlier checks), 3-6 new points per MCI; with the
+oracle's MCIs of 3700-5600 events no better (0.48-0.65 with a point, all 0.23-0.33, only 23-56 tracks alive). That
+is for the tracker and the MCIs of a fast turn, not for the window selection.
 """
 
 from __future__ import annotations
