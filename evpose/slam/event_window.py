@@ -95,8 +95,8 @@ tracks against 150). The main failure is ``SlamFailure.STARVED`` (0.7-1.35 s of 
 seed 0's turn (1.0-1.6 s) 94 keyframes in 96 MCIs grow the map from 124 to 538 points, yet at most 17 tracks per MCI
 carry one (``TrackingConfig.min_inliers`` 12) and 1 MCI is tracked (oracle: 2 of 30, at most 14). Their tracks die
 between MCIs (``survive.py``, the share of the track ids of one MCI alive in the next): with a map point 0.23-0.52 in
-the turn against 0.77-0.90 where it tracks, all tracks 0.34-0.50 against 0.60-0.77 (tracks without a point die as
-fast, so it is KLT's MCI-to-MCI step that loses them, not the pose's outlier checks), 3-6 new points per MCI; with the
+the turn against 0.77-0.90 where it tracks, all tracks 0.34-0.50 against 0.60-0.77 (tracks without a point die about
+as fast, which points at KLT's MCI-to-MCI step rather than the pose's outlier checks), 3-6 new points per MCI; with the
 oracle's MCIs of 3700-5600 events no better (0.48-0.65 with a point, all 0.23-0.33, only 23-56 tracks alive). That
 is for the tracker and the MCIs of a fast turn, not for the window selection.
 """
