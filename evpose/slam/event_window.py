@@ -80,10 +80,9 @@ the truth only while ``N_e`` is at the clamp (``ORACLE=clamp``: a perfect detect
 KLT's) 9.86 % (+3.02 +- 1.30, 2 better; still 42 % at the clamp). Held-out 8-11 (7.98 %): 7.97 / 7.08 %. Over the
 chaos (``pool.py``: seeds 0-11 under the defaults and session 23's four perturbations, ``TrackingConfig.ba_huber_px``
 1.9 / 2.1, ``reprojection_threshold_px`` 2.4 / 2.6; 60 runs each): 7.87 -> 8.68 % (paired +0.81 +- 0.49, 27 better),
-from the events 42.5 -> 41.1 %, tracked 93.3 -> 80.4 % (runs under 80 %: 1 -> 28). E-I-C2 indoor seeds 0-7 (metric ATE 19.60 %, RPE at most
-0.0067 m/m and 0.0047 deg/m): 18.04 % (-1.56 +- 2.06, 3 better), RPE at most 0.0173 m/m and 0.0179 deg/m, from the
-events 45.1 -> 31.3 %. So no detector was built. One
-would be easy: the KLT displacement between the odd and the even events of the current tiny window at the live
+from the events 42.5 -> 41.1 %, tracked 93.3 -> 80.4 % (runs under 80 %: 1 -> 28). E-I-C2 indoor seeds 0-7 (metric
+ATE 19.60 %, RPE at most 0.0067 m/m and 0.0047 deg/m): 18.04 % (-1.56 +- 2.06, 3 better), RPE at most 0.0173 m/m and
+0.0179 deg/m, from the events 45.1 -> 31.3 %. So no detector was built. One would be easy: the KLT displacement between the odd and the even events of the current tiny window at the live
 features (``floor_diag.py``; the halves share their motion, so it is sampling noise; medians) is 4.8-5.7 px in the
 rooms' clamp windows (seeds 0-3: ``M_fd`` 6.2-6.3, true 1.3-1.4), 2.4-2.6 in their others (5.2-5.3 against 3.8-4.5),
 1.4-1.6 on landing seeds 0, 7 (5.1-5.2 against 4.7-4.8): ``M_fd`` over it 1.1-1.3 / 2.0-2.2 / 3.2-3.7, for 2.2-2.4 ms
