@@ -135,11 +135,14 @@ class EventWindowConfig:
     2.46), thinned 2.85 % (2.84); indoors 8.76 % (tracked min 61.4 %; 2.5 px: 9.73 %). Off: the rooms lose tracked
     time with it (issue 9 asks for 80 %), and it misses most of their false windows (indoor seeds 0-7 with 2.0 px:
     18-58 % of the MCIs still at the ``min_events`` clamp, against 55-64 % off; seed 0's measured 5.9 px where the
-    truth moved 1.36, ``truedisp.py``), so the indoor figures do not yet say what stopping the rooms' runaway is
-    worth. Nor does a rate test catch them (``rateguard_patch.py``, not kept: a window whose ``M_fd`` per ms of
+    truth moved 1.36, ``truedisp.py``). Nor does a rate test catch them (``rateguard_patch.py``, not kept: a window
+    whose ``M_fd`` per ms of
     reference-to-last frame exceeds 3 times the running mean of the trusted windows' is not adapted): dimmed 3.31 %,
     indoor 8.87 % (paired +2.02 +- 0.90), 56 % of the rooms' MCIs still at the clamp; with such windows doubling
-    ``N_e`` instead, dimmed 4.03 %, indoor 7.37 % (+0.53 +- 0.61; tracked min 89.2 %), 49 % at the clamp."""
+    ``N_e`` instead, dimmed 4.03 %, indoor 7.37 % (+0.53 +- 0.61; tracked min 89.2 %), 49 % at the clamp. Session 27:
+    catching the rooms' false windows is worth nothing there: dispatching from the true displacement (an oracle) takes
+    indoor seeds 0-11 from 7.87 to 8.68 % over 60 runs, and from it only at the clamp (a perfect detector) seeds 0-7
+    from 6.84 to 9.86 % (module notes of :mod:`evpose.slam.event_window`)."""
     overlap: float = field(default=0.5, metadata={"min": 0.0, "max": 0.9, "step": 0.05, "unit": "fraction"})
     """Overlap of consecutive reconstruction windows, fraction of a window. Session 15, landing event-only seeds 0-11
     (0.5: mean ATE 2.52 %, 5 within 2 %): 0.3 -> 2.40 % (6), 0.7 -> bit-identical results."""
