@@ -30,5 +30,11 @@ class InputError(EvposeError):
         super().__init__(": ".join(parts))
 
 
+class OutputError(InputError):
+    """An output that cannot be written: a full disk, a read-only or vanished folder, a path where no file can be
+    created. Printed like an :class:`InputError` (``<file>: <problem>``, exit code 2): the user's remedy is another
+    ``--out`` or some free space, and a traceback (or, from HDF5, a crash at exit) helps no one."""
+
+
 class ConfigError(EvposeError):
     """An invalid configuration value or combination of options."""

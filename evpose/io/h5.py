@@ -20,6 +20,7 @@ from __future__ import annotations
 import contextlib
 import enum
 import json
+import os
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -33,7 +34,7 @@ from evpose.core.imu import ImuSamples
 from evpose.core.recording import Recording
 from evpose.core.trajectory import Trajectory, quaternion_problem
 from evpose.errors import InputError
-from evpose.io.atomic import atomic_path
+from evpose.io.atomic import atomic_path, write_failure
 
 FORMAT_NAME = "recording"
 FORMAT_VERSION = 1
@@ -100,6 +101,7 @@ class H5RecordingWriter:
         self._cfg = config
         self._stack: contextlib.ExitStack | None = None
         self._file: h5py.File | None = None
+        self._columns: dict[str, h5py.Dataset] = {}
         self._buffer: list[EventArray] = []
         self._buffered = 0
         self._written = 0
@@ -117,25 +119,47 @@ class H5RecordingWriter:
     def __enter__(self) -> "H5RecordingWriter":
         self._stack = contextlib.ExitStack()
         tmp = self._stack.enter_context(atomic_path(self.path, inputs=self._inputs))
+        self._tmp = tmp
         self._file = h5py.File(tmp, "w")
         grp = self._file.create_group("events")
         chunk = int(self._cfg.chunk_events)
-        for name, dtype in _EVENT_COLUMNS:
-            grp.create_dataset(name, shape=(0,), maxshape=(None,), dtype=dtype, chunks=(chunk,), **_filter_kwargs(self._cfg))
+        # Held open until the end: closing a dataset writes its cached chunks, and a write failing there (a full disk)
+        # is only an "Exception ignored" message, after which HDF5 cannot close the file (see _discard_writes).
+        self._columns = {name: grp.create_dataset(name, shape=(0,), maxshape=(None,), dtype=dtype, chunks=(chunk,), **_filter_kwargs(self._cfg))
+                         for name, dtype in _EVENT_COLUMNS}
         return self
 
     def __exit__(self, exc_type, exc, tb) -> None:
         if exc_type is None:
             try:
                 self._finish()
+                self._file.flush()  # a full disk fails here, not in close(), where HDF5 cannot recover from it
             except BaseException as err:  # finishing failed: drop the temporary file like any other error
                 exc_type, exc, tb = type(err), err, err.__traceback__
         if self._file is not None:
-            self._file.close()
+            if exc is not None:
+                self._discard_writes()  # before the columns close, which writes their cached chunks
+            self._columns = {}
+            if exc is None:
+                self._file.close()
+            else:
+                with contextlib.suppress(OSError, RuntimeError):  # after a failed flush: "slist already enabled?"
+                    self._file.close()
             self._file = None
-        self._stack.__exit__(exc_type, exc, tb)
+        self._stack.__exit__(exc_type, exc, tb)  # deletes the temporary file; a failed write becomes one line
         if exc is not None:
             raise exc
+
+    def _discard_writes(self) -> None:
+        """Point HDF5's file descriptor at /dev/null before closing a file that is being dropped. HDF5 writes its
+        cached chunks and metadata when closing; on a full disk that failed, left the file open, and every later
+        attempt (h5py's, as its objects were freed, and at exit) failed again: pages of "Exception ignored" and a
+        segmentation fault. Written to /dev/null, those writes succeed and the close completes."""
+        with contextlib.suppress(Exception):
+            fd = self._file.id.get_vfd_handle()
+            null = os.open(os.devnull, os.O_RDWR)
+            os.dup2(null, fd)
+            os.close(null)
 
     # ------------------------------------------------------------ content
     def set_metadata(self, metadata: dict) -> None:
@@ -180,10 +204,9 @@ class H5RecordingWriter:
             self._buffered = len(rest)
 
     def _write_block(self, ev: EventArray) -> None:
-        grp = self._file["events"]
         n0, n1 = self._written, self._written + len(ev)
         for name, _ in _EVENT_COLUMNS:
-            ds = grp[name]
+            ds = self._columns[name]
             ds.resize((n1,))
             ds[n0:n1] = getattr(ev, name)
         if self._origin is None:

@@ -52,3 +52,54 @@ def test_ctrl_c_inside_a_numba_dispatcher_is_one_line_not_a_system_error(monkeyp
     monkeypatch.setattr(importlib, "import_module", interrupted_import)
     assert cli_main.run(["simulate", "--scenario", "landing", "--out", "x.h5"]) == 130
     assert capsys.readouterr().err.strip().splitlines() == ["evpose simulate: interrupted"]
+
+
+def test_ctrl_c_while_open3d_imports_is_one_line_not_an_import_error(monkeypatch, capsys):
+    # pybind11 turns a KeyboardInterrupt during open3d's module initialisation into "ImportError: initialization
+    # failed" raised from it: `evpose simulate` interrupted 1 s in printed that traceback and exited 1.
+    def interrupted_import(name, *args):
+        raise ImportError("initialization failed") from KeyboardInterrupt()
+
+    monkeypatch.setattr(importlib, "import_module", interrupted_import)
+    assert cli_main.run(["simulate", "--scenario", "landing", "--out", "x.h5"]) == 130
+    assert capsys.readouterr().err.strip().splitlines() == ["evpose simulate: interrupted"]
+
+
+def test_ctrl_c_swallowed_by_c_code_that_then_fails_is_one_line_and_exit_130(monkeypatch, capsys):
+    # A Ctrl+C landing in numba's compiler callback (ctypes) is printed as "Exception ignored on calling ctypes callback
+    # function" with its traceback, and numba then fails with "RuntimeError: no compiled object yet": `build-map`
+    # interrupted during a first run's compilation printed both and exited 1.
+    import os
+    import signal
+    import sys
+    import types
+
+    def main() -> int:
+        try:
+            os.kill(os.getpid(), signal.SIGINT)
+            for _ in range(10**6):  # the handler raises at the next bytecode
+                pass
+        except KeyboardInterrupt as exc:  # what the C callback does with it
+            sys.unraisablehook(types.SimpleNamespace(exc_type=KeyboardInterrupt, exc_value=exc, exc_traceback=None,
+                                                     err_msg="Exception ignored on calling ctypes callback function", object=None))
+        raise RuntimeError("no compiled object yet for <Library 'front_layer'>")
+
+    module = types.ModuleType("fake_compiling_command")
+    module.main = main
+    monkeypatch.setitem(sys.modules, "fake_compiling_command", module)
+    monkeypatch.setitem(cli_main.COMMANDS, "fake", ("fake_compiling_command", "compiles, is interrupted, fails"))
+    before = signal.getsignal(signal.SIGINT), sys.unraisablehook
+    assert cli_main.run(["fake"]) == 130
+    assert capsys.readouterr().err.strip().splitlines() == ["evpose fake: interrupted"]
+    assert (signal.getsignal(signal.SIGINT), sys.unraisablehook) == before
+
+
+def test_an_error_without_an_interrupt_is_still_raised(monkeypatch):
+    def broken_import(name, *args):
+        raise RuntimeError("a bug")
+
+    monkeypatch.setattr(importlib, "import_module", broken_import)
+    import pytest
+
+    with pytest.raises(RuntimeError, match="a bug"):
+        cli_main.run(["convert", "in", "out.h5"])
