@@ -13,6 +13,10 @@ import tyro
 from evpose.errors import InputError
 
 
+MAX_ITERATIONS = 20
+"""Most --iterations: each round tracks the whole recording, and one round tracked a separate flight best."""
+
+
 def track_for_refinement(recording, cmap, mode: str = "full", config: Path | None = None, progress: bool = False):
     """(trajectory of every update that has a pose, times of the updates whose registration succeeded)."""
     from evpose.tracker.config import TrackerConfig, TrackerMode, load_config
@@ -57,7 +61,7 @@ def main(
         out: The refined map (.ply); never an input.
         iterations: Track-measure-move rounds. Later rounds move the points closer to the true edges but let the map
             absorb the refinement flight's own pose errors: on the simulated landing one round tracked a separate
-            flight best (ATE 16.4 / 12.6 mm against 16.8 / 13.3 mm after two rounds).
+            flight best (ATE 16.4 / 12.6 mm against 16.8 / 13.3 mm after two rounds). 1..20.
         mode: Tracker mode used to obtain the poses: full, stpe+filter or stpe.
         config: Tracker configuration (YAML/JSON, ``evpose.tracker.config``).
         refine_config: Refinement settings (``evpose.mapping.refine_from_events.EventRefineConfig``) as YAML/JSON.
@@ -77,8 +81,8 @@ def main(
     check_outputs((out, report), inputs=(recording, map, config, refine_config))
     if out.suffix.lower() != ".ply":
         raise InputError(out, "the refined map is written as PLY; use a .ply output name")
-    if iterations < 1:
-        raise InputError(None, f"--iterations must be at least 1, got {iterations}")
+    if not 1 <= iterations <= MAX_ITERATIONS:  # 1000000 tracked the recording on and on (each round a whole track)
+        raise InputError(None, f"--iterations must be within 1..{MAX_ITERATIONS}, got {iterations}")
     if mode not in {m.value for m in TrackerMode}:
         raise InputError(None, f"--mode must be one of {', '.join(m.value for m in TrackerMode)}, got {mode!r}")
     rcfg = read_config(EventRefineConfig, refine_config) if refine_config is not None else EventRefineConfig()

@@ -26,9 +26,14 @@ def parse_init(text: str) -> np.ndarray | None:
         vals = []
     if len(vals) != 7 or not np.all(np.isfinite(vals)):
         raise InputError(None, f"--init expects 'gt' or seven numbers 'tx ty tz qx qy qz qw', got {text!r}")
+    from evpose.core.trajectory import MAX_COORDINATE_M, quaternion_problem
+
     q = np.asarray(vals[3:])
-    if np.linalg.norm(q) < 1e-9:
-        raise InputError(None, "--init quaternion has zero length")
+    bad = quaternion_problem(q[None])  # a component of 1e300 overflowed the norm: scipy's "zero norm" traceback
+    if bad is not None:
+        raise InputError(None, f"--init {bad[1]}")
+    if np.abs(vals[:3]).max() > MAX_COORDINATE_M:
+        raise InputError(None, f"--init position {vals[:3]} is beyond {MAX_COORDINATE_M:g} m (not metres?)")
     T = np.eye(4)
     T[:3, :3] = Rotation.from_quat(q / np.linalg.norm(q)).as_matrix()
     T[:3, 3] = vals[:3]

@@ -72,3 +72,14 @@ def test_refine_map_with_a_map_in_another_frame_names_the_map_like_track(landing
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(err) == 1
     assert err[0].startswith(f"evpose refine-map: error: {tmp_path / 'far.ply'}: only 0 map points are in view") and "(recording " in err[0]
+
+
+@pytest.mark.parametrize("iterations", ["0", "1000000"])
+def test_refine_map_iterations_outside_their_range_are_refused_before_tracking(landing_files, tmp_path, capsys, iterations):
+    # 1000000 rounds tracked the recording on and on (each round a whole track): a hang, not an error.
+    d = landing_files
+    code = run(["refine-map", str(d / "rec.h5"), "--map", str(d / "map.ply"), "--out", str(tmp_path / "r.ply"), "--quiet",
+                "--iterations", iterations])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and err.endswith(f"--iterations must be within 1..20, got {iterations}") and len(err.splitlines()) == 1
+    assert not (tmp_path / "r.ply").exists()
