@@ -105,7 +105,12 @@ def run(argv: list[str]) -> int:
         return 0
     name = argv[0]
     if name not in COMMANDS:
-        print(f"evpose: error: unknown command {name!r}\n\n{_usage()}", file=sys.stderr)
+        # One line like every other error (the whole usage followed it: 15 lines); close matches first.
+        import difflib
+
+        close = difflib.get_close_matches(name, COMMANDS, n=1)
+        hint = f"did you mean {close[0]!r}? " if close else ""
+        print(f"evpose: error: unknown command {name!r}; {hint}commands: {', '.join(COMMANDS)} (see evpose --help)", file=sys.stderr)
         return 2
     # Only the main thread may set a handler (tests and the viewer's workers call run() from others). An ignored
     # SIGINT (nohup, a background job) stays ignored.

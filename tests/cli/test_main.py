@@ -103,3 +103,11 @@ def test_an_error_without_an_interrupt_is_still_raised(monkeypatch):
 
     with pytest.raises(RuntimeError, match="a bug"):
         cli_main.run(["convert", "in", "out.h5"])
+
+
+def test_an_unknown_command_is_one_line_with_the_closest_command(capsys):
+    # The whole usage (15 lines) followed the error.
+    assert cli_main.run(["trak", "x.h5"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1
+    assert err.startswith("evpose: error: unknown command 'trak'; did you mean 'track'? commands: info, convert,")
