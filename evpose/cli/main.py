@@ -14,7 +14,7 @@ import signal
 import sys
 import threading
 
-from evpose.errors import EvposeError
+from evpose.errors import EvposeError, one_line
 
 # name -> (module, one-line description). Order is the order of ``evpose --help``.
 COMMANDS: dict[str, tuple[str, str]] = {
@@ -130,7 +130,7 @@ def run(argv: list[str]) -> int:
         module = importlib.import_module(COMMANDS[name][0])
         result = run_tyro(module.main, argv[1:], f"evpose {name}")
     except EvposeError as exc:
-        print(f"evpose {name}: error: {exc}", file=sys.stderr)
+        print(f"evpose {name}: error: {one_line(str(exc))}", file=sys.stderr)
         return 2
     except BrokenPipeError:
         # Output piped into e.g. `head`, which closed early: not an error of ours.
