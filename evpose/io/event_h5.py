@@ -72,6 +72,12 @@ class EventH5Reader:
             n = self._cols["t"].shape[0]
             if any(ds.shape[0] != n for ds in self._cols.values()):
                 raise EventH5Error(self.path, "events/x, y, t, p differ in length")
+            from evpose.io.h5 import unwritten_problem
+
+            for c, ds in self._cols.items():
+                missing = unwritten_problem(ds)
+                if missing is not None:
+                    raise EventH5Error(self.path, f"events/{c} {missing}: the file is damaged or was never finished")
             self.n_events = int(n)
             self.t_offset_us = self._read_t_offset()
             self._ms_to_idx = self._read_ms_to_idx(n) if "ms_to_idx" in self._f else None

@@ -248,6 +248,23 @@ class H5RecordingWriter:
             f.attrs["calibration"] = json.dumps(self._calibration.to_dict(), sort_keys=True)
 
 
+def unwritten_problem(ds: h5py.Dataset) -> str | None:
+    """What is missing if ``ds`` declares more values than its file stores, else None. A writer that sized its datasets
+    first and stopped (or a crafted file) leaves unwritten chunks, which read as zeros: one declaring 10**13 IMU
+    samples in a 1.5 MB file ended in numpy's "Unable to allocate 72.8 TiB" traceback, and smaller ones could fill the
+    memory. Exact and cheap: HDF5 counts the chunks it allocated."""
+    if ds.size == 0:
+        return None
+    if ds.chunks is None:
+        stored, needed = ds.id.get_storage_size(), ds.nbytes
+        return None if stored >= needed else f"stores {stored} of its {needed} bytes"
+    expected = 1
+    for size, chunk in zip(ds.shape, ds.chunks):
+        expected *= -(-size // chunk)
+    got = ds.id.get_num_chunks()
+    return None if got >= expected else f"has {got} of its {expected} chunks written"
+
+
 def write_recording_h5(path: str | Path, recording: Recording, config: H5WriteConfig = H5WriteConfig()) -> None:
     """Write ``recording`` to ``path`` atomically (never onto ``recording.source``)."""
     inputs = (recording.source,) if recording.source is not None else ()
@@ -318,6 +335,9 @@ class H5RecordingReader:
         if ds.shape != shape or (n is not None and ds.shape[0] != n):
             expected = f"({'N' if n is None else n},{'' if cols is None else f' {cols}'})"
             raise H5FormatError(self.path, f"dataset {name!r} has shape {ds.shape}, expected {expected}")
+        missing = unwritten_problem(ds)
+        if missing is not None:
+            raise H5FormatError(self.path, f"dataset {name!r} {missing}: the file is damaged or was never finished")
         return ds
 
     def _load(self) -> None:
@@ -375,6 +395,8 @@ class H5RecordingReader:
         """``ds[i0:i1]``; a chunk that fails to decompress is a damaged file, reported with the rows it holds."""
         try:
             return ds[()] if i0 is None else ds[i0:i1]
+        except MemoryError:
+            raise H5FormatError(self.path, f"dataset {ds.name.lstrip('/')!r} of shape {ds.shape} does not fit in memory (the file is damaged?)") from None
         except OSError as exc:
             rows = f"rows {i0}-{i1}" if i0 is not None else None
             raise H5FormatError(self.path, f"cannot read dataset {ds.name.lstrip('/')!r} ({str(exc).split(' (')[-1].rstrip(')')}): the file is damaged", rows) from None
