@@ -246,3 +246,15 @@ def test_a_kalibr_timeshift_beyond_any_clock_is_named(tmp_path, shift, message):
     (tmp_path / "camchain.yaml").write_text(cam + f"  timeshift_cam_imu: {shift}\n")
     with pytest.raises(InputError, match=f"camchain.yaml: cam0: {message}"):
         open_recording(tmp_path / "e.h5")
+
+
+def test_an_event_column_with_unwritten_chunks_is_named(tmp_path):
+    # A converter that sized its columns first and stopped leaves chunks that read as zeros.
+    write_event_h5(tmp_path / "e.h5", EventArray.from_arrays([1, 2], [0, 1], [0, 1], [1, -1]))
+    with h5py.File(tmp_path / "e.h5", "r+") as f:
+        for c in "xytp":
+            del f[f"events/{c}"]
+            f.create_dataset(f"events/{c}", shape=(10**9,), dtype="u2" if c in "xy" else "i8", chunks=(1 << 16,))
+        f["events/t"][:10] = np.arange(10)
+    with pytest.raises(InputError, match=r"e.h5: events/t has 1 of its 15259 chunks written: the file is damaged"):
+        EventH5Reader(tmp_path / "e.h5")
