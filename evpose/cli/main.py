@@ -14,7 +14,7 @@ import signal
 import sys
 import threading
 
-from evpose.errors import EvposeError, one_line
+from evpose.errors import EvposeError, one_line, printable
 
 # name -> (module, one-line description). Order is the order of ``evpose --help``.
 COMMANDS: dict[str, tuple[str, str]] = {
@@ -131,6 +131,11 @@ def run(argv: list[str]) -> int:
         result = run_tyro(module.main, argv[1:], f"evpose {name}")
     except EvposeError as exc:
         print(f"evpose {name}: error: {one_line(str(exc))}", file=sys.stderr)
+        return 2
+    except PermissionError as exc:
+        # A file another user owns (or a folder without write access) reached by a reader without its own check.
+        where = f"{printable(str(exc.filename))}: " if exc.filename else ""
+        print(f"evpose {name}: error: {where}cannot open ({exc.strerror or 'permission denied'})", file=sys.stderr)
         return 2
     except BrokenPipeError:
         # Output piped into e.g. `head`, which closed early: not an error of ours.

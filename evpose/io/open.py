@@ -65,6 +65,8 @@ def _is_hdf5(path: Path) -> bool:
     try:
         with open(path, "rb") as fh:
             return fh.read(8) == b"\x89HDF\r\n\x1a\n"
+    except PermissionError:
+        raise  # "not an HDF5 file (bad signature)" misled about a file the user may not read
     except OSError:
         return False
 

@@ -111,3 +111,22 @@ def test_an_unknown_command_is_one_line_with_the_closest_command(capsys):
     err = capsys.readouterr().err
     assert err.count("\n") == 1
     assert err.startswith("evpose: error: unknown command 'trak'; did you mean 'track'? commands: info, convert,")
+
+
+def test_a_file_the_user_may_not_read_is_one_line_naming_it(monkeypatch, capsys, tmp_path):
+    # Readers without their own check ended in a PermissionError traceback; the HDF5 sniffing called it "not an HDF5
+    # file (bad signature)". (Root reads anything, hence the simulated refusal.)
+    import builtins
+
+    path = tmp_path / "theirs.h5"
+    path.write_bytes(b"\x89HDF\r\n\x1a\n")
+    real_open = builtins.open
+
+    def refusing_open(file, *args, **kwargs):
+        if str(file) == str(path):
+            raise PermissionError(13, "Permission denied", str(file))
+        return real_open(file, *args, **kwargs)
+
+    monkeypatch.setattr(builtins, "open", refusing_open)
+    assert cli_main.run(["info", str(path)]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [f"evpose info: error: {path}: cannot open (Permission denied)"]
