@@ -196,8 +196,15 @@ def _kalibr_calibration(path: Path, cam: int) -> CameraCalibration | None:
 
     try:
         d = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, yaml.YAMLError) as exc:
-        raise InputError(path, f"not valid YAML ({exc})") from None
+    except OSError as exc:
+        raise InputError(path, f"cannot read the calibration ({exc.strerror})") from None
+    except UnicodeDecodeError:
+        raise InputError(path, "not a text file (a kalibr calibration is YAML)") from None
+    except yaml.YAMLError as exc:
+        # The parser's report quotes the file over several lines: its problem and line, as for config files.
+        mark = getattr(exc, "problem_mark", None)
+        raise InputError(path, f"not valid YAML ({getattr(exc, 'problem', None) or str(exc).splitlines()[0]})",
+                         f"line {mark.line + 1}" if mark is not None else None) from None
     key = f"cam{cam}"
     if not isinstance(d, dict) or key not in d:
         return None

@@ -258,3 +258,12 @@ def test_an_event_column_with_unwritten_chunks_is_named(tmp_path):
         f["events/t"][:10] = np.arange(10)
     with pytest.raises(InputError, match=r"e.h5: events/t has 1 of its 15259 chunks written: the file is damaged"):
         EventH5Reader(tmp_path / "e.h5")
+
+
+def test_a_truncated_kalibr_yaml_names_its_line_in_one_short_message(tmp_path):
+    # The parser's whole report ("in "<unicode string>", line 2, column 15: intrinsics: [...") was quoted.
+    write_event_h5(tmp_path / "e.h5", EventArray.from_arrays([1], [0], [0], [1]))
+    (tmp_path / "camchain.yaml").write_text("cam0:\n  intrinsics: [200, 200, 119.5")
+    with pytest.raises(InputError) as info:
+        open_recording(tmp_path / "e.h5")
+    assert str(info.value) == f"{tmp_path / 'camchain.yaml'}: line 2: not valid YAML (expected ',' or ']', but got '<stream end>')"
