@@ -85,6 +85,9 @@ def detect_format(path: str | Path) -> SourceFormat:
             return SourceFormat.ROS2_BAG
         raise InputError(path, "folder is neither an ECD folder (events.txt) nor a ROS2 bag (metadata.yaml)")
     suffix = path.suffix.lower()
+    if ecd.is_ecd_folder(path.parent) and path.parent / ecd.EVENTS_FILE == path:
+        # `info` takes events.txt for its folder; the other commands called it an "unrecognised recording".
+        raise InputError(path, f"an ECD recording is its folder (events.txt, imu.txt...): give {path.parent}")
     if suffix == ".bag":
         return SourceFormat.ROS1_BAG
     if suffix in (".db3", ".mcap"):

@@ -151,3 +151,14 @@ def test_a_stray_far_future_event_is_refused_by_every_reader_not_tracked_through
         open_recording(tmp_path / "seq")
     with pytest.raises(InputError, match=r"seq: event 500: events span 277.8 hours"):  # `info` and `convert` stream it
         list(open_stream(tmp_path / "seq").batches(None))
+
+
+def test_an_ecd_events_file_given_for_its_recording_points_to_the_folder(tmp_path):
+    # "unrecognised recording (suffix '.txt')" left the user guessing what to pass instead.
+    from evpose.errors import InputError
+    from evpose.io.open import detect_format
+
+    (tmp_path / "ecd").mkdir()
+    (tmp_path / "ecd" / "events.txt").write_text("0.1 1 2 1\n")
+    with pytest.raises(InputError, match=r"events.txt: an ECD recording is its folder \(events.txt, imu.txt...\): give .*ecd$"):
+        detect_format(tmp_path / "ecd" / "events.txt")
