@@ -122,12 +122,14 @@ def _read_vertices(path: Path) -> np.ndarray | None:
         # damaged header, refused before allocating an array for it.
         if n * len(props) > data_bytes:
             raise MapFileError(path, f"file is truncated: header promises {n} vertices, the data after the header has only {data_bytes} bytes")
-        if fmt == "binary_little_endian":
-            dtype = np.dtype([(name, "<" + t) for name, t in props])
+        if fmt in ("binary_little_endian", "binary_big_endian"):
+            # Big-endian maps went to open3d, which kept the points and dropped every attribute (edge normals...) silently.
+            order = "<" if fmt == "binary_little_endian" else ">"
+            dtype = np.dtype([(name, order + t) for name, t in props])
             raw = fh.read(n * dtype.itemsize)
             if len(raw) < n * dtype.itemsize:
                 raise MapFileError(path, f"file is truncated: header promises {n} vertices, data holds {len(raw) // dtype.itemsize}")
-            return np.frombuffer(raw, dtype=dtype, count=n)
+            return np.frombuffer(raw, dtype=dtype, count=n).astype(dtype.newbyteorder("="))
         if fmt == "ascii":
             dtype = np.dtype([(name, t) for name, t in props])
             out = np.empty(n, dtype=dtype)
@@ -141,7 +143,7 @@ def _read_vertices(path: Path) -> np.ndarray | None:
                 except ValueError:
                     raise MapFileError(path, "not a number", f"vertex {i}") from None
             return out
-        return None
+        raise MapFileError(path, f"unknown PLY format {fmt!r} (ascii, binary_little_endian or binary_big_endian)")
 
 
 
