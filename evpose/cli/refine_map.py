@@ -85,7 +85,7 @@ def main(
     from evpose.io.atomic import atomic_path, check_outputs, output_set
     from evpose.io.config_file import read_config
     from evpose.io.map_ply import read_contour_map, write_contour_map
-    from evpose.io.open import open_recording
+    from evpose.io.open import open_recording, require_calibration
     from evpose.mapping.refine_from_events import EventRefineConfig, measure_edge_offsets, refine_map
     from evpose.tracker.config import TrackerMode
     from evpose.tracker.session import MapOutOfViewError
@@ -103,8 +103,7 @@ def main(
     if not cmap.has_edge_normals:
         raise InputError(map, "the map has no edge normals (a plain point cloud?): nothing to move the points along")
     rec = open_recording(recording, width, height)
-    if rec.calibration is None:
-        raise InputError(recording, "the recording has no camera calibration")
+    require_calibration(rec, "refining needs one")
     original = cmap.points.copy()
     rounds = []
     for it in range(iterations):

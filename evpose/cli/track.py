@@ -144,7 +144,7 @@ def main(
     from evpose.io.atomic import atomic_path, check_outputs, output_set
     from evpose.io.map_ply import read_contour_map
     from evpose.tracker.session import MapOutOfViewError
-    from evpose.io.open import open_recording
+    from evpose.io.open import open_recording, require_calibration
     from evpose.io.tum import write_tum
     from evpose.tracker.config import TrackerConfig, TrackerMode, load_config
     from evpose.tracker.session import TrackingSession
@@ -176,6 +176,7 @@ def main(
     initial = parse_init(init)
     cmap = read_contour_map(map)
     rec = open_recording(recording, width, height)
+    require_calibration(rec, "tracking needs intrinsics")
     try:
         session = TrackingSession(rec, cmap, cfg, initial_pose=initial, seekable=False)  # memory: see ``seekable``
     except MapOutOfViewError as exc:

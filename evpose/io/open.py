@@ -224,3 +224,13 @@ def open_recording(path: str | Path, width: int | None = None, height: int | Non
     check_nonnegative_times(rec.events, path)
     check_span(rec.events.t, path)  # what `convert` refuses (the HDF5 index's span), every reader refuses
     return rec
+
+
+def require_calibration(rec: Recording, needs: str) -> None:
+    """Refuse a recording without a camera calibration for a command that ``needs`` one (e.g. "tracking needs
+    intrinsics"), saying what would give it one: an ECD ``calib.txt`` without a sensor size was the same bare "no
+    camera calibration" as a folder without any, though ``--width/--height`` was all it lacked."""
+    if rec.calibration is not None:
+        return
+    hint = " (its calib.txt has intrinsics but no sensor size: pass --width/--height)" if "ecd_calib_txt" in rec.metadata else ""
+    raise InputError(rec.source, f"the recording has no camera calibration{hint}; {needs}")
