@@ -132,15 +132,17 @@ def run(argv: list[str]) -> int:
     except EvposeError as exc:
         print(f"evpose {name}: error: {one_line(str(exc))}", file=sys.stderr)
         return 2
-    except PermissionError as exc:
-        # A file another user owns (or a folder without write access) reached by a reader without its own check.
-        where = f"{printable(str(exc.filename))}: " if exc.filename else ""
-        print(f"evpose {name}: error: {where}cannot open ({exc.strerror or 'permission denied'})", file=sys.stderr)
-        return 2
     except BrokenPipeError:
         # Output piped into e.g. `head`, which closed early: not an error of ours.
         sys.stderr.close()
         return 0
+    except OSError as exc:
+        # The system refusing a path a reader or writer without its own check was given: a file another user owns
+        # (PermissionError), a name longer than the file system takes (every command: a traceback), a symlink loop.
+        if exc.filename is None:
+            raise
+        print(f"evpose {name}: error: {printable(str(exc.filename))}: {exc.strerror or exc}", file=sys.stderr)
+        return 2
     except KeyboardInterrupt as exc:
         return _interrupted(name, exc)
     except Exception as exc:

@@ -2,6 +2,8 @@
 
 import importlib
 
+import pytest
+
 from evpose.cli import main as cli_main
 
 
@@ -129,4 +131,15 @@ def test_a_file_the_user_may_not_read_is_one_line_naming_it(monkeypatch, capsys,
 
     monkeypatch.setattr(builtins, "open", refusing_open)
     assert cli_main.run(["info", str(path)]) == 2
-    assert capsys.readouterr().err.strip().splitlines() == [f"evpose info: error: {path}: cannot open (Permission denied)"]
+    assert capsys.readouterr().err.strip().splitlines() == [f"evpose info: error: {path}: Permission denied"]
+
+
+@pytest.mark.parametrize("argv", [["info", "{long}.h5"], ["eval", "{long}.txt", "gt.txt"], ["convert", "in.h5", "{long}.h5"]])
+def test_a_file_name_longer_than_the_file_system_takes_is_one_line(tmp_path, monkeypatch, capsys, argv):
+    # Path.exists() raises ENAMETOOLONG: an OSError traceback in every command.
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "in.h5").write_bytes(b"")
+    long = "a" * 300
+    assert cli_main.run([a.format(long=long) for a in argv]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].endswith("File name too long") and long in err[0]
