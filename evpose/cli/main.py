@@ -136,13 +136,6 @@ def run(argv: list[str]) -> int:
         # Output piped into e.g. `head`, which closed early: not an error of ours.
         sys.stderr.close()
         return 0
-    except OSError as exc:
-        # The system refusing a path a reader or writer without its own check was given: a file another user owns
-        # (PermissionError), a name longer than the file system takes (every command: a traceback), a symlink loop.
-        if exc.filename is None:
-            raise
-        print(f"evpose {name}: error: {printable(str(exc.filename))}: {exc.strerror or exc}", file=sys.stderr)
-        return 2
     except KeyboardInterrupt as exc:
         return _interrupted(name, exc)
     except Exception as exc:
@@ -157,6 +150,11 @@ def run(argv: list[str]) -> int:
             global _exit_now
             _exit_now = True  # the C code may be left half-initialised: see main()
             return _interrupted(name, cause)
+        if isinstance(exc, OSError) and exc.filename is not None:
+            # The system refusing a path a reader or writer without its own check was given: a file another user owns
+            # (PermissionError), a name longer than the file system takes (every command: a traceback), a symlink loop.
+            print(f"evpose {name}: error: {printable(str(exc.filename))}: {exc.strerror or exc}", file=sys.stderr)
+            return 2
         raise
     finally:
         for sig, handler in previous.items():

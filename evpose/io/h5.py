@@ -34,7 +34,7 @@ from evpose.core.imu import ImuSamples
 from evpose.core.recording import Recording
 from evpose.core.trajectory import Trajectory, quaternion_problem
 from evpose.errors import InputError
-from evpose.io.atomic import atomic_path, write_failure
+from evpose.io.atomic import atomic_path
 
 FORMAT_NAME = "recording"
 FORMAT_VERSION = 1
@@ -119,7 +119,6 @@ class H5RecordingWriter:
     def __enter__(self) -> "H5RecordingWriter":
         self._stack = contextlib.ExitStack()
         tmp = self._stack.enter_context(atomic_path(self.path, inputs=self._inputs))
-        self._tmp = tmp
         self._file = h5py.File(tmp, "w")
         grp = self._file.create_group("events")
         chunk = int(self._cfg.chunk_events)
