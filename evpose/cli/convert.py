@@ -38,7 +38,10 @@ def main(
     from evpose.io.convert import convert_to_h5
     from evpose.io.h5 import H5WriteConfig
 
-    if dst.suffix.lower() not in (".h5", ".hdf5") and not dst.is_dir():
+    from evpose.io.atomic import check_outputs
+
+    check_outputs((dst,), inputs=(src,))  # first: "refusing to overwrite the input" says more than a wrong suffix
+    if dst.suffix.lower() not in (".h5", ".hdf5"):
         # `convert rec out.bag` (or an ECD folder name) wrote HDF5 under that name, which `info` then refused as a bag.
         raise InputError(dst, "convert writes evpose HDF5; give an output name ending in .h5")
 
