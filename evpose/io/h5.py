@@ -35,6 +35,7 @@ from evpose.core.recording import Recording
 from evpose.core.trajectory import Trajectory, quaternion_problem
 from evpose.errors import InputError
 from evpose.io.atomic import atomic_path
+from evpose.io.paths import not_a_file
 
 FORMAT_NAME = "recording"
 FORMAT_VERSION = 1
@@ -294,7 +295,7 @@ class H5RecordingReader:
     def __init__(self, path: str | Path):
         self.path = Path(path)
         if not self.path.is_file():
-            raise H5FormatError(self.path, "is a folder, not a file" if self.path.is_dir() else "no such file")
+            raise H5FormatError(self.path, not_a_file(self.path))
         try:
             # A chunk cache larger than one chunk of every column keeps small consecutive windows from decompressing the same chunk again.
             self._file = h5py.File(self.path, "r", rdcc_nbytes=32 << 20)

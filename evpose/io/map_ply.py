@@ -31,6 +31,7 @@ from evpose.core.contour_map import ContourMap
 from evpose.core.trajectory import MAX_COORDINATE_M  # noqa: F401 - the bound shared with trajectories
 from evpose.errors import InputError
 from evpose.io.atomic import atomic_path
+from evpose.io.paths import not_a_file
 
 _PLY_TYPES = {
     "char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1",
@@ -191,7 +192,7 @@ def read_contour_map(path: str | Path) -> ContourMap:
     """Read a contour map written by :func:`write_contour_map`, or any point cloud open3d reads."""
     path = Path(path)
     if not path.is_file():
-        raise MapFileError(path, "is a folder, not a file" if path.is_dir() else "no such file")
+        raise MapFileError(path, not_a_file(path))
     verts = None
     if path.suffix.lower() == ".ply":
         try:
@@ -261,7 +262,7 @@ def read_point_cloud(path: str | Path) -> tuple[np.ndarray, dict[str, np.ndarray
 
     path = Path(path)
     if not path.is_file():
-        raise MapFileError(path, "is a folder, not a file" if path.is_dir() else "no such file")
+        raise MapFileError(path, not_a_file(path))
     if path.suffix.lower() not in (".ply", ".pcd", ".xyz", ".xyzn", ".xyzrgb", ".pts"):
         raise MapFileError(path, f"not a point-cloud file (unknown suffix {path.suffix!r})")
     with open(path, "rb") as fh:

@@ -84,6 +84,9 @@ def detect_format(path: str | Path) -> SourceFormat:
         if (path / "metadata.yaml").is_file() or any(path.glob("*.db3")) or any(path.glob("*.mcap")):
             return SourceFormat.ROS2_BAG
         raise InputError(path, "folder is neither an ECD folder (events.txt) nor a ROS2 bag (metadata.yaml)")
+    if not path.is_file():
+        # Reading a named pipe's magic bytes waited for a writer forever.
+        raise InputError(path, "is not a regular file (a pipe, device or socket); a recording is a file or a folder")
     suffix = path.suffix.lower()
     if ecd.is_ecd_folder(path.parent) and path.parent / ecd.EVENTS_FILE == path:
         # `info` takes events.txt for its folder; the other commands called it an "unrecognised recording".
