@@ -163,7 +163,16 @@ def _camera_index(path: Path) -> int:
     return 1 if "right" in path.name.lower() else 0
 
 
+def _require_file(path: Path) -> None:
+    """A sibling file found by name must be a regular file: reading a named pipe waited for a writer forever."""
+    if not path.is_file():
+        from evpose.io.paths import not_a_file
+
+        raise InputError(path, not_a_file(path))
+
+
 def _basalt_calibration(path: Path, cam: int) -> CameraCalibration:
+    _require_file(path)
     try:
         d = json.loads(path.read_text(encoding="utf-8"))["value0"]
         intr = d["intrinsics"][cam]
@@ -194,6 +203,7 @@ def _basalt_calibration(path: Path, cam: int) -> CameraCalibration:
 def _kalibr_calibration(path: Path, cam: int) -> CameraCalibration | None:
     import yaml
 
+    _require_file(path)
     try:
         d = yaml.safe_load(path.read_text(encoding="utf-8"))
     except OSError as exc:
@@ -277,8 +287,7 @@ def find_sibling_imu(path: Path):
     cand = path.parent / "imu_data.txt"
     if not cand.exists():
         return None, None
-    if cand.is_dir():  # skipped, it gave a recording without its IMU
-        raise InputError(cand, "is a folder, not a file")
+    _require_file(cand)  # a folder was skipped: a recording without its IMU
     n_cols = 8
     with open(cand, encoding="utf-8", errors="replace") as fh:
         for line in fh:

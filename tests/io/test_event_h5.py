@@ -225,7 +225,7 @@ def test_a_float_ms_to_idx_holding_nan_is_named_without_numpy_warnings(tmp_path)
 
 @pytest.mark.parametrize("name, message", [
     # Skipped as if absent (no IMU, no ground truth), or an IsADirectoryError traceback for the calibration.
-    ("camera-calibration.json", "camera-calibration.json: cannot read the calibration"),
+    ("camera-calibration.json", "camera-calibration.json: is a folder, not a file"),
     ("mocap_data.txt", "mocap_data.txt: is a folder, not a file"),
     ("imu_data.txt", "imu_data.txt: is a folder, not a file"),
 ])
@@ -267,3 +267,14 @@ def test_a_truncated_kalibr_yaml_names_its_line_in_one_short_message(tmp_path):
     with pytest.raises(InputError) as info:
         open_recording(tmp_path / "e.h5")
     assert str(info.value) == f"{tmp_path / 'camchain.yaml'}: line 2: not valid YAML (expected ',' or ']', but got '<stream end>')"
+
+
+@pytest.mark.parametrize("name", ["camera-calibration.json", "camchain.yaml", "imu_data.txt", "mocap_data.txt"])
+def test_a_named_pipe_in_place_of_a_sibling_file_is_refused_at_once(tmp_path, name):
+    # Reading it waited for a writer forever.
+    import os
+
+    write_event_h5(tmp_path / "e.h5", EventArray.from_arrays([1], [0], [0], [1]))
+    os.mkfifo(tmp_path / name)
+    with pytest.raises(InputError, match=f"{name}: is not a regular file"):
+        open_recording(tmp_path / "e.h5", 640, 480)
