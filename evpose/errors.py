@@ -11,6 +11,19 @@ from __future__ import annotations
 from pathlib import Path
 
 
+def printable(text: str) -> str:
+    """``text`` with control characters (newline, tab, escape, undecodable bytes of a file name) written as escapes, as
+    in a Python string literal: a file name holding a newline split the one-line message in two, and one holding an
+    escape sequence drove the terminal."""
+    return "".join(ch if ch.isprintable() else ch.encode("unicode_escape", "backslashreplace").decode("ascii") for ch in text)
+
+
+def one_line(text: str) -> str:
+    """A message on one line: line breaks (a library's multi-line report quoted in a problem) become spaces, other
+    control characters escapes."""
+    return printable(" ".join(text.splitlines()))
+
+
 class EvposeError(Exception):
     """Base class of errors caused by input or configuration, reported without traceback."""
 
@@ -26,8 +39,14 @@ class InputError(EvposeError):
         self.path = None if path is None else str(path)
         self.record = record
         self.problem = problem
-        parts = [p for p in (self.path, record, problem) if p]
-        super().__init__(": ".join(parts))
+        parts = [p for p in (None if self.path is None else printable(self.path), record, problem) if p]
+        super().__init__(one_line(": ".join(parts)))
+
+
+class OutputError(InputError):
+    """An output that cannot be written: a full disk, a read-only or vanished folder, a path where no file can be
+    created. Printed like an :class:`InputError` (``<file>: <problem>``, exit code 2): the user's remedy is another
+    ``--out`` or some free space, and a traceback (or, from HDF5, a crash at exit) helps no one."""
 
 
 class ConfigError(EvposeError):

@@ -33,8 +33,10 @@ def flatten_panel(text: str) -> str:
     body: list[str] = []
     for line in lines[1:]:
         inner = line.strip().strip("│").strip()
-        if not inner.strip("─"):
-            if inner:  # a rule: the problem's section has ended
+        # Where stderr cannot encode the box (an ASCII locale), rich draws the title, a rule of "-", the text and
+        # another rule: both rules and the help hint were printed in the one line.
+        if not inner.strip("─-"):
+            if inner and body:  # a rule after the text: the problem's section has ended
                 break
             continue
         body.append(inner)

@@ -34,8 +34,16 @@ def main(
         pose_topic: Bag topic of geometry_msgs/PoseStamped ground truth (default: the first one).
         quiet: No progress bar and no summary line.
     """
+    from evpose.errors import InputError
     from evpose.io.convert import convert_to_h5
     from evpose.io.h5 import H5WriteConfig
+
+    from evpose.io.atomic import check_outputs
+
+    check_outputs((dst,), inputs=(src,))  # first: "refusing to overwrite the input" says more than a wrong suffix
+    if dst.suffix.lower() not in (".h5", ".hdf5"):
+        # `convert rec out.bag` (or an ECD folder name) wrote HDF5 under that name, which `info` then refused as a bag.
+        raise InputError(dst, "convert writes evpose HDF5; give an output name ending in .h5")
 
     opts = {k: v for k, v in (("events_topic", events_topic), ("imu_topic", imu_topic), ("pose_topic", pose_topic)) if v is not None}
     res = convert_to_h5(src, dst, width, height, H5WriteConfig(compression=compression), progress=False if quiet else None, **opts)

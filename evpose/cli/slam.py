@@ -64,7 +64,7 @@ def main(
     from evpose.bench.stats import latency_summary
     from evpose.eval.slam_metrics import atlas_metrics
     from evpose.io.atomic import atomic_path, check_outputs, output_set
-    from evpose.io.open import open_recording
+    from evpose.io.open import open_recording, require_calibration
     from evpose.io.tum import write_tum
     from evpose.slam.config import SlamConfig, SlamMode
     from evpose.slam.config_io import config_to_dict, load_slam_config
@@ -91,6 +91,7 @@ def main(
     # in the summary then cover all the work.
     cv2.setNumThreads(1)
     rec = open_recording(recording, width, height)
+    require_calibration(rec, "SLAM needs one")
     rec.validate()
     if len(rec.events) == 0:
         raise InputError(recording, "the recording has no events")

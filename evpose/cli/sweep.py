@@ -8,7 +8,7 @@ from typing import Literal
 import tyro
 
 
-def check_recording_item(item: str) -> None:
+def check_recording_item(item: str, target: str = "tracking") -> None:
     """Refuse a ``--recordings`` item that no job could read, before any job: a typo, an unknown scenario or a
     damaged file would otherwise become one failed job per configuration and exit 1 after the whole grid.
 
@@ -24,6 +24,9 @@ def check_recording_item(item: str) -> None:
             raise ConfigError(f"--recordings {item}: unknown simulated scenario {item[4:]!r} (known: {', '.join(SCENARIOS)})")
         return
     parts = item.split("::")
+    if target == "tracking" and len(parts) < 2:
+        # Ran the whole grid, each job failing with "needs a contour map", and exited 1.
+        raise ConfigError(f"--recordings {item}: tracking needs the recording's contour map: pass it as {item}::MAP.ply")
     for part in parts:
         if not Path(part).exists():
             raise InputError(part, "no such file or folder", f"--recordings {item}")
@@ -77,7 +80,7 @@ def main(
 
     check_runner_args(workers, scheduler, (out,))
     for item in recordings:
-        check_recording_item(item)
+        check_recording_item(item, target)
     direction = True if minimize else (False if maximize else None)
     result = run_sweep(target, list(grid), list(recordings), out, RunnerConfig(workers=workers, scheduler=scheduler, progress=progress), score=score, minimize=direction)
     print(markdown_table(result.table), end="")

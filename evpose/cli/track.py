@@ -9,9 +9,9 @@ from pathlib import Path
 import numpy as np
 import tyro
 
+from evpose.cli.map_check import AcquisitionCheck, check_acquire_s
 from evpose.errors import InputError
-from evpose.tracker.map_acquisition import (DEFAULT_ACQUIRE_S, chance_mismatch, chance_problem, mismatch_problem,
-                                            registered as update_registered)
+from evpose.tracker.map_acquisition import DEFAULT_ACQUIRE_S
 
 
 def parse_init(text: str) -> np.ndarray | None:
@@ -26,9 +26,14 @@ def parse_init(text: str) -> np.ndarray | None:
         vals = []
     if len(vals) != 7 or not np.all(np.isfinite(vals)):
         raise InputError(None, f"--init expects 'gt' or seven numbers 'tx ty tz qx qy qz qw', got {text!r}")
+    from evpose.core.trajectory import MAX_COORDINATE_M, quaternion_problem
+
     q = np.asarray(vals[3:])
-    if np.linalg.norm(q) < 1e-9:
-        raise InputError(None, "--init quaternion has zero length")
+    bad = quaternion_problem(q[None])  # a component of 1e300 overflowed the norm: scipy's "zero norm" traceback
+    if bad is not None:
+        raise InputError(None, f"--init {bad[1]}")
+    if np.abs(vals[:3]).max() > MAX_COORDINATE_M:
+        raise InputError(None, f"--init position {vals[:3]} is beyond {MAX_COORDINATE_M:g} m (not metres?)")
     T = np.eye(4)
     T[:3, :3] = Rotation.from_quat(q / np.linalg.norm(q)).as_matrix()
     T[:3, 3] = vals[:3]
@@ -139,7 +144,7 @@ def main(
     from evpose.io.atomic import atomic_path, check_outputs, output_set
     from evpose.io.map_ply import read_contour_map
     from evpose.tracker.session import MapOutOfViewError
-    from evpose.io.open import open_recording
+    from evpose.io.open import open_recording, require_calibration
     from evpose.io.tum import write_tum
     from evpose.tracker.config import TrackerConfig, TrackerMode, load_config
     from evpose.tracker.session import TrackingSession
@@ -167,11 +172,11 @@ def main(
     from evpose.io.config_file import check_config
 
     check_config(cfg)  # --rate-hz inf would run a million updates per second of recording
-    if not np.isfinite(acquire_s) or acquire_s < 0:  # -1 ran as 0 (never give up) silently
-        raise InputError(None, f"--acquire-s must be a finite number of seconds >= 0 (0 = never give up), got {acquire_s}")
+    check_acquire_s(acquire_s)
     initial = parse_init(init)
     cmap = read_contour_map(map)
     rec = open_recording(recording, width, height)
+    require_calibration(rec, "tracking needs intrinsics")
     try:
         session = TrackingSession(rec, cmap, cfg, initial_pose=initial, seekable=False)  # memory: see ``seekable``
     except MapOutOfViewError as exc:
@@ -184,29 +189,12 @@ def main(
     inputs = _record_fusion_inputs(session, cfg) if smoothed is not None else None
 
     lost = []
-    acquire_until = session.t0_us + int(round(max(float(acquire_s), 0.0) * 1e6))
-    registered = [acquire_s <= 0]
-    # The window's updates also count their inlier share's chance level, which the test below reads once.
-    window: list | None = None if acquire_s <= 0 else []
-    session.tracker.chance_until_us = None if window is None else acquire_until
+    acquisition = AcquisitionCheck(session, acquire_s, map, recording.name)
     with tqdm(total=session.total_steps, unit="upd", disable=not progress or None, file=sys.stderr, dynamic_ncols=True) as bar:
         def tick(r):
-            nonlocal window
             if r.status is TrackStatus.LOST:
                 lost.append(r)
-            registered[0] = registered[0] or update_registered(r.counts)
-            ends = r.t_us >= acquire_until or session.done
-            if not registered[0] and ends:
-                raise InputError(map, mismatch_problem((r.t_us - session.t0_us) / 1e6, recording.name, r.reason),
-                                 f"updates 1-{len(session.results)}")
-            if window is not None:
-                window.append((r.t_us, r.counts))
-                if ends:
-                    z = chance_mismatch(window, session.t0_us, acquire_s, finished=session.done)
-                    if z is not None:
-                        raise InputError(map, chance_problem(z, (r.t_us - session.t0_us) / 1e6, recording.name),
-                                         f"updates 1-{len(session.results)}")
-                    window = None
+            acquisition.update(r)
             bar.update(1)
 
         session.run(progress=tick)

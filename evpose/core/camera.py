@@ -100,6 +100,9 @@ _FOCAL_PER_PX = (1e-3, 1e3)
 """Plausible focal lengths, in sensor widths (heights for fy)."""
 MAX_EXTRINSIC_M = 100.0
 """Largest camera-IMU translation accepted in ``T_cam_imu``, metres."""
+MAX_TIME_OFFSET_US = 10**17
+"""Largest camera-IMU clock offset accepted, microseconds (3170 years: an IMU on Unix time beside a camera counting from
+0 is 1.7e15). A kalibr ``timeshift_cam_imu`` of 1e300 s passed, and event times plus it overflowed int64 later."""
 
 _LENS_ANGLE_RATIO = (0.1, 10.0)
 """Plausible ratios of the off-axis angle a lens model gives the sensor's farthest pixels to the pinhole's angle."""
@@ -184,6 +187,14 @@ class CameraCalibration:
         # A principal point off the sensor projects nothing onto it: the tracker then blamed the map ("no map point in view").
         if not (0.0 <= self.cx <= self.width and 0.0 <= self.cy <= self.height):
             raise InputError(None, f"calibration's principal point ({self.cx:g}, {self.cy:g}) px lies outside the {self.width}x{self.height} sensor")
+        try:
+            offset_ok = abs(self.time_offset_us) <= MAX_TIME_OFFSET_US  # False for NaN
+        except TypeError:
+            offset_ok = False
+        if not offset_ok:
+            text = repr(self.time_offset_us)
+            raise InputError(None, f"calibration's time_offset_us {text if len(text) <= 24 else text[:21] + '...'} is not a number of"
+                                   f" microseconds within +-{MAX_TIME_OFFSET_US:.0e}")
         _check_rigid(T)
         self._check_invertible()
 
@@ -355,5 +366,5 @@ class CameraCalibration:
             raise InputError(source, f"calibration is missing the field {exc.args[0]!r}") from None
         except InputError as exc:
             raise InputError(source, exc.problem) from None
-        except (TypeError, ValueError) as exc:
+        except (TypeError, ValueError, OverflowError) as exc:  # OverflowError: a JSON integer of 400 digits
             raise InputError(source, f"calibration is malformed ({exc})") from None

@@ -13,14 +13,33 @@ from __future__ import annotations
 
 import contextlib
 import contextvars
+import errno
 import os
+import re
 import shutil
 import signal
 import tempfile
 import threading
 from pathlib import Path
 
-from evpose.errors import InputError
+from evpose.errors import InputError, OutputError
+
+_WRITE_ERRNOS = {errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EROFS}
+"""Errors only a write raises, which no input causes: a full disk or quota, a file too large for the file system, a
+read-only remount (EIO is left out: a damaged input read inside the output's block raises it too)."""
+
+
+def write_failure(exc: BaseException) -> str | None:
+    """Why writing an output failed, if ``exc`` is such a failure (else None): an OSError of :data:`_WRITE_ERRNOS`,
+    or HDF5's report of one, which h5py raises as an OSError or RuntimeError holding "file write failed: ...
+    error message = 'No space left on device'" (a full disk ended `convert` in that 3-line traceback, then a crash)."""
+    if isinstance(exc, (OSError, RuntimeError)):
+        m = re.search(r"file write failed.*?error message = '([^']*)'", str(exc), re.S)
+        if m:
+            return m.group(1)
+    if isinstance(exc, OSError) and exc.errno in _WRITE_ERRNOS:
+        return os.strerror(exc.errno)
+    return None
 
 
 def _umask() -> int:
@@ -51,6 +70,10 @@ def _check_target(dst: Path, is_dir: bool) -> None:
     """``dst`` can be created: not a folder where a file goes (or the reverse), under a writable folder (or one we can make)."""
     if not is_dir and dst.is_dir():
         raise InputError(dst, "output is an existing folder; give a file name")
+    if dst.exists() and not dst.is_file() and not dst.is_dir():
+        # As root, `--out /dev/null` (or /dev/full) replaced the device node with a regular file: the atomic rename
+        # works on any name in a writable folder.
+        raise OutputError(dst, "output exists and is not a regular file (a device, pipe or socket); give a file name")
     if is_dir and dst.exists() and not dst.is_dir():
         raise InputError(dst, "output folder exists and is a file")
     ancestor = dst.parent if str(dst.parent) else Path(".")
@@ -59,7 +82,7 @@ def _check_target(dst: Path, is_dir: bool) -> None:
     if not ancestor.is_dir():
         raise InputError(dst, f"cannot create the output: {ancestor} is a file, not a folder")
     if not os.access(ancestor, os.W_OK):
-        raise InputError(dst, "output folder is not writable")
+        raise OutputError(dst, "output folder is not writable")
 
 
 def check_outputs(outputs, inputs=(), folders=()) -> None:
@@ -176,17 +199,21 @@ def atomic_path(dst: str | Path, inputs: tuple[str | Path, ...] = (), is_dir: bo
         except OSError as exc:
             raise InputError(dst, f"cannot create the output folder ({exc.strerror})") from None
     if not os.access(parent, os.W_OK):
-        raise InputError(dst, "output folder is not writable")
+        raise OutputError(dst, "output folder is not writable")
     holder = None
-    if same_name:
-        holder = Path(tempfile.mkdtemp(prefix=f".{dst.name}.", suffix=".tmp", dir=parent))
-        tmp = holder / dst.name
-    elif is_dir:
-        tmp = Path(tempfile.mkdtemp(prefix=f".{dst.name}.", suffix=".tmp", dir=parent))
-    else:
-        fd, name = tempfile.mkstemp(prefix=f".{dst.name}.", suffix=".tmp" + dst.suffix, dir=parent)
-        os.close(fd)
-        tmp = Path(name)
+    try:
+        if same_name:
+            holder = Path(tempfile.mkdtemp(prefix=f".{dst.name}.", suffix=".tmp", dir=parent))
+            tmp = holder / dst.name
+        elif is_dir:
+            tmp = Path(tempfile.mkdtemp(prefix=f".{dst.name}.", suffix=".tmp", dir=parent))
+        else:
+            fd, name = tempfile.mkstemp(prefix=f".{dst.name}.", suffix=".tmp" + dst.suffix, dir=parent)
+            os.close(fd)
+            tmp = Path(name)
+    except OSError as exc:
+        # A folder that says it is writable but takes no new file: /proc, a full inode table, a read-only remount.
+        raise OutputError(dst, f"cannot create the output ({exc.strerror or exc})") from None
     pending = _PENDING.get()
     try:
         yield tmp
@@ -196,8 +223,11 @@ def atomic_path(dst: str | Path, inputs: tuple[str | Path, ...] = (), is_dir: bo
             pending["files"].append((tmp, dst, is_dir, holder))  # renamed with the rest of the set (or deleted with it)
             return
         _publish(tmp, dst, is_dir)
-    except BaseException:
+    except BaseException as exc:
         _discard(tmp, holder)
+        reason = write_failure(exc)
+        if reason is not None:
+            raise OutputError(dst, f"cannot write the output ({reason})") from None
         raise
     finally:
         if holder is not None and pending is None:

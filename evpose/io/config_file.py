@@ -11,6 +11,7 @@ import dataclasses
 import enum
 import json
 import math
+import types
 import typing
 from pathlib import Path
 
@@ -31,15 +32,79 @@ def config_to_dict(cfg) -> dict:
     return out
 
 
+def shown(value, limit: int = 80) -> str:
+    """``repr(value)`` for a message, cut to about ``limit`` characters. A plain repr of what a file holds can be
+    endless: a YAML alias chain ("billion laughs", 9 levels of 9 references: 40 bytes a level) hung the command."""
+    import reprlib
+
+    r = reprlib.Repr()
+    r.maxlevel, r.maxlist, r.maxtuple, r.maxdict, r.maxstring, r.maxother = 2, 4, 4, 4, limit, limit
+    text = r.repr(value)
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def _convert(typ, raw, meta):
+    """``raw`` as a value of the field type ``typ`` (ValueError naming what was expected). Numbers must be finite and
+    inside ``meta``'s min..max; optional fields take null, tuples their number of values."""
+    origin = typing.get_origin(typ)
+    if origin in (typing.Union, types.UnionType):
+        args = typing.get_args(typ)
+        if raw is None and type(None) in args:
+            return None
+        inner = [a for a in args if a is not type(None)]
+        return _convert(inner[0], raw, meta) if len(inner) == 1 else raw
+    if origin is tuple:
+        # e.g. MapBuildConfig.viewpoint (x, y, z): "abc" or [1, 2] ended in tracebacks deep in the builder.
+        args = typing.get_args(typ)
+        if not isinstance(raw, (list, tuple)):
+            raise ValueError(f"expected a list of {len(args)} values, got {shown(raw)}")
+        if len(raw) != len(args):
+            raise ValueError(f"expected {len(args)} values, got {len(raw)}")
+        return tuple(_convert(a, v, {}) for a, v in zip(args, raw))
+    if isinstance(typ, type) and issubclass(typ, enum.Enum):
+        choices = ", ".join(str(m.value) for m in typ)
+        if isinstance(raw, bool) or not isinstance(raw, (str, int, float)):
+            raise ValueError(f"expected one of {choices}, got {shown(raw)}")
+        try:
+            return typ(raw)
+        except ValueError:
+            raise ValueError(f"expected one of {choices}, got {shown(raw)}") from None
+    if typ is bool:
+        if not isinstance(raw, bool):
+            raise ValueError(f"expected true/false, got {shown(raw)}")
+        return raw
+    if typ is int:
+        try:
+            whole = not isinstance(raw, bool) and isinstance(raw, (int, float, str)) and float(raw) == int(float(raw))
+        except (ValueError, OverflowError):  # OverflowError: int(inf)
+            whole = False
+        if not whole:
+            raise ValueError(f"expected an integer, got {shown(raw)}")
+        value = int(float(raw))
+        _check_range(value, meta)
+        return value
+    if typ is float:
+        if isinstance(raw, bool) or not isinstance(raw, (int, float, str)):
+            raise ValueError(f"expected a number, got {shown(raw)}")
+        try:
+            value = float(raw)
+        except ValueError:
+            raise ValueError(f"expected a number, got {shown(raw)}") from None
+        _check_range(value, meta)
+        return value
+    return raw
+
+
 def config_from_dict(cls, data: dict, source: str | None = None, prefix: str = ""):
     """Build dataclass ``cls`` from a nested dict; unknown keys and wrong types raise :class:`InputError`."""
     if not isinstance(data, dict):
         raise InputError(source, f"expected a mapping, got {type(data).__name__}", prefix.rstrip(".") or None)
     hints = typing.get_type_hints(cls)
     names = {f.name for f in dataclasses.fields(cls)}
-    unknown = sorted(set(data) - names)
+    # Sorted as text: YAML keys may be numbers too, and sorting 1 with "foo" was a TypeError traceback.
+    unknown = sorted(set(data) - names, key=str)
     if unknown:
-        raise InputError(source, f"unknown setting (known: {', '.join(sorted(names))})", prefix + str(unknown[0]))
+        raise InputError(source, f"unknown setting (known: {', '.join(sorted(names))})", prefix + shown(unknown[0]).strip("'"))
     kwargs = {}
     fields = {f.name: f for f in dataclasses.fields(cls)}
     for name, raw in data.items():
@@ -49,31 +114,7 @@ def config_from_dict(cls, data: dict, source: str | None = None, prefix: str = "
             kwargs[name] = config_from_dict(typ, raw, source, key + ".")
             continue
         try:
-            if isinstance(typ, type) and issubclass(typ, enum.Enum):
-                kwargs[name] = typ(raw)
-            elif typ is bool:
-                if not isinstance(raw, bool):
-                    raise ValueError(f"expected true/false, got {raw!r}")
-                kwargs[name] = raw
-            elif typ is int:
-                try:
-                    whole = not isinstance(raw, bool) and isinstance(raw, (int, float, str)) and float(raw) == int(float(raw))
-                except (ValueError, OverflowError):  # OverflowError: int(inf)
-                    whole = False
-                if not whole:
-                    raise ValueError(f"expected an integer, got {raw!r}")
-                kwargs[name] = int(float(raw))
-            elif typ is float:
-                if isinstance(raw, bool) or not isinstance(raw, (int, float, str)):
-                    raise ValueError(f"expected a number, got {raw!r}")
-                try:
-                    kwargs[name] = float(raw)
-                except ValueError:
-                    raise ValueError(f"expected a number, got {raw!r}") from None
-            else:
-                kwargs[name] = raw
-            if typ in (int, float):
-                _check_range(kwargs[name], fields[name].metadata)
+            kwargs[name] = _convert(typ, raw, fields[name].metadata)
         except (TypeError, ValueError) as exc:
             raise InputError(source, str(exc), key) from None
     return cls(**kwargs)

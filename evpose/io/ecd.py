@@ -204,6 +204,8 @@ def check_calib_agrees(calib_path: Path, calibration: CameraCalibration) -> None
 
 def read_ecd_sidecar(folder: Path) -> dict:
     path = folder / SIDECAR_FILE
+    if path.is_dir():  # skipped, it gave a recording without its calibration
+        raise InputError(path, "is a folder, not a file")
     if not path.is_file():
         return {}
     try:
@@ -215,6 +217,17 @@ def read_ecd_sidecar(folder: Path) -> dict:
     return data
 
 
+def _checked_by_line(validate, path: Path, lines: list[int], record: str) -> None:
+    """Run a stream's ``validate`` naming its text file and line: the checks after parsing (an acceleration beyond any
+    IMU's, a position beyond the Earth) named the folder and a 0-based sample index."""
+    try:
+        validate(source=str(path))
+    except InputError as exc:
+        if exc.record and exc.record.startswith(record) and exc.record[len(record):].isdigit():
+            raise InputError(path, exc.problem, f"line {lines[int(exc.record[len(record):])]}") from None
+        raise
+
+
 def read_ecd_context(folder: str | Path, width: int | None = None, height: int | None = None) -> tuple[Recording, tuple[int, int] | None]:
     """Everything but the events: (Recording with empty events, sensor size or None)."""
     folder = Path(folder)
@@ -223,6 +236,8 @@ def read_ecd_context(folder: str | Path, width: int | None = None, height: int |
     if not (folder / EVENTS_FILE).is_file():
         raise InputError(folder / EVENTS_FILE, "no such file (an ECD folder needs events.txt)")
     side = read_ecd_sidecar(folder)
+    if not isinstance(side.get("metadata", {}), dict):  # dict(5) was a TypeError traceback in every command
+        raise InputError(folder / SIDECAR_FILE, f"expected a JSON object, got {type(side['metadata']).__name__}", "metadata")
     metadata = dict(side.get("metadata", {}))
     if not side:
         metadata["source_format"] = "ecd"  # our own folders keep their metadata exactly
@@ -245,6 +260,8 @@ def read_ecd_context(folder: str | Path, width: int | None = None, height: int |
     if size is not None and (size[0] <= 0 or size[1] <= 0):
         raise InputError(folder, f"sensor size must be positive, got {size[0]}x{size[1]}")
     calib_path = folder / CALIB_FILE
+    if calib_path.is_dir():
+        raise InputError(calib_path, "is a folder, not a file")
     if calibration is not None and calib_path.is_file():
         check_calib_agrees(calib_path, calibration)
     elif calib_path.is_file():
@@ -256,20 +273,24 @@ def read_ecd_context(folder: str | Path, width: int | None = None, height: int |
     if size is not None and calibration is None:
         metadata["width"], metadata["height"] = size
     imu = None
-    if (folder / IMU_FILE).is_file():
-        t, v = read_table(folder / IMU_FILE, 7)
+    if (folder / IMU_FILE).exists():  # read_table names a folder in its place (it was skipped: no IMU, silently)
+        lines: list[int] = []
+        t, v = read_table(folder / IMU_FILE, 7, line_numbers=lines)
         if t.size == 0:
             raise InputError(folder / IMU_FILE, "contains no IMU samples")
         imu = ImuSamples.from_arrays(t, v[:, 0:3], v[:, 3:6])
+        _checked_by_line(imu.validate, folder / IMU_FILE, lines, "IMU sample ")
     gt = None
-    if (folder / GT_FILE).is_file():
-        t, v = read_table(folder / GT_FILE, 8)
+    if (folder / GT_FILE).exists():
+        lines = []
+        t, v = read_table(folder / GT_FILE, 8, line_numbers=lines)
         if t.size == 0:
             raise InputError(folder / GT_FILE, "contains no poses")
         bad = quaternion_problem(v[:, 3:7])
         if bad is not None:
-            raise InputError(folder / GT_FILE, bad[1], f"pose {bad[0]}")
+            raise InputError(folder / GT_FILE, bad[1], f"line {lines[bad[0]]}")
         gt = Trajectory.from_arrays(t, v[:, 0:3], v[:, 3:7])
+        _checked_by_line(gt.validate, folder / GT_FILE, lines, "pose ")
     rec = Recording(EventArray.empty(), imu, gt, calibration, metadata, source=folder)
     return rec, size
 

@@ -64,12 +64,23 @@ class EventH5Reader:
             if missing:
                 raise EventH5Error(self.path, f"missing dataset(s) {', '.join('events/' + c for c in missing)}")
             self._cols = {c: g[c] for c in "txyp"}
+            for c, ds in self._cols.items():
+                # A string, compound or scalar column ended in a ValueError, TypeError or IndexError traceback.
+                if not isinstance(ds, h5py.Dataset) or ds.dtype.kind not in "biuf" or len(ds.shape) != 1:
+                    what = "a group" if not isinstance(ds, h5py.Dataset) else f"dtype {ds.dtype}, shape {ds.shape}"
+                    raise EventH5Error(self.path, f"events/{c} is {what}, expected a 1-D column of numbers")
             n = self._cols["t"].shape[0]
-            if any(len(ds.shape) != 1 or ds.shape[0] != n for ds in self._cols.values()):
-                raise EventH5Error(self.path, "events/x, y, t, p differ in length or are not 1-D")
+            if any(ds.shape[0] != n for ds in self._cols.values()):
+                raise EventH5Error(self.path, "events/x, y, t, p differ in length")
+            from evpose.io.h5 import unwritten_problem
+
+            for c, ds in self._cols.items():
+                missing = unwritten_problem(ds)
+                if missing is not None:
+                    raise EventH5Error(self.path, f"events/{c} {missing}: the file is damaged or was never finished")
             self.n_events = int(n)
             self.t_offset_us = self._read_t_offset()
-            self._ms_to_idx = np.asarray(self._f["ms_to_idx"][()], dtype=np.int64) if "ms_to_idx" in self._f else None
+            self._ms_to_idx = self._read_ms_to_idx(n) if "ms_to_idx" in self._f else None
             idx = self._ms_to_idx
             if idx is not None and (idx.ndim != 1 or (idx.size and (idx[0] < 0 or idx[-1] > n or np.any(np.diff(idx) < 0)))):
                 # Windowed reads trusted it: a reversed or overlong index silently gave wrong windows.
@@ -86,6 +97,14 @@ class EventH5Reader:
 
     def __exit__(self, *exc) -> None:
         self.close()
+
+    def _read_ms_to_idx(self, n: int) -> np.ndarray:
+        """``ms_to_idx`` as int64; a float one holding NaN printed numpy's "invalid value encountered in cast"."""
+        ds = self._f["ms_to_idx"]
+        raw = np.asarray(ds[()]) if isinstance(ds, h5py.Dataset) else np.zeros((0, 0))
+        if raw.dtype.kind not in "iuf" or (raw.dtype.kind == "f" and not (np.isfinite(raw).all() and (raw == np.round(raw)).all())):
+            raise EventH5Error(self.path, f"ms_to_idx is not a non-decreasing index into the {n} events (the file is damaged)")
+        return raw.astype(np.int64)
 
     def _read_t_offset(self) -> int:
         """``t_offset`` in us (0 if absent): a NaN one ended in a ValueError traceback, an array silently gave its first value."""
@@ -116,8 +135,10 @@ class EventH5Reader:
         x = self._cols["x"][i0:i1]
         y = self._cols["y"][i0:i1]
         for name, col in (("x", x), ("y", y)):
-            if col.size and (col.min() < 0 or col.max() > 65535):
-                i = int(np.flatnonzero((col < 0) | (col > 65535))[0])
+            # A float column of 3.7 was truncated to pixel 3, a NaN cast to 0 with numpy's warning on stderr.
+            bad = (col < 0) | (col > 65535) if col.dtype.kind != "f" else ~((col >= 0) & (col <= 65535) & (col == np.floor(col)))
+            if col.size and bad.any():
+                i = int(np.flatnonzero(bad)[0])
                 raise EventH5Error(self.path, f"{name}={col[i]} is not a pixel coordinate", f"event {i0 + i}")
         return EventArray(t, x.astype(np.uint16), y.astype(np.uint16), np.where(p > 0, 1, -1).astype(np.int8))
 
@@ -142,7 +163,16 @@ def _camera_index(path: Path) -> int:
     return 1 if "right" in path.name.lower() else 0
 
 
+def _require_file(path: Path) -> None:
+    """A sibling file found by name must be a regular file: reading a named pipe waited for a writer forever."""
+    if not path.is_file():
+        from evpose.io.paths import not_a_file
+
+        raise InputError(path, not_a_file(path))
+
+
 def _basalt_calibration(path: Path, cam: int) -> CameraCalibration:
+    _require_file(path)
     try:
         d = json.loads(path.read_text(encoding="utf-8"))["value0"]
         intr = d["intrinsics"][cam]
@@ -164,17 +194,27 @@ def _basalt_calibration(path: Path, cam: int) -> CameraCalibration:
         return CameraCalibration(w, h, v["fx"], v["fy"], v["cx"], v["cy"], model, dist, T_cam_imu)
     except InputError as exc:  # CameraCalibration's own checks name no file
         raise InputError(exc.path or path, exc.problem, exc.record) from None
-    except (KeyError, IndexError, TypeError, ValueError) as exc:
+    except OSError as exc:  # e.g. a folder named calib.json: an IsADirectoryError traceback
+        raise InputError(path, f"cannot read the calibration ({exc.strerror})") from None
+    except (KeyError, IndexError, TypeError, ValueError, OverflowError) as exc:
         raise InputError(path, f"not a basalt calibration ({type(exc).__name__}: {exc})") from None
 
 
 def _kalibr_calibration(path: Path, cam: int) -> CameraCalibration | None:
     import yaml
 
+    _require_file(path)
     try:
         d = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, yaml.YAMLError) as exc:
-        raise InputError(path, f"not valid YAML ({exc})") from None
+    except OSError as exc:
+        raise InputError(path, f"cannot read the calibration ({exc.strerror})") from None
+    except UnicodeDecodeError:
+        raise InputError(path, "not a text file (a kalibr calibration is YAML)") from None
+    except yaml.YAMLError as exc:
+        # The parser's report quotes the file over several lines: its problem and line, as for config files.
+        mark = getattr(exc, "problem_mark", None)
+        raise InputError(path, f"not valid YAML ({getattr(exc, 'problem', None) or str(exc).splitlines()[0]})",
+                         f"line {mark.line + 1}" if mark is not None else None) from None
     key = f"cam{cam}"
     if not isinstance(d, dict) or key not in d:
         return None
@@ -201,7 +241,7 @@ def _kalibr_calibration(path: Path, cam: int) -> CameraCalibration | None:
         return CameraCalibration(w, h, fx, fy, cx, cy, model, dist, T, offset)
     except InputError as exc:  # CameraCalibration's own checks name no file
         raise InputError(exc.path or path, exc.problem, exc.record or key) from None
-    except (KeyError, TypeError, ValueError) as exc:
+    except (KeyError, TypeError, ValueError, OverflowError) as exc:  # OverflowError: timeshift_cam_imu .inf
         raise InputError(path, f"not a kalibr camera calibration ({type(exc).__name__}: {exc})", key) from None
 
 
@@ -231,7 +271,7 @@ def find_sibling_ground_truth(path: Path):
     from evpose.io.tum import read_tum
 
     mocap = path.parent / "mocap_data.txt"
-    if mocap.is_file():
+    if mocap.exists():  # read_table names a folder in its place (it was skipped: no ground truth, silently)
         return read_tum(mocap, unit=TimeUnit.MICROSECONDS), mocap
     for pattern in ("*groundtruth*.txt", "*gt*.txt"):
         for cand in sorted(path.parent.glob(pattern)):
@@ -245,8 +285,9 @@ def find_sibling_imu(path: Path):
     from evpose.io.text_table import read_table
 
     cand = path.parent / "imu_data.txt"
-    if not cand.is_file():
+    if not cand.exists():
         return None, None
+    _require_file(cand)  # a folder was skipped: a recording without its IMU
     n_cols = 8
     with open(cand, encoding="utf-8", errors="replace") as fh:
         for line in fh:

@@ -20,6 +20,7 @@ from __future__ import annotations
 import contextlib
 import enum
 import json
+import os
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -34,6 +35,7 @@ from evpose.core.recording import Recording
 from evpose.core.trajectory import Trajectory, quaternion_problem
 from evpose.errors import InputError
 from evpose.io.atomic import atomic_path
+from evpose.io.paths import not_a_file
 
 FORMAT_NAME = "recording"
 FORMAT_VERSION = 1
@@ -100,6 +102,7 @@ class H5RecordingWriter:
         self._cfg = config
         self._stack: contextlib.ExitStack | None = None
         self._file: h5py.File | None = None
+        self._columns: dict[str, h5py.Dataset] = {}
         self._buffer: list[EventArray] = []
         self._buffered = 0
         self._written = 0
@@ -120,22 +123,43 @@ class H5RecordingWriter:
         self._file = h5py.File(tmp, "w")
         grp = self._file.create_group("events")
         chunk = int(self._cfg.chunk_events)
-        for name, dtype in _EVENT_COLUMNS:
-            grp.create_dataset(name, shape=(0,), maxshape=(None,), dtype=dtype, chunks=(chunk,), **_filter_kwargs(self._cfg))
+        # Held open until the end: closing a dataset writes its cached chunks, and a write failing there (a full disk)
+        # is only an "Exception ignored" message, after which HDF5 cannot close the file (see _discard_writes).
+        self._columns = {name: grp.create_dataset(name, shape=(0,), maxshape=(None,), dtype=dtype, chunks=(chunk,), **_filter_kwargs(self._cfg))
+                         for name, dtype in _EVENT_COLUMNS}
         return self
 
     def __exit__(self, exc_type, exc, tb) -> None:
         if exc_type is None:
             try:
                 self._finish()
+                self._file.flush()  # a full disk fails here, not in close(), where HDF5 cannot recover from it
             except BaseException as err:  # finishing failed: drop the temporary file like any other error
                 exc_type, exc, tb = type(err), err, err.__traceback__
         if self._file is not None:
-            self._file.close()
+            if exc is not None:
+                self._discard_writes()  # before the columns close, which writes their cached chunks
+            self._columns = {}
+            if exc is None:
+                self._file.close()
+            else:
+                with contextlib.suppress(OSError, RuntimeError):  # after a failed flush: "slist already enabled?"
+                    self._file.close()
             self._file = None
-        self._stack.__exit__(exc_type, exc, tb)
+        self._stack.__exit__(exc_type, exc, tb)  # deletes the temporary file; a failed write becomes one line
         if exc is not None:
             raise exc
+
+    def _discard_writes(self) -> None:
+        """Point HDF5's file descriptor at /dev/null before closing a file that is being dropped. HDF5 writes its
+        cached chunks and metadata when closing; on a full disk that failed, left the file open, and every later
+        attempt (h5py's, as its objects were freed, and at exit) failed again: pages of "Exception ignored" and a
+        segmentation fault. Written to /dev/null, those writes succeed and the close completes."""
+        with contextlib.suppress(Exception):
+            fd = self._file.id.get_vfd_handle()
+            null = os.open(os.devnull, os.O_RDWR)
+            os.dup2(null, fd)
+            os.close(null)
 
     # ------------------------------------------------------------ content
     def set_metadata(self, metadata: dict) -> None:
@@ -180,10 +204,9 @@ class H5RecordingWriter:
             self._buffered = len(rest)
 
     def _write_block(self, ev: EventArray) -> None:
-        grp = self._file["events"]
         n0, n1 = self._written, self._written + len(ev)
         for name, _ in _EVENT_COLUMNS:
-            ds = grp[name]
+            ds = self._columns[name]
             ds.resize((n1,))
             ds[n0:n1] = getattr(ev, name)
         if self._origin is None:
@@ -225,6 +248,23 @@ class H5RecordingWriter:
             f.attrs["calibration"] = json.dumps(self._calibration.to_dict(), sort_keys=True)
 
 
+def unwritten_problem(ds: h5py.Dataset) -> str | None:
+    """What is missing if ``ds`` declares more values than its file stores, else None. A writer that sized its datasets
+    first and stopped (or a crafted file) leaves unwritten chunks, which read as zeros: one declaring 10**13 IMU
+    samples in a 1.5 MB file ended in numpy's "Unable to allocate 72.8 TiB" traceback, and smaller ones could fill the
+    memory. Exact and cheap: HDF5 counts the chunks it allocated."""
+    if ds.size == 0:
+        return None
+    if ds.chunks is None:
+        stored, needed = ds.id.get_storage_size(), ds.nbytes
+        return None if stored >= needed else f"stores {stored} of its {needed} bytes"
+    expected = 1
+    for size, chunk in zip(ds.shape, ds.chunks):
+        expected *= -(-size // chunk)
+    got = ds.id.get_num_chunks()
+    return None if got >= expected else f"has {got} of its {expected} chunks written"
+
+
 def write_recording_h5(path: str | Path, recording: Recording, config: H5WriteConfig = H5WriteConfig()) -> None:
     """Write ``recording`` to ``path`` atomically (never onto ``recording.source``)."""
     inputs = (recording.source,) if recording.source is not None else ()
@@ -255,7 +295,7 @@ class H5RecordingReader:
     def __init__(self, path: str | Path):
         self.path = Path(path)
         if not self.path.is_file():
-            raise H5FormatError(self.path, "is a folder, not a file" if self.path.is_dir() else "no such file")
+            raise H5FormatError(self.path, not_a_file(self.path))
         try:
             # A chunk cache larger than one chunk of every column keeps small consecutive windows from decompressing the same chunk again.
             self._file = h5py.File(self.path, "r", rdcc_nbytes=32 << 20)
@@ -295,6 +335,9 @@ class H5RecordingReader:
         if ds.shape != shape or (n is not None and ds.shape[0] != n):
             expected = f"({'N' if n is None else n},{'' if cols is None else f' {cols}'})"
             raise H5FormatError(self.path, f"dataset {name!r} has shape {ds.shape}, expected {expected}")
+        missing = unwritten_problem(ds)
+        if missing is not None:
+            raise H5FormatError(self.path, f"dataset {name!r} {missing}: the file is damaged or was never finished")
         return ds
 
     def _load(self) -> None:
@@ -352,6 +395,8 @@ class H5RecordingReader:
         """``ds[i0:i1]``; a chunk that fails to decompress is a damaged file, reported with the rows it holds."""
         try:
             return ds[()] if i0 is None else ds[i0:i1]
+        except MemoryError:
+            raise H5FormatError(self.path, f"dataset {ds.name.lstrip('/')!r} of shape {ds.shape} does not fit in memory (the file is damaged?)") from None
         except OSError as exc:
             rows = f"rows {i0}-{i1}" if i0 is not None else None
             raise H5FormatError(self.path, f"cannot read dataset {ds.name.lstrip('/')!r} ({str(exc).split(' (')[-1].rstrip(')')}): the file is damaged", rows) from None

@@ -31,6 +31,7 @@ from evpose.core.contour_map import ContourMap
 from evpose.core.trajectory import MAX_COORDINATE_M  # noqa: F401 - the bound shared with trajectories
 from evpose.errors import InputError
 from evpose.io.atomic import atomic_path
+from evpose.io.paths import not_a_file
 
 _PLY_TYPES = {
     "char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1",
@@ -122,12 +123,14 @@ def _read_vertices(path: Path) -> np.ndarray | None:
         # damaged header, refused before allocating an array for it.
         if n * len(props) > data_bytes:
             raise MapFileError(path, f"file is truncated: header promises {n} vertices, the data after the header has only {data_bytes} bytes")
-        if fmt == "binary_little_endian":
-            dtype = np.dtype([(name, "<" + t) for name, t in props])
+        if fmt in ("binary_little_endian", "binary_big_endian"):
+            # Big-endian maps went to open3d, which kept the points and dropped every attribute (edge normals...) silently.
+            order = "<" if fmt == "binary_little_endian" else ">"
+            dtype = np.dtype([(name, order + t) for name, t in props])
             raw = fh.read(n * dtype.itemsize)
             if len(raw) < n * dtype.itemsize:
                 raise MapFileError(path, f"file is truncated: header promises {n} vertices, data holds {len(raw) // dtype.itemsize}")
-            return np.frombuffer(raw, dtype=dtype, count=n)
+            return np.frombuffer(raw, dtype=dtype, count=n).astype(dtype.newbyteorder("="))
         if fmt == "ascii":
             dtype = np.dtype([(name, t) for name, t in props])
             out = np.empty(n, dtype=dtype)
@@ -141,7 +144,7 @@ def _read_vertices(path: Path) -> np.ndarray | None:
                 except ValueError:
                     raise MapFileError(path, "not a number", f"vertex {i}") from None
             return out
-        return None
+        raise MapFileError(path, f"unknown PLY format {fmt!r} (ascii, binary_little_endian or binary_big_endian)")
 
 
 
@@ -189,7 +192,7 @@ def read_contour_map(path: str | Path) -> ContourMap:
     """Read a contour map written by :func:`write_contour_map`, or any point cloud open3d reads."""
     path = Path(path)
     if not path.is_file():
-        raise MapFileError(path, "is a folder, not a file" if path.is_dir() else "no such file")
+        raise MapFileError(path, not_a_file(path))
     verts = None
     if path.suffix.lower() == ".ply":
         try:
@@ -259,7 +262,7 @@ def read_point_cloud(path: str | Path) -> tuple[np.ndarray, dict[str, np.ndarray
 
     path = Path(path)
     if not path.is_file():
-        raise MapFileError(path, "is a folder, not a file" if path.is_dir() else "no such file")
+        raise MapFileError(path, not_a_file(path))
     if path.suffix.lower() not in (".ply", ".pcd", ".xyz", ".xyzn", ".xyzrgb", ".pts"):
         raise MapFileError(path, f"not a point-cloud file (unknown suffix {path.suffix!r})")
     with open(path, "rb") as fh:

@@ -65,6 +65,8 @@ def _is_hdf5(path: Path) -> bool:
     try:
         with open(path, "rb") as fh:
             return fh.read(8) == b"\x89HDF\r\n\x1a\n"
+    except PermissionError:
+        raise  # "not an HDF5 file (bad signature)" misled about a file the user may not read
     except OSError:
         return False
 
@@ -82,7 +84,13 @@ def detect_format(path: str | Path) -> SourceFormat:
         if (path / "metadata.yaml").is_file() or any(path.glob("*.db3")) or any(path.glob("*.mcap")):
             return SourceFormat.ROS2_BAG
         raise InputError(path, "folder is neither an ECD folder (events.txt) nor a ROS2 bag (metadata.yaml)")
+    if not path.is_file():
+        # Reading a named pipe's magic bytes waited for a writer forever.
+        raise InputError(path, "is not a regular file (a pipe, device or socket); a recording is a file or a folder")
     suffix = path.suffix.lower()
+    if ecd.is_ecd_folder(path.parent) and path.parent / ecd.EVENTS_FILE == path:
+        # `info` takes events.txt for its folder; the other commands called it an "unrecognised recording".
+        raise InputError(path, f"an ECD recording is its folder (events.txt, imu.txt...): give {path.parent}")
     if suffix == ".bag":
         return SourceFormat.ROS1_BAG
     if suffix in (".db3", ".mcap"):
@@ -219,3 +227,13 @@ def open_recording(path: str | Path, width: int | None = None, height: int | Non
     check_nonnegative_times(rec.events, path)
     check_span(rec.events.t, path)  # what `convert` refuses (the HDF5 index's span), every reader refuses
     return rec
+
+
+def require_calibration(rec: Recording, needs: str) -> None:
+    """Refuse a recording without a camera calibration for a command that ``needs`` one (e.g. "tracking needs
+    intrinsics"), saying what would give it one: an ECD ``calib.txt`` without a sensor size was the same bare "no
+    camera calibration" as a folder without any, though ``--width/--height`` was all it lacked."""
+    if rec.calibration is not None:
+        return
+    hint = " (its calib.txt has intrinsics but no sensor size: pass --width/--height)" if "ecd_calib_txt" in rec.metadata else ""
+    raise InputError(rec.source, f"the recording has no camera calibration{hint}; {needs}")

@@ -261,7 +261,13 @@ def open_bag_stream(path: str | Path, events_topic: str | None = None, imu_topic
         calibration = None
         if info_conns:
             for c, _, raw in reader.messages(connections=info_conns):
-                calibration = _calibration_from_info(reader.deserialize(raw, c.msgtype), size)
+                # A corrupt payload was an AnyReaderError traceback; CameraCalibration's own checks named no file.
+                try:
+                    calibration = _calibration_from_info(reader.deserialize(raw, c.msgtype), size)
+                except InputError as exc:
+                    raise BagError(path, exc.problem, f"{c.topic} message 0") from None
+                except Exception as exc:  # rosbags raises assorted errors on corrupt payloads
+                    raise BagError(path, f"cannot decode ({exc})", f"{c.topic} message 0") from None
                 break
     finally:
         reader.close()

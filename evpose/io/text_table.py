@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from evpose.errors import InputError
+from evpose.io.paths import not_a_file
 
 
 class TimeUnit(str, enum.Enum):
@@ -52,7 +53,7 @@ def read_table(path: str | Path, n_cols: int, unit: TimeUnit = TimeUnit.SECONDS,
     """
     path = Path(path)
     if not path.is_file():
-        raise InputError(path, "is a folder, not a file" if path.is_dir() else "no such file")
+        raise InputError(path, not_a_file(path))
     ts: list[int] = []
     rows: list[list[float]] = []
     try:

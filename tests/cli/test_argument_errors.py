@@ -88,3 +88,29 @@ def test_flatten_panel_keeps_the_problem_and_drops_the_box_and_helptext():
     )
     assert flatten_panel(panel) == "Error parsing --rate-hz: could not convert 'abc'."
     assert flatten_panel("") == "invalid arguments"
+
+
+def test_flatten_panel_reads_the_ascii_layout_of_a_locale_without_box_characters():
+    # Where stderr cannot encode the box, rich draws a title, a rule of "-", the text, a rule and the hint: both rules
+    # and "For full helptext" ended up in the one line.
+    panel = (
+        " Invalid choice                                                 \n"
+        " -------------------------------------------------------------- \n"
+        "  invalid choice 'huge' for argument '--suite'. Expected one of \n"
+        "  ('quick', 'full').                                            \n"
+        "  --------------------------------------------------------------\n"
+        "  For full helptext, run evpose bench --help                    \n"
+    )
+    assert flatten_panel(panel) == "invalid choice 'huge' for argument '--suite'. Expected one of ('quick', 'full')."
+
+
+def test_a_bad_argument_on_an_ascii_stderr_is_one_line_without_rules():
+    import os
+    import subprocess
+    from pathlib import Path
+
+    env = {**os.environ, "PYTHONIOENCODING": "ascii", "PYTHONPATH": str(Path(__file__).parents[2])}
+    run = subprocess.run([sys.executable, "-m", "evpose", "info", "--width", "x", "."], capture_output=True, text=True, env=env, timeout=60)
+    assert run.returncode == 2
+    assert run.stderr.count("\n") == 1 and "---" not in run.stderr and "For full helptext" not in run.stderr
+    assert run.stderr.startswith("evpose info: error: Error parsing --width:")

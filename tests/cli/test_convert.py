@@ -89,3 +89,13 @@ def test_the_installed_command_prints_no_traceback(tmp_path):
     proc = subprocess.run([sys.executable, "-m", "evpose.cli.main", "convert", str(tmp_path / "nope"), str(tmp_path / "o.h5")], capture_output=True, text=True, timeout=120)
     assert proc.returncode == 2
     assert proc.stderr.strip() == f"evpose convert: error: {tmp_path / 'nope'}: no such file or folder"
+
+
+@pytest.mark.parametrize("name", ["out.bag", "out.txt", "ecd_out"])
+def test_convert_to_a_name_that_is_not_hdf5_is_refused(tmp_path, capsys, name):
+    # HDF5 was written under that name: `evpose info out.bag` then refused it as a damaged bag.
+    ecd_folder(tmp_path / "s", n=10)
+    assert run(["convert", str(tmp_path / "s"), str(tmp_path / name), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == f"evpose convert: error: {tmp_path / name}: convert writes evpose HDF5; give an output name ending in .h5"
+    assert not (tmp_path / name).exists()

@@ -72,3 +72,27 @@ def test_refine_map_with_a_map_in_another_frame_names_the_map_like_track(landing
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(err) == 1
     assert err[0].startswith(f"evpose refine-map: error: {tmp_path / 'far.ply'}: only 0 map points are in view") and "(recording " in err[0]
+
+
+@pytest.mark.parametrize("iterations", ["0", "1000000"])
+def test_refine_map_iterations_outside_their_range_are_refused_before_tracking(landing_files, tmp_path, capsys, iterations):
+    # 1000000 rounds tracked the recording on and on (each round a whole track): a hang, not an error.
+    d = landing_files
+    code = run(["refine-map", str(d / "rec.h5"), "--map", str(d / "map.ply"), "--out", str(tmp_path / "r.ply"), "--quiet",
+                "--iterations", iterations])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and err.endswith(f"--iterations must be within 1..20, got {iterations}") and len(err.splitlines()) == 1
+    assert not (tmp_path / "r.ply").exists()
+
+
+def test_refine_map_refuses_a_map_of_another_scene_as_track_does(landing_files, tmp_path, capsys):
+    # The indoor map ran through the whole landing recording and was written back unchanged ("0 of 4 measured points
+    # moved"), exit 0, where `evpose track` refused the same pairing.
+    from pathlib import Path
+
+    d = landing_files
+    indoor = Path(__file__).parents[2] / "maps" / "indoor_map.ply"
+    code = run(["refine-map", str(d / "rec.h5"), "--map", str(indoor), "--out", str(tmp_path / "r.ply"), "--quiet"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and not (tmp_path / "r.ply").exists()
+    assert err[0].startswith(f"evpose refine-map: error: {indoor}: updates 1-") and "is it this recording's map" in err[0]

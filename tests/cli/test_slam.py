@@ -166,3 +166,23 @@ def test_slam_never_removes_an_input_named_like_a_surplus_map_file(tmp_path):
         (tmp_path / f"est.map{k}.txt").write_text("x\n")
     assert stale_outputs(out, 1) == [tmp_path / "est.map1.txt", tmp_path / "est.map2.txt"]
     assert stale_outputs(out, 1, inputs=(tmp_path / "est.map2.txt",)) == [tmp_path / "est.map1.txt"]
+
+
+@pytest.mark.parametrize("command", ["slam", "track"])
+def test_an_ecd_folder_with_calib_txt_but_no_sensor_size_says_to_pass_it(tmp_path, capsys, command):
+    # The same bare "no camera calibration" as a folder without any, though --width/--height was all it lacked.
+    d = tmp_path / "ecd"
+    d.mkdir()
+    (d / "events.txt").write_text("0.1 1 2 1\n0.2 3 4 0\n")
+    (d / "calib.txt").write_text("200 200 119.5 89.5\n")
+    extra = ["--map", str(tmp_path / "m.ply"), "--no-progress"] if command == "track" else []
+    if command == "track":
+        import numpy as np
+
+        from evpose.core.contour_map import ContourMap
+        from evpose.io.map_ply import write_contour_map
+
+        write_contour_map(tmp_path / "m.ply", ContourMap.from_points(np.zeros((3, 3))))
+    assert run([command, str(d), "--out", str(tmp_path / "o.txt"), *extra]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "no camera calibration (its calib.txt has intrinsics but no sensor size: pass --width/--height)" in err[0]

@@ -57,3 +57,12 @@ def test_bad_map_is_refused_before_any_job(tmp_path, capsys):
     write_contour_map(tmp_path / "m.ply", ContourMap.from_points(np.zeros((3, 3)), brightness_sign=[7, 0, 0]))
     assert _sweep(tmp_path, f"{tmp_path / 'r.h5'}::{tmp_path / 'm.ply'}") == 2
     assert _last_error(capsys) == f"evpose sweep: error: {tmp_path / 'm.ply'}: point 0: brightness_sign is 7 (expected -1, 0 or +1)"
+
+
+def test_a_recording_without_its_map_is_refused_before_any_tracking_job(tmp_path, capsys):
+    # Each configuration's job failed with "needs a contour map", and the sweep exited 1 after the whole grid.
+    _recording(tmp_path / "r.h5")
+    assert _sweep(tmp_path, str(tmp_path / "r.h5")) == 2
+    assert _last_error(capsys) == (f"evpose sweep: error: --recordings {tmp_path / 'r.h5'}: tracking needs the recording's contour map:"
+                                   f" pass it as {tmp_path / 'r.h5'}::MAP.ply")
+    assert not (tmp_path / "sw" / "jobs").exists()

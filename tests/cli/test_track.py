@@ -52,6 +52,9 @@ def test_track_accepts_an_explicit_initial_pose(files, tmp_path):
     "args, message",
     [
         (["--init", "1 2 3"], "--init expects"),
+        # A component of 1e300 overflowed the quaternion's norm: scipy's "Found zero norm quaternions" traceback.
+        (["--init", "0 0 0 0 0 0 1e300"], "--init quaternion's length is beyond the float range"),
+        (["--init", "1e30 0 0 0 0 0 1"], "--init position [1e+30, 0.0, 0.0] is beyond"),
         (["--mode", "warp"], "--mode must be one of"),
         (["--rate-hz", "0"], "--rate-hz must be positive"),
         (["--config", "missing.yaml"], "cannot read the config file"),

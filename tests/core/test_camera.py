@@ -198,3 +198,18 @@ def test_real_wide_lens_calibrations_are_accepted_even_if_they_fold_in_the_corne
     ecd = cams[0]
     corners = np.array([[0.0, 0.0], [239.0, 179.0]])
     assert np.abs(ecd.project(ecd.unproject(corners)) - corners).max() < 1e-6
+
+
+@pytest.mark.parametrize("offset", [10**18, -(10**18), float("nan")])
+def test_a_time_offset_beyond_any_clock_is_an_input_error(offset):
+    # A kalibr timeshift of 1e300 s passed, and event times plus it overflowed int64 later.
+    with pytest.raises(InputError, match="calibration's time_offset_us .* is not a number of microseconds within"):
+        CameraCalibration(346, 260, 247.0, 247.0, 172.5, 129.5, time_offset_us=offset)
+    CameraCalibration(346, 260, 247.0, 247.0, 172.5, 129.5, time_offset_us=1_700_000_000_000_000)  # Unix time: fine
+
+
+def test_from_dict_with_an_integer_beyond_the_float_range_is_malformed_not_a_traceback():
+    d = CameraCalibration(346, 260, 247.0, 247.0, 172.5, 129.5).to_dict()
+    d["width"] = 10**400  # json.loads reads it; float() of it was an OverflowError traceback
+    with pytest.raises(InputError, match="cal.json: calibration is malformed"):
+        CameraCalibration.from_dict(d, source="cal.json")

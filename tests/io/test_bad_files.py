@@ -143,3 +143,58 @@ def test_a_folder_given_for_a_map_or_a_table_is_called_a_folder_not_missing(tmp_
         read_contour_map(tmp_path / "map.ply")
     with pytest.raises(InputError, match="gt.txt: is a folder, not a file"):
         read_table(tmp_path / "gt.txt", 8)
+
+
+_BOMB = ", ".join(["&a [x, x, x, x, x, x, x, x, x]"] + [f"&{chr(98 + i)} [" + ", ".join([f"*{chr(97 + i)}"] * 9) + "]" for i in range(8)])
+
+
+@pytest.mark.parametrize("text, message", [
+    # A 9-level YAML alias chain under a known key: printing the value in the message never ended.
+    (f"rate_hz: [{_BOMB}]\n", "rate_hz: expected a number, got [['x', 'x', 'x', 'x', ...], [[...]"),
+    (f"mode: [{_BOMB}]\n", "mode: expected one of stpe, stpe+filter, full, got [["),
+    (f"noise_filter: {{enabled: [{_BOMB}]}}\n", "noise_filter.enabled: expected true/false, got [["),
+    ("rate_hz: " + "x" * 100_000 + "\n", "rate_hz: expected a number, got 'xxxxxxxx"),
+    # Sorting unknown keys 1 and "foo" was a TypeError traceback.
+    ("1: a\nfoo: b\n", "1: unknown setting"),
+    ("mode: 3\n", "mode: expected one of stpe, stpe+filter, full, got 3"),
+])
+def test_config_values_of_any_shape_give_a_short_message_at_once(tmp_path, text, message):
+    import time
+
+    path = tmp_path / "cfg.yaml"
+    path.write_text(text)
+    t0 = time.perf_counter()
+    with pytest.raises(InputError) as info:
+        read_config(TrackerConfig, path)
+    assert time.perf_counter() - t0 < 1.0
+    msg = _one_line(info, path)
+    assert message in msg and len(msg) < len(str(path)) + 500  # the known settings are listed for an unknown one
+
+
+@pytest.mark.parametrize("value, message", [
+    ("abc", "viewpoint: expected a list of 3 values, got 'abc'"),
+    ("true", "viewpoint: expected a list of 3 values, got True"),
+    ("[1, 2]", "viewpoint: expected 3 values, got 2"),
+    ("[a, b, c]", "viewpoint: expected a number, got 'a'"),
+    ("[[1], 2, 3]", "viewpoint: expected a number, got [1]"),
+    ("[.nan, 0, 0]", "viewpoint: expected a finite number, got nan"),  # named the field but not the file
+])
+def test_a_tuple_setting_is_checked_like_a_number_naming_the_file(tmp_path, value, message):
+    # MapBuildConfig.viewpoint (x y z) was taken as given: "abc" or [1, 2] ended in tracebacks inside build-map.
+    from evpose.mapping.build import MapBuildConfig
+
+    path = tmp_path / "build.yaml"
+    path.write_text(f"viewpoint: {value}\n")
+    with pytest.raises(InputError) as info:
+        read_config(MapBuildConfig, path)
+    assert message in _one_line(info, path)
+
+
+def test_a_tuple_setting_and_null_read_as_given(tmp_path):
+    from evpose.mapping.build import MapBuildConfig
+
+    path = tmp_path / "build.yaml"
+    path.write_text("viewpoint: [1, 2.5, -3]\n")
+    assert read_config(MapBuildConfig, path).viewpoint == (1.0, 2.5, -3.0)
+    path.write_text("viewpoint: null\n")
+    assert read_config(MapBuildConfig, path).viewpoint is None

@@ -107,8 +107,12 @@ def test_bad_line_far_into_the_file_is_counted_across_blocks(tmp_path):
         ("imu.txt", "0.0 1 2 3 4 5 6\n0.0 1 2 3 4 5 6\n", "line 2: timestamp 0.0 does not increase"),
         ("imu.txt", "0.0 1 2 nan 4 5 6\n", "line 1: NaN or infinite value"),
         ("imu.txt", "", "contains no IMU samples"),
-        ("groundtruth.txt", "0.0 1 2 3 0 0 0 0\n", "pose 0: quaternion has zero length"),
+        ("groundtruth.txt", "# t x y z qx qy qz qw\n0.0 1 2 3 0 0 0 0\n", "line 2: quaternion has zero length"),
         ("groundtruth.txt", "0.0 1 2 3 0 0 0\n", "line 1: expected 8 values"),
+        # The checks after parsing named the folder and a 0-based sample: "ecd: IMU sample 0: acceleration ...".
+        ("imu.txt", "0.0 1 2 3 4 5 6\n\n0.001 9000 2 3 4 5 6\n", "imu.txt: line 3: acceleration 9e\\+03 m/s\\^2 is beyond"),
+        ("groundtruth.txt", "0.0 1 2 3 0 0 0 1\n0.001 1e9 2 3 0 0 0 1\n", "groundtruth.txt: line 2: position .* is beyond"),
+        ("evpose.json", '{"metadata": 5}', "evpose.json: metadata: expected a JSON object, got int"),
     ],
 )
 def test_bad_side_files_name_file_record_and_problem(tmp_path, name, text, message):
@@ -119,6 +123,17 @@ def test_bad_side_files_name_file_record_and_problem(tmp_path, name, text, messa
     with pytest.raises(InputError, match=message) as err:
         read_ecd_folder(d, 240, 180)
     assert str(err.value).startswith(str(d / name))
+
+
+@pytest.mark.parametrize("name", ["imu.txt", "groundtruth.txt", "calib.txt", "evpose.json"])
+def test_a_folder_in_place_of_a_side_file_is_named_not_skipped(tmp_path, name):
+    # It was skipped: a recording without its IMU, ground truth or calibration, and exit 0.
+    d = tmp_path / "ecd"
+    d.mkdir()
+    (d / "events.txt").write_text("0.1 1 2 1\n")
+    (d / name).mkdir()
+    with pytest.raises(InputError, match=f"{name}: is a folder, not a file"):
+        read_ecd_folder(d, 240, 180)
 
 
 def test_missing_folder_and_missing_events_file(tmp_path):

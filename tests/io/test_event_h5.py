@@ -186,3 +186,95 @@ def test_a_damaged_ms_to_idx_is_named_not_trusted_by_windowed_reads(tmp_path, da
         f["ms_to_idx"] = idx[::-1].copy() if damage == "reversed" else idx + 1000
     with pytest.raises(InputError, match=r"e.h5: ms_to_idx is not a non-decreasing index into the 500 events"):
         EventH5Reader(tmp_path / "e.h5")
+
+
+@pytest.mark.parametrize("column, data, message", [
+    # A string, scalar or compound column ended in a ValueError, IndexError or TypeError traceback.
+    ("t", np.array([b"a", b"b"]), r"events/t is dtype \|S1, shape \(2,\), expected a 1-D column of numbers"),
+    ("t", np.int64(5), r"events/t is dtype int64, shape \(\), expected a 1-D column of numbers"),
+    ("x", np.zeros(2, dtype=[("a", "i8"), ("b", "i8")]), r"events/x is dtype .*, expected a 1-D column of numbers"),
+    # A float pixel of 3.7 was truncated to 3 silently; NaN was cast to 0 with numpy's warning.
+    ("x", np.array([1.0, 3.7]), r"event 1: x=3.7 is not a pixel coordinate"),
+    ("y", np.array([np.nan, 1.0]), r"event 0: y=nan is not a pixel coordinate"),
+])
+def test_event_columns_that_are_not_whole_pixel_numbers_are_named(tmp_path, column, data, message):
+    import warnings
+
+    write_event_h5(tmp_path / "e.h5", EventArray.from_arrays([1, 2], [0, 1], [0, 1], [1, -1]))
+    with h5py.File(tmp_path / "e.h5", "r+") as f:
+        del f[f"events/{column}"]
+        f[f"events/{column}"] = data
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(InputError, match=message):
+            open_recording(tmp_path / "e.h5", 640, 480)
+
+
+def test_a_float_ms_to_idx_holding_nan_is_named_without_numpy_warnings(tmp_path):
+    import warnings
+
+    write_event_h5(tmp_path / "e.h5", EventArray.from_arrays([1, 2], [0, 1], [0, 1], [1, -1]))
+    with h5py.File(tmp_path / "e.h5", "r+") as f:
+        del f["ms_to_idx"]
+        f["ms_to_idx"] = np.array([0.0, np.nan])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # "invalid value encountered in cast" was printed
+        with pytest.raises(InputError, match=r"e.h5: ms_to_idx is not a non-decreasing index into the 2 events"):
+            EventH5Reader(tmp_path / "e.h5")
+
+
+@pytest.mark.parametrize("name, message", [
+    # Skipped as if absent (no IMU, no ground truth), or an IsADirectoryError traceback for the calibration.
+    ("camera-calibration.json", "camera-calibration.json: is a folder, not a file"),
+    ("mocap_data.txt", "mocap_data.txt: is a folder, not a file"),
+    ("imu_data.txt", "imu_data.txt: is a folder, not a file"),
+])
+def test_a_folder_in_place_of_a_sibling_file_is_named(tmp_path, name, message):
+    write_event_h5(tmp_path / "e.h5", EventArray.from_arrays([1], [0], [0], [1]))
+    (tmp_path / name).mkdir()
+    with pytest.raises(InputError, match=message):
+        open_recording(tmp_path / "e.h5", 640, 480)
+
+
+@pytest.mark.parametrize("shift, message", [
+    (".inf", "not a kalibr camera calibration \\(OverflowError"),  # was an OverflowError traceback
+    ("1e300", "calibration's time_offset_us 100000000000000001721... is not a number of microseconds within"),
+])
+def test_a_kalibr_timeshift_beyond_any_clock_is_named(tmp_path, shift, message):
+    write_event_h5(tmp_path / "e.h5", EventArray.from_arrays([1], [0], [0], [1]))
+    cam = "cam0:\n  intrinsics: [200, 200, 119.5, 89.5]\n  resolution: [240, 180]\n"
+    (tmp_path / "camchain.yaml").write_text(cam + f"  timeshift_cam_imu: {shift}\n")
+    with pytest.raises(InputError, match=f"camchain.yaml: cam0: {message}"):
+        open_recording(tmp_path / "e.h5")
+
+
+def test_an_event_column_with_unwritten_chunks_is_named(tmp_path):
+    # A converter that sized its columns first and stopped leaves chunks that read as zeros.
+    write_event_h5(tmp_path / "e.h5", EventArray.from_arrays([1, 2], [0, 1], [0, 1], [1, -1]))
+    with h5py.File(tmp_path / "e.h5", "r+") as f:
+        for c in "xytp":
+            del f[f"events/{c}"]
+            f.create_dataset(f"events/{c}", shape=(10**9,), dtype="u2" if c in "xy" else "i8", chunks=(1 << 16,))
+        f["events/t"][:10] = np.arange(10)
+    with pytest.raises(InputError, match=r"e.h5: events/t has 1 of its 15259 chunks written: the file is damaged"):
+        EventH5Reader(tmp_path / "e.h5")
+
+
+def test_a_truncated_kalibr_yaml_names_its_line_in_one_short_message(tmp_path):
+    # The parser's whole report ("in "<unicode string>", line 2, column 15: intrinsics: [...") was quoted.
+    write_event_h5(tmp_path / "e.h5", EventArray.from_arrays([1], [0], [0], [1]))
+    (tmp_path / "camchain.yaml").write_text("cam0:\n  intrinsics: [200, 200, 119.5")
+    with pytest.raises(InputError) as info:
+        open_recording(tmp_path / "e.h5")
+    assert str(info.value) == f"{tmp_path / 'camchain.yaml'}: line 2: not valid YAML (expected ',' or ']', but got '<stream end>')"
+
+
+@pytest.mark.parametrize("name", ["camera-calibration.json", "camchain.yaml", "imu_data.txt", "mocap_data.txt"])
+def test_a_named_pipe_in_place_of_a_sibling_file_is_refused_at_once(tmp_path, name):
+    # Reading it waited for a writer forever.
+    import os
+
+    write_event_h5(tmp_path / "e.h5", EventArray.from_arrays([1], [0], [0], [1]))
+    os.mkfifo(tmp_path / name)
+    with pytest.raises(InputError, match=f"{name}: is not a regular file"):
+        open_recording(tmp_path / "e.h5", 640, 480)

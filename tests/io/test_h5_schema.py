@@ -164,3 +164,19 @@ def test_nan_imu_sample_is_refused_when_streaming(h5copy):
     _edit(h5copy, fn)
     with pytest.raises(InputError, match="IMU sample 4: NaN"):
         open_stream(h5copy)
+
+
+@pytest.mark.parametrize("kw, missing", [
+    ({"shape": (10**13,), "chunks": (1 << 16,)}, "has 0 of its 152587891 chunks written"),
+    ({"shape": (10**6,)}, "stores 0 of its 8000000 bytes"),
+])
+def test_a_dataset_declaring_more_values_than_the_file_stores_is_named_before_reading_it(tmp_path, kw, missing):
+    # 10**13 IMU samples declared in a 1.5 MB file ended in numpy's "Unable to allocate 72.8 TiB" traceback; a smaller
+    # declaration could fill the memory with zeros.
+    path = tmp_path / "r.h5"
+    write_recording_h5(path, make_recording(n=100))
+    with h5py.File(path, "r+") as f:
+        del f["imu"]
+        f.create_dataset("imu/t", dtype="i8", **kw)
+    with pytest.raises(InputError, match=f"r.h5: dataset 'imu/t' {missing}: the file is damaged or was never finished"):
+        read_recording_h5(path)

@@ -63,3 +63,41 @@ def test_coordinate_beyond_the_earth_is_refused_not_a_kd_tree_overflow(tmp_path)
     pts[2, 0] = 1e300
     with pytest.raises(InputError, match=r"point 2: coordinate .* is beyond 1e\+07 m"):
         _round_trip(tmp_path, ContourMap(pts, cmap.edge_normal, cmap.plane_normal, cmap.region_id, cmap.curvature, cmap.brightness_sign))
+
+
+def test_a_big_endian_contour_map_keeps_its_attributes(tmp_path):
+    # It went to open3d, which kept the points and dropped the edge normals, regions and signs without a word.
+    import numpy as np
+
+    from evpose.core.contour_map import ContourMap
+    from evpose.io.map_ply import _NAMES, _SCHEMA, read_contour_map
+
+    rng = np.random.default_rng(0)
+    n = 50
+    en = rng.normal(size=(n, 3))
+    cm = ContourMap.from_points(rng.normal(size=(n, 3)), edge_normal=en / np.linalg.norm(en, axis=1, keepdims=True),
+                                region_id=np.arange(n), brightness_sign=rng.integers(-1, 2, n))
+    rec = np.empty(n, dtype=[(name, ">" + t) for name, t in _SCHEMA])
+    rec["x"], rec["y"], rec["z"] = cm.points.T
+    rec["enx"], rec["eny"], rec["enz"] = cm.edge_normal.T
+    rec["nx"], rec["ny"], rec["nz"] = cm.plane_normal.T
+    rec["region"], rec["curvature"], rec["brightness_sign"] = cm.region_id, cm.curvature, cm.brightness_sign
+    header = ["ply", "format binary_big_endian 1.0", f"element vertex {n}"] + [f"property {_NAMES[t]} {k}" for k, t in _SCHEMA] + ["end_header"]
+    (tmp_path / "be.ply").write_bytes(("\n".join(header) + "\n").encode() + rec.tobytes())
+    back = read_contour_map(tmp_path / "be.ply")
+    assert back.has_edge_normals and back.edge_normal.dtype.isnative
+    np.testing.assert_array_equal(back.points, cm.points)
+    np.testing.assert_array_equal(back.edge_normal, cm.edge_normal.astype(np.float32))
+    np.testing.assert_array_equal(back.region_id, cm.region_id)
+    np.testing.assert_array_equal(back.brightness_sign, cm.brightness_sign)
+
+
+def test_an_unknown_ply_format_is_named(tmp_path):
+    import pytest
+
+    from evpose.errors import InputError
+    from evpose.io.map_ply import read_contour_map
+
+    (tmp_path / "m.ply").write_text("ply\nformat binary_middle_endian 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_header\n0000000000000")
+    with pytest.raises(InputError, match="m.ply: unknown PLY format 'binary_middle_endian'"):
+        read_contour_map(tmp_path / "m.ply")

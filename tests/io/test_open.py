@@ -151,3 +151,31 @@ def test_a_stray_far_future_event_is_refused_by_every_reader_not_tracked_through
         open_recording(tmp_path / "seq")
     with pytest.raises(InputError, match=r"seq: event 500: events span 277.8 hours"):  # `info` and `convert` stream it
         list(open_stream(tmp_path / "seq").batches(None))
+
+
+def test_an_ecd_events_file_given_for_its_recording_points_to_the_folder(tmp_path):
+    # "unrecognised recording (suffix '.txt')" left the user guessing what to pass instead.
+    from evpose.errors import InputError
+    from evpose.io.open import detect_format
+
+    (tmp_path / "ecd").mkdir()
+    (tmp_path / "ecd" / "events.txt").write_text("0.1 1 2 1\n")
+    with pytest.raises(InputError, match=r"events.txt: an ECD recording is its folder \(events.txt, imu.txt...\): give .*ecd$"):
+        detect_format(tmp_path / "ecd" / "events.txt")
+
+
+def test_a_named_pipe_given_as_an_input_is_refused_at_once(tmp_path):
+    # Reading its magic bytes waited for a writer forever; the map and table readers called it "no such file".
+    import os
+
+    from evpose.errors import InputError
+    from evpose.io.map_ply import read_contour_map
+    from evpose.io.open import detect_format
+    from evpose.io.text_table import read_table
+
+    os.mkfifo(tmp_path / "rec.h5")
+    with pytest.raises(InputError, match="rec.h5: is not a regular file"):
+        detect_format(tmp_path / "rec.h5")
+    for reader in (read_contour_map, lambda p: read_table(p, 8)):
+        with pytest.raises(InputError, match="rec.h5: is not a regular file"):
+            reader(tmp_path / "rec.h5")

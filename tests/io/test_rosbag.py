@@ -147,3 +147,37 @@ def test_ros2_bag_is_the_same_bytes_on_every_write_with_its_storage_file_named_a
     for name in files:
         assert (tmp_path / "one" / "b" / name).read_bytes() == (tmp_path / "two" / "b" / name).read_bytes()
     assert len(open_recording(tmp_path / "two" / "b").events) == 300
+
+
+def _bag_with_camera_info(path, info_bytes):
+    from rosbags.rosbag1 import Writer
+
+    store = make_typestore(ros1=True)
+    ev = EventArray.from_arrays([1, 2, 3], [0, 1, 2], [0, 1, 2], [0, 1, 1])
+    with Writer(path) as w:
+        c = w.add_connection("/dvs/events", EVENT_ARRAY, typestore=store)
+        w.write(c, 1000, encode_event_array_ros1(ev, 8, 8))
+        ci = w.add_connection("/dvs/camera_info", "sensor_msgs/msg/CameraInfo", typestore=store)
+        w.write(ci, 1000, info_bytes(store))
+
+
+def _camera_info(store, fx):
+    T = store.types
+    header = T["std_msgs/msg/Header"](seq=0, stamp=T["builtin_interfaces/msg/Time"](sec=0, nanosec=0), frame_id="")
+    roi = T["sensor_msgs/msg/RegionOfInterest"](x_offset=0, y_offset=0, height=0, width=0, do_rectify=False)
+    msg = T["sensor_msgs/msg/CameraInfo"](header=header, height=8, width=8, distortion_model="plumb_bob", D=np.zeros(5),
+                                          K=np.array([fx, 0, 4, 0, 5.0, 4, 0, 0, 1]), R=np.eye(3).ravel(), P=np.zeros(12),
+                                          binning_x=0, binning_y=0, roi=roi)
+    return store.serialize_ros1(msg, "sensor_msgs/msg/CameraInfo")
+
+
+@pytest.mark.parametrize("payload, message", [
+    # A corrupt payload was rosbags' AnyReaderError traceback.
+    (lambda store: b"\xff" * 20, r"c.bag: /dvs/camera_info message 0: cannot decode"),
+    # CameraCalibration's own check named no file: "error: calibration has NaN or infinite values".
+    (lambda store: _camera_info(store, float("nan")), r"c.bag: /dvs/camera_info message 0: calibration has NaN or infinite values"),
+])
+def test_a_bad_camera_info_names_the_bag_and_message(tmp_path, payload, message):
+    _bag_with_camera_info(tmp_path / "c.bag", payload)
+    with pytest.raises(InputError, match=message):
+        open_recording(tmp_path / "c.bag")
