@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import sys
 from pathlib import Path
 
 import tyro
@@ -130,7 +131,7 @@ def main(
     if not trajs:
         reasons = Counter(r.reason for r in run.results if r.reason)
         why = reasons.most_common(1)[0][0] if reasons else "no motion-compensated image was produced (too few events, no texture or a still camera)"
-        print(f"evpose slam: not initialised: {why}")
+        print(f"evpose slam: not initialised: {why}", file=sys.stderr)
         return 1
-    print(f"evpose slam: {len(trajs)} map(s), {sum(len(t) for t in trajs)} poses -> {out}")
+    print(f"evpose slam: {len(trajs)} map(s), {sum(len(t) for t in trajs)} poses -> {out}", file=sys.stderr)
     return 0

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 from evpose.core.trajectory import Trajectory
@@ -76,4 +77,4 @@ def atlas_duration_s(estimate: Path) -> float | None:
         value = json.loads(summary.read_text()).get("duration_s")
     except (ValueError, AttributeError):
         raise InputError(summary, "not a JSON object (expected evpose slam's summary)") from None
-    return float(value) if isinstance(value, (int, float)) and value > 0 else None
+    return float(value) if isinstance(value, (int, float)) and math.isfinite(value) and value > 0 else None

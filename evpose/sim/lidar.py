@@ -77,15 +77,24 @@ def sample_cloud(scene: Scene, cfg: LidarConfig, rng: np.random.Generator) -> tu
 
 
 def write_cloud_ply(path: str | Path, points: np.ndarray, intensity: np.ndarray) -> None:
-    """Binary PLY via open3d: positions (float64) and grey colours = intensity."""
-    import open3d as o3d
+    """Binary PLY: positions (float64) and grey colours = intensity in [0, 1] as 8-bit (open3d's own layout).
 
-    pcd = o3d.geometry.PointCloud()
-    pcd.points = o3d.utility.Vector3dVector(np.asarray(points, np.float64))
-    pcd.colors = o3d.utility.Vector3dVector(np.repeat(np.asarray(intensity, np.float64)[:, None], 3, axis=1))
+    Written with numpy rather than open3d: on a full disk open3d's PLY writer printed a line per point to stderr and
+    kept the deleted temporary file open. The bytes are what ``open3d.io.write_point_cloud`` wrote (its header, and
+    colours clipped to [0, 1] and rounded), so recordings simulated before and after are the same files."""
+    points = np.asarray(points, np.float64)
+    n = len(points)
+    rec = np.empty(n, dtype=[("x", "<f8"), ("y", "<f8"), ("z", "<f8"), ("red", "u1"), ("green", "u1"), ("blue", "u1")])
+    rec["x"], rec["y"], rec["z"] = points.T
+    grey = np.round(np.clip(np.asarray(intensity, np.float64), 0.0, 1.0) * 255.0).astype(np.uint8)
+    rec["red"] = rec["green"] = rec["blue"] = grey
+    header = ["ply", "format binary_little_endian 1.0", "comment Created by Open3D", f"element vertex {n}"]
+    header += [f"property double {c}" for c in "xyz"] + [f"property uchar {c}" for c in ("red", "green", "blue")]
+    header.append("end_header")
     with atomic_path(path) as tmp:
-        if not o3d.io.write_point_cloud(str(tmp), pcd, write_ascii=False, compressed=False, print_progress=False):
-            raise OSError(f"open3d could not write {path}")
+        with open(tmp, "wb") as fh:
+            fh.write(("\n".join(header) + "\n").encode("ascii"))
+            fh.write(rec.tobytes())
 
 
 def write_edges_npz(path: str | Path, segments: np.ndarray, albedo_segments: np.ndarray | None = None) -> None:

@@ -70,7 +70,7 @@ def run_slam(recording: Recording, config: SlamConfig, chunk_us: int = 5000, sla
     if config.mode is SlamMode.EVENT_INERTIAL and slam is None:
         imu, ev = recording.imu, recording.events
         if imu is None or len(imu) < 2:
-            raise InputError(recording.source, "event-inertial mode needs IMU samples; the recording has none", "imu")
+            raise InputError(recording.source, "event-inertial mode needs at least 2 IMU samples; the recording has " + ("none" if imu is None else str(len(imu))), "imu")
         t0 = int(ev.t[0]) + recording.calibration.time_offset_us if len(ev) else None
         if t0 is not None and not imu.covers(t0, t0 + 1):
             raise InputError(recording.source, f"the IMU samples ({int(imu.t[0])}..{int(imu.t[-1])} us, IMU clock) do not cover "

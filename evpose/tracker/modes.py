@@ -66,7 +66,7 @@ def build_motion_components(
     if mode is TrackerMode.STPE:
         return MotionComponents()
     if not has_imu:
-        raise InputError(source, f"mode {mode.value!r} needs IMU data and the recording has none (use --mode stpe)")
+        raise InputError(source, f"mode {mode.value!r} needs IMU data (at least 2 samples) and the recording has fewer (use --mode stpe)")
     config.fusion.validate()
     motion = FusionMotionPredictor(make_fusion(config.fusion, calibration), None, initial_velocity_world)
     selector = None

@@ -194,6 +194,16 @@ def test_atlas_maps_option_and_duration_from_the_slam_summary(tmp_path, atlas_fi
     assert json.loads((tmp_path / "d.json").read_text())["duration_s"] == 10.0
 
 
+def test_a_slam_summary_with_an_infinite_duration_is_ignored(tmp_path):
+    from evpose.eval.inputs import atlas_duration_s
+
+    est = tmp_path / "est.txt"
+    est.with_suffix(".slam.json").write_text(json.dumps({"duration_s": float("inf")}))
+    assert atlas_duration_s(est) is None
+    est.with_suffix(".slam.json").write_text(json.dumps({"duration_s": 2.5}))
+    assert atlas_duration_s(est) == 2.5
+
+
 def test_atlas_without_usable_maps_is_a_one_line_error(tmp_path, files, capsys):
     _, gt = files
     late = curved(n=20)

@@ -46,7 +46,7 @@ def test_slam_cli_on_a_still_camera_says_not_initialised(tmp_path, capsys):
     path = tmp_path / "still.h5"
     write_recording_h5(path, make_recording(duration_s=0.3, still=True))
     assert run(["slam", str(path), "--out", str(tmp_path / "e.txt")]) == 1
-    assert "not initialised" in capsys.readouterr().out
+    assert "not initialised" in capsys.readouterr().err  # status on stderr, as evpose track's
     assert not (tmp_path / "e.txt").exists()
 
 
@@ -58,6 +58,18 @@ def test_slam_cli_event_inertial_mode_needs_imu(tmp_path, capsys):
     assert run(["slam", str(path), "--out", str(tmp_path / "e.txt"), "--mode", "event-inertial"]) == 2
     err = capsys.readouterr().err.strip()
     assert "IMU" in err and str(path) in err and len(err.splitlines()) == 1
+
+
+def test_slam_cli_event_inertial_mode_with_one_imu_sample_says_how_many_it_has(tmp_path, capsys):
+    rec = make_recording(duration_s=0.2, speed=1.5)
+    if rec.imu is None:
+        pytest.skip("the synthetic SLAM recording has no IMU")
+    rec.imu = rec.imu[:1]
+    path = tmp_path / "one.h5"
+    write_recording_h5(path, rec)
+    assert run(["slam", str(path), "--out", str(tmp_path / "e.txt"), "--mode", "event-inertial"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "at least 2 IMU samples" in err and "has 1" in err and len(err.splitlines()) == 1
 
 
 def test_slam_cli_event_inertial_mode_refuses_an_imu_on_another_clock(tmp_path, capsys):

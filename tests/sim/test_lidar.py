@@ -66,3 +66,18 @@ def test_edges_and_cloud_files_round_trip(tmp_path):
         assert z["segments"].shape == scene.edges.shape and z["segments"].dtype == np.float64
         # The pad and every building, crate and piece of street furniture contribute 12 box edges.
         assert z["segments"].shape[0] == 12 * (1 + len(_BUILDINGS) + len(_CRATES) + len(_CLUTTER))
+
+
+def test_cloud_ply_has_open3d_layout_and_reads_back_with_open3d(tmp_path):
+    import open3d as o3d
+
+    rng = np.random.default_rng(3)
+    pts, inten = rng.normal(size=(500, 3)), np.concatenate([rng.uniform(-0.2, 1.2, 490), np.linspace(0.0, 1.0, 10)])
+    write_cloud_ply(tmp_path / "ours.ply", pts, inten)
+    ref = o3d.geometry.PointCloud()
+    ref.points = o3d.utility.Vector3dVector(pts)
+    ref.colors = o3d.utility.Vector3dVector(np.repeat(np.clip(inten, 0.0, 1.0)[:, None], 3, axis=1))
+    assert o3d.io.write_point_cloud(str(tmp_path / "o3d.ply"), ref, write_ascii=False, compressed=False)
+    assert (tmp_path / "ours.ply").read_bytes() == (tmp_path / "o3d.ply").read_bytes()
+    back = o3d.io.read_point_cloud(str(tmp_path / "ours.ply"))
+    assert np.array_equal(np.asarray(back.points), pts)
