@@ -52,7 +52,8 @@ def build_main_panel(app: ViewerApp) -> None:
             app.toggle_boxes[name] = g.add_checkbox(name.replace("_", " "), getattr(app.scene.toggles, name), hint=TOGGLE_HINTS.get(name))
         app.overlay_dropdown = g.add_dropdown("TDF points coloured by", [o.value for o in OverlayColour], initial_value=app.overlay.value)
     with g.add_folder("Layout", expand_by_default=False):
-        app.layout_gui = LayoutGui(g, app.cfg.layout_dir, app._notify, app._layout_applied, app._redraw)
+        app.layout_gui = LayoutGui(g, app.cfg.layout_dir, app._notify, app._layout_applied, app._redraw,
+                                   app.image_hold.quiet)
     with g.add_folder("Export", expand_by_default=False):
         app.export_buttons = g.add_button_group("export", ["trajectory", "config", "screenshot", "GIF"])
         app.export_info = g.add_markdown("")

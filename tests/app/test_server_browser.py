@@ -309,3 +309,39 @@ def test_switching_recordings_while_playing_leaves_the_browser_console_clean(pag
         page.remove_listener("console", on_console)
         viewer.player.pause()
         viewer.player.set_speed(1.0)
+
+
+BUSY_PAGE = "() => setTimeout(() => { const t = performance.now(); while (performance.now() - t < 1500) {} }, 0)"
+"""Keeps the page's thread busy for 1.5 s, as drawing the demo's 3D scene does in a headless browser."""
+
+
+def test_moving_panels_while_playing_leaves_the_browser_console_clean(page, viewer):
+    # A panel moved unmounts its images in the browser and mounts them anew; viser's image component revokes an
+    # image's blob URL then, and at each new image, while its probe of the image's natural size may still be loading
+    # it: "Failed to load resource: net::ERR_FILE_NOT_FOUND" (session 26, a13c: 4-5 per layout switch while playing
+    # with a busy page). Image sends now pause around a move until every tab has loaded them (app/image_hold.py).
+    errors = []
+
+    def on_console(msg):
+        if msg.type == "error":
+            errors.append(msg.text)
+
+    page.on("console", on_console)
+    try:
+        viewer.player.set_speed(0.5)
+        moves = [lambda: viewer.layout_gui.set_dock("images", "left"), lambda: viewer.layout_gui.set_dock("images", "right"),
+                 lambda: viewer.apply_layout_name("compare"), lambda: viewer.apply_layout_name("debug")]
+        for move in moves:
+            viewer.player.play()
+            start = viewer.frames_published
+            wait_for(lambda: viewer.frames_published >= start + 3, what="frames drawn while playing")
+            page.evaluate(BUSY_PAGE)
+            time.sleep(0.4)
+            assert move() is not False
+            page.wait_for_timeout(2500)  # the page has handled what came while it was busy
+        assert not [e for e in errors if "ERR_FILE_NOT_FOUND" in e], errors
+    finally:
+        page.remove_listener("console", on_console)
+        viewer.player.pause()
+        viewer.player.set_speed(1.0)
+        viewer.apply_layout_name("debug")
