@@ -198,6 +198,47 @@ def test_shipped_layouts_leave_the_3d_view_room_without_overlapping_panels_in_na
         page.set_viewport_size({"width": 1400, "height": 900})
 
 
+def test_windows_narrower_than_the_layouts_get_one_column_of_panels_and_keep_the_3d_view_and_controls(page, viewer):
+    # Under 1280 px viser squeezed every column and the 3D view to 121 px (debug at 1000 px); at 700 px the main
+    # panel's dropdowns were cut off (session 26, a5). The panels now go into one column on the right, fitted to the
+    # window the tab reports (app/window_fit.py).
+    from app.window_fit import FIT_BELOW_VIEW_PX, NARROW_COLUMN_PX
+
+    texts = {"images": "SP-TS positive", "plots": "Plots", "parameters": "Parameters", "teaching": "How it works"}
+    play = page.get_by_role("button", name="play / pause (space)")
+    try:
+        for name in ("debug", "compare", "teaching"):
+            page.set_viewport_size({"width": 1400, "height": 900})
+            assert viewer.apply_layout_name(name)
+            page.wait_for_timeout(1000)
+            page.set_viewport_size({"width": 1000, "height": 800})
+            shown = ["Recording"] + [texts[p] for p, _ in viewer.layout.placements()]
+            canvas = lambda: page.locator("canvas").first.bounding_box()["width"]
+
+            def problems():
+                b = {t: panel_box(page, t) for t in shown}
+                out = [f"{s} overlaps {t}" for i, s in enumerate(shown) for t in shown[i + 1:] if _overlap(b[s], b[t]) > 0]
+                out += [f"{t} cut off at the right" for t in shown if b[t][0] + b[t][2] > 1000 + 1]
+                out += [f"{t} {b[t][2]:.0f} px wide" for t in shown[1:] if b[t][2] < NARROW_COLUMN_PX - 15]
+                if page.evaluate("document.documentElement.scrollWidth") > 1000:
+                    out.append("the page scrolls sideways")
+                box = play.bounding_box()
+                if box is None or box["x"] + box["width"] > 1000 or box["width"] < 150:
+                    out.append(f"play button {box}")
+                if canvas() < FIT_BELOW_VIEW_PX:
+                    out.append(f"3D view {canvas():.0f} px")
+                return out
+
+            wait_for(lambda: not problems(), timeout=15, what=f"{name} in a 1000 px window", detail=problems)
+            assert "narrow window" in viewer.layout_gui.note.content or viewer.layout_gui.placed() is viewer.layout
+        # Widened again, the layout is placed as it is.
+        page.set_viewport_size({"width": 1400, "height": 900})
+        wait_for(lambda: viewer.layout_gui.placed() is viewer.layout, timeout=15, what="the layout placed as it is again")
+    finally:
+        page.set_viewport_size({"width": 1400, "height": 900})
+        viewer.apply_layout_name("debug")
+
+
 def test_docking_a_panel_from_the_layout_folder_moves_it_and_a_saved_layout_puts_it_back(page, viewer):
     if not page.get_by_label("layout", exact=True).is_visible():
         page.get_by_text("Layout", exact=True).click()
