@@ -8,11 +8,10 @@ here, through these controls, and applying it re-sends the commands to every cli
 
 from __future__ import annotations
 
-import contextlib
 import dataclasses
 import threading
 from pathlib import Path
-from typing import Callable, ContextManager
+from typing import Callable
 
 from app.layouts import MAX_WIDTH, MIN_WIDTH, PANELS, Layout, check_width, dock_anchor, dock_choices, list_layouts, save_layout
 from app.window_fit import JITTER_PX, SLACK_PX, fitted
@@ -33,8 +32,7 @@ class LayoutGui:
     """The Layout folder's controls and the current :class:`Layout` (a copy: run-time changes never touch the file)."""
 
     def __init__(self, gui, layout_dir: Path, notify: Callable[[str, str, str], None],
-                 on_applied: Callable[[Layout], None], on_shown: Callable[[], None],
-                 quiet: Callable[[], ContextManager] = contextlib.nullcontext):
+                 on_applied: Callable[[Layout], None], on_shown: Callable[[], None]):
         self.gui = gui
         self.layout_dir = layout_dir
         self._notify = notify
@@ -42,9 +40,6 @@ class LayoutGui:
         """Called with each applied layout (dark mode and the 3D toggles are the viewer's)."""
         self._on_shown = on_shown
         """Called when a panel is shown (images of hidden panels were neither drawn nor sent)."""
-        self._quiet = quiet
-        """Wraps every move, show or hide of panels: images held back until the tabs have loaded those sent before
-        (app/image_hold.py: a panel moved while the browser still loads its image logged ERR_FILE_NOT_FOUND)."""
         self.layout: Layout | None = None
         self.window_px: int | None = None
         """Width of the narrowest open tab's window, CSS px (None: not known yet); app/window_fit.py."""
@@ -95,10 +90,6 @@ class LayoutGui:
         return True
 
     def apply(self, layout: Layout) -> None:
-        with self._quiet():
-            self._apply(layout)
-
-    def _apply(self, layout: Layout) -> None:
         self.layout = Layout.from_dict(layout.to_dict())
         for name in PANELS:
             place = self.layout.panels[name]
@@ -153,9 +144,8 @@ class LayoutGui:
         if (before.placements(), before.region_widths()) == (after.placements(), after.region_widths()):
             self._describe(self.shown_docks)
             return False
-        with self._quiet():
-            self._place(set())
-            self._size_edges({"left", "right"})
+        self._place(set())
+        self._size_edges({"left", "right"})
         return True
 
     def _edge(self, name: str, shown: dict[str, str] | None = None) -> str:
@@ -241,11 +231,10 @@ class LayoutGui:
         """Show or hide a panel; panels stacked on it move to its place (or back onto it)."""
         if self.layout is None:
             return
-        with self._quiet():
-            self.layout.panels[name].visible = bool(visible)
-            self.panels[name].visible = bool(visible)
-            self.boxes[name].value = bool(visible)
-            self._place({name} if visible else set())
+        self.layout.panels[name].visible = bool(visible)
+        self.panels[name].visible = bool(visible)
+        self.boxes[name].value = bool(visible)
+        self._place({name} if visible else set())
         if visible:
             self._on_shown()
 
@@ -260,8 +249,7 @@ class LayoutGui:
             self.docks[name].value = self.layout.panels[name].dock  # the control shows what is in effect
             return False
         self.docks[name].value = dock
-        with self._quiet():
-            self._place({name})
+        self._place({name})
         return True
 
     def set_width(self, name: str, width: float) -> bool:

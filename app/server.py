@@ -23,7 +23,6 @@ from app.engine_factory import MODES, NO_MAP_NOTE, engine_factory
 from app.export import export_action, write_config
 from app.frame import Frame
 from app.hotkeys import SliderKeyGuard
-from app.image_hold import ImageHold
 from app.layouts import Layout
 from app.panels import SLAM_PANELS, SLAM_PLACEHOLDER, TRACKER_PANELS, OverlayColour, panel_images
 from app.player import Player, PlayState, RerunFrom
@@ -90,8 +89,6 @@ class ViewerApp:
         """Whether the image panels shown are SLAM mode's (None: none drawn yet)."""
         self._last_slow = 0.0
         self.key_guard = SliderKeyGuard()
-        self.image_hold = ImageHold(self.server, self._redraw)
-        """Image sends held back while panels holding images move (app/image_hold.py)."""
         """Arrow/Home shortcuts pressed on a focused slider move the slider only (app/hotkeys.py)."""
         build_main_panel(self)  # the controls: app/viewer_controls.py
         self.warm_up = WarmUp(cfg.disk_cache, cfg.frame_cache, lambda md: setattr(self.warm_info, "content", md),
@@ -286,10 +283,9 @@ class ViewerApp:
         now = time.monotonic()
         slow = self.player is None or self.player.state != PlayState.PLAYING or now - self._last_slow >= SLOW_REFRESH_S
         history = engine.history if slow else []
-        with self.image_hold.lock, self.server.atomic():
-            send_images = self.image_hold.images_allowed()
+        with self.server.atomic():
             self._show_mode_panels(frame.slam is not None)
-            for name, img in imgs.items() if show_images and send_images else ():
+            for name, img in imgs.items() if show_images else ():
                 self.image_handles[name].image = img
             self.scene.update(frame, history if slow else None)
             if slow:
@@ -301,7 +297,7 @@ class ViewerApp:
             if show_teaching and (STAGE_PANEL[self.stage] in imgs or frame.slam is not None):
                 # SLAM mode: the stages are the tracker's, which is not running; the text says so (no live image).
                 self.teaching_text.content = teaching_markdown(self.stage, frame, engine.t_start_us)
-                if frame.slam is None and send_images:
+                if frame.slam is None:
                     self.teaching_image.image = imgs[STAGE_PANEL[self.stage]]
             self.time_slider.value = round((frame.t_us - engine.t_start_us) / 1e6, 3)
             self.status.content = status_markdown(frame, engine, self.player.stats() if self.player else {}, self.gaps)

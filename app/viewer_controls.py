@@ -13,6 +13,7 @@ import numpy as np
 from app.engine_factory import MODES
 from app.hotkeys import bind_hotkeys
 from app.layout_gui import LayoutGui
+from app.page_patch import add_page_patch
 from app.panels import IMAGES_IN_SLAM_MODE, SLAM_PANELS, SLAM_PLACEHOLDER, TRACKER_PANELS, OverlayColour
 from app.player import RerunFrom
 from app.plots import PlotsView
@@ -30,6 +31,7 @@ def build_main_panel(app: ViewerApp) -> None:
     """The left panel: recording / map / viewer mode, playback, 3D view toggles, layout and export controls."""
     g = app.gui
     g.main_panel.dock_left()
+    add_page_patch(g)  # first, so it is in place before any image: app/page_patch.py
     with g.add_folder("Recording"):
         app.rec_dropdown = g.add_dropdown("recording", ["(none found)"], hint="Recordings under the --data folders")
         app.map_dropdown = g.add_dropdown("map", [NO_MAP], hint="Contour map to track against")
@@ -52,8 +54,7 @@ def build_main_panel(app: ViewerApp) -> None:
             app.toggle_boxes[name] = g.add_checkbox(name.replace("_", " "), getattr(app.scene.toggles, name), hint=TOGGLE_HINTS.get(name))
         app.overlay_dropdown = g.add_dropdown("TDF points coloured by", [o.value for o in OverlayColour], initial_value=app.overlay.value)
     with g.add_folder("Layout", expand_by_default=False):
-        app.layout_gui = LayoutGui(g, app.cfg.layout_dir, app._notify, app._layout_applied, app._redraw,
-                                   app.image_hold.quiet)
+        app.layout_gui = LayoutGui(g, app.cfg.layout_dir, app._notify, app._layout_applied, app._redraw)
     with g.add_folder("Export", expand_by_default=False):
         app.export_buttons = g.add_button_group("export", ["trajectory", "config", "screenshot", "GIF"])
         app.export_info = g.add_markdown("")

@@ -360,7 +360,7 @@ def test_moving_panels_while_playing_leaves_the_browser_console_clean(page, view
     # A panel moved unmounts its images in the browser and mounts them anew; viser's image component revokes an
     # image's blob URL then, and at each new image, while its probe of the image's natural size may still be loading
     # it: "Failed to load resource: net::ERR_FILE_NOT_FOUND" (session 26, a13c: 4-5 per layout switch while playing
-    # with a busy page). Image sends now pause around a move until every tab has loaded them (app/image_hold.py).
+    # with a busy page). The page now revokes blob URLs a few seconds late (app/page_patch.py).
     errors = []
 
     def on_console(msg):
