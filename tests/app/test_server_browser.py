@@ -93,7 +93,7 @@ def test_moving_a_parameter_reruns_the_tracker(page, viewer):
     img = viewer.image_handles["SP-TS positive"].image.copy()
     applies = viewer.player.config_applies
     page.get_by_text("time surface", exact=True).click()
-    thumb = control_row(page, "eta ms [ms]").get_by_role("slider")
+    thumb = control_row(page, "eta [ms]").get_by_role("slider")
     thumb.focus()
     for _ in range(6):  # six quick slider moves: coalesced into one re-run
         page.keyboard.press("ArrowRight")
