@@ -112,11 +112,11 @@ class WindowWatch:
             self.check_soon()
 
     def check_soon(self, delay: float = CHECK_DELAY_S) -> None:
+        """Fit once ``delay`` from now; a check already due stays (camera reports come at the frame rate while the
+        camera follows the pose: restarting the wait at each would put the check off for as long as that lasts)."""
         with self._lock:
-            if self._stopped:
+            if self._stopped or (self._timer is not None and self._timer.is_alive()):
                 return
-            if self._timer is not None:
-                self._timer.cancel()
             self._timer = threading.Timer(delay, self.check)
             self._timer.daemon = True
             self._timer.start()
@@ -130,6 +130,8 @@ class WindowWatch:
         return min((window_width(v, placed) for v in views), default=None)
 
     def check(self) -> None:
+        with self._lock:
+            self._timer = None  # reports from now on schedule the next check (and the recheck below can)
         px = self.window_px()
         if px is not None and self._layout_gui.set_window_width(px):
             self._refit_at = time.monotonic()
