@@ -47,8 +47,16 @@ class FieldSpec:
 
     @property
     def label(self) -> str:
+        """The control's label: the field name in words, its unit in brackets. A name ending in its unit says it once:
+        "rate hz [Hz]", "velocity window ms [ms]", "field margin px [px]" (60 of the tracker's and SLAM's controls) read
+        "rate [Hz]", "velocity window [ms]", "field margin [px]"."""
         unit = self.metadata.get("unit")
-        base = self.path[-1].replace("_", " ")
+        words = self.path[-1].split("_")
+        if unit and words[-1].lower() == str(unit).lower():
+            if len(words) == 1:
+                return words[0]  # "iterations [iterations]"
+            words = words[:-1]
+        base = " ".join(words)
         return f"{base} [{unit}]" if unit else base
 
 

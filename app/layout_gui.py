@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Callable
 
 from app.layouts import MAX_WIDTH, MIN_WIDTH, PANELS, Layout, check_width, dock_anchor, dock_choices, list_layouts, save_layout
+from app.window_fit import JITTER_PX, SLACK_PX, fitted
 from evpose.errors import EvposeError, InputError
 
 FLOAT_AT = {"teaching": (60, 15)}
@@ -40,6 +41,10 @@ class LayoutGui:
         self._on_shown = on_shown
         """Called when a panel is shown (images of hidden panels were neither drawn nor sent)."""
         self.layout: Layout | None = None
+        self.window_px: int | None = None
+        """Width of the narrowest open tab's window, CSS px (None: not known yet); app/window_fit.py."""
+        self._narrow = False
+        """Whether the layout is placed in its narrow-window form (the fit's hysteresis depends on it)."""
         self.panels: dict = {}
         self._timer: threading.Timer | None = None
         self._late_timers: list[threading.Timer] = []
@@ -101,13 +106,15 @@ class LayoutGui:
 
     def _place(self, touched: set[str]) -> None:
         """Send placement commands for the touched panels, those whose shown dock changed, and everything stacked on those."""
-        placements = self.layout.placements()
+        placed = self.placed()
+        self._narrow = placed is not self.layout
+        placements = placed.placements()
         moved = set(touched) | {p for p, dock in placements if self.shown_docks.get(p) != dock}
         for name, dock in placements:  # anchors come first, so a panel follows an anchor moved just before it
             if name not in moved and dock_anchor(dock) not in moved:
                 continue
             moved.add(name)
-            panel, width = self.panels[name], self.layout.panels[name].width
+            panel, width = self.panels[name], placed.panels[name].width
             if dock == "left":
                 panel.dock_left()
             elif dock == "right":
@@ -121,6 +128,25 @@ class LayoutGui:
         self.shown_docks = dict(placements)  # visible panels only: hidden ones are re-placed when shown
         self._size_edges({self._edge(p) for p in moved if p in self.shown_docks} & {"left", "right"})
         self._describe(dict(placements))
+
+    def placed(self) -> Layout:
+        """The layout as placed: the current one, or its narrow-window form (app/window_fit.py)."""
+        return fitted(self.layout, self.window_px, -SLACK_PX if self._narrow else SLACK_PX)
+
+    def set_window_width(self, px: int) -> bool:
+        """The narrowest tab's window is ``px`` wide: place the layout fitted to it if that changes anything."""
+        if self.layout is None or (self.window_px is not None and abs(px - self.window_px) < JITTER_PX):
+            return False
+        before = self.placed()
+        self.window_px = px
+        after = self.placed()
+        self._narrow = after is not self.layout
+        if (before.placements(), before.region_widths()) == (after.placements(), after.region_widths()):
+            self._describe(self.shown_docks)
+            return False
+        self._place(set())
+        self._size_edges({"left", "right"})
+        return True
 
     def _edge(self, name: str, shown: dict[str, str] | None = None) -> str:
         """Where the column holding a (visible) panel is: 'left', 'right' or 'float'."""
@@ -140,11 +166,13 @@ class LayoutGui:
         """
         if not edges or self.layout is None:
             return
-        totals, shown = self.layout.region_widths(), self.shown_docks  # one snapshot: the resend runs on a timer thread
+        totals, shown = self.placed().region_widths(), self.shown_docks  # one snapshot: the resend runs on a timer thread
         for edge in edges:
             on_edge = [p for p in PANELS if p in shown and self._edge(p, shown) == edge]
             if on_edge:
                 self.panels[on_edge[-1]].set_width(totals[edge])
+            elif edge == "left":  # the main panel alone: a share squeezed by a narrow window would stay otherwise
+                self.gui.main_panel.set_width(totals[edge])
         if again:
             with self._timer_lock:
                 if self._timer is not None:
@@ -186,7 +214,11 @@ class LayoutGui:
 
     def _describe(self, shown: dict[str, str]) -> None:
         lines = []
-        for name in PANELS:
+        placed = self.placed()
+        if placed is not self.layout:
+            lines.append(f"- narrow window ({self.window_px} px): panels in one column on the right, "
+                         f"{placed.region_widths()['right']} px wide (the layout is kept for wider windows)")
+        for name in PANELS if placed is self.layout else ():
             place = self.layout.panels[name]
             if place.visible and shown.get(name) != place.dock:
                 anchor = dock_anchor(place.dock)

@@ -29,7 +29,8 @@ CONTROL_PANEL_PX = 320
 DEFAULT_COLUMN_PX = 300
 """Width viser gives a newly docked column (its DEFAULT_REGION_PX)."""
 NARROW_WINDOW_PX = 1280
-"""Narrowest browser window the shipped layouts are made for, CSS pixels (a common laptop width)."""
+"""Narrowest browser window the shipped layouts are made for, CSS pixels (a common laptop width); in narrower ones
+their panels are placed in one right column (app/window_fit.py)."""
 MIN_VIEW_PX = 360
 """Width of 3D view every shipped layout leaves in a NARROW_WINDOW_PX window, CSS pixels. Session 12's debug layout
 left 220 px (a sliver), and compare's floating images (360 px) covered its 260 px view and overlapped the plots."""

@@ -33,6 +33,7 @@ from app.status import event_gaps, status_markdown
 from app.teaching import STAGE_PANEL, Stage, teaching_markdown
 from app.viewer_controls import NO_MAP, bind_viewer_hotkeys, build_main_panel, build_panels
 from app.warm_up import WarmUp
+from app.window_fit import WindowWatch
 from evpose.errors import EvposeError, InputError
 
 __all__ = ["AppConfig", "ViewerApp"]
@@ -97,7 +98,9 @@ class ViewerApp:
         self.refresh_entries()
         self.apply_layout_name(cfg.layout)
         bind_viewer_hotkeys(self)
-        self.server.on_client_connect(lambda _client: self.layout_gui.client_connected())
+        self.window_watch = WindowWatch(self.server, self.layout_gui)
+        """Fits the panels to the narrowest tab's window (app/window_fit.py)."""
+        self.server.on_client_connect(lambda client: (self.layout_gui.client_connected(), self.window_watch.watch(client)))
         recs = [e for e in self.entries if e.kind == EntryKind.RECORDING and e.error is None]
         if recs:
             # Open on the shortest-named landing recording (the showcase) when there is one, else the first found.
@@ -486,6 +489,7 @@ class ViewerApp:
     def stop(self) -> None:
         self.warm_up.stop()
         self.layout_gui.stop()
+        self.window_watch.stop()
         if self.player is not None:
             self.player.stop()
         self.server.stop()

@@ -9,6 +9,7 @@ the nearest earlier snapshot (``EventSlam.snapshot``, taken every
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from dataclasses import dataclass, field
 
@@ -114,6 +115,36 @@ class SlamEngine(Engine):
         self._known[k] = StepSummary(k, self._step_t(k), result.pose, None, result.status.value, timings, counts)
         return result, window, elapsed
 
+    def _skip_empty(self, limit: int) -> int:
+        """Go over the steps without events up to step ``limit`` (exclusive) at once, as :meth:`_advance` would have
+        made them; the number gone over. Only once an empty window has been fed: SLAM's state is then that of every
+        further empty step (an empty window is a no-op), and so is the step's result, so each such step's summary is
+        the last one at its own index and time (its ``step`` time 0: not computed). Session 27, the 60 s gap of
+        ``/tmp/s26/ui26/gapdata/gap60.h5`` (``/tmp/s27/ui27/p_gap.py``, main vs this): seek from the start to just past
+        it 6.35 -> 4.32 s (the 2 s before the gap, with events, cost 4.2 s of it), the gap as one play stride 0.29 ->
+        0.12 s (one seek snapshot copied at its start); the viewer playing it at 1x from 1.8 s to 62.2 s 3.8 -> 3.5 s
+        wall (``a9_slamgap.py``: the player already went over it in few strides)."""
+        k = self.step_count
+        if k == 0 or self._same_since >= k:
+            return 0
+        w, t = int(self.config.step_us), self.recording.events.t
+        i = int(np.searchsorted(t, self.t_start_us + k * w, "left"))
+        first_with_events = self.n_steps if i >= len(t) else (int(t[i]) - self.t_start_us) // w
+        end = min(first_with_events, limit, self.n_steps)
+        if end <= k:
+            return 0
+        last = self._known[k - 1]
+        every = int(self.config.snapshot_every)
+        for j in range(k, end):
+            self._known[j] = dataclasses.replace(last, index=j, t_us=self._step_t(j), timings_ms={"step": 0.0},
+                                                 counts=dict(last.counts))
+            if (j + 1) % every == 0 and (j + 1) not in self._snapshots:
+                prev = max(n for n in self._snapshots if n < j + 1)
+                same = prev >= self._same_since  # as _advance: shared within the stretch, taken once at its start
+                self._snapshots[j + 1] = self._snapshots[prev] if same else self.slam.snapshot()
+        self.step_count = end
+        return end - k
+
     play_stops_at_events = True
     """:meth:`play_step` ends its stride where events come again after a stretch without (the player may then
     stride far over such a stretch)."""
@@ -128,10 +159,12 @@ class SlamEngine(Engine):
         atlas alignment of each frame's view cost 8 of the 13 ms of an empty step (a 60 s gap: 156 s at 1x; now
         ~12 s, ``/tmp/s26/ui26/a1_gap.py``). Playing the demo landing from its start for 10 s (session 26,
         ``/tmp/s26/ui26/b_slamplay.py``): real-time factor 0.086 -> 0.258, 91 -> 123 frames drawn."""
-        for _ in range(min(max(int(stride), 1), self.n_steps - self.step_count) - 1):
+        target = self.step_count + min(max(int(stride), 1), self.n_steps - self.step_count) - 1
+        while self.step_count < target:
             if self._same_since < self.step_count and len(self._window(self.step_count)):
                 break  # events again after a stretch without: their first step is shown, not one a long stride on
-            self._advance()
+            if not self._skip_empty(target):
+                self._advance()
         return self.step()
 
     def _step_t(self, k: int) -> int:
@@ -157,7 +190,7 @@ class SlamEngine(Engine):
         if not (max(j for j in self._snapshots if j <= max(k, 0)) <= self.step_count <= k):
             base = max(j for j in self._snapshots if j <= k)
             self._restore(base)
-        while self.step_count < k and self._advance() is not None:
+        while self.step_count < k and (self._skip_empty(k) or self._advance() is not None):
             pass
 
     def _restore(self, k: int) -> None:
@@ -182,8 +215,8 @@ class SlamEngine(Engine):
         start = self._start_for(k)
         if start != self.step_count:
             self._restore(start)
-        for _ in range(max(int(budget_steps), 1)):
-            if self.step_count >= k or self._advance() is None:
+        for _ in range(max(int(budget_steps), 1)):  # a stretch without events gone over at once counts as one step
+            if self.step_count >= k or not (self._skip_empty(k) or self._advance() is not None):
                 break
         return self.step_count >= k
 

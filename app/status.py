@@ -115,6 +115,9 @@ def status_markdown(frame: Frame, engine: Engine, stats: dict, gaps: list[EventG
     if stats.get("state") == "paused" and engine.is_last(frame):
         # Forward did nothing here without a word.
         text += "\n\n_the end of the recording: play starts it again from the beginning_"
+    elif stats.get("state") == "paused" and frame.index == 0:
+        # "< back" did nothing here without a word too (session 27 audit).
+        text += "\n\n_the first step of the recording: nothing before it_"
     note = gap_note(frame, gaps, hasattr(engine, "seconds_of_steps"), t0)
     if note:
         text += f"\n\n{note}"

@@ -37,7 +37,7 @@ EXPLANATIONS: dict[Stage, str] = {
     ),
     Stage.TDF: (
         "The **temporal distance field** is `1 - time surface`: near 0 exactly on the newest edge, growing behind "
-        "it, then slightly blurred (`distance field > blur px`). It acts as a landscape of valleys along the edges. "
+        "it, then slightly blurred (`distance field > blur [px]`). It acts as a landscape of valleys along the edges. "
         "The contour map points are projected into it "
         "from the current pose guess; each point's height in the landscape is its *residual*."
     ),

@@ -13,6 +13,7 @@ import numpy as np
 from app.engine_factory import MODES
 from app.hotkeys import bind_hotkeys
 from app.layout_gui import LayoutGui
+from app.page_patch import add_page_patch
 from app.panels import IMAGES_IN_SLAM_MODE, SLAM_PANELS, SLAM_PLACEHOLDER, TRACKER_PANELS, OverlayColour
 from app.player import RerunFrom
 from app.plots import PlotsView
@@ -24,12 +25,22 @@ if TYPE_CHECKING:
 NO_MAP = "(no map: events only)"
 TOGGLE_HINTS = {"slam_aligned": "SLAM mode: place each map on the ground truth (Sim(3), evo's Umeyama); untick for the maps' own frames"}
 """Hover text of the 3D view's checkboxes that need more than their name."""
+PLAYBACK_HINTS = {
+    "play": "Play or pause (Space). At the last step, play starts again from the beginning.",
+    "step": "One step back or forward (arrow keys left / right, when no slider has the focus).",
+    "time": "Time from the recording's start, seconds: drag or type to seek (Home: back to the start).",
+    "speed": "Playback speed, times real time, 0.1-10 (arrow keys up / down: double / halve). Stretches without "
+             "events are gone over at once.",
+    "loop": "At the end, go on from the beginning instead of pausing.",
+}
+"""Hover text of the playback controls (what they do and their keys)."""
 
 
 def build_main_panel(app: ViewerApp) -> None:
     """The left panel: recording / map / viewer mode, playback, 3D view toggles, layout and export controls."""
     g = app.gui
     g.main_panel.dock_left()
+    add_page_patch(g)  # first, so it is in place before any image: app/page_patch.py
     with g.add_folder("Recording"):
         app.rec_dropdown = g.add_dropdown("recording", ["(none found)"], hint="Recordings under the --data folders")
         app.map_dropdown = g.add_dropdown("map", [NO_MAP], hint="Contour map to track against")
@@ -38,11 +49,12 @@ def build_main_panel(app: ViewerApp) -> None:
         app.rescan_button = g.add_button("rescan data folders")
         app.rec_info = g.add_markdown("")
     with g.add_folder("Playback"):
-        app.play_button = g.add_button("play / pause (space)")
-        app.step_buttons = g.add_button_group("step", ["< back", "forward >"])
-        app.time_slider = g.add_slider("time [s]", min=0.0, max=1.0, step=0.001, initial_value=0.0)
-        app.speed_slider = g.add_slider("speed [x]", min=0.1, max=10.0, step=0.1, initial_value=1.0)
-        app.loop_box = g.add_checkbox("loop", False)
+        # Hints: the playback controls had none, and their keys were listed only in the README and the command palette.
+        app.play_button = g.add_button("play / pause (space)", hint=PLAYBACK_HINTS["play"])
+        app.step_buttons = g.add_button_group("step", ["< back", "forward >"], hint=PLAYBACK_HINTS["step"])
+        app.time_slider = g.add_slider("time [s]", min=0.0, max=1.0, step=0.001, initial_value=0.0, hint=PLAYBACK_HINTS["time"])
+        app.speed_slider = g.add_slider("speed [x]", min=0.1, max=10.0, step=0.1, initial_value=1.0, hint=PLAYBACK_HINTS["speed"])
+        app.loop_box = g.add_checkbox("loop", False, hint=PLAYBACK_HINTS["loop"])
         app.status = g.add_markdown("_no recording loaded_")
     # Below the playback controls: one line or more per recording found, it pushed them off a 900 px screen.
     app.warm_info = g.add_markdown("")

@@ -164,3 +164,15 @@ def test_config_files_round_trip_and_reject_unknown_keys(tmp_path):
         from_plain(Outer, {"inner": {"nope": 1}})
     with pytest.raises(InputError, match="inner.gain"):
         from_plain(Outer, {"inner": {"gain": "lots"}})
+
+
+def test_a_control_whose_name_ends_in_its_unit_says_the_unit_once():
+    from app.slam_engine import SlamViewConfig
+    from evpose.tracker.config import TrackerConfig
+
+    labels = {s.name: s.label for c in (TrackerConfig(), SlamViewConfig()) for s in field_specs(c)}
+    assert labels["rate_hz"] == "rate [Hz]"
+    assert labels["step_us"] == "step [us]"
+    with_unit = [lab for lab in labels.values() if lab.endswith("]")]
+    assert len(with_unit) > 60
+    assert not [lab for lab in with_unit if lab.split(" [")[0].split(" ")[-1].lower() == lab.rsplit("[", 1)[-1][:-1].lower()]

@@ -65,6 +65,15 @@ def test_the_playback_controls_come_before_the_list_of_prepared_recordings(viewe
     assert viewer.rec_info.order < viewer.play_button.order < viewer.status.order < viewer.warm_info.order
 
 
+def test_the_playback_controls_say_on_hover_what_they_do_and_their_keys(viewer):
+    # They had no hover text: their keys were in the README and the command palette only (session 27 audit).
+    hints = {"play": viewer.play_button.hint, "step": viewer.step_buttons.hint, "time": viewer.time_slider.hint,
+             "speed": viewer.speed_slider.hint, "loop": viewer.loop_box.hint}
+    assert all(hints.values()), hints
+    assert "Space" in hints["play"] and "arrow keys" in hints["step"] and "Home" in hints["time"]
+    assert "up / down" in hints["speed"]
+
+
 def test_the_status_says_a_recording_is_opening_until_its_first_step_is_drawn(viewer):
     gate = threading.Event()
     viewer.player.call(lambda engine: gate.wait(20))  # the worker busy, as with a first step loading its kernels

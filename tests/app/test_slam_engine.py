@@ -148,3 +148,52 @@ def test_strided_play_and_a_stretch_without_events_keep_every_step_exact(moving,
     for k in (quiet[0] + 12, quiet[-1] + 3, len(ref) - 1):
         got = whole.seek_step(k).pose
         assert (got is None and ref[k] is None) or np.array_equal(got, ref[k]), k
+
+
+def _gap_recording(moving, gap_us):
+    import dataclasses
+
+    from evpose.core.events import EventArray
+
+    ev = moving.events
+    t = ev.t.copy()
+    t[t >= ev.t[0] + 300_000] += gap_us  # no events for gap_us after 0.3 s
+    return dataclasses.replace(moving, events=EventArray(t, ev.x, ev.y, ev.p))
+
+
+def _without_timings(history):
+    return [(s.index, s.t_us, None if s.pose is None else s.pose.tobytes(), s.status, s.counts) for s in history]
+
+
+def test_steps_without_events_are_gone_over_at_once_leaving_every_step_as_computing_it_would(moving):
+    # SLAM mode computed every empty 5 ms step of an event gap (~0.7 ms each: a 60 s gap took ~8 s to play). After the
+    # first empty step SLAM's state and result no longer change, so the rest of the stretch is gone over at once.
+    gap = _gap_recording(moving, 2_000_000)  # 400 empty steps
+    cfg = SlamViewConfig(snapshot_every=7)
+    whole = SlamEngine(gap, cfg)  # every step computed, one at a time (step() never skips)
+    ref = [f.pose for f in iter(whole.step, None)]
+    quiet = [k for k, s in enumerate(whole.history) if s.counts["events_in"] == 0]
+    assert len(quiet) >= 400
+    played = SlamEngine(gap, cfg)
+    calls = []
+    real_step = played.slam.step
+    played.slam.step = lambda events: (calls.append(len(events)), real_step(events))[1]
+    frames = []
+    while (f := played.play_step(50)) is not None:
+        frames.append(f)
+        if played.step_count >= played.n_steps:
+            break
+    assert sum(1 for n in calls if n == 0) < 30  # computed: the stretch's first empty step and each stride's shown one
+    assert _without_timings(played.history) == _without_timings(whole.history)
+    assert quiet[-1] + 1 in [f.index for f in frames]  # the stride still stops where events come again
+    assert all(played.history[k].timings_ms == {"step": 0.0} for k in quiet[2:-1] if k not in [f.index for f in frames])
+    # The seek snapshots inside the stretch are the state of its steps: seeks restore them and replay exactly.
+    assert set(played._snapshots) == set(whole._snapshots)
+    for k in (quiet[0] + 40, quiet[-1] - 3, quiet[-1] + 5, len(ref) - 1):
+        got = played.seek_step(k).pose
+        assert (got is None and ref[k] is None) or np.array_equal(got, ref[k]), k
+    # A seek far into the stretch from its start goes over it at once too.
+    seeker = SlamEngine(gap, cfg)
+    f = seeker.seek_step(quiet[-1] - 1)
+    assert _without_timings(seeker.history) == _without_timings(whole.history[:quiet[-1]])
+    assert (f.pose is None and ref[quiet[-1] - 1] is None) or np.array_equal(f.pose, ref[quiet[-1] - 1])

@@ -71,6 +71,18 @@ def test_the_last_step_says_it_is_the_end_even_before_the_last_event():
     assert "end of the recording" not in status_markdown(before, eng, {"state": "paused", "speed": 1.0})
 
 
+def test_the_first_step_says_nothing_comes_before_it_when_paused():
+    # "< back" at step 0 did nothing without a word (the last step already said it was the end).
+    eng = SimpleNamespace(n_steps=793, t_end_us=3_999_995)
+    eng.is_last = lambda frame: Engine.is_last(eng, frame)
+    z = np.zeros((2, 2), np.float32)
+    first = Frame(0, 35_000, z, z, z, EventArray.empty(), EventArray.empty())
+    assert "the first step of the recording" in status_markdown(first, eng, {"state": "paused", "speed": 1.0})
+    assert "first step of the recording" not in status_markdown(first, eng, {"state": "playing", "speed": 1.0})
+    second = Frame(1, 40_000, z, z, z, EventArray.empty(), EventArray.empty())
+    assert "first step of the recording" not in status_markdown(second, eng, {"state": "paused", "speed": 1.0})
+
+
 def _tracker_like(registered_flags, t0_us=1_000_000, step_us=5_000):
     hist = [SimpleNamespace(t_us=t0_us + k * step_us, counts={"registered": int(r)}) for k, r in enumerate(registered_flags)]
     return SimpleNamespace(contour_map=object(), history=hist, session=SimpleNamespace(t0_us=t0_us), t_start_us=0,

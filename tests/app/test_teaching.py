@@ -35,7 +35,8 @@ def test_the_explanations_name_what_the_tracker_runs_and_controls_that_exist():
 
     assert "Levenberg-Marquardt" in registration.__doc__ and "Levenberg-Marquardt" in EXPLANATIONS[Stage.REGISTRATION]
     assert "ego-motion filter" in EXPLANATIONS[Stage.EVENTS] and "EKF" in EXPLANATIONS[Stage.FUSION]
-    labels = {tuple(p.replace("_", " ") for p in s.path) for s in field_specs(TrackerConfig())}
+    # As the Parameters panel shows them: folders, then the control's label ("blur [px]", the unit said once).
+    labels = {tuple(p.replace("_", " ") for p in s.path[:-1]) + (s.label,) for s in field_specs(TrackerConfig())}
     modes = {m.value for m in TrackerMode}
     for stage, text in EXPLANATIONS.items():
         for ref in re.findall(r"`([^`]+)`", text):

@@ -1,0 +1,37 @@
+"""Blob URLs of images revoked a few seconds late in the browser, so viser's image probes never fail.
+
+viser's image component (client ``components/Image.tsx``) makes a blob URL for each image it gets, shows it, and
+starts a probe of its natural size (``new Image().src = url``); it revokes the URL when the next image comes or the
+component unmounts (its panel moved, hidden, or the tab's GUI rebuilt). When the page is busy (software WebGL drawing
+the 3D scene, a tab just opened, a layout switch redrawing the 3D view), the probe had not loaded by then, and the
+console filled with "Failed to load resource: net::ERR_FILE_NOT_FOUND" (harmless: the image shown is always the latest).
+Session 27 (/tmp/s27/ui27/a13e.py, c1_walk.py): every failure was the probe, never a shown ``<img>``; 4-5 per layout
+switch while playing with a busy page (session 26's a13c), 5 in a tab opened while another stepped.
+
+The cause is in viser's client, which the app cannot change, and the server cannot know when a tab's probe has loaded
+(holding image sends around panel moves until every tab had answered a round trip removed most, not all: a probe made
+by an image that came after the move still failed). So the page is told to revoke blob URLs REVOKE_DELAY_MS later:
+a hidden 1x1 image in the main panel whose ``onload`` wraps ``URL.revokeObjectURL`` (viser renders its HTML elements
+with innerHTML, where inline handlers run; ``window.URL`` by name: inside an inline handler a bare ``URL`` is
+``document.URL``, a string). Memory: the few images of the last REVOKE_DELAY_MS stay in the browser
+(tens of kB each). Revocation by viser's other code (file downloads) is delayed the same way, harmlessly.
+"""
+
+from __future__ import annotations
+
+REVOKE_DELAY_MS = 3000
+"""Delay of every blob URL revocation in the page, milliseconds (a busy page's probe loaded within ~1.5 s, a13e)."""
+
+_GIF_1PX = "data:image/gif;base64,R0lGODlhAQABAIAAAAAAAP///yH5BAEAAAAALAAAAAABAAEAAAIBRAA7"
+
+PAGE_PATCH_HTML = (
+    f'<img alt="" src="{_GIF_1PX}" style="display:none" onload="if (!window.__evposeLateRevoke) {{'
+    f" window.__evposeLateRevoke = true; const U = window.URL, revoke = U.revokeObjectURL.bind(U);"
+    f" U.revokeObjectURL = (url) => setTimeout(() => revoke(url), {REVOKE_DELAY_MS}); }}\">"
+)
+"""The HTML element that patches the page (added once to the main panel)."""
+
+
+def add_page_patch(gui):
+    """Add the patch to the GUI (every tab that connects runs it once)."""
+    return gui.add_html(PAGE_PATCH_HTML)
