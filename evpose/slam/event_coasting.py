@@ -141,7 +141,14 @@ m off over 1.3 m, while the defaults end more maps in the turns (seed 2: 0.87-1.
 against one map 0.229 m off with the true warp). So what limits the rooms is the scale a monocular map keeps through a
 rotation-dominated turn, not the tracks' survival: more tracking there scores no better until that is solved. Against
 the drift, indoor seeds 0-7 (single runs): ``TrackingConfig.ba_velocity_prior`` 0.1 / 0.2 9.04 / 10.00 % (with the true
-warp in the turns 8.34 %), ``min_pair_parallax_deg`` 3 / 4 9.74 / 8.27 %, ``min_triangulation_deg`` 2 9.39 %.
+warp in the turns 8.34 %), ``min_pair_parallax_deg`` 3 / 4 9.74 / 8.27 %, ``min_triangulation_deg`` 2 9.39 %. What the
+coast's rotation is worth instead (``twexp.py`` with ``TRUECOAST=1``: coasted poses turn by the true rotation since the
+map's last pose, a perfect gyro; position as by default): indoor seeds 0-7 4.83 % (paired -2.01 +- 0.94, 6 better; from
+the events 37.1 %, 35 maps), over the 40 runs 7.63 -> 5.60 % (median 7.30 -> 4.64; -2.03 +- 0.61, 29 better; from the
+events 41.9 -> 35.7 %, maps 149 -> 181); with the true warp in the turns as well 6.49 % (from the events 41.9 %). The
+visual gyro (:mod:`evpose.slam.visual_gyro`, off) on these defaults: 3.23 % (-3.62 +- 0.61, 8 of 8 better, one within 2
+%; from the events 27.6 %, tracked at least 82.6 %, 40 maps): better than the perfect gyro, so much of its gain is the
+shorter maps, as session 18 found.
 """
 
 from __future__ import annotations
