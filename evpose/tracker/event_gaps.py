@@ -79,7 +79,8 @@ gap, are not judged: the demo ``landing`` still hashes 469f53f67bcd8fbb, with ``
 In ``stpe`` and ``stpe+filter`` the restart from the last estimate recovered in none of the splices tried (pauses at
 1.5 and 2 s, cut 0.2 s, ``F`` pause at 1 s: the tracker reports the updates lost itself, 0-6 written); the gate withholds
 the 2 / 6 that ``stpe`` wrote, 383 / 273 mm RMS off. ``evpose track --smoothed`` writes no pose where the real-time
-track is lost, so not the withheld stretch either: it wrote the cut 0.2 s splice's 353, smoothed.)
+track is lost, so not the withheld stretch either (before this it wrote the 353 withheld updates of the cut
+0.2 s splice, smoothed).)
 Why a deadline and not a higher threshold: the chance-level z does not tell a wrong lock from a right restart by its
 level. Median z over 10 updates where the pose is > 0.3 m off reaches 17.8 (pause at 2 s, the estimate 1-2 m off
 and moving) and 18.9 (``L`` cut 0.05 s, 1.6-1.7 m off); where it is < 0.1 m off it is 0.0 / 14.6 / 24.3 (5th pct /
