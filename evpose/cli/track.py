@@ -209,7 +209,11 @@ def main(
         if len(traj):
             write_tum(out, traj, inputs=(recording, map))
         if inputs is not None:
-            write_tum(smoothed, smoothed_over_restarts(cfg, rec, inputs, session.restarts), inputs=(recording, map))
+            smooth = smoothed_over_restarts(cfg, rec, inputs, session.restarts)
+            # Not the updates reported lost either (those after a restart that ``restart_gate`` withheld: cut 0.2 s
+            # splice of event_gaps, 353 smoothed poses metres off after the gap otherwise).
+            smooth = smooth[~np.isin(smooth.t, np.array([r.t_us for r in lost], dtype=np.int64))] if lost and len(smooth) else smooth
+            write_tum(smoothed, smooth, inputs=(recording, map))
     n = len(session.results)
     if lost:
         first = lost[0]

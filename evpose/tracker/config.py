@@ -26,7 +26,7 @@ from evpose.tracker.motion_filter_config import MotionFilterConfig
 from evpose.tracker.reacquisition import ReacquisitionConfig
 from evpose.tracker.registration_config import RegistrationConfig
 from evpose.tracker.visible_map import VisibleMapConfig
-from evpose.tracker.event_gaps import DEFAULT_MAX_EVENT_GAP_MS
+from evpose.tracker.event_gaps import DEFAULT_MAX_EVENT_GAP_MS, RestartGateConfig
 
 
 class TrackerMode(str, enum.Enum):
@@ -77,7 +77,8 @@ class TrackerConfig:
     """A stretch without events (in the fused modes, or without IMU samples) longer than this ends the track: a
     TrackingSession reports one lost update for the whole gap (not one per empty update: a 1 h pause was 720k updates)
     and restarts the tracker after it as at the start (the ground-truth pose when it started from ground truth, else
-    the last estimate, velocity unknown, or with ``reacquisition.enabled`` where its search finds the camera),
+    the last estimate, velocity unknown, its updates written once ``restart_gate`` passes, or with
+    ``reacquisition.enabled`` where its search finds the camera),
     milliseconds. Shorter outages are bridged as before (the fused modes propagate
     the IMU). See ``evpose.tracker.event_gaps``."""
     snapshot_every: int = field(default=50, metadata={"min": 1, "max": 10000, "step": 1, "unit": "steps"})
@@ -104,6 +105,9 @@ class TrackerConfig:
     reacquisition: ReacquisitionConfig = field(default_factory=ReacquisitionConfig)
     """The search for the pose when the tracker restarts without knowing it (after an event gap without ground
     truth; see ``evpose.tracker.reacquisition``)."""
+    restart_gate: RestartGateConfig = field(default_factory=RestartGateConfig)
+    """Whether the updates after a restart from the last estimate are written before the map's chance-level evidence
+    is back (see ``evpose.tracker.event_gaps``)."""
 
 
 def load_config(path: str | Path) -> TrackerConfig:

@@ -64,7 +64,9 @@ and drifted to 790 mm RMS (914 mm, 5.3 m max, written as degraded): the last est
 was 1.0 m/s off the truth, the accepted trial's still 0.58 m/s at acceptance (the limit found below). Adding the old restart itself (the centre, velocity
 unknown, polarity hold) as one more trial did not help: nothing written at any of the three (it does not converge within
 a round's 10 registered updates). So the search is off by default: it is a better answer only where the old restart
-fails outright, and it does not tell the two cases apart.
+fails outright, and it does not tell the two cases apart. (Session 27 gates the old restart instead,
+:class:`~evpose.tracker.event_gaps.RestartGate`: of the splices above it writes nothing after the gap where the
+old restart was metres off, and the held-out pauses 9-11 updates later, 56-61 / 41 mm RMS.)
 
 Why the cuts are not found: the velocity. A trial started from the true pose with the true velocity (a debugging trial,
 /tmp/s26/reloc26/judge_dbg.py ``TRUTH_TRIAL=1``) is accepted in the first round of cut 0.2 s with z 18.5 while every

@@ -21,7 +21,7 @@ from evpose.core.stream_gaps import EventGap, find_gaps, merge_gaps
 from evpose.core.trajectory import Trajectory
 from evpose.errors import InputError
 from evpose.tracker.config import TrackerConfig, TrackerMode
-from evpose.tracker.event_gaps import UpdateSchedule
+from evpose.tracker.event_gaps import RestartGate, UpdateSchedule
 from evpose.tracker.modes import build_motion_components
 from evpose.tracker.step_result import StepResult, TrackStatus
 from evpose.tracker.tracker import MotionPredictor, PolaritySelector, Tracker
@@ -121,6 +121,8 @@ class TrackingSession:
             self.tracker.feed(events[i0:i1])
         self._cursor = i1
         self._step_index = 0
+        self._gate: RestartGate | None = None
+        """The chance-level gate after a restart from the last estimate while it withholds the updates, else None."""
         self.results: list[StepResult] = []
         """StepResults so far, one per update, in time order."""
         self._future: list[StepResult] = []
@@ -156,7 +158,10 @@ class TrackingSession:
         return self._step_index >= self.total_steps
 
     def _take_snapshot(self) -> None:
-        self._snapshots[self._step_index] = (self.tracker.snapshot(), self._cursor)
+        state = self.tracker.snapshot()
+        if self._gate is not None:
+            state["restart_gate"] = self._gate.snapshot()
+        self._snapshots[self._step_index] = (state, self._cursor)
 
     # ------------------------------------------------------------- snapshots
     @property
@@ -205,6 +210,8 @@ class TrackingSession:
             self.results.extend(self._future[:n])
             self._future = self._future[n:]
         self.tracker.restore(state)
+        gate = state.get("restart_gate")
+        self._gate = None if gate is None else RestartGate.restored(self.config.restart_gate, gate)
         self._cursor = cursor
         self._step_index = step
 
@@ -224,6 +231,17 @@ class TrackingSession:
         gap = self.schedule.gap_of(self._step_index + 1)
         if gap is not None:
             result = self._restart_after_gap(gap, until, batch, imu)
+        elif self._gate is not None:
+            # The gate judges the chance level of every update until it passes (it changes only the reported status).
+            chance = self.tracker.chance_until_us
+            if not self._gate.given_up:
+                self.tracker.chance_until_us = until
+            try:
+                result = self._gate.judge(self.tracker.step(until, batch, imu=imu, debug=debug))
+            finally:
+                self.tracker.chance_until_us = chance
+            if self._gate.passed:
+                self._gate = None
         else:
             result = self.tracker.step(until, batch, imu=imu, debug=debug)
         if result.counts.get("reacquired"):
@@ -282,11 +300,13 @@ class TrackingSession:
         """The update standing for an event gap: the track is lost over it; the tracker starts again at ``until`` (the
         first grid time ``warmup_ms`` after the gap, ``events`` are those since it) as at the start of the recording:
         from the ground-truth pose and velocity when the session started from ground truth and it covers ``until``,
-        else from the last estimate with the velocity unknown (the acquisition test then decides whether it holds)."""
+        else from the last estimate with the velocity unknown (its updates are reported lost until the restart gate,
+        :class:`~evpose.tracker.event_gaps.RestartGate`, passes)."""
         if gap.t_next_us > self.t_end_us:  # the IMU ended before the events (the schedule's last update)
             return StepResult(until, self.tracker.pose, TrackStatus.LOST,
                               f"the IMU samples end at t={gap.t_last_us * 1e-6:.6f} s, {gap.seconds:.3f} s before the events:"
                               f" the fused modes track no further (--mode stpe needs no IMU)", counts={"events_in": len(events), "registered": 0})
+        self._gate = None  # a gate still waiting from an earlier restart: this one decides anew
         gt = self.recording.ground_truth
         from_truth = self._from_ground_truth and gt is not None and int(gt.t[0]) <= until <= int(gt.t[-1])
         pose = gt.interpolate(until).matrix(0) if from_truth else self.tracker.pose
@@ -321,6 +341,8 @@ class TrackingSession:
                 motion.fusion.add_imu(imu)
         self.tracker.feed(events)
         self.tracker.start(pose, until)
+        gate = self.config.restart_gate
+        self._gate = RestartGate(gate) if not from_truth and float(gate.min_chance_z) > 0 else None
         if seed:
             self._seed_velocity(until, pose)
         how = "the ground-truth pose" if from_truth else "the last estimate"

@@ -273,6 +273,20 @@ def test_track_over_an_hour_long_event_gap_reports_it_once_and_resumes_after_it(
         assert np.max(np.linalg.norm(traj.position - truth.position, axis=1)) < 0.05
 
 
+def test_track_writes_no_smoothed_pose_where_the_restart_gate_withholds_the_real_time_one(landing_files, tmp_path, capsys):
+    d, rec = landing_files
+    write_recording_h5(tmp_path / "paused.h5", _paused(rec, rec.t_start_us + 150_000, 3_600_000_000))
+    (tmp_path / "gate.yaml").write_text("restart_gate:\n  min_chance_z: 100.0\n")  # never passes here
+    g = rec.ground_truth
+    init = " ".join(repr(float(v)) for v in (*g.position[0], *g.quat_xyzw[0]))
+    code = run(["track", str(tmp_path / "paused.h5"), "--map", str(d / "map.ply"), "--out", str(tmp_path / "e.txt"),
+                "--smoothed", str(tmp_path / "s.txt"), "--init", init, "--config", str(tmp_path / "gate.yaml"), "--no-progress"])
+    err = capsys.readouterr().err
+    assert code == 1, err
+    est, smooth = read_tum(tmp_path / "e.txt"), read_tum(tmp_path / "s.txt")
+    assert len(est) > 20 and np.array_equal(est.t, smooth.t) and est.t.max() < 3_600_000_000
+
+
 def test_track_interrupted_between_its_outputs_writes_none_of_them(files, tmp_path, monkeypatch, capsys):
     import evpose.io.tum as tum
 

@@ -11,6 +11,7 @@ from tracker_synthetic import generate
 from evpose.core.events import EventArray
 from evpose.core.trajectory import Trajectory
 from evpose.tracker.config import TrackerConfig, TrackerMode
+from evpose.tracker.event_gaps import RestartGateConfig
 from evpose.tracker.reacquisition import ReacquisitionConfig, hypotheses
 from evpose.tracker.session import TrackingSession
 from evpose.tracker.step_result import TrackStatus
@@ -22,6 +23,7 @@ HOUR_US = 3_600_000_000
 def _config(enabled: bool = True, **search) -> TrackerConfig:
     cfg = TrackerConfig(mode=TrackerMode.STPE)
     cfg.reacquisition = dataclasses.replace(ReacquisitionConfig(enabled=enabled), **search)
+    cfg.restart_gate = RestartGateConfig(min_chance_z=0.0)  # "off" is the restart from the last estimate, ungated
     return cfg
 
 
