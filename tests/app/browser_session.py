@@ -37,6 +37,22 @@ def viewer_page(viewer):
             browser.close()
 
 
+@contextlib.contextmanager
+def console_errors(page):
+    """The texts of the console errors the page logs while the block runs (a list, filled as they come)."""
+    errors = []
+
+    def on_console(msg):
+        if msg.type == "error":
+            errors.append(msg.text)
+
+    page.on("console", on_console)
+    try:
+        yield errors
+    finally:
+        page.remove_listener("console", on_console)
+
+
 def wait_for(cond, timeout=40.0, what="condition", detail=None):
     end = time.time() + timeout
     while time.time() < end:

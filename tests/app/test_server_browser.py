@@ -9,7 +9,7 @@ import pytest
 from app.tracker_engine import TrackerEngine
 from app.player import PlayerConfig
 from app.server import SLOW_REFRESH_S
-from browser_session import choose, running_viewer, wait_for
+from browser_session import choose, console_errors, running_viewer, wait_for
 
 pytestmark = pytest.mark.browser
 
@@ -318,42 +318,35 @@ def test_two_tabs_see_one_session_and_a_gif_can_be_exported(page, viewer):
         other.close()
 
 
+BUSY_PAGE = "() => setTimeout(() => { const t = performance.now(); while (performance.now() - t < 1500) {} }, 0)"
+"""Keeps the page's thread busy for 1.5 s, as drawing the demo's 3D scene does in a headless browser."""
+
+
 def test_switching_recordings_while_playing_leaves_the_browser_console_clean(page, viewer):
     # Plots removed at a switch got the updates sent just before it: viser's browser code applies a batch's updates
     # after its removals ("Tried to update non-existent component ... {data}" in the console). A batch spans what
     # arrived since the browser last drew; a busy browser (the demo's 3D scene, headless) gathers many. Here the
     # page is kept busy for 1.5 s while the server plays and switches, so the switch and the updates before it
     # reach the browser in one batch, as they did there. The plots are hidden, not removed, now.
-    errors = []
-
-    def on_console(msg):
-        if msg.type == "error":
-            errors.append(msg.text)
-
-    page.on("console", on_console)
     try:
-        viewer.player.set_speed(0.2)
-        for name in ("bar.h5", "squares.h5", "bar.h5"):
-            name = next(o for o in viewer.rec_dropdown.options if o.endswith(name))
-            viewer.player.play()
-            start = viewer.frames_published
-            wait_for(lambda: viewer.frames_published >= start + 2, what="frames drawn while playing")
-            page.evaluate("() => setTimeout(() => { const t = performance.now(); while (performance.now() - t < 1500) {} }, 0)")
-            time.sleep(SLOW_REFRESH_S + 0.2)  # the plots are refreshed at least once while the page is busy
-            assert viewer.select(name)
-            label = viewer._entry(name).label
-            wait_for(lambda: viewer._shown_label == label and viewer.last_frame is not None, timeout=60,
-                     what=f"{name} opened", detail=lambda: viewer._shown_label)
-            time.sleep(1.5)  # the page has applied what came while it was busy
+        with console_errors(page) as errors:
+            viewer.player.set_speed(0.2)
+            for name in ("bar.h5", "squares.h5", "bar.h5"):
+                name = next(o for o in viewer.rec_dropdown.options if o.endswith(name))
+                viewer.player.play()
+                start = viewer.frames_published
+                wait_for(lambda: viewer.frames_published >= start + 2, what="frames drawn while playing")
+                page.evaluate(BUSY_PAGE)
+                time.sleep(SLOW_REFRESH_S + 0.2)  # the plots are refreshed at least once while the page is busy
+                assert viewer.select(name)
+                label = viewer._entry(name).label
+                wait_for(lambda: viewer._shown_label == label and viewer.last_frame is not None, timeout=60,
+                         what=f"{name} opened", detail=lambda: viewer._shown_label)
+                time.sleep(1.5)  # the page has applied what came while it was busy
         assert not [e for e in errors if "non-existent" in e], errors
     finally:
-        page.remove_listener("console", on_console)
         viewer.player.pause()
         viewer.player.set_speed(1.0)
-
-
-BUSY_PAGE = "() => setTimeout(() => { const t = performance.now(); while (performance.now() - t < 1500) {} }, 0)"
-"""Keeps the page's thread busy for 1.5 s, as drawing the demo's 3D scene does in a headless browser."""
 
 
 def test_moving_panels_while_playing_leaves_the_browser_console_clean(page, viewer):
@@ -361,28 +354,21 @@ def test_moving_panels_while_playing_leaves_the_browser_console_clean(page, view
     # image's blob URL then, and at each new image, while its probe of the image's natural size may still be loading
     # it: "Failed to load resource: net::ERR_FILE_NOT_FOUND" (session 26, a13c: 4-5 per layout switch while playing
     # with a busy page). The page now revokes blob URLs a few seconds late (app/page_patch.py).
-    errors = []
-
-    def on_console(msg):
-        if msg.type == "error":
-            errors.append(msg.text)
-
-    page.on("console", on_console)
     try:
-        viewer.player.set_speed(0.5)
-        moves = [lambda: viewer.layout_gui.set_dock("images", "left"), lambda: viewer.layout_gui.set_dock("images", "right"),
-                 lambda: viewer.apply_layout_name("compare"), lambda: viewer.apply_layout_name("debug")]
-        for move in moves:
-            viewer.player.play()
-            start = viewer.frames_published
-            wait_for(lambda: viewer.frames_published >= start + 3, what="frames drawn while playing")
-            page.evaluate(BUSY_PAGE)
-            time.sleep(0.4)
-            assert move() is not False
-            page.wait_for_timeout(2500)  # the page has handled what came while it was busy
+        with console_errors(page) as errors:
+            viewer.player.set_speed(0.5)
+            moves = [lambda: viewer.layout_gui.set_dock("images", "left"), lambda: viewer.layout_gui.set_dock("images", "right"),
+                     lambda: viewer.apply_layout_name("compare"), lambda: viewer.apply_layout_name("debug")]
+            for move in moves:
+                viewer.player.play()
+                start = viewer.frames_published
+                wait_for(lambda: viewer.frames_published >= start + 3, what="frames drawn while playing")
+                page.evaluate(BUSY_PAGE)
+                time.sleep(0.4)
+                assert move() is not False
+                page.wait_for_timeout(2500)  # the page has handled what came while it was busy
         assert not [e for e in errors if "ERR_FILE_NOT_FOUND" in e], errors
     finally:
-        page.remove_listener("console", on_console)
         viewer.player.pause()
         viewer.player.set_speed(1.0)
         viewer.apply_layout_name("debug")
