@@ -59,27 +59,35 @@ def test_run_ahead_note_says_frames_a_far_seek_skipped_are_being_filled_in():
     assert "done" in run_ahead_note(eng)
 
 
+def _demo_engine():
+    """A stand-in for the landing demo's engine, with the engines' own last-step rule."""
+    eng = SimpleNamespace(n_steps=793, t_end_us=3_999_995)
+    eng.is_last = lambda frame: Engine.is_last(eng, frame)
+    return eng
+
+
+def _blank_frame(index, t_us):
+    z = np.zeros((2, 2), np.float32)
+    return Frame(index, t_us, z, z, z, EventArray.empty(), EventArray.empty())
+
+
 def test_the_last_step_says_it_is_the_end_even_before_the_last_event():
     # The tracker's last step lies up to a step before the last event (landing demo: 3.995 of 3.999995 s).
-    eng = SimpleNamespace(n_steps=793, t_end_us=3_999_995)
-    eng.is_last = lambda frame: Engine.is_last(eng, frame)  # the engines' own rule on a stand-in
-    z = np.zeros((2, 2), np.float32)
-    last = Frame(792, 3_995_000, z, z, z, EventArray.empty(), EventArray.empty())
+    eng = _demo_engine()
+    last = _blank_frame(792, 3_995_000)
     assert "the end of the recording" in status_markdown(last, eng, {"state": "paused", "speed": 1.0})
     assert "end of the recording" not in status_markdown(last, eng, {"state": "playing", "speed": 1.0})
-    before = Frame(791, 3_990_000, z, z, z, EventArray.empty(), EventArray.empty())
+    before = _blank_frame(791, 3_990_000)
     assert "end of the recording" not in status_markdown(before, eng, {"state": "paused", "speed": 1.0})
 
 
 def test_the_first_step_says_nothing_comes_before_it_when_paused():
     # "< back" at step 0 did nothing without a word (the last step already said it was the end).
-    eng = SimpleNamespace(n_steps=793, t_end_us=3_999_995)
-    eng.is_last = lambda frame: Engine.is_last(eng, frame)
-    z = np.zeros((2, 2), np.float32)
-    first = Frame(0, 35_000, z, z, z, EventArray.empty(), EventArray.empty())
+    eng = _demo_engine()
+    first = _blank_frame(0, 35_000)
     assert "the first step of the recording" in status_markdown(first, eng, {"state": "paused", "speed": 1.0})
     assert "first step of the recording" not in status_markdown(first, eng, {"state": "playing", "speed": 1.0})
-    second = Frame(1, 40_000, z, z, z, EventArray.empty(), EventArray.empty())
+    second = _blank_frame(1, 40_000)
     assert "first step of the recording" not in status_markdown(second, eng, {"state": "paused", "speed": 1.0})
 
 
