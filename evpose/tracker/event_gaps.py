@@ -101,8 +101,8 @@ the velocity unknown: 0.24 m off after 32 updates, 2.3 m after 288 at 2.5 s); th
 that withdraws the track again when z falls would not separate either: the right ``D`` restart reads z 0 for 40 updates
 at 0.07-0.08 m, while the drifting one still reads 19-21 at 0.13-0.18 m off.
 
-Session 27 (helper vel27) gives that restart a velocity (``RestartGateConfig.carry_velocity``, on by default): in the
-fused modes the last estimate is carried on at the velocity last estimated before the gap over the event time since
+Session 27 (helper vel27) gives that restart a velocity (``RestartGateConfig.carry_velocity``, on by default): in
+``full`` the last estimate is carried on at the velocity last estimated before the gap over the event time since
 it (:func:`carried_restart_pose`: the warm-up after the gap, 30 ms by default, less the time from the gap's last event
 to that estimate; the gap itself is not bridged), and the fusion starts with that velocity as its prior (sigma
 ``fusion.init_sigma_velocity``, 0.5 m/s, the one a start from ground truth gets; no polarity hold). At a pause the last
@@ -131,12 +131,14 @@ the 7 other cuts       nothing written                           nothing written
 The one loss: ``L`` cut 0.05 s (0.16 m of flight cut, the velocity 0.29 m/s off) now passes the gate at update 31 at
 0.13 m off, closes to 5 mm at update 66 and then drifts to 0.6 m by the end: 352 poses written 0.37 m RMS off where
 nothing was. The gate cannot tell it from ``D`` (right, passes at 34). Runs from ground truth and ``stpe`` are unchanged
-(the demo ``landing`` still hashes 469f53f67bcd8fbb, with ``--init`` 8d1b41529a489d37).
+(the demo ``landing`` still hashes 469f53f67bcd8fbb, with ``--init`` 8d1b41529a489d37). Only ``full``: in
+``stpe+filter`` (where the restart standing still writes nothing after the pauses at 1.5 / 2 s, ``F`` 1.0 s, ``L``
+2.5 s, cut 0.2 s) the carried restart wrote the pause at 1.5 s 55 poses 934 mm RMS off and the others nothing (sf.log).
 Also measured: the velocity prior alone (the pose not carried) recovers the two ``L`` pauses less well and costs the
 others poses > 0.1 m (sigma 0.5: ``L`` 2.5 / 3.5 s 81 / 59 mm, 68 / 0 > 0.1; 1.0 / 1.5 / 3.0 s 60 / 56 / 46 mm, 8 / 26
 / 4 > 0.1; the 2 s pause passes at 41: withheld); sigma 1.0 does not hold the ``L`` pauses (425 / 371 mm), 0.25 costs
 the 1.5 s pause 47 poses > 0.1 (lv*.log). A velocity fitted to the first registrations after the restart is no use
-in the fused modes: they start from the fusion's prediction and follow it (``L`` 2.5 s, velocity unknown: 40-90 mm off
+in ``full``: they start from the fusion's prediction and follow it (``L`` 2.5 s, velocity unknown: 40-90 mm off
 over the first 10 updates, drifting with the fused pose), fits over 5-30 updates were 2.1-4.0 m/s off the truth
 (/tmp/s27/vel27/trace_v.py, an.py).
 
@@ -235,13 +237,13 @@ class RestartGateConfig:
     run_updates: int = field(default=10, metadata={"min": 1, "max": 1000, "step": 1, "unit": "updates"})
     """Updates whose median z the gate judges (0.05 s at 200 Hz), updates."""
     carry_velocity: bool = True
-    """Restart the fused modes from the last estimate carried on at the velocity last estimated before the gap, over
+    """Restart ``full`` from the last estimate carried on at the velocity last estimated before the gap, over
     the event time since that estimate (the gap itself excluded: :func:`carried_restart_pose`), with that velocity as
     the fusion's prior (sigma ``fusion.init_sigma_velocity``, 0.5 m/s; no polarity hold), not standing still with the
     velocity unknown (False: as before). Landing demo splices (module docstring, session 27): the pauses 9-39 mm RMS
     after the gap, 0 poses > 0.1 m, where standing still they were 38-66 mm, 1.3 / 2.8 m off (``L`` 2.5 / 3.5 s) and
-    withheld (2 s); but the 0.05 s cut is now written 0.37 m RMS off (withheld before). ``stpe`` and restarts from
-    ground truth are unaffected."""
+    withheld (2 s); but the 0.05 s cut is now written 0.37 m RMS off (withheld before). The other modes (in
+    ``stpe+filter`` it wrote the pause at 1.5 s 0.93 m off) and restarts from ground truth are unaffected."""
     deadline_updates: int = field(default=40, metadata={"min": 0, "max": 100000, "step": 1, "unit": "updates"})
     """The gate gives the restart up when the evidence has not passed within this many updates after it: every later
     update is lost until the next restart (0 = it waits to the end), updates. Landing demo splices: right restarts pass

@@ -300,8 +300,8 @@ class TrackingSession:
         """The update standing for an event gap: the track is lost over it; the tracker starts again at ``until`` (the
         first grid time ``warmup_ms`` after the gap, ``events`` are those since it) as at the start of the recording:
         from the ground-truth pose and velocity when the session started from ground truth and it covers ``until``,
-        else from the last estimate, in the fused modes carried on at the last estimated velocity over the event time
-        since it (``restart_gate.carry_velocity``; else, and in ``stpe``, standing still with the velocity unknown), its
+        else from the last estimate, in ``full`` carried on at the last estimated velocity over the event time since it
+        (``restart_gate.carry_velocity``; else, and in the other modes, standing still with the velocity unknown), its
         updates reported lost until the restart gate, :class:`~evpose.tracker.event_gaps.RestartGate`, passes."""
         if gap.t_next_us > self.t_end_us:  # the IMU ended before the events (the schedule's last update)
             return StepResult(until, self.tracker.pose, TrackStatus.LOST,
@@ -330,8 +330,9 @@ class TrackingSession:
         v0 = _ground_truth_velocity(gt, until) if seed else None
         motion = self.tracker.components.motion
         carried = False
-        if not from_truth and motion is not None and self.config.restart_gate.carry_velocity:
-            # With the velocity unknown the fusion stood still and drifted off at the camera's speed (event_gaps).
+        if not from_truth and self.tracker.components.drives_pose and self.config.restart_gate.carry_velocity:
+            # With the velocity unknown the fusion stood still and drifted off at the camera's speed; only in ``full``:
+            # in ``stpe+filter`` the carried restart wrote a pause 0.93 m off that it withheld before (event_gaps).
             v_last = next((r.velocity for r in reversed(self.results) if r.velocity is not None), None)
             if v_last is not None:
                 v0 = np.array(v_last, dtype=np.float64)

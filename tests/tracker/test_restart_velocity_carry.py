@@ -1,6 +1,6 @@
-"""A restart from the last estimate after an event gap (no ground truth) in the fused modes carries that estimate on at
+"""A restart from the last estimate after an event gap (no ground truth) in ``full`` carries that estimate on at
 the last estimated velocity over the event time since it, the gap excluded (``restart_gate.carry_velocity``), and gives
-the fusion that velocity; restarts from ground truth and ``stpe`` are as they were."""
+the fusion that velocity; restarts from ground truth and the other modes are as they were."""
 
 from __future__ import annotations
 
@@ -80,12 +80,13 @@ def test_a_fused_restart_without_ground_truth_starts_carried_on_at_the_last_velo
     assert all(np.array_equal(p.pose, q.pose) for p, q in zip(res[:g], off[:g]))
 
 
-def test_restarts_from_ground_truth_and_stpe_are_unchanged(paused):
+def test_restarts_from_ground_truth_and_the_other_modes_are_unchanged(paused):
     rec, cmap = paused
     on, off = _run(rec, cmap, from_init=False), _run(rec, cmap, from_init=False, carry_velocity=False)
     assert len(on) == len(off) and all(np.array_equal(p.pose, q.pose) and p.reason == q.reason for p, q in zip(on, off))
-    on, off = _run(rec, cmap, TrackerMode.STPE), _run(rec, cmap, TrackerMode.STPE, carry_velocity=False)
-    assert len(on) == len(off) and all(np.array_equal(p.pose, q.pose) and p.reason == q.reason for p, q in zip(on, off))
+    for mode in (TrackerMode.STPE, TrackerMode.STPE_FILTER):
+        on, off = _run(rec, cmap, mode), _run(rec, cmap, mode, carry_velocity=False)
+        assert len(on) == len(off) and all(np.array_equal(p.pose, q.pose) and p.reason == q.reason for p, q in zip(on, off))
 
 
 
