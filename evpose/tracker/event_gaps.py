@@ -110,7 +110,8 @@ velocity is the camera's within 0.05-0.18 m/s (``F``: 0.69); the carry moves the
 above (the same splices, ``full``, ``--init`` = the first ground-truth pose, gate at its defaults; the tracker traced
 with the gate never passing and the gate applied offline, /tmp/s27/vel27/ev.py, on.log / off.log; confirmed by ``evpose
 track`` on ``L`` 2.5 / 3.5 s, the pause at 2 s of 60 s and ``L`` cut 0.05 s, /tmp/s27/vel27/cli.sh, cli.log: 284 / 84 /
-359 / 353 poses, 17.6 / 13.0 / 8.8 / 365 mm; "> 0.1": poses written more than 0.1 m off):
+359 / 353 poses, 17.6 / 13.0 / 8.8 / 365 mm; ``--smoothed`` replays from the carried restart: ``L`` 2.5 s 284
+smoothed poses 13.5 mm; "> 0.1": poses written more than 0.1 m off):
 
 =====================  ========================================  ========================================
 splice                 velocity unknown (before): after the gap  carried at the last velocity (default)
