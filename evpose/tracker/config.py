@@ -77,7 +77,8 @@ class TrackerConfig:
     """A stretch without events (in the fused modes, or without IMU samples) longer than this ends the track: a
     TrackingSession reports one lost update for the whole gap (not one per empty update: a 1 h pause was 720k updates)
     and restarts the tracker after it as at the start (the ground-truth pose when it started from ground truth, else
-    the last estimate, velocity unknown, its updates written once ``restart_gate`` passes, or with
+    the last estimate, in ``full`` carried on at its last velocity (``restart_gate.carry_velocity``), its updates
+    written once ``restart_gate`` passes, or with
     ``reacquisition.enabled`` where its search finds the camera),
     milliseconds. Shorter outages are bridged as before (the fused modes propagate
     the IMU). See ``evpose.tracker.event_gaps``."""

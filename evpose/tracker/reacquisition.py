@@ -64,7 +64,9 @@ and drifted to 790 mm RMS (914 mm, 5.3 m max, written as degraded): the last est
 was 1.0 m/s off the truth, the accepted trial's still 0.58 m/s at acceptance (the limit found below). Adding the old restart itself (the centre, velocity
 unknown, polarity hold) as one more trial did not help: nothing written at any of the three (it does not converge within
 a round's 10 registered updates). So the search is off by default: it is a better answer only where the old restart
-fails outright, and it does not tell the two cases apart. (Session 27 gates the old restart instead,
+fails outright, and it does not tell the two cases apart. (Since session 27 the old restart carries the last estimate
+on at the last velocity, ``restart_gate.carry_velocity``: the gap splice 9 mm RMS after the gap, the held-out pauses
+15-22 mm; the cuts are still not found, :mod:`evpose.tracker.event_gaps`.) (Session 27 gates the old restart instead,
 :class:`~evpose.tracker.event_gaps.RestartGate`: of the splices above it writes nothing after the gap where the
 old restart was metres off, and the held-out pauses 9-11 updates later, 56-61 / 41 mm RMS.)
 

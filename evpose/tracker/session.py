@@ -21,7 +21,7 @@ from evpose.core.stream_gaps import EventGap, find_gaps, merge_gaps
 from evpose.core.trajectory import Trajectory
 from evpose.errors import InputError
 from evpose.tracker.config import TrackerConfig, TrackerMode
-from evpose.tracker.event_gaps import RestartGate, UpdateSchedule
+from evpose.tracker.event_gaps import RestartGate, UpdateSchedule, carried_restart_pose
 from evpose.tracker.modes import build_motion_components
 from evpose.tracker.step_result import StepResult, TrackStatus
 from evpose.tracker.tracker import MotionPredictor, PolaritySelector, Tracker
@@ -300,8 +300,9 @@ class TrackingSession:
         """The update standing for an event gap: the track is lost over it; the tracker starts again at ``until`` (the
         first grid time ``warmup_ms`` after the gap, ``events`` are those since it) as at the start of the recording:
         from the ground-truth pose and velocity when the session started from ground truth and it covers ``until``,
-        else from the last estimate with the velocity unknown (its updates are reported lost until the restart gate,
-        :class:`~evpose.tracker.event_gaps.RestartGate`, passes)."""
+        else from the last estimate, in ``full`` carried on at the last estimated velocity over the event time since it
+        (``restart_gate.carry_velocity``; else, and in the other modes, standing still with the velocity unknown), its
+        updates reported lost until the restart gate, :class:`~evpose.tracker.event_gaps.RestartGate`, passes."""
         if gap.t_next_us > self.t_end_us:  # the IMU ended before the events (the schedule's last update)
             return StepResult(until, self.tracker.pose, TrackStatus.LOST,
                               f"the IMU samples end at t={gap.t_last_us * 1e-6:.6f} s, {gap.seconds:.3f} s before the events:"
@@ -327,8 +328,18 @@ class TrackingSession:
                               " estimate (re-acquisition)", counts={"events_in": len(events), "registered": 0})
         seed = from_truth and self.config.initial_velocity_from_ground_truth
         v0 = _ground_truth_velocity(gt, until) if seed else None
-        self.restarts[int(until)] = (pose.copy(), v0)
         motion = self.tracker.components.motion
+        carried = False
+        if not from_truth and self.tracker.components.drives_pose and self.config.restart_gate.carry_velocity:
+            # With the velocity unknown the fusion stood still and drifted off at the camera's speed; only in ``full``:
+            # in ``stpe+filter`` the carried restart wrote a pause 0.93 m off that it withheld before (event_gaps).
+            v_last = next((r.velocity for r in reversed(self.results) if r.velocity is not None), None)
+            if v_last is not None:
+                v0 = np.array(v_last, dtype=np.float64)
+                t_est = self.tracker.t_us if self.tracker.t_us is not None else gap.t_last_us
+                pose = carried_restart_pose(pose, v0, gap, t_est, until)
+                carried = True
+        self.restarts[int(until)] = (pose.copy(), v0)
         if motion is not None:
             # Restarted like the session's start (snapshots replay this too: every restart sets it again).
             motion.initial_velocity_world = v0
@@ -337,6 +348,8 @@ class TrackingSession:
                 # As at a start without a velocity (build_motion_components): T_align composed from the unknown motion
                 # would keep only the events that agree with it.
                 selector.hold_updates = int(self.config.polarity.unknown_velocity_hold_updates)
+            elif carried and selector is not None:
+                selector.hold_updates = 0  # a hold left from a start without a velocity: this restart knows one
             if imu is not None and len(imu):
                 motion.fusion.add_imu(imu)
         self.tracker.feed(events)
@@ -345,7 +358,8 @@ class TrackingSession:
         self._gate = RestartGate(gate) if not from_truth and float(gate.min_chance_z) > 0 else None
         if seed:
             self._seed_velocity(until, pose)
-        how = "the ground-truth pose" if from_truth else "the last estimate"
+        how = ("the ground-truth pose" if from_truth else "the last estimate"
+               + (" carried on at its velocity" if carried else ""))
         reason = f"{gap_words} and restarted after it from {how}"
         return StepResult(until, pose.copy(), TrackStatus.LOST, reason, counts={"events_in": len(events), "registered": 0})
 
