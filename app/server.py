@@ -30,7 +30,7 @@ from app.plots import plot_context
 from app.scene import SceneView
 from app.slam_engine import slam_markdown
 from app.status import event_gaps, status_markdown
-from app.teaching import STAGE_PANEL, Stage, teaching_markdown
+from app.teaching import STAGE_PANEL, Stage, live_image, stage_after, teaching_markdown
 from app.viewer_controls import NO_MAP, bind_viewer_hotkeys, build_main_panel, build_panels
 from app.warm_up import WarmUp
 from app.window_fit import WindowWatch
@@ -296,9 +296,9 @@ class ViewerApp:
                 self.slam_info.content = slam_markdown(frame, self.scene.toggles.slam_aligned, engine.t_start_us)
             if show_teaching and (STAGE_PANEL[self.stage] in imgs or frame.slam is not None):
                 # SLAM mode: the stages are the tracker's, which is not running; the text says so (no live image).
-                self.teaching_text.content = teaching_markdown(self.stage, frame, engine.t_start_us)
+                self.teaching_text.content = teaching_markdown(self.stage, frame, engine.t_start_us, self.scene.toggles)
                 if frame.slam is None:
-                    self.teaching_image.image = imgs[STAGE_PANEL[self.stage]]
+                    self.teaching_image.image = live_image(self.stage, frame, imgs, self.overlay)
             self.time_slider.value = round((frame.t_us - engine.t_start_us) / 1e6, 3)
             self.status.content = status_markdown(frame, engine, self.player.stats() if self.player else {}, self.gaps)
         self.frames_published += 1
@@ -407,8 +407,9 @@ class ViewerApp:
         self.scene.apply_toggles()
         if name == "raw_cloud" and value:
             self._ensure_cloud()
-        if name == "slam_aligned":
-            self._redraw()  # the SLAM maps move between the ground truth's frame and their own
+        if name == "slam_aligned" or self.layout is None or self.layout.panels["teaching"].visible:
+            # SLAM: the maps move between the ground truth's frame and their own; teaching: its text names what is hidden.
+            self._redraw()
 
     def _set_overlay(self, value: str) -> None:
         self.overlay = OverlayColour(value)
@@ -417,6 +418,10 @@ class ViewerApp:
     def _set_stage(self, value: str) -> None:
         self.stage = Stage(value)
         self._redraw()
+
+    def step_stage(self, delta: int) -> None:
+        """The teaching panel's previous (-1) / next (+1) stage, in the lesson's order (the dropdown's callback redraws)."""
+        self.stage_dropdown.value = stage_after(self.stage, delta).value
 
     def _redraw(self) -> None:
         if self.player is not None and self.last_frame is not None:

@@ -105,9 +105,12 @@ def build_panels(app: ViewerApp) -> None:
     app.panels["teaching"] = p = g.add_panel()
     with p.add_tab("How it works"):
         app.stage_dropdown = g.add_dropdown("stage", [s.value for s in Stage], initial_value=app.stage.value)
+        # A lesson walks the stages in order: the dropdown alone took two clicks and a look through the list per stage.
+        app.stage_buttons = g.add_button_group("stages", ["< previous", "next >"], hint="The previous / next stage of the pipeline, in order (after fusion: events again)")
         app.teaching_text = g.add_markdown(teaching_markdown(app.stage, None))
         app.teaching_image = g.add_image(blank, label="live", format="jpeg")
     app.stage_dropdown.on_update(lambda e: app._set_stage(app.stage_dropdown.value))
+    app.stage_buttons.on_click(lambda e: app.step_stage(-1 if e.target.value == "< previous" else 1))
     app.panels["parameters"] = p = g.add_panel()
     app.params_tab = p.add_tab("Parameters")
     with app.params_tab:

@@ -131,6 +131,41 @@ def test_a_layout_that_shows_the_teaching_panel_draws_the_shown_step_into_it(vie
     viewer.apply_layout_name("debug")
 
 
+def test_the_teaching_image_colours_the_map_points_as_its_stage_explains_them(viewer):
+    # The polarity stage showed the points by residual (the Images panel's choice) while its text spoke of red and
+    # blue; the registration stage said "green = on an edge" with the points coloured by weight.
+    from app.panels import OverlayColour, tdf_image
+
+    assert viewer.apply_layout_name("teaching")
+    viewer.select(next(e.display for e in viewer.entries if e.path.name == "squares.h5"))
+    viewer.player.seek(viewer.recording.t_start_us + 100_000)
+    viewer.player.wait_idle()
+    try:
+        viewer._set_overlay(OverlayColour.WEIGHT.value)
+        viewer.stage_dropdown.value = "TDF"
+        viewer.step_stage(1)  # the lesson's next stage
+        viewer.player.wait_idle()
+        assert viewer.stage.value == "polarity prediction" and "coloured by predicted polarity" in viewer.teaching_text.content
+        frame = viewer.last_frame
+        assert frame.predicted_polarity is not None and len(frame.projected_uv)
+        assert (viewer.teaching_image.image == tdf_image(frame, OverlayColour.POLARITY)).all()
+        viewer.step_stage(1)
+        viewer.player.wait_idle()
+        assert viewer.stage.value == "registration"
+        assert (viewer.teaching_image.image == tdf_image(frame, OverlayColour.RESIDUAL)).all()
+        # The fusion stage names the 3D elements the teaching layout hides, and drops them once ticked.
+        viewer.step_stage(1)
+        viewer.player.wait_idle()
+        assert "the raw registrations (purple)" in viewer.teaching_text.content
+        viewer.toggle_boxes["registration"].value = True
+        viewer.player.wait_idle()
+        assert "the raw registrations (purple)" not in viewer.teaching_text.content
+        assert "the IMU-rate poses (small axes)" in viewer.teaching_text.content
+    finally:
+        viewer._set_overlay(OverlayColour.RESIDUAL.value)
+        viewer.apply_layout_name("debug")
+
+
 def test_recording_with_its_map_runs_the_tracker_and_exports_a_trajectory(viewer):
     assert viewer.select(next(e.display for e in viewer.entries if e.path.name == "squares.h5"))
     viewer.player.wait_idle()

@@ -44,3 +44,26 @@ def test_the_explanations_name_what_the_tracker_runs_and_controls_that_exist():
                 continue
             path = tuple(part.strip() for part in ref.split(">"))
             assert path in labels, f"{stage.value}: `{ref}` is no tracker parameter"
+
+
+def test_the_text_says_which_3d_elements_it_speaks_of_are_hidden_and_where_to_tick_them():
+    # The teaching layout hides the raw registrations and the IMU-rate poses; the fusion stage spoke of both.
+    from app.layouts import LAYOUT_DIR, list_layouts
+    from app.scene import SceneToggles
+
+    teaching = list_layouts(LAYOUT_DIR)["teaching"].scene
+    text = teaching_markdown(Stage.FUSION, None, toggles=teaching)
+    assert "Hidden in the 3D view now: the raw registrations (purple) and the IMU-rate poses (small axes)" in text
+    assert "tick *registration*, *imu poses* under **3D view** to show them" in text
+    assert "Hidden" not in teaching_markdown(Stage.FUSION, None, toggles=SceneToggles())
+    assert "tick *contour map*" in teaching_markdown(Stage.POLARITY, None, toggles=SceneToggles(contour_map=False))
+    assert "Hidden" not in teaching_markdown(Stage.EVENTS, None, toggles=SceneToggles(contour_map=False, fused=False))
+
+
+def test_previous_and_next_walk_the_stages_in_order_and_wrap_around():
+    from app.teaching import stage_after
+
+    order = list(Stage)
+    assert order[0] == Stage.EVENTS and order[-1] == Stage.FUSION
+    assert [stage_after(s, 1) for s in order] == order[1:] + order[:1]
+    assert stage_after(Stage.EVENTS, -1) == Stage.FUSION
