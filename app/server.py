@@ -2,7 +2,7 @@
 
 One engine per server, owned by the player's worker thread; every browser tab
 drives and sees that same session (commands are serialised through one queue,
-so concurrent tabs cannot corrupt it). Per-tab state is only the 3D camera.
+so concurrent tabs cannot corrupt it). Per-tab state is only the 3D camera and where the panels are placed (app/layout_gui.py).
 """
 
 from __future__ import annotations
@@ -99,8 +99,9 @@ class ViewerApp:
         self.apply_layout_name(cfg.layout)
         bind_viewer_hotkeys(self)
         self.window_watch = WindowWatch(self.server, self.layout_gui)
-        """Fits the panels to the narrowest tab's window (app/window_fit.py)."""
-        self.server.on_client_connect(lambda client: (self.layout_gui.client_connected(), self.window_watch.watch(client)))
+        """Fits the panels to each tab's window (app/window_fit.py)."""
+        self.server.on_client_connect(lambda client: (self.layout_gui.client_connected(client), self.window_watch.watch(client)))
+        self.server.on_client_disconnect(self.layout_gui.client_disconnected)
         recs = [e for e in self.entries if e.kind == EntryKind.RECORDING and e.error is None]
         if recs:
             # Open on the shortest-named landing recording (the showcase) when there is one, else the first found.
@@ -407,9 +408,10 @@ class ViewerApp:
         self.scene.apply_toggles()
         if name == "raw_cloud" and value:
             self._ensure_cloud()
-        if name == "slam_aligned" or self.layout is None or self.layout.panels["teaching"].visible:
-            # SLAM: the maps move between the ground truth's frame and their own; teaching: its text names what is hidden.
-            self._redraw()
+        if name == "slam_aligned":
+            self._redraw()  # the SLAM maps move between the ground truth's frame and their own
+        elif self.last_frame is not None and self.player is not None:  # the teaching text names what the view hides
+            self.teaching_text.content = teaching_markdown(self.stage, self.last_frame, self.player.engine.t_start_us, self.scene.toggles)
 
     def _set_overlay(self, value: str) -> None:
         self.overlay = OverlayColour(value)

@@ -1,4 +1,9 @@
-"""Plain-words explanations of each EV-Pose stage, filled with the live figures of the step on screen."""
+"""Plain-words explanations of each EV-Pose stage, filled with the live figures of the step on screen.
+
+Session 28 (a teacher's pass over the teaching layout in headless Chromium, /tmp/s28/ux28/s_teacher.py): the stages
+are walked with *previous / next* in the panel (:func:`stage_after`; the dropdown alone took two clicks and a search
+per stage), the live image colours the map points as its stage explains them (:data:`STAGE_OVERLAY`), and the text
+says which 3D elements it points at are hidden by the *3D view* checkboxes (:data:`SCENE_REFERENCES`)."""
 
 from __future__ import annotations
 

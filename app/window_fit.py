@@ -18,7 +18,8 @@ off; at 800 px: view 320 px, right column 160 px; at 700 px: view 220 px. A phon
 breakpoint) gets viser's mobile view: the 3D view with the main panel as a sheet below it (play, step, time, recording
 all reachable); the other panels are not shown there by viser, whatever the layout.
 
-With several tabs open, the placement fits the narrowest of them (panel placement is the same for every tab in viser).
+Each tab is fitted to its own window (app/tab_placement.py; until session 27 the narrowest tab's fit was placed in
+every tab: viser's placement commands are broadcasts).
 """
 
 from __future__ import annotations
@@ -90,7 +91,7 @@ RECHECK_S = 1.2
 
 
 class WindowWatch:
-    """Fits the layout's placement to the narrowest open tab's window (see the module docstring)."""
+    """Fits the layout's placement to each open tab's window (see the module docstring)."""
 
     def __init__(self, server, layout_gui):
         self._server = server
@@ -121,19 +122,21 @@ class WindowWatch:
             self._timer.daemon = True
             self._timer.start()
 
-    def window_px(self) -> int | None:
-        """The narrowest open tab's window width, CSS px (None: no tab has reported yet)."""
-        if self._layout_gui.layout is None:
+    def window_px(self, client) -> int | None:
+        """The tab ``client``'s window width, CSS px (None: it has not reported yet)."""
+        tab = self._layout_gui.tabs.get(client.client_id)
+        if self._layout_gui.layout is None or tab is None or client.camera.image_width <= 0:
             return None
-        placed = self._layout_gui.placed()
-        views = [c.camera.image_width for c in self._server.get_clients().values() if c.camera.image_width > 0]
-        return min((window_width(v, placed) for v in views), default=None)
+        return window_width(client.camera.image_width, self._layout_gui.placed(tab))
 
     def check(self) -> None:
         with self._lock:
             self._timer = None  # reports from now on schedule the next check (and the recheck below can)
-        px = self.window_px()
-        if px is not None and self._layout_gui.set_window_width(px):
+        refit = False
+        for client in list(self._server.get_clients().values()):
+            px = self.window_px(client)
+            refit |= px is not None and self._layout_gui.set_window_width(client.client_id, px)
+        if refit:
             self._refit_at = time.monotonic()
             self.check_soon(RECHECK_S)
 

@@ -417,8 +417,11 @@ def test_a_layout_change_sends_the_edge_widths_again_later_for_a_browser_that_dr
     sent: list[float] = []
     late: list[list[float]] = []  # the widths each late resend sent
     try:
-        for handle in lg.panels.values():
-            monkeypatch.setattr(handle, "set_width", lambda w, send=handle.set_width: (sent.append(w), send(w)))
+        # A tab, as the browser's connection would bring one (placement is sent to each tab, app/tab_placement.py).
+        from types import SimpleNamespace
+
+        lg.client_connected(SimpleNamespace(client_id=7, _websock_connection=SimpleNamespace(queue_message=lambda m: None)))
+        monkeypatch.setattr(lg.tabs[7].placer, "set_width", lambda panel, w: sent.append(w))
         resend = lg._resend_edges
 
         def counted():

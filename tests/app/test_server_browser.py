@@ -249,10 +249,24 @@ def test_windows_narrower_than_the_layouts_get_one_column_of_panels_and_keep_the
                 return out
 
             wait_for(lambda: not problems(), timeout=15, what=f"{name} in a 1000 px window", detail=problems)
-            assert "narrow window" in viewer.layout_gui.note.content or viewer.layout_gui.placed() is viewer.layout
+            (tab,) = viewer.layout_gui.tabs.values()
+            assert "narrow window" in viewer.layout_gui.note.content or viewer.layout_gui.placed(tab) is viewer.layout
         # Widened again, the layout is placed as it is.
         page.set_viewport_size({"width": 1400, "height": 900})
-        wait_for(lambda: viewer.layout_gui.placed() is viewer.layout, timeout=15, what="the layout placed as it is again")
+        wait_for(lambda: viewer.layout_gui.placed(tab) is viewer.layout, timeout=15, what="the layout placed as it is again")
+        # Each tab is fitted to its own window: a narrow tab opened beside this one left it as it is (session 27: both
+        # got the narrow tab's one column, viser's placement being broadcast; app/tab_placement.py).
+        assert viewer.apply_layout_name("debug")
+        other = page.context.browser.new_page(viewport={"width": 1000, "height": 800})
+        try:
+            other.goto(f"http://127.0.0.1:{viewer.cfg.port}")
+            other.get_by_text("SP-TS positive").first.wait_for(timeout=30_000)
+            wait_for(lambda: panel_edge(other, "Parameters") == "right", timeout=15, what="the narrow tab: one column on the right")
+            time.sleep(1.0)
+            assert panel_edge(page, "Parameters") == "left" and panel_edge(other, "Parameters") == "right"
+            assert page.locator("canvas").first.bounding_box()["width"] >= FIT_BELOW_VIEW_PX
+        finally:
+            other.close()
     finally:
         page.set_viewport_size({"width": 1400, "height": 900})
         viewer.apply_layout_name("debug")
