@@ -71,7 +71,7 @@ class LayoutGui:
         self.shown_docks: dict[str, str] = {}
         """Panel -> dock in a window wide enough for the layout (differs from the layout's when its anchor is hidden or
         floats); each tab's own are in :attr:`tabs`."""
-        self.dropdown = gui.add_dropdown("layout", ["debug"])
+        self.dropdown = gui.add_dropdown("layout", ["debug"], hint="Which panels are shown, where, and what the 3D view shows (layouts/*.json)")
         self.boxes, self.docks, self.widths = {}, {}, {}
         for name in PANELS:
             with gui.add_folder(f"{name} panel", expand_by_default=False):
@@ -83,7 +83,7 @@ class LayoutGui:
                     f"{name} width [px]", 0, min=0, max=MAX_WIDTH, step=10,
                     hint=f"{MIN_WIDTH}-{MAX_WIDTH} px; 0 leaves the width to the viewer")
         self.note = gui.add_markdown("")
-        self.name_box = gui.add_text("save as", "my_layout")
+        self.name_box = gui.add_text("save as", "my_layout", hint="Name of the layout file the button below writes (layouts/<name>.json)")
         self.save_button = gui.add_button("save current layout")
         self.dropdown.on_update(lambda e: e.client is not None and self.apply_name(self.dropdown.value))
         self.save_button.on_click(lambda e: self.save(self.name_box.value))

@@ -9,7 +9,8 @@ when the layout would leave the view less than FIT_BELOW_VIEW_PX there, the layo
 
 - the main panel keeps its own column on the left (its controls are never squeezed under CONTROL_PANEL_PX);
 - every other shown panel (left or right, not floating) joins one column on the right, in the order right-edge
-  panels first, then left-edge ones (parameters below images and plots in the debug layout);
+  panels first, then left-edge ones (parameters below images and plots in the debug layout), each edge's stacks top
+  to bottom as the layout has them (teaching: "How it works" above the images; session 28);
 - that column is as wide as the layout's widest right-edge column, but no wider than what leaves the view
   MIN_VIEW_PX, and no narrower than NARROW_COLUMN_PX.
 
@@ -62,14 +63,15 @@ def fitted(layout: Layout, window_px: int | None, slack_px: int = 0) -> Layout:
     if window_px is None or layout.view_width(window_px) >= FIT_BELOW_VIEW_PX - slack_px:
         return layout
     shown = dict(layout.placements())
-    edge = {}
-    for name, dock in shown.items():
-        root = name
-        while ":" in shown[root]:
-            root = shown[root].split(":", 1)[1]
-        edge[name] = shown[root]
-    right = [p for p, _ in layout.placements() if edge[p] == "right"]
-    column = right + [p for p, _ in layout.placements() if edge[p] == "left"]
+
+    def stack(name: str) -> list[str]:
+        """``name`` and the panels stacked on it, top to bottom as on screen."""
+        above = [q for p in shown if shown[p] == f"above:{name}" for q in stack(p)]
+        return above + [name] + [q for p in shown if shown[p] == f"below:{name}" for q in stack(p)]
+
+    # Top to bottom as in the layout: the teaching layout's "How it works" (above the images) came below them.
+    right = [q for p, dock in shown.items() if dock == "right" for q in stack(p)]
+    column = right + [q for p, dock in shown.items() if dock == "left" for q in stack(p)]
     if not column:
         return layout
     wanted = max([layout.panels[p].width or DEFAULT_COLUMN_PX for p in right] or [DEFAULT_COLUMN_PX])

@@ -501,3 +501,20 @@ def test_a_recording_without_imu_opened_first_shows_the_trackers_controls_to_set
         assert isinstance(app.player.engine, TrackerEngine) and app.player.engine.config.mode.value == "stpe"
     finally:
         app.stop()
+
+
+def test_every_control_of_the_main_and_teaching_panels_has_hover_help(viewer):
+    # The 3D view has no legend: its checkboxes had no hint but "slam aligned", the colours were told nowhere else
+    # than the teaching panel's fusion stage; the overlay, stage, re-run, layout and export controls had none.
+    from app.scene import SceneToggles
+
+    assert set(viewer.toggle_boxes) == set(vars(SceneToggles()))
+    for name, box in viewer.toggle_boxes.items():
+        assert box.hint, name
+    for name in ("fused", "registration", "ground_truth", "frustum"):
+        assert "(" in viewer.toggle_boxes[name].hint, f"{name}: its colour"
+    for handle in (viewer.rec_dropdown, viewer.map_dropdown, viewer.mode_dropdown, viewer.rescan_button, viewer.play_button,
+                   viewer.step_buttons, viewer.time_slider, viewer.speed_slider, viewer.loop_box, viewer.overlay_dropdown,
+                   viewer.export_buttons, viewer.stage_dropdown, viewer.stage_buttons, viewer.rerun_dropdown,
+                   viewer.param_buttons, viewer.config_path, viewer.layout_gui.dropdown, viewer.layout_gui.name_box):
+        assert handle.hint, handle.label
