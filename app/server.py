@@ -30,7 +30,7 @@ from app.plots import plot_context
 from app.scene import SceneView
 from app.slam_engine import slam_markdown
 from app.status import event_gaps, status_markdown
-from app.teaching import STAGE_PANEL, Stage, live_image, stage_after, teaching_markdown
+from app.teaching import STAGE_PANEL, Stage, image_caption, live_image, stage_after, teaching_markdown
 from app.viewer_controls import NO_MAP, bind_viewer_hotkeys, build_main_panel, build_panels
 from app.warm_up import WarmUp
 from app.window_fit import WindowWatch
@@ -300,6 +300,8 @@ class ViewerApp:
                 self.teaching_text.content = teaching_markdown(self.stage, frame, engine.t_start_us, self.scene.toggles)
                 if frame.slam is None:
                     self.teaching_image.image = live_image(self.stage, frame, imgs, self.overlay)
+                    if self.teaching_image.label != (caption := image_caption(self.stage, frame)):
+                        self.teaching_image.label = caption
             self.time_slider.value = round((frame.t_us - engine.t_start_us) / 1e6, 3)
             self.status.content = status_markdown(frame, engine, self.player.stats() if self.player else {}, self.gaps)
         self.frames_published += 1

@@ -3,7 +3,10 @@
 Session 28 (a teacher's pass over the teaching layout in headless Chromium, /tmp/s28/ux28/s_teacher.py): the stages
 are walked with *previous / next* in the panel (:func:`stage_after`; the dropdown alone took two clicks and a search
 per stage), the live image colours the map points as its stage explains them (:data:`STAGE_OVERLAY`), and the text
-says which 3D elements it points at are hidden by the *3D view* checkboxes (:data:`SCENE_REFERENCES`)."""
+says which 3D elements it points at are hidden by the *3D view* checkboxes (:data:`SCENE_REFERENCES`). The live
+image comes first, captioned (:func:`image_caption`), the text under it: on a 1280x720 projector the teaching
+layout's panel (above the Images panel) showed the text and the image's top 10 px (/tmp/s28/ux28/s_proj.py); the
+SP-TS stage's image holds both polarities, as its text does."""
 
 from __future__ import annotations
 
@@ -139,25 +142,36 @@ def hidden_note(stage: Stage, toggles) -> str:
 
 
 def teaching_markdown(stage: Stage, frame: Frame | None, t0_us: int = 0, toggles=None) -> str:
-    """The teaching panel's text for ``stage`` at ``frame``; ``toggles`` (the 3D view's :class:`SceneToggles`) adds
-    what the text speaks of that the 3D view hides."""
+    """The teaching panel's text for ``stage`` at ``frame`` (under its live image, whose caption is
+    :func:`image_caption`); ``toggles`` (the 3D view's :class:`SceneToggles`) adds what the text speaks of that the
+    3D view hides."""
     slam = frame is not None and frame.slam is not None
-    image = "" if slam else f"\n\n_Image: {STAGE_PANEL[stage]}_"  # SLAM: none shown
-    if image and "map points" in image:
-        if frame is not None and frame.point_index is None:
-            image = image[:-1] + " (no map, so no points on it)_"  # the events-only view: a bare TDF under that name
-        else:
-            image = image[:-1] + f", coloured by {STAGE_OVERLAY.get(stage, OverlayColour.RESIDUAL).value}_"
     note = hidden_note(stage, toggles) if toggles is not None and not slam else ""
-    return f"### {stage.value}\n\n{EXPLANATIONS[stage]}\n\n**Now:** {live_facts(stage, frame, t0_us)}{image}{note}"
+    return f"### {stage.value}\n\n{EXPLANATIONS[stage]}\n\n**Now:** {live_facts(stage, frame, t0_us)}{note}"
+
+
+def image_caption(stage: Stage, frame: Frame | None) -> str:
+    """What the live image of ``stage`` shows, its caption ("" in SLAM mode, which shows none)."""
+    if frame is not None and frame.slam is not None:
+        return ""
+    if stage == Stage.SP_TS:
+        return "SP-TS: ON (red to yellow) and OFF (blue) surfaces in one picture"
+    if STAGE_PANEL[stage] != "TDF + map points":
+        return STAGE_PANEL[stage]
+    if frame is not None and frame.point_index is None:
+        return "TDF (no map, so no points on it)"  # the events-only view
+    return f"TDF + map points, coloured by {STAGE_OVERLAY.get(stage, OverlayColour.RESIDUAL).value}"
 
 
 def live_image(stage: Stage, frame: Frame, imgs: dict[str, np.ndarray], overlay: OverlayColour) -> np.ndarray:
     """The stage's live image from the panel images ``imgs`` (drawn with the Images panel's ``overlay``); the TDF is
-    drawn again when the stage colours its points otherwise (:data:`STAGE_OVERLAY`)."""
+    drawn again when the stage colours its points otherwise (:data:`STAGE_OVERLAY`), and the SP-TS stage shows both
+    polarities' surfaces in one picture (its text explains both; each is black where empty)."""
     colour = STAGE_OVERLAY.get(stage, OverlayColour.RESIDUAL)
     if STAGE_PANEL[stage] == "TDF + map points" and colour != overlay:
         return tdf_image(frame, colour)
+    if stage == Stage.SP_TS:
+        return np.maximum(imgs["SP-TS positive"], imgs["SP-TS negative"])
     return imgs[STAGE_PANEL[stage]]
 
 

@@ -130,9 +130,10 @@ def build_panels(app: ViewerApp) -> None:
     with p.add_tab("How it works"):
         app.stage_dropdown = g.add_dropdown("stage", [s.value for s in Stage], initial_value=app.stage.value, hint=OTHER_HINTS["stage"])
         # A lesson walks the stages in order: the dropdown alone took two clicks and a look through the list per stage.
-        app.stage_buttons = g.add_button_group("stages", ["< previous", "next >"], hint="The previous / next stage of the pipeline, in order (after fusion: events again)")
+        app.stage_buttons = g.add_button_group("stages", ["< previous", "next >"], hint="The previous / next stage (after fusion: events again)")
+        # The live image above the text: under it, a 1280x720 projector showed only its top (app/teaching.py).
+        app.teaching_image = g.add_image(blank, label="live image", format="jpeg")
         app.teaching_text = g.add_markdown(teaching_markdown(app.stage, None))
-        app.teaching_image = g.add_image(blank, label="live", format="jpeg")
     app.stage_dropdown.on_update(lambda e: app._set_stage(app.stage_dropdown.value))
     app.stage_buttons.on_click(lambda e: app.step_stage(-1 if e.target.value == "< previous" else 1))
     app.panels["parameters"] = p = g.add_panel()

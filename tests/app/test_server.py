@@ -145,7 +145,7 @@ def test_the_teaching_image_colours_the_map_points_as_its_stage_explains_them(vi
         viewer.stage_dropdown.value = "TDF"
         viewer.step_stage(1)  # the lesson's next stage
         viewer.player.wait_idle()
-        assert viewer.stage.value == "polarity prediction" and "coloured by predicted polarity" in viewer.teaching_text.content
+        assert viewer.stage.value == "polarity prediction" and viewer.teaching_image.label.endswith("coloured by predicted polarity")
         frame = viewer.last_frame
         assert frame.predicted_polarity is not None and len(frame.projected_uv)
         assert (viewer.teaching_image.image == tdf_image(frame, OverlayColour.POLARITY)).all()

@@ -17,10 +17,19 @@ def test_every_stage_explains_itself_with_live_numbers(bar_recording):
     assert "Press play" in live_facts(Stage.TDF, None)
 
 
-def test_the_image_line_says_the_events_only_tdf_has_no_map_points(bar_recording):
+def test_the_image_caption_says_the_events_only_tdf_has_no_map_points_and_sp_ts_shows_both_polarities(bar_recording):
+    from app.panels import panel_images
+    from app.teaching import image_caption, live_image
+
     frame = EventsOnlyEngine(bar_recording).step()
-    assert "_Image: TDF + map points (no map, so no points on it)_" in teaching_markdown(Stage.TDF, frame)
-    assert teaching_markdown(Stage.SP_TS, frame).endswith("_Image: SP-TS positive_")
+    assert image_caption(Stage.TDF, frame) == "TDF (no map, so no points on it)"
+    assert image_caption(Stage.EVENTS, frame) == "events kept / removed"
+    assert "ON" in image_caption(Stage.SP_TS, frame) and "OFF" in image_caption(Stage.SP_TS, frame)
+    imgs = panel_images(frame)
+    both = live_image(Stage.SP_TS, frame, imgs, None)
+    for name in ("SP-TS positive", "SP-TS negative"):  # each surface's pixels are in the one picture
+        lit = imgs[name].max(axis=2) > 0
+        assert lit.any() and (both[lit] >= imgs[name][lit]).all()
 
 
 def test_the_explanations_name_what_the_tracker_runs_and_controls_that_exist():
