@@ -130,7 +130,7 @@ def build_panels(app: ViewerApp) -> None:
     with p.add_tab("How it works"):
         app.stage_dropdown = g.add_dropdown("stage", [s.value for s in Stage], initial_value=app.stage.value, hint=OTHER_HINTS["stage"])
         # A lesson walks the stages in order: the dropdown alone took two clicks and a look through the list per stage.
-        app.stage_buttons = g.add_button_group("stages", ["< previous", "next >"], hint="The previous / next stage (after fusion: events again)")
+        app.stage_buttons = g.add_button_group("stages", ["< previous", "next >"], hint="The previous / next stage (after fusion: events again); keys PageUp / PageDown, as a presenter's clicker sends")
         # The live image above the text: under it, a 1280x720 projector showed only its top (app/teaching.py).
         app.teaching_image = g.add_image(blank, label="live image", format="jpeg")
         app.teaching_text = g.add_markdown(teaching_markdown(app.stage, None))
@@ -155,5 +155,8 @@ def bind_viewer_hotkeys(app: ViewerApp) -> None:
                             ("step back", "arrowleft", lambda: app.player and app.player.step_back()),
                             ("faster", "arrowup", lambda: app._nudge_speed(2.0)),
                             ("slower", "arrowdown", lambda: app._nudge_speed(0.5)),
-                            ("to start", "home", lambda: app.player and app.player.seek(app.player.engine.t_start_us))),
+                            ("to start", "home", lambda: app.player and app.player.seek(app.player.engine.t_start_us)),
+                            # A presenter's clicker sends PageDown / PageUp: the lesson's next / previous stage.
+                            ("next stage", "pagedown", lambda: app.step_stage(1)),
+                            ("previous stage", "pageup", lambda: app.step_stage(-1))),
                  app.key_guard)

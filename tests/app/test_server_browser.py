@@ -153,6 +153,12 @@ def test_hover_help_opens_over_a_label_and_next_walks_the_teaching_stages(page, 
     page.locator("h3", has_text="events").first.wait_for(timeout=10_000)
     page.get_by_role("button", name="< previous").click()
     wait_for(lambda: viewer.stage.value == "fusion", what="previous stage")
+    # A presenter's clicker sends PageDown / PageUp.
+    page.mouse.click(700, 450)  # the 3D view: no control has the focus
+    page.keyboard.press("PageDown")
+    wait_for(lambda: viewer.stage.value == "events", what="PageDown: the next stage")
+    page.keyboard.press("PageUp")
+    wait_for(lambda: viewer.stage.value == "fusion", what="PageUp: the previous stage")
 
 
 def panel_box(page, text):
