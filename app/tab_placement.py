@@ -31,8 +31,13 @@ class TabPlacer:
         self.client = client
 
     def _send(self, message) -> None:
+        conn = self.client._websock_connection
+        if conn.get_message_buffer().done:
+            # The tab closed (its disconnect callback, which forgets it, may still be on its way): viser warned
+            # "Queued a GuiSetPanelPositionMessage on a closed connection" (session 28's suite).
+            return
         stamped = dataclasses.replace(message, counter=self._gui._next_layout_counter(), run_id=self._gui._layout_run_id)
-        self.client._websock_connection.queue_message(stamped)
+        conn.queue_message(stamped)
 
     def _position(self, panel, position: dict) -> None:
         self._send(_messages.GuiSetPanelPositionMessage(panel._placement_uuid, position, counter=0, run_id=""))

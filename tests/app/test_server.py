@@ -420,7 +420,8 @@ def test_a_layout_change_sends_the_edge_widths_again_later_for_a_browser_that_dr
         # A tab, as the browser's connection would bring one (placement is sent to each tab, app/tab_placement.py).
         from types import SimpleNamespace
 
-        lg.client_connected(SimpleNamespace(client_id=7, _websock_connection=SimpleNamespace(queue_message=lambda m: None)))
+        conn = SimpleNamespace(queue_message=lambda m: None, get_message_buffer=lambda: SimpleNamespace(done=False))
+        lg.client_connected(SimpleNamespace(client_id=7, _websock_connection=conn))
         monkeypatch.setattr(lg.tabs[7].placer, "set_width", lambda panel, w: sent.append(w))
         resend = lg._resend_edges
 
