@@ -335,7 +335,8 @@ class ViewerApp:
             # changed; replaced by the events-only view's they could not, and tuned values were lost.
             shown, note = rejected, f"{engine.explanation} Change the parameters below to try again."
         else:
-            shown, note = engine.config, engine.explanation or f"{type(engine.config).__name__}: changes re-run the tracker."
+            # Not the class name ("TrackerConfig: changes re-run the tracker.", session 28): words a user reads.
+            shown, note = engine.config, engine.explanation or "The tracker's parameters: a change re-runs it, from the point chosen above."
         if self.config_gui is not None and type(self.config_gui.config) is type(shown):
             # The controls are the source of the engine's config; pushing it back would fight a user still dragging.
             if self.param_info.content != note:  # re-rendering the panel would steal a dragging user's focus

@@ -519,3 +519,10 @@ def test_every_control_of_the_main_and_teaching_panels_has_hover_help(viewer):
                    viewer.export_buttons, viewer.stage_dropdown, viewer.stage_buttons, viewer.rerun_dropdown,
                    viewer.param_buttons, viewer.config_path, viewer.layout_gui.dropdown, viewer.layout_gui.name_box):
         assert handle.hint, handle.label
+
+
+def test_the_parameters_panel_says_what_it_holds_in_words_not_a_class_name(viewer):
+    viewer.select(next(e.display for e in viewer.entries if e.path.name == "squares.h5"))
+    viewer.player.wait_idle()
+    assert isinstance(viewer.player.engine, TrackerEngine)
+    assert "Config" not in viewer.param_info.content and "tracker's parameters" in viewer.param_info.content
