@@ -324,7 +324,8 @@ class LayoutGui:
         try:
             base = self.layout or Layout(name)
             layout = Layout(name, base.description, base.dark_mode,
-                            {k: dataclasses.replace(v) for k, v in base.panels.items()}, dataclasses.replace(base.scene))
+                            {k: dataclasses.replace(v) for k, v in base.panels.items()}, dataclasses.replace(base.scene),
+                            base.stage)
             path = save_layout(layout, self.layout_dir)
         except EvposeError as exc:
             self._notify("layout", str(exc), "red")

@@ -422,6 +422,8 @@ class ViewerApp:
 
     def _set_stage(self, value: str) -> None:
         self.stage = Stage(value)
+        if self.layout is not None:
+            self.layout.stage = self.stage.value  # "save" keeps it
         self._redraw()
 
     def step_stage(self, delta: int) -> None:
@@ -482,6 +484,8 @@ class ViewerApp:
             box.value = getattr(layout.scene, name)
         self.scene.toggles = type(layout.scene)(**vars(layout.scene))
         self.scene.apply_toggles()
+        if layout.stage is not None:
+            self.stage_dropdown.value = layout.stage
         self._ensure_cloud()
 
     # ------------------------------------------------------------------ export

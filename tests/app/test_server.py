@@ -136,7 +136,8 @@ def test_the_teaching_image_colours_the_map_points_as_its_stage_explains_them(vi
     # blue; the registration stage said "green = on an edge" with the points coloured by weight.
     from app.panels import OverlayColour, tdf_image
 
-    assert viewer.apply_layout_name("teaching")
+    viewer.stage_dropdown.value = "fusion"
+    assert viewer.apply_layout_name("teaching") and viewer.stage.value == "events"  # where a lesson starts
     viewer.select(next(e.display for e in viewer.entries if e.path.name == "squares.h5"))
     viewer.player.seek(viewer.recording.t_start_us + 100_000)
     viewer.player.wait_idle()
@@ -395,12 +396,14 @@ def test_the_layout_folder_docks_and_sizes_panels_and_a_saved_layout_restores_th
         assert lg.shown_docks == {"plots": "left", "parameters": "left"} and "images is hidden" in lg.note.content
         app.set_panel_visible("images", True)
         assert lg.set_dock("teaching", "float") and lg.set_width("teaching", 0)
+        app.stage_dropdown.value = "registration"  # a lesson saved at a stage starts there again
         saved = load_layout(app.save_current_layout("moved"))
+        assert saved.stage == "registration"
         assert (saved.panels["images"].dock, saved.panels["images"].width) == ("left", 500)
         assert (saved.panels["teaching"].dock, saved.panels["teaching"].width) == ("float", None)
         assert load_layout(layouts / "debug.json").panels["images"].dock == "right"  # the preset is untouched
-        assert app.apply_layout_name("teaching") and lg.docks["images"].value == "right"
-        assert app.apply_layout_name("moved")
+        assert app.apply_layout_name("teaching") and lg.docks["images"].value == "right" and app.stage.value == "events"
+        assert app.apply_layout_name("moved") and app.stage.value == "registration"
         assert lg.docks["images"].value == "left" and lg.widths["images"].value == 500 and lg.shown_docks["images"] == "left"
         assert app.layout.to_dict() == saved.to_dict()
     finally:
