@@ -332,7 +332,8 @@ def test_the_list_of_prepared_recordings_is_one_line_once_all_are_settled():
     w.states = {"a.h5": "preparing 40 %", "b.h5": PREPARED, "c.h5": OPEN_NOTE, "d.h5": "no map found: events only, nothing to prepare"}
     assert "- `a.h5`: preparing 40 %" in w.markdown()
     w.states["a.h5"] = PREPARED
-    assert w.markdown() == ("**Prepared for seeking:** 3 recordings (a seek anywhere in them reads its pose from the disk "
-                            "cache); 1 without a map, nothing to prepare.")
+    assert w.markdown() == ("**Prepared for seeking:** 3 recordings, each with the map it opens with and the default "
+                            "parameters (a seek anywhere there reads its pose from the disk cache); 1 without a map, "
+                            "nothing to prepare.")
     w.states["a.h5"] = "failed: unreadable"
     assert "- `a.h5`: failed: unreadable" in w.markdown()
