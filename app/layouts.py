@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from app.scene import SceneToggles
+from app.teaching import Stage
 from evpose.errors import InputError
 
 LAYOUT_DIR = Path(__file__).resolve().parent.parent / "layouts"
@@ -90,12 +91,17 @@ class Layout:
     dark_mode: bool = False
     panels: dict[str, PanelPlacement] = field(default_factory=lambda: {p: PanelPlacement() for p in PANELS})
     scene: SceneToggles = field(default_factory=SceneToggles)
+    stage: str | None = None
+    """The teaching panel's stage when the layout is applied (None: left as it is). A lesson starts at its first
+    stage: the teaching layout opened on the TDF, the third of six, before "< previous" / "next >" walked them
+    (session 28); a teacher's saved layout keeps the stage it was saved at."""
 
     def to_dict(self) -> dict:
         return {
             "name": self.name, "description": self.description, "dark_mode": self.dark_mode,
             "panels": {k: dataclasses.asdict(v) for k, v in self.panels.items()},
             "scene": dataclasses.asdict(self.scene),
+            "stage": self.stage,
         }
 
     @classmethod
@@ -103,7 +109,7 @@ class Layout:
         """Validate a parsed layout file; every problem names the offending key."""
         if not isinstance(data, dict):
             raise InputError(source, "a layout must be a JSON object")
-        unknown = set(data) - {"name", "description", "dark_mode", "panels", "scene"}
+        unknown = set(data) - {"name", "description", "dark_mode", "panels", "scene", "stage"}
         if unknown:
             raise InputError(source, "unknown key", sorted(unknown)[0])
         name = data.get("name")
@@ -129,7 +135,10 @@ class Layout:
             scene = SceneToggles(**(data.get("scene") or {}))
         except TypeError as exc:
             raise InputError(source, str(exc), "scene") from None
-        return cls(name, str(data.get("description", "")), bool(data.get("dark_mode", False)), panels, scene)
+        stage = data.get("stage")
+        if stage is not None and stage not in {s.value for s in Stage}:
+            raise InputError(source, f"stage {stage!r} is none of {', '.join(s.value for s in Stage)}", "stage")
+        return cls(name, str(data.get("description", "")), bool(data.get("dark_mode", False)), panels, scene, stage)
 
 
     def with_dock(self, name: str, dock: str) -> "Layout":

@@ -1,4 +1,4 @@
-"""Blob URLs of images revoked a few seconds late in the browser, so viser's image probes never fail.
+"""Patches of viser's page: blob URLs of images revoked late (image probes never fail), hover help over labels too.
 
 viser's image component (client ``components/Image.tsx``) makes a blob URL for each image it gets, shows it, and
 starts a probe of its natural size (``new Image().src = url``); it revokes the URL when the next image comes or the
@@ -15,6 +15,17 @@ a hidden 1x1 image in the main panel whose ``onload`` wraps ``URL.revokeObjectUR
 with innerHTML, where inline handlers run; ``window.URL`` by name: inside an inline handler a bare ``URL`` is
 ``document.URL``, a string). Memory: the few images of the last REVOKE_DELAY_MS stay in the browser
 (tens of kB each). Revocation by viser's other code (file downloads) is delayed the same way, harmlessly.
+
+**Hover help over a control's label** (session 28). viser (client ``components/common.tsx``, ``Checkbox.tsx``) wraps
+only a control's *input* in the Mantine tooltip that shows its ``hint``; its label, where the eye and the pointer go
+first, showed nothing (session 27's leftover: "mode", "rate [Hz]" and every parameter explained only over the slider
+or box). A second hidden image's ``onload`` installs one document ``mouseover`` listener: over a label (a
+``label[for]`` in the first column of viser's label/input row) it sends the tooltip's reference element (the box the
+tooltip wraps around the input) a ``mouseenter`` (floating-ui's hover hook listens for that native event), and a
+``mouseleave`` when the pointer leaves the label again. So the same tooltip opens, after the same 500 ms delay, over
+the label as over the input; controls without a hint get nothing (their box has no listener).
+``tests/app/test_server_browser.py`` hovers a label in Chromium and finds the hint (it would catch a viser client
+that changes this structure).
 """
 
 from __future__ import annotations
@@ -32,6 +43,24 @@ PAGE_PATCH_HTML = (
 """The HTML element that patches the page (added once to the main panel)."""
 
 
+LABEL_HINTS_JS = (
+    "if (!window.__evposeLabelHints) { window.__evposeLabelHints = true; let shown = null;"
+    " const refOf = (t) => { if (!(t instanceof Element)) return null;"
+    " const l = t.closest('label[for]') || t.querySelector(':scope > label[for], :scope > p > label[for]');"
+    " const row = l ? l.closest('.mantine-Flex-root') : null;"
+    " if (!row || row.children.length < 2 || !row.children[0].contains(l)) return null;"
+    " return row.children[1].firstElementChild; };"
+    " document.addEventListener('mouseover', (e) => { const ref = refOf(e.target); if (ref === shown) return;"
+    " if (shown) shown.dispatchEvent(new MouseEvent('mouseleave'));"
+    " shown = ref; if (ref) ref.dispatchEvent(new MouseEvent('mouseenter')); }); }"
+)
+"""Installs the label hover (see the module docstring); single quotes only, it sits in a double-quoted attribute."""
+
+LABEL_HINTS_HTML = f'<img alt="" src="{_GIF_1PX}" style="display:none" onload="{LABEL_HINTS_JS}">'
+"""The HTML element that installs the label hover (added once to the main panel)."""
+
+
 def add_page_patch(gui):
-    """Add the patch to the GUI (every tab that connects runs it once)."""
+    """Add the patches to the GUI (every tab that connects runs them once)."""
+    gui.add_html(LABEL_HINTS_HTML)
     return gui.add_html(PAGE_PATCH_HTML)

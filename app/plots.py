@@ -194,6 +194,9 @@ def empty_reasons(series: dict[str, tuple[tuple[str, ...], tuple[np.ndarray, ...
             continue
         if name in (POSE_ERROR, SLAM_POSE_ERROR) and (gt is None or len(gt) < 2):
             why = "this recording has no ground truth to compare with."
+        elif name.startswith("latency") and all(s.index == 0 or s.timings_ms for s in history[-WINDOW_STEPS:]):
+            # Step 1 after opening (SLAM mode, session 28) was told "the steps a seek went past", without a seek.
+            why = "one step timed so far (a run's first step is left out: it loads the compiled kernels); play or step forward to draw the line."
         elif name.startswith("latency"):
             why = "the steps a seek went past were not timed; play or step forward to time them."
         elif note and all(s.pose is None for s in history[-WINDOW_STEPS:]):

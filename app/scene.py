@@ -225,10 +225,17 @@ class SceneView:
         t = self.toggles
         shown = {"map": t.contour_map, "cloud": t.raw_cloud, "gt": t.ground_truth, "reg": t.registration,
                  "fused": t.fused, "imu": t.imu_poses, "frustum": t.frustum}
-        for name, node in self._nodes.items():
+        # A copy, and removed nodes skipped: the player thread may replace nodes meanwhile (a toggle or a layout
+        # applied while it draws; it draws the new ones with these toggles already). Seen in session 28's suite: a
+        # layout's nine checkboxes set while a redraw replaced the IMU-rate axes ("Cannot assign to 'visible' on a
+        # removed BatchedAxesHandle").
+        for name, node in list(self._nodes.items()):
             on = shown.get(name.split("/")[0])  # trajectory chunks are "fused/0", "fused/1", ...
             if on is not None:
-                node.visible = on
+                try:
+                    node.visible = on
+                except RuntimeError:
+                    pass  # removed by the player thread since the copy
         if self._followed and not t.follow and self._overview is not None:
             # Leaving follow (its checkbox or a layout without it) left the camera a few metres behind the last
             # pose, close to the map: the debug/compare layouts then opened on a zoomed-in corner of the scene.

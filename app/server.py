@@ -2,7 +2,7 @@
 
 One engine per server, owned by the player's worker thread; every browser tab
 drives and sees that same session (commands are serialised through one queue,
-so concurrent tabs cannot corrupt it). Per-tab state is only the 3D camera.
+so concurrent tabs cannot corrupt it). Per-tab state is only the 3D camera and where the panels are placed (app/layout_gui.py).
 """
 
 from __future__ import annotations
@@ -30,7 +30,7 @@ from app.plots import plot_context
 from app.scene import SceneView
 from app.slam_engine import slam_markdown
 from app.status import event_gaps, status_markdown
-from app.teaching import STAGE_PANEL, Stage, teaching_markdown
+from app.teaching import STAGE_PANEL, Stage, image_caption, live_image, stage_after, teaching_markdown
 from app.viewer_controls import NO_MAP, bind_viewer_hotkeys, build_main_panel, build_panels
 from app.warm_up import WarmUp
 from app.window_fit import WindowWatch
@@ -99,8 +99,9 @@ class ViewerApp:
         self.apply_layout_name(cfg.layout)
         bind_viewer_hotkeys(self)
         self.window_watch = WindowWatch(self.server, self.layout_gui)
-        """Fits the panels to the narrowest tab's window (app/window_fit.py)."""
-        self.server.on_client_connect(lambda client: (self.layout_gui.client_connected(), self.window_watch.watch(client)))
+        """Fits the panels to each tab's window (app/window_fit.py)."""
+        self.server.on_client_connect(lambda client: (self.layout_gui.client_connected(client), self.window_watch.watch(client)))
+        self.server.on_client_disconnect(self.layout_gui.client_disconnected)
         recs = [e for e in self.entries if e.kind == EntryKind.RECORDING and e.error is None]
         if recs:
             # Open on the shortest-named landing recording (the showcase) when there is one, else the first found.
@@ -296,9 +297,11 @@ class ViewerApp:
                 self.slam_info.content = slam_markdown(frame, self.scene.toggles.slam_aligned, engine.t_start_us)
             if show_teaching and (STAGE_PANEL[self.stage] in imgs or frame.slam is not None):
                 # SLAM mode: the stages are the tracker's, which is not running; the text says so (no live image).
-                self.teaching_text.content = teaching_markdown(self.stage, frame, engine.t_start_us)
+                self.teaching_text.content = teaching_markdown(self.stage, frame, engine.t_start_us, self.scene.toggles)
                 if frame.slam is None:
-                    self.teaching_image.image = imgs[STAGE_PANEL[self.stage]]
+                    self.teaching_image.image = live_image(self.stage, frame, imgs, self.overlay)
+                    if self.teaching_image.label != (caption := image_caption(self.stage, frame)):
+                        self.teaching_image.label = caption
             self.time_slider.value = round((frame.t_us - engine.t_start_us) / 1e6, 3)
             self.status.content = status_markdown(frame, engine, self.player.stats() if self.player else {}, self.gaps)
         self.frames_published += 1
@@ -332,7 +335,8 @@ class ViewerApp:
             # changed; replaced by the events-only view's they could not, and tuned values were lost.
             shown, note = rejected, f"{engine.explanation} Change the parameters below to try again."
         else:
-            shown, note = engine.config, engine.explanation or f"{type(engine.config).__name__}: changes re-run the tracker."
+            # Not the class name ("TrackerConfig: changes re-run the tracker.", session 28): words a user reads.
+            shown, note = engine.config, engine.explanation or "The tracker's parameters: a change re-runs it, from the point chosen above."
         if self.config_gui is not None and type(self.config_gui.config) is type(shown):
             # The controls are the source of the engine's config; pushing it back would fight a user still dragging.
             if self.param_info.content != note:  # re-rendering the panel would steal a dragging user's focus
@@ -409,6 +413,8 @@ class ViewerApp:
             self._ensure_cloud()
         if name == "slam_aligned":
             self._redraw()  # the SLAM maps move between the ground truth's frame and their own
+        elif self.last_frame is not None and self.player is not None:  # the teaching text names what the view hides
+            self.teaching_text.content = teaching_markdown(self.stage, self.last_frame, self.player.engine.t_start_us, self.scene.toggles)
 
     def _set_overlay(self, value: str) -> None:
         self.overlay = OverlayColour(value)
@@ -416,7 +422,13 @@ class ViewerApp:
 
     def _set_stage(self, value: str) -> None:
         self.stage = Stage(value)
+        if self.layout is not None:
+            self.layout.stage = self.stage.value  # "save" keeps it
         self._redraw()
+
+    def step_stage(self, delta: int) -> None:
+        """The teaching panel's previous (-1) / next (+1) stage, in the lesson's order (the dropdown's callback redraws)."""
+        self.stage_dropdown.value = stage_after(self.stage, delta).value
 
     def _redraw(self) -> None:
         if self.player is not None and self.last_frame is not None:
@@ -472,6 +484,8 @@ class ViewerApp:
             box.value = getattr(layout.scene, name)
         self.scene.toggles = type(layout.scene)(**vars(layout.scene))
         self.scene.apply_toggles()
+        if layout.stage is not None:
+            self.stage_dropdown.value = layout.stage
         self._ensure_cloud()
 
     # ------------------------------------------------------------------ export

@@ -1,4 +1,12 @@
-"""Plain-words explanations of each EV-Pose stage, filled with the live figures of the step on screen."""
+"""Plain-words explanations of each EV-Pose stage, filled with the live figures of the step on screen.
+
+Session 28 (a teacher's pass over the teaching layout in headless Chromium, /tmp/s28/ux28/s_teacher.py): the stages
+are walked with *previous / next* in the panel (:func:`stage_after`; the dropdown alone took two clicks and a search
+per stage), the live image colours the map points as its stage explains them (:data:`STAGE_OVERLAY`), and the text
+says which 3D elements it points at are hidden by the *3D view* checkboxes (:data:`SCENE_REFERENCES`). The live
+image comes first, captioned (:func:`image_caption`), the text under it: on a 1280x720 projector the teaching
+layout's panel (above the Images panel) showed the text and the image's top 10 px (/tmp/s28/ux28/s_proj.py); the
+SP-TS stage's image holds both polarities, as its text does."""
 
 from __future__ import annotations
 
@@ -8,6 +16,7 @@ import numpy as np
 
 from app.frame import Frame
 from app.frame_cache import unit
+from app.panels import OverlayColour, tdf_image
 
 
 class Stage(str, enum.Enum):
@@ -44,14 +53,14 @@ EXPLANATIONS: dict[Stage, str] = {
     Stage.POLARITY: (
         "**Polarity prediction**: from the IMU's rotation rate and the fused velocity, the tracker predicts how each "
         "map edge moves in the image, and so whether it should produce ON or OFF events. Each point is then "
-        "compared only with the time surface of its predicted polarity (red/blue in 3D), which removes the "
+        "compared only with the time surface of its predicted polarity (red/blue, in 3D and in the live image), which removes the "
         "events and distractions of the other polarity. Points whose motion is nearly parallel to the edge sit "
         "in the *buffer zone* (yellow) and use both; so does every point when polarity prediction is off (mode `stpe`)."
     ),
     Stage.REGISTRATION: (
         "**Registration** moves the 6-DoF pose until the projected map points fall into the valleys of the TDF "
         "(robust least squares, Levenberg-Marquardt on SE(3)). Points far from any valley get small weights, so "
-        "clutter does not pull the pose. The TDF panel colours each point by its residual (green = on an edge)."
+        "clutter does not pull the pose. The live image colours each point by its residual (green = on an edge, red = far)."
     ),
     Stage.FUSION: (
         "**Fusion** (mode `full`) combines each registration with the IMU, by default in a factor graph (gtsam; "
@@ -72,6 +81,20 @@ STAGE_PANEL: dict[Stage, str] = {
     Stage.FUSION: "TDF + map points",
 }
 """Which live image illustrates each stage."""
+
+STAGE_OVERLAY: dict[Stage, OverlayColour] = {Stage.POLARITY: OverlayColour.POLARITY}
+"""How the live TDF image colours the map points at a stage (residual where not listed), whatever the Images panel's
+*TDF points coloured by* says: the polarity stage showed them by residual while its text spoke of red and blue, and
+the registration stage's "green = on an edge" was wrong with that dropdown on weight (session 28)."""
+
+SCENE_REFERENCES: dict[Stage, tuple[tuple[str, str], ...]] = {
+    Stage.POLARITY: (("contour_map", "the contour map (points red / blue / yellow)"),),
+    Stage.FUSION: (("fused", "the fused trajectory (orange)"), ("registration", "the raw registrations (purple)"),
+                   ("ground_truth", "the ground truth (green)"), ("imu_poses", "the IMU-rate poses (small axes)")),
+}
+"""What a stage's explanation points at in the 3D view, by its *3D view* checkbox: the teaching layout hides the raw
+registrations and the IMU-rate poses, so the fusion stage spoke of a purple line and small axes nobody could see;
+now the text says which are hidden and where to tick them (session 28)."""
 
 
 def live_facts(stage: Stage, frame: Frame | None, t0_us: int = 0) -> str:
@@ -108,8 +131,51 @@ def live_facts(stage: Stage, frame: Frame | None, t0_us: int = 0) -> str:
     return t + f"{n_imu} IMU-rate poses since the last registration; status **{frame.status}**" + (f" ({frame.reason})" if frame.reason else ".")
 
 
-def teaching_markdown(stage: Stage, frame: Frame | None, t0_us: int = 0) -> str:
-    image = "" if frame is not None and frame.slam is not None else f"\n\n_Image: {STAGE_PANEL[stage]}_"  # SLAM: none shown
-    if image and "map points" in image and frame is not None and frame.point_index is None:
-        image = image[:-1] + " (no map, so no points on it)_"  # the events-only view: a bare TDF under that name
-    return f"### {stage.value}\n\n{EXPLANATIONS[stage]}\n\n**Now:** {live_facts(stage, frame, t0_us)}{image}"
+def hidden_note(stage: Stage, toggles) -> str:
+    """A line naming what the stage's text points at in the 3D view but the *3D view* checkboxes hide (empty if none)."""
+    hidden = [(name, words) for name, words in SCENE_REFERENCES.get(stage, ()) if not getattr(toggles, name, True)]
+    if not hidden:
+        return ""
+    boxes = ", ".join(f"*{name.replace('_', ' ')}*" for name, _ in hidden)
+    return (f"\n\n_Hidden in the 3D view now: {' and '.join(w for _, w in hidden)}; tick {boxes} under "
+            "**3D view** to show {}._".format("it" if len(hidden) == 1 else "them"))
+
+
+def teaching_markdown(stage: Stage, frame: Frame | None, t0_us: int = 0, toggles=None) -> str:
+    """The teaching panel's text for ``stage`` at ``frame`` (under its live image, whose caption is
+    :func:`image_caption`); ``toggles`` (the 3D view's :class:`SceneToggles`) adds what the text speaks of that the
+    3D view hides."""
+    slam = frame is not None and frame.slam is not None
+    note = hidden_note(stage, toggles) if toggles is not None and not slam else ""
+    return f"### {stage.value}\n\n{EXPLANATIONS[stage]}\n\n**Now:** {live_facts(stage, frame, t0_us)}{note}"
+
+
+def image_caption(stage: Stage, frame: Frame | None) -> str:
+    """What the live image of ``stage`` shows, its caption ("" in SLAM mode, which shows none)."""
+    if frame is not None and frame.slam is not None:
+        return ""
+    if stage == Stage.SP_TS:
+        return "SP-TS: ON (red to yellow) and OFF (blue) surfaces in one picture"
+    if STAGE_PANEL[stage] != "TDF + map points":
+        return STAGE_PANEL[stage]
+    if frame is not None and frame.point_index is None:
+        return "TDF (no map, so no points on it)"  # the events-only view
+    return f"TDF + map points, coloured by {STAGE_OVERLAY.get(stage, OverlayColour.RESIDUAL).value}"
+
+
+def live_image(stage: Stage, frame: Frame, imgs: dict[str, np.ndarray], overlay: OverlayColour) -> np.ndarray:
+    """The stage's live image from the panel images ``imgs`` (drawn with the Images panel's ``overlay``); the TDF is
+    drawn again when the stage colours its points otherwise (:data:`STAGE_OVERLAY`), and the SP-TS stage shows both
+    polarities' surfaces in one picture (its text explains both; each is black where empty)."""
+    colour = STAGE_OVERLAY.get(stage, OverlayColour.RESIDUAL)
+    if STAGE_PANEL[stage] == "TDF + map points" and colour != overlay:
+        return tdf_image(frame, colour)
+    if stage == Stage.SP_TS:
+        return np.maximum(imgs["SP-TS positive"], imgs["SP-TS negative"])
+    return imgs[STAGE_PANEL[stage]]
+
+
+def stage_after(stage: Stage, delta: int) -> Stage:
+    """The stage ``delta`` places on in the lesson's order, wrapping around (the teaching panel's previous / next)."""
+    order = list(Stage)
+    return order[(order.index(stage) + delta) % len(order)]

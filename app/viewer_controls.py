@@ -23,8 +23,31 @@ if TYPE_CHECKING:
     from app.server import ViewerApp
 
 NO_MAP = "(no map: events only)"
-TOGGLE_HINTS = {"slam_aligned": "SLAM mode: place each map on the ground truth (Sim(3), evo's Umeyama); untick for the maps' own frames"}
-"""Hover text of the 3D view's checkboxes that need more than their name."""
+TOGGLE_HINTS = {
+    "contour_map": "The map's points: grey out of view, cyan in view, red / blue predicted ON / OFF, yellow in the buffer zone",
+    "raw_cloud": "The scene's raw point cloud (*_cloud.ply beside the map), read when first shown",
+    "ground_truth": "The true trajectory (green), when the recording has one",
+    "registration": "The raw registrations, before fusion (purple)",
+    "fused": "The fused trajectory, what the tracker outputs (orange)",
+    "imu_poses": "IMU-rate poses since the last registration (small axes)",
+    "frustum": "The camera at the shown pose (orange outline), the live TDF on its image plane",
+    "follow": "Move every tab's camera with the tracked camera; untick to look around freely",
+    "slam_aligned": "SLAM mode: place each map on the ground truth (Sim(3), evo's Umeyama); untick for the maps' own frames",
+}
+"""Hover text of the 3D view's checkboxes: the view has no legend, so each says what it draws and in which colour
+(session 28: only "slam aligned" had one; the colours were told only in the teaching panel's fusion stage)."""
+OTHER_HINTS = {
+    "rescan": "Look through the --data folders again for recordings and maps added since",
+    "overlay": "What colours the map points on the TDF image: residual (green on an edge, red far), weight (green "
+               "counted fully, red down-weighted) or predicted polarity (red ON, blue OFF, yellow buffer zone)",
+    "export": "Write to the export folder and download: trajectory (TUM), configuration (YAML), screenshot of the 3D "
+              "view (PNG), short GIF of it",
+    "stage": "The pipeline stage explained, from the events to fusion",
+    "rerun": "Where a parameter change starts computing again: at the shown step (what a headless run with the new "
+             "values shows there) or from the recording's start",
+    "configuration": "reset: the defaults; save / load: the file named below",
+}
+"""Hover text of the other controls that had none (session 28)."""
 PLAYBACK_HINTS = {
     "play": "Play or pause (Space). At the last step, play starts again from the beginning.",
     "step": "One step back or forward (arrow keys left / right, when no slider has the focus).",
@@ -46,7 +69,7 @@ def build_main_panel(app: ViewerApp) -> None:
         app.map_dropdown = g.add_dropdown("map", [NO_MAP], hint="Contour map to track against")
         # Not "mode": the tracker's own mode (full / stpe / stpe+filter) has that label in the Parameters panel.
         app.mode_dropdown = g.add_dropdown("viewer mode", list(MODES), initial_value=MODES[0], hint="tracking: EV-Pose against the map; slam: map-free event SLAM")
-        app.rescan_button = g.add_button("rescan data folders")
+        app.rescan_button = g.add_button("rescan data folders", hint=OTHER_HINTS["rescan"])
         app.rec_info = g.add_markdown("")
     with g.add_folder("Playback"):
         # Hints: the playback controls had none, and their keys were listed only in the README and the command palette.
@@ -62,11 +85,12 @@ def build_main_panel(app: ViewerApp) -> None:
         app.toggle_boxes = {}
         for name in ("contour_map", "raw_cloud", "ground_truth", "registration", "fused", "imu_poses", "frustum", "follow", "slam_aligned"):
             app.toggle_boxes[name] = g.add_checkbox(name.replace("_", " "), getattr(app.scene.toggles, name), hint=TOGGLE_HINTS.get(name))
-        app.overlay_dropdown = g.add_dropdown("TDF points coloured by", [o.value for o in OverlayColour], initial_value=app.overlay.value)
+        app.overlay_dropdown = g.add_dropdown("TDF points coloured by", [o.value for o in OverlayColour], initial_value=app.overlay.value,
+                                               hint=OTHER_HINTS["overlay"])
     with g.add_folder("Layout", expand_by_default=False):
         app.layout_gui = LayoutGui(g, app.cfg.layout_dir, app._notify, app._layout_applied, app._redraw)
     with g.add_folder("Export", expand_by_default=False):
-        app.export_buttons = g.add_button_group("export", ["trajectory", "config", "screenshot", "GIF"])
+        app.export_buttons = g.add_button_group("export", ["trajectory", "config", "screenshot", "GIF"], hint=OTHER_HINTS["export"])
         app.export_info = g.add_markdown("")
     _wire_main_panel(app)
 
@@ -104,15 +128,20 @@ def build_panels(app: ViewerApp) -> None:
     app.plots = PlotsView(g, p.add_tab("Plots"))
     app.panels["teaching"] = p = g.add_panel()
     with p.add_tab("How it works"):
-        app.stage_dropdown = g.add_dropdown("stage", [s.value for s in Stage], initial_value=app.stage.value)
+        app.stage_dropdown = g.add_dropdown("stage", [s.value for s in Stage], initial_value=app.stage.value, hint=OTHER_HINTS["stage"])
+        # A lesson walks the stages in order: the dropdown alone took two clicks and a look through the list per stage.
+        app.stage_buttons = g.add_button_group("stages", ["< previous", "next >"], hint="The previous / next stage (after fusion: events again); keys PageUp / PageDown, as a presenter's clicker sends")
+        # The live image above the text: under it, a 1280x720 projector showed only its top (app/teaching.py).
+        app.teaching_image = g.add_image(blank, label="live image", format="jpeg")
         app.teaching_text = g.add_markdown(teaching_markdown(app.stage, None))
-        app.teaching_image = g.add_image(blank, label="live", format="jpeg")
     app.stage_dropdown.on_update(lambda e: app._set_stage(app.stage_dropdown.value))
+    app.stage_buttons.on_click(lambda e: app.step_stage(-1 if e.target.value == "< previous" else 1))
     app.panels["parameters"] = p = g.add_panel()
     app.params_tab = p.add_tab("Parameters")
     with app.params_tab:
-        app.rerun_dropdown = g.add_dropdown("on change re-run from", [r.value for r in RerunFrom], initial_value=RerunFrom.CURRENT.value)
-        app.param_buttons = g.add_button_group("configuration", ["reset", "save", "load"])
+        app.rerun_dropdown = g.add_dropdown("on change re-run from", [r.value for r in RerunFrom], initial_value=RerunFrom.CURRENT.value,
+                                           hint=OTHER_HINTS["rerun"])
+        app.param_buttons = g.add_button_group("configuration", ["reset", "save", "load"], hint=OTHER_HINTS["configuration"])
         app.config_path = g.add_text("config file", "evpose_exports/config.yaml", hint="A .yaml, .yml or .json file: save writes it to the export folder; load reads it from there or the data folders")
         app.param_info = g.add_markdown("")
     app.param_buttons.on_click(lambda e: app._param_action(e.target.value))
@@ -126,5 +155,8 @@ def bind_viewer_hotkeys(app: ViewerApp) -> None:
                             ("step back", "arrowleft", lambda: app.player and app.player.step_back()),
                             ("faster", "arrowup", lambda: app._nudge_speed(2.0)),
                             ("slower", "arrowdown", lambda: app._nudge_speed(0.5)),
-                            ("to start", "home", lambda: app.player and app.player.seek(app.player.engine.t_start_us))),
+                            ("to start", "home", lambda: app.player and app.player.seek(app.player.engine.t_start_us)),
+                            # A presenter's clicker sends PageDown / PageUp: the lesson's next / previous stage.
+                            ("next stage", "pagedown", lambda: app.step_stage(1)),
+                            ("previous stage", "pageup", lambda: app.step_stage(-1))),
                  app.key_guard)

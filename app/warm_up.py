@@ -325,6 +325,15 @@ class WarmUp:
             states = dict(self.states)
         if not states:
             return ""
+        done = [k for k, v in states.items() if v.startswith(PREPARED) or v == OPEN_NOTE]
+        no_map = [k for k, v in states.items() if v.startswith("no map")]
+        if len(done) + len(no_map) == len(states):
+            # All settled, one line: the list (a line or two per recording) pushed the 3D view, Layout and Export
+            # folders below a 900 px screen for good (session 28); what is queued, preparing or failed is listed.
+            # "With the map ... and the default parameters": another pairing is not prepared (the list said nothing).
+            return (f"**Prepared for seeking:** {len(done)} recording{'s' if len(done) != 1 else ''}, each with the map "
+                    "it opens with and the default parameters (a seek anywhere there reads its pose from the disk cache)"
+                    + (f"; {len(no_map)} without a map, nothing to prepare" if no_map else "") + ".")
         lines = "\n".join(f"- `{label}`: {state}" for label, state in sorted(states.items()))
         return ("**Prepared for seeking** (computed in the background at the lowest CPU priority; the pose of a seek "
                 "anywhere in a prepared recording is read from the disk cache):\n" + lines)

@@ -9,7 +9,8 @@ when the layout would leave the view less than FIT_BELOW_VIEW_PX there, the layo
 
 - the main panel keeps its own column on the left (its controls are never squeezed under CONTROL_PANEL_PX);
 - every other shown panel (left or right, not floating) joins one column on the right, in the order right-edge
-  panels first, then left-edge ones (parameters below images and plots in the debug layout);
+  panels first, then left-edge ones (parameters below images and plots in the debug layout), each edge's stacks top
+  to bottom as the layout has them (teaching: "How it works" above the images; session 28);
 - that column is as wide as the layout's widest right-edge column, but no wider than what leaves the view
   MIN_VIEW_PX, and no narrower than NARROW_COLUMN_PX.
 
@@ -18,7 +19,8 @@ off; at 800 px: view 320 px, right column 160 px; at 700 px: view 220 px. A phon
 breakpoint) gets viser's mobile view: the 3D view with the main panel as a sheet below it (play, step, time, recording
 all reachable); the other panels are not shown there by viser, whatever the layout.
 
-With several tabs open, the placement fits the narrowest of them (panel placement is the same for every tab in viser).
+Each tab is fitted to its own window (app/tab_placement.py; until session 27 the narrowest tab's fit was placed in
+every tab: viser's placement commands are broadcasts).
 """
 
 from __future__ import annotations
@@ -61,14 +63,15 @@ def fitted(layout: Layout, window_px: int | None, slack_px: int = 0) -> Layout:
     if window_px is None or layout.view_width(window_px) >= FIT_BELOW_VIEW_PX - slack_px:
         return layout
     shown = dict(layout.placements())
-    edge = {}
-    for name, dock in shown.items():
-        root = name
-        while ":" in shown[root]:
-            root = shown[root].split(":", 1)[1]
-        edge[name] = shown[root]
-    right = [p for p, _ in layout.placements() if edge[p] == "right"]
-    column = right + [p for p, _ in layout.placements() if edge[p] == "left"]
+
+    def stack(name: str) -> list[str]:
+        """``name`` and the panels stacked on it, top to bottom as on screen."""
+        above = [q for p in shown if shown[p] == f"above:{name}" for q in stack(p)]
+        return above + [name] + [q for p in shown if shown[p] == f"below:{name}" for q in stack(p)]
+
+    # Top to bottom as in the layout: the teaching layout's "How it works" (above the images) came below them.
+    right = [q for p, dock in shown.items() if dock == "right" for q in stack(p)]
+    column = right + [q for p, dock in shown.items() if dock == "left" for q in stack(p)]
     if not column:
         return layout
     wanted = max([layout.panels[p].width or DEFAULT_COLUMN_PX for p in right] or [DEFAULT_COLUMN_PX])
@@ -90,7 +93,7 @@ RECHECK_S = 1.2
 
 
 class WindowWatch:
-    """Fits the layout's placement to the narrowest open tab's window (see the module docstring)."""
+    """Fits the layout's placement to each open tab's window (see the module docstring)."""
 
     def __init__(self, server, layout_gui):
         self._server = server
@@ -121,19 +124,21 @@ class WindowWatch:
             self._timer.daemon = True
             self._timer.start()
 
-    def window_px(self) -> int | None:
-        """The narrowest open tab's window width, CSS px (None: no tab has reported yet)."""
-        if self._layout_gui.layout is None:
+    def window_px(self, client) -> int | None:
+        """The tab ``client``'s window width, CSS px (None: it has not reported yet)."""
+        tab = self._layout_gui.tabs.get(client.client_id)
+        if self._layout_gui.layout is None or tab is None or client.camera.image_width <= 0:
             return None
-        placed = self._layout_gui.placed()
-        views = [c.camera.image_width for c in self._server.get_clients().values() if c.camera.image_width > 0]
-        return min((window_width(v, placed) for v in views), default=None)
+        return window_width(client.camera.image_width, self._layout_gui.placed(tab))
 
     def check(self) -> None:
         with self._lock:
             self._timer = None  # reports from now on schedule the next check (and the recheck below can)
-        px = self.window_px()
-        if px is not None and self._layout_gui.set_window_width(px):
+        refit = False
+        for client in list(self._server.get_clients().values()):
+            px = self.window_px(client)
+            refit |= px is not None and self._layout_gui.set_window_width(client.client_id, px)
+        if refit:
             self._refit_at = time.monotonic()
             self.check_soon(RECHECK_S)
 

@@ -112,3 +112,12 @@ def test_widths_outside_the_range_or_not_whole_pixels_are_refused():
     for bad in (MIN_WIDTH - 1, MAX_WIDTH + 1, 400.5, "wide", True):
         with pytest.raises(InputError):
             check_width(bad)
+
+
+def test_a_layout_can_start_the_teaching_panel_on_a_stage_and_refuses_an_unknown_one(tmp_path):
+    # The teaching layout opened on the TDF, the third of six stages, where a lesson starts at the first.
+    teaching = list_layouts(LAYOUT_DIR)["teaching"]
+    assert teaching.stage == "events" and list_layouts(LAYOUT_DIR)["debug"].stage is None
+    assert Layout.from_dict(json.loads(json.dumps(teaching.to_dict()))).stage == "events"
+    with pytest.raises(InputError, match="stage 'tdf' is none of events, SP-TS, TDF"):
+        Layout.from_dict({**teaching.to_dict(), "stage": "tdf"})

@@ -47,3 +47,10 @@ def test_a_hidden_panel_stacked_on_a_moved_one_floats_until_shown():
     narrow = fitted(Layout.from_dict(data), 900)
     assert narrow.panels["teaching"].dock == "float"
     assert narrow.placements() == [("plots", "right"), ("images", "below:plots")]
+
+
+def test_the_column_keeps_the_layouts_top_to_bottom_order():
+    # The teaching layout docks "How it works" above the images; the narrow form put it below them.
+    teaching = load_layout(LAYOUT_DIR / "teaching.json")
+    assert teaching.panels["teaching"].dock == "above:images"
+    assert fitted(teaching, 900).placements() == [("teaching", "right"), ("images", "below:teaching")]

@@ -86,6 +86,11 @@ def test_empty_plots_say_why_in_events_only_view_without_ground_truth_and_before
     for s in events_only[:-1]:  # a seek's skipped steps are not timed
         s.timings_ms.clear()
     assert "not timed" in empty_reasons(plot_series(events_only, gt), events_only, gt, note)["latency per module [ms]"]
+    # Step 1 after opening: the first step's timing is left out, no seek went past anything.
+    first_two = [StepSummary(i, int(gt.t[0] + i * 10_000), None, None, "events only", {"total": 1.0}, {"events_in": 100})
+                 for i in range(2)]
+    why = empty_reasons(plot_series(first_two, gt), first_two, gt, note)["latency per module [ms]"]
+    assert "one step timed so far" in why and "seek" not in why
     tracked = _history(gt, 10)
     assert empty_reasons(plot_series(tracked, gt), tracked, gt) == {}
     assert "no ground truth" in empty_reasons(plot_series(tracked, None), tracked, None)["pose error"]

@@ -114,3 +114,19 @@ def test_keyframe_axes_are_shorter_than_the_steps_between_keyframes_within_the_s
     assert keyframe_axes_length(line * 100, 2.0) == pytest.approx(0.08)  # far apart: capped at 0.04 x extent
     assert keyframe_axes_length(line / 100, 2.0) == pytest.approx(0.02)  # bunched: still visible
     assert keyframe_axes_length(line[:1], 2.0) == pytest.approx(0.08)
+
+
+def test_toggles_applied_while_the_player_thread_replaced_a_node_skip_the_removed_one(scene):
+    # A layout's checkboxes are set on the GUI thread while the player thread redraws (session 28's suite: "Cannot
+    # assign to 'visible' on a removed BatchedAxesHandle"); the replacement is drawn with the toggles already set.
+    scene._trajectories(_summaries(5))
+    removed = scene._nodes["fused/0"]
+    removed.remove()
+    scene.toggles.fused = False
+    try:
+        scene.apply_toggles()
+        assert all(not n.visible for k, n in scene._nodes.items() if k.startswith("fused/") and n is not removed)
+    finally:
+        scene.toggles.fused = True
+        scene._nodes.pop("fused/0", None)
+        scene.apply_toggles()

@@ -131,6 +131,42 @@ def test_a_layout_that_shows_the_teaching_panel_draws_the_shown_step_into_it(vie
     viewer.apply_layout_name("debug")
 
 
+def test_the_teaching_image_colours_the_map_points_as_its_stage_explains_them(viewer):
+    # The polarity stage showed the points by residual (the Images panel's choice) while its text spoke of red and
+    # blue; the registration stage said "green = on an edge" with the points coloured by weight.
+    from app.panels import OverlayColour, tdf_image
+
+    viewer.stage_dropdown.value = "fusion"
+    assert viewer.apply_layout_name("teaching") and viewer.stage.value == "events"  # where a lesson starts
+    viewer.select(next(e.display for e in viewer.entries if e.path.name == "squares.h5"))
+    viewer.player.seek(viewer.recording.t_start_us + 100_000)
+    viewer.player.wait_idle()
+    try:
+        viewer._set_overlay(OverlayColour.WEIGHT.value)
+        viewer.stage_dropdown.value = "TDF"
+        viewer.step_stage(1)  # the lesson's next stage
+        viewer.player.wait_idle()
+        assert viewer.stage.value == "polarity prediction" and viewer.teaching_image.label.endswith("coloured by predicted polarity")
+        frame = viewer.last_frame
+        assert frame.predicted_polarity is not None and len(frame.projected_uv)
+        assert (viewer.teaching_image.image == tdf_image(frame, OverlayColour.POLARITY)).all()
+        viewer.step_stage(1)
+        viewer.player.wait_idle()
+        assert viewer.stage.value == "registration"
+        assert (viewer.teaching_image.image == tdf_image(frame, OverlayColour.RESIDUAL)).all()
+        # The fusion stage names the 3D elements the teaching layout hides, and drops them once ticked.
+        viewer.step_stage(1)
+        viewer.player.wait_idle()
+        assert "the raw registrations (purple)" in viewer.teaching_text.content
+        viewer.toggle_boxes["registration"].value = True
+        viewer.player.wait_idle()
+        assert "the raw registrations (purple)" not in viewer.teaching_text.content
+        assert "the IMU-rate poses (small axes)" in viewer.teaching_text.content
+    finally:
+        viewer._set_overlay(OverlayColour.RESIDUAL.value)
+        viewer.apply_layout_name("debug")
+
+
 def test_recording_with_its_map_runs_the_tracker_and_exports_a_trajectory(viewer):
     assert viewer.select(next(e.display for e in viewer.entries if e.path.name == "squares.h5"))
     viewer.player.wait_idle()
@@ -360,12 +396,14 @@ def test_the_layout_folder_docks_and_sizes_panels_and_a_saved_layout_restores_th
         assert lg.shown_docks == {"plots": "left", "parameters": "left"} and "images is hidden" in lg.note.content
         app.set_panel_visible("images", True)
         assert lg.set_dock("teaching", "float") and lg.set_width("teaching", 0)
+        app.stage_dropdown.value = "registration"  # a lesson saved at a stage starts there again
         saved = load_layout(app.save_current_layout("moved"))
+        assert saved.stage == "registration"
         assert (saved.panels["images"].dock, saved.panels["images"].width) == ("left", 500)
         assert (saved.panels["teaching"].dock, saved.panels["teaching"].width) == ("float", None)
         assert load_layout(layouts / "debug.json").panels["images"].dock == "right"  # the preset is untouched
-        assert app.apply_layout_name("teaching") and lg.docks["images"].value == "right"
-        assert app.apply_layout_name("moved")
+        assert app.apply_layout_name("teaching") and lg.docks["images"].value == "right" and app.stage.value == "events"
+        assert app.apply_layout_name("moved") and app.stage.value == "registration"
         assert lg.docks["images"].value == "left" and lg.widths["images"].value == 500 and lg.shown_docks["images"] == "left"
         assert app.layout.to_dict() == saved.to_dict()
     finally:
@@ -382,8 +420,12 @@ def test_a_layout_change_sends_the_edge_widths_again_later_for_a_browser_that_dr
     sent: list[float] = []
     late: list[list[float]] = []  # the widths each late resend sent
     try:
-        for handle in lg.panels.values():
-            monkeypatch.setattr(handle, "set_width", lambda w, send=handle.set_width: (sent.append(w), send(w)))
+        # A tab, as the browser's connection would bring one (placement is sent to each tab, app/tab_placement.py).
+        from types import SimpleNamespace
+
+        conn = SimpleNamespace(queue_message=lambda m: None, get_message_buffer=lambda: SimpleNamespace(done=False))
+        lg.client_connected(SimpleNamespace(client_id=7, _websock_connection=conn))
+        monkeypatch.setattr(lg.tabs[7].placer, "set_width", lambda panel, w: sent.append(w))
         resend = lg._resend_edges
 
         def counted():
@@ -463,3 +505,27 @@ def test_a_recording_without_imu_opened_first_shows_the_trackers_controls_to_set
         assert isinstance(app.player.engine, TrackerEngine) and app.player.engine.config.mode.value == "stpe"
     finally:
         app.stop()
+
+
+def test_every_control_of_the_main_and_teaching_panels_has_hover_help(viewer):
+    # The 3D view has no legend: its checkboxes had no hint but "slam aligned", the colours were told nowhere else
+    # than the teaching panel's fusion stage; the overlay, stage, re-run, layout and export controls had none.
+    from app.scene import SceneToggles
+
+    assert set(viewer.toggle_boxes) == set(vars(SceneToggles()))
+    for name, box in viewer.toggle_boxes.items():
+        assert box.hint, name
+    for name in ("fused", "registration", "ground_truth", "frustum"):
+        assert "(" in viewer.toggle_boxes[name].hint, f"{name}: its colour"
+    for handle in (viewer.rec_dropdown, viewer.map_dropdown, viewer.mode_dropdown, viewer.rescan_button, viewer.play_button,
+                   viewer.step_buttons, viewer.time_slider, viewer.speed_slider, viewer.loop_box, viewer.overlay_dropdown,
+                   viewer.export_buttons, viewer.stage_dropdown, viewer.stage_buttons, viewer.rerun_dropdown,
+                   viewer.param_buttons, viewer.config_path, viewer.layout_gui.dropdown, viewer.layout_gui.name_box):
+        assert handle.hint, handle.label
+
+
+def test_the_parameters_panel_says_what_it_holds_in_words_not_a_class_name(viewer):
+    viewer.select(next(e.display for e in viewer.entries if e.path.name == "squares.h5"))
+    viewer.player.wait_idle()
+    assert isinstance(viewer.player.engine, TrackerEngine)
+    assert "Config" not in viewer.param_info.content and "tracker's parameters" in viewer.param_info.content

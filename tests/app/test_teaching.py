@@ -17,10 +17,19 @@ def test_every_stage_explains_itself_with_live_numbers(bar_recording):
     assert "Press play" in live_facts(Stage.TDF, None)
 
 
-def test_the_image_line_says_the_events_only_tdf_has_no_map_points(bar_recording):
+def test_the_image_caption_says_the_events_only_tdf_has_no_map_points_and_sp_ts_shows_both_polarities(bar_recording):
+    from app.panels import panel_images
+    from app.teaching import image_caption, live_image
+
     frame = EventsOnlyEngine(bar_recording).step()
-    assert "_Image: TDF + map points (no map, so no points on it)_" in teaching_markdown(Stage.TDF, frame)
-    assert teaching_markdown(Stage.SP_TS, frame).endswith("_Image: SP-TS positive_")
+    assert image_caption(Stage.TDF, frame) == "TDF (no map, so no points on it)"
+    assert image_caption(Stage.EVENTS, frame) == "events kept / removed"
+    assert "ON" in image_caption(Stage.SP_TS, frame) and "OFF" in image_caption(Stage.SP_TS, frame)
+    imgs = panel_images(frame)
+    both = live_image(Stage.SP_TS, frame, imgs, None)
+    for name in ("SP-TS positive", "SP-TS negative"):  # each surface's pixels are in the one picture
+        lit = imgs[name].max(axis=2) > 0
+        assert lit.any() and (both[lit] >= imgs[name][lit]).all()
 
 
 def test_the_explanations_name_what_the_tracker_runs_and_controls_that_exist():
@@ -44,3 +53,26 @@ def test_the_explanations_name_what_the_tracker_runs_and_controls_that_exist():
                 continue
             path = tuple(part.strip() for part in ref.split(">"))
             assert path in labels, f"{stage.value}: `{ref}` is no tracker parameter"
+
+
+def test_the_text_says_which_3d_elements_it_speaks_of_are_hidden_and_where_to_tick_them():
+    # The teaching layout hides the raw registrations and the IMU-rate poses; the fusion stage spoke of both.
+    from app.layouts import LAYOUT_DIR, list_layouts
+    from app.scene import SceneToggles
+
+    teaching = list_layouts(LAYOUT_DIR)["teaching"].scene
+    text = teaching_markdown(Stage.FUSION, None, toggles=teaching)
+    assert "Hidden in the 3D view now: the raw registrations (purple) and the IMU-rate poses (small axes)" in text
+    assert "tick *registration*, *imu poses* under **3D view** to show them" in text
+    assert "Hidden" not in teaching_markdown(Stage.FUSION, None, toggles=SceneToggles())
+    assert "tick *contour map*" in teaching_markdown(Stage.POLARITY, None, toggles=SceneToggles(contour_map=False))
+    assert "Hidden" not in teaching_markdown(Stage.EVENTS, None, toggles=SceneToggles(contour_map=False, fused=False))
+
+
+def test_previous_and_next_walk_the_stages_in_order_and_wrap_around():
+    from app.teaching import stage_after
+
+    order = list(Stage)
+    assert order[0] == Stage.EVENTS and order[-1] == Stage.FUSION
+    assert [stage_after(s, 1) for s in order] == order[1:] + order[:1]
+    assert stage_after(Stage.EVENTS, -1) == Stage.FUSION

@@ -78,7 +78,9 @@ def test_the_viewers_warm_up_prepares_the_unopened_recording_and_a_fresh_players
         assert app.warm_up.states[other.label].startswith(PREPARED), app.warm_up.states
         assert app.warm_up.states[squares.label] == OPEN_NOTE  # left to the player's own run-ahead
         assert "corrupt.h5" not in app.warm_up.states  # listed as unreadable by the browser already
-        assert f"`{other.label}`: {PREPARED}" in app.warm_info.content
+        # Once every recording is settled the list is one line (it pushed the folders below it off the screen).
+        assert app.warm_info.content.startswith("**Prepared for seeking:** 2 recordings"), app.warm_info.content
+        assert "\n-" not in app.warm_info.content
         # The viewer itself, opening the prepared recording, reads every step back.
         assert app.select(other.label)
         n = app.player.call(lambda e: (e.disk_steps, e.n_steps)).result(60)
@@ -320,3 +322,18 @@ def test_the_player_is_busy_while_it_runs_ahead_or_plays_and_idle_once_done(squa
         assert p.call(lambda e: p.busy).result(60)
     finally:
         p.stop()
+
+
+def test_the_list_of_prepared_recordings_is_one_line_once_all_are_settled():
+    # A line or two per recording pushed the 3D view, Layout and Export folders below a 900 px screen for good.
+    from app.warm_up import WarmUp
+
+    w = WarmUp(None, None, lambda md: None)
+    w.states = {"a.h5": "preparing 40 %", "b.h5": PREPARED, "c.h5": OPEN_NOTE, "d.h5": "no map found: events only, nothing to prepare"}
+    assert "- `a.h5`: preparing 40 %" in w.markdown()
+    w.states["a.h5"] = PREPARED
+    assert w.markdown() == ("**Prepared for seeking:** 3 recordings, each with the map it opens with and the default "
+                            "parameters (a seek anywhere there reads its pose from the disk cache); 1 without a map, "
+                            "nothing to prepare.")
+    w.states["a.h5"] = "failed: unreadable"
+    assert "- `a.h5`: failed: unreadable" in w.markdown()
