@@ -19,7 +19,7 @@ from pathlib import Path
 from typing import Callable
 
 from app.layouts import MAX_WIDTH, MIN_WIDTH, PANELS, Layout, check_width, dock_anchor, dock_choices, list_layouts, save_layout
-from app.tab_placement import TabPlacer
+from app.tab_placement import BroadcastPlacer, TabPlacer, placer_for
 from app.window_fit import JITTER_PX, SLACK_PX, fitted
 from evpose.errors import EvposeError, InputError
 
@@ -38,7 +38,7 @@ full-suite runs; session 21, the debug layout's at 328 px in a full suite beside
 class Tab:
     """One open browser tab as placed: its window and the docks it was last sent."""
 
-    placer: TabPlacer
+    placer: TabPlacer | BroadcastPlacer
     window_px: int | None = None
     """Its window's width, CSS px (None: not reported yet); app/window_fit.py."""
     narrow: bool = False
@@ -226,7 +226,7 @@ class LayoutGui:
         arrives with its width in one update, which the browser drops (as for a move, see _size_edges), so a tab
         opened after the layout was applied showed the debug layout's left edge 620 px wide instead of 580 (its 3D
         view 307 px)."""
-        tab = Tab(TabPlacer(self.gui, client))
+        tab = Tab(placer_for(self.gui, client))
         with self._tabs_lock:
             self.tabs[client.client_id] = tab
         if self.layout is not None:

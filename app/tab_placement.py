@@ -13,7 +13,9 @@ sends those messages, stamped by the server's own GUI (so they are ordered with 
 connection instead of to all. Measured (/tmp/s28/ux28/perclient_probe.py, two tabs 1400 and 800 px): a panel
 docked left for the 800 px tab only moved there and stayed on the right in the other. It uses three private names
 of viser (``_websock_connection``, ``_next_layout_counter``, ``_layout_run_id``); the browser test of narrow
-windows (tests/app/test_server_browser.py) checks the behaviour, so a viser that changes them fails there.
+windows (tests/app/test_server_browser.py) checks the behaviour, so a viser that changes them fails there. A viser
+without them (the project accepts any 1.x) gets :class:`BroadcastPlacer` from :func:`placer_for`: every tab placed
+alike, as before session 28, rather than an AttributeError on connect.
 """
 
 from __future__ import annotations
@@ -59,3 +61,31 @@ class TabPlacer:
 
     def set_width(self, panel, width: float) -> None:
         self._send(_messages.GuiSetPanelWidthMessage(panel._placement_uuid, float(width), counter=0, run_id=""))
+
+
+class BroadcastPlacer:
+    """The same commands through the panels' public methods: every tab gets them (viser's own behaviour)."""
+
+    def dock_left(self, panel) -> None:
+        panel.dock_left()
+
+    def dock_right(self, panel) -> None:
+        panel.dock_right()
+
+    def dock_beside(self, panel, side: str, anchor) -> None:
+        (panel.dock_above if side == "above" else panel.dock_below)(anchor)
+
+    def float(self, panel, x: float, y: float, width: float | None) -> None:
+        panel.float(x=x, y=y, width=width)
+
+    def set_width(self, panel, width: float) -> None:
+        panel.set_width(width)
+
+
+def placer_for(gui, client) -> TabPlacer | BroadcastPlacer:
+    """A :class:`TabPlacer` for ``client`` when this viser has the private names it stamps messages with, else a
+    :class:`BroadcastPlacer`."""
+    private = (hasattr(gui, "_next_layout_counter") and hasattr(gui, "_layout_run_id")
+               and hasattr(client, "_websock_connection")
+               and all(hasattr(_messages, m) for m in ("GuiSetPanelPositionMessage", "GuiSetPanelWidthMessage")))
+    return TabPlacer(gui, client) if private else BroadcastPlacer()

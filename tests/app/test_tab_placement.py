@@ -5,7 +5,7 @@ from types import SimpleNamespace
 import viser
 
 from app.bench import free_port
-from app.tab_placement import TabPlacer
+from app.tab_placement import BroadcastPlacer, TabPlacer, placer_for
 
 
 def test_placement_goes_to_one_tab_stamped_by_the_server_and_never_to_a_closed_one():
@@ -23,5 +23,24 @@ def test_placement_goes_to_one_tab_stamped_by_the_server_and_never_to_a_closed_o
         buffer.done = True  # the tab closed: viser warned of a message queued on a closed connection
         tab.dock_left(panel)
         assert len(sent) == 2
+    finally:
+        server.stop()
+
+
+def test_a_viser_without_the_private_names_gets_every_tab_placed_alike_instead_of_an_error():
+    server = viser.ViserServer(host="127.0.0.1", port=free_port(), verbose=False)
+    try:
+        conn = SimpleNamespace(queue_message=lambda m: None, get_message_buffer=lambda: SimpleNamespace(done=False))
+        assert isinstance(placer_for(server.gui, SimpleNamespace(_websock_connection=conn)), TabPlacer)
+        placer = placer_for(server.gui, SimpleNamespace())  # a client object without _websock_connection
+        assert isinstance(placer, BroadcastPlacer)
+        calls = []
+        panel = SimpleNamespace(dock_left=lambda: calls.append("left"), dock_below=lambda a: calls.append(("below", a)),
+                                float=lambda **kw: calls.append(("float", kw)), set_width=lambda w: calls.append(("width", w)))
+        placer.dock_left(panel)
+        placer.dock_beside(panel, "below", "anchor")
+        placer.float(panel, 10.0, 20.0, None)
+        placer.set_width(panel, 300)
+        assert calls == ["left", ("below", "anchor"), ("float", {"x": 10.0, "y": 20.0, "width": None}), ("width", 300)]
     finally:
         server.stop()
