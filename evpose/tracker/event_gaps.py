@@ -172,7 +172,12 @@ So the deadline and the threshold do not hold up as a separation: a second wrong
 one update inside the deadline; right restarts pass at median z 10.2-25.8. What the gate still does: of the 26
 held-out cuts it withholds 23 (the two wrong locks are cuts at the same corner of the demo's spiral). Where the restart
 starts right and then drifts (``landing_rotation``, indoor) the gate cannot see it, as for the session-27 pauses before
-the carry.
+the carry. Other rules over all 65 splices (rules.py; poses > 0.1 m written, session-27 defaults 952 in 6 splices):
+a deadline of 25 withholds both wrong locks (288 in 3) but also three right pauses (``D`` 1.5 s, ``L`` 2 s, seed 31)
+and the rotation pause; 60 lets five more cuts through (1550 in 11), 80 with all 10 updates registered 1905 in 12;
+requiring 9 or 10 of the 10 updates registered changes nothing else (945 / 942); a median z of 12 withholds the
+two drifting pauses (rotation, indoor 2.0 s) and the right ``L`` 2.75 s one but neither wrong lock (765 in 4); 14
+within 60 also seed 31's pause and lets ``L`` cut 0.1 s at 3.5 s through (776 in 5).
 Why the cuts at 2 s lock: no update registers for the first 21-26 (the fused pose is the IMU dead reckoning from the
 carried restart); the first registrations, 0.13 / 0.28 m off, pull the pose to within 5-25 mm by update 60-90 while
 the fused velocity's error grows from 0.3-0.45 to 0.7 m/s along the flight before the corner, and the estimate then
