@@ -191,7 +191,9 @@ the ``F`` pauses' carried velocity is 0.7-0.9 m/s off, so their dead reckoning p
 counts (wrong / right: inliers per used point 0.041-0.045 / 0.035-0.31, both-polarity points 0.71 / 0.27-0.74,
 wrong-polarity events 0.09-0.12 / 0.007-0.37, events removed by polarity 0.36-0.42 / 0.09-0.70, updates registered
 6-7 / 6-10 of 10, chance hits 0.008-0.013 / 0.008-0.15: the right pause at 2 s reads like the wrong locks); the fused
-accelerometer bias (a tilt mode: it stays < 0.14 m/s^2). The velocity error would (0.42-0.54 m/s against <= 0.2 for
+accelerometer bias (a tilt mode: it stays < 0.14 m/s^2); the fused covariance (ev28f.py: largest translation sd 50-57
+mm for the wrong locks, 52-67 mm for the right restarts that pass late, the two at the same corner, ``D`` 1.5 s and
+seed 31, 14-17 mm for those passing at update 10; weakest along the flight at the corner, right and wrong alike). The velocity error would (0.42-0.54 m/s against <= 0.2 for
 the pauses) but is not observable, and the right 0.02 s cut has 0.37. Nor does a wider position prior for the restarted
 fusion let the registrations move the pose without bending the velocity (``fusion.init_sigma_trans`` 0.1 m instead of
 0.01 at such restarts only, ev28e.py SIGT=0.1: L cuts at 2 s 0.05 / 0.1 s 495 / 604 mm instead of 368 / 451, F cut
