@@ -193,11 +193,12 @@ wrong-polarity events 0.09-0.12 / 0.007-0.37, events removed by polarity 0.36-0.
 6-7 / 6-10 of 10, chance hits 0.008-0.013 / 0.008-0.15: the right pause at 2 s reads like the wrong locks); the fused
 accelerometer bias (a tilt mode: it stays < 0.14 m/s^2); the fused covariance (ev28f.py: largest translation sd 50-57
 mm for the wrong locks, 52-67 mm for the right restarts that pass late, the two at the same corner, ``D`` 1.5 s and
-seed 31, 14-17 mm for those passing at update 10; weakest along the flight at the corner, right and wrong alike). The velocity error would (0.42-0.54 m/s against <= 0.2 for
-the pauses) but is not observable, and the right 0.02 s cut has 0.37. Nor does a wider position prior for the restarted
-fusion let the registrations move the pose without bending the velocity (``fusion.init_sigma_trans`` 0.1 m instead of
-0.01 at such restarts only, ev28e.py SIGT=0.1: L cuts at 2 s 0.05 / 0.1 s 495 / 604 mm instead of 368 / 451, F cut
-0.05 s at 1.5 s now passes, 176 mm; the pauses 12-39 mm, 9-39 before).
+seed 31, 14-17 mm for those passing at update 10; weakest along the flight at the corner, right and wrong alike).
+The velocity error would (0.42-0.54 m/s against <= 0.2 for the pauses) but is not observable, and the right 0.02 s cut
+has 0.37. Nor does a wider position prior for the restarted fusion let the registrations move the pose without
+bending the velocity (``fusion.init_sigma_trans`` 0.1 m instead of 0.01 at such restarts only, ev28e.py SIGT=0.1: L cuts
+at 2 s 0.05 / 0.1 s 495 / 604 mm instead of 368 / 451, F cut 0.05 s at 1.5 s now passes, 176 mm; the pauses 12-39 mm,
+9-39 before).
 
 What made the held-out right-then-drifting restarts drift, measured as options (off by default):
 ``carry_biases`` (the fusion restarted from zero biases; indoor the accelerometer's 0.1 m/s^2 drove the velocity 0.2 m/s
@@ -220,11 +221,11 @@ more accurate (L 2.5 s 18 -> 7 mm), but the rotation pause is now withheld (72 m
 ``carry_rotation`` the rotation pause is written 5 mm RMS from update 10 and indoor 2.0 s 113 -> 43 mm, but four more
 cuts than with the session-27 defaults lock wrongly (L 0.6 s 743 mm, L 3.0 s 119 mm, F 1.5 s, and the old L cut 0.2 s,
 844 mm from update 16) and indoor 1.0 s is 146 mm again. A better restart also lets more cuts through the gate:
-neither is on by default until a discriminator exists (runs from ground truth and without a gap are unaffected either way: demo ``landing``
-469f53f67bcd8fbb, with ``--init`` 8d1b41529a489d37, and ``evpose track --init`` on ``L`` 2.5 s writes session 27's
-output byte for byte, final28.sh; with ``--config`` ``carry_biases: true``: indoor 1.0 s 384 poses 43.5 mm, F cut 0.05 s
-149 poses 170.5 mm (88 > 0.1 m), ``L`` 2.5 s 284 poses 7.4 mm, clibias.sh; cli28.sh: the defaults, 136.0 / withheld /
-17.5 mm).
+neither is on by default until a discriminator exists (runs from ground truth and without a gap are unaffected either
+way: demo ``landing`` 469f53f67bcd8fbb, with ``--init`` 8d1b41529a489d37, and ``evpose track --init`` on ``L`` 2.5 s
+writes session 27's output byte for byte, final28.sh; with ``--config`` ``carry_biases: true``: indoor 1.0 s 384 poses
+43.5 mm, F cut 0.05 s 149 poses 170.5 mm (88 > 0.1 m), ``L`` 2.5 s 284 poses 7.4 mm, clibias.sh; cli28.sh: the
+defaults, 136.0 / withheld / 17.5 mm).
 
 :class:`UpdateSchedule` maps the session's update count to grid indices and back in O(log gaps): the cost of a gap
 no longer depends on its length.

@@ -53,7 +53,8 @@ def _session(rec, cmap, **gate):
 
 
 def _to_the_restart(session):
-    """Step to the update standing for the gap; returns (the fused state before it, the one the restart started from)."""
+    """Step to the update standing for the gap; returns (the fused state before it, the one the restart started
+    from)."""
     before = None
     while (r := session.step()) is not None:
         if "the track is lost over the gap" in r.reason:
