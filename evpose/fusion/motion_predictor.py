@@ -22,13 +22,22 @@ class FusionMotionPredictor:
         if imu is not None:
             fusion.add_imu(imu)
         self.initial_velocity_world = initial_velocity_world
+        self.initial_biases: tuple[np.ndarray, np.ndarray] | None = None
+        """(accelerometer, gyroscope) biases, IMU frame, the backend starts from at the next :meth:`reset`; None: zero,
+        as at a session's start (a restart after an event gap without ground truth carries the last estimates over:
+        ``restart_gate.carry_biases``)."""
         self.last: FusedState | None = None
         self.input_log: list | None = None
         """When a list, every :meth:`report` appends ``(t_us, T_world_cam or None, covariance or None)`` to it: the
         fusion's inputs, for offline studies (:mod:`evpose.fusion.replay`). Not part of the snapshot state."""
 
     def reset(self, t_us: int, T_world_cam: np.ndarray) -> None:
-        self.last = self.fusion.initialize(int(t_us), T_world_cam, self.initial_velocity_world)
+        if self.initial_biases is None:
+            self.last = self.fusion.initialize(int(t_us), T_world_cam, self.initial_velocity_world)
+        else:
+            ba, bg = self.initial_biases
+            self.last = self.fusion.initialize(int(t_us), T_world_cam, self.initial_velocity_world,
+                                               acc_bias=ba, gyro_bias=bg)
 
     def predict(self, t_us: int) -> np.ndarray:
         # The pose alone: a copy of it, not of the whole propagated state, where the backend shares its cache.

@@ -21,7 +21,7 @@ from evpose.core.stream_gaps import EventGap, find_gaps, merge_gaps
 from evpose.core.trajectory import Trajectory
 from evpose.errors import InputError
 from evpose.tracker.config import TrackerConfig, TrackerMode
-from evpose.tracker.event_gaps import RestartGate, UpdateSchedule, carried_restart_pose
+from evpose.tracker.event_gaps import RestartGate, UpdateSchedule, carried_restart_pose, warmup_angular_velocity
 from evpose.tracker.modes import build_motion_components
 from evpose.tracker.step_result import StepResult, TrackStatus
 from evpose.tracker.tracker import MotionPredictor, PolaritySelector, Tracker
@@ -301,7 +301,9 @@ class TrackingSession:
         first grid time ``warmup_ms`` after the gap, ``events`` are those since it) as at the start of the recording:
         from the ground-truth pose and velocity when the session started from ground truth and it covers ``until``,
         else from the last estimate, in ``full`` carried on at the last estimated velocity over the event time since it
-        (``restart_gate.carry_velocity``; else, and in the other modes, standing still with the velocity unknown), its
+        (``restart_gate.carry_velocity``; options, off: turned by the gyroscope over the warm-up, ``carry_rotation``,
+        the fusion started from the last biases, ``carry_biases``; else, and in the other modes, standing still with
+        the velocity unknown), its
         updates reported lost until the restart gate, :class:`~evpose.tracker.event_gaps.RestartGate`, passes."""
         if gap.t_next_us > self.t_end_us:  # the IMU ended before the events (the schedule's last update)
             return StepResult(until, self.tracker.pose, TrackStatus.LOST,
@@ -330,19 +332,33 @@ class TrackingSession:
         v0 = _ground_truth_velocity(gt, until) if seed else None
         motion = self.tracker.components.motion
         carried = False
-        if not from_truth and self.tracker.components.drives_pose and self.config.restart_gate.carry_velocity:
+        biases = None
+        gate_cfg = self.config.restart_gate
+        if not from_truth and self.tracker.components.drives_pose and gate_cfg.carry_velocity:
             # With the velocity unknown the fusion stood still and drifted off at the camera's speed; only in ``full``:
             # in ``stpe+filter`` the carried restart wrote a pause 0.93 m off that it withheld before (event_gaps).
             v_last = next((r.velocity for r in reversed(self.results) if r.velocity is not None), None)
             if v_last is not None:
                 v0 = np.array(v_last, dtype=np.float64)
                 t_est = self.tracker.t_us if self.tracker.t_us is not None else gap.t_last_us
-                pose = carried_restart_pose(pose, v0, gap, t_est, until)
+                fused = motion.last if motion is not None else None
+                omega = None
+                if gate_cfg.carry_rotation:
+                    # Turned as it is moved (a 90 deg/s yaw turns the camera 3 deg over the 30 ms warm-up); off by
+                    # default: it let more cuts through the gate (event_gaps).
+                    omega = warmup_angular_velocity(imu, gap, until, self.recording.calibration,
+                                                    None if fused is None else fused.gyro_bias)
+                pose = carried_restart_pose(pose, v0, gap, t_est, until, omega)
+                if gate_cfg.carry_biases and fused is not None:
+                    # From zero the fusion drifted off where the registrations were weak (indoor: 136 mm); off by
+                    # default: it let two more cuts through the gate (event_gaps).
+                    biases = (fused.acc_bias.copy(), fused.gyro_bias.copy())
                 carried = True
         self.restarts[int(until)] = (pose.copy(), v0)
         if motion is not None:
             # Restarted like the session's start (snapshots replay this too: every restart sets it again).
             motion.initial_velocity_world = v0
+            motion.initial_biases = biases
             selector = self.tracker.components.polarity_selector
             if v0 is None and selector is not None and selector.fused_pose:
                 # As at a start without a velocity (build_motion_components): T_align composed from the unknown motion

@@ -8,6 +8,9 @@ import numpy as np
 import pytest
 
 from evpose.core.contour_map import ContourMap
+from evpose.core.events import EventArray
+from evpose.core.imu import ImuSamples
+from evpose.core.trajectory import Trajectory
 
 
 @pytest.fixture(scope="module")
@@ -27,3 +30,20 @@ def landing_head(sim_landing_small):
         return short, ContourMap.from_points(np.concatenate(pts))
 
     return head
+
+
+@pytest.fixture(scope="module")
+def paused_landing(landing_head):
+    """The first 0.3 s of the small landing with everything from 0.15 s on (events, IMU, ground truth) 2 s later: a
+    recorder pause; and its map."""
+    rec, cmap = landing_head(0.3)
+    at, pause = int(rec.events.t[0]) + 150_000, 2_000_000
+    off = rec.calibration.time_offset_us
+
+    def later(t, at):
+        return np.where(t >= at, t + pause, t)
+
+    ev, gt, imu = rec.events, rec.ground_truth, rec.imu
+    return dataclasses.replace(rec, events=EventArray(later(ev.t, at), ev.x, ev.y, ev.p),
+                               ground_truth=Trajectory(later(gt.t, at), gt.position, gt.quat_xyzw),
+                               imu=ImuSamples(later(imu.t, at + off), imu.acc, imu.gyro)), cmap

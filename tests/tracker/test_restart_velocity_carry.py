@@ -9,34 +9,10 @@ import dataclasses
 import numpy as np
 import pytest
 
-from evpose.core.events import EventArray
-from evpose.core.imu import ImuSamples
 from evpose.core.stream_gaps import EventGap
-from evpose.core.trajectory import Trajectory
 from evpose.tracker.config import TrackerConfig, TrackerMode
 from evpose.tracker.event_gaps import carried_restart_pose
 from evpose.tracker.session import TrackingSession
-
-PAUSE_US = 2_000_000
-
-
-def _paused(rec, at_us: int):
-    """``rec`` with everything from ``at_us`` on (events, IMU, ground truth) ``PAUSE_US`` later: a recorder pause."""
-    ev, gt, imu = rec.events, rec.ground_truth, rec.imu
-    off = rec.calibration.time_offset_us
-
-    def later(t, at):
-        return np.where(t >= at, t + PAUSE_US, t)
-
-    return dataclasses.replace(rec, events=EventArray(later(ev.t, at_us), ev.x, ev.y, ev.p),
-                               ground_truth=Trajectory(later(gt.t, at_us), gt.position, gt.quat_xyzw),
-                               imu=ImuSamples(later(imu.t, at_us + off), imu.acc, imu.gyro))
-
-
-@pytest.fixture(scope="module")
-def paused(landing_head):
-    rec, cmap = landing_head(0.3)
-    return _paused(rec, int(rec.events.t[0]) + 150_000), cmap
 
 
 def _run(rec, cmap, mode=TrackerMode.FULL, from_init=True, **gate):
@@ -61,8 +37,8 @@ def test_the_carried_pose_moves_over_the_event_time_only():
     assert np.array_equal(pose, np.eye(4))  # not moved in place
 
 
-def test_a_fused_restart_without_ground_truth_starts_carried_on_at_the_last_velocity(paused):
-    rec, cmap = paused
+def test_a_fused_restart_without_ground_truth_starts_carried_on_at_the_last_velocity(paused_landing):
+    rec, cmap = paused_landing
     res = _run(rec, cmap)
     g = _gap_index(res)
     assert "restarted after it from the last estimate carried on at its velocity" in res[g].reason
@@ -80,8 +56,8 @@ def test_a_fused_restart_without_ground_truth_starts_carried_on_at_the_last_velo
     assert all(np.array_equal(p.pose, q.pose) for p, q in zip(res[:g], off[:g]))
 
 
-def test_restarts_from_ground_truth_and_the_other_modes_are_unchanged(paused):
-    rec, cmap = paused
+def test_restarts_from_ground_truth_and_the_other_modes_are_unchanged(paused_landing):
+    rec, cmap = paused_landing
     on, off = _run(rec, cmap, from_init=False), _run(rec, cmap, from_init=False, carry_velocity=False)
     assert len(on) == len(off) and all(np.array_equal(p.pose, q.pose) and p.reason == q.reason for p, q in zip(on, off))
     for mode in (TrackerMode.STPE, TrackerMode.STPE_FILTER):
@@ -89,9 +65,8 @@ def test_restarts_from_ground_truth_and_the_other_modes_are_unchanged(paused):
         assert len(on) == len(off) and all(np.array_equal(p.pose, q.pose) and p.reason == q.reason for p, q in zip(on, off))
 
 
-
-def test_the_fusion_restarts_with_that_velocity_and_without_the_polarity_hold(paused):
-    rec, cmap = paused
+def test_the_fusion_restarts_with_that_velocity_and_without_the_polarity_hold(paused_landing):
+    rec, cmap = paused_landing
     on, off = _run(rec, cmap), _run(rec, cmap, carry_velocity=False)
     g = _gap_index(on)
     # A known velocity: the polarity filter's T_align from the first update (velocity unknown: held for 40 updates).
