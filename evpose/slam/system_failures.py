@@ -91,8 +91,6 @@ class VisualFailureHandling:
             T_wc = T_wc.copy()
             T_wc[:3, :3] = R_wc
         edge = self._line_track(m, mci, T_wc) or self._edge_track(m, mci, T_wc)
-        if edge is None and R_wc is not None:
-            edge = self._gyro_place(m, mci, T_wc)
         if edge is not None:
             return edge
         drop_contradicted(m, self.K, T_wc, fe.ids, fe.uv, fe.track_to_point, 2.0 * tc.reprojection_threshold_px)

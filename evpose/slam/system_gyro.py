@@ -14,10 +14,9 @@ from scipy.spatial.transform import Rotation
 from evpose.core.trajectory import invert_pose
 from evpose.slam.atlas import SlamMap
 from evpose.slam.event_coasting import camera_frame_rate
-from evpose.slam.geometry import pose_jump_depths, project
+from evpose.slam.geometry import project
 from evpose.slam.gyro_prior import (camera_delta_rotation, gyro_delta_rotation, keyframe_rotation_priors, reanchor_rotations,
                                     refine_pose_with_rotation_prior, rotation_angle_deg, sparse_pair_sigmas)
-from evpose.slam.step_result import SlamStatus
 from evpose.slam.tracking import PoseEstimate
 from evpose.slam.visual_gyro import visual_rotation
 
@@ -53,37 +52,6 @@ class GyroAids:
         dR0 = np.eye(3) if w is None else Rotation.from_rotvec(w * (mci.t_us - prev_t)).as_matrix()
         dR = visual_rotation(prev8, mci.image8, self.K, dR0, self.cfg.visual_gyro)
         return None if dR is None else m.traj_T[-1][:3, :3] @ dR
-
-    def _gyro_place(self, m: SlamMap, mci, T_pred: np.ndarray):
-        """Event-only, a starved MCI with a measured rotation (``T_pred``: the coast's position, the visual gyro's
-        rotation): its pose from the few tracked map points with that rotation as a tight prior
-        (``VisualGyroConfig.place_min_points``); None when too few fit. Three points fix a translation, so a handful
-        place the map where PnP (``TrackingConfig.min_inliers``) would not, and the map is not carried on dead reckoning."""
-        vc, tc, fe = self.cfg.visual_gyro, self._pose_tc(m), self.fe
-        sel = [i for i, t in enumerate(fe.ids.tolist()) if fe.track_to_point.get(t) in m.points]
-        if vc.place_min_points <= 0 or len(sel) < vc.place_min_points:
-            return None
-        Xw = np.stack([m.points[fe.track_to_point[int(fe.ids[i])]].xyz for i in sel])
-        uv = fe.uv[sel].astype(np.float64)
-        T_cw = refine_pose_with_rotation_prior(self.K, Xw, uv, invert_pose(T_pred), T_pred[:3, :3].T,
-                                               np.radians(vc.place_sigma_deg), huber_px=tc.ba_huber_px)
-        proj, z = project(self.K, T_cw, Xw)
-        err = np.linalg.norm(proj - uv, axis=1)
-        inl = (z > 0) & (err < tc.reprojection_threshold_px)
-        if inl.sum() < max(vc.place_min_points, tc.min_inlier_ratio * len(sel)):
-            return None
-        T_wc = invert_pose(T_cw)
-        if tc.max_jump_depths > 0 and pose_jump_depths(T_wc, (m.traj_T[-1], T_pred), Xw) > tc.max_jump_depths:
-            return None
-        for k in np.flatnonzero(~inl):
-            fe.track_to_point.pop(int(fe.ids[sel[k]]), None)
-        n_refound = self._refind(m, mci, T_wc, self.cfg.search.refine_radius_px)
-        self._last_visual_t, self._blank_us, self._after_blank_t = mci.t_us, 0, None
-        self._inliers = int(inl.sum())
-        m.add_pose(mci.t_us, T_wc)
-        T_wc = self._new_keyframe(m, mci.t_us, T_wc, mci.image8, adjust=False)
-        return (SlamStatus.OK, f"gyro-placed: {int(inl.sum())} of {len(sel)} map points with the measured rotation "
-                f"({n_refound} re-found by projection), map {m.id}", T_wc.copy(), True)
 
     def _gyro_rotation(self, t0_us: int, t1_us: int, T_wc0: np.ndarray) -> np.ndarray | None:
         """Camera orientation at ``t1`` predicted from ``T_wc0`` at ``t0`` by the gyro (event-inertial mode), else None."""

@@ -67,13 +67,6 @@ class VisualGyroConfig:
     """Fewer edge pixels in view than this and no rotation is measured, pixels."""
     border_px: int = field(default=4, metadata={"min": 1, "max": 50, "step": 1, "unit": "px"})
     """Pixels this close to the image border are left out, pixels."""
-    place_min_points: int = field(default=0, metadata={"min": 0, "max": 200, "step": 1, "unit": "points"})
-    """A starved MCI (fewer tracked map points than ``TrackingConfig.min_inliers``) whose rotation the gyro measured is
-    placed from the events when at least this many of its tracked map points fit a pose with that rotation (its
-    translation solved on them, :meth:`~evpose.slam.system_gyro.GyroAids._gyro_place`) instead of coasting (0: it
-    coasts), points."""
-    place_sigma_deg: float = field(default=0.5, metadata={"min": 0.01, "max": 10.0, "step": 0.01, "unit": "deg"})
-    """Sigma of the measured rotation as a prior when such a pose is solved, degrees."""
 
 
 @dataclass
