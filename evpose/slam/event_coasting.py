@@ -184,38 +184,6 @@ def event_only_coast_pose(m: SlamMap, t_us: int, min_span_us: int) -> np.ndarray
     return coast_pose(m, t_us, R_wc, v)
 
 
-def turn_coasted_poses(m: SlamMap, t_from_us: int, turns: dict[int, np.ndarray]) -> int:
-    """Re-turn the poses of ``m`` after ``t_from_us`` (a coast no MCI confirmed) by measured rotations; returns how many.
-
-    ``turns`` maps an MCI time to the camera rotation ``R_prev_cur`` measured since the previous MCI (the visual gyro);
-    a pose without one keeps the coast's own turn. Each step's displacement is kept in the camera frame of the step's
-    mean orientation (as :func:`evpose.slam.coasting.coast_pose` moved it), so the path bends with the new turn.
-    The output trajectory composes each pose with its reference keyframe (``SlamMap.trajectory``), so the relative
-    poses are rewritten too; the keyframes made at the coasted poses stay (the map is lost, nothing tracks on it).
-    """
-    idx = [i for i, t in enumerate(m.traj_t) if t > t_from_us]
-    if not idx or idx[0] == 0:
-        return 0
-    kf_pose = {kf.id: kf.T_wc for kf in m.keyframes}
-    T_old_prev = T_new_prev = m.traj_T[idx[0] - 1]
-    for i in idx:
-        T_old = m.traj_T[i]
-        dR = turns.get(m.traj_t[i])
-        if dR is None:
-            dR = T_old_prev[:3, :3].T @ T_old[:3, :3]
-        R_new = T_new_prev[:3, :3] @ dR
-        mid_old = Rotation.from_matrix(np.stack([T_old_prev[:3, :3], T_old[:3, :3]])).mean().as_matrix()
-        mid_new = Rotation.from_matrix(np.stack([T_new_prev[:3, :3], R_new])).mean().as_matrix()
-        T_new = np.eye(4)
-        T_new[:3, :3] = R_new
-        T_new[:3, 3] = T_new_prev[:3, 3] + mid_new @ mid_old.T @ (T_old[:3, 3] - T_old_prev[:3, 3])
-        m.traj_T[i] = T_new
-        ref = kf_pose.get(m.traj_ref[i])
-        m.traj_rel[i] = np.linalg.solve(ref, T_new) if ref is not None else T_new.copy()
-        T_old_prev, T_new_prev = T_old, T_new
-    return len(idx)
-
-
 def drop_unconfirmed_poses(m: SlamMap, t_last_visual_us: int) -> int:
     """Remove the trajectory poses after ``t_last_visual_us`` (coasted, and no MCI placed the map again); returns how many.
 

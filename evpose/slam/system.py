@@ -120,8 +120,6 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
         """Time of the last MCI placed by PnP on point tracks (``EdgeTrackingConfig.max_span_s``), us."""
         self._prev_mci: tuple = (None, 0)
         """The previous MCI (8-bit image, time in us) while the current one is processed (``VisualGyroConfig``)."""
-        self._coast_turns: dict[int, np.ndarray] = {}
-        """Rotation measured since the previous MCI by MCI time, over the running coast (``VisualGyroConfig.turn_lost_coasts``)."""
         self._lines = LineMap()
         """Line tracks and 3-D lines of the active map (``SlamConfig.lines``)."""
         self._gap_last_t: int | None = None
@@ -180,7 +178,7 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
             "last_visual_t": self._last_visual_t, "prev_hypothesis": self._prev_hypothesis,
             "scale_refinement": self.last_scale_refinement, "rejoin": self._rejoin, "blank_us": self._blank_us,
             "after_blank_t": self._after_blank_t, "last_pnp_t": self._last_pnp_t, "lines": self._lines,
-            "gap_last_t": self._gap_last_t, "imu_end_reported": self._imu_end_reported, "coast_turns": self._coast_turns,
+            "gap_last_t": self._gap_last_t, "imu_end_reported": self._imu_end_reported,
         })
 
     def restore(self, snap: dict) -> None:
@@ -199,7 +197,6 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
         self._last_pnp_t = s.get("last_pnp_t", 0)
         self._lines = s.get("lines", LineMap())
         self._gap_last_t, self._imu_end_reported = s.get("gap_last_t"), s.get("imu_end_reported", False)
-        self._coast_turns = s.get("coast_turns", {})
         del self.results[s["n_results"]:]
 
     # ------------------------------------------------------------- pipeline

@@ -15,7 +15,7 @@ import numpy as np
 from evpose.core.trajectory import invert_pose
 from evpose.slam.coasting import camera_frame_velocity, coast_pose, drop_contradicted
 from evpose.slam.edge_tracking import measure_across_edges, solve_pose_across_edges
-from evpose.slam.event_coasting import drop_unconfirmed_poses, event_only_coast_pose, turn_coasted_poses
+from evpose.slam.event_coasting import drop_unconfirmed_poses, event_only_coast_pose
 from evpose.slam.inertial import InertialConfiguration
 from evpose.slam.map_rejoin import RejoinCandidate
 from evpose.slam.mci import MciResult
@@ -83,16 +83,10 @@ class VisualFailureHandling:
             span_us = m.traj_t[-1] - m.traj_t[0]
             if span_us >= tc.coast_young_span_s * 1e6:
                 T_wc = event_only_coast_pose(m, mci.t_us, span_us)
-        vc = self.cfg.visual_gyro
         if T_wc is None:
             if tc.coast_drop_unconfirmed:
                 drop_unconfirmed_poses(m, self._last_visual_t)
-            elif vc.turn_lost_coasts:
-                turn_coasted_poses(m, self._last_visual_t, self._coast_turns)
-            self._coast_turns = {}
             return self._lose(reason)
-        if vc.turn_lost_coasts and R_wc is None:
-            self._measure_coast_turn(m, mci)
         if R_wc is not None:
             T_wc = T_wc.copy()
             T_wc[:3, :3] = R_wc

@@ -53,14 +53,6 @@ class GyroAids:
         dR = visual_rotation(prev8, mci.image8, self.K, dR0, self.cfg.visual_gyro)
         return None if dR is None else m.traj_T[-1][:3, :3] @ dR
 
-    def _measure_coast_turn(self, m: SlamMap, mci) -> None:
-        """Event-only: the visual gyro's rotation since the previous MCI, kept for this coasted MCI
-        (``VisualGyroConfig.turn_lost_coasts``); rotations of MCIs before this coast are let go."""
-        self._coast_turns = {t: R for t, R in self._coast_turns.items() if t > self._last_visual_t}
-        R_wc = self._visual_gyro(m, mci)
-        if R_wc is not None:
-            self._coast_turns[mci.t_us] = m.traj_T[-1][:3, :3].T @ R_wc
-
     def _gyro_rotation(self, t0_us: int, t1_us: int, T_wc0: np.ndarray) -> np.ndarray | None:
         """Camera orientation at ``t1`` predicted from ``T_wc0`` at ``t0`` by the gyro (event-inertial mode), else None."""
         dR_cam = self._gyro_camera_delta(t0_us, t1_us)

@@ -67,11 +67,6 @@ class VisualGyroConfig:
     """Fewer edge pixels in view than this and no rotation is measured, pixels."""
     border_px: int = field(default=4, metadata={"min": 1, "max": 50, "step": 1, "unit": "px"})
     """Pixels this close to the image border are left out, pixels."""
-    turn_lost_coasts: bool = False
-    """Event-only maps coast on the constant rate of their recent poses as without the gyro, so they are placed again
-    as often; the rotation is measured at each coasted MCI all the same, and when the coast ends in a loss, its poses
-    (which no MCI confirmed) are turned by the measured rotations instead (:func:`evpose.slam.event_coasting.turn_coasted_poses`).
-    Independent of ``enabled`` (which coasts on the measured rotation)."""
 
 
 @dataclass

@@ -7,7 +7,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from evpose.slam import EventSlam, SlamConfig, SlamStatus
-from evpose.slam.event_coasting import camera_frame_rate, drop_unconfirmed_poses, event_only_coast_pose, turn_coasted_poses
+from evpose.slam.event_coasting import camera_frame_rate, drop_unconfirmed_poses, event_only_coast_pose
 from slam_synthetic import circle_map, circle_pose, make_recording
 
 
@@ -110,52 +110,6 @@ def test_a_coast_across_a_blank_ends_after_it_when_coast_after_blank_s_says_so(e
         assert first[0] is SlamStatus.COASTING
         status, _, _, _ = slam._bridge_or_lose(SimpleNamespace(t_us=slam._after_blank_t + 10_000, image8=img), "still nothing")
         assert status is expected
-
-
-def _straight_coast(n_true: int, n_coast: int):
-    """A circle map whose last ``n_coast`` poses coasted without turning (each step's chord held in the camera frame),
-    and the true turn of each of those steps."""
-    m = circle_map(n_true, 5000)
-    mid = Rotation.from_matrix(np.stack([m.traj_T[-2][:3, :3], m.traj_T[-1][:3, :3]])).mean().as_matrix()
-    chord = mid.T @ (m.traj_T[-1][:3, 3] - m.traj_T[-2][:3, 3])  # a circle's chord: the same in every step's mid frame
-    turns = {}
-    for k in range(n_true, n_true + n_coast):
-        T = m.traj_T[-1].copy()
-        T[:3, 3] += T[:3, :3] @ chord
-        m.add_pose(k * 5000, T)
-        turns[k * 5000] = circle_pose((k - 1) * 0.005)[:3, :3].T @ circle_pose(k * 0.005)[:3, :3]
-    return m, turns
-
-
-def test_a_lost_coast_is_turned_by_the_measured_rotations_onto_the_path_it_flew():
-    m, turns = _straight_coast(7, 3)
-    assert turn_coasted_poses(m, 30_000, turns) == 3
-    for k in (7, 8, 9):
-        np.testing.assert_allclose(m.traj_T[k], circle_pose(k * 0.005), atol=1e-9)
-    # The output trajectory composes poses with their reference keyframes: it follows.
-    np.testing.assert_allclose(m.trajectory().matrices()[-1], m.traj_T[-1], atol=1e-12)
-    assert turn_coasted_poses(m, 45_000, turns) == 0
-
-
-def test_a_coasted_step_without_a_measured_rotation_keeps_the_coasts_own_turn():
-    m, turns = _straight_coast(7, 3)
-    del turns[40_000]
-    turn_coasted_poses(m, 30_000, turns)
-    np.testing.assert_allclose(m.traj_T[8][:3, :3], m.traj_T[7][:3, :3], atol=1e-12)  # the coast did not turn there
-
-
-def test_a_coast_that_ends_lost_is_turned_only_when_turn_lost_coasts_is_on(early_map):
-    for on in (False, True):
-        slam, m, _ = _fail(early_map, 0.4, 8000)
-        slam.cfg.visual_gyro.turn_lost_coasts = on
-        t_coast = m.traj_t[-1]
-        before = m.trajectory().matrices()[-1].copy()
-        slam._coast_turns = {t_coast: Rotation.from_rotvec([0.0, 0.05, 0.0]).as_matrix()}
-        mci = SimpleNamespace(t_us=t_coast + 500_000, image8=None)
-        assert slam._bridge_or_lose(mci, "still no tracks")[0] is SlamStatus.LOST
-        after = m.trajectory().matrices()[-1]
-        turned = np.degrees(Rotation.from_matrix(before[:3, :3].T @ after[:3, :3]).magnitude())
-        assert (turned > 0.1) == on and slam._coast_turns == {}
 
 
 def test_a_measured_orientation_replaces_the_coasted_one(early_map):
