@@ -188,8 +188,10 @@ defaults 6.84 / 7.16 / 40.8 % / 30 / 5.1, visual gyro 3.26 / 3.85 / 27.6 % / 40 
 50 / 100 ms old 7.35 / 6.53 / 40.6 / 33 / 3.9 and 8.04 / 7.74 / 42.6 / 30 / 5.5; a starved MCI with a measured rotation
 placed from its few tracked map points (the rotation a 0.5 deg prior, the translation solved, at least 6 inliers,
 counted as tracked; commit ``4f994b1``, reverted) 7.84 / 8.38 / 42.2 / 30 / 2.4 (0.5 s windows both have 6.07 ->
-8.56), with 8 points and 2 deg 4.87 / 5.40 / 38.2 / 36 / 0.9. Whenever the map goes on as often as by default, the gain
-is gone. A coast that ends lost re-turned afterwards by the gyro's rotations (the live coast as by default, so the
+8.56), with 8 points and 2 deg 4.87 / 5.40 / 38.2 / 36 / 0.9; the gyro's coasted keyframes triangulating down to
+``min_triangulation_deg`` 0.5 / 0.2 (``patches.py`` ``coasttri``) 4.83 / 4.91 / 32.6 / 36 / 2.5 and 5.06 / 4.75 / 28.4 /
+37 / 2.2 (segments without a map change -0.69 +- 0.88 / -0.57 +- 0.76, 20 / 18). Whenever the map goes on as often as by
+default, the gain is gone. A coast that ends lost re-turned afterwards by the gyro's rotations (the live coast as by default, so the
 same maps and share; ``VisualGyroConfig.turn_lost_coasts``, commit ``52a8e61``, reverted), 40 runs: ATE 7.63 -> 7.74 %
 (+0.11 +- 0.04, 15 better), fixed segments +0.13 +- 0.05: the tails' rotation error against the truth drops (median
 10.6 -> 6.5 deg, mean 24.6 -> 12.4; ``tailrot.py``, seeds 0-7, 595 poses), but their positions follow the camera-frame
