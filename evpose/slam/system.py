@@ -428,11 +428,13 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
         fe.uv = np.concatenate([fe.uv, uv.astype(np.float32)])
         return len(pids)
 
-    def _new_keyframe(self, m: SlamMap, t_us: int, T_wc: np.ndarray, img8: np.ndarray | None = None, adjust: bool = True) -> np.ndarray:
+    def _new_keyframe(self, m: SlamMap, t_us: int, T_wc: np.ndarray, img8: np.ndarray | None = None, adjust: bool = True,
+                      triangulate: bool = True) -> np.ndarray:
         """Insert a keyframe, triangulate, run local (inertial) BA, cull, try the IMU initialisation; returns the adjusted pose."""
         fe, tc = self.fe, self.cfg.tracking
         kf = insert_keyframe(m, t_us, T_wc, fe.ids, fe.uv.astype(np.float64), fe.track_to_point)
-        self._next_point = triangulate_new_points(m, self.K, kf, fe.track_to_point, tc, self._next_point)
+        if triangulate:
+            self._next_point = triangulate_new_points(m, self.K, kf, fe.track_to_point, tc, self._next_point)
         if img8 is not None:
             store_patches(m, kf.id, img8, self.cfg.search.patch_px)
             if self._matcher() is SearchMatcher.KLT:

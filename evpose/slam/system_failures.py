@@ -96,7 +96,9 @@ class VisualFailureHandling:
         drop_contradicted(m, self.K, T_wc, fe.ids, fe.uv, fe.track_to_point, 2.0 * tc.reprojection_threshold_px)
         m.add_pose(mci.t_us, T_wc)
         # No BA on a keyframe at a predicted pose (InertialConfig.coast_ba: with one fixed keyframe it slid along the scale).
-        T_wc = self._new_keyframe(m, mci.t_us, T_wc, mci.image8, adjust=False)
+        # No points from dead reckoning either (TrackingConfig.coast_triangulate off): they let PnP place the map again
+        # on the coast's own error.
+        T_wc = self._new_keyframe(m, mci.t_us, T_wc, mci.image8, adjust=False, triangulate=tc.coast_triangulate)
         if self.cfg.lines.update_from_coast:
             self._lines_after_pose(m, mci, T_wc)
         return SlamStatus.COASTING, f"visual tracking failed ({reason}); pose coasted on the map's recent motion, map {m.id} kept", T_wc.copy(), True

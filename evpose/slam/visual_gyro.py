@@ -26,6 +26,23 @@ being re-placed, and the ATE, summed per map, gains from the shorter maps (the 7
 3.92 % / 32.7 % from the events (defaults, seeds 0-7; this and the last variant with an earlier, Gauss-Newton
 alignment); with the translation modelled (the map's camera-frame velocity, the edges on a plane at the map points'
 median depth) 7.98 % / 47.4 %, with ``ProjectionSearchConfig.prepass_below`` 12 (rotation only) 4.87 % / 32.3 %.
+
+Why it lowers the share tracked from the events (session 28, ``/tmp/s28/gyro28``; details in the module notes of
+:mod:`evpose.slam.event_coasting`). Not by holding a coast 'valid' longer: by default 68 % of the coasts end with the
+map placed again by PnP within a few MCIs, on points triangulated at the coast's own keyframes (17 of the 22 it uses),
+whose parallax the coast's rotation error made; the gyro's rotation, twice as near the truth, leaves too little
+parallax to triangulate (7 % of the tried tracks become points, against 18 %), the map starves and is lost when
+``coast_s`` runs out (15 % of its coasts placed again). Over the 40 runs of indoor seeds 0-7 under the defaults and the
+four neutral perturbations: ATE 7.63 -> 3.95 %, from the events 41.9 -> 28.5 %, maps 149 -> 200; on the stretches both
+runs track as one map the error does not change (0.5 s windows inside one map: 5.35 -> 5.34 %; fixed 0.5 s segments
+without a map change 6.87 -> 6.69 %), and a coast turning by the true rotation does no better there (5.85 -> 7.78 %,
+8.13 -> 8.48 %). Held-out indoor seeds 8-11 (20 runs): ATE 8.33 -> 4.33 %, from the events 43.9 -> 33.1 %, maps 67 ->
+95, coasts placed again 75 -> 17 %; segments without a map change 7.53 -> 6.92 % (-0.61 +- 0.43, 44). Kept off: with
+the map placed again as often as by default (the gyro only after 50 / 100 ms of coast; a starved MCI placed from its
+few tracked points with the measured rotation) the ATE gain is gone (seeds 0-7: 7.35 / 8.04 / 7.84 % against 6.84);
+re-turning only the coasts that end lost (same maps and share) 7.63 -> 7.74 % over the 40 runs. Coasted keyframes
+that triangulate nothing (``TrackingConfig.coast_triangulate`` off, no gyro) do what the gyro does, and more: 40 runs
+3.29 %, from the events 26.1 %, 213 maps.
 """
 
 from __future__ import annotations
@@ -47,7 +64,9 @@ class VisualGyroConfig:
     events by 12 points, and its lower ATE comes mostly from more, shorter maps (measurements in the module's
     docstring). Session 27 (``/tmp/s27/turn27``, module notes of :mod:`evpose.slam.event_coasting`), indoor seeds 0-7 on
     that session's defaults: 6.84 -> 3.23 % (8 of 8 better), from the events 40.8 -> 27.6 %, maps 30 -> 40; a coast
-    turning by the true rotation (a perfect gyro) 4.83 % with 35 maps."""
+    turning by the true rotation (a perfect gyro) 4.83 % with 35 maps. Session 28: the lower share is the map no longer
+    placed again after a coast on points the coast's own rotation error triangulated; where both runs track as one map
+    the error is unchanged (module docstring)."""
     edge_fraction: float = field(default=0.25, metadata={"min": 0.0, "max": 1.0, "step": 0.05, "unit": "ratio"})
     """Edge pixels are ridge pixels of the MCI at or above this share of its robust maximum (99.5th percentile of the
     non-zero pixels), ratio."""

@@ -112,6 +112,26 @@ def test_a_coast_across_a_blank_ends_after_it_when_coast_after_blank_s_says_so(e
         assert status is expected
 
 
+def test_a_coasted_keyframe_triangulates_no_points_when_coast_triangulate_is_off(early_map, monkeypatch):
+    from evpose.slam import system as slam_system
+
+    for on in (True, False):
+        calls = []
+        real = slam_system.triangulate_new_points
+        monkeypatch.setattr(slam_system, "triangulate_new_points", lambda *a: calls.append(1) or real(*a))
+        cfg = SlamConfig()
+        cfg.tracking.coast_triangulate = on
+        slam = EventSlam(cfg, early_map.calibration)
+        slam.step(early_map.events)
+        m = slam.atlas.active
+        n_kf, n_pts, calls[:] = len(m.keyframes), len(m.points), []
+        mci = SimpleNamespace(t_us=m.traj_t[-1] + 8000, image8=np.zeros((slam.height, slam.width), np.uint8))
+        status, _, _, keyframe = slam._bridge_or_lose(mci, "no tracks")
+        # The keyframe is made either way (it records the tracks); only its triangulation is left out.
+        assert status is SlamStatus.COASTING and keyframe and len(m.keyframes) == n_kf + 1
+        assert bool(calls) == on and (on or len(m.points) <= n_pts)
+
+
 def test_a_measured_orientation_replaces_the_coasted_one(early_map):
     # The visual gyro (evpose.slam.visual_gyro) hands the coast the orientation it measured for the MCI.
     slam, m, _ = _fail(early_map, None, 4000)
