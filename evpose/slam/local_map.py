@@ -54,8 +54,12 @@ def insert_keyframe(m: SlamMap, t_us: int, T_wc: np.ndarray, tr_ids: np.ndarray,
     return kf
 
 
-def triangulate_new_points(m: SlamMap, K: np.ndarray, kf: Keyframe, track_to_point: dict[int, int], cfg: TrackingConfig, next_point_id: int) -> int:
-    """Triangulate tracks of ``kf`` without a point against the oldest keyframe that saw them; returns the next free point id."""
+def triangulate_new_points(m: SlamMap, K: np.ndarray, kf: Keyframe, track_to_point: dict[int, int], cfg: TrackingConfig, next_point_id: int,
+                           predicted: bool = False) -> int:
+    """Triangulate tracks of ``kf`` without a point against the oldest keyframe that saw them; returns the next free point id.
+
+    ``predicted``: ``kf`` sits at a pose no image placed (a coast's prediction), where the pair gate of
+    ``coast_pair_translation_ratio`` applies instead of ``min_pair_translation_ratio``."""
     by_kf: dict[int, list[int]] = {}
     for tid in sorted(kf.obs):
         if tid in track_to_point:
@@ -64,12 +68,15 @@ def triangulate_new_points(m: SlamMap, K: np.ndarray, kf: Keyframe, track_to_poi
             if tid in old.obs:
                 by_kf.setdefault(old.id, []).append(tid)
                 break
-    z_med = _median_depth(m, kf, track_to_point) if cfg.min_pair_parallax_deg > 0 else None
+    ratio = cfg.coast_pair_translation_ratio if predicted else cfg.min_pair_translation_ratio
+    z_med = _median_depth(m, kf, track_to_point) if cfg.min_pair_parallax_deg > 0 or ratio > 0 else None
     for old_id, tids in sorted(by_kf.items()):
         old = m.keyframe(old_id)
         if z_med is not None and np.degrees(np.linalg.norm(kf.T_wc[:3, 3] - old.T_wc[:3, 3]) / z_med) < cfg.min_pair_parallax_deg:
             # Too short a baseline for the scene depth: every track's parallax is near the per-point threshold, and the
             # ones whose noise pushes them over it come out too near. Wait for a later keyframe with a wider baseline.
+            continue
+        if z_med is not None and ratio > 0 and _rotation_dominated(old.T_wc, kf.T_wc, z_med, ratio):
             continue
         uv1 = np.array([old.obs[t] for t in tids])
         uv2 = np.array([kf.obs[t] for t in tids])
@@ -87,6 +94,14 @@ def triangulate_new_points(m: SlamMap, K: np.ndarray, kf: Keyframe, track_to_poi
             track_to_point[tid] = next_point_id
             next_point_id += 1
     return next_point_id
+
+
+def _rotation_dominated(T_a: np.ndarray, T_b: np.ndarray, z_med: float, ratio: float) -> bool:
+    """The pair's baseline over the median depth (the translation's image flow, rad) is below ``ratio`` times its
+    rotation angle (rad): depths triangulated from it carry the pair's rotation error divided by a small parallax."""
+    R = T_a[:3, :3].T @ T_b[:3, :3]
+    rot = float(np.arccos(np.clip((np.trace(R) - 1.0) / 2.0, -1.0, 1.0)))
+    return float(np.linalg.norm(T_b[:3, 3] - T_a[:3, 3])) / z_med < ratio * rot
 
 
 def _reprojects(K: np.ndarray, T_wc: np.ndarray, X: np.ndarray, uv: np.ndarray, max_err_px: float) -> bool:

@@ -66,3 +66,51 @@ def estimate_pose(K: np.ndarray, Xw: np.ndarray, uv: np.ndarray, T_wc_guess: np.
     if inliers.sum() < cfg.min_inlier_ratio * n:
         return PoseEstimate(False, reason=f"only {int(inliers.sum())} of {n} tracked map points agree with the pose")
     return PoseEstimate(True, invert_pose(T_cw), inliers, rms_px=float(np.sqrt(np.mean(err[inliers] ** 2))))
+
+
+def refine_pose_with_position_prior(K: np.ndarray, Xw: np.ndarray, uv: np.ndarray, T_cw: np.ndarray, c_prior: np.ndarray,
+                                    sigma: float, huber_px: float = 2.0, iterations: int = 8) -> np.ndarray:
+    """Gauss-Newton on ``T_cam_world`` minimising Huber reprojection errors (1 px sigma) plus ``|c - c_prior| / sigma``,
+    ``c`` the camera centre (map units). Returns the refined ``T_cam_world`` (4, 4); left perturbations (rotation,
+    translation), under which the centre moves by ``-R^T`` times the translation part only."""
+    T = np.array(T_cw, np.float64)
+    X = np.asarray(Xw, np.float64)
+    z_obs = np.asarray(uv, np.float64)
+    fx, fy, cx, cy = K[0, 0], K[1, 1], K[0, 2], K[1, 2]
+    w_prior = 1.0 / max(sigma, 1e-12)
+    for _ in range(iterations):
+        Xc = X @ T[:3, :3].T + T[:3, 3]
+        good = Xc[:, 2] > 1e-9
+        if good.sum() < 3:
+            break
+        Xc, zo = Xc[good], z_obs[good]
+        zz = Xc[:, 2]
+        r = np.c_[fx * Xc[:, 0] / zz + cx - zo[:, 0], fy * Xc[:, 1] / zz + cy - zo[:, 1]]
+        e = np.linalg.norm(r, axis=1)
+        w = np.where(e <= huber_px, 1.0, huber_px / np.maximum(e, 1e-12))
+        Ju = np.zeros((len(Xc), 2, 3))
+        Ju[:, 0, 0], Ju[:, 0, 2] = fx / zz, -fx * Xc[:, 0] / zz**2
+        Ju[:, 1, 1], Ju[:, 1, 2] = fy / zz, -fy * Xc[:, 1] / zz**2
+        skew = np.zeros((len(Xc), 3, 3))
+        skew[:, 0, 1], skew[:, 0, 2] = -Xc[:, 2], Xc[:, 1]
+        skew[:, 1, 0], skew[:, 1, 2] = Xc[:, 2], -Xc[:, 0]
+        skew[:, 2, 0], skew[:, 2, 1] = -Xc[:, 1], Xc[:, 0]
+        J = np.einsum("nij,njk->nik", Ju, np.concatenate([-skew, np.broadcast_to(np.eye(3), skew.shape)], axis=2))
+        H = np.einsum("n,nji,njk->ik", w, J, J)
+        g = np.einsum("n,nji,nj->i", w, J, r)
+        Rt = T[:3, :3].T
+        rc = (-Rt @ T[:3, 3] - c_prior) * w_prior
+        Jc = -Rt * w_prior
+        H[3:, 3:] += Jc.T @ Jc
+        g[3:] += Jc.T @ rc
+        try:
+            delta = -np.linalg.solve(H, g)
+        except np.linalg.LinAlgError:
+            break
+        dT = np.eye(4)
+        dT[:3, :3] = cv2.Rodrigues(delta[:3].reshape(3, 1))[0]
+        dT[:3, 3] = delta[3:]
+        T = dT @ T
+        if np.linalg.norm(delta) < 1e-9:
+            break
+    return T
