@@ -27,7 +27,7 @@ def local_bundle_adjustment(m: SlamMap, K: np.ndarray, window: int, iterations: 
                             rotation_priors: dict | None = None, rotation_sigma_rad: float = 1e-3, scale_anchor: float = 0.0,
                             rotation_sigmas_rad: dict | None = None, velocity_sigma_ratio: float = 0.0,
                             rotation_rate_sigma_rad_s: float = 0.0, edge_along_sigma_px: float = 0.0,
-                            edge_max_ratio: float = 0.1, max_jump_depths: float = 0.0, depth_anchor: float = 0.0) -> BaReport:
+                            edge_max_ratio: float = 0.1, max_jump_depths: float = 0.0) -> BaReport:
     """Optimise the last ``window`` keyframes of ``m`` and the points they see, in place.
 
     The ``n_fixed`` oldest keyframes of the window (two while the map has only
@@ -98,8 +98,6 @@ def local_bundle_adjustment(m: SlamMap, K: np.ndarray, window: int, iterations: 
                 sig = float(sigmas.get((a, b), rotation_sigma_rad))
                 rot_noise = gtsam.noiseModel.Diagonal.Sigmas(np.r_[np.full(3, sig), np.full(3, 1e4)])
                 graph.add(gtsam.BetweenFactorPose3(X(a), X(b), gtsam.Pose3(gtsam.Rot3(np.asarray(R_ab, np.float64)), np.zeros(3)), rot_noise))
-    if depth_anchor > 0:
-        _add_depth_anchor(gtsam, graph, m, kf_by_id, used_pts, used_kfs, in_window, fixed_ids, depth_anchor)
     if scale_anchor > 0 and len(free_ids) >= 2 and free_ids[1] not in fixed_ids and free_ids[0] in used_kfs and free_ids[1] in used_kfs:
         a, b = kf_by_id[free_ids[0]], kf_by_id[free_ids[1]]
         d = float(np.linalg.norm(a.T_wc[:3, 3] - b.T_wc[:3, 3]))
@@ -134,26 +132,6 @@ def local_bundle_adjustment(m: SlamMap, K: np.ndarray, window: int, iterations: 
     for pid in used_pts:
         m.points[pid].xyz = np.asarray(result.atPoint3(L(pid)), np.float64)
     return BaReport(n_free, len(used_pts), e0, graph.error(result))
-
-
-def _add_depth_anchor(gtsam, graph, m: SlamMap, kf_by_id: dict, used_pts: list, used_kfs: set, in_window: set, fixed_ids: set, sigma: float) -> None:
-    """Range factors holding each point's distance from the fixed poses that observe it at its value before the
-    optimisation, each with sigma ``sigma * range * sqrt(n)`` (n such pairs), so together they hold the mean depth scale
-    seen from the fixed poses to about ``sigma``."""
-    from gtsam.symbol_shorthand import L, X
-
-    fixed = {kid for kid in used_kfs if kid in fixed_ids or kid not in in_window}
-    pairs = []
-    for pid in used_pts:
-        p = m.points[pid]
-        for kid in p.obs:
-            if kid in fixed:
-                r = float(np.linalg.norm(p.xyz - kf_by_id[kid].T_wc[:3, 3]))
-                if r > 0:
-                    pairs.append((kid, pid, r))
-    k = np.sqrt(len(pairs))
-    for kid, pid, r in pairs:
-        graph.add(gtsam.RangeFactor3D(X(kid), L(pid), r, gtsam.noiseModel.Isotropic.Sigma(1, sigma * r * k)))
 
 
 def _edge_noise(gtsam, kf, uv, tensors: dict, along_px: float, max_ratio: float, huber_px: float):

@@ -37,7 +37,7 @@ from evpose.slam.config import SlamConfig, SlamMode
 from evpose.slam.event_window import WINDOW_REASONS, EventWindowSelector, ReconstructionWindow
 from evpose.slam.features import FrontendTracks, detect_features, has_support, step_consistent, track_features
 from evpose.slam.fine_grid import track_features_fine, use_fine_grid
-from evpose.slam.geometry import pose_jump_depths, project
+from evpose.slam.geometry import pose_jump_depths
 from evpose.slam.inertial import InertialConfiguration
 from evpose.slam.inertial_ba import inertial_local_bundle_adjustment
 from evpose.slam.inertial_trajectory import carry_relative_scale, keyframe_positions
@@ -58,7 +58,7 @@ from evpose.slam.system_inertial import InertialMaps
 from evpose.slam.system_lines import LineAids
 from evpose.slam.line_landmarks import LineMap
 from evpose.slam.track_fusion import fuse_tracks
-from evpose.slam.tracking import PoseEstimate, estimate_pose, refine_pose_with_position_prior
+from evpose.slam.tracking import PoseEstimate, estimate_pose
 
 
 class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHandling, LineAids, StreamGaps):
@@ -388,8 +388,6 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
         sigma_deg = self.cfg.inertial.gyro_prior_deg if m.imu_initialised else self.cfg.inertial.gyro_prior_uninit_deg
         if est.ok and R_prior is not None and sigma_deg > 0:
             est = self._refine_with_gyro(est, Xw, uv, R_prior, sigma_deg)
-        if est.ok and self.imu is None and self.cfg.tracking.pnp_velocity_prior > 0 and len(m.traj_T) >= 2:
-            est = self._refine_with_velocity(m, est, Xw, uv, guess)
         max_jump = self._pose_tc(m).max_jump_depths
         if est.ok and max_jump > 0:
             # Between two MCIs (milliseconds) the camera cannot move a multiple of the scene depth: a pose that far from
@@ -398,21 +396,6 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
             if jump > max_jump:
                 est = PoseEstimate(False, reason=f"PnP pose {jump:.1f} median point depths from the last and the predicted pose > {max_jump:g}")
         return est, sel
-
-    def _refine_with_velocity(self, m: SlamMap, est: PoseEstimate, Xw: np.ndarray, uv: np.ndarray, guess: np.ndarray) -> PoseEstimate:
-        """Re-solve an event-only PnP pose with the camera centre held towards the constant-velocity prediction
-        (:attr:`TrackingConfig.pnp_velocity_prior`); the visual pose when too few points agree with the result."""
-        tc = self._pose_tc(m)
-        step = float(np.linalg.norm(guess[:3, 3] - m.traj_T[-1][:3, 3]))
-        z = np.linalg.norm(Xw - est.T_wc[:3, 3], axis=1)
-        sigma = tc.pnp_velocity_prior * step + tc.pnp_velocity_floor * float(np.median(z))
-        T_cw = refine_pose_with_position_prior(self.K, Xw[est.inliers], uv[est.inliers], invert_pose(est.T_wc), guess[:3, 3], sigma, tc.ba_huber_px)
-        proj, zc = project(self.K, T_cw, Xw)
-        err = np.linalg.norm(proj - uv, axis=1)
-        inliers = (zc > 0) & (err < tc.reprojection_threshold_px)
-        if inliers.sum() < max(tc.min_inliers, tc.min_inlier_ratio * len(Xw)):
-            return est
-        return PoseEstimate(True, invert_pose(T_cw), inliers, rms_px=float(np.sqrt(np.mean(err[inliers] ** 2))))
 
     def _matcher(self) -> SearchMatcher | None:
         """The projection search's matcher; None while it is off (event-inertial runs need ``search.event_inertial``)."""
@@ -449,7 +432,9 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
         """Insert a keyframe, triangulate, run local (inertial) BA, cull, try the IMU initialisation; returns the adjusted pose."""
         fe, tc = self.fe, self.cfg.tracking
         kf = insert_keyframe(m, t_us, T_wc, fe.ids, fe.uv.astype(np.float64), fe.track_to_point)
-        self._next_point = triangulate_new_points(m, self.K, kf, fe.track_to_point, tc, self._next_point, predicted=t_us != self._last_pnp_t)
+        self._next_point = triangulate_new_points(m, self.K, kf, fe.track_to_point, tc, self._next_point,
+                                                  # event-only coasts: event-inertial maps bridge on the IMU
+                                                  predicted=self.imu is None and t_us != self._last_pnp_t)
         if img8 is not None:
             store_patches(m, kf.id, img8, self.cfg.search.patch_px)
             if self._matcher() is SearchMatcher.KLT:
@@ -476,8 +461,7 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
                                     velocity_sigma_ratio=tc.ba_velocity_prior if self.imu is None else 0.0,
                                     rotation_rate_sigma_rad_s=np.radians(tc.ba_rotation_rate_prior_deg_s) if self.imu is None else 0.0,
                                     edge_along_sigma_px=tc.ba_edge_along_sigma_px if self.imu is None else 0.0,
-                                    edge_max_ratio=tc.ba_edge_max_ratio, max_jump_depths=tc.max_jump_depths,
-                                    depth_anchor=tc.ba_depth_anchor if self.imu is None else 0.0)
+                                    edge_max_ratio=tc.ba_edge_max_ratio, max_jump_depths=tc.max_jump_depths)
         if before is not None:
             carry_relative_scale(m, before)
         cull_points(m, self.K, fe.track_to_point, tc)
