@@ -434,7 +434,9 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
         fe, tc = self.fe, self.cfg.tracking
         kf = insert_keyframe(m, t_us, T_wc, fe.ids, fe.uv.astype(np.float64), fe.track_to_point)
         if triangulate:
-            self._next_point = triangulate_new_points(m, self.K, kf, fe.track_to_point, tc, self._next_point)
+            self._next_point = triangulate_new_points(m, self.K, kf, fe.track_to_point, tc, self._next_point,
+                                                      # event-only coasts: event-inertial maps bridge on the IMU
+                                                      predicted=self.imu is None and t_us != self._last_pnp_t)
         if img8 is not None:
             store_patches(m, kf.id, img8, self.cfg.search.patch_px)
             if self._matcher() is SearchMatcher.KLT:

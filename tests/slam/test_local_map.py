@@ -130,3 +130,31 @@ def test_ba_window_stays_within_the_newest_visual_segment():
 
     cfg = TrackingConfig(local_window=6, ba_window=10)
     assert visual_ba_window(_map_with_keyframes(12, segment_start=9), cfg, event_only=True)[0] == 3
+
+
+def test_points_triangulated_at_a_predicted_pose_take_the_depth_level_of_the_older_points():
+    from evpose.slam.local_map import triangulate_new_points
+
+    # The predicted keyframe's baseline is 0.3 map units where the map's own scale would make it 0.6: its new points come
+    # out at half the depth of the older points (same true depths, 4.5-5.5) until levelled to their median.
+    m, K, t2p = _two_keyframes(0.3)
+    for p in m.points.values():
+        p.xyz = p.xyz * 2.0
+    cfg = TrackingConfig(min_triangulation_deg=1.0, min_pair_parallax_deg=0.0, coast_depth_level=True)
+    off = TrackingConfig(min_triangulation_deg=1.0, min_pair_parallax_deg=0.0)
+    m2, _, t2p2 = _two_keyframes(0.3)
+    for p in m2.points.values():
+        p.xyz = p.xyz * 2.0
+    triangulate_new_points(m2, K, m2.keyframes[1], t2p2, off, 1000, predicted=True)
+    z_raw = np.median([p.xyz[2] for pid, p in m2.points.items() if pid >= 1000])
+    triangulate_new_points(m, K, m.keyframes[1], t2p, cfg, 1000, predicted=True)
+    z_new = np.median([p.xyz[2] for pid, p in m.points.items() if pid >= 1000])
+    z_old = np.median([p.xyz[2] for pid, p in m.points.items() if pid < 1000])
+    assert abs(z_raw / z_old - 0.5) < 0.05
+    assert abs(z_new / z_old - 1.0) < 0.05
+    # A keyframe placed by the images keeps its triangulation as it is.
+    m3, _, t2p3 = _two_keyframes(0.3)
+    for p in m3.points.values():
+        p.xyz = p.xyz * 2.0
+    triangulate_new_points(m3, K, m3.keyframes[1], t2p3, cfg, 1000, predicted=False)
+    assert abs(np.median([p.xyz[2] for pid, p in m3.points.items() if pid >= 1000]) - z_raw) < 1e-9
