@@ -98,10 +98,27 @@ class VisualFailureHandling:
         # No BA on a keyframe at a predicted pose (InertialConfig.coast_ba: with one fixed keyframe it slid along the scale).
         # No points from dead reckoning either (TrackingConfig.coast_triangulate off): they let PnP place the map again
         # on the coast's own error.
-        T_wc = self._new_keyframe(m, mci.t_us, T_wc, mci.image8, adjust=False, triangulate=tc.coast_triangulate)
+        triangulate = self._coast_triangulates(m, mci.t_us, T_wc)
+        T_wc = self._new_keyframe(m, mci.t_us, T_wc, mci.image8, adjust=False, triangulate=triangulate)
         if self.cfg.lines.update_from_coast:
             self._lines_after_pose(m, mci, T_wc)
         return SlamStatus.COASTING, f"visual tracking failed ({reason}); pose coasted on the map's recent motion, map {m.id} kept", T_wc.copy(), True
+
+    def _coast_triangulates(self, m, t_us: int, T_wc: np.ndarray) -> bool:
+        """Whether the keyframe at coasted pose ``T_wc`` triangulates: always with ``TrackingConfig.coast_triangulate``;
+        without it only on a map with at least ``coast_triangulate_min_map_s`` of trajectory up to its last PnP pose
+        whose coast has turned at most ``coast_triangulate_max_rate_dps`` per second since that pose (a landing's slow
+        spiral, whose map would otherwise run out of points, not a room's turn)."""
+        tc = self.cfg.tracking
+        if tc.coast_triangulate:
+            return True
+        if tc.coast_triangulate_max_rate_dps <= 0 or self._last_pnp_t not in m.traj_t:
+            return False
+        if (self._last_pnp_t - m.traj_t[0]) / 1e6 < tc.coast_triangulate_min_map_s:
+            return False
+        R_rel = m.traj_T[m.traj_t.index(self._last_pnp_t)][:3, :3].T @ T_wc[:3, :3]
+        deg = np.degrees(np.arccos(np.clip((np.trace(R_rel) - 1.0) / 2.0, -1.0, 1.0)))
+        return bool(deg <= tc.coast_triangulate_max_rate_dps * max(t_us - self._last_pnp_t, 0) / 1e6)
 
     def _edge_track(self, m, mci: MciResult, T_pred: np.ndarray) -> tuple[SlamStatus, str, np.ndarray, bool] | None:
         """Event-only: the pose of ``mci`` from the map's points on its edges with ``T_pred`` (the coast) as the prior

@@ -118,7 +118,7 @@ def test_a_coasted_keyframe_triangulates_no_points_when_coast_triangulate_is_off
     for on in (True, False):
         calls = []
         real = slam_system.triangulate_new_points
-        monkeypatch.setattr(slam_system, "triangulate_new_points", lambda *a: calls.append(1) or real(*a))
+        monkeypatch.setattr(slam_system, "triangulate_new_points", lambda *a, **k: calls.append(1) or real(*a, **k))
         cfg = SlamConfig()
         cfg.tracking.coast_triangulate = on
         slam = EventSlam(cfg, early_map.calibration)
