@@ -334,15 +334,17 @@ class TrackingConfig:
     77.6 %): most coasts there end in a loss. Session 12 (``reference_fraction`` 0.5): indoor seeds 0-3 6.84 -> 9.38 %,
     80.2 -> 52.4 %; landing seeds 4 / 7 / 20 / 21 3.34 / 4.54 / 4.83 / 6.72 -> 2.16 / 4.54 / 4.83 / 7.19 % (tracked
     96.5 -> 83.8 % on seed 4)."""
-    coast_triangulate: bool = True
-    """Event-only coasting: the keyframe made at each coasted pose triangulates new points (off: it only records the
-    tracks, so no point comes from dead reckoning and PnP places the map again only on points tracked images fixed).
+    coast_triangulate: bool = False
+    """Event-only coasting: the keyframe made at each coasted pose triangulates new points (before session 28). Off
+    (the default since): it only records the tracks, so no point comes from dead reckoning and PnP places the map again
+    only on points tracked images fixed, except on a mature map turning slowly (``coast_triangulate_max_rate_dps``,
+    ``coast_triangulate_min_map_s``), whose coast is what keeps it alive when its old points leave the view.
     Session 28 (:mod:`evpose.slam.event_coasting`): 68 % of the default coasts end placed again on points the coast's
     own rotation error triangulated; off, indoor seeds 0-7 x the defaults and four neutral perturbations (40 runs) ATE
     7.63 -> 3.29 % (held-out seeds 8-11, 20 runs: 8.33 -> 3.58 %), but from the events 41.9 -> 26.1 % and maps 149 ->
     213, and landing event-only seed 8 1.98 -> 5.31 % (seeds 0-11 1.50 -> 1.78 %, 12 -> 11 within 2 %). Why seed 8 splits
     and a narrower form that keeps it: ``coast_triangulate_max_rate_dps``."""
-    coast_triangulate_max_rate_dps: float = field(default=0.0, metadata={"min": 0.0, "max": 500.0, "step": 1.0, "unit": "deg/s"})
+    coast_triangulate_max_rate_dps: float = field(default=40.0, metadata={"min": 0.0, "max": 500.0, "step": 1.0, "unit": "deg/s"})
     """Event-only coasting with ``coast_triangulate`` off: a coasted keyframe still triangulates if its coast has turned
     at most this much per second since the map's last PnP pose, on a map at least ``coast_triangulate_min_map_s`` old
     (0: none does), degrees per second. Session 28 (``/tmp/s28/seed828``: ``log8.py`` per-MCI log, ``coastlog2.py`` per
