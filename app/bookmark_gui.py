@@ -31,6 +31,21 @@ HINTS = {
 """Hover text of the folder's controls."""
 
 
+def _shown(path) -> str:
+    """A file as the notice line names it: from the current folder when inside it (an absolute path has no break in
+    it and ran past the panel's edge; ``layouts/bookmarks/bookmarks.json`` fits)."""
+    try:
+        return str(Path(path).resolve().relative_to(Path.cwd().resolve()))
+    except ValueError:
+        return str(path)
+
+
+def _located(exc: Exception) -> str:
+    """An error for the notice line, its file as code (:func:`_shown`)."""
+    path, text = getattr(exc, "path", None), str(exc)
+    return f"`{_shown(path)}`{text[len(path):]}" if path and text.startswith(path) else text
+
+
 class BookmarkGui:
     """The Bookmarks folder's controls, wired to a :class:`ViewerApp`, and the bookmarks as last read."""
 
@@ -61,7 +76,7 @@ class BookmarkGui:
             self._show(load_bookmarks(self.path))
         except EvposeError as exc:
             self._show([])
-            self._say(f"**bookmarks not read:** {exc} (fix or move the file; nothing is saved to it until then)")
+            self._say(f"**bookmarks not read:** {_located(exc)} (fix or move the file; nothing is saved to it until then)")
             self._mark_file(False)
             return False
         self._mark_file(True)
@@ -109,11 +124,11 @@ class BookmarkGui:
             with self._file_lock:
                 bookmarks = add_bookmark(bookmark, self.path)
         except (EvposeError, OSError) as exc:  # OSError: a file name too long, no permission
-            self._say(f"**not saved:** {exc}")
+            self._say(f"**not saved:** {_located(exc)}")
             return None
         self._show(bookmarks, len(bookmarks) - 1)
         self._mark_file(True)  # read and written: mended if it was not
-        self._say(f"saved {bookmark.label(len(bookmarks))} to `{self.path}`")
+        self._say(f"saved {bookmark.label(len(bookmarks))} to `{_shown(self.path)}`")
         return bookmark
 
     def delete(self, bookmark: Bookmark | None) -> bool:
@@ -123,7 +138,7 @@ class BookmarkGui:
             with self._file_lock:
                 bookmarks = remove_bookmark(bookmark, self.path)
         except (EvposeError, OSError) as exc:  # OSError: a file name too long, no permission
-            self._say(f"**not deleted:** {exc}")
+            self._say(f"**not deleted:** {_located(exc)}")
             return False
         self._show(bookmarks)
         self._mark_file(True)

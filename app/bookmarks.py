@@ -2,7 +2,7 @@
 JSON file that keeps them; no viser here (the Bookmarks folder is app/bookmark_gui.py).
 
 A teacher asked to save the moment on screen and come back to it in class (session 28). The file is
-``<layout folder>/bookmarks/bookmarks.json`` by default (``AppConfig.bookmarks_file``), beside the layouts a lesson
+``<layout folder>/bookmarks/bookmarks.json`` by default (``evpose app --bookmarks FILE``: another), beside the layouts a lesson
 uses but in a folder of its own: in ``layouts/`` itself it was listed as a broken layout named "bookmarks", and saving
 a layout of that name would have replaced it. Its form::
 
