@@ -6,9 +6,9 @@ import socket
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from app.bookmarks import BOOKMARKS_NAME
 from app.disk_cache import DiskCacheConfig
 from app.frame_cache import FrameCacheConfig
-from app.bookmarks import BOOKMARKS_NAME
 from app.layouts import LAYOUT_DIR
 from app.player import PlayerConfig
 from evpose.errors import InputError

@@ -1,10 +1,11 @@
 """The Bookmarks folder of the left panel: save the moment on screen under a title, list the saved ones, go back to one.
 
 Going to a bookmark applies its layout first (which sets the layout's own stage), then opens its recording, map and
-viewer mode if another is shown, seeks exactly to its time (not to the nearest kept frame, as the time slider may:
-app/player_config.py ``snap_seeks``; snapping, the browser test's bookmark at step 33 came back at step 32) and sets its stage. The file and its format are app/bookmarks.py. A notice line
-under the controls says what happened; a bookmark file that cannot be read is named there with its problem, and
-saving or deleting is refused until it is mended (it is never written over).
+viewer mode if another is shown, seeks exactly to its time and sets its stage. Exactly: not to the kept frame at or
+before it, as the time slider may (app/player_config.py ``snap_seeks``); snapping, the browser test's bookmark at
+step 33 came back at step 32. The file and its format are app/bookmarks.py. A notice line under the controls says
+what happened; a bookmark file that cannot be read is named there with its problem (the folder opens and its title
+says so), and saving or deleting is refused until it is mended: it is never written over.
 """
 
 from __future__ import annotations
