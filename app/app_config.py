@@ -6,6 +6,7 @@ import socket
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from app.bookmarks import BOOKMARKS_NAME
 from app.disk_cache import DiskCacheConfig
 from app.frame_cache import FrameCacheConfig
 from app.layouts import LAYOUT_DIR
@@ -29,6 +30,8 @@ class AppConfig:
     """Where exports are written (also offered as browser downloads)."""
     layout_dir: Path = LAYOUT_DIR
     """Folder of layout files."""
+    bookmarks_file: Path | None = None
+    """The lesson bookmarks' file (app/bookmarks.py); None: ``bookmarks/bookmarks.json`` in :attr:`layout_dir`."""
     player: PlayerConfig = field(default_factory=PlayerConfig)
     """Pacing, coalescing and prefetch of the player."""
     frame_cache: FrameCacheConfig = field(default_factory=FrameCacheConfig)
@@ -41,6 +44,10 @@ class AppConfig:
     player alone: drawn after 3-4 ms instead of 8.3-14 s, ``python -m app.bench --only far_seek``, load 2-7).
     ``evpose app`` turns it on (``--no-warm-up``: off); off here so viewers made in code (tests, benchmarks) start
     no process unless asked. Off whenever the disk cache is."""
+
+    def bookmarks_path(self) -> Path:
+        """Where the lesson bookmarks are kept."""
+        return self.bookmarks_file if self.bookmarks_file is not None else self.layout_dir / BOOKMARKS_NAME
 
 
 def check_port_free(host: str, port: int) -> None:

@@ -268,7 +268,9 @@ class LayoutGui:
                              f"{placed.region_widths()['right']} px wide (wider windows get the layout as it is)")
         for name in PANELS:
             place = self.layout.panels[name]
-            if place.visible and shown.get(name) != place.dock:
+            # Not yet placed (a layout being applied on another thread, the window check's: KeyError in a browser test
+            # that switched layouts); the placement that follows describes it.
+            if place.visible and name in shown and shown[name] != place.dock:
                 anchor = dock_anchor(place.dock)
                 why = "is hidden" if not self.layout.panels[anchor].visible else "floats"
                 lines.append(f"- {name}: `{place.dock}` but {anchor} {why}, so `{shown[name]}`")

@@ -109,8 +109,9 @@ class Player:
     def step_back(self) -> None:
         self._queue.put(("step", -1))
 
-    def seek(self, t_us: int) -> None:
-        self._queue.put(("seek", int(t_us)))
+    def seek(self, t_us: int, exact: bool = False) -> None:
+        """Show the step at ``t_us``; ``exact``: that very step, never a kept frame before it (PlayerConfig.snap_seeks)."""
+        self._queue.put(("seek", int(t_us), bool(exact)))
 
     def set_speed(self, speed: float) -> None:
         self._queue.put(("speed", float(min(10.0, max(0.1, speed)))))
@@ -333,7 +334,7 @@ class Player:
             self._ready = None
             self._publish(frame if frame is not None else self.last_frame)
         elif kind == "seek":
-            self._seek(cmd[1])
+            self._seek(cmd[1], cmd[2])
             self._last_advance_wall = None
         elif kind == "speed":
             self.speed = cmd[1]

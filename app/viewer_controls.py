@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from app.bookmark_gui import BookmarkGui
 from app.engine_factory import MODES
 from app.hotkeys import bind_hotkeys
 from app.layout_gui import LayoutGui
@@ -89,6 +90,8 @@ def build_main_panel(app: ViewerApp) -> None:
                                                hint=OTHER_HINTS["overlay"])
     with g.add_folder("Layout", expand_by_default=False):
         app.layout_gui = LayoutGui(g, app.cfg.layout_dir, app._notify, app._layout_applied, app._redraw)
+    with g.add_folder("Bookmarks", expand_by_default=False) as folder:  # a lesson's saved moments: app/bookmark_gui.py
+        app.bookmark_gui = BookmarkGui(app, app.cfg.bookmarks_path(), folder)
     with g.add_folder("Export", expand_by_default=False):
         app.export_buttons = g.add_button_group("export", ["trajectory", "config", "screenshot", "GIF"], hint=OTHER_HINTS["export"])
         app.export_info = g.add_markdown("")

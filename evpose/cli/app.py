@@ -47,6 +47,21 @@ def check_arguments(data: list[Path], port: int, layout: str, export_dir: Path, 
     check_outputs((), folders=(export_dir, cache_dir))
 
 
+def warn_bookmarks(path: Path) -> None:
+    """One line on stderr when the bookmarks file cannot be read. Not an error: a slip in a bookmark must not keep a
+    teacher's viewer from starting (the Bookmarks folder names the problem too, and nothing is saved over the file)."""
+    import sys
+
+    from app.bookmarks import load_bookmarks
+
+    from evpose.errors import EvposeError, one_line
+
+    try:
+        load_bookmarks(path)
+    except EvposeError as exc:
+        print(f"evpose app: warning: bookmarks not read: {one_line(str(exc))}", file=sys.stderr, flush=True)
+
+
 def prepare_recording(recording: Path, map_path: Path | None, data: list[Path], cache, acquire_s: float = DEFAULT_ACQUIRE_S) -> int:
     """``evpose app --prepare``: fill the disk cache for ``recording`` (and its map) as the warm-up does, printing progress.
 
@@ -111,6 +126,7 @@ def main(
     prepare: Path | None = None,
     map: Path | None = None,  # noqa: A002 - the option is --map
     acquire_s: float = DEFAULT_ACQUIRE_S,
+    bookmarks: Path | None = None,
 ) -> int:
     """Start the browser-based viewer: browse, play, step and tune the tracker on recordings and maps.
 
@@ -131,6 +147,8 @@ def main(
         acquire_s: ``--prepare`` stops with an error, as ``evpose track`` does, if no update registers against the map
             within this many seconds of the start, or the registrations there are no better than chance (a wrong map;
             the viewer only warns, as it must show the pairing); 0 = never.
+        bookmarks: The lesson bookmarks' file (default ``layouts/bookmarks/bookmarks.json``, beside the layouts); one
+            that cannot be read is a one-line warning here and in the viewer's Bookmarks folder, and is never written over.
     """
     from app.disk_cache import DiskCacheConfig
     from app.server import AppConfig, ViewerApp
@@ -140,8 +158,10 @@ def main(
     if prepare is not None:
         return prepare_recording(prepare, map, data, cache, acquire_s)
     check_arguments(data, port, layout, export_dir, cache_dir)
-    viewer = ViewerApp(AppConfig(data=list(data), host=host, port=port, layout=layout, export_dir=export_dir,
-                                 disk_cache=cache, warm_up=warm_up))
+    cfg = AppConfig(data=list(data), host=host, port=port, layout=layout, export_dir=export_dir, disk_cache=cache,
+                    warm_up=warm_up, bookmarks_file=bookmarks)
+    warn_bookmarks(cfg.bookmarks_path())
+    viewer = ViewerApp(cfg)
     print(f"evpose app: serving http://{host}:{port} (Ctrl+C to stop)", flush=True)
     # A service manager's SIGTERM stops the viewer as Ctrl+C does (the warm-up process and its queues shut down too).
     signal.signal(signal.SIGTERM, _interrupt)

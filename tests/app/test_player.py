@@ -410,3 +410,19 @@ def test_play_goes_over_a_stretch_without_events_at_once_and_says_so(bar_recordi
         assert p.quiet.ending_at(dataclasses.replace(after, t_us=1_005_000), shown, 5_000, 500_000) is None
     finally:
         p.stop()
+
+
+def test_an_exact_seek_shows_that_very_step_not_the_kept_frame_before_it(squares_scene):
+    # A lesson bookmark goes back to the step saved (app/bookmark_gui.py); the slider's seek may land on the grid.
+    rec, cmap = squares_scene
+    p, frames, _ = _tracker_player(rec, cmap)
+    try:
+        p.step_forward()
+        p.wait_idle()
+        t83 = p.call(lambda e: e.seek_step(83).t_us).result(60)
+        p.seek(t83)
+        assert p.wait_idle(60) and frames[-1].index == 80  # snapped to the frame grid (every 4 steps of 5 ms)
+        p.seek(t83, exact=True)
+        assert p.wait_idle(60) and frames[-1].index == 83 and frames[-1].t_us == t83
+    finally:
+        p.stop()

@@ -520,7 +520,9 @@ def test_every_control_of_the_main_and_teaching_panels_has_hover_help(viewer):
     for handle in (viewer.rec_dropdown, viewer.map_dropdown, viewer.mode_dropdown, viewer.rescan_button, viewer.play_button,
                    viewer.step_buttons, viewer.time_slider, viewer.speed_slider, viewer.loop_box, viewer.overlay_dropdown,
                    viewer.export_buttons, viewer.stage_dropdown, viewer.stage_buttons, viewer.rerun_dropdown,
-                   viewer.param_buttons, viewer.config_path, viewer.layout_gui.dropdown, viewer.layout_gui.name_box):
+                   viewer.param_buttons, viewer.config_path, viewer.layout_gui.dropdown, viewer.layout_gui.name_box,
+                   viewer.bookmark_gui.title_box, viewer.bookmark_gui.save_button, viewer.bookmark_gui.dropdown,
+                   viewer.bookmark_gui.actions):
         assert handle.hint, handle.label
 
 

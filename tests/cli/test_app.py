@@ -146,3 +146,17 @@ def test_a_broken_saved_layout_is_a_one_line_error_before_the_server_starts(monk
     err = capsys.readouterr().err.strip()
     assert message in err and len(err.splitlines()) == 1
     assert not started
+
+
+def test_bookmarks_reach_the_viewer_and_an_unreadable_file_is_a_one_line_warning_not_an_error(monkeypatch, capsys, tmp_path):
+    from evpose.cli.main import run
+
+    seen = _capture_config(monkeypatch)
+    path = tmp_path / "lesson.json"
+    path.write_text('{"bookmarks": [')
+    with pytest.raises(_Started):
+        run(["app", "--data", "demo_data", "--port", "0", "--bookmarks", str(path)])
+    assert seen["cfg"].bookmarks_path() == path
+    err = capsys.readouterr().err.strip()
+    assert err == f"evpose app: warning: bookmarks not read: {path}: line 1: not valid JSON (Expecting value)"
+    assert path.read_text() == '{"bookmarks": ['
