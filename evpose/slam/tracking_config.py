@@ -372,7 +372,11 @@ class TrackingConfig:
     3.90). The map's age does the separating on these sets: at 60, 100 or 1e5 deg/s (map age 0.5 s) indoor 0-11
     defaults stay identical to off, since off the rooms coast only on maps 0.013-0.233 s old at their last PnP pose
     (``gatecount.py``, seeds 0 and 8: none of 132 / 107 coasted keyframes passes), against 2 s for landing seed 8; the
-    rate is kept as the guard for a mature map coasting into a fast turn."""
+    rate is kept as the guard for a mature map coasting into a fast turn. Made the default (with ``coast_triangulate``
+    off) by the lead, session 28, after held-out landing seeds 48-71 (``/tmp/s28/lead``: ``base_48-71`` /
+    ``rule_48-71``): 1.82 -> 1.90 %, 20 -> 20 within 2 %, the one seed changed 49 2.51 -> 4.54 % (off alone: also 66
+    8.35 -> 8.29); over landing seeds 0-71 within 2 % 63 -> 63; indoor seeds 0-7 defaults 6.84 -> 3.90 % (from the
+    events 40.8 -> 27.4 %, maps 30 -> 42, least tracked 86.2 -> 79.3 %: seed 7)."""
     coast_triangulate_min_map_s: float = field(default=0.5, metadata={"min": 0.0, "max": 3.0, "step": 0.05, "unit": "s"})
     """Event-only coasting: ``coast_triangulate_max_rate_dps`` lets only a map whose trajectory up to its last PnP pose
     spans at least this triangulate at coasted keyframes (0: any map), seconds."""
