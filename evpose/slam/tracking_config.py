@@ -376,7 +376,8 @@ class TrackingConfig:
     off) by the lead, session 28, after held-out landing seeds 48-71 (``/tmp/s28/lead``: ``base_48-71`` /
     ``rule_48-71``): 1.82 -> 1.90 %, 20 -> 20 within 2 %, the one seed changed 49 2.51 -> 4.54 % (off alone: also 66
     8.35 -> 8.29); over landing seeds 0-71 within 2 % 63 -> 63; indoor seeds 0-7 defaults 6.84 -> 3.90 % (from the
-    events 40.8 -> 27.4 %, maps 30 -> 42, least tracked 86.2 -> 79.3 %: seed 7)."""
+    events 40.8 -> 27.4 %, maps 30 -> 42, least tracked 86.2 -> 79.3 %: seed 7); indoor seeds 12-19, simulated after the choice: 8.69 ->
+    4.24 % (7 of 8 better, least tracked 84.1 %)."""
     coast_triangulate_min_map_s: float = field(default=0.5, metadata={"min": 0.0, "max": 3.0, "step": 0.05, "unit": "s"})
     """Event-only coasting: ``coast_triangulate_max_rate_dps`` lets only a map whose trajectory up to its last PnP pose
     spans at least this triangulate at coasted keyframes (0: any map), seconds."""
