@@ -26,6 +26,7 @@ from pathlib import Path
 from app.engine_factory import MODES
 from app.teaching import Stage
 from evpose.errors import InputError
+from evpose.io.json_file import read_json
 
 BOOKMARKS_NAME = Path("bookmarks") / "bookmarks.json"
 """Where the bookmarks are kept, relative to the layout folder (see the module docstring for why not in it)."""
@@ -102,14 +103,7 @@ def load_bookmarks(path: str | Path) -> list[Bookmark]:
     path = Path(path)
     if not path.exists():
         return []
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise InputError(path, f"cannot read ({exc.strerror})") from None
-    except UnicodeDecodeError:
-        raise InputError(path, "not UTF-8 text") from None
-    except json.JSONDecodeError as exc:
-        raise InputError(path, f"not valid JSON ({exc.msg})", f"line {exc.lineno}") from None
+    data = read_json(path)
     if not isinstance(data, dict) or set(data) != {"bookmarks"} or not isinstance(data["bookmarks"], list):
         raise InputError(path, 'must be an object with one key, "bookmarks", a list')
     return [Bookmark.from_dict(b, str(path), f"bookmarks[{i}]") for i, b in enumerate(data["bookmarks"])]

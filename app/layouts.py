@@ -11,6 +11,7 @@ from pathlib import Path
 from app.scene import SceneToggles
 from app.teaching import Stage
 from evpose.errors import InputError
+from evpose.io.json_file import read_json
 
 LAYOUT_DIR = Path(__file__).resolve().parent.parent / "layouts"
 """The repository's ``layouts/`` folder."""
@@ -214,13 +215,7 @@ def layout_path(name: str, directory: Path = LAYOUT_DIR) -> Path:
 
 def load_layout(path: str | Path) -> Layout:
     path = Path(path)
-    try:
-        data = json.loads(path.read_text())
-    except OSError as exc:
-        raise InputError(path, f"cannot read ({exc.strerror})") from None
-    except json.JSONDecodeError as exc:
-        raise InputError(path, f"not valid JSON ({exc.msg})", f"line {exc.lineno}") from None
-    return Layout.from_dict(data, str(path))
+    return Layout.from_dict(read_json(path), str(path))
 
 
 def list_layouts(directory: Path = LAYOUT_DIR) -> dict[str, Layout | str]:

@@ -29,8 +29,12 @@ def test_bad_layout_files_name_the_problem(tmp_path):
         (tmp_path / f"{stem}.json").write_text(text)
         with pytest.raises(InputError, match=needle):
             load_layout(tmp_path / f"{stem}.json")
+    # Bytes that are not UTF-8 (a layout saved by another editor) raised UnicodeDecodeError out of list_layouts.
+    (tmp_path / "latin.json").write_bytes(b'{"name": "caf\xe9"}')
+    with pytest.raises(InputError, match="latin.json: not UTF-8 text"):
+        load_layout(tmp_path / "latin.json")
     listed = list_layouts(tmp_path)
-    assert all(isinstance(v, str) for v in listed.values())
+    assert set(listed) == set(cases) | {"latin"} and all(isinstance(v, str) for v in listed.values())
 
 
 def test_saved_layout_round_trips(tmp_path):
