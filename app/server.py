@@ -17,15 +17,16 @@ import viser
 
 from app.app_config import AppConfig, cache_inside_data, check_port_free
 from app.browser import DataEntry, DataRoots, EntryKind, guess_map_for, load_cloud, load_map, load_recording, scan_note
-from app.config_gui import ConfigGui, load_config_file
+from app.config_gui import ConfigGui
 from app.engine import Engine
 from app.engine_factory import MODES, NO_MAP_NOTE, engine_factory
-from app.export import export_action, write_config
+from app.export import export_action
 from app.frame import Frame
 from app.hotkeys import SliderKeyGuard
 from app.layouts import Layout
 from app.panels import SLAM_PANELS, SLAM_PLACEHOLDER, TRACKER_PANELS, OverlayColour, panel_images
-from app.player import Player, PlayState, RerunFrom
+from app.param_panel import config_changed, param_action, rebuild_config_gui
+from app.player import Player, PlayState
 from app.plots import plot_context
 from app.scene import SceneView
 from app.slam_engine import slam_markdown
@@ -40,8 +41,6 @@ __all__ = ["AppConfig", "ViewerApp"]
 
 OPENING = "_opening "
 """How the status line starts while a recording's first step is computed."""
-CONFIG_SUFFIXES = (".yaml", ".yml", ".json")
-"""File name endings "save" writes a configuration under (YAML, or JSON for ``.json``)."""
 ERROR_NOTE = "**error:** "
 """How the status line's last paragraph starts when the player has failed since the step shown was drawn."""
 SLOW_REFRESH_S = 0.25
@@ -327,81 +326,15 @@ class ViewerApp:
         if self.last_frame is not None and self.player is not None:
             self.status.content = status_markdown(self.last_frame, engine, self.player.stats(), self.gaps)
 
+    # ------------------------------------------------------------------ parameters panel (app/param_panel.py)
     def _rebuild_config_gui(self, engine: Engine) -> None:
-        rejected = getattr(engine, "rejected_config", None)
-        if rejected is not None:
-            # The tracker cannot start with these parameters (visible map min depth at its 10 m maximum: no map point
-            # in view; mode "full" on a recording without IMU). Its controls stay, or come, so the value can be
-            # changed; replaced by the events-only view's they could not, and tuned values were lost.
-            shown, note = rejected, f"{engine.explanation} Change the parameters below to try again."
-        else:
-            # Not the class name ("TrackerConfig: changes re-run the tracker.", session 28): words a user reads.
-            shown, note = engine.config, engine.explanation or "The tracker's parameters: a change re-runs it, from the point chosen above."
-        if self.config_gui is not None and type(self.config_gui.config) is type(shown):
-            # The controls are the source of the engine's config; pushing it back would fight a user still dragging.
-            if self.param_info.content != note:  # re-rendering the panel would steal a dragging user's focus
-                self.param_info.content = note
-            return
-        if self.config_gui is not None:
-            self.config_gui.remove()
-        with self.params_tab:
-            self.config_gui = ConfigGui(self.gui, shown, self._config_changed)
-        self.key_guard.watch(h for h in self.config_gui.handles.values() if isinstance(h, viser.GuiSliderHandle))
-        self.param_info.content = note
+        rebuild_config_gui(self, engine)
 
     def _config_changed(self, config) -> None:
-        if self.player is not None:
-            self.player.set_config(config, RerunFrom(self.rerun_dropdown.value))
+        config_changed(self, config)
 
     def _param_action(self, action: str) -> None:
-        if self.config_gui is None:
-            return
-        typed = self.config_path.value.strip()  # "   " was saved as a file named by three spaces
-        try:
-            if action in ("save", "load") and not typed:
-                raise InputError(None, "type a file name in 'config file' first")
-            if action == "reset":
-                self.config_gui.reset()
-                self.param_info.content = "configuration reset to defaults"
-            elif action == "save":
-                path = write_config(self.config_gui.config, self._config_save_path(typed))
-                self.param_info.content = f"saved `{path}`"
-            elif action == "load":
-                path = self._readable_config_path(typed)
-                cfg = load_config_file(self.config_gui.cls, path)
-                self.config_gui.set_config(cfg)
-                self._config_changed(cfg)
-                self.param_info.content = f"loaded `{path}`"
-        except (EvposeError, OSError) as exc:
-            # OSError too (a 300-character name: "File name too long"): it ended in a traceback on the server's
-            # console and the panel said nothing.
-            self.param_info.content = f"**{action} failed:** {exc}"
-
-    def _export_path(self, path: str) -> Path:
-        """Writes go to the export folder only, whatever path was typed (by file name)."""
-        self.cfg.export_dir.mkdir(parents=True, exist_ok=True)
-        return self.cfg.export_dir / Path(path).name
-
-    def _config_save_path(self, typed: str) -> Path:
-        """Where "save" writes a configuration: the export folder, a ``.yaml``/``.yml``/``.json`` name (``.yaml`` added
-        to a name without a suffix). Any other suffix is refused: with ``--export-dir`` on a data folder, saving as
-        ``landing.h5`` replaced the 2.5 MB recording by 4.8 kB of YAML."""
-        path = self._export_path(typed)
-        if not path.suffix:
-            return path.with_name(path.name + ".yaml")
-        if path.suffix.lower() not in CONFIG_SUFFIXES:
-            raise InputError(typed, f"a configuration is saved as {', '.join(CONFIG_SUFFIXES)}, not {path.suffix}")
-        return path
-
-    def _readable_config_path(self, path: str) -> Path:
-        p = Path(path)
-        export = (self.cfg.export_dir / p.name).resolve()
-        if export.is_file() and (not p.is_absolute() or p.resolve() == export):
-            return export
-        if not p.is_absolute() and not p.exists() and not any((root / p).exists() for root in self.roots.roots):
-            # A mistyped name of a saved file was "refused: outside the data directories", as if it were forbidden.
-            raise InputError(path, f"no such file in the export folder {self.cfg.export_dir} or the data folders")
-        return self.roots.check(p)
+        param_action(self, action)
 
     # ------------------------------------------------------------------ view options
     def _set_toggle(self, name: str, value: bool) -> None:
