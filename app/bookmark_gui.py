@@ -172,7 +172,7 @@ class BookmarkGui:
         self.to_delete = bookmark
         self.confirm_button.visible = self.keep_button.visible = True
         self._say(f"**delete {bookmark.label(self.bookmarks.index(bookmark) + 1)}?** It is removed from the file for "
-                  "good: press \"yes, delete\" below, or \"no, keep it\".")
+                  "good: press \"yes, delete\" or \"no, keep it\" (above).")
         return True
 
     def _cancel_delete(self, say: bool = False) -> None:

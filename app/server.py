@@ -152,14 +152,26 @@ class ViewerApp:
             return False
         self.mode_dropdown.value = mode
         map_display = self.map_dropdown.value if self.map_dropdown.value in self.map_dropdown.options else None
-        return self.select(self.rec_dropdown.value, map_display)
+        return self.select(self.rec_dropdown.value, map_display, keep_moment=True)
 
-    def select(self, rec_display: str, map_display: str | None = None) -> bool:
-        """Load a recording (and a map, guessed if not given); errors are shown, never raised to the server."""
+    def select(self, rec_display: str, map_display: str | None = None, keep_moment: bool = False) -> bool:
+        """Load a recording (and a map, guessed if not given); errors are shown, never raised to the server.
+
+        ``keep_moment``: when it is the recording shown (another viewer mode or map), go on at the time shown, not at
+        its start. Session 29: switching to SLAM at 2.5 s of landing showed its first step, the time slider back at 0
+        with no word why, and the moment being looked at had to be found again (SLAM computes up to it, with the
+        "computing ... to reach the seek" line; a seek elsewhere or pause gives that up)."""
         with self._select_lock:  # two tabs switching at once load one after the other
-            return self._select(rec_display, map_display)
+            return self._select(rec_display, map_display, keep_moment)
 
-    def _select(self, rec_display: str, map_display: str | None) -> bool:
+    def _moment_shown(self, entry: DataEntry) -> int | None:
+        """Microseconds from the start of the step shown, if it is of ``entry``'s recording (else None)."""
+        frame, player = self.last_frame, self.player
+        if frame is None or player is None or self._open_displays is None or self._shown_label != entry.label:
+            return None
+        return max(0, int(frame.t_us - player.engine.t_start_us))
+
+    def _select(self, rec_display: str, map_display: str | None, keep_moment: bool = False) -> bool:
         entry = self._entry(rec_display)
         if entry is None or entry.kind != EntryKind.RECORDING:
             return False
@@ -182,6 +194,7 @@ class ViewerApp:
             if self._open_displays is not None:  # the dropdowns name what is still shown, not the refused file
                 self.rec_dropdown.value, self.map_dropdown.value = self._open_displays
             return False
+        moment_us = self._moment_shown(entry) if keep_moment else None
         self.rec_dropdown.value = entry.display
         self.map_dropdown.value = map_entry.display if map_entry is not None else NO_MAP
         self._open_displays = (self.rec_dropdown.value, self.map_dropdown.value)
@@ -226,6 +239,9 @@ class ViewerApp:
             self.player.call(reset_view)
             # Keep the user's tuned parameters across recordings when the engine kind stays the same.
             self.player.load(factory, self.config_gui.config if self.config_gui is not None else None)
+            if moment_us:  # on the player's thread, after the load: the time is from the start of the engine it loads
+                player = self.player
+                player.call(lambda engine: player.seek(engine.t_start_us + moment_us, exact=True))
         with self._cloud_lock:
             self._cloud_entry, self._cloud_generation = map_entry, self._cloud_generation + 1
         self._ensure_cloud()

@@ -101,7 +101,7 @@ def build_main_panel(app: ViewerApp) -> None:
 def _wire_main_panel(app: ViewerApp) -> None:
     """Connect the left panel's controls to the viewer's methods."""
     app.rec_dropdown.on_update(lambda e: e.client is not None and app.select(app.rec_dropdown.value))
-    app.map_dropdown.on_update(lambda e: e.client is not None and app.select(app.rec_dropdown.value, app.map_dropdown.value))
+    app.map_dropdown.on_update(lambda e: e.client is not None and app.select(app.rec_dropdown.value, app.map_dropdown.value, keep_moment=True))
     app.mode_dropdown.on_update(lambda e: e.client is not None and app.set_mode(app.mode_dropdown.value))
     app.rescan_button.on_click(lambda e: app.refresh_entries())
     app.play_button.on_click(lambda e: app.player and app.player.toggle())
