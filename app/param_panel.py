@@ -1,7 +1,10 @@
 """The Parameters panel's behaviour: its controls follow the engine's configuration, a change re-runs the engine, and
 reset / save / load act on configuration files (the controls themselves are built in app/viewer_controls.py).
 
-Split out of app/server.py (session 29, which had grown past the project's 500-line limit); no behaviour changed.
+Split out of app/server.py (session 29, which had grown past the project's 500-line limit). The note above the controls
+is the engine's explanation; what the last button did stays above it until a control is moved (session 29: "load"
+rebuilt the engine, whose note then replaced "loaded `my.yaml`" within a second, so a load seemed to do nothing; so did
+"reset").
 """
 
 from __future__ import annotations
@@ -37,15 +40,23 @@ def rebuild_config_gui(app: ViewerApp, engine: Engine) -> None:
         shown, note = engine.config, engine.explanation or "The tracker's parameters: a change re-runs it, from the point chosen above."
     if app.config_gui is not None and type(app.config_gui.config) is type(shown):
         # The controls are the source of the engine's config; pushing it back would fight a user still dragging.
-        if app.param_info.content != note:  # re-rendering the panel would steal a dragging user's focus
-            app.param_info.content = note
+        text = f"{app.param_said}\n\n{note}" if app.param_said else note
+        if app.param_info.content != text:  # re-rendering the panel would steal a dragging user's focus
+            app.param_info.content = text
         return
     if app.config_gui is not None:
         app.config_gui.remove()
     with app.params_tab:
-        app.config_gui = ConfigGui(app.gui, shown, lambda config: config_changed(app, config))
+        app.config_gui = ConfigGui(app.gui, shown, lambda config: edited(app, config))
     app.key_guard.watch(h for h in app.config_gui.handles.values() if isinstance(h, viser.GuiSliderHandle))
+    app.param_said = ""  # other controls: what a button did to the earlier ones is past
     app.param_info.content = note
+
+
+def edited(app: ViewerApp, config) -> None:
+    """A control was moved (or reset): what the last button did is no longer the news."""
+    app.param_said = ""
+    config_changed(app, config)
 
 
 def config_changed(app: ViewerApp, config) -> None:
@@ -64,20 +75,23 @@ def param_action(app: ViewerApp, action: str) -> None:
             raise InputError(None, "type a file name in 'config file' first")
         if action == "reset":
             app.config_gui.reset()
-            app.param_info.content = "configuration reset to defaults"
+            said = "configuration reset to defaults"
         elif action == "save":
             path = write_config(app.config_gui.config, config_save_path(app.cfg.export_dir, typed))
-            app.param_info.content = f"saved `{path}`"
+            said = f"saved `{path}`"
         elif action == "load":
             path = readable_config_path(app, typed)
             cfg = load_config_file(app.config_gui.cls, path)
             app.config_gui.set_config(cfg)
             config_changed(app, cfg)
-            app.param_info.content = f"loaded `{path}`"
+            said = f"loaded `{path}`"
+        else:
+            return
     except (EvposeError, OSError) as exc:
         # OSError too (a 300-character name: "File name too long"): it ended in a traceback on the server's
         # console and the panel said nothing.
-        app.param_info.content = f"**{action} failed:** {exc}"
+        said = f"**{action} failed:** {exc}"
+    app.param_said = app.param_info.content = said
 
 
 def export_path(export_dir: Path, path: str) -> Path:

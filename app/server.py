@@ -87,6 +87,8 @@ class ViewerApp:
         self._slam_panels_shown: bool | None = None
         """Whether the image panels shown are SLAM mode's (None: none drawn yet)."""
         self._last_slow = 0.0
+        self.param_said = ""
+        """What the Parameters panel's last button did, shown above the engine's note (app/param_panel.py)."""
         self.key_guard = SliderKeyGuard()
         """Arrow/Home shortcuts pressed on a focused slider move the slider only (app/hotkeys.py)."""
         build_main_panel(self)  # the controls: app/viewer_controls.py
