@@ -10,7 +10,8 @@ says so), and saving or editing is refused until it is mended: it is never writt
 Session 29 added what a teacher preparing a lesson expects: rename (the chosen bookmark takes the title typed above),
 move up / down (the list is the lesson's order) and delete behind a confirmation: one click on "delete", next to "go
 to", removed a bookmark for good; now a red "yes, delete" and a "no, keep it" come up under the list and the notice
-line names the bookmark, and choosing another bookmark or any other action first keeps it.
+line names the bookmark, and choosing another bookmark or any other action first keeps it. "reload" reads the file
+again: one mended (or edited) by hand was read only at the next save or a restart.
 
 Session 28 on the bundled demo (/tmp/s28/ux28b/demo_check.py, disk cache warm): a bookmark at 3.000 s of landing
 (step 593, polarity stage, teaching layout) saved, indoor opened, then "go to": landing, step 593 at 3.000 s, the
@@ -38,7 +39,8 @@ HINTS = {
     "list": "The saved moments of the lesson; choosing one goes there",
     "actions": "go to: the chosen bookmark again (its layout, recording, step and stage); rename: give it the title "
                "typed above; delete: remove it from the file (asks first)",
-    "order": "Move the chosen bookmark up or down the list: a lesson's bookmarks in the order they are to be shown",
+    "order": "Move the chosen bookmark up or down the list (a lesson's bookmarks in the order they are to be shown); "
+             "reload: read the file again (after mending or editing it by hand)",
     "confirm": "Remove the bookmark named below from the file for good",
     "keep": "Keep the bookmark: nothing is deleted",
 }
@@ -76,7 +78,7 @@ class BookmarkGui:
         self.save_button = g.add_button("save this moment", hint=HINTS["save"])
         self.dropdown = g.add_dropdown("bookmarks", [NONE_SAVED], hint=HINTS["list"])
         self.actions = g.add_button_group("bookmark", ["go to", "rename", "delete"], hint=HINTS["actions"])
-        self.order = g.add_button_group("order", ["move up", "move down"], hint=HINTS["order"])
+        self.order = g.add_button_group("list", ["move up", "move down", "reload"], hint=HINTS["order"])
         # Shown only while a deletion waits to be confirmed (ask_delete).
         self.confirm_button = g.add_button("yes, delete", color="red", visible=False, hint=HINTS["confirm"])
         self.keep_button = g.add_button("no, keep it", visible=False, hint=HINTS["keep"])
@@ -87,22 +89,27 @@ class BookmarkGui:
         # A choice made in the browser goes there; the options rewritten here must not.
         self.dropdown.on_update(lambda e: e.client is not None and (self._cancel_delete() or self.go_to(self.chosen())))
         self.actions.on_click(lambda e: self._action(e.target.value))
-        self.order.on_click(lambda e: self._cancel_delete() or self.move(self.chosen(), -1 if e.target.value == "move up" else 1))
+        self.order.on_click(lambda e: self._cancel_delete() or (self.reload(say=True) if e.target.value == "reload" else
+                                                                 self.move(self.chosen(), -1 if e.target.value == "move up" else 1)))
         self.confirm_button.on_click(lambda e: self.delete(self.to_delete))
         self.keep_button.on_click(lambda e: self._cancel_delete(say=True))
         self.reload()
 
     # ------------------------------------------------------------------ the list
-    def reload(self) -> bool:
-        """Read the file again; an unreadable one is named in the notice line, the list emptied."""
+    def reload(self, say: bool = False) -> bool:
+        """Read the file again; an unreadable one is named in the notice line, the list emptied. ``say``: say what was
+        read (the "reload" button: a file mended by hand was read only at the next save, or a restart)."""
         try:
             self._show(load_bookmarks(self.path))
         except EvposeError as exc:
             self._show([])
-            self._say(f"**bookmarks not read:** {_located(exc)} (fix or move the file; nothing is saved to it until then)")
+            self._say(f"**bookmarks not read:** {_located(exc)} (fix or move the file, then press reload; nothing is "
+                      "saved to it until then)")
             self._mark_file(False)
             return False
         self._mark_file(True)
+        if say:
+            self._say(f"read {len(self.bookmarks)} bookmark{'s' * (len(self.bookmarks) != 1)} from `{_shown(self.path)}`")
         return True
 
     def _mark_file(self, readable: bool) -> None:

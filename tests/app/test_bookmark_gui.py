@@ -35,7 +35,9 @@ def test_a_malformed_bookmarks_file_is_named_in_one_line_and_saving_leaves_it_as
         assert app.bookmark_gui.save("a title") is None
         assert "not saved" in app.bookmark_gui.note.content and "not valid JSON" in app.bookmark_gui.note.content
         assert path.read_text() == '{"bookmarks": [{"title": "x"}'
-        path.write_text('{"bookmarks": []}')  # mended: the next save goes in
+        path.write_text('{"bookmarks": []}')  # mended: "reload" reads it, and the next save goes in
+        assert app.bookmark_gui.reload(say=True) and app.bookmark_gui.folder.label == "Bookmarks"
+        assert app.bookmark_gui.note.content == f"read 0 bookmarks from `{path}`"
         assert app.bookmark_gui.save("a title") is not None and len(app.bookmark_gui.dropdown.options) == 1
         assert app.bookmark_gui.dropdown.value.startswith("1. a title") and app.bookmark_gui.folder.label == "Bookmarks"
     finally:

@@ -114,3 +114,13 @@ def test_bookmarks_are_renamed_reordered_and_deleted_only_once_confirmed(page, v
     wait_for(lambda: [b.title for b in load_bookmarks(path)] == before, what="deleted once confirmed")
     page.get_by_role("button", name="yes, delete").wait_for(state="hidden", timeout=10_000)
     page.get_by_text("deleted 'the second, renamed'").first.wait_for(timeout=10_000)
+
+    # Edited by hand (a teacher's text editor): "reload" lists it without a restart.
+    from app.bookmarks import save_bookmarks
+    import dataclasses
+
+    marks = load_bookmarks(path)
+    save_bookmarks(marks + [dataclasses.replace(marks[0], title="typed by hand")], path)
+    page.get_by_role("button", name="reload", exact=True).click()
+    wait_for(lambda: [b.title for b in gui.bookmarks] == before + ["typed by hand"], what="the hand edit read")
+    page.get_by_text(f"read {len(before) + 1} bookmarks from").first.wait_for(timeout=10_000)
