@@ -1,5 +1,7 @@
 """Lesson bookmarks in a real headless Chromium: save the moment on screen, move away (another recording, stage and
-layout), go back to it; rename, move up and delete (only once confirmed) from the page."""
+layout), go back to it; rename, move up and delete (only once confirmed) from the page, and reload a hand edit."""
+
+import dataclasses
 
 import pytest
 
@@ -80,7 +82,7 @@ def test_a_saved_bookmark_brings_back_its_recording_step_stage_and_layout(page, 
 
 
 def test_bookmarks_are_renamed_reordered_and_deleted_only_once_confirmed(page, viewer):
-    from app.bookmarks import load_bookmarks
+    from app.bookmarks import load_bookmarks, save_bookmarks
 
     gui, path = viewer.bookmark_gui, viewer.cfg.bookmarks_path()
     wait_for(lambda: viewer.last_frame is not None and viewer.player.wait_idle(), timeout=60, what="a step shown")
@@ -116,9 +118,6 @@ def test_bookmarks_are_renamed_reordered_and_deleted_only_once_confirmed(page, v
     page.get_by_text("deleted 'the second, renamed'").first.wait_for(timeout=10_000)
 
     # Edited by hand (a teacher's text editor): "reload" lists it without a restart.
-    from app.bookmarks import save_bookmarks
-    import dataclasses
-
     marks = load_bookmarks(path)
     save_bookmarks(marks + [dataclasses.replace(marks[0], title="typed by hand")], path)
     page.get_by_role("button", name="reload", exact=True).click()
