@@ -279,6 +279,9 @@ class Player(Seeking):
         elif kind == "speed":
             self.speed = cmd[1]
             self._reanchor()
+            if self.state == PlayState.PAUSED:
+                # Nothing is drawn until play: the status line said "paused at 1.0x" after the speed was set to 3.
+                self._progress()
         elif kind == "loop":
             self.loop = cmd[1]
         elif kind == "load":

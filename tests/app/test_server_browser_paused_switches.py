@@ -1,5 +1,5 @@
-"""Switching the viewer mode or the map in a real headless Chromium keeps the moment shown: the same recording goes on
-at the same time in the other engine (it was back at its first step, the time slider at 0 with no word why)."""
+"""Switches made while paused, in a real headless Chromium: another viewer mode or map goes on at the moment shown (the
+same recording was back at its first step, the time slider at 0 with no word why), and a new speed is said at once."""
 
 import pytest
 
@@ -51,3 +51,18 @@ def test_switching_viewer_mode_and_map_goes_on_at_the_time_shown(page, viewer):
     wait_for(lambda: _at(viewer, EventsOnlyEngine, 200_000), timeout=60, what="events only at 0.2 s")
     wait_for(lambda: time_box.input_value() == "0.2", what="the page's time box at 0.2", detail=time_box.input_value)
     page.get_by_text("t = 0.200 s").first.wait_for(timeout=10_000)  # the status line says the same moment
+
+
+def test_a_speed_set_while_paused_is_said_in_the_status_line_at_once(page, viewer):
+    wait_for(lambda: viewer.last_frame is not None and viewer.player.wait_idle(5), timeout=60, what="a step shown")
+    assert viewer.player.state.value == "paused"
+    box = page.locator("label", has_text="speed [x]").first.locator(
+        "xpath=ancestor::div[contains(@class,'mantine-Flex-root')][1]").locator("input").last
+    box.fill("3")
+    box.press("Enter")
+    wait_for(lambda: viewer.player.speed == 3.0, what="the player at 3x")
+    # Nothing is drawn while paused: the line kept "paused at 1.0x" until play.
+    page.get_by_text("paused at 3.0x").first.wait_for(timeout=10_000)
+    box.fill("1")
+    box.press("Enter")
+    page.get_by_text("paused at 1.0x").first.wait_for(timeout=10_000)
