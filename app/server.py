@@ -396,6 +396,17 @@ class ViewerApp:
         if self.player is not None:
             self.player.set_speed(speed)
 
+    def _time_typed(self) -> None:
+        """Seek to the time slider's value, a value typed past either end brought inside it first."""
+        value = self.time_slider.value
+        seconds = float(np.clip(value, 0.0, self.time_slider.max))
+        if seconds != value:
+            # "100" typed in a 4 s recording: the box kept showing 100 while SLAM computed up to the last step (tens of
+            # seconds) and the engine clipped the seek. The write back does not seek again (no client: not a user's).
+            self.time_slider.value = seconds
+        if self.player is not None:
+            self.player.seek(self._slider_to_us(seconds))
+
     def _nudge_speed(self, factor: float) -> None:
         self.speed_slider.value = float(np.clip(round(self.speed_slider.value * factor, 1), 0.1, 10.0))
 

@@ -1,5 +1,8 @@
 """Switches made while paused, in a real headless Chromium: another viewer mode or map goes on at the moment shown (the
-same recording was back at its first step, the time slider at 0 with no word why), and a new speed is said at once."""
+same recording was back at its first step, the time slider at 0 with no word why), a new speed is said at once, and a
+time typed past the end is brought to the end in the box at once."""
+
+import threading
 
 import pytest
 
@@ -66,3 +69,23 @@ def test_a_speed_set_while_paused_is_said_in_the_status_line_at_once(page, viewe
     box.fill("1")
     box.press("Enter")
     page.get_by_text("paused at 1.0x").first.wait_for(timeout=10_000)
+
+
+def test_a_time_typed_past_the_end_is_brought_to_the_end_in_the_box(page, viewer):
+    wait_for(lambda: viewer.last_frame is not None and viewer.player.wait_idle(5), timeout=60, what="a step shown")
+    box = page.locator("label", has_text="time [s]").first.locator(
+        "xpath=ancestor::div[contains(@class,'mantine-Flex-root')][1]").locator("input").last
+    end = viewer.time_slider.max
+    gate = threading.Event()
+    viewer.player.call(lambda _engine: gate.wait(30))  # the player busy, as SLAM computing up to the end (demo: 20 s)
+    try:
+        box.fill("100")
+        box.press("Enter")
+        # At once, not once the player has drawn the last step.
+        wait_for(lambda: box.input_value() == f"{end:g}", timeout=10, what=f"the box at {end:g}", detail=box.input_value)
+    finally:
+        gate.set()
+    wait_for(lambda: viewer.player.wait_idle(5) and viewer.player.engine.is_last(viewer.last_frame), what="the last step shown")
+    box.fill("0")
+    box.press("Enter")
+    wait_for(lambda: viewer.player.wait_idle(5) and viewer.last_frame.index == 0, what="back at the first step")
