@@ -135,6 +135,16 @@ class BookmarkGui:
     def _say(self, text: str) -> None:
         self.note.content = text
 
+    def _refused(self, what: str, exc: Exception) -> None:
+        """Say why an edit was refused, and list the file as it is now when it can be read: a bookmark deleted by hand
+        or by another viewer stayed listed, and every edit of it was refused again ("not in the file any more")."""
+        try:
+            with self._file_lock:
+                self._show(load_bookmarks(self.path))
+        except EvposeError:
+            pass  # unreadable: the list stays as it was, the message says why
+        self._say(f"**{what}:** {_located(exc)}")
+
     # ------------------------------------------------------------------ actions
     def current(self, title: str) -> Bookmark:
         """The moment on screen as a bookmark titled ``title``."""
@@ -199,7 +209,7 @@ class BookmarkGui:
             with self._file_lock:
                 bookmarks = remove_bookmark(bookmark, self.path)
         except (EvposeError, OSError) as exc:  # OSError: a file name too long, no permission
-            self._say(f"**not deleted:** {_located(exc)}")
+            self._refused("not deleted", exc)
             return False
         self._show(bookmarks)
         self._mark_file(True)
@@ -215,7 +225,7 @@ class BookmarkGui:
             with self._file_lock:
                 bookmarks, index = rename_bookmark(bookmark, title, self.path)
         except (EvposeError, OSError) as exc:
-            self._say(f"**not renamed:** {_located(exc)}")
+            self._refused("not renamed", exc)
             return False
         self._show(bookmarks, index)
         self._mark_file(True)
@@ -231,7 +241,7 @@ class BookmarkGui:
             with self._file_lock:
                 bookmarks, index = move_bookmark(bookmark, delta, self.path)
         except (EvposeError, OSError) as exc:
-            self._say(f"**not moved:** {_located(exc)}")
+            self._refused("not moved", exc)
             return False
         self._show(bookmarks, index)
         self._mark_file(True)

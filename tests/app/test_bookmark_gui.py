@@ -1,5 +1,6 @@
 """The Bookmarks folder without a browser: a malformed bookmarks file is named in one line and never written over, and
-what a bookmark names that is gone is said (a recording or map: nothing changes; a layout: the rest comes back)."""
+what a bookmark names that is gone is said (a recording or map: nothing changes; a layout: the rest comes back); delete
+asks first, rename and move keep the bookmark chosen, and an edit of a bookmark gone from the file lists the file as it is."""
 
 import dataclasses
 import socket
@@ -96,5 +97,20 @@ def test_delete_asks_first_and_rename_and_move_keep_the_bookmark_chosen(tmp_path
         gui._action("delete")
         gui.delete(gui.to_delete)  # "yes, delete"
         assert load_bookmarks(path) == [a] and not gui.confirm_button.visible and gui.note.content == "deleted 'the second, renamed'"
+    finally:
+        app.stop()
+
+
+def test_an_edit_of_a_bookmark_gone_from_the_file_is_refused_and_the_list_shows_the_file(tmp_path):
+    path = tmp_path / "layouts" / "bookmarks" / "bookmarks.json"
+    a, b = (Bookmark(t, "data/x.h5", None, "tracking", 0, 0, "events", "debug") for t in ("first", "second"))
+    save_bookmarks([a, b], path)
+    app = _viewer(tmp_path)
+    try:
+        gui = app.bookmark_gui
+        save_bookmarks([a], path)  # "second" deleted by hand (or by another viewer) meanwhile
+        assert not gui.rename(b, "new title")
+        assert "not renamed:** " in gui.note.content and "no bookmark 'second' in the file any more" in gui.note.content
+        assert gui.bookmarks == [a] and load_bookmarks(path) == [a]  # listed as the file is: no stale entry left
     finally:
         app.stop()
