@@ -89,8 +89,7 @@ class BookmarkGui:
         # A choice made in the browser goes there; the options rewritten here must not.
         self.dropdown.on_update(lambda e: e.client is not None and (self._cancel_delete() or self.go_to(self.chosen())))
         self.actions.on_click(lambda e: self._action(e.target.value))
-        self.order.on_click(lambda e: self._cancel_delete() or (self.reload(say=True) if e.target.value == "reload" else
-                                                                 self.move(self.chosen(), -1 if e.target.value == "move up" else 1)))
+        self.order.on_click(lambda e: self._action(e.target.value))
         self.confirm_button.on_click(lambda e: self.delete(self.to_delete))
         self.keep_button.on_click(lambda e: self._cancel_delete(say=True))
         self.reload()
@@ -172,6 +171,7 @@ class BookmarkGui:
         return bookmark
 
     def _action(self, action: str) -> None:
+        """A button of the "bookmark" or "list" group; any but "delete" gives up a deletion waiting to be confirmed."""
         if action == "delete":
             self.ask_delete(self.chosen())
             return
@@ -180,6 +180,10 @@ class BookmarkGui:
             self.go_to(self.chosen())
         elif action == "rename":
             self.rename(self.chosen(), self.title_box.value)
+        elif action in ("move up", "move down"):
+            self.move(self.chosen(), -1 if action == "move up" else 1)
+        elif action == "reload":
+            self.reload(say=True)
 
     def ask_delete(self, bookmark: Bookmark | None) -> bool:
         """Ask before deleting ``bookmark``: the confirmation buttons come up and the notice line names it."""
