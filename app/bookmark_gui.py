@@ -5,7 +5,13 @@ viewer mode if another is shown, seeks exactly to its time and sets its stage. E
 before it, as the time slider may (app/player_config.py ``snap_seeks``); snapping, the browser test's bookmark at
 step 33 came back at step 32. The file and its format are app/bookmarks.py. A notice line under the controls says
 what happened; a bookmark file that cannot be read is named there with its problem (the folder opens and its title
-says so), and saving or deleting is refused until it is mended: it is never written over.
+says so), and saving or editing is refused until it is mended: it is never written over.
+
+Session 29 added what a teacher preparing a lesson expects: rename (the chosen bookmark takes the title typed above),
+move up / down (the list is the lesson's order) and delete behind a confirmation: one click on "delete", next to "go
+to", removed a bookmark for good; now a red "yes, delete" and a "no, keep it" come up under the list and the notice
+line names the bookmark, and choosing another bookmark or any other action first keeps it. "reload" reads the file
+again: one mended (or edited) by hand was read only at the next save or a restart.
 
 Session 28 on the bundled demo (/tmp/s28/ux28b/demo_check.py, disk cache warm): a bookmark at 3.000 s of landing
 (step 593, polarity stage, teaching layout) saved, indoor opened, then "go to": landing, step 593 at 3.000 s, the
@@ -18,7 +24,7 @@ import threading
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from app.bookmarks import Bookmark, add_bookmark, check_title, load_bookmarks, remove_bookmark
+from app.bookmarks import Bookmark, add_bookmark, check_title, load_bookmarks, move_bookmark, remove_bookmark, rename_bookmark
 from app.layouts import Layout
 from evpose.errors import EvposeError, InputError
 
@@ -27,11 +33,16 @@ if TYPE_CHECKING:
 
 NONE_SAVED = "(no bookmarks yet)"
 HINTS = {
-    "title": "A short title for the moment on screen, as the list below shows it",
+    "title": "A short title for the moment on screen, as the list below shows it (rename: the chosen bookmark's new title)",
     "save": "Keep the moment on screen (recording, map, viewer mode, step, teaching stage, layout) under the title "
             "above, in the bookmarks file",
     "list": "The saved moments of the lesson; choosing one goes there",
-    "actions": "go to: the chosen bookmark again (its layout, recording, step and stage); delete: remove it from the file",
+    "actions": "go to: the chosen bookmark again (its layout, recording, step and stage); rename: give it the title "
+               "typed above; delete: remove it from the file (asks first)",
+    "order": "Move the chosen bookmark up or down the list (a lesson's bookmarks in the order they are to be shown); "
+             "reload: read the file again (after mending or editing it by hand)",
+    "confirm": "Remove the bookmark named below from the file for good",
+    "keep": "Keep the bookmark: nothing is deleted",
 }
 """Hover text of the folder's controls."""
 
@@ -66,25 +77,38 @@ class BookmarkGui:
         self.title_box = g.add_text("bookmark title", "", hint=HINTS["title"])
         self.save_button = g.add_button("save this moment", hint=HINTS["save"])
         self.dropdown = g.add_dropdown("bookmarks", [NONE_SAVED], hint=HINTS["list"])
-        self.actions = g.add_button_group("bookmark", ["go to", "delete"], hint=HINTS["actions"])
+        self.actions = g.add_button_group("bookmark", ["go to", "rename", "delete"], hint=HINTS["actions"])
+        self.order = g.add_button_group("list", ["move up", "move down", "reload"], hint=HINTS["order"])
+        # Shown only while a deletion waits to be confirmed (ask_delete).
+        self.confirm_button = g.add_button("yes, delete", color="red", visible=False, hint=HINTS["confirm"])
+        self.keep_button = g.add_button("no, keep it", visible=False, hint=HINTS["keep"])
         self.note = g.add_markdown("")
-        self.save_button.on_click(lambda e: self.save(self.title_box.value))
+        self.to_delete: Bookmark | None = None
+        """The bookmark a deletion waits to be confirmed for (None: none)."""
+        self.save_button.on_click(lambda e: self._cancel_delete() or self.save(self.title_box.value))
         # A choice made in the browser goes there; the options rewritten here must not.
-        self.dropdown.on_update(lambda e: e.client is not None and self.go_to(self.chosen()))
-        self.actions.on_click(lambda e: self.go_to(self.chosen()) if e.target.value == "go to" else self.delete(self.chosen()))
+        self.dropdown.on_update(lambda e: e.client is not None and (self._cancel_delete() or self.go_to(self.chosen())))
+        self.actions.on_click(lambda e: self._action(e.target.value))
+        self.order.on_click(lambda e: self._action(e.target.value))
+        self.confirm_button.on_click(lambda e: self.delete(self.to_delete))
+        self.keep_button.on_click(lambda e: self._cancel_delete(say=True))
         self.reload()
 
     # ------------------------------------------------------------------ the list
-    def reload(self) -> bool:
-        """Read the file again; an unreadable one is named in the notice line, the list emptied."""
+    def reload(self, say: bool = False) -> bool:
+        """Read the file again; an unreadable one is named in the notice line, the list emptied. ``say``: say what was
+        read (the "reload" button: a file mended by hand was read only at the next save, or a restart)."""
         try:
             self._show(load_bookmarks(self.path))
         except EvposeError as exc:
             self._show([])
-            self._say(f"**bookmarks not read:** {_located(exc)} (fix or move the file; nothing is saved to it until then)")
+            self._say(f"**bookmarks not read:** {_located(exc)} (fix or move the file, then press reload; nothing is "
+                      "saved to it until then)")
             self._mark_file(False)
             return False
         self._mark_file(True)
+        if say:
+            self._say(f"read {len(self.bookmarks)} bookmark{'s' * (len(self.bookmarks) != 1)} from `{_shown(self.path)}`")
         return True
 
     def _mark_file(self, readable: bool) -> None:
@@ -109,6 +133,16 @@ class BookmarkGui:
 
     def _say(self, text: str) -> None:
         self.note.content = text
+
+    def _refused(self, what: str, exc: Exception) -> None:
+        """Say why an edit was refused, and list the file as it is now when it can be read: a bookmark deleted by hand
+        or by another viewer stayed listed, and every edit of it was refused again ("not in the file any more")."""
+        try:
+            with self._file_lock:
+                self._show(load_bookmarks(self.path))
+        except EvposeError:
+            pass  # unreadable: the list stays as it was, the message says why
+        self._say(f"**{what}:** {_located(exc)}")
 
     # ------------------------------------------------------------------ actions
     def current(self, title: str) -> Bookmark:
@@ -136,18 +170,86 @@ class BookmarkGui:
         self._say(f"saved {bookmark.label(len(bookmarks))} to `{_shown(self.path)}`")
         return bookmark
 
+    def _action(self, action: str) -> None:
+        """A button of the "bookmark" or "list" group; any but "delete" gives up a deletion waiting to be confirmed."""
+        if action == "delete":
+            self.ask_delete(self.chosen())
+            return
+        self._cancel_delete()
+        if action == "go to":
+            self.go_to(self.chosen())
+        elif action == "rename":
+            self.rename(self.chosen(), self.title_box.value)
+        elif action in ("move up", "move down"):
+            self.move(self.chosen(), -1 if action == "move up" else 1)
+        elif action == "reload":
+            self.reload(say=True)
+
+    def ask_delete(self, bookmark: Bookmark | None) -> bool:
+        """Ask before deleting ``bookmark``: the confirmation buttons come up and the notice line names it."""
+        if bookmark is None:
+            self._say("**nothing to delete:** no bookmark is chosen")
+            return False
+        self.to_delete = bookmark
+        self.confirm_button.visible = self.keep_button.visible = True
+        self._say(f"**delete {bookmark.label(self.bookmarks.index(bookmark) + 1)}?** It is removed from the file for "
+                  "good: press \"yes, delete\" or \"no, keep it\" (above).")
+        return True
+
+    def _cancel_delete(self, say: bool = False) -> None:
+        """Give up a deletion waiting to be confirmed (the bookmark stays); ``say``: tell so in the notice line."""
+        if self.to_delete is not None and say:
+            self._say(f"kept {self.to_delete.title!r}")
+        self.to_delete = None
+        if self.confirm_button.visible:
+            self.confirm_button.visible = self.keep_button.visible = False
+
     def delete(self, bookmark: Bookmark | None) -> bool:
+        """Delete ``bookmark`` from the file now (the "yes, delete" button; "delete" asks first: :meth:`ask_delete`)."""
+        self._cancel_delete()
         if bookmark is None:
             return False
         try:
             with self._file_lock:
                 bookmarks = remove_bookmark(bookmark, self.path)
         except (EvposeError, OSError) as exc:  # OSError: a file name too long, no permission
-            self._say(f"**not deleted:** {_located(exc)}")
+            self._refused("not deleted", exc)
             return False
         self._show(bookmarks)
         self._mark_file(True)
         self._say(f"deleted {bookmark.title!r}")
+        return True
+
+    def rename(self, bookmark: Bookmark | None, title: str) -> bool:
+        """Give ``bookmark`` the title ``title`` in the file."""
+        if bookmark is None:
+            self._say("**nothing to rename:** no bookmark is chosen")
+            return False
+        try:
+            with self._file_lock:
+                bookmarks, index = rename_bookmark(bookmark, title, self.path)
+        except (EvposeError, OSError) as exc:
+            self._refused("not renamed", exc)
+            return False
+        self._show(bookmarks, index)
+        self._mark_file(True)
+        self._say(f"renamed {bookmark.title!r} to {bookmarks[index].title!r}")
+        return True
+
+    def move(self, bookmark: Bookmark | None, delta: int) -> bool:
+        """Move ``bookmark`` ``delta`` places on in the list (-1 up, +1 down); it stays chosen."""
+        if bookmark is None:
+            self._say("**nothing to move:** no bookmark is chosen")
+            return False
+        try:
+            with self._file_lock:
+                bookmarks, index = move_bookmark(bookmark, delta, self.path)
+        except (EvposeError, OSError) as exc:
+            self._refused("not moved", exc)
+            return False
+        self._show(bookmarks, index)
+        self._mark_file(True)
+        self._say(f"{bookmark.title!r} is number {index + 1} of {len(bookmarks)}")
         return True
 
     def go_to(self, bookmark: Bookmark | None) -> bool:

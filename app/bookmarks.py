@@ -13,7 +13,10 @@ a layout of that name would have replaced it. Its form::
 ``step`` is the step index shown then (a check, not used to seek: the same time is the same step unless the
 parameters changed). ``map`` null means "no map". Every write replaces the whole file atomically
 (evpose/io/atomic.py); a file that cannot be read is refused with one line naming it and the problem, and is never
-written over (:func:`add_bookmark` and :func:`remove_bookmark` read the file again before writing).
+written over (:func:`add_bookmark`, :func:`remove_bookmark`, :func:`rename_bookmark` and :func:`move_bookmark` read
+the file again before writing, so edits made meanwhile by hand or by another viewer are kept). A bookmarks file that is
+a symbolic link (a lesson's file kept elsewhere, linked in) is written where it points: replaced by the atomic rename,
+the link became a copy and the lesson's own file silently stopped getting the new bookmarks.
 """
 
 from __future__ import annotations
@@ -114,6 +117,8 @@ def save_bookmarks(bookmarks: list[Bookmark], path: str | Path) -> Path:
     from evpose.io.atomic import atomic_path
 
     path = Path(path)
+    if path.is_symlink():
+        path = path.resolve()  # the file it points at, not a copy in its place (module docstring)
     text = json.dumps({"bookmarks": [dataclasses.asdict(b) for b in bookmarks]}, indent=2, ensure_ascii=False) + "\n"
     with atomic_path(path) as tmp:
         Path(tmp).write_text(text, encoding="utf-8")
@@ -128,11 +133,47 @@ def add_bookmark(bookmark: Bookmark, path: str | Path) -> list[Bookmark]:
     return bookmarks
 
 
-def remove_bookmark(bookmark: Bookmark, path: str | Path) -> list[Bookmark]:
-    """Remove the first bookmark equal to ``bookmark`` from the file as it is now and return the list written."""
+def _edit(bookmark: Bookmark, path: str | Path, change) -> tuple[list[Bookmark], int]:
+    """Apply ``change(bookmarks, i)`` (which returns the edited bookmark's new index) to the file as it is now, where
+    ``bookmark`` is at ``i``, and write it; the list written and that index. A bookmark no longer in the file (edited
+    by hand or by another viewer meanwhile) is refused, never guessed at."""
     bookmarks = load_bookmarks(path)
     if bookmark not in bookmarks:
         raise InputError(path, f"no bookmark {bookmark.title!r} in the file any more (changed meanwhile?)")
-    bookmarks.remove(bookmark)
+    index = change(bookmarks, bookmarks.index(bookmark))
     save_bookmarks(bookmarks, path)
-    return bookmarks
+    return bookmarks, index
+
+
+def remove_bookmark(bookmark: Bookmark, path: str | Path) -> list[Bookmark]:
+    """Remove the first bookmark equal to ``bookmark`` from the file as it is now and return the list written."""
+
+    def remove(bookmarks, i):
+        del bookmarks[i]
+        return min(i, len(bookmarks) - 1)  # the one after it, which takes its place in the list
+
+    return _edit(bookmark, path, remove)[0]
+
+
+def rename_bookmark(bookmark: Bookmark, title: str, path: str | Path) -> tuple[list[Bookmark], int]:
+    """Give ``bookmark`` the title ``title`` (checked as :func:`check_title` does) in the file as it is now; the list
+    written and its index."""
+    title = check_title(title)
+
+    def rename(bookmarks, i):
+        bookmarks[i] = dataclasses.replace(bookmarks[i], title=title)
+        return i
+
+    return _edit(bookmark, path, rename)
+
+
+def move_bookmark(bookmark: Bookmark, delta: int, path: str | Path) -> tuple[list[Bookmark], int]:
+    """Move ``bookmark`` ``delta`` places on in the file's order (-1: up, +1: down; it stops at either end); the list
+    written and its new index. A lesson's bookmarks are listed in the order they are to be shown."""
+
+    def move(bookmarks, i):
+        j = min(max(i + delta, 0), len(bookmarks) - 1)
+        bookmarks.insert(j, bookmarks.pop(i))
+        return j
+
+    return _edit(bookmark, path, move)

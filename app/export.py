@@ -133,5 +133,9 @@ def export_action(app, what: str, client=None, gif_frames: int = 16) -> Path:
                 app.player.step_forward()
                 app.player.wait_idle(10.0)
             frames.append(_render(client, height=270, width=480, transport_format="jpeg", timeout=20.0))
+        if not was_playing and shown is not None:
+            # Back to the step shown when the button was pressed: the GIF left the viewer 16 steps on, the moment a
+            # lesson was looking at (or had just bookmarked) gone (session 29).
+            app.player.seek(shown.t_us, exact=True)
         return write_gif(frames, out_dir / stamped_name("view", ".gif"), fps=8.0)
     raise ValueError(f"unknown export {what!r}")

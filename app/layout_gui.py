@@ -84,7 +84,10 @@ class LayoutGui:
                     hint=f"{MIN_WIDTH}-{MAX_WIDTH} px; 0 leaves the width to the viewer")
         self.note = gui.add_markdown("")
         self.name_box = gui.add_text("save as", "my_layout", hint="Name of the layout file the button below writes (layouts/<name>.json)")
-        self.save_button = gui.add_button("save current layout")
+        # The one control of the left panel without hover text (session 29).
+        self.save_button = gui.add_button("save current layout", hint="Write the panels as shown (placed, sized, hidden), "
+                                          "the 3D view's checkboxes and the teaching stage to layouts/<name above>.json; "
+                                          "it is then listed under 'layout'")
         self.dropdown.on_update(lambda e: e.client is not None and self.apply_name(self.dropdown.value))
         self.save_button.on_click(lambda e: self.save(self.name_box.value))
         for name in PANELS:

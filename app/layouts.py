@@ -16,6 +16,11 @@ from evpose.io.json_file import read_json
 LAYOUT_DIR = Path(__file__).resolve().parent.parent / "layouts"
 """The repository's ``layouts/`` folder."""
 
+SHIPPED = ("compare", "debug", "teaching")
+"""The layouts that come with evpose, in :data:`LAYOUT_DIR`. Saving under one of their names there is refused (session
+29: "save as debug" replaced the checkout's ``layouts/debug.json``, the default ``--layout``, without a word, and only
+git brought it back); in another layout folder any name may be saved over."""
+
 PANELS = ("images", "plots", "teaching", "parameters")
 """The movable panels a layout places (the main control panel always stays docked left)."""
 
@@ -233,6 +238,8 @@ def save_layout(layout: Layout, directory: Path = LAYOUT_DIR) -> Path:
     from evpose.io.atomic import atomic_path
 
     path = layout_path(layout.name, directory)
+    if layout.name in SHIPPED and Path(directory).resolve() == LAYOUT_DIR.resolve():
+        raise InputError(path, f"{layout.name!r} is a layout shipped with evpose: save under another name")
     with atomic_path(path) as tmp:
         Path(tmp).write_text(json.dumps(layout.to_dict(), indent=2) + "\n")
     return path

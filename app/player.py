@@ -16,7 +16,7 @@ needs every step before it) is a *catch-up*: the engine computes the steps
 plainly, a slice at a time (``Engine.catch_up``), the status line says how far
 it is, commands are heard between slices (a new seek replaces the target;
 pause, a step or a new recording cancels it), and only the target's frame is
-drawn. A stretch of the recording without events is gone over at once, not in
+drawn (the seeks are app/catch_up.py's ``Seeking``, a part of the player). A stretch of the recording without events is gone over at once, not in
 real time (app/quiet_stretches.py).
 """
 
@@ -28,7 +28,7 @@ import time
 from concurrent.futures import Future
 from typing import Callable
 
-from app.catch_up import CatchUp
+from app.catch_up import CatchUp, Seeking
 from app.engine import Engine
 from app.frame import Frame
 from app.player_config import PlayerConfig, PlayState, RerunFrom
@@ -41,7 +41,7 @@ EngineFactory = Callable[[object], Engine]
 """Builds an engine from a configuration (None = the engine's defaults)."""
 
 
-class Player:
+class Player(Seeking):
     """Owns the engine and the thread that drives it."""
 
     def __init__(self, factory: EngineFactory, on_frame: Callable[[Frame, Engine], None], config=None,
@@ -213,66 +213,6 @@ class Player:
         t = self.last_frame.t_us if self.last_frame else self.engine.t_start_us
         self._anchor = (time.monotonic(), t)
 
-    def _timed_seek(self, t_us: int, exact: bool = False) -> Frame | None:
-        t0 = time.perf_counter()
-        frame = self.engine.seek(t_us) if exact or not self.pc.snap_seeks else self.engine.seek_near(t_us)
-        self.last_seek_ms = (time.perf_counter() - t0) * 1e3
-        return frame
-
-    def _seek(self, t_us: int, exact: bool = False) -> None:
-        """Show the step at ``t_us``: at once when little is left to compute, else start a catch-up (sliced)."""
-        exact = exact or not self.pc.snap_seeks
-        self._catch_up = None
-        if self.engine.catch_up_cost_steps(t_us, exact) <= self.pc.catch_up_steps:
-            self._publish(self._timed_seek(t_us, exact))
-            self._reanchor()
-            return
-        self._catch_up = CatchUp(int(t_us), exact, self.engine.catch_up_steps(t_us, exact))
-        self._catch_up.progress = self.engine.catch_up_progress(t_us, exact)
-        self._last_progress = 0.0
-        if self.pc.preview_seeks:
-            try:
-                preview = self.engine.preview(t_us, exact)
-            except Exception as exc:  # the catch-up goes on without it
-                preview = None
-                self._on_error(f"seek preview failed: {exc!r}")
-            if preview is not None:
-                self._publish(preview)
-                self._catch_up.preview_s = time.perf_counter() - self._catch_up.wall0
-
-    def _end_catch_up(self, reason: str) -> None:
-        c, self._catch_up = self._catch_up, None
-        if c is not None:
-            self.last_catch_up = c.report(reason)
-
-    def _catch_up_slice(self) -> None:
-        """One slice of the catch-up; the seek's frame once it is reached."""
-        c = self._catch_up
-        c0 = time.thread_time()
-        try:
-            done = self.engine.catch_up(c.t_us, self.pc.catch_up_steps, c.exact)
-        except Exception as exc:
-            self._end_catch_up("failed")
-            self._failed(f"seek failed: {exc}")
-            return
-        c.cpu_s += time.thread_time() - c0
-        c.progress = self.engine.catch_up_progress(c.t_us, c.exact)
-        if done:
-            c1 = time.thread_time()
-            frame = self._timed_seek(c.t_us, c.exact)
-            c.cpu_s += time.thread_time() - c1
-            self._end_catch_up("done")
-            self.last_seek_ms = self.last_catch_up["wall_s"] * 1e3
-            self._prefetching = self.pc.prefetch
-            self._publish(frame)
-            self._last_advance_wall = None
-            self._reanchor()
-            return
-        now = time.monotonic()
-        if now - self._last_progress >= self.pc.progress_every_s:
-            self._last_progress = now
-            self._progress()
-
     def _failed(self, message: str) -> None:
         """Pause after a failed step or seek, with every tab redrawn at the step still shown (a failed far seek left
         its preview's "computing 0.0 / 0.3 s ... pause to cancel" up, a failed play step "playing at 1.0x"), then say why."""
@@ -339,6 +279,9 @@ class Player:
         elif kind == "speed":
             self.speed = cmd[1]
             self._reanchor()
+            if self.state == PlayState.PAUSED:
+                # Nothing is drawn until play: the status line said "paused at 1.0x" after the speed was set to 3.
+                self._progress()
         elif kind == "loop":
             self.loop = cmd[1]
         elif kind == "load":

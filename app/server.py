@@ -17,15 +17,16 @@ import viser
 
 from app.app_config import AppConfig, cache_inside_data, check_port_free
 from app.browser import DataEntry, DataRoots, EntryKind, guess_map_for, load_cloud, load_map, load_recording, scan_note
-from app.config_gui import ConfigGui, load_config_file
+from app.config_gui import ConfigGui
 from app.engine import Engine
 from app.engine_factory import MODES, NO_MAP_NOTE, engine_factory
-from app.export import export_action, write_config
+from app.export import export_action
 from app.frame import Frame
 from app.hotkeys import SliderKeyGuard
 from app.layouts import Layout
 from app.panels import SLAM_PANELS, SLAM_PLACEHOLDER, TRACKER_PANELS, OverlayColour, panel_images
-from app.player import Player, PlayState, RerunFrom
+from app.param_panel import config_changed, param_action, rebuild_config_gui
+from app.player import Player, PlayState
 from app.plots import plot_context
 from app.scene import SceneView
 from app.slam_engine import slam_markdown
@@ -40,8 +41,6 @@ __all__ = ["AppConfig", "ViewerApp"]
 
 OPENING = "_opening "
 """How the status line starts while a recording's first step is computed."""
-CONFIG_SUFFIXES = (".yaml", ".yml", ".json")
-"""File name endings "save" writes a configuration under (YAML, or JSON for ``.json``)."""
 ERROR_NOTE = "**error:** "
 """How the status line's last paragraph starts when the player has failed since the step shown was drawn."""
 SLOW_REFRESH_S = 0.25
@@ -88,6 +87,8 @@ class ViewerApp:
         self._slam_panels_shown: bool | None = None
         """Whether the image panels shown are SLAM mode's (None: none drawn yet)."""
         self._last_slow = 0.0
+        self.param_said = ""
+        """What the Parameters panel's last button did, shown above the engine's note (app/param_panel.py)."""
         self.key_guard = SliderKeyGuard()
         """Arrow/Home shortcuts pressed on a focused slider move the slider only (app/hotkeys.py)."""
         build_main_panel(self)  # the controls: app/viewer_controls.py
@@ -153,14 +154,26 @@ class ViewerApp:
             return False
         self.mode_dropdown.value = mode
         map_display = self.map_dropdown.value if self.map_dropdown.value in self.map_dropdown.options else None
-        return self.select(self.rec_dropdown.value, map_display)
+        return self.select(self.rec_dropdown.value, map_display, keep_moment=True)
 
-    def select(self, rec_display: str, map_display: str | None = None) -> bool:
-        """Load a recording (and a map, guessed if not given); errors are shown, never raised to the server."""
+    def select(self, rec_display: str, map_display: str | None = None, keep_moment: bool = False) -> bool:
+        """Load a recording (and a map, guessed if not given); errors are shown, never raised to the server.
+
+        ``keep_moment``: when it is the recording shown (another viewer mode or map), go on at the time shown, not at
+        its start. Session 29: switching to SLAM at 2.5 s of landing showed its first step, the time slider back at 0
+        with no word why, and the moment being looked at had to be found again (SLAM computes up to it, with the
+        "computing ... to reach the seek" line; a seek elsewhere or pause gives that up)."""
         with self._select_lock:  # two tabs switching at once load one after the other
-            return self._select(rec_display, map_display)
+            return self._select(rec_display, map_display, keep_moment)
 
-    def _select(self, rec_display: str, map_display: str | None) -> bool:
+    def _moment_shown(self, entry: DataEntry) -> int | None:
+        """Microseconds from the start of the step shown, if it is of ``entry``'s recording (else None)."""
+        frame, player = self.last_frame, self.player
+        if frame is None or player is None or self._open_displays is None or self._shown_label != entry.label:
+            return None
+        return max(0, int(frame.t_us - player.engine.t_start_us))
+
+    def _select(self, rec_display: str, map_display: str | None, keep_moment: bool = False) -> bool:
         entry = self._entry(rec_display)
         if entry is None or entry.kind != EntryKind.RECORDING:
             return False
@@ -183,6 +196,7 @@ class ViewerApp:
             if self._open_displays is not None:  # the dropdowns name what is still shown, not the refused file
                 self.rec_dropdown.value, self.map_dropdown.value = self._open_displays
             return False
+        moment_us = self._moment_shown(entry) if keep_moment else None
         self.rec_dropdown.value = entry.display
         self.map_dropdown.value = map_entry.display if map_entry is not None else NO_MAP
         self._open_displays = (self.rec_dropdown.value, self.map_dropdown.value)
@@ -227,6 +241,9 @@ class ViewerApp:
             self.player.call(reset_view)
             # Keep the user's tuned parameters across recordings when the engine kind stays the same.
             self.player.load(factory, self.config_gui.config if self.config_gui is not None else None)
+            if moment_us:  # on the player's thread, after the load: the time is from the start of the engine it loads
+                player = self.player
+                player.call(lambda engine: player.seek(engine.t_start_us + moment_us, exact=True))
         with self._cloud_lock:
             self._cloud_entry, self._cloud_generation = map_entry, self._cloud_generation + 1
         self._ensure_cloud()
@@ -327,81 +344,15 @@ class ViewerApp:
         if self.last_frame is not None and self.player is not None:
             self.status.content = status_markdown(self.last_frame, engine, self.player.stats(), self.gaps)
 
+    # ------------------------------------------------------------------ parameters panel (app/param_panel.py)
     def _rebuild_config_gui(self, engine: Engine) -> None:
-        rejected = getattr(engine, "rejected_config", None)
-        if rejected is not None:
-            # The tracker cannot start with these parameters (visible map min depth at its 10 m maximum: no map point
-            # in view; mode "full" on a recording without IMU). Its controls stay, or come, so the value can be
-            # changed; replaced by the events-only view's they could not, and tuned values were lost.
-            shown, note = rejected, f"{engine.explanation} Change the parameters below to try again."
-        else:
-            # Not the class name ("TrackerConfig: changes re-run the tracker.", session 28): words a user reads.
-            shown, note = engine.config, engine.explanation or "The tracker's parameters: a change re-runs it, from the point chosen above."
-        if self.config_gui is not None and type(self.config_gui.config) is type(shown):
-            # The controls are the source of the engine's config; pushing it back would fight a user still dragging.
-            if self.param_info.content != note:  # re-rendering the panel would steal a dragging user's focus
-                self.param_info.content = note
-            return
-        if self.config_gui is not None:
-            self.config_gui.remove()
-        with self.params_tab:
-            self.config_gui = ConfigGui(self.gui, shown, self._config_changed)
-        self.key_guard.watch(h for h in self.config_gui.handles.values() if isinstance(h, viser.GuiSliderHandle))
-        self.param_info.content = note
+        rebuild_config_gui(self, engine)
 
     def _config_changed(self, config) -> None:
-        if self.player is not None:
-            self.player.set_config(config, RerunFrom(self.rerun_dropdown.value))
+        config_changed(self, config)
 
     def _param_action(self, action: str) -> None:
-        if self.config_gui is None:
-            return
-        typed = self.config_path.value.strip()  # "   " was saved as a file named by three spaces
-        try:
-            if action in ("save", "load") and not typed:
-                raise InputError(None, "type a file name in 'config file' first")
-            if action == "reset":
-                self.config_gui.reset()
-                self.param_info.content = "configuration reset to defaults"
-            elif action == "save":
-                path = write_config(self.config_gui.config, self._config_save_path(typed))
-                self.param_info.content = f"saved `{path}`"
-            elif action == "load":
-                path = self._readable_config_path(typed)
-                cfg = load_config_file(self.config_gui.cls, path)
-                self.config_gui.set_config(cfg)
-                self._config_changed(cfg)
-                self.param_info.content = f"loaded `{path}`"
-        except (EvposeError, OSError) as exc:
-            # OSError too (a 300-character name: "File name too long"): it ended in a traceback on the server's
-            # console and the panel said nothing.
-            self.param_info.content = f"**{action} failed:** {exc}"
-
-    def _export_path(self, path: str) -> Path:
-        """Writes go to the export folder only, whatever path was typed (by file name)."""
-        self.cfg.export_dir.mkdir(parents=True, exist_ok=True)
-        return self.cfg.export_dir / Path(path).name
-
-    def _config_save_path(self, typed: str) -> Path:
-        """Where "save" writes a configuration: the export folder, a ``.yaml``/``.yml``/``.json`` name (``.yaml`` added
-        to a name without a suffix). Any other suffix is refused: with ``--export-dir`` on a data folder, saving as
-        ``landing.h5`` replaced the 2.5 MB recording by 4.8 kB of YAML."""
-        path = self._export_path(typed)
-        if not path.suffix:
-            return path.with_name(path.name + ".yaml")
-        if path.suffix.lower() not in CONFIG_SUFFIXES:
-            raise InputError(typed, f"a configuration is saved as {', '.join(CONFIG_SUFFIXES)}, not {path.suffix}")
-        return path
-
-    def _readable_config_path(self, path: str) -> Path:
-        p = Path(path)
-        export = (self.cfg.export_dir / p.name).resolve()
-        if export.is_file() and (not p.is_absolute() or p.resolve() == export):
-            return export
-        if not p.is_absolute() and not p.exists() and not any((root / p).exists() for root in self.roots.roots):
-            # A mistyped name of a saved file was "refused: outside the data directories", as if it were forbidden.
-            raise InputError(path, f"no such file in the export folder {self.cfg.export_dir} or the data folders")
-        return self.roots.check(p)
+        param_action(self, action)
 
     # ------------------------------------------------------------------ view options
     def _set_toggle(self, name: str, value: bool) -> None:
@@ -444,6 +395,17 @@ class ViewerApp:
             return
         if self.player is not None:
             self.player.set_speed(speed)
+
+    def _time_typed(self) -> None:
+        """Seek to the time slider's value, a value typed past either end brought inside it first."""
+        value = self.time_slider.value
+        seconds = float(np.clip(value, 0.0, self.time_slider.max))
+        if seconds != value:
+            # "100" typed in a 4 s recording: the box kept showing 100 while SLAM computed up to the last step (tens of
+            # seconds) and the engine clipped the seek. The write back does not seek again (no client: not a user's).
+            self.time_slider.value = seconds
+        if self.player is not None:
+            self.player.seek(self._slider_to_us(seconds))
 
     def _nudge_speed(self, factor: float) -> None:
         self.speed_slider.value = float(np.clip(round(self.speed_slider.value * factor, 1), 0.1, 10.0))

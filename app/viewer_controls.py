@@ -101,12 +101,12 @@ def build_main_panel(app: ViewerApp) -> None:
 def _wire_main_panel(app: ViewerApp) -> None:
     """Connect the left panel's controls to the viewer's methods."""
     app.rec_dropdown.on_update(lambda e: e.client is not None and app.select(app.rec_dropdown.value))
-    app.map_dropdown.on_update(lambda e: e.client is not None and app.select(app.rec_dropdown.value, app.map_dropdown.value))
+    app.map_dropdown.on_update(lambda e: e.client is not None and app.select(app.rec_dropdown.value, app.map_dropdown.value, keep_moment=True))
     app.mode_dropdown.on_update(lambda e: e.client is not None and app.set_mode(app.mode_dropdown.value))
     app.rescan_button.on_click(lambda e: app.refresh_entries())
     app.play_button.on_click(lambda e: app.player and app.player.toggle())
     app.step_buttons.on_click(lambda e: app.player and (app.player.step_back() if e.target.value == "< back" else app.player.step_forward()))
-    app.time_slider.on_update(lambda e: e.client is not None and app.player and app.player.seek(app._slider_to_us(app.time_slider.value)))
+    app.time_slider.on_update(lambda e: e.client is not None and app._time_typed())
     app.speed_slider.on_update(lambda e: app._speed_changed())
     app.loop_box.on_update(lambda e: app.player and app.player.set_loop(app.loop_box.value))
     for name, box in app.toggle_boxes.items():

@@ -1,10 +1,11 @@
 """The Bookmarks folder without a browser: a malformed bookmarks file is named in one line and never written over, and
-what a bookmark names that is gone is said (a recording or map: nothing changes; a layout: the rest comes back)."""
+what a bookmark names that is gone is said (a recording or map: nothing changes; a layout: the rest comes back); delete
+asks first, rename and move keep the bookmark chosen, and an edit of a bookmark gone from the file lists the file as it is."""
 
 import dataclasses
 import socket
 
-from app.bookmarks import Bookmark, save_bookmarks
+from app.bookmarks import Bookmark, load_bookmarks, save_bookmarks
 from app.server import AppConfig, ViewerApp
 
 
@@ -35,7 +36,9 @@ def test_a_malformed_bookmarks_file_is_named_in_one_line_and_saving_leaves_it_as
         assert app.bookmark_gui.save("a title") is None
         assert "not saved" in app.bookmark_gui.note.content and "not valid JSON" in app.bookmark_gui.note.content
         assert path.read_text() == '{"bookmarks": [{"title": "x"}'
-        path.write_text('{"bookmarks": []}')  # mended: the next save goes in
+        path.write_text('{"bookmarks": []}')  # mended: "reload" reads it, and the next save goes in
+        assert app.bookmark_gui.reload(say=True) and app.bookmark_gui.folder.label == "Bookmarks"
+        assert app.bookmark_gui.note.content == f"read 0 bookmarks from `{path}`"
         assert app.bookmark_gui.save("a title") is not None and len(app.bookmark_gui.dropdown.options) == 1
         assert app.bookmark_gui.dropdown.value.startswith("1. a title") and app.bookmark_gui.folder.label == "Bookmarks"
     finally:
@@ -62,5 +65,52 @@ def test_going_to_a_bookmark_whose_recording_is_gone_says_so(tmp_path, squares_s
         # A layout that is gone: the rest of the moment still comes back, in the layout shown.
         assert gui.go_to(dataclasses.replace(mark, recording="data/bar.h5"))
         assert "layout `nosuch` not found, kept `debug`" in gui.note.content and app.stage.value == "TDF"
+    finally:
+        app.stop()
+
+
+def test_delete_asks_first_and_rename_and_move_keep_the_bookmark_chosen(tmp_path):
+    path = tmp_path / "layouts" / "bookmarks" / "bookmarks.json"
+    a, b = (Bookmark(t, "data/x.h5", None, "tracking", 0, 0, "events", "debug") for t in ("first", "second"))
+    save_bookmarks([a, b], path)
+    app = _viewer(tmp_path)
+    try:
+        gui = app.bookmark_gui
+        gui.dropdown.value = gui.dropdown.options[1]
+        gui._action("delete")  # one click removed it for good (session 28): now it asks
+        assert gui.to_delete == b and gui.confirm_button.visible and gui.keep_button.visible
+        assert "delete 2. second" in gui.note.content and load_bookmarks(path) == [a, b]
+        gui._cancel_delete(say=True)  # "no, keep it"
+        assert not gui.confirm_button.visible and gui.note.content == "kept 'second'" and load_bookmarks(path) == [a, b]
+        gui._action("delete")
+        gui._action("go to")  # any other action first keeps it too
+        assert gui.to_delete is None and not gui.confirm_button.visible and load_bookmarks(path) == [a, b]
+
+        gui.title_box.value = "the second, renamed"
+        gui._action("rename")
+        renamed = dataclasses.replace(b, title="the second, renamed")
+        assert load_bookmarks(path) == [a, renamed] and gui.chosen() == renamed
+        assert gui.note.content == "renamed 'second' to 'the second, renamed'"
+        assert gui.move(gui.chosen(), -1) and load_bookmarks(path) == [renamed, a]
+        assert gui.dropdown.value.startswith("1. the second, renamed") and "number 1 of 2" in gui.note.content
+
+        gui._action("delete")
+        gui.delete(gui.to_delete)  # "yes, delete"
+        assert load_bookmarks(path) == [a] and not gui.confirm_button.visible and gui.note.content == "deleted 'the second, renamed'"
+    finally:
+        app.stop()
+
+
+def test_an_edit_of_a_bookmark_gone_from_the_file_is_refused_and_the_list_shows_the_file(tmp_path):
+    path = tmp_path / "layouts" / "bookmarks" / "bookmarks.json"
+    a, b = (Bookmark(t, "data/x.h5", None, "tracking", 0, 0, "events", "debug") for t in ("first", "second"))
+    save_bookmarks([a, b], path)
+    app = _viewer(tmp_path)
+    try:
+        gui = app.bookmark_gui
+        save_bookmarks([a], path)  # "second" deleted by hand (or by another viewer) meanwhile
+        assert not gui.rename(b, "new title")
+        assert "not renamed:** " in gui.note.content and "no bookmark 'second' in the file any more" in gui.note.content
+        assert gui.bookmarks == [a] and load_bookmarks(path) == [a]  # listed as the file is: no stale entry left
     finally:
         app.stop()

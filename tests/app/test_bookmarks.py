@@ -1,5 +1,5 @@
 """Lesson bookmark files: a round trip, malformed files refused with one line naming the file and the problem (and
-never written over), and atomic writes."""
+never written over), atomic writes, rename and reorder on the file as it is now, and a linked file written through."""
 
 import dataclasses
 import json
@@ -7,8 +7,8 @@ import json
 import pytest
 
 from app.app_config import AppConfig
-from app.bookmarks import (BOOKMARKS_NAME, Bookmark, add_bookmark, check_title, load_bookmarks, remove_bookmark,
-                           save_bookmarks)
+from app.bookmarks import (BOOKMARKS_NAME, Bookmark, add_bookmark, check_title, load_bookmarks, move_bookmark,
+                           remove_bookmark, rename_bookmark, save_bookmarks)
 from app.layouts import list_layouts
 from evpose.errors import InputError
 
@@ -86,3 +86,33 @@ def test_titles_are_one_trimmed_line_and_not_empty_or_too_long():
         with pytest.raises(InputError, match=needle):
             check_title(title)
     assert MARK.label(2) == "2. the TDF valleys (squares.h5, 1.250 s, TDF)"
+
+
+def test_rename_and_move_edit_the_file_as_it_is_now_and_refuse_a_bookmark_gone_from_it(tmp_path):
+    path = tmp_path / "bookmarks.json"
+    a, b, c = (dataclasses.replace(MARK, title=t) for t in "abc")
+    save_bookmarks([a, b], path)
+    add_bookmark(c, path)  # another viewer (or a hand edit) adds one meanwhile: the edits below keep it
+    assert move_bookmark(c, -1, path) == ([a, c, b], 1)
+    assert move_bookmark(c, -5, path) == ([c, a, b], 0)  # stops at the top
+    assert move_bookmark(b, 1, path) == ([c, a, b], 2)  # and at the bottom
+    renamed = dataclasses.replace(a, title="the valleys again")
+    assert rename_bookmark(a, "  the valleys\nagain ", path) == ([c, renamed, b], 1)
+    assert load_bookmarks(path) == [c, renamed, b]
+    for edit, needle in ((lambda: rename_bookmark(a, "x", path), "no bookmark 'a'"),
+                         (lambda: move_bookmark(a, 1, path), "no bookmark 'a'"),
+                         (lambda: rename_bookmark(b, " ", path), "type a title")):
+        with pytest.raises(InputError, match=needle):
+            edit()
+    assert load_bookmarks(path) == [c, renamed, b]
+
+
+def test_a_bookmarks_file_that_is_a_link_is_written_where_it_points(tmp_path):
+    lesson = tmp_path / "lessons" / "optics.json"
+    save_bookmarks([MARK], lesson)
+    link = tmp_path / "layouts" / "bookmarks" / "bookmarks.json"
+    link.parent.mkdir(parents=True)
+    link.symlink_to(lesson)
+    other = dataclasses.replace(MARK, title="second")
+    add_bookmark(other, link)
+    assert link.is_symlink() and load_bookmarks(lesson) == [MARK, other]

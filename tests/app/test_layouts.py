@@ -125,3 +125,18 @@ def test_a_layout_can_start_the_teaching_panel_on_a_stage_and_refuses_an_unknown
     assert Layout.from_dict(json.loads(json.dumps(teaching.to_dict()))).stage == "events"
     with pytest.raises(InputError, match="stage 'tdf' is none of events, SP-TS, TDF"):
         Layout.from_dict({**teaching.to_dict(), "stage": "tdf"})
+
+
+def test_saving_over_a_shipped_layout_in_the_shipped_folder_is_refused(tmp_path, monkeypatch):
+    shipped = tmp_path / "layouts"
+    shipped.mkdir()
+    (shipped / "debug.json").write_text((LAYOUT_DIR / "debug.json").read_text())
+    monkeypatch.setattr("app.layouts.LAYOUT_DIR", shipped)  # as if it were the checkout's layouts/
+    before = (shipped / "debug.json").read_text()
+    mine = load_layout(shipped / "debug.json")
+    with pytest.raises(InputError, match="'debug' is a layout shipped with evpose: save under another name"):
+        save_layout(mine, shipped)
+    assert (shipped / "debug.json").read_text() == before
+    assert save_layout(Layout.from_dict({**mine.to_dict(), "name": "my_debug"}), shipped) == shipped / "my_debug.json"
+    other = tmp_path / "elsewhere"  # another --layout folder: its own files, any name
+    assert save_layout(mine, other) == other / "debug.json"

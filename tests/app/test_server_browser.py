@@ -343,16 +343,21 @@ def test_two_tabs_see_one_session_and_a_gif_can_be_exported(page, viewer):
 
         frames = iio.imread(path, index=None)
         assert frames.shape[0] == 3 and frames.std() > 5.0
+        viewer.player.wait_idle()
+        assert viewer.last_frame.index == idx + 2  # back at the step shown, not three steps on
         viewer.player.seek(viewer.recording.t_end_us)  # at the end: the GIF shows the steps before it, not one still
         viewer.player.wait_idle()
+        at = viewer.last_frame.index
         drawn, draw = [], viewer.player._on_frame
         viewer.player._on_frame = lambda f, e: drawn.append(f.index) or draw(f, e)
         try:
             export_action(viewer, "GIF", gif_frames=3)
         finally:
             viewer.player._on_frame = draw
+        viewer.player.wait_idle()
         n = viewer.player.engine.n_steps
-        assert drawn[-3:] == [n - 3, n - 2, n - 1]  # the GIF's three frames are the last three steps
+        assert drawn[-4:-1] == [n - 3, n - 2, n - 1]  # the GIF's three frames are the last three steps
+        assert drawn[-1] == at == viewer.last_frame.index  # and the viewer is back at the step it showed
     finally:
         other.close()
 

@@ -1,5 +1,7 @@
 """Lesson bookmarks in a real headless Chromium: save the moment on screen, move away (another recording, stage and
-layout), go back to it."""
+layout), go back to it; rename, move up and delete (only once confirmed) from the page, and reload a hand edit."""
+
+import dataclasses
 
 import pytest
 
@@ -77,3 +79,47 @@ def test_a_saved_bookmark_brings_back_its_recording_step_stage_and_layout(page, 
     assert viewer.last_frame.t_us == t_us
     assert viewer.stage.value == "registration" and viewer.layout.name == "teaching"
     page.locator("h3", has_text="registration").first.wait_for(timeout=10_000)  # the teaching panel shows that stage
+
+
+def test_bookmarks_are_renamed_reordered_and_deleted_only_once_confirmed(page, viewer):
+    from app.bookmarks import load_bookmarks, save_bookmarks
+
+    gui, path = viewer.bookmark_gui, viewer.cfg.bookmarks_path()
+    wait_for(lambda: viewer.last_frame is not None and viewer.player.wait_idle(), timeout=60, what="a step shown")
+    if not page.get_by_role("button", name="save this moment").is_visible():
+        page.get_by_text("Bookmarks", exact=True).first.click()
+    before = [b.title for b in load_bookmarks(path)]
+    title = control_row(page, "bookmark title").locator("input")
+    title.fill("second")
+    wait_for(lambda: gui.title_box.value == "second", what="title typed")
+    page.get_by_role("button", name="save this moment").click()
+    wait_for(lambda: [b.title for b in load_bookmarks(path)] == before + ["second"], what="second saved")
+
+    title.fill("the second, renamed")
+    wait_for(lambda: gui.title_box.value == "the second, renamed", what="new title typed")
+    page.get_by_role("button", name="rename", exact=True).click()
+    wait_for(lambda: [b.title for b in load_bookmarks(path)] == before + ["the second, renamed"], what="renamed")
+    page.get_by_role("button", name="move up").click()
+    wait_for(lambda: [b.title for b in load_bookmarks(path)] == ["the second, renamed"] + before, what="moved up")
+    page.get_by_text("'the second, renamed' is number 1 of").first.wait_for(timeout=10_000)
+
+    page.get_by_role("button", name="delete", exact=True).click()  # asks first: nothing is gone yet
+    page.get_by_role("button", name="yes, delete").wait_for(timeout=10_000)
+    page.get_by_text("delete 1. the second, renamed").first.wait_for(timeout=10_000)
+    assert [b.title for b in load_bookmarks(path)] == ["the second, renamed"] + before
+    page.get_by_role("button", name="no, keep it").click()
+    page.get_by_role("button", name="yes, delete").wait_for(state="hidden", timeout=10_000)
+    assert [b.title for b in load_bookmarks(path)] == ["the second, renamed"] + before
+
+    page.get_by_role("button", name="delete", exact=True).click()
+    page.get_by_role("button", name="yes, delete").click()
+    wait_for(lambda: [b.title for b in load_bookmarks(path)] == before, what="deleted once confirmed")
+    page.get_by_role("button", name="yes, delete").wait_for(state="hidden", timeout=10_000)
+    page.get_by_text("deleted 'the second, renamed'").first.wait_for(timeout=10_000)
+
+    # Edited by hand (a teacher's text editor): "reload" lists it without a restart.
+    marks = load_bookmarks(path)
+    save_bookmarks(marks + [dataclasses.replace(marks[0], title="typed by hand")], path)
+    page.get_by_role("button", name="reload", exact=True).click()
+    wait_for(lambda: [b.title for b in gui.bookmarks] == before + ["typed by hand"], what="the hand edit read")
+    page.get_by_text(f"read {len(before) + 1} bookmarks from").first.wait_for(timeout=10_000)
