@@ -42,6 +42,25 @@ class TrackingConfig:
     2.7x below the smallest move of the gap60 blow-up."""
     min_inlier_ratio: float = field(default=0.5, metadata={"min": 0.0, "max": 1.0, "step": 0.05, "unit": "ratio"})
     """Tracking is lost when fewer than this share of the tracked map points are pose inliers (tracks jumped to other features), ratio."""
+    refit_tracked_poses: bool = False
+    """Event-only: the refined trajectory (:meth:`evpose.slam.atlas.SlamMap.trajectory`) re-solves each PnP-placed
+    MCI pose on its inlier pixels with the points where the map holds them at the end (motion-only, points fixed; only
+    points still in the map, at least six), then once more adding the MCI's other tracks whose track carries a point by
+    then and reprojects within ``reprojection_threshold_px`` (:mod:`evpose.slam.pose_refit`); off: each pose rides on
+    its reference keyframe as solved online. Tracking is unchanged bit for bit (per-MCI logs identical): only the
+    output trajectory differs. Session 29 (``/tmp/s29/jit29``: ``capture.py`` records the runs, ``repnp.py`` /
+    ``repnp2.py`` re-solve offline, ``run.sh`` / ``gexp.py`` in situ, ``cmpfinal.py`` pairs them), scale-aligned ATE:
+    indoor event-only seeds 0-7 3.904 -> 3.730 % (paired -0.174 +- 0.054, 8 of 8 better; 0.5 s segment metric 3.27 ->
+    3.10 %); under the defaults and the four neutral perturbations (``ba_huber_px`` 1.9 / 2.1,
+    ``reprojection_threshold_px`` 2.4 / 2.6; 40 runs) 3.293 -> 3.153 % (-0.140 +- 0.016, 38 better, 2 worse; segment
+    metric 2.77 -> 2.62 %); held out, seeds 8-19 3.882 -> 3.745 % (-0.137 +- 0.031, 11 better, 1 worse; within 2 % 1 -> 2; 8-11 3.16 -> 3.06, 12-19 4.24 -> 4.09; segment metric 2.87 -> 2.62 %); landing event-only seeds 0-23 1.439 -> 1.317 % (-0.122 +- 0.014, 23 better, 1 worse; 24 of 24 within 2 % either way, worst 1.98 -> 1.87 %; segment metric 4.09 -> 3.06 %); 24-35 LAND2.
+    Variants offline (seeds 0-7, 40 runs / held-out 8-19 / landing 0-23, paired ATE points): the inliers alone -0.142
+    / -0.093 / -0.098; with the extra tracks (this) -0.147 / -0.144 / -0.136; only inliers still reprojecting within
+    2.5 px -0.136 / -0.093 / -0.108; only points with at least three keyframe observations by then (else all) -0.190 /
+    -0.083 / -0.135; every pose that is a keyframe left at its bundle-adjusted pose (seeds 0-7 defaults) -0.141
+    against -0.205 re-solving them too; the coasted keyframes and the initialisation's first pose re-solved on their
+    points' keyframe observations as well (indoor ``ba_huber_px`` 2.1, 5 seeds) +0.536 / -0.137 against -0.144.
+    CPU: CPU."""
     keyframe_tracked_ratio: float = field(default=0.7, metadata={"min": 0.1, "max": 1.0, "step": 0.05, "unit": "ratio"})
     """New keyframe when tracked map points drop below this share of the last keyframe's, ratio. In the landing's sharp
     turn nearly every MCI becomes a keyframe, from the sparsest MCIs (3000-6000 events). Session 22 (``/tmp/s22/turn9``,
