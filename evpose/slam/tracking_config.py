@@ -70,7 +70,9 @@ class TrackingConfig:
     """New keyframe when tracked map points drop below this share of the last keyframe's, ratio. In the landing's sharp
     turn nearly every MCI becomes a keyframe, from the sparsest MCIs (3000-6000 events). Session 22 (``/tmp/s22/turn9``,
     removed: commit d6c2af7): a keyframe due on an MCI with fewer events than 0.6 of the last 20 MCIs' median waited
-    one MCI: landing seeds 0-23 1.80 -> 2.47 % (20 -> 16 within 2 %; paired +0.67 +- 0.34, 6 better)."""
+    one MCI: landing seeds 0-23 1.80 -> 2.47 % (20 -> 16 within 2 %; paired +0.67 +- 0.34, 6 better). Session 29
+    (``/tmp/s29/jit29``, ``run.sh``, ``cmpj.py``; with ``refit_tracked_poses``), indoor event-only seeds 0-7 (3.730 %):
+    0.6 -> 3.758 % (paired +0.03 +- 0.44, 4 better), 0.8 -> 4.283 % (+0.55 +- 1.47, 1 better)."""
     keyframe_displacement_px: float = field(default=20.0, metadata={"min": 2.0, "max": 100.0, "step": 1.0, "unit": "px"})
     """New keyframe when the median key-point displacement from the last keyframe exceeds this, pixels. Session 12,
     landing event-only seeds 0-11 (defaults 2.53 %, 5 of 12 within 2 %): 30 -> 2.86 % (5 of 12); 14 -> 2.21 %
