@@ -419,8 +419,12 @@ class TrackingConfig:
     old) coasts on that whole trajectory's motion if it spans at least this (0: it is lost at its first visual
     failure), seconds. Measured with ``coast_blank_s`` in :mod:`evpose.slam.event_coasting`."""
     ba_iterations: int = field(default=10, metadata={"min": 0, "max": 100, "step": 1, "unit": "iterations"})
-    """Levenberg-Marquardt iterations of local BA (0 disables it), iterations. Session 18, landing event-only seeds
-    0-23 (2.07 %, 15 within 2 %): 25 -> 2.20 % (17), tracked at least 88.3 %."""
+    """Levenberg-Marquardt iterations of local BA (0 disables it), iterations. Session 18, landing event-only seeds 0-23
+    (2.07 %, 15 within 2 %): 25 -> 2.20 % (17), tracked at least 88.3 %. Session 29 (``/tmp/s29/jit29``, ``run.sh``,
+    ``cmpj.py``; with ``refit_tracked_poses``): 20 -> indoor event-only seeds 0-7 3.730 -> 2.828 % (paired -0.90 +-
+    0.95, 3 better, 5 worse: seeds 0 / 4 / 6 4.24 / 9.81 / 3.44 -> 2.44 / 2.77 / 2.22, seeds 1 / 2 / 5 2.74 / 2.68 /
+    1.48 -> 3.78 / 3.67 / 2.22); under the defaults and the four neutral perturbations (40 runs) 3.153 -> 3.198 % (+0.05
+    +- 0.27, 18 better, 22 worse; segment metric 2.62 -> 2.98 %): within the spread."""
     ba_huber_px: float = field(default=2.0, metadata={"min": 0.1, "max": 10.0, "step": 0.1, "unit": "px"})
     """Huber threshold of the reprojection factors, pixels. Session 14, landing event-only seeds 0-11 (defaults 2.52 %,
     5 within 2 %): 1.0 -> 2.51 % (5; seeds 1, 3, 4, 10 better, seed 7 7.16 % in two maps, 8 3.70 %). Session 22
