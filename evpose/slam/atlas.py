@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from evpose.core.trajectory import Trajectory
+from evpose.slam.pose_refit import PoseObservations, refit_trajectory
 
 
 @dataclass
@@ -64,6 +65,13 @@ class SlamMap:
     """Why tracking of this map ended ("" while active or at the end of the recording)."""
     restructured: int = 0
     """Times the map was re-initialised from a wide-baseline keyframe pair (:mod:`evpose.slam.map_restructure`)."""
+    traj_obs: dict[int, PoseObservations] = field(default_factory=dict)
+    """Per-MCI time (us) -> what placed the pose by PnP (inliers, other tracks); recorded only while ``refit_K`` is set."""
+    refit_K: np.ndarray | None = None
+    """Camera matrix with which :meth:`trajectory` re-solves the PnP-placed poses on the points' current positions
+    (:mod:`evpose.slam.pose_refit`, :attr:`TrackingConfig.refit_tracked_poses`); None: never."""
+    refit_threshold_px: float = 2.5
+    """Other tracks of a re-solved MCI join its inliers when they reproject within this, pixels."""
     segment_start_kf: int = 0
     """Id of the first keyframe of the map's newest visual segment: a lost map re-joined by the next two-view map
     (:mod:`evpose.slam.map_rejoin`) shares no points with it, and the visual local BA stays within the segment."""
@@ -88,6 +96,14 @@ class SlamMap:
         self.traj_ref.append(ref.id if ref is not None else -1)
         self.traj_rel.append(rel)
 
+    def record_pose_observations(self, t_us: int, point_ids: np.ndarray, uv: np.ndarray, track_ids: np.ndarray, track_uv: np.ndarray) -> None:
+        """Keep what placed the pose at ``t_us`` by PnP (inliers' point ids and pixels, the MCI's other tracks), when
+        poses are re-solved later."""
+        if self.refit_K is not None:
+            # Pixels as the tracker holds them (float32): a long run keeps one entry per tracked MCI.
+            self.traj_obs[int(t_us)] = PoseObservations(np.asarray(point_ids, np.int64).copy(), np.asarray(uv, np.float32).copy(),
+                                                        np.asarray(track_ids, np.int64).copy(), np.asarray(track_uv, np.float32).copy())
+
     def transform(self, R: np.ndarray, s: float) -> None:
         """Apply ``x -> s R x`` to the whole map (keyframes, points, trajectory)."""
         def tf(T):
@@ -109,7 +125,8 @@ class SlamMap:
 
         ``refined`` (as ORB-SLAM saves its trajectories) composes each pose with the current pose of its
         reference keyframe, so corrections of later bundle adjustments reach the poses between
-        keyframes; otherwise the poses are those estimated online.
+        keyframes, and with ``refit_K`` set re-solves the PnP-placed poses on their inliers' current positions;
+        otherwise the poses are those estimated online.
         """
         if not self.traj_t:
             return Trajectory.empty()
@@ -117,6 +134,8 @@ class SlamMap:
         if refined:
             kf_pose = {kf.id: kf.T_wc for kf in self.keyframes}
             T = [kf_pose[r] @ rel if r in kf_pose else Tw for r, rel, Tw in zip(self.traj_ref, self.traj_rel, self.traj_T)]
+            if self.refit_K is not None and self.traj_obs:
+                T = refit_trajectory(self.refit_K, self.traj_t, T, self.traj_obs, self.points, self.refit_threshold_px)
         return Trajectory.from_matrices(np.array(self.traj_t, np.int64), np.stack(T))
 
     def point_array(self) -> np.ndarray:
@@ -131,13 +150,17 @@ class Atlas:
     """All maps of a run; a new one starts whenever tracking is lost and re-initialises."""
 
     maps: list[SlamMap] = field(default_factory=list)
+    refit_K: np.ndarray | None = None
+    """Given to every new map (:attr:`SlamMap.refit_K`)."""
+    refit_threshold_px: float = 2.5
+    """Given to every new map (:attr:`SlamMap.refit_threshold_px`)."""
 
     @property
     def active(self) -> SlamMap | None:
         return self.maps[-1] if self.maps else None
 
     def new_map(self) -> SlamMap:
-        m = SlamMap(id=len(self.maps))
+        m = SlamMap(id=len(self.maps), refit_K=self.refit_K, refit_threshold_px=self.refit_threshold_px)
         self.maps.append(m)
         return m
 

@@ -95,7 +95,9 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
                                                                 min_parallax_deg=icfg.min_parallax_deg_inertial,
                                                                 plane_min_parallax_deg=icfg.plane_min_parallax_deg_inertial)
         """Two-view settings of this run's mode (event-inertial runs keep their own parallax and decomposition choice)."""
-        self.atlas = Atlas()
+        # Event-only maps re-solve their PnP-placed poses on the final points (TrackingConfig.refit_tracked_poses).
+        self.atlas = Atlas(refit_K=self.K if self.imu is None and config.tracking.refit_tracked_poses else None,
+                           refit_threshold_px=config.tracking.reprojection_threshold_px)
         self.fe = FrontendTracks()
         self.results: list[SlamStepResult] = []
         """One result per processed MCI."""
@@ -367,10 +369,15 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
                 self._map_tracks = len(sel2)
         for k in np.flatnonzero(~est.inliers):
             fe.track_to_point.pop(int(fe.ids[sel[k]]), None)
-        T_wc, segs = self._pnp_pose_with_lines(m, mci, est.T_wc, [sel[k] for k in np.flatnonzero(est.inliers)])
+        inl = [sel[k] for k in np.flatnonzero(est.inliers)]
+        T_wc, segs = self._pnp_pose_with_lines(m, mci, est.T_wc, inl)
         self._last_visual_t, self._blank_us, self._after_blank_t = mci.t_us, 0, None
         self._last_pnp_t = mci.t_us
         m.add_pose(mci.t_us, T_wc)
+        if m.refit_K is not None:
+            rest = np.setdiff1d(np.arange(len(fe.ids)), inl)
+            m.record_pose_observations(mci.t_us, np.array([fe.track_to_point[int(fe.ids[i])] for i in inl], np.int64), fe.uv[inl],
+                                       fe.ids[rest], fe.uv[rest])
         n_tracked = self._inliers = int(est.inliers.sum())
         keyframe = False
         if need_keyframe(m, fe.ids, fe.uv, n_tracked, tc):

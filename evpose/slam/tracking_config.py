@@ -42,11 +42,37 @@ class TrackingConfig:
     2.7x below the smallest move of the gap60 blow-up."""
     min_inlier_ratio: float = field(default=0.5, metadata={"min": 0.0, "max": 1.0, "step": 0.05, "unit": "ratio"})
     """Tracking is lost when fewer than this share of the tracked map points are pose inliers (tracks jumped to other features), ratio."""
+    refit_tracked_poses: bool = True
+    """Event-only: the refined trajectory (:meth:`evpose.slam.atlas.SlamMap.trajectory`) re-solves each PnP-placed MCI
+    pose on its inlier pixels with the points where the map holds them at the end (motion-only, points fixed; only
+    points still in the map, at least six), then once more adding the MCI's other tracks whose track carries a point by
+    then and reprojects within ``reprojection_threshold_px`` (:mod:`evpose.slam.pose_refit`); off: each pose rides on
+    its reference keyframe as solved online. Tracking is unchanged bit for bit (per-MCI logs identical): only the output
+    trajectory differs. Session 29 (``/tmp/s29/jit29``: ``capture.py`` records the runs with the option off,
+    ``repnp.py`` / ``repnp2.py`` re-solve offline, ``run.sh`` / ``gexp.py`` runs it in situ, ``cmpfinal.py`` pairs the
+    two), scale-aligned ATE: indoor event-only seeds 0-7 3.904 -> 3.730 % (paired -0.174 +- 0.054, 8 of 8 better; 0.5 s
+    segment metric 3.27 -> 3.10 %); under the defaults and the four neutral perturbations (``ba_huber_px`` 1.9 / 2.1,
+    ``reprojection_threshold_px`` 2.4 / 2.6; 40 runs) 3.293 -> 3.153 % (-0.140 +- 0.016, 38 better, 2 worse; segment
+    metric 2.77 -> 2.62 %); held out, seeds 8-19 3.882 -> 3.745 % (-0.137 +- 0.031, 11 better, 1 worse; within 2 % 1 ->
+    2; 8-11 3.16 -> 3.06, 12-19 4.24 -> 4.09; segment metric 2.87 -> 2.62 %); landing event-only seeds 0-23 1.439 ->
+    1.317 % (-0.122 +- 0.014, 23 better, 1 worse; 24 of 24 within 2 % either way, worst 1.98 -> 1.87 %; segment metric
+    4.09 -> 3.06 %), 24-35 1.456 -> 1.395 % (-0.062 +- 0.018, 9 better, 3 worse; 11 of 12 within 2 % either way; segment
+    metric 3.71 -> 2.81 %). Variants offline (indoor 40 runs / held-out 8-19 / landing 0-23, paired ATE points; the
+    offline extra tracks also took inlier tracks that got a new point: -0.147 / -0.144 / -0.136 there): the inliers
+    alone -0.142 / -0.093 / -0.098; only inliers still within 2.5 px -0.136 / -0.093 / -0.108; only points with at least
+    three keyframe observations by then (else all) -0.190 / -0.083 / -0.135; indoor seeds 0-7 (inliers alone): keyframe
+    MCIs left at their bundle-adjusted pose -0.141 against -0.205 re-solving them too; on ``ba_huber_px`` 2.1 (5 seeds)
+    the coasted keyframes re-solved on their points' keyframe observations as well +0.536, the maps' first (two-view
+    reference) poses -0.137, against -0.144 without. CPU (``cpu.py``): the re-solve costs 0.3-0.6 ms per PnP-placed pose
+    once, when the trajectory is read (indoor seed 0: 38 poses, 16 ms against 1 ms without; landing seed 0: 77 poses, 43
+    ms), and the record about 1.5 kB per pose."""
     keyframe_tracked_ratio: float = field(default=0.7, metadata={"min": 0.1, "max": 1.0, "step": 0.05, "unit": "ratio"})
     """New keyframe when tracked map points drop below this share of the last keyframe's, ratio. In the landing's sharp
     turn nearly every MCI becomes a keyframe, from the sparsest MCIs (3000-6000 events). Session 22 (``/tmp/s22/turn9``,
     removed: commit d6c2af7): a keyframe due on an MCI with fewer events than 0.6 of the last 20 MCIs' median waited
-    one MCI: landing seeds 0-23 1.80 -> 2.47 % (20 -> 16 within 2 %; paired +0.67 +- 0.34, 6 better)."""
+    one MCI: landing seeds 0-23 1.80 -> 2.47 % (20 -> 16 within 2 %; paired +0.67 +- 0.34, 6 better). Session 29
+    (``/tmp/s29/jit29``, ``run.sh``, ``cmpj.py``; with ``refit_tracked_poses``), indoor event-only seeds 0-7 (3.730 %):
+    0.6 -> 3.758 % (paired +0.03 +- 0.44, 4 better), 0.8 -> 4.283 % (+0.55 +- 1.47, 1 better)."""
     keyframe_displacement_px: float = field(default=20.0, metadata={"min": 2.0, "max": 100.0, "step": 1.0, "unit": "px"})
     """New keyframe when the median key-point displacement from the last keyframe exceeds this, pixels. Session 12,
     landing event-only seeds 0-11 (defaults 2.53 %, 5 of 12 within 2 %): 30 -> 2.86 % (5 of 12); 14 -> 2.21 %
@@ -140,7 +166,12 @@ class TrackingConfig:
     keyframe confirms are dropped). Session 12, landing event-only seeds 0-11, 60 runs (see
     ``ba_rotation_rate_prior_deg_s`` for the baseline): 3 -> mean ATE 2.43 %, median 1.88, 35 of 60 within 2 % (27),
     paired -0.18 +- 0.21 points (better in 33 of 60), tracked at least 94.7 % (88.5); defaults alone 2.40 % (8 of 12
-    within 2 %, against 2.53 % and 5): within the spread, keyframes."""
+    within 2 %, against 2.53 % and 5): within the spread, keyframes. Session 29 (``/tmp/s29/jit29``, ``run.sh`` /
+    ``cmpj.py``, with ``refit_tracked_poses``): 3 -> indoor event-only seeds 0-7 3.730 -> 2.810 % (paired -0.920 +-
+    0.737, 5 better; seed 4 9.81 -> 4.07 %), under the defaults and the four neutral perturbations (40 runs) 3.153 ->
+    3.071 % (-0.083 +- 0.227, 24 better, 16 worse; worst run 9.81 -> 10.27 %), held out 8-19 3.745 -> 3.324 % (-0.421 +-
+    0.468, 5 better, 7 worse), landing event-only 0-23 1.317 -> 1.521 % (+0.204 +- 0.254, 24 -> 23 within 2 %, one run
+    7.36 %): within the spread, not changed."""
     local_window: int = field(default=6, metadata={"min": 2, "max": 30, "step": 1, "unit": "keyframes"})
     """Keyframes optimised by local bundle adjustment, keyframes. Session 11, landing event-only seeds 0-11, 60 runs
     (defaults and four perturbations, see ``MciConfig.reference_fraction``, 0.5 there): 10 -> mean ATE 2.60 -> 2.30 %,
@@ -388,8 +419,12 @@ class TrackingConfig:
     old) coasts on that whole trajectory's motion if it spans at least this (0: it is lost at its first visual
     failure), seconds. Measured with ``coast_blank_s`` in :mod:`evpose.slam.event_coasting`."""
     ba_iterations: int = field(default=10, metadata={"min": 0, "max": 100, "step": 1, "unit": "iterations"})
-    """Levenberg-Marquardt iterations of local BA (0 disables it), iterations. Session 18, landing event-only seeds
-    0-23 (2.07 %, 15 within 2 %): 25 -> 2.20 % (17), tracked at least 88.3 %."""
+    """Levenberg-Marquardt iterations of local BA (0 disables it), iterations. Session 18, landing event-only seeds 0-23
+    (2.07 %, 15 within 2 %): 25 -> 2.20 % (17), tracked at least 88.3 %. Session 29 (``/tmp/s29/jit29``, ``run.sh``,
+    ``cmpj.py``; with ``refit_tracked_poses``): 20 -> indoor event-only seeds 0-7 3.730 -> 2.828 % (paired -0.90 +-
+    0.95, 3 better, 5 worse: seeds 0 / 4 / 6 4.24 / 9.81 / 3.44 -> 2.44 / 2.77 / 2.22, seeds 1 / 2 / 5 2.74 / 2.68 /
+    1.48 -> 3.78 / 3.67 / 2.22); under the defaults and the four neutral perturbations (40 runs) 3.153 -> 3.198 % (+0.05
+    +- 0.27, 18 better, 22 worse; segment metric 2.62 -> 2.98 %): within the spread."""
     ba_huber_px: float = field(default=2.0, metadata={"min": 0.1, "max": 10.0, "step": 0.1, "unit": "px"})
     """Huber threshold of the reprojection factors, pixels. Session 14, landing event-only seeds 0-11 (defaults 2.52 %,
     5 within 2 %): 1.0 -> 2.51 % (5; seeds 1, 3, 4, 10 better, seed 7 7.16 % in two maps, 8 3.70 %). Session 22

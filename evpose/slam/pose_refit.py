@@ -1,0 +1,104 @@
+"""Re-solving the PnP-placed per-MCI poses of a refined trajectory on the map points' current positions.
+
+An MCI's pose is solved once, online, on the points as they were then: a keyframe or two old, triangulated over short
+baselines. The local bundle adjustments of the next keyframes move those points (and the keyframes), and a refined
+trajectory (:meth:`evpose.slam.atlas.SlamMap.trajectory`) carries the MCI along with its reference keyframe only, as
+a rigid body: the pose keeps the error of the points it was solved on. With each pose's PnP inliers (point ids,
+pixels) and its MCI's other tracks recorded (:attr:`SlamMap.traj_obs`), the pose is re-solved on the same pixels with
+the points where the map holds them at the end, joined by the tracks that got a point later: a motion-only refinement
+per MCI, points fixed (unlike the full BA at the end, :mod:`evpose.slam.map_restructure`, which moved the keyframes and
+made every indoor map worse). Figures: :attr:`evpose.slam.tracking_config.TrackingConfig.refit_tracked_poses`.
+
+Where the indoor ATE sits in tracked stretches (session 29, ``/tmp/s29/jit29``; ``capture.py`` records each run's maps,
+per-MCI poses and every PnP pose's inliers; ``ana.py`` .. ``ana4.py``, ``corr.py``; indoor event-only seeds 0-7 at the
+session-28 defaults, 3.90 %). After each map's Sim(3) alignment the PnP-placed poses hold 84 % of the squared position
+residual (329 poses, RMS 100 mm), the coasted ones 9 % (1061 poses, 19 mm) and the maps' first (two-view reference)
+poses 6 % (42 poses, 76 mm). The maps tracking the two legs (0-0.83 s and 2.4-2.97 s, 16-43 poses each; the turn
+between them is coasted in three maps) give about two thirds of the summed ATE, seed 4's last map alone 7.7 of its
+10.3 points. That error is slow, not pose-to-pose: the residual minus its +-4-pose moving average is 40 mm RMS of the
+100, and replacing the tracked poses by that average makes the ATE worse (4.15 %); the map's scale wanders along a leg
+(Sim(3) scale over 7-pose windows 0.7-2.1 times the map's own on seed 0's first map, 0.2-14 on seed 4's last map, whose
+first 0.3 s track 15-26 points from 1200-1800-event MCIs; its online poses jump 100-300 mm between MCIs there).
+Aligning each leg's map in halves would give 2.78 instead of 3.96 % (distance-weighted). Per pose (``corr.py``, 271 PnP
+poses of ``reprojection_threshold_px`` 2.4, Spearman against the residual / its fast part, both over the map's
+distance): points used -0.08 / +0.32, PnP RMS +0.04 / +0.13, median point age in keyframes +0.09 / +0.04, keyframe
+observations per point +0.09 / +0.07, MCI events +0.27 / -0.02: no per-MCI figure flags the bad poses. Composing the
+poses otherwise does not help (``comp.py``): the online poses 3.78 %, the keyframe correction interpolated between the
+reference keyframe and the next 3.90 %, the next keyframe's 4.04 %, the reference keyframe's (default) 3.90 %.
+With this re-solve (``split.py``, run ``chk``: the defaults, 3.73 %) the PnP-placed poses still hold 83 % of the
+squared residual at 96 mm RMS (fast part 37 mm): it takes off a little of both, and the legs' slow scale wander stays.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from evpose.core.trajectory import invert_pose
+from evpose.slam.geometry import project
+
+MIN_POINTS = 6
+"""A pose is re-solved only on at least this many of its inliers still in the map (six pairs fix a pose with margin)."""
+
+
+def refit_pose(K: np.ndarray, Xw: np.ndarray, uv: np.ndarray, T_wc: np.ndarray) -> np.ndarray:
+    """Levenberg-Marquardt refinement of the pose ``T_wc`` (``T_world_cam``) on the 2-D / 3-D pairs ``uv`` / ``Xw``."""
+    T_cw = invert_pose(T_wc)
+    rvec, _ = cv2.Rodrigues(T_cw[:3, :3])
+    tvec = T_cw[:3, 3].reshape(3, 1).copy()
+    obj = np.ascontiguousarray(Xw, np.float64).reshape(-1, 1, 3)
+    img = np.ascontiguousarray(uv, np.float64).reshape(-1, 1, 2)
+    try:
+        rvec, tvec = cv2.solvePnPRefineLM(obj, img, K, None, rvec, tvec)
+    except cv2.error:
+        return T_wc  # a degenerate set (e.g. points along one ray): keep the pose as it was
+    R, _ = cv2.Rodrigues(rvec)
+    out = np.eye(4)
+    out[:3, :3] = R
+    out[:3, 3] = tvec.ravel()
+    out = invert_pose(out)
+    return out if np.all(np.isfinite(out)) else T_wc
+
+
+@dataclass
+class PoseObservations:
+    """What placed one MCI pose: its PnP inliers' point ids (M,) and pixels (M, 2), and the MCI's other tracks' ids (N,)
+    and pixels (N, 2) (tracks without a map point then, or PnP outliers)."""
+
+    point_ids: np.ndarray
+    uv: np.ndarray
+    track_ids: np.ndarray
+    track_uv: np.ndarray
+
+
+def refit_trajectory(K: np.ndarray, t_us: list[int], T_wc: list[np.ndarray], obs: dict[int, PoseObservations], points: dict,
+                     threshold_px: float, min_points: int = MIN_POINTS) -> list[np.ndarray]:
+    """``T_wc`` (poses at ``t_us``) with every pose that has recorded observations in ``obs`` (by time) re-solved on
+    the points (``points``: id -> :class:`MapPoint`) where they are now: first from itself on those of its inliers still
+    in the map (when at least ``min_points`` are), then once more with the MCI's other tracks whose track now carries a
+    point (triangulated later, or re-found) and reprojects within ``threshold_px`` of it; the other poses unchanged."""
+    by_track = {p.track_id: pid for pid, p in points.items()}
+    out = list(T_wc)
+    for i, t in enumerate(t_us):
+        o = obs.get(int(t))
+        if o is None:
+            continue
+        keep = np.array([p in points for p in o.point_ids.tolist()], bool)
+        if keep.sum() < min_points:
+            continue
+        Xw = np.stack([points[int(p)].xyz for p in o.point_ids[keep]])
+        uv = o.uv[keep].astype(np.float64)
+        T = refit_pose(K, Xw, uv, out[i])
+        have = set(o.point_ids[keep].tolist())
+        extra = [(by_track[tid], k) for k, tid in enumerate(o.track_ids.tolist()) if tid in by_track and by_track[tid] not in have]
+        if extra:
+            Xe = np.stack([points[pid].xyz for pid, _ in extra])
+            ue = o.track_uv[[k for _, k in extra]].astype(np.float64)
+            proj, z = project(K, invert_pose(T), Xe)
+            near = (z > 0) & (np.linalg.norm(proj - ue, axis=1) < threshold_px)
+            if near.any():
+                T = refit_pose(K, np.r_[Xw, Xe[near]], np.r_[uv, ue[near]], T)
+        out[i] = T
+    return out
