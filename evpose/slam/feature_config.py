@@ -185,7 +185,7 @@ class FeatureConfig:
     ``ba_edge_along_sigma_px`` 3 landing 0-11 2.40 % (5 of 12, worst 4.60)."""
     klt_curvature_gain: float = field(default=0.0, metadata={"min": 0.0, "max": 3.0, "step": 0.05, "unit": "ratio"})
     """Each MCI-to-MCI step removes the change of the shift a constant-velocity warp leaves under image acceleration
-    (:func:`evpose.slam.features.remove_curvature_shift`; 0: off), ratio of the model's ``a T^2 / 24``. Session 15
+    (:func:`evpose.slam.track_step.remove_curvature_shift`; 0: off), ratio of the model's ``a T^2 / 24``. Session 15
     (``/tmp/s15/turnbias``, see the module notes of :mod:`evpose.slam.features`): the shift is there but small. On the
     event-only landing (seeds 1, 2, 3, 7) the true track errors regress on the model's summed shift since birth (true
     image acceleration) at 1.6-2.1 times the model, R^2 0.6-1.1 %, the model's shift 0.11-0.14 px RMS; from the tracks'
