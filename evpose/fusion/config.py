@@ -181,7 +181,19 @@ class FusionConfig:
     while each iSAM2 update costs more with N; 100 states, or re-optimising at every update with 5 iterations and
     relinearisation checked every update, left seeds 0-3 within 0.001 mm (replayed): the newest state of a
     fixed-lag smoother is the filter's estimate (marginalisation keeps the old states' information), so the window
-    helps only the states that later registrations revisit, states."""
+    helps only the states that later registrations revisit, states.
+
+    Session 29: re-using a frame's registration from a better start, which only a graph can do for a past state (swap
+    state k-L's registration factor, at update k, for that frame registered again from the smoothed x_(k-L|k)), bounded
+    on recorded inputs with session 20's echo model (a registration moves ``S`` times its start's move,
+    :mod:`evpose.tracker.event_registration`; every registration also moved by ``S`` times its own prediction's change,
+    so the loop's feedback is in; ``/tmp/s29/fuse29/causal.py``, 346x260 seeds 0-7, 5.297 mm as replayed): L = 7 (this
+    window) 5.295, L = 30 (a 32-state window) 5.258 mm, for a second registration per update; on seed 0, L = 1 / 7
+    6.514 -> 6.697 / 6.667 mm (worse: the smoothed start carries the estimate's own slow error, which the swapped
+    registration then echoes as news). The smoothed states are only a little better than the online ones (seed 0, lag 1
+    / 3 / 7: 6.30 -> 6.24 / 6.12 / 5.98 mm), while the same swap from the truth (an oracle) gives 3.60 / 4.57 mm at L =
+    7 / 30: what a re-registration could reach needs a start better than any estimate the IMU and these
+    registrations give. Not built."""
     reoptimize_every: int = field(default=5, metadata={"min": 1, "max": 100, "step": 1, "unit": "updates"})
     """Joint optimisation of the window every K updates."""
     reoptimize_iterations: int = field(default=2, metadata={"min": 1, "max": 20, "step": 1, "unit": "iterations"})
