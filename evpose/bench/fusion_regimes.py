@@ -67,7 +67,9 @@ observe (see ``FusionConfig.init_sigma_gyro_bias``). Where relinearising should 
 :func:`same_inputs_gap` (346x260 seeds 0-7, both backends' runs, seed 5's lost cold start left out): ``cold``
 closed loop 15.451 / 15.374 mm (+0.078 +- 0.150, 3 of 7), same inputs -0.007 +- 0.005 mm (graph lower on 10 of 14),
 estimates 0.08 mm RMS apart; ``outage_300ms`` closed loop 5.948 / 5.954 mm (-0.006 +- 0.057, 5 of 8), same inputs
--0.020 +- 0.007 mm (10 of 16), 0.07 mm apart: the graph's one measurable edge, 0.3 % of the error. Re-using past
+-0.020 +- 0.007 mm (10 of 16), 0.07 mm apart: with the defaults the graph's one measurable edge, 0.3 % of the error
+(relinearising at every update widens it to -0.25 mm on the 3 s landings' turns, ``FusionConfig.relinearize_skip``,
+at ~0.2 ms per update, and still not visible in closed loop). Re-using past
 frames' registrations from the smoothed window, the other thing only a graph can do, is bounded in
 ``FusionConfig.window_states``.
 """
