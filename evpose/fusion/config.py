@@ -181,7 +181,19 @@ class FusionConfig:
     while each iSAM2 update costs more with N; 100 states, or re-optimising at every update with 5 iterations and
     relinearisation checked every update, left seeds 0-3 within 0.001 mm (replayed): the newest state of a
     fixed-lag smoother is the filter's estimate (marginalisation keeps the old states' information), so the window
-    helps only the states that later registrations revisit, states."""
+    helps only the states that later registrations revisit, states.
+
+    Session 29: re-using a frame's registration from a better start, which only a graph can do for a past state (swap
+    state k-L's registration factor, at update k, for that frame registered again from the smoothed x_(k-L|k)), bounded
+    on recorded inputs with session 20's echo model (a registration moves ``S`` times its start's move,
+    :mod:`evpose.tracker.event_registration`; every registration also moved by ``S`` times its own prediction's change,
+    so the loop's feedback is in; ``/tmp/s29/fuse29/causal.py``, 346x260 seeds 0-7, 5.297 mm as replayed): L = 7 (this
+    window) 5.295, L = 30 (a 32-state window) 5.258 mm, for a second registration per update; on seed 0, L = 1 / 7
+    6.514 -> 6.697 / 6.667 mm (worse: the smoothed start carries the estimate's own slow error, which the swapped
+    registration then echoes as news). The smoothed states are only a little better than the online ones (seed 0, lag 1
+    / 3 / 7: 6.30 -> 6.24 / 6.12 / 5.98 mm), while the same swap from the truth (an oracle) gives 3.60 / 4.57 mm at L =
+    7 / 30: what a re-registration could reach needs a start better than any estimate the IMU and these
+    registrations give. Not built."""
     reoptimize_every: int = field(default=5, metadata={"min": 1, "max": 100, "step": 1, "unit": "updates"})
     """Joint optimisation of the window every K updates."""
     reoptimize_iterations: int = field(default=2, metadata={"min": 1, "max": 20, "step": 1, "unit": "iterations"})
@@ -194,7 +206,24 @@ class FusionConfig:
     relinearize_skip: int = field(default=10, metadata={"min": 1, "max": 100, "step": 1, "unit": "updates"})
     """iSAM2 checks which variables to relinearise only every this many updates (gtsam ``relinearizeSkip``); the
     window re-optimisation relinearises anyway. 10 instead of 1 cut the update's CPU time by ~20 % with the same
-    estimates to 0.01 mm on the simulated landing, updates."""
+    estimates to 0.01 mm on the simulated landing, updates.
+
+    Session 29, on the same recorded inputs (each graph run's registrations replayed, ``/tmp/s29/fuse29/same.py``,
+    ``trig.py``; see :func:`evpose.bench.fusion_regimes.same_inputs_gap`), mean ATE mm default -> 1 (EKF): 2 s landings
+    346x260 seeds 0-7 5.297 -> 5.293 (5.305), 8-11 4.766 -> 4.761 (4.762), 240x180 0-7 6.930 -> 6.909 (6.938); 3 s
+    landings (346x260 seeds 0-3) 12.275 -> 12.032 (12.285), every seed lower, the gain in the turn and after it (seed
+    0: 12.51 -> 11.61 mm RMS in the turn, 11.06 -> 10.47 after, 7.53 -> 7.37 before), where weak registrations move
+    the states most: the one setting found that gives the graph an edge over the EKF of more than 0.03 mm on the same
+    inputs. With ``relinearize_threshold`` 1e-4 too 5.278 / 4.756 / 6.924 / 12.177 mm, 0.3 s / 0.5 s outages
+    (``regimes``, seeds 0-3) 8.822 -> 8.767 mm (EKF 8.871) at 0.5 s; ``reoptimize_iterations`` 5 or ``reoptimize_every``
+    1 add nothing. Relinearising at every update only within 8 / 40 / 200 updates of a degraded one: 12.252 / 12.252
+    / 12.204 mm. Cost (fusion update CPU on seed 0's inputs, load ~3.9): median 0.56 -> 0.80 ms, p99 1.70 -> 2.12 ms
+    at 346x260 (1e-4 too: 1.07 / 2.79 ms), against the 3 ms per-update target (session 19: 2.48 ms wall median).
+    In closed loop the front end's response hides it (a neutral nudge moves a seed by ~0.2 mm, see
+    :mod:`evpose.bench.fusion_regimes`): 3 s landings 12.147 -> 12.144 mm (per seed 9.848 / 14.665 / 12.716 / 11.360
+    -> 10.243 / 14.264 / 12.636 / 11.433; EKF 11.996), 2 s 346x260 seeds 0-7 5.287 -> 5.322 mm (+0.035 +- 0.020, 2
+    of 8 lower; EKF 5.365), ARE 0.0591 -> 0.0594 deg. Not changed: it would take the latency budget's margin for a
+    gain no closed-loop set of this size shows."""
     relinearize_correction_velocity: float = field(default=0.05, metadata={"min": 0.0, "max": 10.0, "step": 0.01, "unit": "m/s"})
     """When an update moves the newest state's velocity by more than this from its IMU prediction, the window is
     relinearised at once (forced, whatever ``relinearize_skip``) and re-optimised; a re-acquisition's joint

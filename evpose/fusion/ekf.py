@@ -22,6 +22,12 @@ smoother is the filter's estimate, the graph's robust kernel never engages
 there and relinearising more did not help, so the two differ by linearisation
 and the graph's constant-velocity prior only (without it the graph's mean is
 7.103 / 0.0758): which one wins a set is not a property of either.
+
+Session 29: on the same recorded registrations (each graph run's inputs replayed through both) the two differ by
+-0.008 mm on 346x260 seeds 0-7 (5.297 / 5.305 mm), +0.004 on seeds 8-11, -0.008 at 240x180 (6.930 / 6.938) and
+-0.010 on the 3 s landings (12.275 / 12.285), their estimates 0.03-0.06 mm RMS apart (0.36 mm on the 3 s landings'
+turns), while a closed-loop pair moves by ~0.2 mm per seed whichever estimator runs (a neutral nudge of the graph
+alone does the same): see :mod:`evpose.bench.fusion_regimes` and its ``same_inputs_gap``.
 """
 
 from __future__ import annotations

@@ -49,7 +49,7 @@ def test_an_outage_withholds_every_registration_inside_it_and_tracking_resumes_a
 
 
 def test_the_table_pairs_the_backends_per_seed(monkeypatch):
-    def regime_run(rec, cmap, regime, backend, seed, config=None):
+    def regime_run(rec, cmap, regime, backend, seed, config=None, same_inputs=False):
         ate = seed + (0.5 if backend == "ekf" else 0.0) * (-1) ** seed + (1000.0 if (seed, backend) == (4, "ekf") else 0.0)
         return {"ate_rmse_mm": ate, "not_ok_updates": 0, "diverged": int(ate > fr.DIVERGED_MM)}
 
@@ -68,7 +68,7 @@ def test_the_benchmark_is_registered_under_fusion(monkeypatch):
     assert collect()["fusion.regimes"] is fr.bench_fusion_regimes
     calls = []
     monkeypatch.setattr("evpose.bench.tracking.landing_case", lambda work_dir, res, seconds, seed: calls.append((res, seconds, seed)) or (seed, None))
-    monkeypatch.setattr(fr, "regime_table", lambda cases, regimes: {"n": len(list(cases)), "regimes": [r.name for r in regimes]})
+    monkeypatch.setattr(fr, "regime_table", lambda cases, regimes, same_inputs: {"n": len(list(cases)), "regimes": [r.name for r in regimes]})
     out = fr.bench_fusion_regimes(BenchContext(quick=True, work_dir=Path("unused"), seed=3))
     assert out["240x180_n"] == 1 and calls == [((240, 180), 2.0, 3)]
     assert out["240x180_regimes"] == list(fr.QUICK_REGIMES)
@@ -102,3 +102,13 @@ def test_an_outage_report_withholds_only_inside_its_window():
     for t in (50, 100, 199, 200):
         report(t, np.eye(4), np.eye(6))
     assert calls == [False, True, True, False]
+
+
+def test_the_same_inputs_replay_gives_the_estimators_own_gap_without_the_closed_loop(short_landing):
+    rec, cmap = short_landing
+    out = fr.regime_run(rec, cmap, fr.Regime("steady"), "factor_graph", same_inputs=True)
+    # Both estimators on the graph run's own registrations: they differ by far less than either's error.
+    assert 0 < out["same_inputs_gap_mm"] < 0.2 * out["ate_rmse_mm"]
+    assert abs(out["same_inputs_graph_minus_ekf_ate_mm"]) <= out["same_inputs_gap_mm"] + 1e-9
+    assert np.isfinite(out["same_inputs_graph_minus_ekf_are_deg"])
+    assert "same_inputs_gap_mm" not in fr.regime_run(rec, cmap, fr.Regime("steady"), "factor_graph")
