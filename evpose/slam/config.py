@@ -432,12 +432,6 @@ class InitializationConfig:
     """Fewest good triangulated points to accept the map, points."""
     max_frames: int = field(default=8, metadata={"min": 1, "max": 100, "step": 1, "unit": "MCIs"})
     """The reference view is replaced after this many MCIs without success, MCIs."""
-    restart_reference_back: int = field(default=0, metadata={"min": 0, "max": 2, "step": 1, "unit": "MCIs"})
-    """Event-only: after a map is lost, the next map's two-view initialisation takes its reference this many MCIs
-    before the first MCI after the loss (0: that MCI, as before a map was ever made; 1: the MCI that lost the map; 2:
-    the one before it, the lost map's last pose, unless a blank wall lies between the two: then the losing MCI),
-    MCIs. Every MCI interval between the lost map's last pose and the new map's reference is untracked time (module
-    notes of :mod:`evpose.slam.system_initialisation`)."""
 
 
 @dataclass

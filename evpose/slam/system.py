@@ -294,8 +294,6 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
             self._after_blank_t = mci.t_us
         t1, c1 = time.perf_counter(), time.thread_time()
         self._prev_mci = (self.fe.prev8, self.fe.prev_t)  # the visual gyro's reference: _track_mci moves on from it
-        # The previous MCI's tracks, should this MCI lose the map (InitializationConfig.restart_reference_back).
-        before = self._tracks_before() if self._state is SlamStatus.OK else None
         mci = self._track_mci(mci)
         keyframe = False
         if self._state is SlamStatus.OK:
@@ -305,8 +303,6 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
             self._failure = SlamFailure.INITIALISING
         t2, c2 = time.perf_counter(), time.thread_time()
         self._replenish(mci.image8, mci.image)
-        if status is SlamStatus.LOST:
-            self._restart_reference(mci.t_us, None if rw.blank_us else before)
         m = self.atlas.active
         fe = self.fe
         has_pt = np.array([t in fe.track_to_point for t in fe.ids.tolist()], bool)

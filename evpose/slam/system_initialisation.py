@@ -71,24 +71,6 @@ class TwoViewInitialisation:
                 return SlamStatus.OK, joined, self.atlas.active.keyframes[-1].T_wc.copy()
         return SlamStatus.OK, f"map {m.id} initialised ({res.model}, {len(m.points)} points, parallax {res.median_parallax_deg:.1f} deg)", m.keyframes[-1].T_wc.copy()
 
-    def _tracks_before(self) -> tuple[int, np.ndarray, np.ndarray] | None:
-        """The tracks as the previous MCI left them, ``(time us, ids, pixels)``, when
-        ``InitializationConfig.restart_reference_back`` may start the next map from that MCI (else None)."""
-        if self.imu is not None or self._init_cfg.restart_reference_back < 2 or self.fe.prev8 is None:
-            return None
-        return self.fe.prev_t, self.fe.ids.copy(), self.fe.uv.copy()
-
-    def _restart_reference(self, t_us: int, before: tuple[int, np.ndarray, np.ndarray] | None) -> None:
-        """After the MCI at ``t_us`` lost the map: the next map's initialisation reference, ``restart_reference_back``
-        MCIs back (``before``: the previous MCI's tracks, None to use this MCI's)."""
-        back = self._init_cfg.restart_reference_back if self.imu is None else 0
-        if back <= 0:
-            return
-        fe = self.fe
-        t, ids, uv = before if back >= 2 and before is not None else (t_us, fe.ids, fe.uv)
-        fe.init_ref = {int(i): p.astype(np.float64) for i, p in zip(ids.tolist(), uv)}
-        fe.init_ref_t, fe.init_frames = int(t), 0
-
     def _try_rejoin(self, m: SlamMap) -> str | None:
         """Append the fresh two-view map ``m`` to the map lost while coasting, in that map's frame (:mod:`evpose.slam.map_rejoin`)."""
         cand, self._rejoin = self._rejoin, None
