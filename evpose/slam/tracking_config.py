@@ -332,8 +332,10 @@ class TrackingConfig:
     with 2.6: 77.1 -> 78.6 %); all 100 runs +0.05 +- 0.19, 61 better. Landing event-only seeds 0-23 bit-identical,
     24-47 1.699 -> 1.700 % (only seed 43, two maps, 4.62 -> 4.63 %; 19 of 24 within 2 % either way). With
     ``InitializationConfig.min_triangulated`` 12 as well, indoor seeds 0-19 3.88 % (against 0.45 alone seed 12 2.07 ->
-    6.65, 15 3.71 -> 2.10), least tracked 80.2 %.
-    Not changed: the ATE does not move beyond its noise, and the tracked time only where a loss moves off the blank
+    6.65, 15 3.71 -> 2.10), least tracked 80.2 %. 0.5: seeds 0-19 3.52 % (-0.38 +- 0.49, 10 better, 10 worse;
+    seed 4 10.32 -> 2.20, 14 6.62 -> 8.78), tracked mean 89.0 %, least 79.2 % (seed 15; 3, 4, 12, 18 80.8-82.5 %
+    from 89-94 %): blank walls inside the gaps between maps 0.035 -> 0.084 s per run, more starved maps end just
+    before one. Not changed: the ATE does not move beyond its noise, and the tracked time only where a loss moves off the blank
     wall (``InitializationConfig.min_triangulated`` mends seed 7 without moving the other seeds' losses)."""
     coast_blank_s: float = field(default=0.3, metadata={"min": 0.0, "max": 2.0, "step": 0.01, "unit": "s"})
     """Event-only coasting: up to this much of the time whose events the window selection dropped for a low event rate
