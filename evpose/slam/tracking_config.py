@@ -335,8 +335,9 @@ class TrackingConfig:
     6.65, 15 3.71 -> 2.10), least tracked 80.2 %. 0.5: seeds 0-19 3.52 % (-0.38 +- 0.49, 10 better, 10 worse;
     seed 4 10.32 -> 2.20, 14 6.62 -> 8.78), tracked mean 89.0 %, least 79.2 % (seed 15; 3, 4, 12, 18 80.8-82.5 %
     from 89-94 %): blank walls inside the gaps between maps 0.035 -> 0.084 s per run, more starved maps end just
-    before one. Not changed: the ATE does not move beyond its noise, and the tracked time only where a loss moves off the blank
-    wall (``InitializationConfig.min_triangulated`` mends seed 7 without moving the other seeds' losses)."""
+    before one. Not changed: the ATE does not move beyond its noise, and the tracked time only where a loss moves
+    off the blank wall (``InitializationConfig.min_triangulated`` mends seed 7 without moving the other seeds'
+    losses)."""
     coast_blank_s: float = field(default=0.3, metadata={"min": 0.0, "max": 2.0, "step": 0.01, "unit": "s"})
     """Event-only coasting: up to this much of the time whose events the window selection dropped for a low event rate
     (``EventWindowConfig.min_event_rate``: a blank wall, no MCI) does not use up ``coast_s`` (0: it does), seconds.
