@@ -2,7 +2,36 @@
 between a reference MCI and a later one, the first map points and the global BA of the two keyframes, and the re-join of
 a fresh map onto the map lost while coasting (:mod:`evpose.slam.map_rejoin`). The methods read and set the system's
 ``fe``, ``atlas``, ``cfg``, ``K``, ``_init_cfg``, ``_next_point``, ``_state``, ``_rejoin`` and the times of its
-last visual pose, and call its ``_replenish``, ``_matcher`` and ``_gyro_rotation``."""
+last visual pose, and call its ``_replenish``, ``_matcher`` and ``_gyro_rotation``.
+
+Where the indoor event-only time not tracked goes (session 29, ``/tmp/s29/track29``: ``diag.py`` runs the defaults of
+main 48c8ad2 and pickles per-MCI logs and per-map spans, ``ana.py`` attributes every untracked 100 us, ``gaps.py``
+splits each gap between maps, ``cmp.py`` pairs two runs). Tracked time is what
+:func:`evpose.eval.slam_metrics.atlas_metrics` counts, the summed spans of the maps with at least three poses. Indoor
+seeds 0-19, per 3 s run: 0.27 s untracked (seeds 0-11 0.28), of it 0.014 s before the first map, 0.035 s after the last
+map's last pose (the last MCI's reference time lies half a window before the recording's end), and the rest in the 4.2
+gaps between maps, every one of them after a starved map whose coast ran out (``TrackingConfig.coast_s``; no map ended
+on a rejected pose or a pause): 0.076 s from the lost map's last (coasted) pose to the MCI that loses it, 0.109 s from
+that MCI to the new map's first pose (its two-view reference: one MCI interval to the next MCI, which becomes the
+reference, plus the reference's resets), 0.035 s of blank walls inside the gaps, and 0.001 s in two-pose maps lost at
+once (not counted). Over the 104 map starts, summed per run, the three steps take 100 / 90 / 44 ms, blank walls
+included (35 ms of them). So the untracked time is mostly two MCI intervals per loss (5-65 ms each, the longest at the
+sparse MCIs before the first blank wall), not waiting for a two-view start to succeed. Seed 7, the least tracked
+(79.3 %; 0.62 s untracked), is the exception: 0.44 s in one gap, 0.404-0.847 s: its first map lost at 0.470 s, the
+reference at 0.527 s, its one attempt before the first blank wall (0.632 s) 14 triangulated points <
+``InitializationConfig.min_triangulated`` 15, then 169 ms blank, 3 matches left and a new reference at 0.847 s.
+
+Starting the next map at once (``InitializationConfig.restart_reference_back``, commit ``378766e``, reverted): the
+reference at the MCI that lost the map (1) or at the one before it, the lost map's last pose (2; the losing MCI when a
+blank wall lies between them), indoor seeds 0-19 (defaults 3.89 %, tracked 91.0 %, least 79.3 %): 1 -> 4.76 % (paired
++0.87 +- 0.74, 16 of 20 worse), tracked 93.6 % (least 86.7); 2 -> 4.84 % (+0.94 +- 0.47, 12 worse), 94.0 % (least
+81.2). The tracked time is there, but the new maps begin in the stretch that lost the old one: with 2 the second map of
+seeds 3 / 5 / 18 starts at 0.40-0.45 s instead of 0.52-0.54 s and is 12.8 / 7.8 / 10.3 cm RMS off instead of 0.3 / 0.1
+/ 0.9, and on seeds 3 and 6 (with 1: 16, 17) the last map, started at 1.92-1.95 s, lives through the turn at 2.33 s
+where the defaults lose it and restart (8-32 cm over 1.3 m against two maps of 0.6-3.6 cm). The delay after a loss
+keeps the new map out of the stretch that starved the old one. For the permissive start that mends seed 7 see
+``InitializationConfig.min_triangulated``. Coasting longer (``TrackingConfig.coast_s`` 0.45) and coasting two-pose maps
+(``TrackingConfig.coast_young_span_s`` 0.003): see there."""
 
 from __future__ import annotations
 
