@@ -63,10 +63,21 @@ walks it steadily (-0.7 to -2.8 deg about y on each of its last 11 steps, 2.2-2.
 per step flags it (Spearman of the rotation error / |log step ratio| with the points seen at insertion +0.06 / -0.10,
 with the true rotation rate -0.14 / +0.22, with the keyframes in the map -0.10 / -0.34; rotation error (all axes) under
 30 points 2.8 deg RMS, over 30 3.1 deg). So gating new points by the old points' depths, a minimum baseline over depth
-for triangulation, or more fixed keyframes in the BA act on what is already right; the lever is the steps' rotation. A
-constant-rotation-rate factor in the BA (``TrackingConfig.ba_rotation_rate_prior_deg_s``, figures there) did not hold
-it: at 80 deg/s seed 4's legs were re-drawn into other maps, not mended (its last map born 0.7 s later; step ratios
-0.15-0.26 at a depth scale of 0.3), and the pooled 40 runs got no better.
+for triangulation, or more fixed keyframes in the BA act on what is already right; the lever is the keyframe steps'
+rotation, while the map is built. Oracles: the true rotation between consecutive keyframes as a prior of the event-only
+local BA (``oracle_stmt.txt``, run through ``run.sh``; sigma 0.2 deg, in place of the gyro priors of event-inertial
+maps): indoor seeds 0-7 3.730 -> 2.722 % (paired -1.01 +- 0.82, 5 better; seed 4 9.81 -> 3.32 %), held-out 8-19 3.745 ->
+2.568 % (-1.18 +- 0.75, 8 better, 4 worse; within 2 % 2 -> 6; segment metric -0.94 +- 0.48); at 1 deg 3.039 % (-0.69 +-
+1.04, 4 better) and 3.417 % (-0.33 +- 0.62, 4 better, 8 worse): a rotation source must hold a keyframe step to well
+under 1 deg (the steps' own error is 2-3 deg) to be worth about a point. After the fact it is no lever: each PnP-placed
+MCI pose re-solved on the final points with its rotation taken from the truth and only its translation solved
+(``rotoracle.py`` on jit29's captures, seeds 0-7 at the session-28 defaults, 3.904 %; the same re-solve with its own
+rotation 3.699 %, as ``refit_tracked_poses``) gives 5.837 % with the map's frame fitted to the true orientations, 4.068
+% with the reference keyframe's rotation and the true rotation since it: the points were triangulated from the same
+traded steps and hold the trade. A constant-rotation-rate factor in the BA
+(``TrackingConfig.ba_rotation_rate_prior_deg_s``, figures there) did not hold it: at 80 deg/s seed 4's legs were
+re-drawn into other maps, not mended (its last map born 0.7 s later; step ratios 0.15-0.26 at a depth scale of 0.3), and
+the pooled 40 runs got no better.
 """
 
 from __future__ import annotations
