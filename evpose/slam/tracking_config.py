@@ -314,7 +314,12 @@ class TrackingConfig:
     extrapolated rotation rate carried the bias from step to step along the weakly observed direction: seeds 1, 2, 3,
     10 4.63 / 2.66 / 3.06 / 2.33 -> 2.07 / 1.62 / 1.47 / 2.91 %, but over the 60 runs +0.05 +- 0.15 points (29 of 60
     within 2 %). Session 18 (seeds 0-23, defaults then 2.07 %, 15 within 2 %): 20 -> 2.45 % (15; seeds 2 and 13
-    out of their collapse, seed 9 into two maps), 10 -> 2.32 % (16). Off, degrees per second."""
+    out of their collapse, seed 9 into two maps), 10 -> 2.32 % (16). Session 29 (``/tmp/s29/scale29``, ``run.sh`` /
+    ``cmpj.py``; the indoor legs' keyframe steps trade rotation for translation, :mod:`evpose.slam.local_map`), indoor
+    event-only seeds 0-7 (defaults 3.730 %): 20 / 40 / 80 -> 4.626 / 3.903 / 3.049 % (paired +0.90 +- 0.81 / +0.17 +-
+    0.81 / -0.68 +- 0.99; 3 better and 5 worse each; at 80 seed 4 9.81 -> 2.55 % by other maps, seed 0 4.24 -> 4.34 %);
+    80 under the defaults and the four neutral perturbations (40 runs) 3.153 -> 3.177 % (+0.02 +- 0.30, 19 better, 21
+    worse; segment metric 2.62 -> 2.98 %). Off, degrees per second."""
     coast_s: float = field(default=0.4, metadata={"min": 0.0, "max": 2.0, "step": 0.01, "unit": "s"})
     """Event-only: longest stretch a map coasts through visual failures, its pose predicted by its own recent rotation
     rate and camera-frame velocity (:mod:`evpose.slam.event_coasting`), before it is given up (0: lost at once),
