@@ -113,9 +113,10 @@ class RegistrationConfig:
 
     Session 29, ``full`` at 240x180 (``/tmp/s29/reg29/run.py``; 2 s landing from ground truth, seeds 0-7, 6.955 mm):
     0.45 / 0.2 gave 6.964 / 6.845 mm; 0.2 with the events' thresholds kept in angle
-    (``event_registration.angle_reference_pixel_mrad``, 6.727 mm) 6.614 mm, held-out seeds 8-11 6.508 -> 6.408-6.446
-    mm (two runs a rounding apart), 3 s landing seeds 0-3 18.132 -> 17.985 mm: a tenth of a millimetre, the size of
-    the runs' chaotic spread of an 8-seed mean (0.05-0.1 mm between runs a rounding apart): not changed."""
+    (``event_registration.angle_reference_pixel_mrad`` at ``angle_pixel_exponent`` 1, 6.727 mm) 6.614 mm, held-out
+    seeds 8-11 6.508 -> 6.408-6.446 mm (two runs a rounding apart), 3 s landing seeds 0-3 18.132 -> 17.985 mm: a tenth
+    of a millimetre, the size of the runs' chaotic spread of an 8-seed mean (0.03-0.1 mm between runs a rounding
+    apart); not tried with the default exponent 2: not changed."""
     inlier_threshold: float = field(default=0.7, metadata={"min": 0.05, "max": 1.0, "step": 0.01, "unit": "TDF"})
     """A point is an inlier if its final TDF value is below this, TDF units."""
     lm_lambda: float = field(default=0.01, metadata={"min": 0.0, "max": 10.0, "step": 1e-4, "unit": "ratio"})
