@@ -78,9 +78,11 @@ class EventRegistrationConfig:
     8-11 6.30 6.78 3.51 10.64 -> 5.83 5.30 3.49 10.27, 3 s 21.60 16.59 15.76 21.64 -> 16.60 15.83 13.58 18.85. The factors rounded (0.6947 ** exponent):
     exponent 1 6.813 / 6.508 mm, 2 6.493 / 6.121 mm (seeds 0-7 / 8-11; 3 s 16.659), so the runs' chaotic spread of
     an 8-seed mean is 0.03-0.1 mm. Exponent 2 against off, paired over the twelve 2 s seeds: -0.48 +- 0.16 mm, 10 better (ARE 0.0772 / 0.0796 -> 0.0728 / 0.0651 deg on seeds 0-7 / 8-11); the 3 s landings all four better. Alone (pixels, seeds 0-7): ``gate_px`` 1.0 6.754, ``huber_px`` 0.35 6.860 mm.
-    Where it acts (exponent 1, every update of seeds 0-7, camera frame at the truth, RMS): the fused sideways /
-    height error 4.97 / 4.40 -> 4.81 / 4.28 mm, the slow part (50-update mean) of the registration's height error
-    3.74 -> 3.59 mm. Not scaled: ``association_radius_px`` 1.5 (seeds 0-7, without this) 7.041 mm;
+    Where it acts (every update of seeds 0-7, camera frame at the truth, RMS, off / exponent 1 / 2): the fused
+    sideways / height error 4.97 / 4.40, 4.81 / 4.28, 4.54 / 4.24 mm, its rotation about x (the tilt paired with the
+    sideways shift) 57.6 / 58.0 / 54.1 mdeg, the slow part (50-update mean) of the registration's height error 3.74 /
+    3.59 / 3.55 mm. 3 s landing seeds 4-7 (not used to choose): 26.405 -> 23.165 mm (25.50 21.30 29.49 29.33 -> 23.44
+    17.63 26.82 24.77), ARE 0.196 -> 0.162 deg. Not scaled: ``association_radius_px`` 1.5 (seeds 0-7, without this) 7.041 mm;
     ``offset_clip_px`` 0.69 (exponent 1) the same figures to the last digit (the gate already bounds the distances)."""
     angle_pixel_exponent: float = field(default=2.0, metadata={"min": 0.0, "max": 4.0, "step": 0.1, "unit": "ratio"})
     """Power of ``angle_reference_pixel_mrad / pixel`` that ``gate_px`` and ``huber_px`` shrink by on coarser sensors: 1
