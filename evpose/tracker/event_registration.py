@@ -157,7 +157,9 @@ with the sideways shift of the same sign, -6.1 to +3.7 mm): no bias a constant c
 parts, y and the height, need registrations whose slow error is ~30 % smaller to reach 5 mm. Kept: the events' gate
 and Huber scale shrunk on coarse sensors (``angle_reference_pixel_mrad``, ``angle_pixel_exponent``: 1.5 / 0.5 ->
 0.72 / 0.24 px at 240x180; 6.955 -> 6.521 mm, held-out seeds 8-11 6.807 -> 6.225, 3 s landing seeds 0-3 / 4-7
-18.90 / 26.41 -> 16.22 / 23.17; fused y / height 4.54 / 4.24 mm). Not kept (seeds 0-7, 6.955 mm): ``registration.robust_scale`` 0.45 / 0.2 6.964 / 6.845 (0.2 with the gate and
+18.90 / 26.41 -> 16.22 / 23.17; fused y / height 4.54 / 4.24 mm), and with them the events trusted more there
+(``covariance_pixel_exponent``: ``covariance_scale`` 300 -> 70 at 240x180; seeds 0-7 5.532 mm, 8-11 5.257, 3 s 14.13
+/ 17.72). Not kept (seeds 0-7, 6.955 mm): ``registration.robust_scale`` 0.45 / 0.2 6.964 / 6.845 (0.2 with the gate and
 Huber scale x 0.69 6.614, held-out 6.408-6.446: within the spread);
 ``time_surface.eta_ms`` 14.4 / 7 8.750 / 7.259; ``registration.max_points`` 1500 6.918; the field's covariance from
 its inliers (``registration.residual_variance``) 7.596; ``prior_residual_px`` 0.3 6.932; ``association_radius_px``

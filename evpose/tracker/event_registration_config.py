@@ -58,9 +58,10 @@ class EventRegistrationConfig:
     graph at 240x180 (7.22 / 8.18 mm, ARE 0.073 / 0.085 deg): not kept."""
     angle_reference_pixel_mrad: float = field(default=4.05, metadata={"min": 0.0, "max": 100.0, "step": 0.01, "unit": "mrad"})
     """On a sensor whose pixel subtends more than this angle (``1 / fx``), ``gate_px`` and ``huber_px`` shrink by
-    ``(this / pixel) ** angle_pixel_exponent``, milliradians (0 = never: they stay as set). They were tuned on the
-    simulated 346x260 70 deg camera (4.05 mrad: unchanged there, as on the bundled demos); its 240x180 sibling (5.83
-    mrad) gets 0.72 / 0.24 px instead of 1.5 / 0.5.
+    ``(this / pixel) ** angle_pixel_exponent`` and ``covariance_scale`` by ``(this / pixel) **
+    covariance_pixel_exponent``, milliradians (0 = never: they stay as set). They were tuned on the simulated 346x260
+    70 deg camera (4.05 mrad: unchanged there, as on the bundled demos); its 240x180 sibling (5.83 mrad) gets 0.72 /
+    0.24 px and 70 instead of 1.5 / 0.5 px and 300 (the figures with all three: ``covariance_pixel_exponent``).
 
     What they bound is how far an event may sit from its edge line for the map's and the edge's own errors (a few
     millimetres on the map, 0.1-0.3 px of polarity lead at 346x260), an angle rather than a pixel count: a coarser
@@ -71,7 +72,7 @@ class EventRegistrationConfig:
 
     Session 29 (``/tmp/s29/reg29/run.py``, ``queue*.sh``; ``full``, 2 s landing from ground truth, mean ATE mm / ARE
     deg at 240x180; 346x260 and the bundled demos bit-identical, ``evpose track demo_data/landing.h5`` still
-    ``469f53f67bcd8fbb``), off / exponent 1 / 1.5 / 2 (the default) / 3: seeds 0-7 6.955 / 6.727 / 6.575 / 6.521 /
+    ``469f53f67bcd8fbb``), ``covariance_scale`` as set (300), off / exponent 1 / 1.5 / 2 (the default) / 3: seeds 0-7 6.955 / 6.727 / 6.575 / 6.521 /
     6.502 (ARE 0.0772 / 0.0759 / 0.0727 / 0.0728 / 0.0723), held-out seeds 8-11 6.807 / 6.452 / 6.290 / 6.225 / -, 3 s
     landing seeds 0-3 18.897 / 18.132 / 17.172 / 16.217 / - (ARE 0.186 / 0.174 / 0.161 / 0.153 / -). Per seed, off ->
     exponent 2: seeds 0-7 9.93 4.87 8.89 4.17 10.13 5.32 6.10 6.23 -> 9.94 5.26 8.75 3.71 9.53 4.57 5.54 4.87, seeds
@@ -88,6 +89,23 @@ class EventRegistrationConfig:
     """Power of ``angle_reference_pixel_mrad / pixel`` that ``gate_px`` and ``huber_px`` shrink by on coarser sensors: 1
     keeps their angle, 2 (the default) shrinks them further, as measured at 240x180 (see ``angle_reference_pixel_mrad``),
     ratio."""
+    covariance_pixel_exponent: float = field(default=4.0, metadata={"min": 0.0, "max": 4.0, "step": 0.1, "unit": "ratio"})
+    """Power of ``angle_reference_pixel_mrad / pixel`` that ``covariance_scale`` shrinks by on coarser sensors (0 = it
+    stays), ratio: 300 -> 70 at 240x180 with 4.
+
+    With the thresholds shrunk (exponent 2), the events' weight against the field's is no longer at its optimum at
+    240x180 (session 29, ``/tmp/s29/reg29/queue12-15.sh``; ``full``, 2 s landing from ground truth, mean ATE mm, the
+    scale set by hand): seeds 0-7 600 / 300 / 150 / 75 / 37.5 gave 7.012 / 6.521 / 6.027 / 5.564 / 5.382; held-out
+    seeds 8-11 300 / 150 / 75 6.225 / 5.567 / 5.103; 3 s landing seeds 0-3 300 / 150 / 75 16.217 / 15.350 / 14.016.
+    With this default (70 at 240x180), against session 28's defaults (thresholds and scale as at 346x260): seeds 0-7
+    6.955 -> 5.532 mm (per seed 9.93 4.87 8.89 4.17 10.13 5.32 6.10 6.23 -> 7.84 5.44 7.99 3.63 5.81 3.91 5.33 4.30;
+    seeds 0-3 / 4-7 6.23 / 4.84), ARE 0.0772 -> 0.0674 deg; held-out seeds 8-11 6.807 -> 5.257 (6.30 6.78 3.51 10.64
+    -> 4.73 5.09 3.79 7.42), ARE 0.0796 -> 0.0577; paired over the twelve -1.47 +- 0.40 mm, 10 better; 3 s landing
+    seeds 0-3 18.897 -> 14.133 (21.60 16.59 15.76 21.64 -> 10.07 17.28 13.02 16.16), seeds 4-7 26.405 -> 17.717
+    (25.50 21.30 29.49 29.33 -> 16.24 15.47 19.55 19.61), ARE 0.186 / 0.196 -> 0.119 / 0.097 deg. 346x260 seeds 0-1 and
+    the ``landing`` demo bit-identical. The scale is a 240x180 optimum found on seeds 0-7 (37.5 still lower there):
+    whether 346x260 would also gain from trusting its events more with tighter thresholds was not measured (its
+    sweep, session 12, had 300 best with 1.5 / 0.5 px)."""
     on_lead_px: float = field(default=0.0, metadata={"min": -2.0, "max": 2.0, "step": 0.01, "unit": "px"})
     """How far ahead of its edge along the edge's image motion an ON event fires (negative: behind), pixels.
 
@@ -225,10 +243,13 @@ backend (``full:ekf``) 6.05 / 5.36 / 7.41 / 7.41 -> 5.88 / 4.79 / 7.50 / 7.24 (6
 
 
 def scaled_to_pixel(config: EventRegistrationConfig, pixel_mrad: float) -> EventRegistrationConfig:
-    """``config`` with ``gate_px`` and ``huber_px`` shrunk for a sensor whose pixel subtends ``pixel_mrad`` (see
-    ``EventRegistrationConfig.angle_reference_pixel_mrad``); ``config`` itself at or below the reference."""
+    """``config`` with ``gate_px``, ``huber_px`` and ``covariance_scale`` shrunk for a sensor whose pixel subtends
+    ``pixel_mrad`` (see ``EventRegistrationConfig.angle_reference_pixel_mrad``); ``config`` itself at or below the
+    reference."""
     ref = float(config.angle_reference_pixel_mrad)
     if not ref > 0 or not pixel_mrad > ref:
         return config
     k = (ref / float(pixel_mrad)) ** float(config.angle_pixel_exponent)
-    return dataclasses.replace(config, gate_px=float(config.gate_px) * k, huber_px=float(config.huber_px) * k)
+    c = (ref / float(pixel_mrad)) ** float(config.covariance_pixel_exponent)
+    return dataclasses.replace(config, gate_px=float(config.gate_px) * k, huber_px=float(config.huber_px) * k,
+                               covariance_scale=float(config.covariance_scale) * c)

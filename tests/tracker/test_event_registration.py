@@ -214,6 +214,7 @@ def test_pixel_thresholds_shrink_on_coarser_sensors_only():
     assert np.isclose(angle.gate_px * 5.83, c.gate_px * 4.05) and np.isclose(angle.huber_px * 5.83, c.huber_px * 4.05)
     coarse = scaled_to_pixel(c, 5.83)  # the default exponent 2
     assert np.isclose(coarse.gate_px, c.gate_px * (4.05 / 5.83) ** 2) and np.isclose(coarse.huber_px, c.huber_px * (4.05 / 5.83) ** 2)
+    assert np.isclose(coarse.covariance_scale, c.covariance_scale * (4.05 / 5.83) ** 4)  # the default exponent 4
     assert coarse.association_radius_px == c.association_radius_px and c.gate_px == 1.5  # the rest, and c, untouched
     off = EventRegistrationConfig(angle_reference_pixel_mrad=0.0)
     assert scaled_to_pixel(off, 5.83) is off
