@@ -110,7 +110,10 @@ class EventRegistrationConfig:
     mdeg): the sideways / height pair is no longer the largest part. The scale is a 240x180 optimum found on seeds 0-7 (37.5 still lower there):
     346x260 may gain too (its sweep, session 12, had 300 best with 1.5 / 0.5 px): 0.72 / 0.24 px and 70 there by
     hand, seeds 0-7 5.302 -> 4.862 mm (6.65 5.31 7.72 3.68 4.94 3.95 5.23 4.95 -> 5.82 5.44 5.74 4.34 3.40 4.04 4.61
-    5.50, ARE 0.0592 -> 0.0610 deg), not checked on held-out seeds, the 3 s landings or the demos: not applied there."""
+    5.50, ARE 0.0592 -> 0.0610 deg); the bundled demos (``evpose track ... --config`` with those three, ``evpose eval
+    --align none``, ATE RMSE / ARE) ``landing`` 9.953 -> 7.124 mm / 0.108 -> 0.062 deg, ``landing_fast`` 18.560 ->
+    9.981 / 0.171 -> 0.090, ``landing_dynamic`` 10.435 -> 5.897 / 0.112 -> 0.063. Not checked on held-out seeds or
+    the 3 s landings, and it would move the pinned demo output: left to a later session (defaults unchanged there)."""
     on_lead_px: float = field(default=0.0, metadata={"min": -2.0, "max": 2.0, "step": 0.01, "unit": "px"})
     """How far ahead of its edge along the edge's image motion an ON event fires (negative: behind), pixels.
 
