@@ -112,8 +112,11 @@ class EventRegistrationConfig:
     hand, seeds 0-7 5.302 -> 4.862 mm (6.65 5.31 7.72 3.68 4.94 3.95 5.23 4.95 -> 5.82 5.44 5.74 4.34 3.40 4.04 4.61
     5.50, ARE 0.0592 -> 0.0610 deg); the bundled demos (``evpose track ... --config`` with those three, ``evpose eval
     --align none``, ATE RMSE / ARE) ``landing`` 9.953 -> 7.124 mm / 0.108 -> 0.062 deg, ``landing_fast`` 18.560 ->
-    9.981 / 0.171 -> 0.090, ``landing_dynamic`` 10.435 -> 5.897 / 0.112 -> 0.063. Not checked on held-out seeds or
-    the 3 s landings, and it would move the pinned demo output: left to a later session (defaults unchanged there)."""
+    9.981 / 0.171 -> 0.090, ``landing_dynamic`` 10.435 -> 5.897 / 0.112 -> 0.063; held-out seeds 8-11 4.670 -> 4.137
+    (4.36 4.68 3.42 6.22 -> 3.80 4.92 3.15 4.68, ARE 0.0472 -> 0.0505); 3 s landing seeds 0-3 12.147 -> 7.399 (9.85
+    14.66 12.72 11.36 -> 5.85 9.56 6.37 7.81, ARE 0.133 -> 0.078). Found at the end of session 29 and not applied
+    (it moves the pinned demo output and every 346x260 figure): the first thing to try next, as new defaults for
+    every sensor with this scaling re-based."""
     on_lead_px: float = field(default=0.0, metadata={"min": -2.0, "max": 2.0, "step": 0.01, "unit": "px"})
     """How far ahead of its edge along the edge's image motion an ON event fires (negative: behind), pixels.
 
