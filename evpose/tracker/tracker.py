@@ -157,7 +157,7 @@ class Tracker:
                        else eo.stpe_filter_field_lag_ms if polarity_selector is not None else eo.field_lag_ms)
         if self.edge_offsets is not None and lag_ms > 0:
             self._registration = dataclasses.replace(self._registration, field_lag_ms=lag_ms)
-        self.event_registration = (event_registration_for(config, contour_map, self._tangents, w, h)
+        self.event_registration = (event_registration_for(config, contour_map, self._tangents, w, h, 1e3 / float(self.K[0, 0]))
                                    if config.event_registration.enabled and self.components.drives_pose else None)
         """The fused modes' registration of the step's events at their own timestamps
         (:mod:`evpose.tracker.event_registration`), None when off."""
