@@ -205,16 +205,16 @@ def test_the_tracker_registers_events_only_in_the_fused_modes_and_restores_its_o
     assert np.array_equal(fused.event_registration.points, np.asarray(cmap.points) + 0.001 * n)
 
 
-def test_pixel_thresholds_shrink_on_coarser_sensors_only():
+def test_pixel_thresholds_shrink_on_coarser_sensors_only_when_a_reference_angle_is_set():
     from evpose.tracker.event_registration_config import scaled_to_pixel
 
-    c = EventRegistrationConfig()
+    c = EventRegistrationConfig(angle_reference_pixel_mrad=4.05)
     assert scaled_to_pixel(c, 4.05) is c and scaled_to_pixel(c, 2.0) is c  # the reference sensor and finer ones
-    angle = scaled_to_pixel(EventRegistrationConfig(angle_pixel_exponent=1.0), 5.83)  # exponent 1: the same angle
+    angle = scaled_to_pixel(EventRegistrationConfig(angle_reference_pixel_mrad=4.05, angle_pixel_exponent=1.0), 5.83)
     assert np.isclose(angle.gate_px * 5.83, c.gate_px * 4.05) and np.isclose(angle.huber_px * 5.83, c.huber_px * 4.05)
     coarse = scaled_to_pixel(c, 5.83)  # the default exponent 2
     assert np.isclose(coarse.gate_px, c.gate_px * (4.05 / 5.83) ** 2) and np.isclose(coarse.huber_px, c.huber_px * (4.05 / 5.83) ** 2)
     assert np.isclose(coarse.covariance_scale, c.covariance_scale * (4.05 / 5.83) ** 4)  # the default exponent 4
-    assert coarse.association_radius_px == c.association_radius_px and c.gate_px == 1.5  # the rest, and c, untouched
-    off = EventRegistrationConfig(angle_reference_pixel_mrad=0.0)
-    assert scaled_to_pixel(off, 5.83) is off
+    assert coarse.association_radius_px == c.association_radius_px and c.gate_px == EventRegistrationConfig().gate_px
+    default = EventRegistrationConfig()  # off by default: the same thresholds at every resolution
+    assert scaled_to_pixel(default, 5.83) is default
