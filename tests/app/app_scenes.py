@@ -113,15 +113,23 @@ def old_and_recent_entries(folder, file_name: str, size: int) -> None:
         os.utime(d / "meta.json", (1000 + i, 1000 + i))
 
 
-def write_data_root(root, squares_scene, corrupt_bytes: bytes = b"\x89HDF\r\n\x1a\n broken"):
-    """Fill ``root`` as a viewer data directory: the squares recording with its map, the map-less sweeping bar and a
-    corrupt ``.h5`` (listed as unreadable)."""
+def write_squares_root(root, squares_scene):
+    """Write the squares recording and its map into ``root`` (``squares.h5``, ``squares_map.ply``); returns ``root``."""
     from evpose.io.h5 import write_recording_h5
     from evpose.io.map_ply import write_contour_map
 
     rec, cmap = squares_scene
     write_recording_h5(root / "squares.h5", rec)
     write_contour_map(root / "squares_map.ply", cmap)
+    return root
+
+
+def write_data_root(root, squares_scene, corrupt_bytes: bytes = b"\x89HDF\r\n\x1a\n broken"):
+    """Fill ``root`` as a viewer data directory: the squares recording with its map, the map-less sweeping bar and a
+    corrupt ``.h5`` (listed as unreadable)."""
+    from evpose.io.h5 import write_recording_h5
+
+    write_squares_root(root, squares_scene)
     write_recording_h5(root / "bar.h5", sweeping_bar_recording())
     (root / "corrupt.h5").write_bytes(corrupt_bytes)
     return root

@@ -15,14 +15,10 @@ pytestmark = pytest.mark.browser
 @pytest.fixture(scope="module")
 def viewer(tmp_path_factory, squares_scene):
     from app.layouts import LAYOUT_DIR
-    from app_scenes import sweeping_bar_recording
+    from app_scenes import sweeping_bar_recording, write_squares_root
     from evpose.io.h5 import write_recording_h5
-    from evpose.io.map_ply import write_contour_map
 
-    rec, cmap = squares_scene
-    root = tmp_path_factory.mktemp("data")
-    write_recording_h5(root / "squares.h5", rec)
-    write_contour_map(root / "squares_map.ply", cmap)
+    root = write_squares_root(tmp_path_factory.mktemp("data"), squares_scene)
     write_recording_h5(root / "bar.h5", sweeping_bar_recording())
     layouts = tmp_path_factory.mktemp("layouts")  # the bookmarks file goes beside these
     for f in LAYOUT_DIR.glob("*.json"):

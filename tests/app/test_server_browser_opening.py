@@ -24,14 +24,12 @@ def wrong_map(cmap):
 
 @pytest.fixture(scope="module")
 def viewer(tmp_path_factory, squares_scene):
-    from app_scenes import map_scene
+    from app_scenes import map_scene, write_squares_root
     from evpose.io.h5 import write_recording_h5
     from evpose.io.map_ply import write_contour_map
 
-    rec, cmap = squares_scene
-    root = tmp_path_factory.mktemp("data")
-    write_recording_h5(root / "squares.h5", rec)
-    write_contour_map(root / "squares_map.ply", cmap)
+    cmap = squares_scene[1]
+    root = write_squares_root(tmp_path_factory.mktemp("data"), squares_scene)
     # 0.2 s, none of whose 33 updates registers against the patch (a 0.5 s one registers from update 44 on)
     short = map_scene(duration_s=0.2)[0]
     write_recording_h5(root / "wrong.h5", dataclasses.replace(short, metadata={"scene": "wrong"}))

@@ -13,13 +13,9 @@ pytestmark = pytest.mark.browser
 
 @pytest.fixture(scope="module")
 def viewer(tmp_path_factory, squares_scene):
-    from evpose.io.h5 import write_recording_h5
-    from evpose.io.map_ply import write_contour_map
+    from app_scenes import write_squares_root
 
-    rec, cmap = squares_scene
-    root = tmp_path_factory.mktemp("data")
-    write_recording_h5(root / "squares.h5", rec)
-    write_contour_map(root / "squares_map.ply", cmap)
+    root = write_squares_root(tmp_path_factory.mktemp("data"), squares_scene)
     with running_viewer(tmp_path_factory, root, warm_up=False, player=PlayerConfig(prefetch=False)) as app:
         yield app
 
