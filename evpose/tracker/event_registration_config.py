@@ -36,7 +36,10 @@ class EventRegistrationConfig:
     """Factor on the events' covariance ``(J^T W J)^-1 sigma^2`` (``sigma^2`` their weighted residual variance), ratio.
 
     70 with ``gate_px`` 0.72 and ``huber_px`` 0.24 since session 29 (300 / 1.5 / 0.5 before; the figures under
-    ``gate_px``); the older figures below are with the older thresholds.
+    ``gate_px``); the older figures below are with the older thresholds. Around the new defaults (lead,
+    ``/tmp/s29/lead/sweep.sh``; ``full``, 2 s landing from ground truth, seeds 0-11, mean ATE mm, defaults 4.621 at
+    346x260 / 5.438 at 240x180): 35 gave 4.804 / 5.229, 140 4.611 / 5.802; ``gate_px`` 0.5 with ``huber_px`` 0.17
+    5.149 / 5.777. Nothing clearly better at both resolutions; kept.
 
     A step's ~1000 events claim ~0.01 px but share the map's slowly learned errors from update to update. Seeds
     0-3, 346x260, replacing (3 px association radius): 1 / 3 / 10 / 30 / 100 / 300 / 1000 / 3000 gave 16.1 (seed 0)
