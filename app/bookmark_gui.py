@@ -222,34 +222,29 @@ class BookmarkGui:
 
     def rename(self, bookmark: Bookmark | None, title: str) -> bool:
         """Give ``bookmark`` the title ``title`` in the file."""
-        if bookmark is None:
-            self._say("**nothing to rename:** no bookmark is chosen")
-            return False
-        try:
-            with self._file_lock:
-                bookmarks, index = rename_bookmark(bookmark, title, self.path)
-        except (EvposeError, OSError) as exc:
-            self._refused("not renamed", exc)
-            return False
-        self._show(bookmarks, index)
-        self._mark_file(True)
-        self._say(f"renamed {bookmark.title!r} to {bookmarks[index].title!r}")
-        return True
+        return self._edit(bookmark, "rename", "renamed", lambda: rename_bookmark(bookmark, title, self.path),
+                          lambda bookmarks, index: f"renamed {bookmark.title!r} to {bookmarks[index].title!r}")
 
     def move(self, bookmark: Bookmark | None, delta: int) -> bool:
         """Move ``bookmark`` ``delta`` places on in the list (-1 up, +1 down); it stays chosen."""
+        return self._edit(bookmark, "move", "moved", lambda: move_bookmark(bookmark, delta, self.path),
+                          lambda bookmarks, index: f"{bookmark.title!r} is number {index + 1} of {len(bookmarks)}")
+
+    def _edit(self, bookmark: Bookmark | None, verb: str, done: str, edit, said) -> bool:
+        """Run ``edit()`` (the file's bookmarks after it and the edited one's index) under the file lock, show the
+        result with that bookmark chosen and say ``said(bookmarks, index)``; a refusal is said in one line."""
         if bookmark is None:
-            self._say("**nothing to move:** no bookmark is chosen")
+            self._say(f"**nothing to {verb}:** no bookmark is chosen")
             return False
         try:
             with self._file_lock:
-                bookmarks, index = move_bookmark(bookmark, delta, self.path)
-        except (EvposeError, OSError) as exc:
-            self._refused("not moved", exc)
+                bookmarks, index = edit()
+        except (EvposeError, OSError) as exc:  # OSError: a file name too long, no permission
+            self._refused(f"not {done}", exc)
             return False
         self._show(bookmarks, index)
         self._mark_file(True)
-        self._say(f"{bookmark.title!r} is number {index + 1} of {len(bookmarks)}")
+        self._say(said(bookmarks, index))
         return True
 
     def go_to(self, bookmark: Bookmark | None) -> bool:

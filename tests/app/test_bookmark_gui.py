@@ -69,10 +69,16 @@ def test_going_to_a_bookmark_whose_recording_is_gone_says_so(tmp_path, squares_s
         app.stop()
 
 
-def test_delete_asks_first_and_rename_and_move_keep_the_bookmark_chosen(tmp_path):
+def _two_bookmarks(tmp_path):
+    """The bookmarks file of a viewer on ``tmp_path`` holding "first" and "second"; (its path, the two)."""
     path = tmp_path / "layouts" / "bookmarks" / "bookmarks.json"
     a, b = (Bookmark(t, "data/x.h5", None, "tracking", 0, 0, "events", "debug") for t in ("first", "second"))
     save_bookmarks([a, b], path)
+    return path, a, b
+
+
+def test_delete_asks_first_and_rename_and_move_keep_the_bookmark_chosen(tmp_path):
+    path, a, b = _two_bookmarks(tmp_path)
     app = _viewer(tmp_path)
     try:
         gui = app.bookmark_gui
@@ -102,9 +108,7 @@ def test_delete_asks_first_and_rename_and_move_keep_the_bookmark_chosen(tmp_path
 
 
 def test_an_edit_of_a_bookmark_gone_from_the_file_is_refused_and_the_list_shows_the_file(tmp_path):
-    path = tmp_path / "layouts" / "bookmarks" / "bookmarks.json"
-    a, b = (Bookmark(t, "data/x.h5", None, "tracking", 0, 0, "events", "debug") for t in ("first", "second"))
-    save_bookmarks([a, b], path)
+    path, a, b = _two_bookmarks(tmp_path)
     app = _viewer(tmp_path)
     try:
         gui = app.bookmark_gui
