@@ -48,7 +48,9 @@ class AtlasAligner:
         self._done: dict[tuple, AtlasMapView] = {}
 
     def _view(self, m, active: bool) -> AtlasMapView:
-        traj = m.trajectory(refined=True)
+        # The active map is drawn anew at every step: its PnP poses are re-solved on the final points only once it
+        # is done (evpose.slam.pose_refit costs up to tens of milliseconds on a grown map).
+        traj = m.trajectory(refined=True, refit=not active)
         kfs = np.stack([k.T_wc for k in m.keyframes]) if m.keyframes else np.zeros((0, 4, 4))
         scaled = not m.imu_initialised
         return AtlasMapView(m.id, active, m.point_array(), kfs, traj.position.copy() if len(traj) else np.zeros((0, 3)),

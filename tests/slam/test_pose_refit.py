@@ -45,6 +45,13 @@ def test_a_tracked_pose_is_re_solved_on_its_inliers():
     assert not np.allclose(m.trajectory(refined=False).matrices()[1], truth, atol=1e-3)  # online poses stay as solved
 
 
+def test_a_caller_can_leave_the_re_solve_out_and_get_the_composed_pose():
+    m, truth = _map_with_one_tracked_pose(refit=True)
+    composed = _pose([0.0, 0.02 + np.radians(1.0), 0.0], [0.25, 0.0, 0.0])
+    assert np.allclose(m.trajectory(refit=False).matrices()[1], composed)
+    assert np.allclose(m.trajectory().matrices()[1], truth, atol=1e-6)  # the recorded observations are kept
+
+
 def test_without_refit_nothing_is_recorded_and_the_pose_rides_on_its_keyframe():
     m, truth = _map_with_one_tracked_pose(refit=False)
     assert not m.traj_obs
