@@ -234,8 +234,9 @@ def _finish(m: SlamMap, K: np.ndarray, cfg: RestructureConfig, pair: tuple[int, 
     if cfg.ba_iterations > 0:
         local_bundle_adjustment(m, K, len(m.keyframes), cfg.ba_iterations, cfg.ba_huber_px, n_fixed=1, scale_anchor=cfg.scale_anchor,
                                 velocity_sigma_ratio=cfg.velocity_prior, rotation_rate_sigma_rad_s=np.radians(cfg.rotation_rate_prior_deg_s))
-    # The per-MCI poses the motion model extrapolates from follow their keyframes.
-    m.traj_T = [t.copy() for t in m.trajectory().matrices()] if m.traj_t else m.traj_T
+    # The per-MCI poses the motion model extrapolates from follow their keyframes (the final re-solve of
+    # pose_refit only shapes the output, never tracking).
+    m.traj_T = [t.copy() for t in m.trajectory(refit=False).matrices()] if m.traj_t else m.traj_T
     m.restructured += 1
     return RestructureReport(True, "", pair, par, len(m.points))
 
