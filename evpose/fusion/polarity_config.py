@@ -98,7 +98,26 @@ class PolarityFilterConfig:
     +101.2 -> +88.4 %; ATE unchanged everywhere (27.356 / 24.612 / 7.477 mm there). Tried, not kept (figures
     in :mod:`evpose.fusion.aligned_field` and :mod:`evpose.fusion.aligned_surface`): the field blurred only in the tiles
     near the patches (0.155 -> 0.227 ms), branch-free or per-row-run marking, and a branch-free selecting pass
-    (in a run, three alternated pairs: 0.122 / 0.112 / 0.157 against 0.129 / 0.115 / 0.138 ms)."""
+    (in a run, three alternated pairs: 0.122 / 0.112 / 0.157 against 0.129 / 0.115 / 0.138 ms).
+
+    Session 30, the same question again (the issue's -40 %, i.e. ``stpe+filter`` <= 0.6 x ``stpe``), CPU (thread
+    time) per update, 346x260 seed 0, the modes alternated in one process (3-4 rounds, load 4-5.4; medians; script
+    ``/tmp/s30/lat30/lat.py``, per-kernel wrappers ``filtprof.py`` / ``regprof.py``). Plain landing: ``stpe`` 0.67-0.86
+    ms (field 0.20-0.27, registration 0.44-0.57), ``stpe+filter`` 1.58-1.82 ms (2.05-2.58x; to the pose 1.44-1.67):
+    prediction 0.26-0.30 (IMU propagation 0.10-0.12, per-point kernel 0.09-0.10, the rest Python), ``T_align``
+    0.45-0.48 (marking 0.23-0.27, selecting 0.13-0.16, the rest Python), field 0.18-0.20 (scatter 0.074, blur and
+    gradients 0.094-0.10), registration 0.53-0.64, labelling after the pose 0.12-0.14 (its kernel 0.035). Textured
+    landing (63.5 % of the events removed): ``stpe`` 0.749, ``stpe+filter`` 1.833 ms (2.45x). The floor of any filter
+    that registers the map's points is its field and registration alone: 0.71-0.84 ms, 1.07-1.11x ``stpe``'s whole
+    front end (textured 1.09x), because the fusion the prediction needs runs beside the registration and its cache
+    footprint slows the registration: ``stpe+filter`` with ``enabled`` off (the fusion beside, no filter, the same
+    registration as ``stpe`` bit for bit) costs 0.756 against ``stpe``'s 0.669 ms. Nor does the filter's choice of
+    points cut the registration: ``drop_empty_points`` (383 of 857 points; ATE 12.54 -> 13.16 mm) 0.630 -> 0.575 ms (its linearisation 71 ->
+    46 us for 3.4 -> 3.9 linearisations; per call ~25 us whatever the points), ``register_min_normal_speed_px_s`` 20
+    (778 points) none, and both cost accuracy (below). So the -40 % stays out of reach; what session 30 cut:
+    the prediction's IMU propagation before the pose (``unfused_latest_motion``, -0.10 ms, same ATE). The bench's
+    ``ablation`` now reports the floor (``filter_free_floor_change_pct``) and the change to the pose
+    (``filter_stpe_latency_to_pose_change_pct``)."""
     drop_empty_points: bool = False
     """Registration skips map points whose ``T_align`` patch shows no accepted event younger than
     ``empty_after_eta`` (50-60 % of the used points on the simulated landing); points whose patch shows only the
@@ -142,7 +161,10 @@ class PolarityFilterConfig:
     ``register_to_map`` per update (seed 0, 346x260, six configurations stepped alternately in one process, load
     29-38, median / p95) ``stpe`` 1.80 / 2.92 ms, ``stpe+filter`` 1.67 / 2.47, with 40 px/s (756 of 898 points)
     1.65 / 2.47, ``drop_empty_points`` (421 of 898) 1.54 / 2.32, ``registration.max_points`` 500 (471 points) 1.42 /
-    2.20 ms: the per-call cost, not the points, dominates, so no choice of points reaches the paper's 40 % cut."""
+    2.20 ms: the per-call cost, not the points, dominates, so no choice of points reaches the paper's 40 % cut.
+    Session 30 (``stpe+filter`` mean ATE, 2 s landing seeds 0-7 at 346x260 / 240x180, textured landing seed 0; 0:
+    11.760 / 14.090, 25.278 mm): 10 px/s 12.020 / 14.139, 24.549 mm; 20 px/s (778 of 857 points) 12.078 / 14.278,
+    24.743 mm; 30 px/s 12.544 / 14.466, 25.779 mm: worse on the plain landing at every threshold, so still off."""
     reopen_contradicted_unfused: bool = True
     """As ``reopen_contradicted``, but only where the pose is not fused with the IMU (``stpe+filter``: ``full`` is left
     as it is, where reopening costs, see there).
