@@ -109,7 +109,7 @@ class PolarityFilterConfig:
     gradients 0.094-0.10), registration 0.53-0.64, labelling after the pose 0.12-0.14 (its kernel 0.035). Textured
     landing (63.5 % of the events removed): ``stpe`` 0.749, ``stpe+filter`` 1.833 ms (2.45x). The floor of any filter
     that registers the map's points is its field and registration alone: 0.71-0.84 ms, 1.07-1.11x ``stpe``'s whole
-    front end (textured 1.09x), because the fusion the prediction needs runs beside the registration and its cache
+    front end (textured 0.86-1.09x over three sets of rounds), because the fusion the prediction needs runs beside the registration and its cache
     footprint slows the registration: ``stpe+filter`` with ``enabled`` off (the fusion beside, no filter, the same
     registration as ``stpe`` bit for bit) costs 0.756 against ``stpe``'s 0.669 ms. Nor does the filter's choice of
     points cut the registration: ``drop_empty_points`` (383 of 857 points; ATE 12.54 -> 13.16 mm) 0.630 -> 0.575 ms (its linearisation 71 ->
@@ -198,7 +198,11 @@ class PolarityFilterConfig:
     CPU per update (346x260 seed 0, the three runs alternated in one process over 4 rounds, load 4.5-5.4, medians):
     polarity prediction 0.289 -> 0.187 ms, the filter's front end (field, prediction, ``T_align``, registration,
     labelling) 1.760 -> 1.640 ms (p95 2.544 -> 2.348), to the pose (without the labelling) 1.612 -> 1.488 ms (p95
-    2.391 -> 2.185), ``stpe`` 0.858 ms (``/tmp/s30/lat30/lat.py``). The latest fused velocity as it is, without the
+    2.391 -> 2.185), ``stpe`` 0.858 ms (``/tmp/s30/lat30/lat.py``); textured landing, 5 rounds at load 4.9-6.4:
+    prediction 0.257 -> 0.162 ms, front end 1.571 -> 1.409 ms (p95 2.102 -> 1.959; faster in each round), to the pose
+    1.400 -> 1.259 ms, ``stpe`` 0.770 ms (3 more rounds: 1.660 -> 1.673 ms, the rounds spread by +-0.1 ms). The demos
+    (``evpose track --mode stpe+filter``, ``evpose eval --align none``): ``landing`` and ``landing_fast`` the same
+    trajectories, ``landing_dynamic`` within 0.001 mm; ``full`` untouched (demo ``1c3f8d90bee2efe8``). The latest fused velocity as it is, without the
     step (the option until session 30): 11.793 / 14.201 mm on seeds 0-7 (7 of the 7 runs that changed worse; session
     14: 11.79 / 14.21 against 11.76 / 14.12 mm), textured 25.198 mm. For comparison, the motion taken from
     ``stpe+filter``'s own constant-velocity filter (its twist; no IMU at all) gave 11.76 / 13.94 mm (session 14), and
