@@ -202,7 +202,9 @@ class PolarityFilterConfig:
     prediction 0.257 -> 0.162 ms, front end 1.571 -> 1.409 ms (p95 2.102 -> 1.959; faster in each round), to the pose
     1.400 -> 1.259 ms, ``stpe`` 0.770 ms (3 more rounds: 1.660 -> 1.673 ms, the rounds spread by +-0.1 ms). The demos
     (``evpose track --mode stpe+filter``, ``evpose eval --align none``): ``landing`` and ``landing_fast`` the same
-    trajectories, ``landing_dynamic`` within 0.001 mm; ``full`` untouched (demo ``1c3f8d90bee2efe8``). The latest fused velocity as it is, without the
+    trajectories, ``landing_dynamic`` within 0.001 mm; ``full`` untouched (demo ``1c3f8d90bee2efe8``). The 3 s landings
+    (seeds 0-3) say nothing here: ``stpe``, and ``stpe+filter`` either way, are ~100 mm off after 0.25 s and metres
+    by 3 s (``/tmp/s30/lat30/trace3s.py``; run.py's means over the OK updates 120.5 / 126.2 mm, seeds 1-2 the same). The latest fused velocity as it is, without the
     step (the option until session 30): 11.793 / 14.201 mm on seeds 0-7 (7 of the 7 runs that changed worse; session
     14: 11.79 / 14.21 against 11.76 / 14.12 mm), textured 25.198 mm. For comparison, the motion taken from
     ``stpe+filter``'s own constant-velocity filter (its twist; no IMU at all) gave 11.76 / 13.94 mm (session 14), and
