@@ -88,6 +88,11 @@ def _geometric_kernel(P, nw, rows, R_cw, t_wc, omega, v_c, fx, fy, f_mean, buf_d
     float32 normals are widened exactly, so the arithmetic is that of their float64 copy.
     In a run it takes ~0.12 ms for ~930 points (57 us hot): not the reads of the map's rows, measured in session 14
     (points and normals packed into one 64-byte record per map point, caches flushed: 164 against 164-170 us).
+    Tried in session 30, not kept: the buffer-zone test in cosine space (``|cos| > sin(b)``, ``sin(b)`` from the
+    speed and ``flow_sigma`` with one square root, ``arccos`` / ``arctan2`` only within 1e-9 of the boundary; the
+    angle and buffer outputs then computed on demand): the same decisions on all 393 updates of ``stpe+filter``'s
+    seed-0 run, 85 -> 62 us per call replayed (``/tmp/s30/lat30/geo_fast.py``, ``geo_bench.py``), ~1.5 % of the
+    filter's front end, not worth lazily computed outputs.
     """
     for i in range(rows.shape[0]):
         j = rows[i]

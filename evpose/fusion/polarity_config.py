@@ -98,7 +98,26 @@ class PolarityFilterConfig:
     +101.2 -> +88.4 %; ATE unchanged everywhere (27.356 / 24.612 / 7.477 mm there). Tried, not kept (figures
     in :mod:`evpose.fusion.aligned_field` and :mod:`evpose.fusion.aligned_surface`): the field blurred only in the tiles
     near the patches (0.155 -> 0.227 ms), branch-free or per-row-run marking, and a branch-free selecting pass
-    (in a run, three alternated pairs: 0.122 / 0.112 / 0.157 against 0.129 / 0.115 / 0.138 ms)."""
+    (in a run, three alternated pairs: 0.122 / 0.112 / 0.157 against 0.129 / 0.115 / 0.138 ms).
+
+    Session 30, the same question again (the issue's -40 %, i.e. ``stpe+filter`` <= 0.6 x ``stpe``), CPU (thread
+    time) per update, 346x260 seed 0, the modes alternated in one process (3-4 rounds, load 4-5.4; medians; script
+    ``/tmp/s30/lat30/lat.py``, per-kernel wrappers ``filtprof.py`` / ``regprof.py``). Plain landing: ``stpe`` 0.67-0.86
+    ms (field 0.20-0.27, registration 0.44-0.57), ``stpe+filter`` 1.58-1.82 ms (2.05-2.58x; to the pose 1.44-1.67):
+    prediction 0.26-0.30 (IMU propagation 0.10-0.12, per-point kernel 0.09-0.10, the rest Python), ``T_align``
+    0.45-0.48 (marking 0.23-0.27, selecting 0.13-0.16, the rest Python), field 0.18-0.20 (scatter 0.074, blur and
+    gradients 0.094-0.10), registration 0.53-0.64, labelling after the pose 0.12-0.14 (its kernel 0.035). Textured
+    landing (63.5 % of the events removed): ``stpe`` 0.749, ``stpe+filter`` 1.833 ms (2.45x). The floor of any filter
+    that registers the map's points is its field and registration alone: 0.71-0.84 ms, 1.07-1.11x ``stpe``'s whole
+    front end (textured 0.86-1.09x over three sets of rounds), because the fusion the prediction needs runs beside the registration and its cache
+    footprint slows the registration: ``stpe+filter`` with ``enabled`` off (the fusion beside, no filter, the same
+    registration as ``stpe`` bit for bit) costs 0.756 against ``stpe``'s 0.669 ms. Nor does the filter's choice of
+    points cut the registration: ``drop_empty_points`` (383 of 857 points; ATE 12.54 -> 13.16 mm) 0.630 -> 0.575 ms (its linearisation 71 ->
+    46 us for 3.4 -> 3.9 linearisations; per call ~25 us whatever the points), ``register_min_normal_speed_px_s`` 20
+    (778 points) none, and both cost accuracy (below). So the -40 % stays out of reach; what session 30 cut:
+    the prediction's IMU propagation before the pose (``unfused_latest_motion``, -0.10 ms, same ATE). The bench's
+    ``ablation`` now reports the floor (``filter_free_floor_change_pct``) and the change to the pose
+    (``filter_stpe_latency_to_pose_change_pct``)."""
     drop_empty_points: bool = False
     """Registration skips map points whose ``T_align`` patch shows no accepted event younger than
     ``empty_after_eta`` (50-60 % of the used points on the simulated landing); points whose patch shows only the
@@ -142,7 +161,10 @@ class PolarityFilterConfig:
     ``register_to_map`` per update (seed 0, 346x260, six configurations stepped alternately in one process, load
     29-38, median / p95) ``stpe`` 1.80 / 2.92 ms, ``stpe+filter`` 1.67 / 2.47, with 40 px/s (756 of 898 points)
     1.65 / 2.47, ``drop_empty_points`` (421 of 898) 1.54 / 2.32, ``registration.max_points`` 500 (471 points) 1.42 /
-    2.20 ms: the per-call cost, not the points, dominates, so no choice of points reaches the paper's 40 % cut."""
+    2.20 ms: the per-call cost, not the points, dominates, so no choice of points reaches the paper's 40 % cut.
+    Session 30 (``stpe+filter`` mean ATE, 2 s landing seeds 0-7 at 346x260 / 240x180, textured landing seed 0; 0:
+    11.760 / 14.090, 25.278 mm): 10 px/s 12.020 / 14.139, 24.549 mm; 20 px/s (778 of 857 points) 12.078 / 14.278,
+    24.743 mm; 30 px/s 12.544 / 14.466, 25.779 mm: worse on the plain landing at every threshold, so still off."""
     reopen_contradicted_unfused: bool = True
     """As ``reopen_contradicted``, but only where the pose is not fused with the IMU (``stpe+filter``: ``full`` is left
     as it is, where reopening costs, see there).
@@ -161,19 +183,33 @@ class PolarityFilterConfig:
     12.38 / 14.17 -> 11.76 / 14.12 mm with ``edge_offsets.stpe_filter_field_lag_ms`` 6.0 (with 5.5: 14.50 -> 14.75 mm
     at 240x180); textured landing 24.60 -> 24.61 mm. Its check of the other polarity now runs in the selecting pass
     (:func:`~evpose.fusion.aligned_surface_kernels._select_times_reopening`), not in a pass of its own."""
-    unfused_latest_motion: bool = False
+    unfused_latest_motion: bool = True
     """In ``stpe+filter`` (where the fusion runs beside the registration, not as its prediction) take the motion the
-    prediction needs from the gyro at the update time less the latest fused gyro bias and the latest fused velocity
-    (one update old), instead of propagating the fused state with the IMU to the update time: that propagation then
-    runs once, in the fusion's update after the pose is out, not in the front end (``full`` predicts its pose by that
+    prediction needs from the gyro at the update time less the latest fused gyro bias, and the latest fused velocity
+    (one update old) moved on to the update time by one accelerometer step (the latest fused attitude and accelerometer
+    bias, gravity), instead of propagating the fused state with the IMU to the update time: that propagation then runs
+    once, in the fusion's update after the pose is out, not in the front end (``full`` predicts its pose by that
     propagation anyway and reuses it).
 
-    Off: it saves the propagation's ~0.08 ms (CPU, seed 0, 346x260) in ``stpe+filter``'s front end, but scored 11.79
-    / 14.21 mm against 11.76 / 14.12 mm (mean ATE of seeds 0-7 at 346x260 / 240x180, session 14; ``stpe`` 12.03 /
-    14.20 mm), the same within the seeds' spread but above ``stpe`` at 240x180. For comparison, the motion taken from
-    ``stpe+filter``'s own constant-velocity filter (its twist; no IMU at all) gave 11.76 / 13.94 mm, and at 190 / 210
-    Hz (``rate_hz``) 12.06 / 11.78 and 14.05 / 14.30 mm against 11.77 / 11.82 and 14.34 / 14.22 mm with the IMU's: the
-    filter's accuracy does not hinge on the IMU's motion."""
+    On since session 30 (with the accelerometer step). Mean ATE of ``stpe+filter``, 2 s landing from ground truth,
+    seeds 0-7 / held-out 8-15 (``/tmp/s30/lat30/run.py``, ``MODE=stpe+filter``): 346x260 11.760 -> 11.736 / 12.415 ->
+    12.415 mm, 240x180 14.090 -> 14.090 / 16.112 -> 16.127 mm (30 of the 32 runs the same to 0.01 mm; seed 5 at
+    346x260 10.94 against 11.13, seed 8 at 240x180 13.61 against 13.50), textured landing seed 0 25.278 -> 25.279 mm.
+    CPU per update (346x260 seed 0, the three runs alternated in one process over 4 rounds, load 4.5-5.4, medians):
+    polarity prediction 0.289 -> 0.187 ms, the filter's front end (field, prediction, ``T_align``, registration,
+    labelling) 1.760 -> 1.640 ms (p95 2.544 -> 2.348), to the pose (without the labelling) 1.612 -> 1.488 ms (p95
+    2.391 -> 2.185), ``stpe`` 0.858 ms (``/tmp/s30/lat30/lat.py``); textured landing, 5 rounds at load 4.9-6.4:
+    prediction 0.257 -> 0.162 ms, front end 1.571 -> 1.409 ms (p95 2.102 -> 1.959; faster in each round), to the pose
+    1.400 -> 1.259 ms, ``stpe`` 0.770 ms (3 more rounds: 1.660 -> 1.673 ms, the rounds spread by +-0.1 ms). The demos
+    (``evpose track --mode stpe+filter``, ``evpose eval --align none``): ``landing`` and ``landing_fast`` the same
+    trajectories, ``landing_dynamic`` within 0.001 mm; ``full`` untouched (demo ``1c3f8d90bee2efe8``). The 3 s landings
+    (seeds 0-3) say nothing here: ``stpe``, and ``stpe+filter`` either way, are ~100 mm off after 0.25 s and metres
+    by 3 s (``/tmp/s30/lat30/trace3s.py``; run.py's means over the OK updates 120.5 / 126.2 mm, seeds 1-2 the same). The latest fused velocity as it is, without the
+    step (the option until session 30): 11.793 / 14.201 mm on seeds 0-7 (7 of the 7 runs that changed worse; session
+    14: 11.79 / 14.21 against 11.76 / 14.12 mm), textured 25.198 mm. For comparison, the motion taken from
+    ``stpe+filter``'s own constant-velocity filter (its twist; no IMU at all) gave 11.76 / 13.94 mm (session 14), and
+    at 190 / 210 Hz (``rate_hz``) 12.06 / 11.78 and 14.05 / 14.30 mm against 11.77 / 11.82 and 14.34 / 14.22 mm with
+    the IMU's: the filter's accuracy does not hinge on the IMU's motion."""
     empty_after_eta: float = field(default=3.0, metadata={"min": 0.5, "max": 12.0, "step": 0.5, "unit": "eta"})
     """A patch whose newest accepted event is older than this many time-surface constants counts as empty (TDF > 0.95 at 3), eta."""
     align_patch_radius_px: float = field(default=4.0, metadata={"min": 1.0, "max": 30.0, "step": 0.5, "unit": "px"})

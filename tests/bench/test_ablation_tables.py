@@ -49,3 +49,17 @@ def test_ablation_tables_are_skipped_in_the_quick_suite(fake_runs):
     ctx = BenchContext(quick=True, work_dir=Path("unused"))
     assert "skipped" in ft.bench_ablation_long(ctx) and "skipped" in ft.bench_ablation_seeds(ctx)
     assert fake_runs == []
+
+
+def test_ablation_table_reports_the_filters_latency_change_to_the_pose_and_its_free_filter_floor(monkeypatch):
+    lat = {"stpe": (0.6, 0.6, 0.45), "stpe+filter": (1.2, 1.1, 0.72)}  # whole front end, to the pose, field + registration
+
+    def ablation_run(recording, contour_map, mode, event_filter=None):
+        fe, to_pose, core = lat.get(mode, (1.0, 1.0, 1.0))
+        return {"stpe_latency_median_ms": fe, "stpe_latency_to_pose_median_ms": to_pose, "field_registration_median_ms": core}
+
+    monkeypatch.setattr(ft, "ablation_run", ablation_run)
+    out = ft._ablation_table("rec", [0] * 5, "346x260", 2.0, with_variants=False)
+    assert out["filter_stpe_latency_change_pct"] == pytest.approx(100.0)
+    assert out["filter_stpe_latency_to_pose_change_pct"] == pytest.approx(100.0 * 0.5 / 0.6)
+    assert out["filter_free_floor_change_pct"] == pytest.approx(20.0)

@@ -253,10 +253,10 @@ def test_stpe_filter_composes_held_out_painted_points_into_t_align_but_does_not_
     assert sum(r.counts.get("points_refined", 0) for r in held) > 0
 
 
-def test_unfused_latest_motion_takes_the_gyro_and_the_latest_fused_velocity_without_propagating(landing):
+def test_unfused_latest_motion_takes_the_gyro_and_steps_the_latest_fused_velocity_without_propagating(landing):
     rec, cmap = landing
     cfg = TrackerConfig(mode=TrackerMode.STPE_FILTER)
-    cfg.polarity.unfused_latest_motion = True
+    assert cfg.polarity.unfused_latest_motion  # the default
     s = TrackingSession(rec, cmap, cfg)
     for _ in range(3):
         r = s.step()
@@ -266,11 +266,16 @@ def test_unfused_latest_motion_takes_the_gyro_and_the_latest_fused_velocity_with
     assert TrackingSession(rec, cmap, cfg).tracker.polarity_selector.latest_state is None
     t = r.t_us + 5_000
     omega, v = sel._motion(t)
-    _, gyro = motion.fusion.buffer.measurement_at(t)
-    assert np.array_equal(omega, motion.fusion.extrinsic.cam_omega(gyro - motion.last.gyro_bias))
-    assert np.array_equal(v, motion.last.velocity_world)
+    last, fusion = motion.last, motion.fusion
+    acc, gyro = fusion.buffer.measurement_at(t)
+    assert np.array_equal(omega, fusion.extrinsic.cam_omega(gyro - last.gyro_bias))
+    # The latest fused velocity moved on by one accelerometer step (specific force rotated to the world, plus gravity).
+    acc_world = last.T_world_cam[:3, :3] @ fusion.extrinsic.R_cam_imu @ (acc - last.acc_bias) - [0.0, 0.0, fusion.config.gravity]
+    assert np.allclose(v, last.velocity_world + acc_world * (t - last.t_us) * 1e-6, rtol=0, atol=1e-12)
     predicted = motion.fusion.predict(t)  # what the option replaces: the same rate, the velocity propagated 5 ms on
-    assert np.allclose(omega, predicted.omega_cam) and np.allclose(v, predicted.velocity_world, atol=0.05)
+    assert np.allclose(omega, predicted.omega_cam)
+    assert np.linalg.norm(v - predicted.velocity_world) < 0.5 * np.linalg.norm(last.velocity_world - predicted.velocity_world)
+    assert np.array_equal(sel._motion(last.t_us)[1], last.velocity_world)  # no time since the state: no step
     sel.latest_state = None
     omega_p, v_p = sel._motion(t)
     assert np.array_equal(omega_p, predicted.omega_cam) and np.array_equal(v_p, predicted.velocity_world)
