@@ -368,7 +368,8 @@ class H5RecordingReader:
             if t_first != self._origin or t_last < t_first or (t_last - self._origin) // 1000 + 1 != self._index.size - 1:
                 raise H5FormatError(self.path, f"events/ms_to_idx (origin {self._origin} us, {self._index.size - 1} ms) does not span the events"
                                     f" ({t_first} .. {t_last} us): the file is damaged or a timestamp is wrong", f"event {n - 1}")
-        self.metadata: dict = self._json_attr("metadata") or {}
+        metadata = self._json_attr("metadata")
+        self.metadata: dict = {} if metadata is None else metadata  # `or {}` let an empty JSON list pass as no metadata
         if not isinstance(self.metadata, dict):
             raise H5FormatError(self.path, f"attribute 'metadata' is a JSON {type(self.metadata).__name__}, expected an object")
         cal = self._json_attr("calibration")

@@ -160,6 +160,25 @@ def _check_points(points: np.ndarray, path: Path) -> None:
         raise MapFileError(path, f"coordinate {points[bad[0]].tolist()} is beyond {MAX_COORDINATE_M:g} m (not metres?)", f"point {int(bad[0])}")
 
 
+MAX_SHARED_POSITION = 1000
+"""Most map points that may share one position. A contour map holds each position once (the landing and indoor maps:
+no two points alike); a map collapsed onto one point (a scale-0 export, a cloud whose missing returns were written
+as 0 0 0) made the tracker's KD-tree queries quadratic in the points stacked there: 97 k identical points hung
+``track``, ``refine-map`` and ``app --prepare`` in ``wall_occlusion`` for hours; 10 k cost ~1 s per query pass, 1 k
+nothing measurable (session 30, /tmp/s30/fuzz30/)."""
+
+
+def _check_distinct(points: np.ndarray, path: Path) -> None:
+    """Refuse a contour map with more than :data:`MAX_SHARED_POSITION` points at one position (~0.1 s on 97 k points)."""
+    if points.shape[0] <= MAX_SHARED_POSITION:
+        return
+    _, first, counts = np.unique(points, axis=0, return_index=True, return_counts=True)
+    k = int(np.argmax(counts))
+    if counts[k] > MAX_SHARED_POSITION:
+        raise MapFileError(path, f"{int(counts[k])} of the {points.shape[0]} points share the position {points[first[k]].tolist()}"
+                           " (a collapsed or damaged map; a contour map holds each position once)", f"point {int(first[k])}")
+
+
 _UNIT_TOL = 1e-2
 """How far from 1 the length of a known (non-zero) normal may be."""
 
@@ -217,8 +236,11 @@ def read_contour_map(path: str | Path) -> ContourMap:
         if "brightness_sign" in names:
             attrs["brightness_sign"] = verts["brightness_sign"]
         _check_attributes(attrs, path)
+        _check_distinct(pts, path)
         return ContourMap.from_points(pts, **attrs)
-    return ContourMap.from_points(read_point_cloud(path)[0])
+    pts = read_point_cloud(path)[0]
+    _check_distinct(pts, path)
+    return ContourMap.from_points(pts)
 
 
 def _check_ply_size(path: Path) -> None:
