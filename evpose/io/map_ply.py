@@ -261,6 +261,41 @@ def _check_ply_size(path: Path) -> None:
         raise MapFileError(path, f"file is truncated: header promises {n} vertices, the data after the header has only {data_bytes} bytes")
 
 
+def _check_pcd_size(path: Path) -> None:
+    """Refuse a PCD whose header promises more points than its data holds. open3d filled the missing ones with zeros
+    (its legacy reader) or left them uninitialised (its tensor reader, which ``build-map`` prefers): a cut or
+    miscounted scan became 900 k points at the origin, garbage coordinates or a NaN "at point 14976" of a file
+    holding 30 points (session 30's fuzzing, /tmp/s30/fuzz30/)."""
+    with open(path, "rb") as fh:
+        fields: dict[str, list[str]] = {}
+        lineno = 0
+        for raw in fh:
+            lineno += 1
+            words = raw.decode("ascii", "replace").split()
+            if not words or words[0].startswith("#"):
+                continue
+            fields[words[0].upper()] = words[1:]
+            if words[0].upper() == "DATA" or lineno > 64:
+                break
+        if "DATA" not in fields:
+            return  # not a PCD header open3d reads: its own reading fails on it
+        try:
+            n = int(fields["POINTS"][0]) if "POINTS" in fields else int(fields["WIDTH"][0]) * int(fields["HEIGHT"][0])
+            sizes = [int(v) for v in fields.get("SIZE", [])]
+            counts = [int(v) for v in fields.get("COUNT", ["1"] * len(sizes))]
+        except (KeyError, IndexError, ValueError):
+            raise MapFileError(path, "PCD header has no valid POINTS (or WIDTH and HEIGHT), SIZE or COUNT line") from None
+        kind = (fields["DATA"] or ["?"])[0].lower()
+        if kind == "ascii":
+            have = sum(1 for line in fh if line.strip())
+        elif kind == "binary":
+            have = (path.stat().st_size - fh.tell()) // max(1, sum(a * b for a, b in zip(sizes, counts)))
+        else:
+            return  # binary_compressed: open3d checks its own sizes
+    if n < 0 or have < n:
+        raise MapFileError(path, f"file is truncated: header promises {n} points, the data holds {have}")
+
+
 @contextlib.contextmanager
 def _captured_stderr():
     """Redirect file descriptor 2 (C libraries write there directly) to a temporary file; yields a getter of its lines."""
@@ -293,6 +328,8 @@ def read_point_cloud(path: str | Path) -> tuple[np.ndarray, dict[str, np.ndarray
         raise MapFileError(path, "not a PLY file (missing 'ply' magic)")
     if path.suffix.lower() == ".ply":
         _check_ply_size(path)
+    if path.suffix.lower() == ".pcd":
+        _check_pcd_size(path)
     # open3d's PLY reader (RPly) prints a damaged file's problem to stderr and returns the points read so far (a
     # truncated scan became half a map): catch what it prints and make it our one-line error instead.
     with _captured_stderr() as said:
