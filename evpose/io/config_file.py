@@ -80,7 +80,11 @@ def _convert(typ, raw, meta):
             whole = False
         if not whole:
             raise ValueError(f"expected an integer, got {shown(raw)}")
-        value = int(float(raw))
+        value = int(raw) if isinstance(raw, int) else int(float(raw))
+        if not -(2**63) <= value < 2**63:
+            # A field without a declared range (SlamConfig.seed) took 1e300 and numpy's seeding ended in
+            # "OverflowError: Python int too large to convert to C long" (session 30's fuzzing).
+            raise ValueError(f"expected an integer that fits in 64 bits, got {shown(raw)}")
         _check_range(value, meta)
         return value
     if typ is float:

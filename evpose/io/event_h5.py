@@ -85,8 +85,13 @@ class EventH5Reader:
             if idx is not None and (idx.ndim != 1 or (idx.size and (idx[0] < 0 or idx[-1] > n or np.any(np.diff(idx) < 0)))):
                 # Windowed reads trusted it: a reversed or overlong index silently gave wrong windows.
                 raise EventH5Error(self.path, f"ms_to_idx is not a non-decreasing index into the {n} events (the file is damaged)")
-        except BaseException:
+        except BaseException as exc:
             self._f.close()
+            from evpose.io.h5 import hdf5_damage
+
+            damage = hdf5_damage(exc)
+            if damage is not None:  # a damaged object header or symbol table (see hdf5_damage)
+                raise EventH5Error(self.path, f"the file's HDF5 structure is damaged ({damage})") from None
             raise
 
     def close(self) -> None:

@@ -160,6 +160,25 @@ def _check_points(points: np.ndarray, path: Path) -> None:
         raise MapFileError(path, f"coordinate {points[bad[0]].tolist()} is beyond {MAX_COORDINATE_M:g} m (not metres?)", f"point {int(bad[0])}")
 
 
+MAX_SHARED_POSITION = 1000
+"""Most map points that may share one position. A contour map holds each position once (the landing and indoor maps:
+no two points alike); a map collapsed onto one point (a scale-0 export, a cloud whose missing returns were written
+as 0 0 0) made the tracker's KD-tree queries quadratic in the points stacked there: 97 k identical points hung
+``track``, ``refine-map`` and ``app --prepare`` in ``wall_occlusion`` for hours; 10 k cost ~1 s per query pass, 1 k
+nothing measurable (session 30, /tmp/s30/fuzz30/)."""
+
+
+def _check_distinct(points: np.ndarray, path: Path) -> None:
+    """Refuse a contour map with more than :data:`MAX_SHARED_POSITION` points at one position (~0.1 s on 97 k points)."""
+    if points.shape[0] <= MAX_SHARED_POSITION:
+        return
+    _, first, counts = np.unique(points, axis=0, return_index=True, return_counts=True)
+    k = int(np.argmax(counts))
+    if counts[k] > MAX_SHARED_POSITION:
+        raise MapFileError(path, f"{int(counts[k])} of the {points.shape[0]} points share the position {points[first[k]].tolist()}"
+                           " (a collapsed or damaged map; a contour map holds each position once)", f"point {int(first[k])}")
+
+
 _UNIT_TOL = 1e-2
 """How far from 1 the length of a known (non-zero) normal may be."""
 
@@ -217,8 +236,11 @@ def read_contour_map(path: str | Path) -> ContourMap:
         if "brightness_sign" in names:
             attrs["brightness_sign"] = verts["brightness_sign"]
         _check_attributes(attrs, path)
+        _check_distinct(pts, path)
         return ContourMap.from_points(pts, **attrs)
-    return ContourMap.from_points(read_point_cloud(path)[0])
+    pts = read_point_cloud(path)[0]
+    _check_distinct(pts, path)
+    return ContourMap.from_points(pts)
 
 
 def _check_ply_size(path: Path) -> None:
@@ -237,6 +259,41 @@ def _check_ply_size(path: Path) -> None:
     per_vertex = np.dtype([(name, t) for name, t in props]).itemsize if fmt.startswith("binary") else len(props)
     if n * per_vertex > data_bytes:
         raise MapFileError(path, f"file is truncated: header promises {n} vertices, the data after the header has only {data_bytes} bytes")
+
+
+def _check_pcd_size(path: Path) -> None:
+    """Refuse a PCD whose header promises more points than its data holds. open3d filled the missing ones with zeros
+    (its legacy reader) or left them uninitialised (its tensor reader, which ``build-map`` prefers): a cut or
+    miscounted scan became 900 k points at the origin, garbage coordinates or a NaN "at point 14976" of a file
+    holding 30 points (session 30's fuzzing, /tmp/s30/fuzz30/)."""
+    with open(path, "rb") as fh:
+        fields: dict[str, list[str]] = {}
+        lineno = 0
+        for raw in fh:
+            lineno += 1
+            words = raw.decode("ascii", "replace").split()
+            if not words or words[0].startswith("#"):
+                continue
+            fields[words[0].upper()] = words[1:]
+            if words[0].upper() == "DATA" or lineno > 64:
+                break
+        if "DATA" not in fields:
+            return  # not a PCD header open3d reads: its own reading fails on it
+        try:
+            n = int(fields["POINTS"][0]) if "POINTS" in fields else int(fields["WIDTH"][0]) * int(fields["HEIGHT"][0])
+            sizes = [int(v) for v in fields.get("SIZE", [])]
+            counts = [int(v) for v in fields.get("COUNT", ["1"] * len(sizes))]
+        except (KeyError, IndexError, ValueError):
+            raise MapFileError(path, "PCD header has no valid POINTS (or WIDTH and HEIGHT), SIZE or COUNT line") from None
+        kind = (fields["DATA"] or ["?"])[0].lower()
+        if kind == "ascii":
+            have = sum(1 for line in fh if line.strip())
+        elif kind == "binary":
+            have = (path.stat().st_size - fh.tell()) // max(1, sum(a * b for a, b in zip(sizes, counts)))
+        else:
+            return  # binary_compressed: open3d checks its own sizes
+    if n < 0 or have < n:
+        raise MapFileError(path, f"file is truncated: header promises {n} points, the data holds {have}")
 
 
 @contextlib.contextmanager
@@ -271,6 +328,8 @@ def read_point_cloud(path: str | Path) -> tuple[np.ndarray, dict[str, np.ndarray
         raise MapFileError(path, "not a PLY file (missing 'ply' magic)")
     if path.suffix.lower() == ".ply":
         _check_ply_size(path)
+    if path.suffix.lower() == ".pcd":
+        _check_pcd_size(path)
     # open3d's PLY reader (RPly) prints a damaged file's problem to stderr and returns the points read so far (a
     # truncated scan became half a map): catch what it prints and make it our one-line error instead.
     with _captured_stderr() as said:
