@@ -83,15 +83,20 @@ _FILE_HASHES: dict[tuple, str] = {}
 
 
 def file_hash(path: Path) -> str:
-    """blake2b of a file's bytes (memoised on path, size and modification time)."""
+    """blake2b of a file's bytes, or of a folder recording's files (an ECD folder, a ROS2 bag: their relative names
+    and bytes, in sorted order), memoised on path, sizes and modification times."""
     p = Path(path).resolve()
-    st = p.stat()
-    key = (str(p), st.st_size, st.st_mtime_ns)
+    files = sorted(f for f in p.rglob("*") if f.is_file()) if p.is_dir() else [p]
+    stats = [f.stat() for f in files]
+    key = (str(p), tuple((str(f), st.st_size, st.st_mtime_ns) for f, st in zip(files, stats)))
     if key not in _FILE_HASHES:
         h = hashlib.blake2b(digest_size=20)
-        with open(p, "rb") as f:
-            while chunk := f.read(1 << 22):
-                h.update(chunk)
+        for f in files:
+            if p.is_dir():
+                h.update(str(f.relative_to(p)).encode() + b"\0")
+            with open(f, "rb") as fh:
+                while chunk := fh.read(1 << 22):
+                    h.update(chunk)
         _FILE_HASHES[key] = h.hexdigest()
     return _FILE_HASHES[key]
 

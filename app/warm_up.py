@@ -102,7 +102,11 @@ def prepare_pair(recording, contour_map, paths: tuple[Path, Path], disk, frames=
     if not isinstance(engine, TrackerEngine):
         cause = getattr(engine, "cause", None)
         if isinstance(cause, InputError):  # its record and problem, without the explanation's repeat of the path
-            raise InputError(paths[0], f"tracking cannot start: {cause.problem}", cause.record)
+            from evpose.tracker.session import MapOutOfViewError
+
+            # A map out of view names the map, as `evpose track` and `refine-map` do: the likelier culprit.
+            culprit = paths[1] if isinstance(cause, MapOutOfViewError) else paths[0]
+            raise InputError(culprit, f"tracking cannot start: {cause.problem}", cause.record)
         raise InputError(paths[0], engine.explanation or "cannot be tracked")
     if engine.disk is None:
         raise InputError(None, "the disk cache is off: there is nothing to prepare into")

@@ -85,12 +85,6 @@ def prepare_recording(recording: Path, map_path: Path | None, data: list[Path], 
     for p in (recording, map_path):
         if p is not None and not p.exists():
             raise InputError(p, "no such file")
-    if recording.is_dir():
-        # The disk cache keys a recording by its file's bytes (app.disk_cache.file_hash), which a folder has none of:
-        # an ECD folder or ROS2 bag ended in "the disk cache is off: there is nothing to prepare into", naming nothing
-        # (session 30's fuzzing).
-        raise InputError(recording, "is a folder (an ECD recording or a ROS2 bag), and --prepare caches file recordings only:"
-                         " convert it first (evpose convert FOLDER REC.h5) and prepare REC.h5")
     rec_path = recording.resolve()
     rec = load_recording(rec_path)
     if map_path is None:

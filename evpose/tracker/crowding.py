@@ -72,14 +72,17 @@ def _crowded_kernel(points, tangents, R_cw, t_cw, fx, fy, cx, cy, radius, tol, o
             vmax = max(vmax, v[i])
     if not umin <= umax:
         return
-    gw = int((umax - umin) / radius) + 1
-    gh = int((vmax - vmin) / radius) + 1
+    # Cells no smaller than 1/1024 of the spread: still >= the radius for any usable one, but a radius near zero
+    # (a config at its bound) or projections far off the image cannot ask for billions of cells.
+    cell = max(radius, max(umax - umin, vmax - vmin) / 1024.0)
+    gw = int((umax - umin) / cell) + 1
+    gh = int((vmax - vmin) / cell) + 1
     # Counting sort of the points by cell (linear time; an argsort of the keys cost half the function).
     key = np.full(n, -1, dtype=np.int64)
     start = np.zeros(gw * gh + 1, dtype=np.int64)
     for i in range(n):
         if ok[i]:
-            key[i] = int((v[i] - vmin) / radius) * gw + int((u[i] - umin) / radius)
+            key[i] = int((v[i] - vmin) / cell) * gw + int((u[i] - umin) / cell)
             start[key[i] + 1] += 1
     for c in range(gw * gh):
         start[c + 1] += start[c]
@@ -93,8 +96,8 @@ def _crowded_kernel(points, tangents, R_cw, t_cw, fx, fy, cx, cy, radius, tol, o
     for i in range(n):
         if not has_tangent[i]:
             continue
-        ci = int((u[i] - umin) / radius)
-        ri = int((v[i] - vmin) / radius)
+        ci = int((u[i] - umin) / cell)
+        ri = int((v[i] - vmin) / cell)
         found = False
         for dr in range(-1, 2):
             rr = ri + dr

@@ -46,3 +46,13 @@ def test_points_without_a_tangent_or_a_radius_are_never_crowded():
     assert not out[:20].any() and out[20:].all()  # the unknown ones still crowd the others
     assert not crowded_points(np.r_[a, b], np.r_[ta, tb], T, K, 0.0, 1.0).any()
     assert crowded_points(np.zeros((0, 3)), np.zeros((0, 3)), T, K, 3.0, 1.0).shape == (0,)
+
+
+def test_a_radius_near_zero_or_projections_far_off_the_image_do_not_blow_up_the_grid():
+    a, ta = _edge(50, 40, 1.0, 0.0, 20, [1.0, 0.0, 0.0])
+    b, tb = _edge(50, 42, 1.0, 0.0, 20, [1.0, 0.0, 0.0])
+    # 1e-9 px once asked for ~1e21 cells ("array is too big"); now nothing is within such a radius.
+    assert not crowded_points(np.r_[a, b], np.r_[ta, tb], T, K, 1e-9, 1.0).any()
+    far, tf = _edge(5e7, 40, 1.0, 0.0, 3, [1.0, 0.0, 0.0])  # projected 5e7 px away: a spread of 5e7 px
+    out = crowded_points(np.r_[a, b, far], np.r_[ta, tb, tf], T, K, 3.0, 1.0)
+    assert out[:40].all() and not out[40:].any()
