@@ -1,7 +1,7 @@
 """The gyro's aids to the event-inertial SLAM system (:class:`evpose.slam.system.EventSlam` inherits them).
 
 KLT's start where the gyro rotation moves each feature, the gyro rotation between poses and keyframes, the visual
-local BA's rotation-prior sigmas, and the pose re-solved with the gyro rotation as a prior; and, event-only, the tilt
+local BA's rotation-prior sigmas, and the pose re-solved with the gyro rotation as a prior; and, event-only, the rotation
 priors from the MCIs' room-axis edges (:mod:`evpose.slam.room_axes`). They read the system's
 ``imu``, ``calib``, ``K``, ``cfg`` and ``atlas``; the event-only mode has no ``imu`` and gets None from each.
 """

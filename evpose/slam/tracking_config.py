@@ -327,7 +327,10 @@ class TrackingConfig:
     Session 30 (figures and scripts in the module notes), against the defaults (indoor event-only seeds 0-7 3.942 %, 40
     pooled runs 3.294 %, 8-19 3.566 %; landing event-only 0-23 1.317 %): 0.2 at gain 1: 0-7 2.704 % (paired -1.24 +-
     0.91, 6 better), pooled 2.743 % (-0.55 +- 0.23, 29 better), 8-19 3.544 % (-0.02 +- 0.32, 6 better, 6 worse),
-    landing 1.460 % (+0.14 +- 0.12, 22 of 24 within 2 %); 0.1 at gain 4: SHORT05"""
+    landing 1.460 % (+0.14 +- 0.12, 22 of 24 within 2 %); 0.1 at gain 4: 0-7 2.745 % (-1.20 +- 1.10), pooled 2.732 %
+    (-0.56 +- 0.29, least tracked 79.6 %), 8-19 pooled over the same five settings 3.695 -> 3.436 % (-0.26 +- 0.24, 35 of
+    60 better), landing 1.911 % (+0.59 +- 0.19, 17 of 24 within 2 %). Off: the indoor gain is within the noise beyond
+    seeds 0-7 and the landing gets worse."""
     ba_room_prior_gain: float = field(default=4.0, metadata={"min": 0.1, "max": 100.0, "step": 0.1, "unit": "ratio"})
     """``ba_room_prior_deg``: the prior's rotation information is the measurement's (plus the sigma floor) times this: in
     situ the measurements' estimated sigmas ran at about three times their errors (:mod:`evpose.slam.room_axes`), ratio."""
