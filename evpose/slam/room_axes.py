@@ -26,7 +26,7 @@ on them offline; ``measlog.py`` logs the measurements in situ; ``run.sh`` / ``ge
   3.129 % (with 0.5 deg noise drawn 3.044 %); the true camera-from-room rotation through ``room_frame`` / ``room_priors``
   at 0.2 deg with 0.2 deg of noise drawn 3.028 %. A rotation source needs pitch and roll (and better yaw) to a few
   tenths of a degree per keyframe.
-- Vertical edges alone (the first form, ``vpeval.py``): the rooms' keyframe MCIs show one to four vertical segments,
+- Vertical edges alone (the first form, code not kept; ``vpeval.py``): the rooms' keyframe MCIs show one to four vertical segments,
   which give roll (error median 0.3-0.5 deg) but not pitch (estimated sigma median 4.7 deg: pitch shows only in the
   slant of vertical lines far from the image centre); in situ (per-keyframe tilt prior, floor 0.2 deg) 3.299 % (-0.64 +-
   0.87, 4 better, 4 worse). Replaced by the three room axes.
@@ -39,11 +39,11 @@ on them offline; ``measlog.py`` logs the measurements in situ; ``run.sh`` / ``ge
   2.723 % (-0.571 +- 0.255, 28 better), but held out 8-19 3.757 % (+0.19 +- 0.33, 4 better, 8 worse) and landing 0-23
   1.720 % (seeds 12 / 14 / 19 1.32 / 1.04 / 1.14 -> 3.76 / 5.15 / 2.82 %); the measurement guided by the pose and
   ``M`` 3.057 % (``measlog.py``: 12 of the 83 keyframes in the consensus over 2 deg off, the guide drifted with the
-  map); with ``min_per_axis`` 2 and the Huber loss (this code, ``ba_room_prior_gain`` 1) 2.704 % (-1.24 +- 0.91, 6 better, 2 worse; 0.5 s segment
-  metric -1.06 +- 0.49), pooled 40 runs 2.743 % (-0.551 +- 0.234, 29 better; without seed 4 -0.26 +- 0.17, 24 of 35
-  better; seeds 4 / 7 better under all five settings, seed 2 worse under three), held out 8-19 3.544 % (-0.02 +- 0.32, 6 better, 6 worse; segment metric +0.27 +-
-  0.13), landing 0-23 1.460 % (+0.14 +- 0.12, 14 better, 10 worse; 22 of 24 within 2 %, seed 12 3.45 %; segment metric
-  -0.29 +- 0.14). In situ (``measlog.py``, seeds 0-7) 65 of the 96 BA keyframes are measured and 55 agree with their
+  map); with ``min_per_axis`` 2 and the Huber loss (this code, ``ba_room_prior_gain`` 1) 2.704 % (-1.24 +- 0.91, 6
+  better, 2 worse; 0.5 s segment metric -1.06 +- 0.49), pooled 40 runs 2.743 % (-0.551 +- 0.234, 29 better; without
+  seed 4 -0.26 +- 0.17, 24 of 35 better; seeds 4 / 7 better under all five settings, seed 2 worse under three), held
+  out 8-19 3.544 % (-0.02 +- 0.32, 6 better, 6 worse; segment metric +0.27 +- 0.13), landing 0-23 1.460 % (+0.14 +-
+  0.12, 14 better, 10 worse; 22 of 24 within 2 %, seed 12 3.45 %; segment metric -0.29 +- 0.14). In situ (``measlog.py``, seeds 0-7) 65 of the 96 BA keyframes are measured and 55 agree with their
   map's frame, those a median 0.25 deg off (RMS 0.37 / 0.47 / 0.12, one over 2 deg): near the oracle's noise, but on
   57 % of the keyframes and with sigmas estimated at 0.7 deg (three times the error). Hence ``ba_room_prior_gain`` 4
   (information times four) with ``ba_room_prior_deg`` 0.1: seeds 0-7 2.745 % (-1.20 +- 1.10, 5 better), held out 8-19
@@ -52,9 +52,9 @@ on them offline; ``measlog.py`` logs the measurements in situ; ``run.sh`` / ``ge
   two runs tracked under 80 %, least 79.6 %, against none), held out 8-19 pooled (60 runs, defaults 3.695 %) 3.436 %
   (-0.26 +- 0.24, 35 better; within 2 % 4 -> 10; segment metric -0.12 +- 0.22; seed 14 better under all five settings,
   12 worse under four), all 100 indoor runs -0.38 +- 0.18 (63 better), but landing 0-23 1.911 % (+0.59 +- 0.19, 19
-  worse, 24 -> 17 within 2 %; seeds 8 / 13 / 17 4.04 / 4.78 / 4.33 %): the landing's crates and buildings are
-  axis-aligned too, but the measurement assumes the image's up near the world's (a camera looking down sees the
-  vertical edges converge inside the image), and its mislabelled frames pull the landing maps.
+  worse, 24 -> 17 within 2 %; seeds 8 / 13 / 17 4.04 / 4.78 / 4.33 %). The landing's crates and buildings are
+  axis-aligned too, but the search starts from the image's up as the world's, which a camera looking down does not
+  share (its vertical edges converge inside the image): probably mislabelled frames (not measured there).
   CPU: a measurement 9.5 ms per keyframe MCI (LSD and the yaw search; seed 0's 12 captured keyframes), the room frame
   2 ms at 150 keyframes.
   The gain on seeds 0-7 is mostly seed 4 (9.81 -> 2.59 %, the run session 29's rotation oracle mended too), on the
