@@ -21,6 +21,10 @@ class Keyframe:
     """Track id -> ideal-pinhole pixel (2,) in this keyframe."""
     image8: np.ndarray | None = None
     """The keyframe's MCI (uint8) while the keyframe is in the local window, for KLT re-finding of its points; else None."""
+    R_cm: np.ndarray | None = None
+    """Camera-from-room rotation (3, 3) measured from the MCI's axis-aligned edges, or None (:mod:`evpose.slam.room_axes`)."""
+    R_cm_info: np.ndarray | None = None
+    """Information (3, 3) of ``R_cm`` as a camera-frame rotation, 1/rad^2."""
 
 
 @dataclass

@@ -27,7 +27,8 @@ def local_bundle_adjustment(m: SlamMap, K: np.ndarray, window: int, iterations: 
                             rotation_priors: dict | None = None, rotation_sigma_rad: float = 1e-3, scale_anchor: float = 0.0,
                             rotation_sigmas_rad: dict | None = None, velocity_sigma_ratio: float = 0.0,
                             rotation_rate_sigma_rad_s: float = 0.0, edge_along_sigma_px: float = 0.0,
-                            edge_max_ratio: float = 0.1, max_jump_depths: float = 0.0) -> BaReport:
+                            edge_max_ratio: float = 0.1, max_jump_depths: float = 0.0,
+                            attitude_priors: dict | None = None) -> BaReport:
     """Optimise the last ``window`` keyframes of ``m`` and the points they see, in place.
 
     The ``n_fixed`` oldest keyframes of the window (two while the map has only
@@ -45,6 +46,9 @@ def local_bundle_adjustment(m: SlamMap, K: np.ndarray, window: int, iterations: 
     constant-rotation-rate factors with that sigma, rad/s. ``edge_along_sigma_px`` > 0 gives observations on a straight
     edge of a keyframe MCI (structure-tensor eigenvalue ratio below ``edge_max_ratio``; keyframes that keep their
     ``image8``) that sigma along the edge, pixels: KLT measures only the motion across an edge.
+    ``attitude_priors`` maps keyframe ids to (target ``T_wc``, 6x6 covariance): a prior on each free keyframe of the
+    window, with a Huber loss at two sigmas (:func:`evpose.slam.room_axes.room_priors`: the rotation from the room's
+    axis-aligned edges).
     ``max_jump_depths`` > 0 leaves the map as it was when the solution moves a free keyframe's camera centre farther
     than that many median distances of the optimised points from it (:attr:`TrackingConfig.max_jump_depths`).
     """
@@ -98,6 +102,12 @@ def local_bundle_adjustment(m: SlamMap, K: np.ndarray, window: int, iterations: 
                 sig = float(sigmas.get((a, b), rotation_sigma_rad))
                 rot_noise = gtsam.noiseModel.Diagonal.Sigmas(np.r_[np.full(3, sig), np.full(3, 1e4)])
                 graph.add(gtsam.BetweenFactorPose3(X(a), X(b), gtsam.Pose3(gtsam.Rot3(np.asarray(R_ab, np.float64)), np.zeros(3)), rot_noise))
+    if attitude_priors:
+        for kid, (T_t, C) in sorted(attitude_priors.items()):
+            if kid in used_kfs and kid in in_window and kid not in fixed_ids:
+                # Huber at two sigmas: a mislabelled measurement pulls no harder than a fair one.
+                nm = gtsam.noiseModel.Robust.Create(gtsam.noiseModel.mEstimator.Huber.Create(2.0), gtsam.noiseModel.Gaussian.Covariance(C))
+                graph.add(gtsam.PriorFactorPose3(X(kid), gtsam.Pose3(np.asarray(T_t, np.float64)), nm))
     if scale_anchor > 0 and len(free_ids) >= 2 and free_ids[1] not in fixed_ids and free_ids[0] in used_kfs and free_ids[1] in used_kfs:
         a, b = kf_by_id[free_ids[0]], kf_by_id[free_ids[1]]
         d = float(np.linalg.norm(a.T_wc[:3, 3] - b.T_wc[:3, 3]))

@@ -414,6 +414,8 @@ class FrontendTracks:
     init_ref: dict | None = None
     """Track id -> pixel in the initialisation reference MCI."""
     init_ref_t: int = 0
+    init_ref8: np.ndarray | None = None
+    """The initialisation reference MCI (uint8), for its keyframe's room-axes measurement (``TrackingConfig.ba_room_prior_deg``)."""
     init_frames: int = 0
     stepped: set = field(default_factory=set)
     """Ids of the live tracks already carried through an MCI-to-MCI step (``FeatureConfig.klt_first_step_max_residual_px``)."""

@@ -79,6 +79,14 @@ keyframe's rotation and the true rotation since it: the points were triangulated
 trade. A constant-rotation-rate factor in the BA (``TrackingConfig.ba_rotation_rate_prior_deg_s``, figures there) did
 not hold it: at 80 deg/s seed 4's legs were re-drawn into other maps, not mended (its last map born 0.7 s later; step
 ratios 0.15-0.26 at a depth scale of 0.3), and the pooled 40 runs got no better.
+
+A rotation source from the images themselves (session 30, :mod:`evpose.slam.room_axes`): the steps' error lies about
+the camera's x / y / z axes at 2.0 / 1.9 / 1.1 deg RMS, in world terms tilt 2.4 and yaw 1.8; the true up direction
+alone as a 0.2 deg prior (yaw free) gave seeds 0-7 3.94 -> 2.52 %. The rooms' edges along their three axes measure a
+keyframe's rotation to a median 0.25 deg where all three show (57 % of the BA's keyframes in situ); as BA priors
+(``TrackingConfig.ba_room_prior_deg``, off) they gave the 40 pooled runs of seeds 0-7 3.29 -> 2.73 % (mostly seed 4)
+and the 60 of held-out seeds 8-19 3.70 -> 3.44 % (-0.26 +- 0.24), segment metric unmoved, and landing 0-23 1.32 ->
+1.91 %.
 """
 
 from __future__ import annotations

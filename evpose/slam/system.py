@@ -441,6 +441,7 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
         """Insert a keyframe, triangulate, run local (inertial) BA, cull, try the IMU initialisation; returns the adjusted pose."""
         fe, tc = self.fe, self.cfg.tracking
         kf = insert_keyframe(m, t_us, T_wc, fe.ids, fe.uv.astype(np.float64), fe.track_to_point)
+        self._measure_room(kf, img8)
         if triangulate:
             self._next_point = triangulate_new_points(m, self.K, kf, fe.track_to_point, tc, self._next_point,
                                                       # event-only coasts: event-inertial maps bridge on the IMU
@@ -471,7 +472,8 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
                                     velocity_sigma_ratio=tc.ba_velocity_prior if self.imu is None else 0.0,
                                     rotation_rate_sigma_rad_s=np.radians(tc.ba_rotation_rate_prior_deg_s) if self.imu is None else 0.0,
                                     edge_along_sigma_px=tc.ba_edge_along_sigma_px if self.imu is None else 0.0,
-                                    edge_max_ratio=tc.ba_edge_max_ratio, max_jump_depths=tc.max_jump_depths)
+                                    edge_max_ratio=tc.ba_edge_max_ratio, max_jump_depths=tc.max_jump_depths,
+                                    attitude_priors=self._room_priors(m, window))
         if before is not None:
             carry_relative_scale(m, before)
         cull_points(m, self.K, fe.track_to_point, tc)

@@ -1,7 +1,8 @@
 """The gyro's aids to the event-inertial SLAM system (:class:`evpose.slam.system.EventSlam` inherits them).
 
 KLT's start where the gyro rotation moves each feature, the gyro rotation between poses and keyframes, the visual
-local BA's rotation-prior sigmas, and the pose re-solved with the gyro rotation as a prior. They read the system's
+local BA's rotation-prior sigmas, and the pose re-solved with the gyro rotation as a prior; and, event-only, the rotation
+priors from the MCIs' room-axis edges (:mod:`evpose.slam.room_axes`). They read the system's
 ``imu``, ``calib``, ``K``, ``cfg`` and ``atlas``; the event-only mode has no ``imu`` and gets None from each.
 """
 
@@ -17,6 +18,7 @@ from evpose.slam.event_coasting import camera_frame_rate
 from evpose.slam.geometry import project
 from evpose.slam.gyro_prior import (camera_delta_rotation, gyro_delta_rotation, keyframe_rotation_priors, reanchor_rotations,
                                     refine_pose_with_rotation_prior, rotation_angle_deg, sparse_pair_sigmas)
+from evpose.slam.room_axes import measure_room_rotation, room_frame, room_priors
 from evpose.slam.tracking import PoseEstimate
 from evpose.slam.visual_gyro import visual_rotation
 
@@ -104,3 +106,20 @@ class GyroAids:
                 return PoseEstimate(False, reason=f"visual rotation {off:.1f} deg off the gyro's")
             return est  # the prior disagrees with the images (a wrong bias or a bad time offset): keep the visual pose
         return PoseEstimate(True, invert_pose(T_cw), inliers, rms_px=float(np.sqrt(np.mean(err[inliers] ** 2))))
+
+    def _measure_room(self, kf, img8: np.ndarray | None) -> None:
+        """Event-only with ``TrackingConfig.ba_room_prior_deg``: a keyframe's camera-from-room rotation from its MCI (every
+        keyframe, coasted or not, and the two of a new map, so a young map has its room frame)."""
+        if self.imu is None and self.cfg.tracking.ba_room_prior_deg > 0 and img8 is not None and kf.R_cm is None:
+            kf.R_cm, kf.R_cm_info = measure_room_rotation(img8, self.K)
+
+    def _room_priors(self, m: SlamMap, window: int) -> dict | None:
+        """Event-only with ``TrackingConfig.ba_room_prior_deg``: the rotation priors of the BA window against the map's
+        room frame (:mod:`evpose.slam.room_axes`), else None."""
+        if self.imu is not None or self.cfg.tracking.ba_room_prior_deg <= 0:
+            return None
+        M, labels = room_frame(m.keyframes)
+        if M is None:
+            return None
+        tc = self.cfg.tracking
+        return room_priors(m.keyframes[-window:], M, labels, np.radians(tc.ba_room_prior_deg), tc.ba_room_prior_gain) or None

@@ -57,6 +57,7 @@ class TwoViewInitialisation:
             self._replenish(mci.image8, mci.image)
             fe.init_ref = {int(t): uv.astype(np.float64) for t, uv in zip(fe.ids.tolist(), fe.uv)}
             fe.init_ref_t, fe.init_frames = mci.t_us, 0
+            fe.init_ref8 = mci.image8
             return SlamStatus.NOT_INITIALISED, f"initialisation reference set with {len(fe.init_ref)} features", None
         fe.init_frames += 1
         common = [i for i, t in enumerate(fe.ids.tolist()) if t in fe.init_ref]
@@ -71,6 +72,8 @@ class TwoViewInitialisation:
         m = self.atlas.new_map() if (self.atlas.active is None or self.atlas.active.keyframes) else self.atlas.active
         kf0 = Keyframe(0, fe.init_ref_t, np.eye(4), {int(t): fe.init_ref[int(t)].copy() for t in ids})
         kf1 = Keyframe(1, mci.t_us, res.T_wc2, {int(t): uv.astype(np.float64) for t, uv in zip(fe.ids.tolist(), fe.uv)})
+        self._measure_room(kf0, fe.init_ref8)
+        self._measure_room(kf1, mci.image8)
         # The first pose refers to its own keyframe: later BAs move the second one, and the first pose must not follow.
         m.keyframes = [kf0]
         m.add_pose(kf0.t_us, kf0.T_wc)

@@ -320,6 +320,20 @@ class TrackingConfig:
     0.81 / -0.68 +- 0.99; 3 better and 5 worse each; at 80 seed 4 9.81 -> 2.55 % by other maps, seed 0 4.24 -> 4.34 %);
     80 under the defaults and the four neutral perturbations (40 runs) 3.153 -> 3.177 % (+0.02 +- 0.30, 19 better, 21
     worse; segment metric 2.62 -> 2.98 %). Off, degrees per second."""
+    ba_room_prior_deg: float = field(default=0.0, metadata={"min": 0.0, "max": 10.0, "step": 0.1, "unit": "deg"})
+    """Event-only local BA: each free keyframe's rotation held to the map's room frame by the camera-from-room rotation
+    measured from its MCI's straight edges along the room's three axes, at that measurement's own covariance plus this
+    sigma, over ``ba_room_prior_gain`` (:mod:`evpose.slam.room_axes`, Huber at two sigmas; 0 disables), degrees.
+    Session 30 (figures and scripts in the module notes), against the defaults (indoor event-only seeds 0-7 3.942 %, 40
+    pooled runs 3.294 %, 8-19 3.566 %; landing event-only 0-23 1.317 %): 0.2 at gain 1: 0-7 2.704 % (paired -1.24 +-
+    0.91, 6 better), pooled 2.743 % (-0.55 +- 0.23, 29 better), 8-19 3.544 % (-0.02 +- 0.32, 6 better, 6 worse),
+    landing 1.460 % (+0.14 +- 0.12, 22 of 24 within 2 %); 0.1 at gain 4: 0-7 2.745 % (-1.20 +- 1.10), pooled 2.732 %
+    (-0.56 +- 0.29, least tracked 79.6 %), 8-19 pooled over the same five settings 3.695 -> 3.436 % (-0.26 +- 0.24, 35 of
+    60 better), landing 1.911 % (+0.59 +- 0.19, 17 of 24 within 2 %). Off: the indoor gain is within the noise beyond
+    seeds 0-7 and the landing gets worse."""
+    ba_room_prior_gain: float = field(default=4.0, metadata={"min": 0.1, "max": 100.0, "step": 0.1, "unit": "ratio"})
+    """``ba_room_prior_deg``: the prior's rotation information is the measurement's (plus the sigma floor) times this: in
+    situ the measurements' estimated sigmas ran at about three times their errors (:mod:`evpose.slam.room_axes`), ratio."""
     coast_s: float = field(default=0.4, metadata={"min": 0.0, "max": 2.0, "step": 0.01, "unit": "s"})
     """Event-only: longest stretch a map coasts through visual failures, its pose predicted by its own recent rotation
     rate and camera-frame velocity (:mod:`evpose.slam.event_coasting`), before it is given up (0: lost at once),
