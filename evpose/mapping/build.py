@@ -50,6 +50,7 @@ from evpose.mapping.region_growing import extend_to_planes, fit_regions, grow_re
 from evpose.mapping.robust_normals import robust_normals
 from evpose.mapping.spatial import BoxIndex
 from evpose.mapping.step_fit import dominant_axis
+from evpose.mapping.step_lines import fit_step_runs
 from evpose.mapping.visibility import front_layer, mid_layer_depth
 
 
@@ -123,6 +124,8 @@ class MapBuildConfig:
     """Search radius, raster cells, of a second look for a low step's face points around contour points the first (2 cells) left unmoved; 2 = no second look. A single look at 4 cells moved indoor points onto wrong faces (bundled indoor precision 97.97 -> 97.33 %); the second look only where the first found nothing keeps the landing gain (see step_min_points) at indoor 97.91 %."""
     step_retry_shift_cells: float = field(default=1.5, metadata={"min": 0.5, "max": 10.0, "step": 0.5, "unit": "cells"})
     """Largest move onto a step's face in the second look (step_retry_radius_cells), raster cells (the first look's limit is 1.5). Measured 1.5 -> 2.5 (2 s landing, seeds 0-3): pad points misplaced 108 / 139 / 116 / 92 -> 43 / 139 / 147 / 43, bundled landing precision / recall 99.33 / 96.82 -> 99.40 / 96.88 %, but indoor 97.91 / 92.37 -> 97.83 / 92.22 % and tracking no better: ablation_seeds stpe ATE 15.8 / 23.8 -> 16.0 / 23.9 mm, full 9.06 / 9.50 -> 9.09 / 9.73 mm (346x260 / 240x180); so 1.5."""
+    step_lines: bool = True
+    """Replace each straight run of a low step's edge (not on a crease) by the line fitted to all of its face's points along the run (:mod:`evpose.mapping.step_lines`), instead of each point's median of its few nearest face points."""
     contour_min_width: float = field(default=1.5, metadata={"min": 0.0, "max": 10.0, "step": 0.1, "unit": "spacings"})
     """Regions narrower than this (std along the minor in-plane axis, median point spacings) give no contour of their own: a strip a point or two wide (a 15 cm step's side on a sparse scan) has an ill-defined tilt, so its outline lies off both of the step's edges, which its neighbours' contours already give; 0 = every region. Measured 0 -> 1.5 (2 s landing, with the step options above): seeds 2 / 3's tilted strip across the pad's side (1.44 spacings wide) gone, pad points misplaced 496 / 300 -> 116 / 92 (seeds 0 / 1 unchanged); bundled landing precision 99.34 -> 99.33 %, bundled indoor unchanged; six indoor re-samples recall -0.05 points."""
     brightness_radius_m: float = field(default=0.0, metadata={"min": 0.0, "max": 0.5, "step": 0.01, "unit": "m"})
@@ -361,6 +364,15 @@ def build_contour_map(
                 max_shift=cfg.step_retry_shift_cells * cell, min_count=cfg.step_min_points,
             )
         cpts = stepped
+        if cfg.step_lines:
+            # One line per straight run of a low step's edge, from all of its face's points.
+            parallel = math.cos(math.radians(cfg.snap_min_angle_deg))
+            cpts, cen_unit, _ = fit_step_runs(
+                cpts, cen_unit, creg, crease < 0, pts, labels, nb.tree, regions.centroids, regions.normals,
+                radius=cfg.step_retry_radius_cells * cell, min_offset=cfg.plane_distance_m, max_offset=sc.adjacent,
+                max_shift=cfg.step_retry_shift_cells * cell, parallel_cos=parallel,
+            )
+            cen = cen_unit
         # Brightness edges are squared to the outline: the creases give it more exactly than the trace.
         from_creases = crease_axes(creg, crease, regions.normals, regions.axes)
         axis_angles = np.where(np.isfinite(from_creases), from_creases, axis_angles)
