@@ -164,6 +164,23 @@ Huber scale x 0.69 6.614, held-out 6.408-6.446: within the spread);
 ``time_surface.eta_ms`` 14.4 / 7 8.750 / 7.259; ``registration.max_points`` 1500 6.918; the field's covariance from
 its inliers (``registration.residual_variance``) 7.596; ``prior_residual_px`` 0.3 6.932; ``association_radius_px``
 1.5 7.041 mm.
+
+Session 30 (``/tmp/s30/map30/``: ``run.py`` with ``MAPX``, ``mapx.py``, ``errs.py``, ``nearerr.py``): what the built map
+still costs with these defaults (``full``, 2 s landing from ground truth, mean ATE). The built map's error along each
+point's edge normal to the nearest true edge (points within 3 cm of one): painted points 12.2 mm RMS (bias +1.9 mm; 8-19
+% of them farther than 3 cm; seeds 0-3), geometric feet / tops / vertical edges 1.34 / 1.30 / 1.05 mm over the whole
+map but 2.8 / 3.8 / 1.4 mm within 4 m of the pad (seed 0): the pad's 15 cm sides make no region, and its rims were
+placed point by point from one to three side points (pieces 10-40 cm long, p10 / p90 -5 / +6 mm; seed 0's top rim
+traced 7 degrees tilted, 72 mm RMS). The oracle, every map point moved onto its nearest true edge with its attributes
+kept: 346x260 seeds 0-3 5.335 -> 4.19 mm, but 240x180 seeds 0-7 5.56 -> 5.66 mm (seeds 0-2 1-1.5 mm better, 3-4 1-2
+mm worse). :mod:`evpose.mapping.step_lines` (one line per straight run of a low step's edge, fitted to all of its
+face's points; rims near the pad 2.9 / 3.9 -> 2.1 / 3.0 mm RMS) took seeds 0-11 to 4.471 / 5.313 mm (346x260 /
+240x180, from 4.621 / 5.438) but held-out seeds 12-23 from 5.551 / 6.445 to 5.653 / 6.490: within the noise, left off.
+On its map (seeds 0-11): the oracle 4.241 / 5.620 mm, the painted points alone on the truth 4.452 / 5.367, the painted
+points farther than 3 cm left out 4.479 / 5.306, the painted edges squared to the pad (``albedo_axis_snap_deg`` 12,
+their RMS error 11.9 -> 10.8 mm) 4.595 / 5.626. So the map no longer sets the limit: at 240x180 a perfect one is 0.3
+mm worse than the built one, at 346x260 it leaves 0.2 mm; the 5 mm target at 240x180 needs the registrations' slow
+error down (session 29), not a better map.
 """
 
 from __future__ import annotations
