@@ -19,24 +19,27 @@ face points, or whose face points do not span enough of the run to fix a tilt, k
 (the face points' median) or stay as they are.
 
 Measured (session 30, scripts in ``/tmp/s30/map30/``; error = distance along the point's edge normal to the nearest true
-edge, points within 3 cm of one, 2 s landing clouds, points within 4 m of the pad's centre): the pad's and
-crates' feet 2.90 -> 2.05 mm RMS and tops 3.87 -> 3.01 mm (seeds 0-1, ``buildcmp.py``; share > 5 mm off 9.5 / 10.5 ->
-3.7 / 3.9 %); seed 0's pad top rim at y = -1.5 m, traced 7 degrees tilted from a notch, 71.7 -> 0.6 mm RMS (the fit
-needs the second gather about its own line and a slope of up to 0.25, ``segcmp.py``). Tracking (``full``, 2 s landing
-from ground truth, ``run.py``, mean ATE of seeds 0-11): 346x260 4.621 -> 4.471 mm (paired -0.149 +- 0.140, 7 of 12 seeds
-better; 0-3 5.335 -> 4.950), 240x180 5.438 -> 5.313 mm (-0.125 +- 0.157, 6 of 12; seed 0 7.78 -> 6.22). Bundled demos
-(``evpose track demo_data/X.h5`` on ``maps/landing_map.ply`` rebuilt, ``evpose eval --align none``): ``landing`` /
-``landing_fast`` / ``landing_dynamic`` 7.12 / 9.98 / 5.90 -> 7.24 / 9.53 / 4.97 mm (``demos.sh``). Contour-map precision
-/ recall / recall_faces (``evpose.bench.mapping`` figures, simulator clouds of seeds 0-1 and the bundled cloud,
-``prscore.py``): landing 99.41 / 96.74 / 96.85 -> 99.46 / 96.80 / 96.90 %, indoor 97.16 / 90.55 / 91.53 -> 97.53 / 90.81
-/ 91.87 %; p95 distance of the landing maps 2.4-2.7 -> 2.1-2.4 mm. But on held-out seeds 12-23 (``q6.sh``) ``full`` went
-5.551 -> 5.653 mm at 346x260 (+0.102 +- 0.253, 4 of 12 better) and 6.445 -> 6.490 mm at 240x180 (+0.045 +- 0.216, 5 of
-12): over seeds 0-23, -0.02 / -0.04 mm with 11 of 24 better at each resolution, within the paired spread (per-seed
-differences of +-0.3-2 mm from any small map change). So :attr:`evpose.mapping.build.MapBuildConfig.step_lines` is off
-by default. Why so little: with the simulator's true edges in place of the built map's points (every point moved onto
-its nearest true edge, its attributes kept; ``mapx.py``) ``full`` gives 4.241 mm at 346x260 and 5.620 mm at 240x180
-(seeds 0-11, against 4.471 / 5.313 on this builder's map), and the painted points alone moved 4.452 / 5.367: at 240x180
-a perfect map is no better than the built one, at 346x260 it leaves 0.2 mm.
+edge, points within 3 cm of one, 2 s landing clouds, points within 4 m of the pad's centre): the pad's and crates' feet
+2.90 -> 2.05 mm RMS and tops 3.87 -> 3.01 mm (seeds 0-1, ``buildcmp.py``; share > 5 mm off 9.5 / 10.5 -> 3.7 / 3.9 %);
+seed 0's pad top rim at y = -1.5 m, traced 7 degrees tilted from a notch, 71.7 -> 0.6 mm RMS (the fit needs the second
+gather about its own line and a slope of up to 0.25, ``segcmp.py``). Tracking (``full``, 2 s landing from ground truth,
+``run.py``, mean ATE of seeds 0-11): 346x260 4.621 -> 4.471 mm (paired -0.149 +- 0.140, 7 of 12 seeds better; 0-3 5.335
+-> 4.950), 240x180 5.438 -> 5.313 mm (-0.125 +- 0.157, 6 of 12; seed 0 7.78 -> 6.22). Bundled demos (``evpose track
+demo_data/X.h5`` on ``maps/landing_map.ply`` rebuilt, ``evpose eval --align none``): ``landing`` / ``landing_fast`` /
+``landing_dynamic`` 7.12 / 9.98 / 5.90 -> 7.24 / 9.53 / 4.97 mm (``demos.sh``). Contour-map precision / recall /
+recall_faces (``evpose.bench.mapping`` figures, simulator clouds of seeds 0-1 and the bundled cloud, ``prscore.py``):
+landing 99.41 / 96.74 / 96.85 -> 99.46 / 96.80 / 96.90 %, indoor 97.16 / 90.55 / 91.53 -> 97.53 / 90.81 / 91.87 %; p95
+distance of the landing maps 2.4-2.7 -> 2.1-2.4 mm. But on held-out seeds 12-23 (``q6.sh``) ``full`` went 5.551 -> 5.653
+mm at 346x260 (+0.102 +- 0.253, 4 of 12 better) and 6.445 -> 6.490 mm at 240x180 (+0.045 +- 0.216, 5 of 12): over seeds
+0-23, -0.02 / -0.04 mm with 11 of 24 better at each resolution, within the paired spread (per-seed differences of
++-0.3-2 mm from any small map change). So :attr:`evpose.mapping.build.MapBuildConfig.step_lines` is off by default. Why
+so little: with the simulator's true edges in place of the built map's points (every point moved onto its nearest true
+edge, its attributes kept; ``mapx.py``) ``full`` gives 4.241 mm at 346x260 and 5.620 mm at 240x180 (seeds 0-11, against
+4.471 / 5.313 on this builder's map), and the painted points alone moved 4.452 / 5.367; but the top rims alone on the
+truth give 3.314 / 4.871 mm (from 4.621 / 5.438 on the map without step lines; the pad's alone 4.394 at 346x260, the
+crates' and buildings' alone 3.817) while the feet alone on the truth cost 0.1 mm at 240x180: this fit mends the pad's
+rims, feet included, and leaves the crease-snapped top rims (1.84 mm RMS, bias -0.43 mm near the pad), which weigh most
+(:mod:`evpose.tracker.event_registration`, session 30).
 """
 
 from __future__ import annotations
