@@ -50,6 +50,7 @@ from evpose.mapping.region_growing import extend_to_planes, fit_regions, grow_re
 from evpose.mapping.robust_normals import robust_normals
 from evpose.mapping.spatial import BoxIndex
 from evpose.mapping.step_fit import dominant_axis
+from evpose.mapping.step_lines import fit_step_runs
 from evpose.mapping.visibility import front_layer, mid_layer_depth
 
 
@@ -123,6 +124,8 @@ class MapBuildConfig:
     """Search radius, raster cells, of a second look for a low step's face points around contour points the first (2 cells) left unmoved; 2 = no second look. A single look at 4 cells moved indoor points onto wrong faces (bundled indoor precision 97.97 -> 97.33 %); the second look only where the first found nothing keeps the landing gain (see step_min_points) at indoor 97.91 %."""
     step_retry_shift_cells: float = field(default=1.5, metadata={"min": 0.5, "max": 10.0, "step": 0.5, "unit": "cells"})
     """Largest move onto a step's face in the second look (step_retry_radius_cells), raster cells (the first look's limit is 1.5). Measured 1.5 -> 2.5 (2 s landing, seeds 0-3): pad points misplaced 108 / 139 / 116 / 92 -> 43 / 139 / 147 / 43, bundled landing precision / recall 99.33 / 96.82 -> 99.40 / 96.88 %, but indoor 97.91 / 92.37 -> 97.83 / 92.22 % and tracking no better: ablation_seeds stpe ATE 15.8 / 23.8 -> 16.0 / 23.9 mm, full 9.06 / 9.50 -> 9.09 / 9.73 mm (346x260 / 240x180); so 1.5."""
+    step_lines: bool = False
+    """Replace each straight run of a low step's edge (not on a crease) by the line fitted to all of its face's points along the run (:mod:`evpose.mapping.step_lines`), instead of each point's median of its few nearest face points. Off by default: the map is better, tracking only within its noise. Measured (session 30, details in the module): the pad's and crates' rims near the pad 2.9 / 3.9 -> 2.1 / 3.0 mm RMS (feet / tops), landing and indoor precision and recall up 0.05-0.4 points; ``full`` (2 s landing from ground truth) seeds 0-11 346x260 4.621 -> 4.471 mm, 240x180 5.438 -> 5.313, but held-out seeds 12-23 5.551 -> 5.653 and 6.445 -> 6.490 (0-23: -0.02 / -0.04 mm, 11 of 24 seeds better at each); demos landing / landing_fast / landing_dynamic 7.12 / 9.98 / 5.90 -> 7.24 / 9.53 / 4.97 mm. On, the bundled ``maps/landing_map.ply`` must be rebuilt (``tests/test_blas_kernels.py`` checks it is what ``evpose build-map maps/landing_cloud.ply`` writes)."""
     contour_min_width: float = field(default=1.5, metadata={"min": 0.0, "max": 10.0, "step": 0.1, "unit": "spacings"})
     """Regions narrower than this (std along the minor in-plane axis, median point spacings) give no contour of their own: a strip a point or two wide (a 15 cm step's side on a sparse scan) has an ill-defined tilt, so its outline lies off both of the step's edges, which its neighbours' contours already give; 0 = every region. Measured 0 -> 1.5 (2 s landing, with the step options above): seeds 2 / 3's tilted strip across the pad's side (1.44 spacings wide) gone, pad points misplaced 496 / 300 -> 116 / 92 (seeds 0 / 1 unchanged); bundled landing precision 99.34 -> 99.33 %, bundled indoor unchanged; six indoor re-samples recall -0.05 points."""
     brightness_radius_m: float = field(default=0.0, metadata={"min": 0.0, "max": 0.5, "step": 0.01, "unit": "m"})
@@ -140,7 +143,7 @@ class MapBuildConfig:
     albedo_layer_m: float = field(default=0.012, metadata={"min": 0.0, "max": 0.1, "step": 0.001, "unit": "m"})
     """A point this far behind the front layer of its region's neighbours is hidden (a wall behind a picture) and its intensity ignored, metres (~2x range noise)."""
     albedo_axis_snap_deg: float = field(default=0.0, metadata={"min": 0.0, "max": 45.0, "step": 0.5, "unit": "deg"})
-    """A straight brightness edge within this angle of square to its region's outline (the dominant direction of the region's contour, when it has one) is fitted exactly square to it, degrees; 0 = free tilt. Measured 0 -> 12 on four indoor clouds (bundled, re-samples 1-3): the wall panels' (picture, door, screen) tilted edges straightened, indoor recall +1.6 points, precision +0.4 on average (re-samples 4/5: recall +2.9/-0.7); landing +0.1 precision, +0.1 recall; painted 'H' recall +2.4 to +9 points on three of four landing clouds, -2 on the bundled one. Off by default: on the 2 s landing benchmark (seed 0) the squared 'H' cost tracking, stpe 33.0 -> 38.9 mm / 0.52 -> 0.67 deg at 346x260 (42.3 -> 48.2 mm at 240x180), full ARE 0.24 -> 0.28 deg (0.31 -> 0.36), full ATE the same. (Measured with the traced outline's direction; a region with creases now takes theirs, :func:`evpose.mapping.adjacency.crease_axes`.)"""
+    """A straight brightness edge within this angle of square to its region's outline (the dominant direction of the region's contour, when it has one) is fitted exactly square to it, degrees; 0 = free tilt. Measured 0 -> 12 on four indoor clouds (bundled, re-samples 1-3): the wall panels' (picture, door, screen) tilted edges straightened, indoor recall +1.6 points, precision +0.4 on average (re-samples 4/5: recall +2.9/-0.7); landing +0.1 precision, +0.1 recall; painted 'H' recall +2.4 to +9 points on three of four landing clouds, -2 on the bundled one. Off by default: on the 2 s landing benchmark (seed 0) the squared 'H' cost tracking, stpe 33.0 -> 38.9 mm / 0.52 -> 0.67 deg at 346x260 (42.3 -> 48.2 mm at 240x180), full ARE 0.24 -> 0.28 deg (0.31 -> 0.36), full ATE the same. (Measured with the traced outline's direction; a region with creases now takes theirs, :func:`evpose.mapping.adjacency.crease_axes`.) Session 30 (with step_lines, ``/tmp/s30/map30/``), still off: 12 deg takes the painted points' error along their normals from 11.9 to 10.8 mm RMS and those > 3 cm off from 14 to 10 % (seeds 0-3; 20 / 30 deg 10.8 / 10.6 mm), but ``full`` (2 s landing, seeds 0-11) 4.471 -> 4.595 mm at 346x260 and 5.313 -> 5.626 mm at 240x180."""
     albedo_panel_rims: bool = True
     """Place a brightness edge along the rim of a layer proud of its region (a door, picture or screen 2 cm in front of its wall, the wall sampled behind it) by where the panel's own points end, not by the intensity step fit, which the panel's side faces and the wall behind it push 1-2 cm outward (:mod:`evpose.mapping.panel_rims`); the pieces of one rim are placed together. Measured on seven indoor clouds (bundled, re-samples 1-6), with albedo_panel_snap_deg 12 and albedo_panel_gap_m 0.3: recall 85.9 -> 90.2 %, recall_faces 88.2 -> 91.3 %, precision 95.3 -> 96.1 % (picture / door / screen recall 49 / 75 / 59 -> 67 / 86 / 82 %); landing maps bit-identical (no two-layer rims there, so tracking is unchanged)."""
     albedo_panel_snap_deg: float = field(default=12.0, metadata={"min": 0.0, "max": 45.0, "step": 0.5, "unit": "deg"})
@@ -361,6 +364,15 @@ def build_contour_map(
                 max_shift=cfg.step_retry_shift_cells * cell, min_count=cfg.step_min_points,
             )
         cpts = stepped
+        if cfg.step_lines:
+            # One line per straight run of a low step's edge, from all of its face's points.
+            parallel = math.cos(math.radians(cfg.snap_min_angle_deg))
+            cpts, cen_unit, _ = fit_step_runs(
+                cpts, cen_unit, creg, crease < 0, pts, labels, nb.tree, regions.centroids, regions.normals,
+                radius=cfg.step_retry_radius_cells * cell, min_offset=cfg.plane_distance_m, max_offset=sc.adjacent,
+                max_shift=cfg.step_retry_shift_cells * cell, parallel_cos=parallel,
+            )
+            cen = cen_unit
         # Brightness edges are squared to the outline: the creases give it more exactly than the trace.
         from_creases = crease_axes(creg, crease, regions.normals, regions.axes)
         axis_angles = np.where(np.isfinite(from_creases), from_creases, axis_angles)

@@ -164,6 +164,31 @@ Huber scale x 0.69 6.614, held-out 6.408-6.446: within the spread);
 ``time_surface.eta_ms`` 14.4 / 7 8.750 / 7.259; ``registration.max_points`` 1500 6.918; the field's covariance from
 its inliers (``registration.residual_variance``) 7.596; ``prior_residual_px`` 0.3 6.932; ``association_radius_px``
 1.5 7.041 mm.
+
+Session 30 (``/tmp/s30/map30/``: ``run.py`` with ``MAPX``, ``mapx.py``, ``errs.py``, ``nearerr.py``): what the built map
+still costs with these defaults (``full``, 2 s landing from ground truth, mean ATE). The built map's error along each
+point's edge normal to the nearest true edge (points within 3 cm of one): painted points 12.2 mm RMS (bias +1.9 mm; 8-19
+% of them farther than 3 cm; seeds 0-3), geometric feet / tops / vertical edges 1.34 / 1.30 / 1.05 mm over the whole
+map but 2.8 / 3.8 / 1.4 mm within 4 m of the pad (seed 0): the pad's 15 cm sides make no region, and its rims were
+placed point by point from one to three side points (pieces 10-40 cm long, p10 / p90 -5 / +6 mm; seed 0's top rim
+traced 7 degrees tilted, 72 mm RMS). The oracle, every map point moved onto its nearest true edge with its attributes
+kept: 346x260 seeds 0-3 5.335 -> 4.19 mm, but 240x180 seeds 0-7 5.56 -> 5.66 mm (seeds 0-2 1-1.5 mm better, 3-4 1-2
+mm worse). :mod:`evpose.mapping.step_lines` (one line per straight run of a low step's edge, fitted to all of its
+face's points; rims near the pad 2.9 / 3.9 -> 2.1 / 3.0 mm RMS) took seeds 0-11 to 4.471 / 5.313 mm (346x260 /
+240x180, from 4.621 / 5.438) but held-out seeds 12-23 from 5.551 / 6.445 to 5.653 / 6.490: within the noise, left off.
+On its map (seeds 0-11): the oracle 4.241 / 5.620 mm, the painted points alone on the truth 4.452 / 5.367, the painted
+points farther than 3 cm left out 4.479 / 5.306, the painted edges squared to the pad (``albedo_axis_snap_deg`` 12,
+their RMS error 11.9 -> 10.8 mm) 4.595 / 5.626. Where the whole-map oracle's gain hides, one class of points at a
+time moved onto the truth (built map without step_lines, seeds 0-11, against 4.621 / 5.438 mm): the top rims (the
+pad's and every box's upper edges) 3.314 mm at 346x260 (ARE 0.0575 -> 0.0382 deg) and 4.871 mm at 240x180 (0.063 ->
+0.055 deg), both under the 5 mm target; the feet 5.552 mm at 240x180 (worse, which is why the whole-map oracle is no
+better there), the vertical edges 5.391. At 346x260 the pad's top rims alone 4.394 mm, the other top rims alone (the
+crates' and buildings', crease-snapped) 3.817 mm. Their error (along the edge normal, within 3 cm of the truth, seeds
+0-11 at 346x260): the pad's top rims 4.66 mm RMS (20 % of points > 5 mm off, 3.5 % > 3 cm; step_lines takes the pad's
+to ~1-2 mm), the other top rims within 4 m of the pad 1.84 mm RMS, bias -0.43 mm (inward, onto the top face), median
+0.69 mm, 17 % > 2 mm (the whole map's 0.80 mm, bias -0.16). So the map still sets a limit, through its top rims: their
+1-5 mm RMS cost 0.6-1.3 mm of ATE; placing the crease-snapped top rims more exactly (their inward bias, the
+crates near the pad) is the next map work, the feet are better left as built (scripts ``q7.sh``-``q9.sh``).
 """
 
 from __future__ import annotations

@@ -10,7 +10,7 @@ from evpose.mapping.edge_metrics import point_segment_distances
 from evpose.mapping.synthetic import Box, boxes_on_ground
 
 # The options this file checks, all off: what the builder did before them.
-_OFF = MapBuildConfig(step_min_points=3, step_retry_radius_cells=2.0, contour_min_width=0.0)
+_OFF = MapBuildConfig(step_min_points=3, step_retry_radius_cells=2.0, contour_min_width=0.0, step_lines=False)
 
 
 def _misplaced_share(cmap, edges) -> float:
