@@ -44,7 +44,8 @@ from __future__ import annotations
 import numpy as np
 
 
-def _fit(p: np.ndarray, up: np.ndarray | None, square_sin: float, square_sigmas: float) -> tuple[np.ndarray, np.ndarray]:
+def _fit(p: np.ndarray, up: np.ndarray | None, square_sin: float,
+         square_sigmas: float) -> tuple[np.ndarray, np.ndarray]:
     """Centroid and PCA normal of ``p``; the normal made parallel or square to ``up`` when it is within the angle
     whose sine is ``square_sin`` of that (and, ``square_sigmas`` > 0, within that many standard errors of the fit's
     tilt: a face the scan resolves as tilted keeps its tilt)."""

@@ -195,7 +195,7 @@ faces (19-87 points) hold their neighbours' strays and are tilted 1.5-2.3 degree
 without the strip along each crease, trimmed, and squared to the ground within 3 degrees takes those rims to 1.40 mm RMS
 (bias 0.00, 2.8 % > 2 mm) but ``full`` (seeds 0-11, this checkout's plain builder 4.625 / 5.453 mm: main's crowding fix
 moved seed 0 by 0.05 mm) only to 4.434 / 5.784 mm (4.306 / 5.651 with the feet left as built): better at 346x260, worse
-at 240x180, all within +-1.5 paired standard errors, so :attr:`evpose.mapping.build.MapBuildConfig.crease_refit` is off.
+at 240x180 (ARE 0.063 -> 0.070), all within +-1.5 paired standard errors; held-out seeds 12-23 (feet as built) 346x260 5.551 -> 4.858 mm (seeds 21 / 22 10.5 / 8.7 -> 4.8 / 5.7), 240x180 240x180 6.445 -> 6.202 (0-23: 346x260 5.088 -> 4.582 mm, -0.51 +- 0.31, 16 of 24 seeds better; 240x180 5.949 -> 5.927, 13 of 24). So :attr:`evpose.mapping.build.MapBuildConfig.crease_refit` is off (it does not help both resolutions).
 """
 
 from __future__ import annotations

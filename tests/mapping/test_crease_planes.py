@@ -1,4 +1,4 @@
-"""Crease planes refitted away from the creases, outliers trimmed, optionally squared to the ground (evpose.mapping.crease_planes)."""
+"""Crease planes refitted away from the creases, trimmed, optionally squared to the ground (evpose.mapping.crease_planes)."""
 
 from __future__ import annotations
 
