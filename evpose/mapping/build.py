@@ -15,7 +15,8 @@ Stages (EV-Pose VI-B, NOTES.md "Map construction"):
 4. per region: project, rasterise, close, trace, resample, refine to the points,
    straighten straight runs, drop the scan's own rim; contour points next to another
    plane snapped onto the planes' intersection line (of several crease lines across the
-   edge, the innermost: the sofa's back, not the wall behind it), contour points of low steps
+   edge, the innermost: the sofa's back, not the wall behind it; optionally on planes refitted
+   without the strips along the creases, :mod:`evpose.mapping.crease_planes`), contour points of low steps
    (no region on the step's face) moved onto the face's points (a second, wider look where
    the face is sampled sparser than the scan); regions only a point or two wide (a step's
    side) give no contour of their own;
@@ -43,6 +44,7 @@ from evpose.mapping.albedo_edges import region_albedo_edges
 from evpose.mapping.adjacency import crease_axes, orient_plane_normals, snap_to_intersections, snap_to_steps
 from evpose.mapping.brightness import brightness_signs
 from evpose.mapping.contours import trace_region
+from evpose.mapping.crease_planes import refit_crease_planes, resnap_creases
 from evpose.mapping.dedup import merge_double_contours
 from evpose.mapping.leftover_regions import grow_leftover_regions
 from evpose.mapping.normals import estimate_neighbourhoods, voxel_downsample
@@ -126,6 +128,16 @@ class MapBuildConfig:
     """Largest move onto a step's face in the second look (step_retry_radius_cells), raster cells (the first look's limit is 1.5). Measured 1.5 -> 2.5 (2 s landing, seeds 0-3): pad points misplaced 108 / 139 / 116 / 92 -> 43 / 139 / 147 / 43, bundled landing precision / recall 99.33 / 96.82 -> 99.40 / 96.88 %, but indoor 97.91 / 92.37 -> 97.83 / 92.22 % and tracking no better: ablation_seeds stpe ATE 15.8 / 23.8 -> 16.0 / 23.9 mm, full 9.06 / 9.50 -> 9.09 / 9.73 mm (346x260 / 240x180); so 1.5."""
     step_lines: bool = False
     """Replace each straight run of a low step's edge (not on a crease) by the line fitted to all of its face's points along the run (:mod:`evpose.mapping.step_lines`), instead of each point's median of its few nearest face points. Off by default: the map is better, tracking only within its noise. Measured (session 30, details in the module): the pad's and crates' rims near the pad 2.9 / 3.9 -> 2.1 / 3.0 mm RMS (feet / tops), landing and indoor precision and recall up 0.05-0.4 points; ``full`` (2 s landing from ground truth) seeds 0-11 346x260 4.621 -> 4.471 mm, 240x180 5.438 -> 5.313, but held-out seeds 12-23 5.551 -> 5.653 and 6.445 -> 6.490 (0-23: -0.02 / -0.04 mm, 11 of 24 seeds better at each); demos landing / landing_fast / landing_dynamic 7.12 / 9.98 / 5.90 -> 7.24 / 9.53 / 4.97 mm. On, the bundled ``maps/landing_map.ply`` must be rebuilt (``tests/test_blas_kernels.py`` checks it is what ``evpose build-map maps/landing_cloud.ply`` writes)."""
+    crease_refit: bool = False
+    """Snap crease points onto the intersection of planes refitted away from the creases (points within crease_band_m of a crease partner's plane left out, outliers trimmed at 2.5 robust sigmas; :mod:`evpose.mapping.crease_planes`) instead of the regions' plain least-squares planes. Off by default: the map is better, tracking better at 346x260 and worse at 240x180. Measured (session 30, ``/tmp/s30/rim30/``; crates' and buildings' top rims within 4 m of the pad, seeds 0-3, with crease_square_deg 3): 2.10 -> 1.40 mm RMS, bias -0.55 -> 0.00 mm, > 2 mm off 17.5 -> 2.8 %. ``full`` (2 s landing from ground truth, seeds 0-11, mean ATE, paired against the plain builder in the same checkout, 4.625 / 5.453 mm at 346x260 / 240x180): crease_square_deg 3 346x260 4.434 mm (-0.19 +- 0.23, 7 of 12 better), 240x180 5.784 (+0.33 +- 0.25, 5 of 12; ARE 0.063 -> 0.072 deg); with crease_refit_feet off 4.306 (-0.32 +- 0.26, 8 of 12) and 5.651 (+0.20 +- 0.24, 6 of 12); crease_square_sigmas 3 at 240x180 5.822; with step_lines too (feet off) 4.301 (-0.32 +- 0.23, 8 of 12) and 5.703 (+0.25 +- 0.27, 4 of 12). Held-out seeds 12-23 (feet off): 346x260 5.551 -> 4.858 mm (-0.69 +- 0.57, 8 of 12; seeds 21 / 22 10.52 / 8.68 -> 4.76 / 5.66), 240x180 240x180 6.445 -> 6.202 (-0.24 +- 0.47, 7 of 12; seed 21 10.15 -> 5.77); over seeds 0-23 346x260 5.088 -> 4.582 mm (-0.51 +- 0.31, 16 of 24 better), 240x180 5.949 -> 5.927 (-0.02 +- 0.26, 13 of 24). At 240x180 every variant raised the ARE (0.063 -> 0.070-0.073 deg): the more exact rims help the finer sensor only. Against the oracle (these top rims on the truth: 3.817 mm at 346x260) the remaining top-rim error is not what limits 240x180."""
+    crease_band_m: float = field(default=0.0, metadata={"min": 0.0, "max": 0.2, "step": 0.001, "unit": "m"})
+    """With crease_refit: a region's points closer than this to the plane of a region it meets at a crease stay out of its crease plane, metres; 0 = 2x plane_distance_m."""
+    crease_square_deg: float = field(default=0.0, metadata={"min": 0.0, "max": 10.0, "step": 0.5, "unit": "deg"})
+    """With crease_refit: a crease plane whose normal is within this angle of the largest region's (the ground, a floor) is made parallel to it, one within it of square to it exactly square, degrees; 0 = free tilt."""
+    crease_square_sigmas: float = field(default=0.0, metadata={"min": 0.0, "max": 10.0, "step": 0.5, "unit": "sigmas"})
+    """With crease_square_deg: a crease plane is squared only if its deviation is also within this many standard errors of its fitted tilt (residual RMS / (sqrt(N) x the points' spread along the tilt)), so a face the scan resolves as tilted keeps its tilt; 0 = no such test."""
+    crease_refit_feet: bool = True
+    """With crease_refit: also the creases with the largest region (the ground, a floor: the feet) are resnapped; False = only the others (top rims, vertical edges)."""
     contour_min_width: float = field(default=1.5, metadata={"min": 0.0, "max": 10.0, "step": 0.1, "unit": "spacings"})
     """Regions narrower than this (std along the minor in-plane axis, median point spacings) give no contour of their own: a strip a point or two wide (a 15 cm step's side on a sparse scan) has an ill-defined tilt, so its outline lies off both of the step's edges, which its neighbours' contours already give; 0 = every region. Measured 0 -> 1.5 (2 s landing, with the step options above): seeds 2 / 3's tilted strip across the pad's side (1.44 spacings wide) gone, pad points misplaced 496 / 300 -> 116 / 92 (seeds 0 / 1 unchanged); bundled landing precision 99.34 -> 99.33 %, bundled indoor unchanged; six indoor re-samples recall -0.05 points."""
     brightness_radius_m: float = field(default=0.0, metadata={"min": 0.0, "max": 0.5, "step": 0.01, "unit": "m"})
@@ -343,12 +355,21 @@ def build_contour_map(
     crease = np.full(cpts.shape[0], -1, np.int32)
     if cfg.snap:
         cen_unit = cen / np.maximum(np.linalg.norm(cen, axis=1, keepdims=True), 1e-12)
+        traced = cpts
         cpts, crease = snap_to_intersections(
             cpts, creg, labels, nb.tree, regions.centroids, regions.normals,
             sc.snap_radius, math.radians(cfg.snap_min_angle_deg), sc.snap_shift,
             reliable=(regions.minor_std >= cfg.snap_min_width * nb.spacing) & (regions.rms <= cfg.plane_distance_m),
             outward=cen_unit, across_tol=cfg.snap_across_cells * cell,
         )
+        if cfg.crease_refit:
+            # The plain fits hold the neighbours' points along the creases: refit them without.
+            pairs = np.unique(np.stack([creg[crease >= 0], crease[crease >= 0]], axis=1), axis=0)
+            band = cfg.crease_band_m if cfg.crease_band_m > 0 else 2.0 * cfg.plane_distance_m
+            cc, cn = refit_crease_planes(pts, labels, pairs, regions.centroids, regions.normals, band,
+                                         square_deg=cfg.crease_square_deg, square_sigmas=cfg.crease_square_sigmas)
+            resnap = crease if cfg.crease_refit_feet else np.where((creg == 0) | (crease == 0), -1, crease)
+            cpts = resnap_creases(traced, cpts, creg, resnap, cc, cn, sc.snap_shift)
         stepped = snap_to_steps(
             cpts, cen_unit, creg, crease < 0, pts, labels, nb.tree, regions.normals,
             radius=2.0 * cell, min_offset=cfg.plane_distance_m, max_offset=sc.adjacent, max_shift=1.5 * cell,
