@@ -7,31 +7,9 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
 import tyro
 
 from evpose.errors import InputError
-
-
-MAX_RASTER_CELLS = 5e7
-"""Most raster cells a chosen ``cell_m`` may lay over the cloud's two largest extents. The field's declared range starts
-at 0 (= automatic), so any tiny cell passed it, and the contour rasters then never finished: on the 30 x 30 m landing
-cloud (17 k points, automatic cell 0.20 m) cell 0.02 m (2.3e6 cells) took 8 s, 0.005 m (3.6e7) 58 s, 0.002 m (2.3e8)
-over 200 s, 0.001 m over 600 s and 1e-9 m forever, none answering SIGTERM (numba loops; session 30,
-/tmp/s30/fuzz30/). A bound on the raster, not on the cell, as the cost is the scene's area over the cell's. The guard
-belongs in evpose.mapping.build (also for an automatic cell on a very dense, very large scan); until then the command
-checks the cell it is given."""
-
-
-def check_raster(points: np.ndarray, cell_m: float, path: Path) -> None:
-    """Refuse a ``cell_m`` that would raster the cloud's extent into more than :data:`MAX_RASTER_CELLS` cells."""
-    if cell_m <= 0 or points.shape[0] == 0:
-        return
-    small, large = np.sort(np.ptp(points, axis=0))[-2:]
-    cells = (small / cell_m + 1.0) * (large / cell_m + 1.0)
-    if cells > MAX_RASTER_CELLS:
-        raise InputError(path, f"cell_m {cell_m!r} m would raster the cloud's {large:.1f} x {small:.1f} m into {cells:.1e} cells (at most"
-                         f" {MAX_RASTER_CELLS:.0e}): give a coarser --cell, or 0 for the automatic one")
 
 
 def main(
@@ -110,7 +88,6 @@ def main(
 
     check_config(cfg)
     raw = load_cloud(cloud)
-    check_raster(raw.points, cfg.cell_m, cloud)
     try:
         cmap = build_contour_map(raw.points, raw.normals, raw.intensity, cfg, progress=not quiet and sys.stderr.isatty())
     except MapBuildError as exc:

@@ -60,6 +60,29 @@ class MapBuildError(InputError):
     """A cloud from which no contour map can be built (empty, NaN, too few points, no contour)."""
 
 
+MAX_RASTER_CELLS = 5e7
+"""Most raster cells the contour cell may lay over the cloud's two largest extents. Below the field's range (0 =
+automatic) any tiny cell passed, and the contour rasters then never finished: on the 30 x 30 m landing cloud (17 k
+points, automatic cell 0.20 m) cell 0.02 m (2.3e6 cells) took 8 s, 0.005 m (3.6e7) 58 s, 0.002 m (2.3e8) over 200 s,
+0.001 m over 600 s and 1e-9 m forever, none answering SIGTERM (numba loops; session 30, /tmp/s30/fuzz30/). A bound
+on the raster, not on the cell, since the cost is the scene's area over the cell's. Not applied to the automatic cell
+(1.5 x the point spacing): over a whole extent it would refuse a few dense scans far apart, whose regions' rasters
+:mod:`evpose.mapping.contours` already bounds one by one; an automatic cell on one very dense, very wide surface is
+still unguarded."""
+
+
+def check_raster(points: np.ndarray, cell_m: float) -> None:
+    """Refuse a given contour cell (``cell_m`` > 0) that would raster the cloud's extent into more than
+    :data:`MAX_RASTER_CELLS` cells."""
+    if cell_m <= 0 or points.shape[0] == 0:
+        return
+    small, large = np.sort(np.ptp(points, axis=0))[-2:]
+    cells = (small / cell_m + 1.0) * (large / cell_m + 1.0)
+    if cells > MAX_RASTER_CELLS:
+        raise MapBuildError(None, f"cell_m {cell_m!r} m would raster the cloud's {large:.1f} x {small:.1f} m into {cells:.1e} cells"
+                            f" (at most {MAX_RASTER_CELLS:.0e}): give a coarser --cell, or 0 for the automatic one")
+
+
 @dataclass(frozen=True)
 class MapBuildConfig:
     """Parameters of contour-map construction. Lengths in metres, angles in degrees."""
@@ -252,6 +275,7 @@ def build_contour_map(
             bar.set_description(f"build-map: {name}")
             bar.update(1)
 
+    check_raster(pts, cfg.cell_m)  # before any work: a given cell is known now
     pts, inten, nrm_in = voxel_downsample(pts, cfg.voxel_m, inten, nrm_in)
     if pts.shape[0] < max(cfg.k_neighbours, 10):
         raise MapBuildError(None, f"only {pts.shape[0]} points; at least {max(cfg.k_neighbours, 10)} are needed")

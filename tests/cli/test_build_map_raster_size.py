@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from evpose.cli.build_map import MAX_RASTER_CELLS, check_raster
+from evpose.mapping.build import MAX_RASTER_CELLS, MapBuildConfig, MapBuildError, build_contour_map, check_raster
 from evpose.cli.main import run
 
 
@@ -37,9 +37,17 @@ def test_a_cell_too_fine_for_the_cloud_is_one_line_and_writes_nothing(tmp_path, 
 
 def test_the_bound_is_on_the_raster_not_the_cell():
     pts = np.array([[0.0, 0.0, 0.0], [30.0, 30.0, 1.0]])
-    check_raster(pts, 0.0, "c.ply")  # automatic
-    check_raster(pts, 0.005, "c.ply")  # 3.6e7 cells: 58 s on the landing cloud, allowed
-    with pytest.raises(Exception, match="into 2.3e\\+08 cells"):
-        check_raster(pts, 0.002, "c.ply")
-    check_raster(pts / 10, 0.0005, "c.ply")  # a 3 m scene takes a 10x finer cell
+    check_raster(pts, 0.0)  # automatic: checked once the spacing is known
+    check_raster(pts, 0.005)  # 3.6e7 cells: 58 s on the landing cloud, allowed
+    with pytest.raises(MapBuildError, match="into 2.3e\\+08 cells"):
+        check_raster(pts, 0.002)
+    check_raster(pts / 10, 0.0005)  # a 3 m scene takes a 10x finer cell
     assert MAX_RASTER_CELLS == 5e7
+
+
+
+def test_the_library_refuses_a_given_cell_too_fine_before_any_work():
+    # The guard sits in build_contour_map, so callers other than the command get it too (a 1e-9 m cell never finished).
+    pts = np.random.default_rng(0).uniform(0, 30.0, size=(200, 3)) * [1, 1, 0.01]
+    with pytest.raises(MapBuildError, match="cell_m 1e-09 m would raster the cloud's"):
+        build_contour_map(pts, config=MapBuildConfig(cell_m=1e-9))
