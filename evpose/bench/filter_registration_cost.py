@@ -55,10 +55,16 @@ already leaves out the texture's events off the map's edges; the filter's polari
 associated events (the noise filters' ``events_kept`` is the same in both states; the ego-motion filter, off by
 default, would take 2 / 9 % of them for 0.72 / 1.34 ms). Against the old reading (``stpe+filter`` against ``stpe``,
 ``ablation``: +83-91 % in session 30, its field and registration alone 1.07-1.09x ``stpe``'s whole front end) this
-one is less far off, and the filter pays for itself in accuracy where the map explains few events (textured: ATE
-5.18 against 6.72 mm); on the plain landing, seeds 0-11 (``/tmp/s31/lat31/run.py``), 4.625 mm with the filter against
-4.730 without (paired -0.11 +- 0.13 mm, 8 of 12 better). Per-point polarity fields instead of ``T_align``
+one is less far off, and the filter pays for itself in accuracy where the map explains few events (textured seeds
+0-2, ``/tmp/s31/lat31/texacc.py``: 5.18 / 7.19 / 6.28 mm with the filter against 6.72 / 9.56 / 7.63 without, mean 6.21
+against 7.97); on the plain landing, seeds 0-11 (``/tmp/s31/lat31/run.py``), 4.625 mm with the filter against 4.730
+without (paired -0.11 +- 0.13 mm, 8 of 12 better). Per-point polarity fields instead of ``T_align``
 (``polarity.event_filter`` off) cost more still (2.469 / 2.043 ms, their field 0.98 / 0.70 ms, ATE 7.49 / 8.09 mm).
+Inside the registration block the filter's polarities also cost the grazing OFF trails, 0.056 ms per update (their
+kernel 0.025-0.028 ms, the rest numpy and Python; prefetching the map's normals 8 points ahead took the kernel to
+0.025 ms, not kept: ``/tmp/s31/lat31/grazpf.py``). Nothing the filter removes is processed before being dropped
+except by the association's cheap test (see :mod:`evpose.tracker.event_registration`, session 31, for a gate tried
+before it).
 """
 
 from __future__ import annotations

@@ -18,8 +18,8 @@ class PolarityFilterConfig:
     Off in ``full``: no prediction and no ``T_align``, registration reads the combined field over the box, and the
     events' registration associates events of either polarity (the ego-motion filter is its own switch,
     ``ego_motion.enabled``). Session 31 (``full``, 2 s landing from ground truth, built map, 346x260): plain landing seeds
-    0-11 4.625 mm on against 4.730 off (paired -0.11 +- 0.13 mm, 8 of 12 better on), textured landing seed 0 5.18
-    against 6.72 mm; its registration latency in ``full`` under ``event_filter``."""
+    0-11 4.625 mm on against 4.730 off (paired -0.11 +- 0.13 mm, 8 of 12 better on), textured landing seeds 0-2 5.18 /
+    7.19 / 6.28 against 6.72 / 9.56 / 7.63 mm; its registration latency in ``full`` under ``event_filter``."""
     buffer_deg: float = field(default=20.0, metadata={"min": 0.0, "max": 89.0, "step": 0.5, "unit": "deg"})
     """Base half-width of the buffer zone around 90 deg, degrees.
 
