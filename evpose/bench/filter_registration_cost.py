@@ -18,9 +18,9 @@ swapped for ``time.thread_time`` during the runs) it reports:
 * the events the noise filters kept (``events_kept``, what enters the events' association) and those associated
   (``events_registered``) per update, and each state's ATE / ARE (the comparison is honest only beside them).
 
-``full_filter_registration_latency_change_pct`` = 100 x (median ``registration_to_pose`` with the filter / without
-- 1): the target asks for <= -40. ``full_filter_registrations_change_pct`` and
-``full_filter_event_registration_change_pct`` the same of ``registrations`` and ``event_registration``.
+``full_filter_registration_latency_change_pct`` is 100 x (the median ``registration_to_pose`` with the filter over
+the one without, minus 1): the target asks for <= -40. ``full_filter_registrations_change_pct`` and
+``full_filter_event_registration_change_pct`` are the same of ``registrations`` and ``event_registration``.
 
 Measured (session 31, ``/tmp/s31/lat31/flat.py`` with the same stages; 346x260 2 s landing from ground truth, built
 map, CPU per update, medians / p95 over 4 alternated rounds at load 4.4-5.8 (seed 1: 6-8)):
@@ -58,7 +58,7 @@ default, would take 2 / 9 % of them for 0.72 / 1.34 ms). Against the old reading
 one is less far off, and the filter pays for itself in accuracy where the map explains few events (textured seeds
 0-2, ``/tmp/s31/lat31/texacc.py``: 5.18 / 7.19 / 6.28 mm with the filter against 6.72 / 9.56 / 7.63 without, mean 6.21
 against 7.97); on the plain landing, seeds 0-11 (``/tmp/s31/lat31/run.py``), 4.625 mm with the filter against 4.730
-without (paired -0.11 +- 0.13 mm, 8 of 12 better). Per-point polarity fields instead of ``T_align``
+without (paired -0.11 +- 0.13 mm, 8 of 12 better with it). The quick suite (240x180 1 s, one round): +58.4 %. Per-point polarity fields instead of ``T_align``
 (``polarity.event_filter`` off) cost more still (2.469 / 2.043 ms, their field 0.98 / 0.70 ms, ATE 7.49 / 8.09 mm).
 Inside the registration block the filter's polarities also cost the grazing OFF trails, 0.056 ms per update (their
 kernel 0.025-0.028 ms, the rest numpy and Python; prefetching the map's normals 8 points ahead took the kernel to
