@@ -10,6 +10,8 @@
   ATE/ARE (RMSE) of raw registrations, factor graph, EKF and IMU-only.
 * ``ablation``, ``ablation_texture``, ``ablation_seeds``, ``ablation_long``, ``realtime_300hz``, ``registration_wander``, ``aligned_field``, ``refinement_cost``, ``crowding_cost``: whole tracking runs on
   the simulated landing, in :mod:`evpose.bench.fusion_tracking`.
+* ``full_filter_cost`` (:mod:`evpose.bench.filter_registration_cost`): ``full`` with and without the polarity filter,
+  alternated: the registration stages' CPU per update, the events they take, ATE (issue 7's -40 % read in ``full``).
 * ``regimes`` (:mod:`evpose.bench.fusion_regimes`): the factor graph against the EKF, paired per seed, in a cold
   start (no initial velocity, the pose off) and across registration outages of 0.1-0.5 s.
 * ``polarity_ceiling`` (:mod:`evpose.bench.polarity_ceiling`): the filter's wrong predictions on the
@@ -31,6 +33,7 @@ from scipy.spatial.transform import Rotation
 from evpose.bench.fusion_tracking import (ABLATION, ablation_run, bench_ablation, bench_ablation_long, bench_ablation_seeds, bench_ablation_texture,  # noqa: F401
                                           bench_aligned_field, bench_crowding_cost, bench_realtime_300hz, bench_refinement_cost,
                                           bench_registration_wander)
+from evpose.bench.filter_registration_cost import bench_full_filter_cost
 from evpose.bench.fusion_regimes import bench_fusion_regimes
 from evpose.bench.polarity_ceiling import bench_polarity_ceiling
 from evpose.bench.stats import latency_summary, peak_rss_mb
@@ -396,4 +399,4 @@ BENCHMARKS = {"backends": bench_backends, "polarity_sim": bench_polarity_sim, "e
               "ablation": bench_ablation, "ablation_texture": bench_ablation_texture, "ablation_seeds": bench_ablation_seeds, "ablation_long": bench_ablation_long, "realtime_300hz": bench_realtime_300hz, "snapshot_restore": bench_snapshot_restore, "imu_buffer": bench_imu_buffer,
               "registration_wander": bench_registration_wander, "aligned_field": bench_aligned_field,
               "polarity_ceiling": bench_polarity_ceiling, "refinement_cost": bench_refinement_cost,
-              "crowding_cost": bench_crowding_cost, "regimes": bench_fusion_regimes}
+              "crowding_cost": bench_crowding_cost, "regimes": bench_fusion_regimes, "full_filter_cost": bench_full_filter_cost}

@@ -13,7 +13,13 @@ class PolarityFilterConfig:
     """Parameters of the polarity prediction and its buffer zone."""
 
     enabled: bool = True
-    """Predict polarities (False: every point uses both, i.e. plain STPE)."""
+    """Predict polarities (False: every point uses both, i.e. plain STPE).
+
+    Off in ``full``: no prediction and no ``T_align``, registration reads the combined field over the box, and the
+    events' registration associates events of either polarity (the ego-motion filter is its own switch,
+    ``ego_motion.enabled``). Session 31 (``full``, 2 s landing from ground truth, built map, 346x260): plain landing seeds
+    0-11 4.625 mm on against 4.730 off (paired -0.11 +- 0.13 mm, 8 of 12 better on), textured landing seeds 0-2 5.18 /
+    7.19 / 6.28 against 6.72 / 9.56 / 7.63 mm; its registration latency in ``full`` under ``event_filter``."""
     buffer_deg: float = field(default=20.0, metadata={"min": 0.0, "max": 89.0, "step": 0.5, "unit": "deg"})
     """Base half-width of the buffer zone around 90 deg, degrees.
 
@@ -117,7 +123,17 @@ class PolarityFilterConfig:
     (778 points) none, and both cost accuracy (below). So the -40 % stays out of reach; what session 30 cut:
     the prediction's IMU propagation before the pose (``unfused_latest_motion``, -0.10 ms, same ATE). The bench's
     ``ablation`` now reports the floor (``filter_free_floor_change_pct``) and the change to the pose
-    (``filter_stpe_latency_to_pose_change_pct``)."""
+    (``filter_stpe_latency_to_pose_change_pct``).
+
+    Session 31, the claim read in ``full``, the filter on against ``enabled`` off (where the events registered at their
+    own timestamps, whose cost follows the events, give the pose too; bench ``fusion.full_filter_cost``,
+    :mod:`evpose.bench.filter_registration_cost`, which has the table; 346x260 seed 0, CPU per update, medians of 4
+    alternated rounds): every stage up to the pose (prediction, ``T_align``, field, field registration, events'
+    registration) 2.048 against 1.516 ms on the textured landing (+35 %, ``full_filter_registration_latency_change_pct``),
+    1.850 against 1.204 on the plain one (+54 %; seed 1 +46 %). The field gets 29-48 % cheaper, the two registrations
+    stay level (+2 / +10 %; the events' alone -1 / +2 %): the events ``T_align`` removes are off the map's edges, where
+    the events' association (2 px) takes none either, so the filter changes the events that stage registers by 1-3 %.
+    Not met in this reading either; the filter's own prediction and ``T_align`` (0.59-0.65 ms) exceed the whole field."""
     drop_empty_points: bool = False
     """Registration skips map points whose ``T_align`` patch shows no accepted event younger than
     ``empty_after_eta`` (50-60 % of the used points on the simulated landing); points whose patch shows only the

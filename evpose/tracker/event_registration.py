@@ -196,6 +196,22 @@ without the strip along each crease, trimmed, and squared to the ground within 3
 (bias 0.00, 2.8 % > 2 mm) but ``full`` (seeds 0-11, this checkout's plain builder 4.625 / 5.453 mm: main's crowding fix
 moved seed 0 by 0.05 mm) only to 4.434 / 5.784 mm (4.306 / 5.651 with the feet left as built): better at 346x260, worse
 at 240x180 (ARE 0.063 -> 0.070), all within +-1.5 paired standard errors; held-out seeds 12-23 (feet as built) 346x260 5.551 -> 4.858 mm (seeds 21 / 22 10.5 / 8.7 -> 4.8 / 5.7), 240x180 240x180 6.445 -> 6.202 (0-23: 346x260 5.088 -> 4.582 mm, -0.51 +- 0.31, 16 of 24 seeds better; 240x180 5.949 -> 5.927, 13 of 24). So :attr:`evpose.mapping.build.MapBuildConfig.crease_refit` is off (it does not help both resolutions).
+
+Session 31, what the polarity filter does to this stage (issue 7's "the filter cuts registration latency by >= 40 %"
+read in ``full``, :mod:`evpose.bench.filter_registration_cost`, figures there): with the filter off
+(``polarity.enabled``) the same events enter the association (the noise filters' ``keep``: 3402 per update on the
+textured landing, 1293 on the plain one) and 878 / 861 against 902 / 878 are associated (the point's predicted polarity
+drops 1.2-2.6 %); this stage's CPU is the same within +-2 % (textured 0.511 against 0.516 ms). The ~65 % of the
+textured landing's events ``T_align`` removes are the texture's, off the map's edges, which the association's 2 px
+radius leaves out too, at ~20-40 ns an event (association 0.136 ms for 3400 events, 0.09 ms for 1300). Tried, the same
+outputs bit for bit, not kept (``/tmp/s31/lat31/gate.py``, ``gate_prototype.diff``; textured seed 0, two alternated
+rounds): the kept events gated by ``T_align``'s patches before the association (an event left out when its pixel lies
+in the field's box in no patch, valid because a point that moved less than the patch radius minus the association
+radius between the prediction and the field registration (with its learned offset) has its association disk inside
+its patch; the points that moved more, up to 3 px in a third of the updates through the offsets, got their own disks):
+3411 -> 1278 events into the association, which fell 0.138 -> 0.095 ms, but the per-event grid tests took
+``_kept_events`` 0.023 -> 0.077 ms and the moved points' test 0.032 ms (the used points read from the whole map):
+this stage 0.529 -> 0.587 ms.
 """
 
 from __future__ import annotations
