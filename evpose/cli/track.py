@@ -57,9 +57,10 @@ def timings_document(results, config) -> dict:
     }
 
 
-def smoothed_over_restarts(cfg, recording, inputs, restarts):
+def smoothed_over_restarts(cfg, recording, inputs, restarts, lag_states: int = 400):
     """The smoothed trajectory of each stretch the fusion ran without a restart (``session.restarts``: after an event
-    gap the backend starts again, and a replay across the gap would integrate the missing IMU), joined."""
+    gap the backend starts again, and a replay across the gap would integrate the missing IMU), joined; each state
+    re-estimated with the registrations of the next ``lag_states - 1`` updates."""
     from evpose.core.trajectory import Trajectory
     from evpose.fusion.replay import FusionInputs, smoothed_trajectory
 
@@ -69,7 +70,8 @@ def smoothed_over_restarts(cfg, recording, inputs, restarts):
         t1 = starts[k + 1][0] if k + 1 < len(starts) else None
         reports = [r for r in inputs.reports if r[0] > t0 and (t1 is None or r[0] < t1)]
         if reports:
-            parts.append(smoothed_trajectory(cfg.fusion, recording.calibration, recording.imu, FusionInputs(t0, T0, v0, reports)))
+            parts.append(smoothed_trajectory(cfg.fusion, recording.calibration, recording.imu, FusionInputs(t0, T0, v0, reports),
+                                             lag_states))
     if len(parts) == 1:
         return parts[0]
     if not parts:
@@ -103,6 +105,7 @@ def main(
     config: Path | None = None,
     timings: Path | None = None,
     smoothed: Path | None = None,
+    smoothed_lag: int = 400,
     width: int | None = None,
     height: int | None = None,
     progress: bool = True,
@@ -128,6 +131,9 @@ def main(
         smoothed: Also write the factor graph's smoothed trajectory here (``full`` mode, factor_graph backend only):
             each state re-estimated with the registrations of the next 2 s. An offline product, more accurate than
             OUT (which holds the estimates as they were available in real time).
+        smoothed_lag: States (updates) each smoothed pose waits for: 400 (2 s at 200 Hz) for the most accurate
+            offline trajectory; the fusion's own window (``fusion.window_states``, 8: 35 ms) gives the trajectory its
+            sliding-window joint optimisation corrects, which a live system has that much later.
         width: Sensor width, for formats that do not state it.
         height: Sensor height, for formats that do not state it.
         progress: Show a progress bar on the terminal.
@@ -151,6 +157,8 @@ def main(
     from evpose.tracker.step_result import TrackStatus
 
     check_outputs((out, timings, smoothed), inputs=(recording, map, config))
+    if smoothed_lag < 2:
+        raise InputError(None, f"--smoothed-lag must be at least 2 states, got {smoothed_lag}")
     cfg = load_config(config) if config is not None else TrackerConfig()
     if mode is not None:
         try:
@@ -209,7 +217,7 @@ def main(
         if len(traj):
             write_tum(out, traj, inputs=(recording, map))
         if inputs is not None:
-            smooth = smoothed_over_restarts(cfg, rec, inputs, session.restarts)
+            smooth = smoothed_over_restarts(cfg, rec, inputs, session.restarts, smoothed_lag)
             # Not the updates reported lost either (those after a restart that ``restart_gate`` withheld: cut 0.2 s
             # splice of event_gaps, 353 smoothed poses metres off after the gap otherwise).
             smooth = smooth[~np.isin(smooth.t, np.array([r.t_us for r in lost], dtype=np.int64))] if lost and len(smooth) else smooth

@@ -166,6 +166,24 @@ def test_smoothed_trajectory_is_written_beside_the_real_time_one(landing_files, 
     assert np.max(np.linalg.norm(smooth.position - gt.position, axis=1)) < 0.05
 
 
+def test_smoothed_lag_sets_how_many_later_registrations_each_pose_waits_for(landing_files, tmp_path, capsys):
+    d, rec = landing_files
+    base = ["track", str(d / "rec.h5"), "--map", str(d / "map.ply"), "--mode", "full", "--no-progress"]
+    assert run(base + ["--out", str(tmp_path / "e.txt"), "--smoothed", str(tmp_path / "s8.txt"), "--smoothed-lag", "8"]) == 0
+    assert run(base + ["--out", str(tmp_path / "e2.txt"), "--smoothed", str(tmp_path / "s400.txt")]) == 0
+    online, s8, s400 = read_tum(tmp_path / "e.txt"), read_tum(tmp_path / "s8.txt"), read_tum(tmp_path / "s400.txt")
+    assert np.array_equal(online.t, s8.t) and np.array_equal(online.t, s400.t)
+    # The window's corrections reach each pose, but only those of the next 7 registrations, not the whole run's.
+    assert not np.array_equal(s8.position, online.position) and not np.array_equal(s8.position, s400.position)
+    gt = rec.ground_truth.interpolate(s8.t)
+    assert np.max(np.linalg.norm(s8.position - gt.position, axis=1)) < 0.05
+    capsys.readouterr()
+    code = run(base + ["--out", str(tmp_path / "e3.txt"), "--smoothed", str(tmp_path / "s1.txt"), "--smoothed-lag", "1"])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and "--smoothed-lag must be at least 2" in err and len(err.splitlines()) == 1
+    assert not (tmp_path / "e3.txt").exists()
+
+
 def test_smoothed_needs_the_factor_graph(landing_files, tmp_path, capsys):
     d, _ = landing_files
     code = run(["track", str(d / "rec.h5"), "--map", str(d / "map.ply"), "--out", str(tmp_path / "e.txt"), "--mode", "stpe",
