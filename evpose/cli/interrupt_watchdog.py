@@ -67,9 +67,22 @@ def start(name: str, grace_s: float = 1.0) -> bool:
             return False
         _thread_started = True
         start.write_fd = w
+        # A child forked without exec (os.fork, multiprocessing's "fork"; evpose's own pools spawn) keeps the wakeup
+        # fd: a SIGTERM sent to the child alone would reach this pipe and end the parent. It has no watchdog thread.
+        os.register_at_fork(after_in_child=_forget_in_child)
     _previous_fd = signal.set_wakeup_fd(start.write_fd, warn_on_full_buffer=False)
     st[2] = 0
     return True
+
+
+def _forget_in_child() -> None:
+    global _previous_fd
+    if _previous_fd is not None:
+        try:
+            signal.set_wakeup_fd(-1)
+        except ValueError:  # not the main thread of the child
+            pass
+        _previous_fd = None
 
 
 def stop() -> None:

@@ -14,7 +14,7 @@ import signal
 import sys
 import threading
 
-from evpose.errors import EvposeError, one_line, printable
+from evpose.errors import RAISED_INTERRUPTS, EvposeError, interrupt_cause, one_line, printable
 from evpose.io import atomic
 
 # name -> (module, one-line description). Order is the order of ``evpose --help``.
@@ -51,8 +51,7 @@ class _Terminated(KeyboardInterrupt):
     once, leaving the hidden temporary file of an output being written (``.OUT.XXXX.tmp``) behind."""
 
 
-_raised: list[KeyboardInterrupt] = []
-"""The interrupts the signal handlers raised in the current :func:`run`: C code may swallow one and fail otherwise."""
+_raised = RAISED_INTERRUPTS  # the interrupts the signal handlers raised in the current run (evpose.errors)
 
 
 def _terminate(signum, frame) -> None:
@@ -88,17 +87,6 @@ def _interrupted(name: str, exc: KeyboardInterrupt) -> int:
         return 128 + signal.SIGTERM
     print(f"evpose {name}: interrupted", file=sys.stderr)
     return 130
-
-
-def _interrupt_cause(exc: BaseException) -> KeyboardInterrupt | None:
-    """The KeyboardInterrupt (Ctrl+C, or SIGTERM as :class:`_Terminated`) that ``exc`` was raised from, if any."""
-    seen: set[int] = set()
-    while exc is not None and id(exc) not in seen:
-        seen.add(id(exc))
-        if isinstance(exc, KeyboardInterrupt):
-            return exc
-        exc = exc.__cause__ or exc.__context__
-    return None
 
 
 def _tell_watchdog(paths, held) -> None:
@@ -188,7 +176,7 @@ def run(argv: list[str], watchdog: bool = False) -> int:
         # open3d imports (`simulate` 1 s in, 2 of 7 tries); or after it, when the C code swallowed it: numba's
         # "RuntimeError: no compiled object yet" when it lands in a compilation (`build-map` 6 s in, a first run).
         # A traceback and exit 1 each.
-        cause = _interrupt_cause(exc) or (_raised[-1] if _raised else None)
+        cause = interrupt_cause(exc, swallowed=True)
         if cause is not None:
             global _exit_now
             _exit_now = True  # the C code may be left half-initialised: see main()
@@ -208,6 +196,7 @@ def run(argv: list[str], watchdog: bool = False) -> int:
         for sig, handler in previous.items():
             signal.signal(sig, handler)
         sys.unraisablehook = previous_hook
+        _raised.clear()  # acted on: code run after this command (a test's next one) must not see them
     return int(result) if isinstance(result, int) else 0
 
 

@@ -135,7 +135,9 @@ files it removes under "remove" (None when none is open)."""
 
 
 def _discard(tmp: Path, holder: Path | None) -> None:
-    _live(holder if holder is not None else tmp, False)
+    _live(tmp, False)
+    if holder is not None:
+        _live(holder, False)
     if tmp.is_dir():
         shutil.rmtree(tmp, ignore_errors=True)
     else:
@@ -240,7 +242,9 @@ def atomic_path(dst: str | Path, inputs: tuple[str | Path, ...] = (), is_dir: bo
     except OSError as exc:
         # A folder that says it is writable but takes no new file: /proc, a full inode table, a read-only remount.
         raise OutputError(dst, f"cannot create the output ({exc.strerror or exc})") from None
-    _live(holder if holder is not None else tmp, True)
+    _live(tmp, True)  # a file written inside a holder first: the watchdog can remove the holder only once empty
+    if holder is not None:
+        _live(holder, True)
     pending = _PENDING.get()
     try:
         yield tmp
