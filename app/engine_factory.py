@@ -9,7 +9,7 @@ from app.engine import EventsOnlyEngine
 from app.frame_cache import FrameCacheConfig
 from app.slam_engine import slam_engine_factory
 from app.tracker_engine import TrackerEngine
-from evpose.errors import EvposeError
+from evpose.errors import EvposeError, interrupt_cause
 
 NO_MAP_NOTE = "No contour map selected: showing events and time surfaces only. Tracking needs a map of the scene."
 
@@ -55,6 +55,12 @@ def engine_factory(recording, contour_map, mode: str = "tracking", cache: FrameC
     try:
         import evpose.tracker.session  # noqa: F401
     except ImportError as exc:
+        # A Ctrl+C or SIGTERM landing while gtsam/open3d import fails the import ("initialization failed"): `evpose
+        # app --prepare` then said "the tracker is not available in this build" and exited 2 (session 31, 1 of 3
+        # SIGTERMs 3 s in). The user asked to stop.
+        interrupt = interrupt_cause(exc, swallowed=True)
+        if interrupt is not None:
+            raise interrupt from None
         note = f"The tracker is not available in this build ({exc}); showing events only."
         return lambda cfg: EventsOnlyEngine(recording, cfg, explanation=note)
 

@@ -26,6 +26,14 @@ tooltip wraps around the input) a ``mouseenter`` (floating-ui's hover hook liste
 the label as over the input; controls without a hint get nothing (their box has no listener).
 ``tests/app/test_server_browser.py`` hovers a label in Chromium and finds the hint (it would catch a viser client
 that changes this structure).
+
+**Number boxes keep showing their value** (session 31, /tmp/s31/fuzz31/gui/fuzz.py). viser's number boxes (a
+slider's companion box, a plain number input) ignore text that is no finite number ("", "abc", "nan", "inf", " ") and
+send nothing, rightly, but Mantine's box went on showing that text after the focus left it: the speed box read empty
+while the player ran at 1.0x, a parameter's box empty while the tracker used 200 Hz, until the value next changed.
+A third hidden image installs capture-phase ``focusin`` / ``input`` / ``focusout`` listeners that remember a box's last
+finite text and put it back when the focus leaves the box holding something else (display only: no event is sent, so
+the server sees nothing, as before). ``tests/app/test_server_browser_params.py`` types such text in Chromium.
 """
 
 from __future__ import annotations
@@ -60,7 +68,25 @@ LABEL_HINTS_HTML = f'<img alt="" src="{_GIF_1PX}" style="display:none" onload="{
 """The HTML element that installs the label hover (added once to the main panel)."""
 
 
+BOX_RESTORE_JS = (
+    "if (!window.__evposeBoxRestore) { window.__evposeBoxRestore = true; const last = new WeakMap();"
+    " const isBox = (t) => t instanceof HTMLInputElement && t.classList.contains('mantine-NumberInput-input');"
+    " const finite = (s) => s.trim() !== '' && Number.isFinite(Number(s.trim()));"
+    " const keep = (e) => { if (isBox(e.target) && finite(e.target.value)) last.set(e.target, e.target.value); };"
+    " document.addEventListener('focusin', keep, true); document.addEventListener('input', keep, true);"
+    " document.addEventListener('focusout', (e) => { const t = e.target;"
+    " if (!isBox(t) || finite(t.value) || !last.has(t)) return;"
+    " setTimeout(() => { if (document.activeElement !== t && !finite(t.value)) t.value = last.get(t); }, 0); }, true); }"
+)
+"""Installs the number boxes' restore (see the module docstring); single quotes only. The restore waits for the
+box's own blur handling (a timeout of 0), which would otherwise render the typed text again over it."""
+
+BOX_RESTORE_HTML = f'<img alt="" src="{_GIF_1PX}" style="display:none" onload="{BOX_RESTORE_JS}">'
+"""The HTML element that installs the number boxes' restore (added once to the main panel)."""
+
+
 def add_page_patch(gui):
     """Add the patches to the GUI (every tab that connects runs them once)."""
     gui.add_html(LABEL_HINTS_HTML)
+    gui.add_html(BOX_RESTORE_HTML)
     return gui.add_html(PAGE_PATCH_HTML)

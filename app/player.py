@@ -79,6 +79,8 @@ class Player(Seeking):
         self._play_stats = [0.0, 0]
         """Wall seconds and media microseconds of the current (or last) play, since play was pressed."""
         self._last_advance_wall: float | None = None
+        self._ended_at: float | None = None
+        """When playback last stopped by itself at the end (monotonic seconds; None after any other command)."""
         self.quiet = QuietStretches()
         """Stretches without events playback goes over at once (app/quiet_stretches.py)."""
         self._prefetching = self.pc.prefetch
@@ -241,6 +243,12 @@ class Player(Seeking):
                 self._progress()
             if kind == "cancel":
                 self._publish(self.last_frame)  # every tab's time slider back to the step shown
+        ended_at = self._ended_at
+        if kind not in ("speed", "loop", "call"):
+            self._ended_at = None
+        if kind == "toggle" and self.state == PlayState.PAUSED and ended_at is not None and (
+                time.monotonic() - ended_at < self.pc.late_pause_s):
+            return  # the pause pressed while the page still showed playback, arriving after the end (PlayerConfig.late_pause_s)
         if kind == "play" or (kind == "toggle" and self.state == PlayState.PAUSED):
             # At the last step (by count: it lies before the last event), play starts again instead of doing nothing.
             if self.last_frame is None or self.engine.current_t_us >= self.engine.t_end_us or self.engine.is_last(self.last_frame):
@@ -422,6 +430,7 @@ class Player(Seeking):
                 else:
                     # The end: drawn once more, paused, or every tab's status line would still say "playing".
                     self.state = PlayState.PAUSED
+                    self._ended_at = time.monotonic()
                     self._publish(self._unpublished if self._unpublished is not None else self.last_frame)
                 return
         now = time.monotonic()

@@ -52,6 +52,13 @@ class PlayerConfig:
     (``Engine.preview``)."""
     progress_every_s: float = field(default=0.5, metadata={"min": 0.1, "max": 5.0, "step": 0.1, "unit": "s"})
     """Time between two status-line updates while the engine works with nothing new shown, seconds."""
+    late_pause_s: float = field(default=2.0, metadata={"min": 0.0, "max": 10.0, "step": 0.1, "unit": "s"})
+    """A play / pause press (the button, Space) that arrives this soon after playback stopped by itself at the end is
+    taken as the pause it was, pressed while the page still showed it playing, seconds; 0 = off. On a busy page
+    (software WebGL drawing every frame, 2 shared cores) a click reached the server 1.9 s and 4.7 s after it was made
+    (session 31, /tmp/s31/fuzz31/gui/fuzz.py phase ``trace``): a pause pressed 1.3 s before the end of the 4 s demo
+    arrived after it and, as a press at the last step does, played the whole recording again from the start. A play
+    wanted at the end within this time takes a second press."""
     skip_gaps_s: float = field(default=0.5, metadata={"min": 0.05, "max": 60.0, "step": 0.05, "unit": "s"})
     """While playing, a stretch of the recording without events longer than this is gone over at once instead of in
     real time, seconds (the status line says so). A 60 s gap held the display still for a minute at "playing at

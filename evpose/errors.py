@@ -24,6 +24,24 @@ def one_line(text: str) -> str:
     return printable(" ".join(text.splitlines()))
 
 
+RAISED_INTERRUPTS: list[KeyboardInterrupt] = []
+"""The interrupts (Ctrl+C, SIGTERM) the CLI's signal handlers raised in the current command (``evpose.cli.main``): C
+code may swallow one and fail otherwise (pybind11's "ImportError: initialization failed")."""
+
+
+def interrupt_cause(exc: BaseException | None, swallowed: bool = False) -> KeyboardInterrupt | None:
+    """The KeyboardInterrupt (Ctrl+C, or SIGTERM raised as one) that ``exc`` was raised from, if any; ``swallowed``:
+    else the last one raised in this command at all (C code that swallowed it then failed). Code that turns a failure
+    into a message (a missing optional library, a fallback) re-raises this instead: the user asked to stop."""
+    seen: set[int] = set()
+    while exc is not None and id(exc) not in seen:
+        seen.add(id(exc))
+        if isinstance(exc, KeyboardInterrupt):
+            return exc
+        exc = exc.__cause__ or exc.__context__
+    return RAISED_INTERRUPTS[-1] if swallowed and RAISED_INTERRUPTS else None
+
+
 class EvposeError(Exception):
     """Base class of errors caused by input or configuration, reported without traceback."""
 

@@ -14,7 +14,8 @@ import signal
 import sys
 import threading
 
-from evpose.errors import EvposeError, one_line, printable
+from evpose.errors import RAISED_INTERRUPTS, EvposeError, interrupt_cause, one_line, printable
+from evpose.io import atomic
 
 # name -> (module, one-line description). Order is the order of ``evpose --help``.
 COMMANDS: dict[str, tuple[str, str]] = {
@@ -32,6 +33,11 @@ COMMANDS: dict[str, tuple[str, str]] = {
 }
 
 
+WATCHED_COMMANDS = frozenset({"convert", "simulate", "build-map", "refine-map", "track", "bench", "sweep", "slam", "app"})
+"""Commands whose interrupts :mod:`evpose.cli.interrupt_watchdog` enforces: those that run numba kernels (which hold
+the main thread for up to a minute, ignoring Ctrl+C) and so pay nothing extra to load its own."""
+
+
 def _usage() -> str:
     width = max(len(n) for n in COMMANDS)
     lines = ["usage: evpose COMMAND [ARGS...]", "", "commands:"]
@@ -45,8 +51,7 @@ class _Terminated(KeyboardInterrupt):
     once, leaving the hidden temporary file of an output being written (``.OUT.XXXX.tmp``) behind."""
 
 
-_raised: list[KeyboardInterrupt] = []
-"""The interrupts the signal handlers raised in the current :func:`run`: C code may swallow one and fail otherwise."""
+_raised = RAISED_INTERRUPTS  # the interrupts the signal handlers raised in the current run (evpose.errors)
 
 
 def _terminate(signum, frame) -> None:
@@ -75,6 +80,8 @@ def _quiet_unraisable(previous):
 
 def _interrupted(name: str, exc: KeyboardInterrupt) -> int:
     """One line and the shell's exit code for a Ctrl+C (130) or a SIGTERM (143)."""
+    if "evpose.cli.interrupt_watchdog" in sys.modules:
+        sys.modules["evpose.cli.interrupt_watchdog"].stop()  # unwound in time: the watchdog must not say it too
     if isinstance(exc, _Terminated):
         print(f"evpose {name}: terminated", file=sys.stderr)
         return 128 + signal.SIGTERM
@@ -82,19 +89,40 @@ def _interrupted(name: str, exc: KeyboardInterrupt) -> int:
     return 130
 
 
-def _interrupt_cause(exc: BaseException) -> KeyboardInterrupt | None:
-    """The KeyboardInterrupt (Ctrl+C, or SIGTERM as :class:`_Terminated`) that ``exc`` was raised from, if any."""
-    seen: set[int] = set()
-    while exc is not None and id(exc) not in seen:
-        seen.add(id(exc))
-        if isinstance(exc, KeyboardInterrupt):
-            return exc
-        exc = exc.__cause__ or exc.__context__
-    return None
+def _tell_watchdog(paths, held) -> None:
+    from evpose.cli import interrupt_watchdog
+
+    interrupt_watchdog.set_paths(paths)
+    interrupt_watchdog.set_held(held)
 
 
-def run(argv: list[str]) -> int:
-    """Run one subcommand; returns the process exit code."""
+def _watch(name: str) -> bool:
+    """Arm the watchdog that ends the process if an interrupt is not acted on within a second (a numba kernel)."""
+    try:
+        from evpose.cli import interrupt_watchdog
+
+        if not interrupt_watchdog.start(name, WATCHDOG_GRACE_S):
+            return False
+    except KeyboardInterrupt:
+        raise
+    except Exception:  # noqa: BLE001 - no numba/pthreads here: interrupts are acted on as before, between kernels
+        return False
+    atomic.LISTENERS.append(_tell_watchdog)
+    _tell_watchdog(tuple(atomic._LIVE), False)
+    return True
+
+
+WATCHDOG_GRACE_S = 1.5
+"""Seconds an interrupt has to unwind through :func:`run` before the watchdog ends the process itself. Signal to exit
+took 0.4-1.5 s without it (session 31, /tmp/s31/fuzz31/sig/before.jsonl: track, slam, build-map, simulate, bench,
+app --prepare), part of it the interpreter's teardown after :func:`run` returned; at 1.0 s ``build-map``'s own unwinding
+and the watchdog both printed their line once in 2 tries."""
+
+
+def run(argv: list[str], watchdog: bool = False) -> int:
+    """Run one subcommand; returns the process exit code. ``watchdog``: the process is this command's own (the console
+    script, ``python -m evpose``), which :mod:`evpose.cli.interrupt_watchdog` may end if an interrupt is not acted on
+    in time (never a test or a viewer worker calling this in-process)."""
     if not argv or argv[0] in ("-h", "--help", "help"):
         print(_usage())
         return 0 if argv else 2
@@ -123,6 +151,9 @@ def run(argv: list[str]) -> int:
     if previous:
         sys.unraisablehook = _quiet_unraisable(previous_hook)
     _raised.clear()
+    # The viewer itself stops its server and warm-up process on an interrupt (which may take longer); --prepare does not.
+    watched = (watchdog and previous and name in WATCHED_COMMANDS and not {"-h", "--help"} & set(argv[1:])
+               and (name != "app" or "--prepare" in argv) and _watch(name))
     try:
         # Importing a command takes about a second (numba, gtsam, open3d): a Ctrl+C then printed a 40-line traceback.
         from evpose.cli.argument_errors import run_tyro
@@ -145,7 +176,7 @@ def run(argv: list[str]) -> int:
         # open3d imports (`simulate` 1 s in, 2 of 7 tries); or after it, when the C code swallowed it: numba's
         # "RuntimeError: no compiled object yet" when it lands in a compilation (`build-map` 6 s in, a first run).
         # A traceback and exit 1 each.
-        cause = _interrupt_cause(exc) or (_raised[-1] if _raised else None)
+        cause = interrupt_cause(exc, swallowed=True)
         if cause is not None:
             global _exit_now
             _exit_now = True  # the C code may be left half-initialised: see main()
@@ -157,9 +188,15 @@ def run(argv: list[str]) -> int:
             return 2
         raise
     finally:
+        if watched:
+            from evpose.cli import interrupt_watchdog
+
+            interrupt_watchdog.stop()
+            atomic.LISTENERS.remove(_tell_watchdog)
         for sig, handler in previous.items():
             signal.signal(sig, handler)
         sys.unraisablehook = previous_hook
+        _raised.clear()  # acted on: code run after this command (a test's next one) must not see them
     return int(result) if isinstance(result, int) else 0
 
 
@@ -168,7 +205,7 @@ _exit_now = False
 
 
 def main() -> None:
-    code = run(sys.argv[1:])
+    code = run(sys.argv[1:], watchdog=True)
     if _exit_now:
         # open3d interrupted while importing made the interpreter's own shutdown end in exit status 1 or death by
         # SIGINT (3 of 8 tries), after the one-line message: leave without finalising it, with the status promised.

@@ -108,12 +108,36 @@ def check_outputs(outputs, inputs=(), folders=()) -> None:
         _check_target(dst, is_dir)
 
 
+_LIVE: dict[Path, None] = {}
+"""The temporary files and folders of outputs being written (in this process), oldest first."""
+LISTENERS: list = []
+"""Callables told ``(live temporaries, held)`` whenever :data:`_LIVE` changes or an output set starts or ends its
+renames: :mod:`evpose.cli.interrupt_watchdog`, which deletes them itself when an interrupt is not acted on in time
+(a numba kernel holding the main thread)."""
+
+
+def _tell(held: bool = False) -> None:
+    for fn in LISTENERS:
+        fn(tuple(_LIVE), held)
+
+
+def _live(path: Path, live: bool) -> None:
+    if live:
+        _LIVE[path] = None
+    else:
+        _LIVE.pop(path, None)
+    _tell()
+
+
 _PENDING: contextvars.ContextVar[dict | None] = contextvars.ContextVar("evpose_output_set", default=None)
 """The open :func:`output_set`: its finished outputs ``(tmp, dst, is_dir, holder)`` under "files", the earlier run's
 files it removes under "remove" (None when none is open)."""
 
 
 def _discard(tmp: Path, holder: Path | None) -> None:
+    _live(tmp, False)
+    if holder is not None:
+        _live(holder, False)
     if tmp.is_dir():
         shutil.rmtree(tmp, ignore_errors=True)
     else:
@@ -127,6 +151,7 @@ def _publish(tmp: Path, dst: Path, is_dir: bool) -> None:
     if is_dir and dst.exists():
         shutil.rmtree(dst) if dst.is_dir() else dst.unlink()
     os.replace(tmp, dst)
+    _live(tmp, False)
 
 
 @contextlib.contextmanager
@@ -149,6 +174,7 @@ def output_set(remove=()):
                 _publish(tmp, dst, is_dir)
                 if holder is not None:
                     shutil.rmtree(holder, ignore_errors=True)
+                    _live(holder, False)
             for path in pending["remove"]:
                 with contextlib.suppress(FileNotFoundError):
                     Path(path).unlink()
@@ -171,12 +197,14 @@ def _signals_held():
         yield
         return
     caught: list[int] = []
+    _tell(held=True)
     previous = {sig: signal.signal(sig, lambda signum, frame: caught.append(signum)) for sig in (signal.SIGINT, signal.SIGTERM)}
     try:
         yield
     finally:
         for sig, handler in previous.items():
             signal.signal(sig, handler if handler is not None else signal.SIG_DFL)
+        _tell(held=False)
         if caught:
             signal.raise_signal(caught[0])
 
@@ -214,6 +242,9 @@ def atomic_path(dst: str | Path, inputs: tuple[str | Path, ...] = (), is_dir: bo
     except OSError as exc:
         # A folder that says it is writable but takes no new file: /proc, a full inode table, a read-only remount.
         raise OutputError(dst, f"cannot create the output ({exc.strerror or exc})") from None
+    _live(tmp, True)  # a file written inside a holder first: the watchdog can remove the holder only once empty
+    if holder is not None:
+        _live(holder, True)
     pending = _PENDING.get()
     try:
         yield tmp
@@ -232,3 +263,4 @@ def atomic_path(dst: str | Path, inputs: tuple[str | Path, ...] = (), is_dir: bo
     finally:
         if holder is not None and pending is None:
             shutil.rmtree(holder, ignore_errors=True)
+            _live(holder, False)

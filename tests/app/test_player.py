@@ -426,3 +426,28 @@ def test_an_exact_seek_shows_that_very_step_not_the_kept_frame_before_it(squares
         assert p.wait_idle(60) and frames[-1].index == 83 and frames[-1].t_us == t83
     finally:
         p.stop()
+
+
+def test_a_pause_arriving_just_after_playback_ended_does_not_play_it_again_from_the_start(bar_recording):
+    # A busy page delivered the pause 4.7 s late, after the end: as a press at the last step it replayed everything.
+    p, frames = _player(bar_recording, late_pause_s=0.5)
+    try:
+        p.set_speed(10.0)
+        p.seek(bar_recording.t_end_us - 50_000)
+        p.play()
+        deadline = time.time() + 5
+        while (p.state == PlayState.PLAYING or p._ended_at is None) and time.time() < deadline:
+            time.sleep(0.01)
+        ended = len(frames)
+        p.toggle()  # the late pause
+        p.wait_idle()
+        assert p.state == PlayState.PAUSED and all(f.index > 2 for f in frames[ended:])
+        time.sleep(0.6)
+        p.toggle()  # a press after late_pause_s: play again from the start, as before
+        p.wait_idle()
+        deadline = time.time() + 5
+        while not any(f.index <= 2 for f in frames[ended:]) and time.time() < deadline:
+            time.sleep(0.02)
+        assert any(f.index <= 2 for f in frames[ended:])
+    finally:
+        p.stop()

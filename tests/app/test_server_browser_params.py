@@ -61,3 +61,18 @@ def test_save_reset_and_load_say_what_they_did_after_the_tracker_is_rebuilt(page
     wait_for(lambda: _rebuilt(viewer, 180.0), what="the tracker at 180 Hz")
     wait_for(lambda: not viewer.param_info.content.startswith("loaded"), what="the load's line gone",
              detail=lambda: viewer.param_info.content)
+
+
+@pytest.mark.parametrize("typed", ["", "abc", "inf"])
+def test_a_number_box_left_holding_no_number_shows_its_value_again_and_nothing_is_rerun(page, viewer, typed):
+    # The box kept showing the typed text (empty, "abc") while the player and the tracker ran with the old value.
+    wait_for(lambda: isinstance(viewer.player.engine, TrackerEngine), timeout=90, what="squares opened with its map")
+    for label in ("rate [Hz]", "speed [x]"):
+        box = _box(page, label)
+        shown = box.input_value()
+        assert shown not in ("", typed)
+        applies = viewer.player.config_applies
+        box.fill(typed)
+        box.press("Tab")
+        wait_for(lambda: box.input_value() == shown, timeout=5, what=f"{label} box showing {shown} again", detail=box.input_value)
+        assert viewer.player.config_applies == applies
