@@ -4,7 +4,7 @@ from scipy.spatial.transform import Rotation
 
 from evpose.slam.atlas import Keyframe, MapPoint, SlamMap
 from evpose.slam.bundle_adjustment import local_bundle_adjustment
-from evpose.slam.room_axes import measure_room_rotation, room_frame, room_priors
+from evpose.slam.room_axes import RoomAxesSettings, measure_room_rotation, room_frame, room_priors
 
 K = np.array([[247.0, 0, 172.5], [0, 247.0, 129.5], [0, 0, 1]])
 # Camera looking along world +x, its y axis down (world z up); the room's axes are the world's.
@@ -64,6 +64,21 @@ def test_measure_room_rotation_needs_segments_along_every_axis():
     for x in (60, 140, 250, 300):
         cv2.line(img, (x, 30), (x + 3, 220), 255, 1, cv2.LINE_AA)
     assert measure_room_rotation(img, K) == (None, None)
+
+
+def test_measure_room_rotation_drops_a_scene_whose_edges_are_not_mostly_along_three_axes():
+    R_wc = _camera(-10.0, 20.0, 3.0)
+    room = _render_box_room(R_wc)
+    cluttered = room.copy()
+    rng = np.random.default_rng(1)
+    for _ in range(12):  # straight edges at random angles, like a landing's ground texture
+        c, a, h = rng.uniform([20, 20], [326, 240]), rng.uniform(0, np.pi), rng.uniform(20, 50)
+        d = h * np.array([np.cos(a), np.sin(a)])
+        cv2.line(cluttered, tuple(np.round(c + d).astype(int)), tuple(np.round(c - d).astype(int)), 255, 1, cv2.LINE_AA)
+    assert measure_room_rotation(cluttered, K, RoomAxesSettings(min_axis_share=0.0))[0] is not None  # 3 deg off
+    assert measure_room_rotation(cluttered, K) == (None, None)  # about 73 % of its segment length explained
+    R, _ = measure_room_rotation(room, K)
+    assert R is not None and _error_deg(R, R_wc.T) < 0.5
 
 
 def _keyframe(kid: int, R_wc_est: np.ndarray, R_cm: np.ndarray) -> Keyframe:
