@@ -197,6 +197,21 @@ without the strip along each crease, trimmed, and squared to the ground within 3
 moved seed 0 by 0.05 mm) only to 4.434 / 5.784 mm (4.306 / 5.651 with the feet left as built): better at 346x260, worse
 at 240x180 (ARE 0.063 -> 0.070), all within +-1.5 paired standard errors; held-out seeds 12-23 (feet as built) 346x260 5.551 -> 4.858 mm (seeds 21 / 22 10.5 / 8.7 -> 4.8 / 5.7), 240x180 240x180 6.445 -> 6.202 (0-23: 346x260 5.088 -> 4.582 mm, -0.51 +- 0.31, 16 of 24 seeds better; 240x180 5.949 -> 5.927, 13 of 24). So :attr:`evpose.mapping.build.MapBuildConfig.crease_refit` is off (it does not help both resolutions).
 
+Session 31 (``/tmp/s31/rim31/``, ``run2.py`` swaps the events' copy of the map): it is on now (ARE over seeds 0-23 lower at
+both resolutions, 240x180 ATE level), and at 240x180 it is this registration reading the better rims that keeps the
+gain away: the field on the new map with the events on the plain one 5.949 -> 5.824 mm (-0.13 +- 0.07, every axis a
+little better), the events on the new map with the field on the plain one 6.038, the new map for both 5.927 (seeds
+0-23). With the better rims the events trade the tilt about x and the sideways error (-15 mdeg, -0.54 mm RMS) for the
+tilt about y and an along-motion bias (+12 mdeg, +0.70 mm; the bias +1.70 -> +2.76 mm along the camera's x, the
+flight's direction, in every seed alike). The events move the field's pose +2.0 mm ahead along the motion with either
+map (their OFF leads); halving the three OFF leads removes it (+0.02 mm, ARE 0.0732 -> 0.0639 deg) but grows the height
+and sideways errors (+0.9 mm RMS each): 6.352 mm. At 346x260 the same split (seeds 0-23, 5.088 mm plain): the field on
+the new map alone 4.875 (-0.21 +- 0.07, 19 of 24 better), the events on it alone 4.656 (-0.43 +- 0.26), both 4.582;
+there too the events on the better rims cut the tilt about x and the sideways error (-15.4 mdeg, -0.82 mm RMS) and
+raise the along-motion bias (+1.15 -> +2.43 mm), but that costs only +2.5 mdeg / +0.21 mm RMS against +12.8 / +0.80 at
+240x180: the coarser sensor holds the tilt about y against the shift along the motion less well. Figures in the
+builder's ``crease_refit``.
+
 Session 31, what the polarity filter does to this stage (issue 7's "the filter cuts registration latency by >= 40 %"
 read in ``full``, :mod:`evpose.bench.filter_registration_cost`, figures there): with the filter off
 (``polarity.enabled``) the same events enter the association (the noise filters' ``keep``: 3402 per update on the
