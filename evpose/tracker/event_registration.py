@@ -210,7 +210,10 @@ the new map alone 4.875 (-0.21 +- 0.07, 19 of 24 better), the events on it alone
 there too the events on the better rims cut the tilt about x and the sideways error (-15.4 mdeg, -0.82 mm RMS) and
 raise the along-motion bias (+1.15 -> +2.43 mm), but that costs only +2.5 mdeg / +0.21 mm RMS against +12.8 / +0.80 at
 240x180: the coarser sensor holds the tilt about y against the shift along the motion less well. Figures in the
-builder's ``crease_refit``.
+builder's ``crease_refit``. The crease points' OFF lead kept as an angle on coarser sensors (offlead31,
+``crease_off_lead_pixel_exponent`` 1: -0.22 -> -0.153 px at 240x180, 346x260 and the demos unchanged): 240x180 2 s
+seeds 0-23 5.927 -> 5.716 mm (-0.21 +- 0.07), held-out 24-35 7.202 -> 6.934 (-0.27 +- 0.15), 36-47 6.522 -> 6.371, ARE
+lower on all three, but the 3 s landing (seeds 0-7) 16.99 -> 18.09 mm, every seed worse: an option, off.
 
 Session 31, what the polarity filter does to this stage (issue 7's "the filter cuts registration latency by >= 40 %"
 read in ``full``, :mod:`evpose.bench.filter_registration_cost`, figures there): with the filter off
