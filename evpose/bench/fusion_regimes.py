@@ -192,7 +192,9 @@ def same_inputs_gap(recording, fusion_config, inputs) -> dict:
     replayed; EKF online 4.645 / 5.405 mm at 346x260 / 240x180): the graph online 4.644 / 5.401 mm (-0.001 +- 0.002 /
     -0.004 +- 0.006); corrected at 8 states 4.442 / 5.166 mm (-0.203 +- 0.028 / -0.239 +- 0.043 mm, ARE -0.0010 /
     -0.0010 deg, each of the 24 runs better in both); at 3 / 20 / 60 states (10 / 95 / 295 ms) 4.561 / 4.089 / 3.425
-    and 5.303 / 4.717 / 3.919 mm."""
+    and 5.303 / 4.717 / 3.919 mm (session 30's map builder). On the refitted-crease map (session 31's default): EKF
+    4.239 / 5.506 mm, graph online 4.239 / 5.504, corrected at 8 states 4.058 / 5.273 (-0.181 +- 0.025 / -0.233 +-
+    0.042, every run better), at 20 states 3.747 / 4.863 mm."""
     from dataclasses import replace
 
     from evpose.fusion import FusionBackend, make_fusion
