@@ -105,7 +105,7 @@ def main(
     config: Path | None = None,
     timings: Path | None = None,
     smoothed: Path | None = None,
-    smoothed_lag: int = 400,
+    smoothed_lag: int | None = None,
     width: int | None = None,
     height: int | None = None,
     progress: bool = True,
@@ -131,8 +131,8 @@ def main(
         smoothed: Also write the factor graph's smoothed trajectory here (``full`` mode, factor_graph backend only):
             each state re-estimated with the registrations of the next 2 s. An offline product, more accurate than
             OUT (which holds the estimates as they were available in real time).
-        smoothed_lag: States (updates) each smoothed pose waits for: 400 (2 s at 200 Hz) for the most accurate
-            offline trajectory; the fusion's own window (``fusion.window_states``, 8: 35 ms) gives the trajectory its
+        smoothed_lag: States (updates) each smoothed pose waits for (with --smoothed): 400 by default (2 s at 200 Hz),
+            the most accurate offline trajectory; the fusion's own window (``fusion.window_states``, 8: 35 ms) gives the trajectory its
             sliding-window joint optimisation corrects, which a live system has that much later.
         width: Sensor width, for formats that do not state it.
         height: Sensor height, for formats that do not state it.
@@ -157,7 +157,9 @@ def main(
     from evpose.tracker.step_result import TrackStatus
 
     check_outputs((out, timings, smoothed), inputs=(recording, map, config))
-    if smoothed_lag < 2:
+    if smoothed_lag is not None and smoothed is None:
+        raise InputError(None, "--smoothed-lag needs --smoothed FILE (the trajectory it sets the lag of)")
+    if smoothed_lag is not None and smoothed_lag < 2:
         raise InputError(None, f"--smoothed-lag must be at least 2 states, got {smoothed_lag}")
     cfg = load_config(config) if config is not None else TrackerConfig()
     if mode is not None:
@@ -217,7 +219,7 @@ def main(
         if len(traj):
             write_tum(out, traj, inputs=(recording, map))
         if inputs is not None:
-            smooth = smoothed_over_restarts(cfg, rec, inputs, session.restarts, smoothed_lag)
+            smooth = smoothed_over_restarts(cfg, rec, inputs, session.restarts, smoothed_lag or 400)
             # Not the updates reported lost either (those after a restart that ``restart_gate`` withheld: cut 0.2 s
             # splice of event_gaps, 353 smoothed poses metres off after the gap otherwise).
             smooth = smooth[~np.isin(smooth.t, np.array([r.t_us for r in lost], dtype=np.int64))] if lost and len(smooth) else smooth

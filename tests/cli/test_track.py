@@ -182,6 +182,10 @@ def test_smoothed_lag_sets_how_many_later_registrations_each_pose_waits_for(land
     err = capsys.readouterr().err.strip()
     assert code == 2 and "--smoothed-lag must be at least 2" in err and len(err.splitlines()) == 1
     assert not (tmp_path / "e3.txt").exists()
+    code = run(base + ["--out", str(tmp_path / "e4.txt"), "--smoothed-lag", "8"])  # nothing to set the lag of
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and "--smoothed-lag needs --smoothed" in err and len(err.splitlines()) == 1
+    assert not (tmp_path / "e4.txt").exists()
 
 
 def test_smoothed_needs_the_factor_graph(landing_files, tmp_path, capsys):
