@@ -35,9 +35,10 @@ _thread_started = False
 _previous_fd: int | None = None
 
 
-def start(name: str, grace_s: float = 1.0) -> bool:
+def start(name: str, grace_s: float = 1.0, quiet: bool = False) -> bool:
     """Arm the watchdog for ``evpose NAME`` (main thread only); False where it cannot run (not the main thread, SIGINT
-    and SIGTERM both without a Python handler, no pthreads)."""
+    and SIGTERM both without a Python handler, no pthreads). ``quiet``: print nothing when it ends the process (a
+    worker of a process pool, whose parent prints the line: :mod:`evpose.eval.pool_workers`)."""
     global _state, _thread_started, _previous_fd
     if threading.current_thread() is not threading.main_thread():
         return False
@@ -49,7 +50,7 @@ def start(name: str, grace_s: float = 1.0) -> bool:
     for at, slot, word in ((INT_MSG_AT, 4, "interrupted"), (TERM_MSG_AT, 5, "terminated")):
         line = f"evpose {name}: {word}\n".encode()[:250]
         raw[at:at + len(line)] = np.frombuffer(line, np.uint8)
-        st[slot] = len(line)
+        st[slot] = 0 if quiet else len(line)
     st[1] = int(grace_s * 1e6)
     st[3] = 0
     set_paths(())
