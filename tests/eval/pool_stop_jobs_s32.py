@@ -27,3 +27,12 @@ def waiter_job(marker: str) -> dict:
     while not Path(marker).exists() and time.monotonic() < end:
         time.sleep(0.05)
     return {"pid": os.getpid()}
+
+
+def tqdm_lock_job() -> dict:
+    """What lock a progress bar made in this worker takes."""
+    from tqdm import tqdm
+
+    with tqdm(total=1, disable=True):
+        pass
+    return {"lock_module": type(tqdm.get_lock()).__module__, "lock_type": type(tqdm.get_lock()).__name__}

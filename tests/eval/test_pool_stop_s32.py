@@ -50,3 +50,12 @@ def test_an_uninterrupted_pool_still_runs_every_job_in_its_workers(tmp_path):
     outcomes = run_jobs(jobs, None, RunnerConfig(workers=2, progress=False))
     assert [o["ok"] for o in outcomes] == [True, True, True]
     assert all(o["result"]["pid"] != os.getpid() for o in outcomes)
+
+
+def test_a_workers_progress_bars_hold_no_semaphore_of_the_shared_resource_tracker():
+    # tqdm's default lock is a multiprocessing semaphore: a worker ended by an interrupt left the tracker warning
+    # "There appear to be 1 leaked semaphore objects to clean up at shutdown" after the command's line.
+    jobs = [Job("lock", "pool_stop_jobs_s32:tqdm_lock_job", {}), Job("w", "pool_stop_jobs_s32:waiter_job", {"marker": __file__})]
+    outcomes = run_jobs(jobs, None, RunnerConfig(workers=2, progress=False))  # two jobs: the pool, not this process
+    assert outcomes[0]["ok"], outcomes[0]
+    assert outcomes[0]["result"] == {"lock_module": "_thread", "lock_type": "RLock"}
