@@ -4,8 +4,9 @@ Python runs signal handlers in the main thread between bytecodes, so a signal ar
 holds the GIL and never checks for signals) waited for the kernel to return: ``build-map --cell`` on the landing cloud
 spent up to a minute in one raster kernel, a minute in which Ctrl+C did nothing (session 30, /tmp/s30/fuzz30/), and
 session 31 saw ``bench`` ignore a SIGTERM 3-3.5 s after its start for over 60 s (2 of 9 tries, not reproduced under
-faulthandler; /tmp/s31/fuzz31/sig/lat.py). (Session 32 found that one: not a kernel but the job pool, which the interpreter's exit joined after the
-watchdog was disarmed; :mod:`evpose.eval.pool_workers`.) A Python thread cannot help: it needs the GIL the kernel holds.
+faulthandler; /tmp/s31/fuzz31/sig/lat.py; session 32 found that one: not a kernel but the job pool, which the
+interpreter's exit joined after the watchdog was disarmed, :mod:`evpose.eval.pool_workers`). A Python thread cannot
+help: it needs the GIL the kernel holds.
 
 So :func:`start` starts a thread running a numba ``cfunc`` (native code, no GIL) and points Python's signal wakeup fd
 (:func:`signal.set_wakeup_fd`) at a pipe it reads: Python's C-level handler writes the signal's number there at once,
