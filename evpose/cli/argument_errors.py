@@ -40,8 +40,22 @@ def flatten_panel(text: str) -> str:
                 break
             continue
         body.append(inner)
-    message = re.sub(r"\s+", " ", " ".join(body)).strip()
+    message = _plain_optional(re.sub(r"\s+", " ", " ".join(body)).strip())
     return message or title or "invalid arguments"
+
+
+_OPTIONAL = re.compile(r"^(Error parsing \S+): no type matching \{None\}\|(\w+) could be instantiated from \[(.*?)\]\. Got errors: .*$")
+_KINDS = {"INT": "an integer", "FLOAT": "a number", "PATH": "a path", "STR": "a text"}
+
+
+def _plain_optional(message: str) -> str:
+    """tyro's error for an optional flag (``int | None``) given a bad value lists each type's failure, Python class names
+    and all ("no type matching {None}|INT could be instantiated from ['abc']. Got errors: - <class 'NoneType'>: ...");
+    what it means is the flag's kind and the value (session 32: ``track --smoothed-lag abc``)."""
+    m = _OPTIONAL.match(message)
+    if m is None:
+        return message
+    return f"{m.group(1)}: expected {_KINDS.get(m.group(2), m.group(2))}, got {m.group(3)}"
 
 
 def run_tyro(main: Callable[..., Any], args: list[str], prog: str) -> Any:

@@ -4,7 +4,9 @@ Python runs signal handlers in the main thread between bytecodes, so a signal ar
 holds the GIL and never checks for signals) waited for the kernel to return: ``build-map --cell`` on the landing cloud
 spent up to a minute in one raster kernel, a minute in which Ctrl+C did nothing (session 30, /tmp/s30/fuzz30/), and
 session 31 saw ``bench`` ignore a SIGTERM 3-3.5 s after its start for over 60 s (2 of 9 tries, not reproduced under
-faulthandler; /tmp/s31/fuzz31/sig/lat.py). A Python thread cannot help: it needs the GIL the kernel holds.
+faulthandler; /tmp/s31/fuzz31/sig/lat.py; session 32 found that one: not a kernel but the job pool, which the
+interpreter's exit joined after the watchdog was disarmed, :mod:`evpose.eval.pool_workers`). A Python thread cannot
+help: it needs the GIL the kernel holds.
 
 So :func:`start` starts a thread running a numba ``cfunc`` (native code, no GIL) and points Python's signal wakeup fd
 (:func:`signal.set_wakeup_fd`) at a pipe it reads: Python's C-level handler writes the signal's number there at once,
@@ -35,9 +37,10 @@ _thread_started = False
 _previous_fd: int | None = None
 
 
-def start(name: str, grace_s: float = 1.0) -> bool:
+def start(name: str, grace_s: float = 1.0, quiet: bool = False) -> bool:
     """Arm the watchdog for ``evpose NAME`` (main thread only); False where it cannot run (not the main thread, SIGINT
-    and SIGTERM both without a Python handler, no pthreads)."""
+    and SIGTERM both without a Python handler, no pthreads). ``quiet``: print nothing when it ends the process (a
+    worker of a process pool, whose parent prints the line: :mod:`evpose.eval.pool_workers`)."""
     global _state, _thread_started, _previous_fd
     if threading.current_thread() is not threading.main_thread():
         return False
@@ -49,7 +52,7 @@ def start(name: str, grace_s: float = 1.0) -> bool:
     for at, slot, word in ((INT_MSG_AT, 4, "interrupted"), (TERM_MSG_AT, 5, "terminated")):
         line = f"evpose {name}: {word}\n".encode()[:250]
         raw[at:at + len(line)] = np.frombuffer(line, np.uint8)
-        st[slot] = len(line)
+        st[slot] = 0 if quiet else len(line)
     st[1] = int(grace_s * 1e6)
     st[3] = 0
     set_paths(())

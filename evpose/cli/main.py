@@ -152,9 +152,12 @@ def run(argv: list[str], watchdog: bool = False) -> int:
         sys.unraisablehook = _quiet_unraisable(previous_hook)
     _raised.clear()
     # The viewer itself stops its server and warm-up process on an interrupt (which may take longer); --prepare does not.
-    watched = (watchdog and previous and name in WATCHED_COMMANDS and not {"-h", "--help"} & set(argv[1:])
-               and (name != "app" or "--prepare" in argv) and _watch(name))
+    watched = False
     try:
+        # Inside the try: arming the watchdog imports numba (a second or more), and a SIGTERM or Ctrl+C landing there
+        # printed a 20-line traceback (session 32, /tmp/s32/sig32/).
+        watched = (watchdog and previous and name in WATCHED_COMMANDS and not {"-h", "--help"} & set(argv[1:])
+                   and (name != "app" or "--prepare" in argv) and _watch(name))
         # Importing a command takes about a second (numba, gtsam, open3d): a Ctrl+C then printed a 40-line traceback.
         from evpose.cli.argument_errors import run_tyro
 

@@ -80,14 +80,21 @@ def smoothed_over_restarts(cfg, recording, inputs, restarts, lag_states: int = 4
                                   np.concatenate([p.quat_xyzw for p in parts]))
 
 
-def _record_fusion_inputs(session, cfg):
-    """Have the session's factor graph log what it is fed, for the smoothed trajectory written after the run."""
+def _check_smoothed(cfg) -> None:
+    """--smoothed replays the factor graph: refused for another mode or backend before the recording and map are read
+    (it came after them, 5 s into a 0.6 s recording; session 32)."""
     from evpose.fusion import FusionBackend
-    from evpose.fusion.replay import FusionInputs
     from evpose.tracker.config import TrackerMode
 
     if cfg.mode is not TrackerMode.FULL or cfg.fusion.backend is not FusionBackend.FACTOR_GRAPH:
         raise InputError(None, f"--smoothed needs --mode full with the factor_graph fusion, not {cfg.mode.value} / {cfg.fusion.backend.value}")
+
+
+def _record_fusion_inputs(session, cfg):
+    """Have the session's factor graph log what it is fed, for the smoothed trajectory written after the run."""
+    from evpose.fusion.replay import FusionInputs
+
+    _check_smoothed(cfg)
     motion = session.tracker.components.motion
     inputs = FusionInputs(int(motion.last.t_us), motion.last.T_world_cam.copy(), motion.initial_velocity_world)
     motion.input_log = inputs.reports
@@ -182,6 +189,8 @@ def main(
     from evpose.io.config_file import check_config
 
     check_config(cfg)  # --rate-hz inf would run a million updates per second of recording
+    if smoothed is not None:
+        _check_smoothed(cfg)
     check_acquire_s(acquire_s)
     initial = parse_init(init)
     cmap = read_contour_map(map)

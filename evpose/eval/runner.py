@@ -132,18 +132,26 @@ def _run_pool(jobs, todo, workers, finish, bar, fresh_process: bool = False) -> 
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor, as_completed
 
+    from evpose.eval.pool_workers import init_worker, run_job, stop_workers
+
     # spawn, not fork: workers must not inherit threads (tqdm, numba, dask) or half-held locks.
     ctx = multiprocessing.get_context("spawn")
     extra = {"max_tasks_per_child": 1} if fresh_process else {}
-    with ProcessPoolExecutor(max_workers=min(workers, len(todo)), mp_context=ctx, **extra) as pool:
-        futures = {pool.submit(execute_job, jobs[i]): i for i in todo}
+    with ProcessPoolExecutor(max_workers=min(workers, len(todo)), mp_context=ctx, initializer=init_worker, **extra) as pool:
+        futures = {pool.submit(run_job, jobs[i]): i for i in todo}
         try:
             for fut in as_completed(futures):
                 finish(futures[fut], fut.result())
                 bar.update(1)
         except BaseException:
-            # Interrupted: drop queued jobs; finished ones are already in the cache for the rerun.
-            pool.shutdown(wait=False, cancel_futures=True)
+            # Interrupted: drop queued jobs (finished ones are already in the cache for the rerun) and end the running
+            # ones: the interpreter's exit joined the pool, waiting 8-46 s for them (evpose.eval.pool_workers).
+            # (Not Future.cancel() first: the pool's thread then failed on the cancelled ones with InvalidStateError.)
+            stop_workers(lambda: list((pool._processes or {}).values()))
+            # Flags the shutdown (no worker or job starts any more) and joins the pool's thread, which, its workers
+            # gone, ends at once. shutdown(wait=False) let that thread run on and fail on the pool it had emptied
+            # ("TypeError: object of type 'NoneType' has no len()", a traceback after the command's line).
+            pool.shutdown(wait=True, cancel_futures=True)
             raise
 
 

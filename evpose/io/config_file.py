@@ -94,6 +94,10 @@ def _convert(typ, raw, meta):
             value = float(raw)
         except ValueError:
             raise ValueError(f"expected a number, got {shown(raw)}") from None
+        except OverflowError:
+            # An integer of 309 digits or more (YAML and JSON read it exactly) does not fit a float: "OverflowError: int
+            # too large to convert to float", a traceback out of every --config (session 32's fuzzing, /tmp/s32/sig32/).
+            raise ValueError(f"expected a finite number, got {shown(raw)}") from None
         _check_range(value, meta)
         return value
     return raw
@@ -148,12 +152,14 @@ def check_config(cfg, prefix: str = "") -> None:
 def _check_range(value, meta) -> None:
     """A number must be finite and inside the field's declared ``min``..``max`` (the range the viewer's slider
     offers): a negative window or a NaN decay would otherwise run and quietly produce nonsense."""
-    if not math.isfinite(value):
+    # An integer is finite however large (math.isfinite(10**400) is an OverflowError: a traceback out of `build-map
+    # --k 999...9`, session 32); Python compares it with a float bound exactly.
+    if not isinstance(value, int) and not math.isfinite(value):
         raise ValueError(f"expected a finite number, got {value!r}")
     lo, hi = meta.get("min"), meta.get("max")
     unit = f" {meta['unit']}" if meta.get("unit") else ""
     if (lo is not None and value < lo) or (hi is not None and value > hi):
-        raise ValueError(f"{value!r} is outside the allowed range {lo}..{hi}{unit}")
+        raise ValueError(f"{shown(value)} is outside the allowed range {lo}..{hi}{unit}")
 
 
 def _unique_keys(pairs: list) -> dict:
