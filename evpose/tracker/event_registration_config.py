@@ -32,11 +32,13 @@ class EventRegistrationConfig:
     8.52 / 13.59 / 12.66 / 12.26 mm, but the ``landing`` demo 9.71 -> 10.99 mm (3x / 5x: 10.49 / 10.80 mm): not kept.
     Its variance along the optical axis alone 10x: 2 s seeds 0-3 6.09 mm at 346x260, 7.89 at 240x180, the 3 s
     ``plain3`` 13.09 mm, the demo 10.22 mm; its tilt and sideways variances 10x: 7.55 mm at 346x260."""
-    combine_convex: bool = False
+    combine_convex: bool = True
     """With ``combine``: the combined pose weighs each tangent component (field pose's frame) by the two diagonal
     informations alone, so it lies between the field's and the events' poses component by component (the covariance
     stays the full combination); False = the full information-weighted mean, which can land beyond both along a
-    direction both hold poorly (session 32, below).
+    direction both hold poorly (session 32, below; the default since then: better on the held-out seeds, 346x260, the
+    3 s landing and two of the three demos, ``evpose track demo_data/landing.h5 --map maps/landing_map.ply`` now hashes
+    ``df748492ded2f3b2``).
 
     Session 32 (``/tmp/s32/edge32/``: ``stages.py`` logs every update's prediction, field pose, events' pose and
     combined pose against the truth; ``run.sh``, ``cmp.py``, ``bias.py``, ``demo.sh``). Where the along-motion bias of
@@ -51,7 +53,9 @@ class EventRegistrationConfig:
     240x180 2 s seeds 0-23 5.984 -> 5.568 (-0.42 +- 0.11, 20 of 24), ARE 0.0736 -> 0.0667, along-motion bias +2.80 ->
     +2.13 mm; held-out seeds 24-47 6.821 -> 6.091 (-0.73 +- 0.13, 22 of 24), ARE 0.0828 -> 0.0707,
     along-motion bias +3.30 -> +2.40 mm (seeds 0-47 6.403 -> 5.829, -0.57 +- 0.08, 42 of 48); 3 s landing at 240x180 seeds 0-7 16.982 -> 15.889 (-1.09 +- 0.28, 7 of 8),
-    ARE 0.1130 -> 0.1055; 346x260 2 s seeds 0-11 4.308 -> 4.313 (+0.005 +- 0.069, 6 of 12), ARE 0.0537 -> 0.0522;
+    ARE 0.1130 -> 0.1055; 346x260 2 s seeds 0-11 4.308 -> 4.313 (+0.005 +- 0.069, 6 of 12), ARE 0.0537 -> 0.0522,
+    seeds 12-23 4.910 -> 4.745 (-0.17 +- 0.10, 9 of 12), seeds 0-23 4.609 -> 4.529 (-0.08 +- 0.06, 15 of 24), ARE
+    0.0562 -> 0.0538;
     bundled demos (``evpose track demo_data/X.h5 --map maps/landing_map.ply``, ``evpose eval --align none``)
     ``landing`` 6.569 -> 6.615 mm (ARE 0.0525 -> 0.0537), ``landing_fast`` 10.108 -> 9.357 (0.0990 -> 0.0832),
     ``landing_dynamic`` 5.907 -> 5.697 (0.0544 -> 0.0561). Per seed, 240x180 seeds 0-23: 7.42 5.65 7.88 5.07 6.37
