@@ -46,7 +46,9 @@ class EventRegistrationConfig:
     y): prediction +3.13 mm / -48 mdeg, field registration +0.41 / -21, events' pose +1.89 / -29, combined +2.77 / -44.
     The combination lands beyond both inputs along the tilt-about-y / shift-along-x ridge (the two hold it in
     different combinations), the fusion keeps it, and the next prediction starts from it; the field alone is nearly
-    unbiased along x. The same with the burst leads (``follower_crossings``) or the events' prior 0.24 px
+    unbiased along x. With this on (seeds 0-5): prediction +2.54 / -37.5, field +0.28 / -16.2, events +1.63 / -23.3,
+    combined +1.45 / -19.5: the combination now stays between, but the prediction (fused state + IMU) still runs
+    ahead of every registration it is fed, which is where the rest of the bias is made. The same with the burst leads (``follower_crossings``) or the events' prior 0.24 px
     (``prior_residual_px``): field +0.05 / +0.59, events +1.49 / +1.46, combined +2.63 / +2.98 mm.
 
     On (``full`` from ground truth, mean ATE mm, paired change +- standard error, seeds better, ARE deg):
