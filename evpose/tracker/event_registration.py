@@ -230,6 +230,14 @@ its patch; the points that moved more, up to 3 px in a third of the updates thro
 3411 -> 1278 events into the association, which fell 0.138 -> 0.095 ms, but the per-event grid tests took
 ``_kept_events`` 0.023 -> 0.077 ms and the moved points' test 0.032 ms (the used points read from the whole map):
 this stage 0.529 -> 0.587 ms.
+
+Session 32 (``/tmp/s32/edge32/``): the events' offset from the true edge follows neither the edge's normal image speed
+nor the pixel size but the event's place in its pixel's burst (first of a passage or after another; the option
+``follower_crossings``, off: it costs 1.5 mm at 240x180), and the along-motion bias of 240x180 is not the leads': the
+field registration is nearly unbiased along the flight (+0.4 mm), the events' pose +1.9 mm, and their combination lands
+beyond both (+2.8 mm, tilt about y -44 mdeg against -21 / -29) on the tilt / shift ridge, which the fusion then carries
+into the next prediction (+3.1 mm). Weighing each tangent component on its own keeps it between the two
+(``combine_convex``; figures there).
 """
 
 from __future__ import annotations
@@ -238,7 +246,8 @@ import gtsam
 import numpy as np
 
 from evpose.tracker.event_registration_config import EventRegistrationConfig, scaled_to_pixel  # noqa: F401 (re-exported)
-from evpose.tracker.event_registration_kernels import _associate_nearest, _kept_events, _learn_offsets, _linearise_events
+from evpose.tracker.event_registration_kernels import (NO_EVENT, _associate_nearest, _kept_events, _learn_offsets, _linearise_events,
+                                                       _pixel_gaps)
 from evpose.tracker.grazing import crease_points, point_leads
 from evpose.tracker.lapack_calls import inv
 from evpose.tracker.registration import _eigvalsh, _inv, _isotropic_information
@@ -247,6 +256,7 @@ from evpose.tracker.registration_kernels import _lm_step
 _NO_POLARITY = np.zeros(0, np.int8)
 _NO_TWIST = np.zeros(6)
 _NO_TABLE = np.zeros((0, 0, 2), np.float32)
+_NO_BURST = np.zeros(0)
 """Placeholders of the kernels' optional inputs (never written)."""
 
 
@@ -280,28 +290,46 @@ class EventRegistration:
         self._last = None
         self.last_events = 0
         """Events associated with a point at the last :meth:`refine`."""
+        c = config
+        self._burst = (np.array([float(c.follower_crossings), float(c.first_on_lead_px), float(c.follower_on_lead_px),
+                                 float(c.first_off_lead_px), float(c.follower_off_lead_px)])
+                       if float(c.follower_crossings) > 0 else _NO_BURST)
+        self._pixel_last = (np.full(2 * self._width * self._height, NO_EVENT, np.int64) if self._burst.size else None)
+        """Each pixel's latest event time per polarity (us), for ``follower_crossings``; None when that is off."""
 
-    def snapshot(self) -> np.ndarray:
-        return np.copy(self.offsets)
+    def snapshot(self):
+        if self._pixel_last is None:
+            return np.copy(self.offsets)
+        return np.copy(self.offsets), np.copy(self._pixel_last)
 
-    def restore(self, state: np.ndarray) -> None:
-        self.offsets = np.copy(state)
+    def restore(self, state) -> None:
+        offsets = state
+        if isinstance(state, tuple):
+            offsets = state[0]
+            if self._pixel_last is not None:
+                self._pixel_last = np.copy(state[1])
+        elif self._pixel_last is not None:
+            self._pixel_last.fill(NO_EVENT)
+        self.offsets = np.copy(offsets)
         self.points = self._base + self.offsets[:, None] * self._normals
         self._last = None
 
     def refine(self, T_world_cam: np.ndarray, used: np.ndarray, polarity: np.ndarray | None, ex: np.ndarray, ey: np.ndarray,
                et: np.ndarray, ep: np.ndarray, t_us: int, twist: np.ndarray | None, K: np.ndarray,
-               prior: tuple[np.ndarray, np.ndarray] | None) -> tuple[np.ndarray, np.ndarray] | None:
-        """(pose, covariance) of the events (ideal pixels ``ex``, ``ey``, times ``et`` us, polarities ``ep``) against the
+               prior: tuple[np.ndarray, np.ndarray] | None, gaps: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray] | None:
+        """(pose, covariance) of the events (ideal pixels ``ex``, ``ey``, times ``et`` us, polarities ``ep``; ``gaps`` each
+        one's time since its pixel's previous same-polarity event, us, for ``follower_crossings``, None = none) against the
         map points ``used`` (indices) starting from ``T_world_cam`` (the pose at ``t_us``); ``polarity`` (as ``used``)
         the polarity each point may fire (+1 / -1 / 0 both; None = any), ``twist`` the body twist per second (gtsam
         order), ``prior`` = (T_prior, information of the body tangent in squared pixels) or None. None when too few
         events associate or the system is singular."""
-        events = (np.array(ex, np.float64), np.array(ey, np.float64), np.array(et, np.int64), np.array(ep, np.int8))
+        events = (np.array(ex, np.float64), np.array(ey, np.float64), np.array(et, np.int64), np.array(ep, np.int8),
+                  np.full(len(ex), np.int64(2) ** 62) if gaps is None else np.array(gaps, np.int64))  # None: each event a first
         return self._refine(T_world_cam, used, polarity, events, len(events[0]), t_us, twist, K, prior)
 
     def _refine(self, T_world_cam, used, polarity, events, n_events, t_us, twist, K, prior):
-        """:meth:`refine` of the first ``n_events`` of ``events`` = (ex, ey, et, ep), which it reorders in place."""
+        """:meth:`refine` of the first ``n_events`` of ``events`` = (ex, ey, et, ep, eg), which it reorders in place
+        (``eg``: each event's time since its pixel's previous same-polarity event, us)."""
         c = self.config
         self._last = None
         fx, fy, cx, cy = float(K[0, 0]), float(K[1, 1]), float(K[0, 2]), float(K[1, 2])
@@ -313,12 +341,12 @@ class EventRegistration:
         T = np.asarray(T_world_cam, np.float64)
         R_cw = np.ascontiguousarray(T[:3, :3].T)
         t_cw = -R_cw @ T[:3, 3]
-        ex, ey, et, ep = events
+        ex, ey, et, ep, eg = events
         assoc = np.empty(n_events, np.int64)
         # The associated events first, in order (the others took no part in the sums below).
         n = self.last_events = int(_associate_nearest(self.points, self._tangents, used, R_cw, t_cw, fx, fy, cx, cy,
                                                       float(c.association_radius_px), self._width, self._height, n_events,
-                                                      ex, ey, et, ep, pol, pts, tg, assoc))
+                                                      ex, ey, et, ep, eg, pol, pts, tg, assoc))
         if n < int(c.min_events):
             return None
         H, b = np.zeros((6, 6)), np.zeros(6)
@@ -327,7 +355,7 @@ class EventRegistration:
         info = None
         if prior is not None:
             T_p, info = gtsam.Pose3(prior[0]), prior[1]
-        args = (*self._leads(used, T), float(c.huber_px), float(c.gate_px), H, b, sw, swr)
+        args = (*self._leads(used, T), eg, self._burst, float(c.huber_px), float(c.gate_px), H, b, sw, swr)
         n_it = int(c.iterations)
         t_ref = int(t_us)
         for it in range(n_it + 1):
@@ -378,9 +406,11 @@ class EventRegistration:
         c = self.config
         self._last = None
         n_all = len(events)
-        buffers = (np.empty(n_all), np.empty(n_all), np.empty(n_all, np.int64), np.empty(n_all, np.int8))
+        buffers = (np.empty(n_all), np.empty(n_all), np.empty(n_all, np.int64), np.empty(n_all, np.int8), np.empty(n_all, np.int64))
         table = calibration.undistortion_table if calibration.dist else _NO_TABLE
-        n_kept = int(_kept_events(keep, events.x, events.y, events.t, events.p, table, *buffers))
+        n_kept = int(_kept_events(keep, events.x, events.y, events.t, events.p, table, *buffers[:4]))
+        if self._pixel_last is not None:  # every event of the step moves its pixel's history, kept or not
+            _pixel_gaps(keep, events.x, events.y, events.t, events.p, self._width, self._pixel_last, buffers[4])
         if n_kept < int(c.min_events):
             self.last_events = 0
             return False
@@ -393,16 +423,29 @@ class EventRegistration:
         if out is None:
             return False
         if c.combine and reg.covariance is not None:
-            T_f = gtsam.Pose3(reg.T_world_cam)
-            e = T_f.logmap(gtsam.Pose3(out[0]))
-            I_f = inv(reg.covariance)  # a singular one raises as np.linalg.inv
-            I_e = _inv(out[1])  # positive definite (checked above), as the sum below
-            P = _inv(I_f + I_e)
-            reg.T_world_cam = T_f.compose(gtsam.Pose3.Expmap(P @ (I_e @ e))).matrix()
-            reg.covariance = 0.5 * (P + P.T)
+            reg.T_world_cam, reg.covariance = combine_poses(reg.T_world_cam, reg.covariance, out[0], out[1], bool(c.combine_convex))
         else:
             reg.T_world_cam, reg.covariance = out
         return True
+
+
+def combine_poses(T_f: np.ndarray, cov_f: np.ndarray, T_e: np.ndarray, cov_e: np.ndarray, convex: bool = False):
+    """(pose, covariance) of the field registration's pose ``T_f`` (covariance ``cov_f``, its tangent space, gtsam
+    order) combined with the events' ``T_e`` (``cov_e``) by their informations, in ``T_f``'s tangent space. The
+    covariance is the full combination's; the pose its information-weighted mean, or with ``convex`` each tangent
+    component weighted by the two diagonal informations alone (between the two poses, never beyond: see
+    ``EventRegistrationConfig.combine_convex``)."""
+    T_f = gtsam.Pose3(T_f)
+    e = T_f.logmap(gtsam.Pose3(T_e))
+    I_f = inv(cov_f)  # a singular one raises as np.linalg.inv
+    I_e = _inv(cov_e)  # positive definite (checked by the caller), as the sum below
+    P = _inv(I_f + I_e)
+    if convex:
+        d_f, d_e = np.diag(I_f), np.diag(I_e)
+        step = d_e / (d_f + d_e) * e
+    else:
+        step = P @ (I_e @ e)
+    return T_f.compose(gtsam.Pose3.Expmap(step)).matrix(), 0.5 * (P + P.T)
 
 
 def event_registration_for(config, contour_map, tangents: np.ndarray, width: int, height: int,

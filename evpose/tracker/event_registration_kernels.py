@@ -41,13 +41,33 @@ def _kept_events(keep, x, y, t, p, table, ex, ey, et, ep):
     return n
 
 
+NO_EVENT = np.iinfo(np.int64).min
+"""A pixel without an event yet, in :func:`_pixel_gaps`'s ``last``."""
+
+
+@nb.njit(cache=True)
+def _pixel_gaps(keep, x, y, t, p, width, last, gaps):
+    """For each kept event (``keep``), in order, the time since its pixel's previous event of the same polarity into
+    ``gaps`` (us; 2**62 when none), ``last`` ((2 W H,) int64, ``NO_EVENT`` = none) the pixels' latest event times,
+    which every event of the step (kept or not) updates; returns how many kept."""
+    n = 0
+    for i in range(keep.shape[0]):
+        j = (np.int64(y[i]) * width + np.int64(x[i])) * 2 + (1 if p[i] > 0 else 0)
+        prev = last[j]
+        if keep[i]:
+            gaps[n] = t[i] - prev if prev != NO_EVENT else np.int64(2) ** 62
+            n += 1
+        last[j] = t[i]
+    return n
+
+
 @nb.njit(cache=True)
 def _associate_nearest(points, tangents, used, R_cw, t_cw, fx, fy, cx, cy, radius, width, height, n_events, ex, ey, et, ep,
-                       polarity, pts, tg, assoc):
+                       eg, polarity, pts, tg, assoc):
     """Gathers the rows ``used`` of ``points`` / ``tangents`` into ``pts`` / ``tg`` and associates each of the first
     ``n_events`` events with the point (row of ``pts``) projected nearest to its (rounded) pixel within ``radius``
     (ties: the lower index) if that point may fire the event's polarity; the associated events are moved to the
-    front of ``ex``, ``ey``, ``et``, ``ep`` in their order, their points in ``assoc``. Returns how many. The points
+    front of ``ex``, ``ey``, ``et``, ``ep`` (and ``eg``, the gaps of :func:`_pixel_gaps`) in their order, their points in ``assoc``. Returns how many. The points
     are bucketed in cells of ``2 radius`` pixels, so each event looks at a few points only. (Marking every pixel of
     an image-sized grid with its nearest point, as :mod:`evpose.fusion.aligned_surface` marks its patches, gave the
     same associations bit for bit at the same CPU cost in a run, ~0.06 ms when hot, with three image-sized arrays to
@@ -112,6 +132,7 @@ def _associate_nearest(points, tangents, used, R_cw, t_cw, fx, fy, cx, cy, radiu
         ey[n] = ey[i]
         et[n] = et[i]
         ep[n] = ep[i]
+        eg[n] = eg[i]
         assoc[n] = bk
         n += 1
     return n
@@ -119,12 +140,15 @@ def _associate_nearest(points, tangents, used, R_cw, t_cw, fx, fy, cx, cy, radiu
 
 @nb.njit(cache=True)
 def _linearise_events(n_events, ex, ey, et, ep, assoc, points, tangents, R_cw, t_cw, fx, fy, cx, cy, twist, t_ref, on_lead, off_lead,
-                      huber, gate, H, b, sw, swr):
+                      eg, burst, huber, gate, H, b, sw, swr):
     """Robust normal equations of the first ``n_events`` events' distances to their points' edge lines (event ``i``'s
     point the row ``assoc[i]`` of ``points`` / ``tangents``), each point projected at its
     event's time (the pose ``t_ref - t`` earlier along ``twist``, body frame, rotation then translation, per
     second). An ON event of row ``k``'s point is taken ``on_lead[k]`` pixels ahead of the edge along its motion, an OFF
-    event ``off_lead[k]`` (see ``EventRegistrationConfig.on_lead_px`` and ``grazing_max_cos``). ``sw`` / ``swr`` (M,) get each point's sums of the robust weights
+    event ``off_lead[k]`` (see ``EventRegistrationConfig.on_lead_px`` and ``grazing_max_cos``); with ``burst[0]`` > 0 an
+    event whose pixel fired the same polarity ``eg[i]`` us before, less than ``burst[0]`` of the edge's pixel-crossing
+    times (1 / its normal speed) ago, adds ``burst[2]`` (ON) / ``burst[4]`` (OFF) to that lead, any other ``burst[1]`` /
+    ``burst[3]`` (see ``EventRegistrationConfig.follower_crossings``). ``sw`` / ``swr`` (M,) get each point's sums of the robust weights
     and weighted residuals. Returns (cost, events used, sum of w r^2)."""
     for k in range(sw.shape[0]):
         sw[k] = 0.0
@@ -137,6 +161,7 @@ def _linearise_events(n_events, ex, ey, et, ep, assoc, points, tangents, R_cw, t
     used = 0
     swr2 = 0.0
     J = np.zeros(6)
+    with_burst = burst.shape[0] == 5 and burst[0] > 0.0
     wx, wy, wz, vx, vy, vz = twist[0], twist[1], twist[2], twist[3], twist[4], twist[5]
     for i in range(n_events):
         k = assoc[i]
@@ -167,10 +192,18 @@ def _linearise_events(n_events, ex, ey, et, ep, assoc, points, tangents, R_cw, t
         J[5] = -(nu * (-puz) + nv * (-pvz))
         res = nu * (ex[i] - u) + nv * (ey[i] - v)
         lead = on_lead[k] if ep[i] > 0 else off_lead[k]
-        if lead != 0.0:
+        if lead != 0.0 or with_burst:
             vn = 0.0  # the edge's image speed along n: -J . twist
             for a in range(6):
                 vn -= J[a] * twist[a]
+            if with_burst and vn != 0.0:
+                # The pixel's previous same-polarity event less than burst[0] crossing times ago: the same edge's
+                # passage, whose later events trail its first (the threshold crossings of a pixel-integrated edge).
+                follower = eg[i] * abs(vn) * 1e-6 < burst[0]
+                if ep[i] > 0:
+                    lead += burst[2] if follower else burst[1]
+                else:
+                    lead += burst[4] if follower else burst[3]
             if vn > 0.0:
                 res -= lead
             elif vn < 0.0:
