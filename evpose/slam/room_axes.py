@@ -227,6 +227,24 @@ def _refine(n: np.ndarray, length: np.ndarray, R: np.ndarray, gates_deg: tuple, 
     return R, H / (max(1.0, chi2 / dof) if dof > 0 else 1.0), int(np.bincount(lab[sel], minlength=3).min())
 
 
+def _yaw_search(n: np.ndarray, length: np.ndarray, up: np.ndarray, cfg: RoomAxesSettings) -> np.ndarray:
+    """The start of :func:`_refine`: of the rotations with third axis ``up`` and a yaw on a 1-deg grid over 90 deg, the
+    first that labels the most segment length within ``search_gate_deg``."""
+    h = np.array([1.0, 0, 0]) - up[0] * up
+    h /= np.linalg.norm(h)
+    # The 90 candidates at once (session 32: the per-candidate loop's small numpy calls were 60 % of a measurement's
+    # CPU); same arithmetic per candidate as one at a time (scalar sin / cos, a stacked matmul, each score summed over
+    # its own selection), so the same R0.
+    psi = np.radians(np.arange(0.0, 90.0, 1.0))
+    c, s = np.array([np.cos(v) for v in psi]), np.array([np.sin(v) for v in psi])
+    a = c[:, None] * h + s[:, None] * np.cross(up, h)
+    Rs = np.stack([a, np.cross(up, a), np.broadcast_to(up, a.shape)], axis=2)
+    sel = np.min(np.abs(n @ Rs), axis=2) < np.sin(np.radians(cfg.search_gate_deg))
+    scores = [float(length[m].sum()) for m in sel]
+    R0 = Rs[int(np.argmax(scores))].copy()  # the first of the best, as the loop's strict ``>``
+    return R0
+
+
 def measure_room_rotation(img8: np.ndarray, K: np.ndarray, cfg: RoomAxesSettings = RoomAxesSettings()) -> tuple[np.ndarray | None, np.ndarray | None]:
     """Camera-from-room rotation of an MCI (columns: the room's two horizontal axes and its up, in the camera frame),
     known up to the room's 90-deg yaw symmetry, and the 3x3 information of its camera-frame rotation (1/rad^2), or
@@ -242,18 +260,7 @@ def measure_room_rotation(img8: np.ndarray, K: np.ndarray, cfg: RoomAxesSettings
         return None, None
     up = _up_direction(n, length, cfg)
     up = np.array([0.0, -1.0, 0.0]) if up is None else up
-    h = np.array([1.0, 0, 0]) - up[0] * up
-    h /= np.linalg.norm(h)
-    # The 90 candidates at once (session 32: the per-candidate loop's small numpy calls were 60 % of a measurement's
-    # CPU); same arithmetic per candidate as one at a time (scalar sin / cos, a stacked matmul, each score summed over
-    # its own selection), so the same R0.
-    psi = np.radians(np.arange(0.0, 90.0, 1.0))
-    c, s = np.array([np.cos(v) for v in psi]), np.array([np.sin(v) for v in psi])
-    a = c[:, None] * h + s[:, None] * np.cross(up, h)
-    Rs = np.stack([a, np.cross(up, a), np.broadcast_to(up, a.shape)], axis=2)
-    sel = np.min(np.abs(n @ Rs), axis=2) < np.sin(np.radians(cfg.search_gate_deg))
-    scores = [float(length[m].sum()) for m in sel]
-    R0 = Rs[int(np.argmax(scores))].copy()  # the first of the best, as the loop's strict ``>``
+    R0 = _yaw_search(n, length, up, cfg)
     R, H, least = _refine(n, length, R0, (6.0,) + tuple(cfg.gates_deg), cfg)
     if R is None or least < cfg.min_per_axis:
         return None, None
