@@ -120,7 +120,14 @@ travel holds more than the scale. By kind of step (``ana2.py``): the steps place
 0.33 of their length (log length ratio sd 0.34, direction median 8.2 deg), the coasted ones by 0.14 (sd 0.19, 2.9 deg).
 Aimed at the tracked stretches' direction, also tried and worse: each PnP pose re-solved with its own MCI's room
 rotation (in the map's room frame) as a 0.5 deg prior, +0.38 +- 0.26 (11 of 19 worse); tilt-only priors (the rotation
-about the room's up left free) +0.33 +- 0.26 (seeds 0-10, 7 of 11 worse). So still off: seed 3's tracked share.
+about the room's up left free) +0.33 +- 0.26 (seeds 0-10, 7 of 11 worse); more keyframes, so more poses under the prior
+(``keyframe_displacement_px`` 14) +0.23 +- 0.26 (14 of 20 worse). Every variant of the prior-on runs tried lands at
+3.26-3.37 %, so part of its -0.74 on these seeds is a lucky draw (session 31's 100 pooled runs: -0.32 +- 0.18). By
+pose (``ana3.py``, seeds 0-19, squared residual after each map's Sim(3)): the PnP-placed poses 40 % (RMS 36 mm; prior
+off 76 %, 87 mm), the coasted 43 % (20 mm; off 18 %, 24 mm), each map's first (two-view reference) pose 18 % (65 mm;
+off 7 %, 73 mm). Re-solving the two-view poses on the final points as ``refit_tracked_poses`` does the PnP ones moved
+them by under 3 mm and the ATE by -0.001 +- 0.009 points (seeds 0-8; ``tried_refit_first.diff``): they agree with their
+points, and the error is the two-view map's own. So still off: seed 3's tracked share.
 """
 
 from __future__ import annotations
