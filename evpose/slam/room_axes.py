@@ -127,7 +127,10 @@ pose (``ana3.py``, seeds 0-19, squared residual after each map's Sim(3)): the Pn
 off 76 %, 87 mm), the coasted 43 % (20 mm; off 18 %, 24 mm), each map's first (two-view reference) pose 18 % (65 mm;
 off 7 %, 73 mm). Re-solving the two-view poses on the final points as ``refit_tracked_poses`` does the PnP ones moved
 them by under 3 mm and the ATE by -0.001 +- 0.009 points (seeds 0-8; ``tried_refit_first.diff``): they agree with their
-points, and the error is the two-view map's own. So still off: seed 3's tracked share.
+points, and the error is the two-view map's own. Landing event-only seeds 0-23 (recorded as the rooms: ``evpose
+simulate --seconds 3``, 346x260; defaults today 1.618 %, 20 within 2 %): with the prior 1.606 % (-0.011 +- 0.007), 21
+seeds bit-identical, seeds 12 / 14 / 22 a little better (so some of their BAs got priors). So still off:
+seed 3's tracked share.
 """
 
 from __future__ import annotations
