@@ -337,7 +337,10 @@ class TrackingConfig:
     seeds 28 / 36 only: 1.68 / 3.37 -> 1.50 / 3.42 %; 20 within 2 % either way); indoor 0-7 3.026 %
     (-0.92 +- 1.12), pooled 40 runs 2.989 % (-0.31 +- 0.31, 28 better), 8-19 2.965 % (-0.60 +- 0.51, 8 better), 8-19
     pooled 60 runs 3.695 -> 3.370 % (-0.33 +- 0.22, 36 better), all 100 indoor runs -0.32 +- 0.18 (64 better), the 0.5 s
-    segment metric level; but seed 3 79.6 % tracked (defaults 89.2 %) and 20-30 % more CPU indoors. Still off."""
+    segment metric level; but seed 3 79.6 % tracked (defaults 89.2 %) and 20-30 % more CPU indoors. Session 32
+    (``/tmp/s32/room32``, module notes): indoor 0-19 3.773 -> 3.029 % (-0.74 +- 0.53, 13 of 20 better), seed 3 still
+    79.6 % (one MCI's timing before a blank wall; the defaults' 89.2 % holds a three-pose map across it), CPU 1.10x
+    the defaults' (1.27x before the yaw search ran its candidates at once). Still off: seed 3's tracked share."""
     ba_room_prior_gain: float = field(default=4.0, metadata={"min": 0.1, "max": 100.0, "step": 0.1, "unit": "ratio"})
     """``ba_room_prior_deg``: the prior's rotation information is the measurement's (plus the sigma floor) times this: in
     situ the measurements' estimated sigmas ran at about three times their errors (:mod:`evpose.slam.room_axes`), ratio."""
