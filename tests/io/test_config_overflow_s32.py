@@ -47,7 +47,9 @@ def test_an_integer_flag_beyond_any_float_exits_2_with_one_line(tmp_path, capsys
 
 
 def test_integers_inside_the_range_still_pass(tmp_path):
-    from evpose.io.config_file import check_config
     from evpose.mapping.build import MapBuildConfig
 
-    check_config(MapBuildConfig(k_neighbours=100, min_region_points=3))
+    path = tmp_path / "map.yaml"
+    path.write_text("k_neighbours: 100\nmin_region_points: 3\n")
+    cfg = read_config(MapBuildConfig, path)
+    assert (cfg.k_neighbours, cfg.min_region_points) == (100, 3)
