@@ -23,7 +23,15 @@ from __future__ import annotations
 
 import evpose  # noqa: F401  first, before numpy: the suite runs on the BLAS kernels evpose pins (evpose.blas_kernels)
 
+import signal
+
 import pytest
+
+# A run started in the background of a non-interactive shell (`make test &`, a CI script's `cmd &`) inherits SIGINT
+# ignored, so the tests that send themselves a Ctrl+C saw nothing and failed (session 32). Such a run could not be
+# interrupted from a terminal anyway; the suite runs as from an interactive one, and so do the commands it starts.
+if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 SIM_LANDING_SMALL = dict(scenario="landing", seconds=1.0, resolution=(240, 180), seed=0)
 
