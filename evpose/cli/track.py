@@ -90,11 +90,11 @@ def _check_smoothed(cfg) -> None:
         raise InputError(None, f"--smoothed needs --mode full with the factor_graph fusion, not {cfg.mode.value} / {cfg.fusion.backend.value}")
 
 
-def _record_fusion_inputs(session, cfg):
-    """Have the session's factor graph log what it is fed, for the smoothed trajectory written after the run."""
+def _record_fusion_inputs(session):
+    """Have the session's factor graph log what it is fed, for the smoothed trajectory written after the run (the mode and
+    backend were checked by :func:`_check_smoothed` before the inputs were read)."""
     from evpose.fusion.replay import FusionInputs
 
-    _check_smoothed(cfg)
     motion = session.tracker.components.motion
     inputs = FusionInputs(int(motion.last.t_us), motion.last.T_world_cam.copy(), motion.initial_velocity_world)
     motion.input_log = inputs.reports
@@ -205,7 +205,7 @@ def main(
         raise InputError(recording, f"no pose update to run: the events end at {session.t_end_us} us, less than one update"
                          f" ({session.dt_us} us) after the start at {session.t0_us} us"
                          + (" (the first ground-truth pose)" if initial is None else ""))
-    inputs = _record_fusion_inputs(session, cfg) if smoothed is not None else None
+    inputs = _record_fusion_inputs(session) if smoothed is not None else None
 
     lost = []
     acquisition = AcquisitionCheck(session, acquire_s, map, recording.name)
