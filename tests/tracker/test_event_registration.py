@@ -224,14 +224,15 @@ def test_pixel_thresholds_shrink_on_coarser_sensors_only_when_a_reference_angle_
 def test_crease_off_lead_shrinks_with_the_pixel_on_coarser_sensors_only():
     from evpose.tracker.event_registration_config import scaled_to_pixel
 
-    c = EventRegistrationConfig(crease_off_lead_pixel_exponent=1.0)
+    c = EventRegistrationConfig(crease_off_lead_pixel_exponent=1.0, coarse_on_lead_px=0.0)  # the ON leads: test_event_on_leads_s33
     assert scaled_to_pixel(c, 1e3 / 247.07) is c  # the simulated 346x260 camera (4.047 mrad) and the demos: as set
     assert scaled_to_pixel(c, 2.0) is c
     coarse = scaled_to_pixel(c, 5.83)  # its 240x180 sibling: a smaller lead, the same angle at exponent 1
     assert c.crease_off_lead_px < coarse.crease_off_lead_px < 0
     assert np.isclose(coarse.crease_off_lead_px * 5.83, c.crease_off_lead_px * c.lead_reference_pixel_mrad)
-    steeper = scaled_to_pixel(EventRegistrationConfig(crease_off_lead_pixel_exponent=2.0), 5.83)
+    steeper = scaled_to_pixel(EventRegistrationConfig(crease_off_lead_pixel_exponent=2.0, coarse_on_lead_px=0.0), 5.83)
     assert coarse.crease_off_lead_px < steeper.crease_off_lead_px < 0
     assert (coarse.off_lead_px, coarse.grazing_off_lead_px, coarse.crease_on_lead_px) == (c.off_lead_px, c.grazing_off_lead_px, c.crease_on_lead_px)
-    for off in (EventRegistrationConfig(), EventRegistrationConfig(lead_reference_pixel_mrad=0.0, crease_off_lead_pixel_exponent=1.0)):
+    for off in (EventRegistrationConfig(coarse_on_lead_px=0.0),
+                EventRegistrationConfig(lead_reference_pixel_mrad=0.0, crease_off_lead_pixel_exponent=1.0, coarse_on_lead_px=0.0)):
         assert scaled_to_pixel(off, 5.83) is off  # off by default (the 3 s landing loses), or without a reference
