@@ -41,8 +41,8 @@ from evpose.core.trajectory import Trajectory
 from evpose.fusion.config import FusionConfig, RegistrationErrorModel, RobustLoss
 from evpose.fusion.fixed_lag import CopyableFixedLagSmoother
 from evpose.fusion.preintegration import ImuBuffer, make_preintegration_params, preintegrate
-from evpose.fusion.startup import gyro_bias_release_due, gyro_bias_release_params, initial_gyro_bias_sigma, startup_inflated
 from evpose.fusion.propagation import NavPropagator, imu_rate_trajectory
+from evpose.fusion.startup import gyro_bias_release_due, gyro_bias_release_params, initial_gyro_bias_sigma, startup_inflated
 from evpose.fusion.state import Extrinsic, FusedState
 
 
