@@ -40,6 +40,7 @@ from evpose.core.imu import ImuSamples
 from evpose.core.trajectory import Trajectory
 from evpose.fusion.config import FusionConfig, RobustLoss
 from evpose.fusion.factor_graph import initial_bias_covariance, registration_covariance, usable_pose
+from evpose.fusion.startup import gyro_bias_release_due, initial_gyro_bias_sigma, startup_inflated
 from evpose.fusion.preintegration import ImuBuffer
 from evpose.fusion.state import Extrinsic, FusedState, skew
 
@@ -77,6 +78,10 @@ class ErrorStateEkf:
         self.state: _Nominal | None = None
         self.history: list[_Nominal] = []
         self.degraded = False
+        self.start_us: int | None = None
+        """Time of the state ``initialize`` set (``FusionConfig.registration_startup_s`` counts from it)."""
+        self.hold_start_us: int | None = None
+        """Start time of a running gyroscope-bias hold (``FusionConfig.gyro_bias_hold_s``); None: none or released."""
 
     # -------------------------------------------------------------- propagation
     def _propagate(self, s: _Nominal, t_us: int, with_covariance: bool = True) -> _Nominal:
@@ -139,13 +144,15 @@ class ErrorStateEkf:
         v = self.extrinsic.imu_velocity(T_wi[:3, :3], v_cam, gyro_m - bg)
         sigma_v = c.init_sigma_velocity if velocity_world is not None else c.unknown_velocity_sigma
         P = np.diag([c.init_sigma_rot**2] * 3 + [c.init_sigma_trans**2] * 3 + [sigma_v**2] * 3
-                    + [c.init_sigma_acc_bias**2] * 3 + [c.init_sigma_gyro_bias**2] * 3)
+                    + [c.init_sigma_acc_bias**2] * 3 + [initial_gyro_bias_sigma(c) ** 2] * 3)
         bias_cov = initial_bias_covariance(c, T_wi[:3, :3])
         if bias_cov is not None:
             P[9:, 9:] = bias_cov
         self.state = _Nominal(int(t_us), T_wi[:3, :3].copy(), T_wi[:3, 3].copy(), v, ba, bg, P)
         self.history = [self.state.copy()]
         self.degraded = False
+        self.hold_start_us = int(t_us) if c.gyro_bias_hold_s > 0 else None
+        self.start_us = int(t_us)
         return self._fused(self.state, False)
 
     def add_imu(self, imu: ImuSamples) -> None:
@@ -157,12 +164,16 @@ class ErrorStateEkf:
         if int(t_us) <= self.state.t_us:
             raise ValueError(f"update time {t_us} us is not after the last state at {self.state.t_us} us")
         s = self._propagate(self.state, int(t_us))
+        if gyro_bias_release_due(self.config, self.hold_start_us, int(t_us)):
+            s.P[12:15, 12:15] += np.eye(3) * self.config.init_sigma_gyro_bias**2  # the held bias released (the graph's step)
+            self.hold_start_us = None
         T_world_cam_measured = usable_pose(T_world_cam_measured)
         if T_world_cam_measured is None:
             self.degraded = True
         else:
             reacquire = self.degraded
-            self._correct(s, np.asarray(T_world_cam_measured, np.float64).reshape(4, 4), covariance_6x6, robust=not reacquire)
+            cov = startup_inflated(self.config, self.start_us, int(t_us), covariance_6x6)
+            self._correct(s, np.asarray(T_world_cam_measured, np.float64).reshape(4, 4), cov, robust=not reacquire)
             self.degraded = False
         self.state = s
         self.history.append(s.copy())
@@ -234,11 +245,14 @@ class ErrorStateEkf:
 
     def snapshot(self) -> dict:
         return {"state": None if self.state is None else self.state.copy(), "history": [h.copy() for h in self.history],
-                "degraded": self.degraded, "imu": self.buffer.samples}
+                "degraded": self.degraded, "imu": self.buffer.samples, "hold_start_us": self.hold_start_us,
+                "start_us": self.start_us}
 
     def restore(self, snap: dict) -> None:
         self.state = None if snap["state"] is None else snap["state"].copy()
         self.history = [h.copy() for h in snap["history"]]
         self.degraded = bool(snap["degraded"])
+        self.hold_start_us = snap.get("hold_start_us")
+        self.start_us = snap.get("start_us")
         self.buffer = ImuBuffer(self.time_offset_us)
         self.buffer.set_samples(snap["imu"])

@@ -40,14 +40,15 @@ from evpose.core.imu import ImuSamples
 from evpose.core.trajectory import Trajectory
 from evpose.fusion.config import FusionConfig, RegistrationErrorModel, RobustLoss
 from evpose.fusion.fixed_lag import CopyableFixedLagSmoother
-from evpose.fusion.preintegration import ImuBuffer, make_preintegration_params
+from evpose.fusion.preintegration import ImuBuffer, make_preintegration_params, preintegrate
 from evpose.fusion.propagation import NavPropagator, imu_rate_trajectory
+from evpose.fusion.startup import gyro_bias_release_due, gyro_bias_release_params, initial_gyro_bias_sigma, startup_inflated
 from evpose.fusion.state import Extrinsic, FusedState
 
 
 def initial_bias_covariance(config: FusionConfig, R_world_imu: np.ndarray) -> np.ndarray | None:
     """(6, 6) covariance of the initial (accelerometer, gyroscope) bias prior in the IMU frame, or None when it is the
-    diagonal of ``init_sigma_acc_bias`` / ``init_sigma_gyro_bias`` (``init_sigma_acc_bias_vertical`` off)."""
+    diagonal of ``init_sigma_acc_bias`` / :func:`initial_gyro_bias_sigma` (``init_sigma_acc_bias_vertical`` off)."""
     sv = float(config.init_sigma_acc_bias_vertical)
     if not sv > 0:
         return None
@@ -55,7 +56,7 @@ def initial_bias_covariance(config: FusionConfig, R_world_imu: np.ndarray) -> np
     g = np.asarray(R_world_imu, np.float64)[2, :]  # world z in the IMU frame
     P = np.zeros((6, 6))
     P[:3, :3] = sh**2 * np.eye(3) + (sv**2 - sh**2) * np.outer(g, g)
-    P[3:, 3:] = float(config.init_sigma_gyro_bias) ** 2 * np.eye(3)
+    P[3:, 3:] = initial_gyro_bias_sigma(config) ** 2 * np.eye(3)
     return P
 
 
@@ -63,7 +64,7 @@ def initial_bias_noise(gtsam, config: FusionConfig, R_world_imu: np.ndarray):
     """gtsam noise model of :func:`initial_bias_covariance`."""
     P = initial_bias_covariance(config, R_world_imu)
     if P is None:
-        return gtsam.noiseModel.Diagonal.Sigmas(np.array([config.init_sigma_acc_bias] * 3 + [config.init_sigma_gyro_bias] * 3))
+        return gtsam.noiseModel.Diagonal.Sigmas(np.array([config.init_sigma_acc_bias] * 3 + [initial_gyro_bias_sigma(config)] * 3))
     return gtsam.noiseModel.Gaussian.Covariance(P)
 
 
@@ -216,6 +217,10 @@ class FactorGraphFusion:
         AR(1) registration error models."""
         self.temporary_factor: int | None = None
         """Smoother index of the newest state's extra prior of ``AR1_WHITENED``, removed by the next registration."""
+        self.start_us: int | None = None
+        """Time of the state ``initialize`` set (``FusionConfig.registration_startup_s`` counts from it)."""
+        self.hold_start_us: int | None = None
+        """Start time of a running gyroscope-bias hold (``FusionConfig.gyro_bias_hold_s``); None: none or released."""
 
     @property
     def initialized(self) -> bool:
@@ -269,6 +274,8 @@ class FactorGraphFusion:
         self.smoother.update(graph, values, {x: 0.0, vk: 0.0, b: 0.0})
         self.index = 0
         self.t_state_us = int(t_us)
+        self.hold_start_us = int(t_us) if c.gyro_bias_hold_s > 0 else None
+        self.start_us = int(t_us)
         return self._finish_state(int(t_us), degraded=False)
 
     def add_imu(self, imu: ImuSamples) -> None:
@@ -318,7 +325,8 @@ class FactorGraphFusion:
                 "t_state_us": getattr(self, "t_state_us", None), "n_updates": self.n_updates, "degraded": self.degraded,
                 "anchor": (p.t_us, p.nav, p.bias), "history": list(self.history),
                 "last_state": None if self.last_state is None else self.last_state.copy(), "imu": self.buffer.samples,
-                "last_registration": self.last_registration, "temporary_factor": self.temporary_factor}
+                "last_registration": self.last_registration, "temporary_factor": self.temporary_factor,
+                "hold_start_us": self.hold_start_us, "start_us": self.start_us}
 
     def restore(self, snap: dict) -> None:
         """Put back a snapshot; the snapshot stays usable (its smoother is copied again), and the restored fusion fed
@@ -339,6 +347,8 @@ class FactorGraphFusion:
         self.last_state = None if snap["last_state"] is None else snap["last_state"].copy()
         self.last_registration = snap.get("last_registration")
         self.temporary_factor = snap.get("temporary_factor")
+        self.hold_start_us = snap.get("hold_start_us")
+        self.start_us = snap.get("start_us")
 
     # -------------------------------------------------------------- internals
     def _add_state(self, t_us: int, T_meas_cam: np.ndarray | None, cov_cam: np.ndarray | None) -> FusedState:
@@ -350,6 +360,10 @@ class FactorGraphFusion:
         pim = self.propagator.preintegration_to(t_us)
         nav_pred = self.propagator.predict_nav(t_us)  # pim.predict from the anchor (t_us > anchor), usually cached
         dt = (t_us - self.t_state_us) * 1e-6
+        if gyro_bias_release_due(c, self.hold_start_us, t_us):
+            # The same integral with the held bias's release as this step's random walk (FusionConfig.gyro_bias_hold_s).
+            pim = preintegrate(self.buffer, gyro_bias_release_params(c, dt), self.propagator.bias, self.propagator.t_us, t_us)
+            self.hold_start_us = None
 
         graph = gtsam.NonlinearFactorGraph()
         graph.add(gtsam.CombinedImuFactor(xi, vi, xj, vj, bi, bj, pim))
@@ -358,6 +372,7 @@ class FactorGraphFusion:
         remove, temporary = None, None
         if not degraded:
             T_meas_imu = self.extrinsic.imu_pose(T_meas_cam)
+            cov_cam = startup_inflated(c, self.start_us, t_us, cov_cam)
             remove, temporary = self._add_registration(graph, i, xi, xj, T_meas_imu, cov_cam, robust=not reacquire)
             self.last_registration = (j, T_meas_imu)
         else:
