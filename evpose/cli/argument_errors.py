@@ -58,11 +58,24 @@ def _plain_optional(message: str) -> str:
     return f"{m.group(1)}: expected {_KINDS.get(m.group(2), m.group(2))}, got {m.group(3)}"
 
 
+def _refuse_empty(args: list[str]) -> None:
+    """An empty argument (``--out ""``, ``--out=``, a positional ``""``) is refused: tyro reads it as the path ``.``, so
+    ``bench --out ""`` wrote its report, jobs and data into the current folder (session 32's fuzzing)."""
+    for i, arg in enumerate(args):
+        if arg.startswith("--") and arg.endswith("=") and len(arg) > 3:
+            raise ArgumentError(f"{arg[:-1]}: empty value; give one (see the command's --help)")
+        if arg == "" or not arg.strip():
+            before = args[i - 1] if i > 0 else ""
+            where = before.split("=", 1)[0] if before.startswith("--") and "=" not in before else f"argument {i + 1}"
+            raise ArgumentError(f"{where}: empty value; give one (see the command's --help)")
+
+
 def run_tyro(main: Callable[..., Any], args: list[str], prog: str) -> Any:
     """``tyro.cli(main, args=args, prog=prog)``, raising :class:`ArgumentError` (one line) where tyro would print its
     panel and exit 2. ``--help`` and everything ``main`` prints are untouched."""
     import tyro
 
+    _refuse_empty(args)
     real_stderr = sys.stderr
     captured = io.StringIO()
 

@@ -83,6 +83,12 @@ def _check_target(dst: Path, is_dir: bool) -> None:
         raise InputError(dst, f"cannot create the output: {ancestor} is a file, not a folder")
     if not os.access(ancestor, os.W_OK):
         raise OutputError(dst, "output folder is not writable")
+    # access() says yes to root for any folder on a writable mount, /proc and /sys included, where nothing can be
+    # created: `bench --out /proc/x` failed only after 40 s of work. A real (empty, removed) folder is the test.
+    try:
+        os.rmdir(tempfile.mkdtemp(prefix=".evpose-probe-", dir=ancestor))
+    except OSError as exc:
+        raise OutputError(dst, f"cannot create anything in {ancestor}: {exc.strerror or exc}") from None
 
 
 def check_outputs(outputs, inputs=(), folders=()) -> None:

@@ -36,3 +36,13 @@ def tqdm_lock_job() -> dict:
     with tqdm(total=1, disable=True):
         pass
     return {"lock_module": type(tqdm.get_lock()).__module__, "lock_type": type(tqdm.get_lock()).__name__}
+
+
+def released_job(release: str, started: str) -> dict:
+    """Say so in STARTED, then wait until RELEASE exists (at most 60 s): a job running or queued when the run is
+    interrupted."""
+    Path(started).write_text("")
+    end = time.monotonic() + 60
+    while not Path(release).exists() and time.monotonic() < end:
+        time.sleep(0.05)
+    return {"released": Path(release).exists()}
