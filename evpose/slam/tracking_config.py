@@ -66,6 +66,27 @@ class TrackingConfig:
     reference) poses -0.137, against -0.144 without. CPU (``cpu.py``): the re-solve costs 0.3-0.6 ms per PnP-placed pose
     once, when the trajectory is read (indoor seed 0: 38 poses, 16 ms against 1 ms without; landing seed 0: 77 poses, 43
     ms), and the record about 1.5 kB per pose."""
+    pnp_motion_prior_ratio: float = field(default=0.0, metadata={"min": 0.0, "max": 10.0, "step": 0.05, "unit": "ratio"})
+    """Event-only: each PnP pose is refined once more (Gauss-Newton, Huber reprojection errors at ``ba_huber_px``) with a
+    prior pulling its camera centre towards the pose the map's camera-frame rotation rate and velocity over the newest
+    ``coast_span_s`` of poses predict, at a sigma of this share of the predicted step since the map's last pose (0
+    disables; :mod:`evpose.slam.pnp_motion_prior`), ratio. The refined pose is kept only if as many tracked map points
+    agree with it as PnP needs; the read-time re-solve (``refit_tracked_poses``) keeps the same prior around the pose
+    it starts from. Session 33 (``/tmp/s33/dir33``: ``run.py`` harness = ``evpose slam`` + ``evpose eval --atlas
+    --correct-scale``, checked identical on indoor seed 0; ``cmp.py`` pairs two tags, ``ana2.py`` / ``ana5.py`` the
+    0.1 s steps), 1.0 against the defaults: indoor event-only seeds 0-19 3.795 -> 3.361 % (paired -0.43 +- 0.40, 11
+    better, 9 worse, least tracked 85.2 -> 85.4 %), held-out 20-39 3.477 -> 3.378 % (-0.10 +- 0.32, 10 / 10), landing
+    event-only 0-23 1.597 -> 1.322 % (-0.28 +- 0.28, 12 / 12; within 2 % 21 -> 23, the mean is mostly seed 4 7.63 ->
+    1.28 %); POOLED. What it does, which the ATE's chaos hides: the PnP-placed 0.1 s steps' log length ratio sd 0.467 ->
+    0.397 (held-out 0.456 -> 0.358), direction error RMS 29.7 -> 26.6 deg (24.2 -> 19.1), error / length 0.473 ->
+    0.399 (0.351 -> 0.342), and the coasts, which hold a velocity read from those poses, length sd 0.182 -> 0.128
+    (0.251 -> 0.138). With the room prior on (``ba_room_prior_deg`` 0.1, seeds 0-19 3.329 %): 1.0 3.132 % (-0.20 +-
+    0.32, 10 / 10), held-out 20-39 3.433 -> 3.755 % (+0.32 +- 0.36, 10 / 10); 3.0 3.560 % (+0.23 +- 0.47); 1.0 with ``pnp_motion_prior_deg`` 0.5 3.653 % (+0.32
+    +- 0.36, 12 worse): a rotation prior costs, as session 32's per-pose room rotation did. Off: within the noise
+    everywhere."""
+    pnp_motion_prior_deg: float = field(default=0.0, metadata={"min": 0.0, "max": 10.0, "step": 0.05, "unit": "deg"})
+    """``pnp_motion_prior_ratio`` > 0: sigma of the prior on the PnP pose's rotation about the predicted one (0: the
+    rotation is left to the points), degrees. 0.5 with ratio 1 and the room prior: worse (``pnp_motion_prior_ratio``)."""
     keyframe_tracked_ratio: float = field(default=0.7, metadata={"min": 0.1, "max": 1.0, "step": 0.05, "unit": "ratio"})
     """New keyframe when tracked map points drop below this share of the last keyframe's, ratio. In the landing's sharp
     turn nearly every MCI becomes a keyframe, from the sparsest MCIs (3000-6000 events). Session 22 (``/tmp/s22/turn9``,
