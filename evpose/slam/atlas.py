@@ -100,13 +100,15 @@ class SlamMap:
         self.traj_ref.append(ref.id if ref is not None else -1)
         self.traj_rel.append(rel)
 
-    def record_pose_observations(self, t_us: int, point_ids: np.ndarray, uv: np.ndarray, track_ids: np.ndarray, track_uv: np.ndarray) -> None:
-        """Keep what placed the pose at ``t_us`` by PnP (inliers' point ids and pixels, the MCI's other tracks), when
-        poses are re-solved later."""
+    def record_pose_observations(self, t_us: int, point_ids: np.ndarray, uv: np.ndarray, track_ids: np.ndarray, track_uv: np.ndarray,
+                                 prior_sigmas: tuple[float, float] | None = None) -> None:
+        """Keep what placed the pose at ``t_us`` by PnP (inliers' point ids and pixels, the MCI's other tracks, the
+        sigmas of the motion prior it was refined with), when poses are re-solved later."""
         if self.refit_K is not None:
             # Pixels as the tracker holds them (float32): a long run keeps one entry per tracked MCI.
             self.traj_obs[int(t_us)] = PoseObservations(np.asarray(point_ids, np.int64).copy(), np.asarray(uv, np.float32).copy(),
-                                                        np.asarray(track_ids, np.int64).copy(), np.asarray(track_uv, np.float32).copy())
+                                                        np.asarray(track_ids, np.int64).copy(), np.asarray(track_uv, np.float32).copy(),
+                                                        prior_sigmas)
 
     def transform(self, R: np.ndarray, s: float) -> None:
         """Apply ``x -> s R x`` to the whole map (keyframes, points, trajectory)."""

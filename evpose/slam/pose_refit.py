@@ -41,6 +41,7 @@ import numpy as np
 
 from evpose.core.trajectory import invert_pose
 from evpose.slam.geometry import project
+from evpose.slam.pnp_motion_prior import refine_pose_with_pose_prior
 
 MIN_POINTS = 6
 """A pose is re-solved only on at least this many of its inliers still in the map (six pairs fix a pose with margin)."""
@@ -74,6 +75,9 @@ class PoseObservations:
     uv: np.ndarray
     track_ids: np.ndarray
     track_uv: np.ndarray
+    prior_sigmas: tuple[float, float] | None = None
+    """(rotation rad, translation map units) of the motion prior the pose was refined with online
+    (:mod:`evpose.slam.pnp_motion_prior`); the re-solve keeps it around the pose it starts from. None: no prior."""
 
 
 def refit_trajectory(K: np.ndarray, t_us: list[int], T_wc: list[np.ndarray], obs: dict[int, PoseObservations], points: dict,
@@ -93,7 +97,16 @@ def refit_trajectory(K: np.ndarray, t_us: list[int], T_wc: list[np.ndarray], obs
             continue
         Xw = np.stack([points[int(p)].xyz for p in o.point_ids[keep]])
         uv = o.uv[keep].astype(np.float64)
-        T = refit_pose(K, Xw, uv, out[i])
+        if o.prior_sigmas is None:
+            solve = refit_pose
+        else:
+            # The online pose carried the motion prior; re-solving without it would hand the pose back to the valley
+            # the prior held it out of, so the prior stays, centred on the pose as the keyframes carry it now.
+            T_prior_cw = invert_pose(out[i])
+
+            def solve(K_, X_, u_, T_wc_):
+                return invert_pose(refine_pose_with_pose_prior(K_, X_, u_, invert_pose(T_wc_), T_prior_cw, *o.prior_sigmas))
+        T = solve(K, Xw, uv, out[i])
         have = set(o.point_ids[keep].tolist())
         extra = [(by_track[tid], k) for k, tid in enumerate(o.track_ids.tolist()) if tid in by_track and by_track[tid] not in have]
         if extra:
@@ -102,6 +115,6 @@ def refit_trajectory(K: np.ndarray, t_us: list[int], T_wc: list[np.ndarray], obs
             proj, z = project(K, invert_pose(T), Xe)
             near = (z > 0) & (np.linalg.norm(proj - ue, axis=1) < threshold_px)
             if near.any():
-                T = refit_pose(K, np.r_[Xw, Xe[near]], np.r_[uv, ue[near]], T)
+                T = solve(K, np.r_[Xw, Xe[near]], np.r_[uv, ue[near]], T)
         out[i] = T
     return out

@@ -378,7 +378,7 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
         if m.refit_K is not None:
             rest = np.setdiff1d(np.arange(len(fe.ids)), inl)
             m.record_pose_observations(mci.t_us, np.array([fe.track_to_point[int(fe.ids[i])] for i in inl], np.int64), fe.uv[inl],
-                                       fe.ids[rest], fe.uv[rest])
+                                       fe.ids[rest], fe.uv[rest], est.prior_sigmas)
         n_tracked = self._inliers = int(est.inliers.sum())
         keyframe = False
         if need_keyframe(m, fe.ids, fe.uv, n_tracked, tc):
@@ -393,6 +393,8 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
         Xw = np.stack([m.points[fe.track_to_point[int(fe.ids[i])]].xyz for i in sel])
         uv = fe.uv[sel].astype(np.float64)
         est = estimate_pose(self.K, Xw, uv, guess, self._pose_tc(m), self.cfg.seed)
+        if est.ok and self.imu is None and self.cfg.tracking.pnp_motion_prior_ratio > 0:
+            est = self._motion_prior_pose(m, mci.t_us, est, Xw, uv)
         sigma_deg = self.cfg.inertial.gyro_prior_deg if m.imu_initialised else self.cfg.inertial.gyro_prior_uninit_deg
         if est.ok and R_prior is not None and sigma_deg > 0:
             est = self._refine_with_gyro(est, Xw, uv, R_prior, sigma_deg)

@@ -14,11 +14,12 @@ from scipy.spatial.transform import Rotation
 
 from evpose.core.trajectory import invert_pose
 from evpose.slam.atlas import SlamMap
-from evpose.slam.event_coasting import camera_frame_rate
+from evpose.slam.event_coasting import camera_frame_rate, event_only_coast_pose
 from evpose.slam.geometry import project
 from evpose.slam.gyro_prior import (camera_delta_rotation, gyro_delta_rotation, keyframe_rotation_priors, reanchor_rotations,
                                     refine_pose_with_rotation_prior, rotation_angle_deg, sparse_pair_sigmas)
 from evpose.slam.room_axes import measure_room_rotation, room_frame, room_priors
+from evpose.slam.pnp_motion_prior import refine_pose_with_pose_prior
 from evpose.slam.tracking import PoseEstimate
 from evpose.slam.visual_gyro import visual_rotation
 
@@ -123,3 +124,24 @@ class GyroAids:
             return None
         tc = self.cfg.tracking
         return room_priors(m.keyframes[-window:], M, labels, np.radians(tc.ba_room_prior_deg), tc.ba_room_prior_gain) or None
+
+    def _motion_prior_pose(self, m: SlamMap, t_us: int, est: PoseEstimate, Xw: np.ndarray, uv: np.ndarray) -> PoseEstimate:
+        """Event-only: ``est`` refined with the map's predicted motion as a prior (``TrackingConfig.pnp_motion_prior_ratio``);
+        ``est`` itself when the map has no motion to predict with or too few points agree with the refined pose."""
+        tc = self._pose_tc(m)
+        T_pred = event_only_coast_pose(m, t_us, int(tc.coast_span_s * 1e6))
+        if T_pred is None:
+            return est
+        step = float(np.linalg.norm(T_pred[:3, 3] - m.traj_T[-1][:3, 3]))
+        if not step > 0:
+            return est
+        sigmas = (np.radians(tc.pnp_motion_prior_deg), tc.pnp_motion_prior_ratio * step)
+        inl = est.inliers
+        T_cw = refine_pose_with_pose_prior(self.K, Xw[inl], uv[inl], invert_pose(est.T_wc), invert_pose(T_pred), *sigmas,
+                                           huber_px=tc.ba_huber_px)
+        proj, z = project(self.K, T_cw, Xw)
+        err = np.linalg.norm(proj - uv, axis=1)
+        inliers = (z > 0) & (err < tc.reprojection_threshold_px)
+        if inliers.sum() < max(tc.min_inliers, tc.min_inlier_ratio * len(Xw)):
+            return est
+        return PoseEstimate(True, invert_pose(T_cw), inliers, rms_px=float(np.sqrt(np.mean(err[inliers] ** 2))), prior_sigmas=sigmas)

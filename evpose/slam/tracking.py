@@ -22,6 +22,9 @@ class PoseEstimate:
     reason: str = ""
     rms_px: float = float("nan")
     """RMS reprojection error of the inliers, pixels."""
+    prior_sigmas: tuple[float, float] | None = None
+    """(rotation rad, translation map units) of the motion prior the pose was refined with
+    (:mod:`evpose.slam.pnp_motion_prior`); None: none."""
 
 
 def estimate_pose(K: np.ndarray, Xw: np.ndarray, uv: np.ndarray, T_wc_guess: np.ndarray, cfg: TrackingConfig, seed: int = 0) -> PoseEstimate:
