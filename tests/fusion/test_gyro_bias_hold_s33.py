@@ -94,7 +94,7 @@ def test_startup_inflation_widens_only_the_two_ridges_and_only_during_the_startu
     # After the startup, before any start, or off: the covariance as given.
     assert startup_inflated(config, 1_000_000, 1_300_000, C) is C
     assert startup_inflated(config, None, 1_200_000, C) is C
-    assert startup_inflated(FusionConfig(), 1_000_000, 1_000_001, C) is C
+    assert startup_inflated(FusionConfig(registration_startup_s=0.0), 1_000_000, 1_000_001, C) is C
     # ``registration_ridge_scale``: the same two directions scaled after the startup.
     later = startup_inflated(FusionConfig(registration_startup_s=0.3, registration_ridge_scale=0.5), 1_000_000, 1_300_000, C)
     Ln = later / np.sqrt(np.outer(np.diag(C), np.diag(C)))
@@ -121,3 +121,14 @@ def test_startup_inflation_changes_the_fusion_only_during_the_startup(backend, c
     d = [np.abs(a.T_world_cam - b.T_world_cam).max() for a, b in zip(out[0.0], out[0.1])]
     assert d[5] > 1e-6  # inside the 0.1 s: different
     assert d[-1] < 0.2 * max(d[:20])  # long after it: the same registrations pull both to the same estimate
+
+
+def test_the_startup_widening_is_on_by_default_for_half_a_second():
+    # Session 33: on after the demos' recipes on other seeds gained (docs in FusionConfig.registration_startup_s).
+    config = FusionConfig()
+    assert config.registration_startup_s == 0.5 and config.registration_startup_inflation == 10.0
+    from evpose.fusion.startup import startup_inflated
+
+    C = _ridge_covariance()
+    assert startup_inflated(config, 0, 499_999, C) is not C
+    assert startup_inflated(config, 0, 500_000, C) is C
