@@ -463,8 +463,10 @@ class InitializationConfig:
     0.50 s and the next map starts only at 0.85 s. Paired: indoor 0-19 2.985 -> 3.056 % (+0.07 +- 0.44, 8 better, 6
     worse, 6 identical), least tracked 86.3 -> 82.5 %; held-out 20-39 3.048 -> 2.968 % (-0.08 +- 0.21, 6 / 5 / 9),
     least tracked 79.8 -> 80.3 % (seed 23 91.1 -> 80.3 %, also under the three perturbations: its second map's
-    restarted references keep failing until 0.87 s); landing 0-23 bit-identical. Neutral on the ATE and it moves the
-    marginal run from seed 30 to seed 23, so off."""
+    restarted references keep failing until 0.87 s); 0-39 pooled 3.017 -> 3.012 % (-0.00 +- 0.24, 14 / 11 / 15);
+    landing 0-23 bit-identical. Only before the first map (``tried_first_map_only.diff``): 0-39 3.080 % (+0.06 +-
+    0.19), least tracked 80.3 % (seed 23 again). Neutral on the ATE and it moves the marginal run from seed 30 to seed
+    23, so off."""
 
 
 @dataclass
