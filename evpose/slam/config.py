@@ -452,6 +452,21 @@ class InitializationConfig:
     least tracked 79.3 -> 85.5 %; 15 before."""
     max_frames: int = field(default=8, metadata={"min": 1, "max": 100, "step": 1, "unit": "MCIs"})
     """The reference view is replaced after this many MCIs without success, MCIs."""
+    restart_at_failed_mci: bool = False
+    """When a two-view attempt gives up its reference (too few matches left, or ``max_frames`` used up), make the
+    failing MCI the new reference at once instead of the next MCI (off: the next one), one MCI interval earlier.
+    Session 33 (issue 9; ``/tmp/s33/seed30/``: ``run.py``, ``batch.sh``, ``cmp.py``, ``pert.sh``), against main's
+    defaults: held-out indoor seed 30 79.8 -> 93.4 % tracked (1.79 -> 1.91 %; the same 79.8 -> 93.2-93.4 % under
+    ``ba_huber_px`` 1.9 / 2.1 and ``reprojection_threshold_px`` 2.4): its first reference (37 features, 7 ms) loses
+    every track by 27 ms; from that MCI's reference map 0 tracks visually to 0.25 s and coasts across the 0.28 s blank
+    wall at 0.56 s, where the defaults' map (reference one MCI later, 41 ms) starves at 0.10 s, runs out of coast at
+    0.50 s and the next map starts only at 0.85 s. Paired: indoor 0-19 2.985 -> 3.056 % (+0.07 +- 0.44, 8 better, 6
+    worse, 6 identical), least tracked 86.3 -> 82.5 %; held-out 20-39 3.048 -> 2.968 % (-0.08 +- 0.21, 6 / 5 / 9),
+    least tracked 79.8 -> 80.3 % (seed 23 91.1 -> 80.3 %, also under the three perturbations: its second map's
+    restarted references keep failing until 0.87 s); 0-39 pooled 3.017 -> 3.012 % (-0.00 +- 0.24, 14 / 11 / 15);
+    landing 0-23 bit-identical. Only before the first map (``tried_first_map_only.diff``): 0-39 3.080 % (+0.06 +-
+    0.19), least tracked 80.3 % (seed 23 again). Neutral on the ATE and it moves the marginal run from seed 30 to seed
+    23, so off."""
 
 
 @dataclass

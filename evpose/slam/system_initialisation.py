@@ -54,10 +54,7 @@ class TwoViewInitialisation:
     def _try_initialise(self, mci: MciResult) -> tuple[SlamStatus, str, np.ndarray | None]:
         fe, icfg = self.fe, self._init_cfg
         if fe.init_ref is None:
-            self._replenish(mci.image8, mci.image)
-            fe.init_ref = {int(t): uv.astype(np.float64) for t, uv in zip(fe.ids.tolist(), fe.uv)}
-            fe.init_ref_t, fe.init_frames = mci.t_us, 0
-            fe.init_ref8 = mci.image8
+            self._set_init_reference(mci)
             return SlamStatus.NOT_INITIALISED, f"initialisation reference set with {len(fe.init_ref)} features", None
         fe.init_frames += 1
         common = [i for i, t in enumerate(fe.ids.tolist()) if t in fe.init_ref]
@@ -68,6 +65,10 @@ class TwoViewInitialisation:
         if not res.ok:
             if fe.init_frames >= icfg.max_frames or len(common) < icfg.min_matches:
                 fe.init_ref = None  # start over from the next MCI with fresh features
+                if icfg.restart_at_failed_mci:
+                    # The failure is the old reference's (its tracks died or never moved), not this MCI's image.
+                    self._set_init_reference(mci)
+                    return SlamStatus.NOT_INITIALISED, f"initialisation: {res.reason}; reference set again with {len(fe.init_ref)} features", None
             return SlamStatus.NOT_INITIALISED, f"initialisation: {res.reason}", None
         m = self.atlas.new_map() if (self.atlas.active is None or self.atlas.active.keyframes) else self.atlas.active
         kf0 = Keyframe(0, fe.init_ref_t, np.eye(4), {int(t): fe.init_ref[int(t)].copy() for t in ids})
@@ -102,6 +103,14 @@ class TwoViewInitialisation:
             if joined is not None:
                 return SlamStatus.OK, joined, self.atlas.active.keyframes[-1].T_wc.copy()
         return SlamStatus.OK, f"map {m.id} initialised ({res.model}, {len(m.points)} points, parallax {res.median_parallax_deg:.1f} deg)", m.keyframes[-1].T_wc.copy()
+
+    def _set_init_reference(self, mci: MciResult) -> None:
+        """Make ``mci`` the two-view reference: its tracked features topped up with fresh ones."""
+        fe = self.fe
+        self._replenish(mci.image8, mci.image)
+        fe.init_ref = {int(t): uv.astype(np.float64) for t, uv in zip(fe.ids.tolist(), fe.uv)}
+        fe.init_ref_t, fe.init_frames = mci.t_us, 0
+        fe.init_ref8 = mci.image8
 
     def _try_rejoin(self, m: SlamMap) -> str | None:
         """Append the fresh two-view map ``m`` to the map lost while coasting, in that map's frame (:mod:`evpose.slam.map_rejoin`)."""
