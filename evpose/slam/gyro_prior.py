@@ -16,6 +16,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from evpose.core.imu import ImuSamples
+from evpose.slam.reprojection_normal_equations import reprojection_normal_equations
 
 
 def gyro_delta_rotation(imu: ImuSamples, t0_us: int, t1_us: int, bias: np.ndarray | None = None) -> np.ndarray | None:
@@ -93,35 +94,12 @@ def refine_pose_with_rotation_prior(K: np.ndarray, Xw: np.ndarray, uv: np.ndarra
     T = np.array(T_cw, np.float64)
     X = np.asarray(Xw, np.float64)
     z_obs = np.asarray(uv, np.float64)
-    fx, fy, cx, cy = K[0, 0], K[1, 1], K[0, 2], K[1, 2]
     w_prior = 1.0 / max(sigma_rot_rad, 1e-9)
     for _ in range(iterations):
-        Xc = X @ T[:3, :3].T + T[:3, 3]
-        z = Xc[:, 2]
-        good = z > 1e-9
-        if good.sum() < 3:
+        normal = reprojection_normal_equations(T, X, z_obs, K, huber_px, sigma_px)
+        if normal is None:
             break
-        Xc, zo, zz = Xc[good], z_obs[good], z[good]
-        u = fx * Xc[:, 0] / zz + cx
-        v = fy * Xc[:, 1] / zz + cy
-        r = np.c_[u - zo[:, 0], v - zo[:, 1]] / sigma_px
-        # Huber weights per point, on the point's 2D error.
-        e = np.linalg.norm(r, axis=1)
-        w = np.where(e <= huber_px, 1.0, huber_px / np.maximum(e, 1e-12))
-        # d(u, v)/d(Xc), then d(Xc)/d(delta) = [-[Xc]x, I].
-        Ju = np.zeros((len(Xc), 2, 3))
-        Ju[:, 0, 0] = fx / zz
-        Ju[:, 0, 2] = -fx * Xc[:, 0] / zz**2
-        Ju[:, 1, 1] = fy / zz
-        Ju[:, 1, 2] = -fy * Xc[:, 1] / zz**2
-        skew = np.zeros((len(Xc), 3, 3))
-        skew[:, 0, 1], skew[:, 0, 2] = -Xc[:, 2], Xc[:, 1]
-        skew[:, 1, 0], skew[:, 1, 2] = Xc[:, 2], -Xc[:, 0]
-        skew[:, 2, 0], skew[:, 2, 1] = -Xc[:, 1], Xc[:, 0]
-        dX = np.concatenate([-skew, np.broadcast_to(np.eye(3), skew.shape)], axis=2)
-        J = np.einsum("nij,njk->nik", Ju, dX) / sigma_px
-        H = np.einsum("n,nji,njk->ik", w, J, J)
-        g = np.einsum("n,nji,nj->i", w, J, r)
+        H, g = normal
         # Rotation prior: residual Log(R R_prior^T), Jacobian ~ identity for left perturbations.
         rp = cv2.Rodrigues(T[:3, :3] @ R_cw_prior.T)[0].ravel() * w_prior  # Log map; cv2 is ~20x faster than scipy here
         H[:3, :3] += np.eye(3) * w_prior**2

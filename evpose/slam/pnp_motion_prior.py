@@ -27,6 +27,8 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from evpose.slam.reprojection_normal_equations import reprojection_normal_equations
+
 
 def refine_pose_with_pose_prior(K: np.ndarray, Xw: np.ndarray, uv: np.ndarray, T_cw: np.ndarray, T_cw_prior: np.ndarray,
                                 sigma_rot_rad: float, sigma_trans: float, huber_px: float = 2.0,
@@ -40,32 +42,13 @@ def refine_pose_with_pose_prior(K: np.ndarray, Xw: np.ndarray, uv: np.ndarray, T
     X = np.asarray(Xw, np.float64)
     z_obs = np.asarray(uv, np.float64)
     T_prior_inv = np.linalg.inv(np.asarray(T_cw_prior, np.float64))
-    fx, fy, cx, cy = K[0, 0], K[1, 1], K[0, 2], K[1, 2]
     w_rot = 1.0 / sigma_rot_rad if sigma_rot_rad > 0 else 0.0
     w_tr = 1.0 / sigma_trans if sigma_trans > 0 else 0.0
     for _ in range(iterations):
-        Xc = X @ T[:3, :3].T + T[:3, 3]
-        z = Xc[:, 2]
-        good = z > 1e-9
-        if good.sum() < 3:
+        normal = reprojection_normal_equations(T, X, z_obs, K, huber_px)
+        if normal is None:
             break
-        Xc, zo, zz = Xc[good], z_obs[good], z[good]
-        r = np.c_[fx * Xc[:, 0] / zz + cx - zo[:, 0], fy * Xc[:, 1] / zz + cy - zo[:, 1]]
-        e = np.linalg.norm(r, axis=1)
-        w = np.where(e <= huber_px, 1.0, huber_px / np.maximum(e, 1e-12))
-        Ju = np.zeros((len(Xc), 2, 3))
-        Ju[:, 0, 0] = fx / zz
-        Ju[:, 0, 2] = -fx * Xc[:, 0] / zz**2
-        Ju[:, 1, 1] = fy / zz
-        Ju[:, 1, 2] = -fy * Xc[:, 1] / zz**2
-        skew = np.zeros((len(Xc), 3, 3))
-        skew[:, 0, 1], skew[:, 0, 2] = -Xc[:, 2], Xc[:, 1]
-        skew[:, 1, 0], skew[:, 1, 2] = Xc[:, 2], -Xc[:, 0]
-        skew[:, 2, 0], skew[:, 2, 1] = -Xc[:, 1], Xc[:, 0]
-        dX = np.concatenate([-skew, np.broadcast_to(np.eye(3), skew.shape)], axis=2)
-        J = np.einsum("nij,njk->nik", Ju, dX)
-        H = np.einsum("n,nji,njk->ik", w, J, J)
-        g = np.einsum("n,nji,nj->i", w, J, r)
+        H, g = normal
         E = T @ T_prior_inv
         H[:3, :3] += np.eye(3) * w_rot**2
         g[:3] += cv2.Rodrigues(E[:3, :3])[0].ravel() * w_rot**2

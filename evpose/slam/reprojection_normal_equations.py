@@ -1,0 +1,41 @@
+"""The Gauss-Newton normal equations of one camera pose's Huber reprojection errors, shared by the motion-only pose
+refinements that add a prior to them (:mod:`evpose.slam.gyro_prior`, :mod:`evpose.slam.pnp_motion_prior`)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def reprojection_normal_equations(T_cw: np.ndarray, X: np.ndarray, z_obs: np.ndarray, K: np.ndarray, huber_px: float,
+                                  sigma_px: float = 1.0) -> tuple[np.ndarray, np.ndarray] | None:
+    """``(H, g)`` (6x6, 6) of the reprojection errors of world points ``X`` (N, 3) observed at ``z_obs`` (N, 2) by
+    a pinhole ``K`` at ``T_cw`` (camera from world), residuals divided by ``sigma_px``, each point's 2D error Huber
+    weighted at ``huber_px`` (in sigmas). Perturbations act on the left (``T <- Exp(delta) T``, rotation first). None
+    when fewer than 3 points lie in front of the camera."""
+    fx, fy, cx, cy = K[0, 0], K[1, 1], K[0, 2], K[1, 2]
+    Xc = X @ T_cw[:3, :3].T + T_cw[:3, 3]
+    z = Xc[:, 2]
+    good = z > 1e-9
+    if good.sum() < 3:
+        return None
+    Xc, zo, zz = Xc[good], z_obs[good], z[good]
+    u = fx * Xc[:, 0] / zz + cx
+    v = fy * Xc[:, 1] / zz + cy
+    r = np.c_[u - zo[:, 0], v - zo[:, 1]] / sigma_px
+    e = np.linalg.norm(r, axis=1)
+    w = np.where(e <= huber_px, 1.0, huber_px / np.maximum(e, 1e-12))
+    # d(u, v)/d(Xc), then d(Xc)/d(delta) = [-[Xc]x, I].
+    Ju = np.zeros((len(Xc), 2, 3))
+    Ju[:, 0, 0] = fx / zz
+    Ju[:, 0, 2] = -fx * Xc[:, 0] / zz**2
+    Ju[:, 1, 1] = fy / zz
+    Ju[:, 1, 2] = -fy * Xc[:, 1] / zz**2
+    skew = np.zeros((len(Xc), 3, 3))
+    skew[:, 0, 1], skew[:, 0, 2] = -Xc[:, 2], Xc[:, 1]
+    skew[:, 1, 0], skew[:, 1, 2] = Xc[:, 2], -Xc[:, 0]
+    skew[:, 2, 0], skew[:, 2, 1] = -Xc[:, 1], Xc[:, 0]
+    dX = np.concatenate([-skew, np.broadcast_to(np.eye(3), skew.shape)], axis=2)
+    J = np.einsum("nij,njk->nik", Ju, dX) / sigma_px
+    H = np.einsum("n,nji,njk->ik", w, J, J)
+    g = np.einsum("n,nji,nj->i", w, J, r)
+    return H, g
