@@ -16,7 +16,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from evpose.core.imu import ImuSamples
-from evpose.slam.reprojection_normal_equations import reprojection_normal_equations
+from evpose.slam.reprojection_normal_equations import left_gauss_newton_step, reprojection_normal_equations
 
 
 def gyro_delta_rotation(imu: ImuSamples, t0_us: int, t1_us: int, bias: np.ndarray | None = None) -> np.ndarray | None:
@@ -104,16 +104,12 @@ def refine_pose_with_rotation_prior(K: np.ndarray, Xw: np.ndarray, uv: np.ndarra
         rp = cv2.Rodrigues(T[:3, :3] @ R_cw_prior.T)[0].ravel() * w_prior  # Log map; cv2 is ~20x faster than scipy here
         H[:3, :3] += np.eye(3) * w_prior**2
         g[:3] += rp * w_prior
-        try:
-            delta = -np.linalg.solve(H, g)
-        except np.linalg.LinAlgError:
+        step = left_gauss_newton_step(T, H, g)
+        if step is None:
             break
-        dT = np.eye(4)
-        dT[:3, :3] = cv2.Rodrigues(delta[:3].reshape(3, 1))[0]
-        dT[:3, 3] = delta[3:]
-        T = dT @ T
-        if np.linalg.norm(delta) < 1e-9:
-            break  # converged (rad and map units): further steps change nothing measurable
+        T, converged = step
+        if converged:
+            break
     return T
 
 

@@ -27,7 +27,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from evpose.slam.reprojection_normal_equations import reprojection_normal_equations
+from evpose.slam.reprojection_normal_equations import left_gauss_newton_step, reprojection_normal_equations
 
 
 def refine_pose_with_pose_prior(K: np.ndarray, Xw: np.ndarray, uv: np.ndarray, T_cw: np.ndarray, T_cw_prior: np.ndarray,
@@ -54,14 +54,10 @@ def refine_pose_with_pose_prior(K: np.ndarray, Xw: np.ndarray, uv: np.ndarray, T
         g[:3] += cv2.Rodrigues(E[:3, :3])[0].ravel() * w_rot**2
         H[3:, 3:] += np.eye(3) * w_tr**2
         g[3:] += E[:3, 3] * w_tr**2
-        try:
-            delta = -np.linalg.solve(H, g)
-        except np.linalg.LinAlgError:
+        step = left_gauss_newton_step(T, H, g)
+        if step is None:
             break
-        dT = np.eye(4)
-        dT[:3, :3] = cv2.Rodrigues(delta[:3].reshape(3, 1))[0]
-        dT[:3, 3] = delta[3:]
-        T = dT @ T
-        if np.linalg.norm(delta) < 1e-9:
-            break  # converged (rad and map units)
+        T, converged = step
+        if converged:
+            break
     return T if np.all(np.isfinite(T)) else np.array(T_cw, np.float64)

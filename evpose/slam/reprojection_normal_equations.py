@@ -3,6 +3,7 @@ refinements that add a prior to them (:mod:`evpose.slam.gyro_prior`, :mod:`evpos
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 
 
@@ -39,3 +40,16 @@ def reprojection_normal_equations(T_cw: np.ndarray, X: np.ndarray, z_obs: np.nda
     H = np.einsum("n,nji,njk->ik", w, J, J)
     g = np.einsum("n,nji,nj->i", w, J, r)
     return H, g
+
+
+def left_gauss_newton_step(T_cw: np.ndarray, H: np.ndarray, g: np.ndarray) -> tuple[np.ndarray, bool] | None:
+    """``(Exp(delta) T_cw, converged)`` for the step ``delta = -H^-1 g`` (rotation first; converged: the step is
+    under 1e-9 in rad and map units, so further steps change nothing measurable); None when ``H`` is singular."""
+    try:
+        delta = -np.linalg.solve(H, g)
+    except np.linalg.LinAlgError:
+        return None
+    dT = np.eye(4)
+    dT[:3, :3] = cv2.Rodrigues(delta[:3].reshape(3, 1))[0]
+    dT[:3, 3] = delta[3:]
+    return dT @ T_cw, bool(np.linalg.norm(delta) < 1e-9)
