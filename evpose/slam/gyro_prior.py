@@ -16,7 +16,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from evpose.core.imu import ImuSamples
-from evpose.slam.reprojection_normal_equations import left_gauss_newton_step, reprojection_normal_equations
+from evpose.slam.reprojection_normal_equations import refine_with_prior
 
 
 def gyro_delta_rotation(imu: ImuSamples, t0_us: int, t1_us: int, bias: np.ndarray | None = None) -> np.ndarray | None:
@@ -91,27 +91,16 @@ def refine_pose_with_rotation_prior(K: np.ndarray, Xw: np.ndarray, uv: np.ndarra
     Returns the refined ``T_cam_world`` (4, 4). Perturbations act on the left
     (``T <- Exp(delta) T``, delta = rotation, translation).
     """
-    T = np.array(T_cw, np.float64)
-    X = np.asarray(Xw, np.float64)
-    z_obs = np.asarray(uv, np.float64)
     w_prior = 1.0 / max(sigma_rot_rad, 1e-9)
-    for _ in range(iterations):
-        normal = reprojection_normal_equations(T, X, z_obs, K, huber_px, sigma_px)
-        if normal is None:
-            break
-        H, g = normal
+
+    def add_prior(T, H, g):
         # Rotation prior: residual Log(R R_prior^T), Jacobian ~ identity for left perturbations.
         rp = cv2.Rodrigues(T[:3, :3] @ R_cw_prior.T)[0].ravel() * w_prior  # Log map; cv2 is ~20x faster than scipy here
         H[:3, :3] += np.eye(3) * w_prior**2
         g[:3] += rp * w_prior
-        step = left_gauss_newton_step(T, H, g)
-        if step is None:
-            break
-        T, converged = step
-        if converged:
-            break
-    return T
 
+    return refine_with_prior(K, np.asarray(Xw, np.float64), np.asarray(uv, np.float64), T_cw, add_prior, huber_px,
+                             sigma_px, iterations)
 
 def rotation_angle_deg(R_a: np.ndarray, R_b: np.ndarray) -> float:
     """Angle of the rotation between two orientations (3, 3), degrees."""

@@ -27,7 +27,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from evpose.slam.reprojection_normal_equations import left_gauss_newton_step, reprojection_normal_equations
+from evpose.slam.reprojection_normal_equations import refine_with_prior
 
 
 def refine_pose_with_pose_prior(K: np.ndarray, Xw: np.ndarray, uv: np.ndarray, T_cw: np.ndarray, T_cw_prior: np.ndarray,
@@ -38,26 +38,17 @@ def refine_pose_with_pose_prior(K: np.ndarray, Xw: np.ndarray, uv: np.ndarray, T
     map units; the translation part is the prior's camera centre seen from the estimate, so its length is the distance
     between the two centres). Perturbations act on the left (``T <- Exp(delta) T``), where the prior's Jacobian is the
     identity to first order. A sigma <= 0 leaves that part free. Returns the refined ``T_cam_world`` (4, 4)."""
-    T = np.array(T_cw, np.float64)
-    X = np.asarray(Xw, np.float64)
-    z_obs = np.asarray(uv, np.float64)
     T_prior_inv = np.linalg.inv(np.asarray(T_cw_prior, np.float64))
     w_rot = 1.0 / sigma_rot_rad if sigma_rot_rad > 0 else 0.0
     w_tr = 1.0 / sigma_trans if sigma_trans > 0 else 0.0
-    for _ in range(iterations):
-        normal = reprojection_normal_equations(T, X, z_obs, K, huber_px)
-        if normal is None:
-            break
-        H, g = normal
+
+    def add_prior(T, H, g):
         E = T @ T_prior_inv
         H[:3, :3] += np.eye(3) * w_rot**2
         g[:3] += cv2.Rodrigues(E[:3, :3])[0].ravel() * w_rot**2
         H[3:, 3:] += np.eye(3) * w_tr**2
         g[3:] += E[:3, 3] * w_tr**2
-        step = left_gauss_newton_step(T, H, g)
-        if step is None:
-            break
-        T, converged = step
-        if converged:
-            break
+
+    T = refine_with_prior(K, np.asarray(Xw, np.float64), np.asarray(uv, np.float64), T_cw, add_prior, huber_px,
+                          iterations=iterations)
     return T if np.all(np.isfinite(T)) else np.array(T_cw, np.float64)

@@ -1,7 +1,10 @@
-"""The Gauss-Newton normal equations of one camera pose's Huber reprojection errors, shared by the motion-only pose
-refinements that add a prior to them (:mod:`evpose.slam.gyro_prior`, :mod:`evpose.slam.pnp_motion_prior`)."""
+"""Motion-only refinement of one camera pose: the Gauss-Newton normal equations of its Huber reprojection errors, a
+step on the left, and the loop that adds a prior to them (:mod:`evpose.slam.gyro_prior`'s rotation prior,
+:mod:`evpose.slam.pnp_motion_prior`'s pose prior)."""
 
 from __future__ import annotations
+
+from typing import Callable
 
 import cv2
 import numpy as np
@@ -53,3 +56,25 @@ def left_gauss_newton_step(T_cw: np.ndarray, H: np.ndarray, g: np.ndarray) -> tu
     dT[:3, :3] = cv2.Rodrigues(delta[:3].reshape(3, 1))[0]
     dT[:3, 3] = delta[3:]
     return dT @ T_cw, bool(np.linalg.norm(delta) < 1e-9)
+
+
+def refine_with_prior(K: np.ndarray, X: np.ndarray, z_obs: np.ndarray, T_cw: np.ndarray,
+                      add_prior: Callable[[np.ndarray, np.ndarray, np.ndarray], None], huber_px: float,
+                      sigma_px: float = 1.0, iterations: int = 8) -> np.ndarray:
+    """Gauss-Newton from ``T_cw`` on :func:`reprojection_normal_equations` plus a prior: ``add_prior(T, H, g)`` adds
+    its terms to ``H`` and ``g`` in place at the current ``T``. Stops after ``iterations``, on convergence, on a
+    singular system or with fewer than 3 points in front. Returns the refined ``T_cam_world`` (4, 4)."""
+    T = np.array(T_cw, np.float64)
+    for _ in range(iterations):
+        normal = reprojection_normal_equations(T, X, z_obs, K, huber_px, sigma_px)
+        if normal is None:
+            break
+        H, g = normal
+        add_prior(T, H, g)
+        step = left_gauss_newton_step(T, H, g)
+        if step is None:
+            break
+        T, converged = step
+        if converged:
+            break
+    return T

@@ -1,27 +1,19 @@
 """Event-only PnP poses refined with the map's predicted motion as a prior (TrackingConfig.pnp_motion_prior_ratio)."""
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from evpose.core.trajectory import invert_pose
 from evpose.slam.atlas import Atlas, Keyframe, MapPoint
 from evpose.slam.geometry import project
+from slam_pose_scene import K, scene
+from slam_pose_scene import pose as _pose
 from evpose.slam.pnp_motion_prior import refine_pose_with_pose_prior
 from evpose.slam.pose_refit import refit_pose
 
-K = np.array([[250.0, 0, 173], [0, 250.0, 130], [0, 0, 1]])
-
-
-def _pose(rotvec, t):
-    T = np.eye(4)
-    T[:3, :3] = Rotation.from_rotvec(rotvec).as_matrix()
-    T[:3, 3] = t
-    return T
 
 
 def _scene(n=15, seed=0):
-    rng = np.random.default_rng(seed)
-    return np.c_[rng.uniform(-1, 1, n), rng.uniform(-0.8, 0.8, n), rng.uniform(3, 6, n)]
+    return scene(n, seed)
 
 
 def _centre_distance(T_cw_a, T_cw_b):

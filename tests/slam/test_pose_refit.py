@@ -1,25 +1,16 @@
 """Refined trajectories re-solve PnP-placed poses on where the map holds their inlier points at the end."""
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from evpose.core.trajectory import invert_pose
 from evpose.slam.atlas import Atlas, Keyframe, MapPoint
 from evpose.slam.geometry import project
-
-K = np.array([[250.0, 0, 173], [0, 250.0, 130], [0, 0, 1]])
-
-
-def _pose(rotvec, t):
-    T = np.eye(4)
-    T[:3, :3] = Rotation.from_rotvec(rotvec).as_matrix()
-    T[:3, 3] = t
-    return T
+from slam_pose_scene import K, scene
+from slam_pose_scene import pose as _pose
 
 
 def _scene(n=30, seed=0):
-    rng = np.random.default_rng(seed)
-    return np.c_[rng.uniform(-1, 1, n), rng.uniform(-0.8, 0.8, n), rng.uniform(3, 6, n)]
+    return scene(n, seed)
 
 
 def _map_with_one_tracked_pose(refit: bool):

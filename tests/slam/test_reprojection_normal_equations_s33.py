@@ -3,7 +3,7 @@
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from evpose.slam.reprojection_normal_equations import left_gauss_newton_step, reprojection_normal_equations
+from evpose.slam.reprojection_normal_equations import left_gauss_newton_step, refine_with_prior, reprojection_normal_equations
 
 K = np.array([[250.0, 0, 173], [0, 250.0, 130], [0, 0, 1]])
 
@@ -48,3 +48,21 @@ def test_fewer_than_three_points_in_front_give_no_equations_and_a_singular_syste
     X[2:, 2] = -1.0  # three of five behind the camera
     assert reprojection_normal_equations(T, X, uv, K, huber_px=2.0) is None
     assert left_gauss_newton_step(T, np.zeros((6, 6)), np.ones(6)) is None
+
+
+def test_the_refinement_loop_calls_the_prior_at_each_pose_and_recovers_the_truth_without_one():
+    truth = np.eye(4)
+    X, uv = _points_and_pixels(truth)
+    start = np.eye(4)
+    start[:3, 3] = [0.02, -0.01, 0.03]
+    seen = []
+    out = refine_with_prior(K, X, uv, start, lambda T, H, g: seen.append(T.copy()), huber_px=100.0)
+    assert np.abs(out - truth).max() < 1e-9
+    assert 1 <= len(seen) <= 8 and np.array_equal(seen[0], start)
+    # A prior pulling the translation to 1 m along x moves the estimate towards it.
+    def pull(T, H, g):
+        H[3:, 3:] += np.eye(3) * 1e6
+        g[3:] += (T[:3, 3] - [1.0, 0.0, 0.0]) * 1e6
+
+    pulled = refine_with_prior(K, X, uv, start, pull, huber_px=100.0)
+    assert pulled[0, 3] > 0.1
