@@ -340,6 +340,24 @@ backend (``full:ekf``) 6.05 / 5.36 / 7.41 / 7.41 -> 5.88 / 4.79 / 7.50 / 7.24 (6
     1 (the lead the same angle at every pixel size) is the value to take if only the 2 s landing counts. The 3 s
     landing wants the lead as it is at 240x180, so the leads trade the 2 s flight's along-motion bias against what
     the 3 s one needs (its turn), and this stays off until that is understood."""
+    covered_foot_off_lead_px: float = field(default=0.0, metadata={"min": -2.0, "max": 2.0, "step": 0.01, "unit": "px"})
+    """Added to the OFF lead of a vertical face's foot (a point of a vertical region's bottom, or beside one within
+    ``crease_radius_m``, along a horizontal edge) while its face lies behind it along its image motion and projects
+    narrower than ``covered_foot_max_width_px``: the face's nearer top rim sweeps it shut towards the foot
+    (:mod:`evpose.tracker.covered_feet`, which has the measurements), pixels (0 = off). Needs the map's plane normals
+    and regions; costs two projections per used foot per registration.
+
+    Measured at the truth (session 34, ``/tmp/s34/rim34/ana4.py``, ``ana6.py``, ``ana7.py``, ``ana5.py``; 240x180 2 s
+    landing seeds 0-1, session 33's events registered from the true pose): these feet's OFF events sit -0.33 to -0.41
+    px beyond their lead at 4-12 px of face; -0.35 px here takes the events' ridge step at the truth from +4.87 to
+    +3.85 mm per update over 50-600 ms (leaving them out: +3.82) and from -1.16 to -0.96 over 1-2 s."""
+    covered_foot_max_width_px: float = field(default=12.0, metadata={"min": 0.0, "max": 100.0, "step": 0.5, "unit": "px"})
+    """Widest projected face (along the foot's image normal) for which ``covered_foot_off_lead_px`` applies, pixels: a
+    0.4 m crate's side spans 4-12 px at 240x180 from 4-5 m, a 2.2 m building's 24-80 px (whose feet's events do not
+    trail)."""
+    covered_foot_wall_side: bool = True
+    """With ``covered_foot_off_lead_px``: the face's own points at its foot take it too; False = only the ground's
+    points beside the foot (whose events, covered, sit like a face-on edge's)."""
     beyond_off_lead_px: float = field(default=0.5, metadata={"min": -2.0, "max": 2.0, "step": 0.01, "unit": "px"})
     """``off_lead_px`` of the face-on points off a crease whose edge the camera sees past (their outward edge normal
     points towards the camera centre: a low step's unmapped riser shows beyond its top edge), with ``crease_radius_m``
