@@ -1,21 +1,35 @@
-"""Feet of vertical faces that the camera sees narrowing towards them: their OFF events trail further behind the edge
-than the grazing and crease leads say (see ``EventRegistrationConfig.covered_foot_off_lead_px``).
+"""Feet of vertical faces whose image lies behind them along their image motion: their OFF events sit less far behind
+the edge than the crease and grazing leads say (see ``EventRegistrationConfig.covered_foot_off_lead_px``).
 
-A box's side seen obliquely from above projects as a strip between its foot (on the ground) and its top rim (nearer the
-camera). When the image motion carries the foot away from the strip, the faster top rim sweeps the strip shut
-towards the foot: the face narrows and then hides its foot. Session 34 measured (``/tmp/s34/rim34/ana4.py``,
-``ana6.py``, ``ana7.py`` on session 33's events registered from the true pose, 240x180 2 s landing seeds 0-1, the built
-map) that the OFF events of such feet sit 0.33-0.41 px further behind the foot than its lead says while the strip is
-4-12 px wide (a 0.4 m crate's side, both seeds, early and late in the flight), and that these few events (about 3 per
-update) carry a fifth of the events' start-up swing along the tilt / shift ridge (+1.0 of +4.9 mm per update from 50
-to 600 ms), since they lie on the ground, far below the nearby rims the ridge is told from. Feet whose face widens
-(the strip behind the foot's motion, ahead of it) and wide strips (a 2.2 m building's side, 24-80 px) do not: their
-OFF events sit +0.09 to +0.12 px ahead of the lead.
+A box's side seen obliquely from above projects as a strip between its foot (on the ground) and its top rim (nearer
+the camera, so faster in the image). When the image motion carries the foot away from the strip, the rim sweeps the
+strip shut towards the foot (the camera flies towards the face: it narrows and then hides its foot); these are the
+"covered" feet. Measured (session 34, ``/tmp/s34/rim34/ana10.py`` on session 33's events registered from the true pose,
+``decomp.py`` with ``DUMP=1``; 240x180 2 s landing seeds 0-3, the built map; offsets signed along the edge's image
+motion, the tracker's gate): the covered feet's OFF events sit -0.13 / -0.16 / -0.18 / -0.16 px from the ground's
+points beside the foot (lead -0.22, crease) from 50 to 600 ms and -0.12 / -0.14 (seeds 2 / 3) at 600-1000 ms, -0.26 /
+-0.37 / -0.31 / -0.21 px and -0.15 to -0.22 from the face's own foot points (lead -0.28, grazing); as a class
+(``ana9.py``) +0.08 to +0.12 px beyond their leads at every face width from 6 to 80 px and in every seed, except one
+crate's west foot early in the flight (4-8 px wide, -0.2 to -0.4 px). Uncovered feet's OFF events sit at their leads
+(-0.15 to -0.28 px against -0.22 / -0.28). In this flight they are mostly the feet of the buildings beside the start,
+which lie on the ground, far below the nearby rims, where the events' tilt / shift ridge is told: +0.1 px on their OFF
+lead takes the events' ridge step at the truth (``ana8.py``; mm per update) from +4.44 to +3.50 over 50-600 ms, +0.04
+to +0.33 over 600-1000 ms and -1.34 to -1.43 over 1-2 s (seeds 0-3). It is not a property of the class, though: the
+3 s landing (6.6 m up, another path; ``ana11.py``, ``ana12.py`` with ``DUR=3``, seeds 0-1) sees covered feet whose
+OFF events sit -0.32 / -0.34 px (ground side, lead -0.22) and -0.33 / -0.32 (the face's own, lead -0.28) over its
+first 0.6 s, -0.05 px beyond their leads at 12-24 px of face where the 2 s flight's sit +0.08 to +0.11 ahead; so the
+lead is an option, off (the closed-loop figures: ``EventRegistrationConfig.covered_foot_off_lead_px``). Nor does the
+edge's event multiplicity (events per update over its normal image speed, ``mult.py``) tell the two apart
+(correlation with the OFF offset +0.08 to +0.18 per 2 s seed, -0.15 / -0.17 per 3 s seed).
+
+Cost when on (``/tmp/s34/rim34/timing.py``: ``EventRegistration._leads`` on 900 used points of seed 0's 240x180 map at
+the true pose 0.3 s in, 655 of them feet, 317 covered; timeit): 12 -> 42 us per registration (the kernel 17 us, its
+wrapper 7 us); nothing when off.
 
 The map says which points are feet: a point whose own surface is vertical, or that has a point of a vertical surface
 of another region within the crease radius, lies at that vertical region's bottom; the face rises to the region's top.
-Which side the face lies on and how wide it is are read per update from the point and the point ``rise`` above it
-projected at the registration's pose, and the edge's image motion from the motion twist.
+Which side the face lies on and how wide it is are read per registration from the point and the point ``rise`` above
+it projected at the registration's starting pose, and the edge's image motion from the motion twist.
 """
 
 from __future__ import annotations
