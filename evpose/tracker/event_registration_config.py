@@ -360,7 +360,12 @@ backend (``full:ekf``) 6.05 / 5.36 / 7.41 / 7.41 -> 5.88 / 4.79 / 7.50 / 7.24 (6
     5.130 (-0.125 +- 0.068, 16 of 24); +0.1 on the ground's side only (``covered_foot_wall_side`` False) 5.188 (-0.067
     +- 0.040, 15 of 24); -0.35 px on faces narrower than 12 px (one crate's foot early in the flight sits there)
     5.513 (+0.258 +- 0.078, 7 of 24: the other narrow covered feet sit +0.07 to +0.14 px ahead of their leads from
-    0.6 s on)."""
+    0.6 s on). Learning the lead online instead (a prototype, not kept: ``/tmp/s34/rim34/patch/learned_lead.diff``;
+    each accepted update moves it by 0.05 of the covered feet's mean event distance beyond it, signed along their
+    motion, at the registered pose, from 0): 2 s seeds 0-23 5.290 (+0.035 +- 0.041, 12 of 24), 3 s seeds 0-7 13.184
+    (-0.33 +- 0.26, 6 of 8); it learns -0.01 to -0.03 px on the 2 s flight (seed 0, ``learnlog.py``), where the truth
+    says +0.1: at the registered pose the events' ridge error has already taken up the feet's offset (the gauge the
+    per-point offsets cannot see either); on the 3 s flight -0.04 to -0.15 px, the truth's direction."""
     covered_foot_max_width_px: float = field(default=100.0, metadata={"min": 0.0, "max": 1000.0, "step": 0.5, "unit": "px"})
     """Widest projected face (along the foot's image normal) for which ``covered_foot_off_lead_px`` applies, pixels: a
     0.4 m crate's side spans 4-12 px at 240x180 from 4-5 m up, a 2.2 m building's 24-80 px."""
