@@ -365,7 +365,10 @@ backend (``full:ekf``) 6.05 / 5.36 / 7.41 / 7.41 -> 5.88 / 4.79 / 7.50 / 7.24 (6
     motion, at the registered pose, from 0): 2 s seeds 0-23 5.290 (+0.035 +- 0.041, 12 of 24), 3 s seeds 0-7 13.184
     (-0.33 +- 0.26, 6 of 8); it learns -0.01 to -0.03 px on the 2 s flight (seed 0, ``learnlog.py``), where the truth
     says +0.1: at the registered pose the events' ridge error has already taken up the feet's offset (the gauge the
-    per-point offsets cannot see either); on the 3 s flight -0.04 to -0.15 px, the truth's direction."""
+    per-point offsets cannot see either); on the 3 s flight -0.04 to -0.15 px, the truth's direction. Leaving the
+    covered feet's OFF events out (this lead at +2.0 px, beyond the gate: ``cfg/cdrop.yaml``; at the truth the 2 s
+    ridge step +4.44 -> +2.63 mm over 50-600 ms, ``ana13.py``): 2 s seeds 0-23 5.291 (+0.036 +- 0.063, 11 of 24), 3 s
+    seeds 0-7 14.696 (+1.18 +- 0.40, 1 of 8): the ground-level events hold more than their offset costs."""
     covered_foot_max_width_px: float = field(default=100.0, metadata={"min": 0.0, "max": 1000.0, "step": 0.5, "unit": "px"})
     """Widest projected face (along the foot's image normal) for which ``covered_foot_off_lead_px`` applies, pixels: a
     0.4 m crate's side spans 4-12 px at 240x180 from 4-5 m up, a 2.2 m building's 24-80 px."""
