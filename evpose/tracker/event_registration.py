@@ -248,6 +248,7 @@ import numpy as np
 from evpose.tracker.event_registration_config import EventRegistrationConfig, scaled_to_pixel  # noqa: F401 (re-exported)
 from evpose.tracker.event_registration_kernels import (NO_EVENT, _associate_nearest, _kept_events, _learn_offsets, _linearise_events,
                                                        _pixel_gaps)
+from evpose.tracker.covered_feet import add_covered_foot_lead, foot_rise
 from evpose.tracker.grazing import crease_points, point_leads
 from evpose.tracker.lapack_calls import inv
 from evpose.tracker.registration import _eigvalsh, _inv, _isotropic_information
@@ -284,6 +285,12 @@ class EventRegistration:
         self._crease = None
         if float(config.crease_radius_m) > 0 and plane_normal is not None and region_id is not None:
             self._crease = crease_points(self._base, self._plane_normals, region_id, float(config.crease_radius_m))
+        self._rise = None
+        if float(config.covered_foot_off_lead_px) != 0 and plane_normal is not None and region_id is not None:
+            self._rise = foot_rise(self._base, self._plane_normals, region_id, float(config.crease_radius_m))
+            if not config.covered_foot_wall_side:  # the ground's side of the foot only
+                self._rise[np.abs(self._plane_normals[:, 2]) < 0.3] = 0.0
+        """How far each point's vertical face rises above it (m, 0 = not a foot) for ``covered_foot_off_lead_px``; None = off."""
         self.offsets = np.zeros(self._base.shape[0])
         """Learned offset of each map point along its unit edge normal, metres."""
         self._width, self._height = int(width), int(height)
@@ -355,7 +362,7 @@ class EventRegistration:
         info = None
         if prior is not None:
             T_p, info = gtsam.Pose3(prior[0]), prior[1]
-        args = (*self._leads(used, T), eg, self._burst, float(c.huber_px), float(c.gate_px), H, b, sw, swr)
+        args = (*self._leads(used, T, xi, K), eg, self._burst, float(c.huber_px), float(c.gate_px), H, b, sw, swr)
         n_it = int(c.iterations)
         t_ref = int(t_us)
         for it in range(n_it + 1):
@@ -381,10 +388,17 @@ class EventRegistration:
         self._last = (used, sw, swr, R_cw, t_cw, (fx, fy, cx, cy))
         return pose.matrix(), 0.5 * (cov + cov.T)
 
-    def _leads(self, used: np.ndarray, T: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def _leads(self, used: np.ndarray, T: np.ndarray, twist: np.ndarray | None = None,
+               K: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """(ON, OFF) lead of each point ``used`` (pixels), the grazing ones (see ``grazing_max_cos``) seen from the
-        camera centre of ``T``."""
-        return point_leads(used, self._crease, self._normals, self.points, self._plane_normals, T[:3, 3], self.config)
+        camera centre of ``T``; with ``covered_foot_off_lead_px``, ``twist`` (body, per second) and ``K``, the feet
+        whose face narrows towards them at ``T`` take that on their OFF lead."""
+        on, off = point_leads(used, self._crease, self._normals, self.points, self._plane_normals, T[:3, 3], self.config)
+        c = self.config
+        if self._rise is not None and twist is not None and K is not None and twist.shape[0] == 6:
+            add_covered_foot_lead(off, used, self.points, self._tangents, self._rise, T, K, twist,
+                                  float(c.covered_foot_max_width_px), float(c.covered_foot_off_lead_px))
+        return on, off
 
     def learn(self) -> int:
         """Move the points of the last successful :meth:`refine` by ``offset_gain`` of their gauge-free offsets;

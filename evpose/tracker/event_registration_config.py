@@ -340,6 +340,41 @@ backend (``full:ekf``) 6.05 / 5.36 / 7.41 / 7.41 -> 5.88 / 4.79 / 7.50 / 7.24 (6
     1 (the lead the same angle at every pixel size) is the value to take if only the 2 s landing counts. The 3 s
     landing wants the lead as it is at 240x180, so the leads trade the 2 s flight's along-motion bias against what
     the 3 s one needs (its turn), and this stays off until that is understood."""
+    covered_foot_off_lead_px: float = field(default=0.0, metadata={"min": -2.0, "max": 2.0, "step": 0.01, "unit": "px"})
+    """Added to the OFF lead of a vertical face's foot (a point at a vertical region's bottom, or beside one within
+    ``crease_radius_m``, along a horizontal-ish edge) while the face's image lies behind the foot along its image
+    motion (the face's nearer top rim sweeping it shut towards the foot: a "covered" foot) and spans less than
+    ``covered_foot_max_width_px``, pixels (0 = off). :mod:`evpose.tracker.covered_feet` has the offsets measured at the
+    truth; costs two projections per used foot per registration (``/tmp/s34/rim34/timing.py``: see the module).
+
+    Off: it is not a property of the class. Session 34 (``/tmp/s34/rim34/``: ``run.sh``, ``cmp.py``, ``demo.sh``,
+    ``demcmp.py``, ``cfg/``; ``full`` from ground truth, the CLI path on the cached landings, paired against main's
+    defaults, mean ATE mm, change +- standard error, seeds better, ARE deg). +0.1 px, faces up to 100 px
+    (``cw10``): 240x180 2 s seeds 0-23 5.255 -> 5.104 (-0.150 +- 0.065, 17 of 24), ARE 0.0603 -> 0.0585; held-out
+    seeds 24-47 5.652 -> 5.532 (-0.120 +- 0.067, 16 of 24), ARE 0.0629 -> 0.0608; but the 3 s landing at 240x180
+    seeds 0-7 13.512 -> 17.401 (+3.89 +- 0.48, 0 of 8; the loss builds from 0.5 to 2 s, over that flight's first
+    leg, ``errt.py``) and 346x260 2 s seeds 0-23 4.279 -> 4.366 (+0.087 +- 0.057, 10 of 24), ARE 0.0504 -> 0.0510.
+    The 3 s flight (6.6 m up, another path) sees other covered feet, whose OFF events sit -0.32 / -0.34 px (ground
+    side, seeds 0 / 1, 0-0.6 s; lead -0.22) and -0.33 / -0.32 (the face's own, lead -0.28): behind their leads where
+    the 2 s flight's sit ahead (``ana11.py`` with ``DUR=3``). Also measured on the 2 s landing seeds 0-23: +0.15 px
+    5.130 (-0.125 +- 0.068, 16 of 24); +0.1 on the ground's side only (``covered_foot_wall_side`` False) 5.188 (-0.067
+    +- 0.040, 15 of 24); -0.35 px on faces narrower than 12 px (one crate's foot early in the flight sits there)
+    5.513 (+0.258 +- 0.078, 7 of 24: the other narrow covered feet sit +0.07 to +0.14 px ahead of their leads from
+    0.6 s on). Learning the lead online instead (a prototype, not kept: ``/tmp/s34/rim34/patch/learned_lead.diff``;
+    each accepted update moves it by 0.05 of the covered feet's mean event distance beyond it, signed along their
+    motion, at the registered pose, from 0): 2 s seeds 0-23 5.290 (+0.035 +- 0.041, 12 of 24), 3 s seeds 0-7 13.184
+    (-0.33 +- 0.26, 6 of 8); it learns -0.01 to -0.03 px on the 2 s flight (seed 0, ``learnlog.py``), where the truth
+    says +0.1: at the registered pose the events' ridge error has already taken up the feet's offset (the gauge the
+    per-point offsets cannot see either); on the 3 s flight -0.04 to -0.15 px, the truth's direction. Leaving the
+    covered feet's OFF events out (this lead at +2.0 px, beyond the gate: ``cfg/cdrop.yaml``; at the truth the 2 s
+    ridge step +4.44 -> +2.63 mm over 50-600 ms, ``ana13.py``): 2 s seeds 0-23 5.291 (+0.036 +- 0.063, 11 of 24), 3 s
+    seeds 0-7 14.696 (+1.18 +- 0.40, 1 of 8): the ground-level events hold more than their offset costs."""
+    covered_foot_max_width_px: float = field(default=100.0, metadata={"min": 0.0, "max": 1000.0, "step": 0.5, "unit": "px"})
+    """Widest projected face (along the foot's image normal) for which ``covered_foot_off_lead_px`` applies, pixels: a
+    0.4 m crate's side spans 4-12 px at 240x180 from 4-5 m up, a 2.2 m building's 24-80 px."""
+    covered_foot_wall_side: bool = True
+    """With ``covered_foot_off_lead_px``: the face's own points at its foot take it too; False = only the ground's
+    points beside the foot (figures there)."""
     beyond_off_lead_px: float = field(default=0.5, metadata={"min": -2.0, "max": 2.0, "step": 0.01, "unit": "px"})
     """``off_lead_px`` of the face-on points off a crease whose edge the camera sees past (their outward edge normal
     points towards the camera centre: a low step's unmapped riser shows beyond its top edge), with ``crease_radius_m``
