@@ -117,7 +117,9 @@ class TrackingConfig:
     s at 8.6 / 10.5 / 6.9 %, against 2.6 / 2.4 / 1.8 % with the defaults' coasted turn maps). With the default gates
     (1.0 / 2.0 deg, keyframes only): 3.222 % (+0.21 +- 0.26, 20 / 20), seed 3 tracked 90.5 -> 79.6 %, seed 30 unchanged.
     With ``young_map_max_rate_dps`` 40: 3.219 % (+0.20 +- 0.16, 15 better, 19 worse; 0-19 +0.55 +- 0.23, 20-39 -0.15 +-
-    0.18), seed 30 79.8 %. Worse or no better everywhere: off."""
+    0.18); 60: 3.247 % (+0.23 +- 0.19, 18 better, 19 worse); seed 30 79.8 % under both: its first map, which 0.15
+    alone feeds from 23 to 78 points by 0.165 s, turns faster than 60 deg/s in its own poses. Worse or no better
+    everywhere: off."""
     young_map_max_rate_dps: float = field(default=0.0, metadata={"min": 0.0, "max": 500.0, "step": 1.0, "unit": "deg/s"})
     """``young_map_s`` > 0: only a young map that has turned at most this fast (its own poses, since its first keyframe)
     is fed (0: any young map), degrees per second. Indoors the starts in the room's turn (true rate 60-100 deg/s at the
