@@ -450,6 +450,15 @@ class InitializationConfig:
     it), after ``TrackingConfig.refit_tracked_poses`` (``/tmp/s29/lead/in019*.json``, ``/tmp/s22/lead/exp.py``): indoor
     seeds 0-19 3.739 -> 3.717 % (paired -0.02 +- 0.12; 0-7 3.730 -> 3.942, seed 7 2.17 -> 3.87; 8-19 3.745 -> 3.566),
     least tracked 79.3 -> 85.5 %; 15 before."""
+    reference_tracks: int = field(default=0, metadata={"min": 0, "max": 1000, "step": 10, "unit": "tracks"})
+    """A two-view reference tops its tracks up to this many (``FeatureConfig.per_cell`` scaled to match), so that more
+    of them survive to the second view and the map starts from more points (0: ``FeatureConfig.target_tracks``, as any
+    MCI), tracks. Session 34 (issue 9, ``/tmp/s34/feed34/``; why: ``TrackingConfig.young_map_s``), 300, indoor
+    event-only seeds 0-39 against main's defaults: starts' median points 35 -> 41, maps 222 -> 203, ATE 3.017 -> 3.745 %
+    (paired +0.73 +- 0.26, 12 better, 28 worse; 0-19 +0.70 +- 0.28, held-out 20-39 +0.76 +- 0.46), least tracked 79.8 ->
+    81.2 % (seed 30 83.0 % at 1.79 -> 3.79 %): the better-fed maps live longer and score worse than the coasted ones they
+    replace. Off. A stricter start instead (``min_triangulated`` 30, seeds 0-15 before it was stopped): +1.78 +- 0.61,
+    13 of 16 worse, least tracked 72.0 %."""
     max_frames: int = field(default=8, metadata={"min": 1, "max": 100, "step": 1, "unit": "MCIs"})
     """The reference view is replaced after this many MCIs without success, MCIs."""
     restart_at_failed_mci: bool = False

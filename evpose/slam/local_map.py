@@ -87,9 +87,31 @@ keyframe's rotation to a median 0.25 deg where all three show (57 % of the BA's 
 (``TrackingConfig.ba_room_prior_deg``, off) they gave the 40 pooled runs of seeds 0-7 3.29 -> 2.73 % (mostly seed 4)
 and the 60 of held-out seeds 8-19 3.70 -> 3.44 % (-0.26 +- 0.24), segment metric unmoved, and landing 0-23 1.32 ->
 1.91 %.
+
+Why young indoor maps starve, and why feeding them does not pay (session 34, issue 9; ``/tmp/s34/feed34/``: ``run.py``
+is session 33's harness writing per-MCI counts, ``young.py`` the per-map start / decay / untracked-time / ATE split,
+``diag.py`` + ``diag_ana.py`` where a young map's point tracks go, ``stretch.py`` / ``gtrate.py`` by stretch and true
+turn rate, ``cmp.py`` paired). Main's defaults, indoor event-only seeds 0-39 (3.017 %): 225 map starts from a median
+35 points (q10 18, q90 85); of the 186 starts under 70 points 179 have their last PnP pose within 0.3 s of the start
+(median tracked map points at 0.05 / 0.1 s: 5 / 1 for 20-30 point starts, 7 / 1 for 30-45, 21 / 9 for 45-70), of the
+39 starts of 70 or more 5 (79 / 70 / 59 / 57 tracked at 0.05 / 0.1 / 0.2 / 0.3 s). Of the 288 ms untracked per run,
+239 (83 %) follow a map whose visual tracking ended within 0.3 s of its start; 63 % of the squared position residual
+(each map Sim(3)-aligned) lies in maps' first 0.3 s, and cutting those poses (maps re-aligned) gives 2.26 %. The
+starts in the room's turn (0.84-1.91 s: 83 starts, median 27 points; true turn rate 60-100 deg/s at 87 starts) never
+track visually past 0.3 s; the first stretch's 63 starts once, the last stretch's 79 starts 40 times. The point tracks
+die in KLT, not in the pose step: per MCI 36 % at ages 0-0.02 s, 27 % at 0.02-0.05 s, 14 % at 0.05-0.1 s, 11-13 % later
+(seeds 0-19); the pose step's net change in the first 0.1 s is -1 to +4 % on PnP-placed MCIs (re-finding less PnP
+outliers) and -10 to -11 % on coasted ones (tracks the coast contradicts). The landing
+(seeds 0-23) starts from 38-68 points and no map starves young. Feeding young maps (``TrackingConfig.young_map_s``,
+``young_map_max_rate_dps``, ``InitializationConfig.reference_tracks``; figures there) and a stricter start
+(``min_triangulated`` 30) all made the rooms worse: a fed map lives on where a starved one would have coasted, and in
+these rooms the coasted maps score better than the visually tracked ones (as the notes of
+``FeatureConfig.klt_min_support_ratio`` found for the turn).
 """
 
 from __future__ import annotations
+
+from dataclasses import replace
 
 import numpy as np
 
@@ -111,6 +133,26 @@ def need_keyframe(m: SlamMap, tr_ids: np.ndarray, tr_uv: np.ndarray, n_tracked_p
         return True
     disp = np.median([np.linalg.norm(a - b) for a, b in common])
     return bool(disp > cfg.keyframe_displacement_px)
+
+
+def young_map(m: SlamMap, t_us: int, cfg: TrackingConfig, T_wc: np.ndarray | None = None) -> bool:
+    """``m`` is younger than :attr:`TrackingConfig.young_map_s` at ``t_us`` (time since its first keyframe) and, with
+    ``young_map_max_rate_dps`` and the pose ``T_wc`` given, has turned at most that fast since its first keyframe."""
+    if cfg.young_map_s <= 0 or not m.keyframes:
+        return False
+    dt = (t_us - m.keyframes[0].t_us) / 1e6
+    if dt >= cfg.young_map_s:
+        return False
+    if cfg.young_map_max_rate_dps > 0 and T_wc is not None and dt > 0:
+        R = m.keyframes[0].T_wc[:3, :3].T @ T_wc[:3, :3]
+        deg = np.degrees(np.arccos(np.clip((np.trace(R) - 1.0) / 2.0, -1.0, 1.0)))
+        return bool(deg <= cfg.young_map_max_rate_dps * dt)
+    return True
+
+
+def young_triangulation(cfg: TrackingConfig) -> TrackingConfig:
+    """The triangulation settings of a young map's keyframes (``young_min_*`` in place of ``min_*``)."""
+    return replace(cfg, min_triangulation_deg=cfg.young_min_triangulation_deg, min_pair_parallax_deg=cfg.young_min_pair_parallax_deg)
 
 
 def visual_ba_window(m: SlamMap, cfg: TrackingConfig, event_only: bool) -> tuple[int, int]:

@@ -44,7 +44,8 @@ from evpose.slam.inertial_ba import inertial_local_bundle_adjustment
 from evpose.slam.inertial_trajectory import carry_relative_scale, keyframe_positions
 from evpose.slam.map_restructure import maybe_restructure
 from evpose.slam.map_rejoin import RejoinCandidate
-from evpose.slam.local_map import cull_points, insert_keyframe, need_keyframe, triangulate_new_points, visual_ba_window
+from evpose.slam.local_map import (cull_points, insert_keyframe, need_keyframe, triangulate_new_points, visual_ba_window, young_map,
+                                   young_triangulation)
 from evpose.slam.event_image import to_uint8
 from evpose.slam.mci import Hypothesis, MciGenerator, MciResult, MotionPrior
 from evpose.slam.parallax_warp import points_in_view
@@ -277,11 +278,15 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
             return (*track_features_fine(fe.prev_fine8, fine8, fe.uv, fc, guess, min_ncc, fe.prev8, mci.image8), fine8)
         return (*track_features(fe.prev8, mci.image8, fe.uv, fc, guess=guess, min_ncc=min_ncc), fine8)
 
-    def _replenish(self, img8: np.ndarray, img: np.ndarray | None = None) -> None:
-        fe = self.fe
-        if len(fe.ids) >= self.cfg.features.target_tracks:
+    def _replenish(self, img8: np.ndarray, img: np.ndarray | None = None, target: int = 0) -> None:
+        """Top the tracks up to ``target`` (0: ``FeatureConfig.target_tracks``; more: a denser grid, ``per_cell`` scaled)."""
+        fe, fc = self.fe, self.cfg.features
+        target = target if target > fc.target_tracks else fc.target_tracks
+        if len(fe.ids) >= target:
             return
-        pts = detect_features(img8, self.cfg.features, existing=fe.uv, max_total=self.cfg.features.target_tracks - len(fe.ids), support=img)
+        if target > fc.target_tracks:
+            fc = replace(fc, per_cell=-(-fc.per_cell * target // fc.target_tracks))
+        pts = detect_features(img8, fc, existing=fe.uv, max_total=target - len(fe.ids), support=img)
         if len(pts):
             fe.ids = np.concatenate([fe.ids, np.arange(fe.next_id, fe.next_id + len(pts), dtype=np.int64)])
             fe.uv = np.concatenate([fe.uv, pts.astype(np.float32)])
@@ -381,7 +386,7 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
                                        fe.ids[rest], fe.uv[rest], est.prior_sigmas)
         n_tracked = self._inliers = int(est.inliers.sum())
         keyframe = False
-        if need_keyframe(m, fe.ids, fe.uv, n_tracked, tc):
+        if need_keyframe(m, fe.ids, fe.uv, n_tracked, tc) or (self.imu is None and young_map(m, mci.t_us, tc, T_wc)):
             keyframe = True
             T_wc = self._new_keyframe(m, mci.t_us, T_wc, mci.image8)
         self._lines_after_pose(m, mci, T_wc, segs)
@@ -445,7 +450,8 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
         kf = insert_keyframe(m, t_us, T_wc, fe.ids, fe.uv.astype(np.float64), fe.track_to_point)
         self._measure_room(kf, img8)
         if triangulate:
-            self._next_point = triangulate_new_points(m, self.K, kf, fe.track_to_point, tc, self._next_point,
+            tt = young_triangulation(tc) if self.imu is None and young_map(m, t_us, tc, T_wc) else tc  # feed a young map
+            self._next_point = triangulate_new_points(m, self.K, kf, fe.track_to_point, tt, self._next_point,
                                                       # event-only coasts: event-inertial maps bridge on the IMU
                                                       predicted=self.imu is None and t_us != self._last_pnp_t)
         if img8 is not None:

@@ -107,7 +107,7 @@ class TwoViewInitialisation:
     def _set_init_reference(self, mci: MciResult) -> None:
         """Make ``mci`` the two-view reference: its tracked features topped up with fresh ones."""
         fe = self.fe
-        self._replenish(mci.image8, mci.image)
+        self._replenish(mci.image8, mci.image, self._init_cfg.reference_tracks)
         fe.init_ref = {int(t): uv.astype(np.float64) for t, uv in zip(fe.ids.tolist(), fe.uv)}
         fe.init_ref_t, fe.init_frames = mci.t_us, 0
         fe.init_ref8 = mci.image8

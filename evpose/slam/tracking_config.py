@@ -106,6 +106,29 @@ class TrackingConfig:
     (defaults 2.53 %, 5 of 12 within 2 %): 2 -> 2.92 % (2 of 12); 17 of the 60 perturbed runs paired +0.31 +- 0.40
     points. Session 27 (``/tmp/s27/turn27``), indoor event-only seeds 0-7 (defaults 6.84 %): 2 -> 9.39 % (paired +2.55
     +- 1.59), degrees."""
+    young_map_s: float = field(default=0.0, metadata={"min": 0.0, "max": 2.0, "step": 0.01, "unit": "s"})
+    """Event-only: a map younger than this (time since its first keyframe) makes every MCI placed by PnP a keyframe,
+    and those keyframes triangulate with ``young_min_triangulation_deg`` / ``young_min_pair_parallax_deg`` in place of
+    ``min_triangulation_deg`` / ``min_pair_parallax_deg`` (0: off, young maps are treated like old ones), seconds.
+    Session 34 (issue 9, ``/tmp/s34/feed34/``; why young maps starve: :mod:`evpose.slam.local_map`), indoor event-only
+    seeds 0-39 against main's defaults (3.017 %, least tracked 79.8 %: seed 30): 0.15 3.017 -> 4.220 % (paired +1.20 +-
+    0.37, 15 better, 25 worse; 0-19 +1.40 +- 0.58, held-out 20-39 +1.01 +- 0.45), least tracked 81.9 % (seed 30 79.8 ->
+    95.1 % at 1.79 -> 5.36 %): fed maps born in the room's turn live on through it (seeds 10 / 13 / 18: one map of 1.04
+    s at 8.6 / 10.5 / 6.9 %, against 2.6 / 2.4 / 1.8 % with the defaults' coasted turn maps). With the default gates
+    (1.0 / 2.0 deg, keyframes only): 3.222 % (+0.21 +- 0.26, 20 / 20), seed 3 tracked 90.5 -> 79.6 %, seed 30 unchanged.
+    With ``young_map_max_rate_dps`` 40: 3.219 % (+0.20 +- 0.16, 15 better, 19 worse; 0-19 +0.55 +- 0.23, 20-39 -0.15 +-
+    0.18); 60: 3.247 % (+0.23 +- 0.19, 18 better, 19 worse); seed 30 79.8 % under both: its first map, which 0.15
+    alone feeds from 23 to 78 points by 0.165 s, turns faster than 60 deg/s in its own poses. Worse or no better
+    everywhere: off."""
+    young_map_max_rate_dps: float = field(default=0.0, metadata={"min": 0.0, "max": 500.0, "step": 1.0, "unit": "deg/s"})
+    """``young_map_s`` > 0: only a young map that has turned at most this fast (its own poses, since its first keyframe)
+    is fed (0: any young map), degrees per second. Indoors the starts in the room's turn (true rate 60-100 deg/s at the
+    start: 87 of 225 starts on seeds 0-39, 1 with visual tracking past 0.3 s) are the ones whose feeding keeps a bad map
+    alive into the last stretch."""
+    young_min_triangulation_deg: float = field(default=0.5, metadata={"min": 0.1, "max": 10.0, "step": 0.1, "unit": "deg"})
+    """``young_map_s`` > 0: a young map's keyframes triangulate new points down to this parallax, degrees."""
+    young_min_pair_parallax_deg: float = field(default=0.5, metadata={"min": 0.0, "max": 10.0, "step": 0.1, "unit": "deg"})
+    """``young_map_s`` > 0: a young map's keyframe pairs triangulate down to this baseline over depth, degrees."""
     min_pair_parallax_deg: float = field(default=2.0, metadata={"min": 0.0, "max": 10.0, "step": 0.1, "unit": "deg"})
     """New points are triangulated from a keyframe pair only if its baseline over the median depth of the newer
     keyframe's points subtends this angle (ORB-SLAM's baseline check; 0 disables), degrees. Below it every track's
