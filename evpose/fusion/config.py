@@ -396,6 +396,27 @@ class FusionConfig:
     error than its covariance claims relative to the best-observed direction (``registration_startup_s``), so a
     smaller scale would let the fused state return to the registrations faster; session 33, 240x180 2 s seeds 0-23,
     0.5 alone: 5.568 -> 5.654 mm (+0.086 +- 0.083, 11 of 24 better): off."""
+    registration_offset_tau_s: float = field(default=0.0, metadata={"min": 0.0, "max": 100.0, "step": 0.05, "unit": "s"})
+    """Correlation time of a registration offset along the shift / tilt ridges that the factor graph estimates with the
+    poses (a first-order Gauss-Markov state per registered state, :mod:`evpose.fusion.registration_offset`), s (0 =
+    off: the registrations' errors white; the EKF always takes them as white).
+
+    Why: the registrations' ridge error is slow (session 33: +6.6 mm for the flight's first ~0.6 s), which a white
+    model hands to the pose and the gyroscope bias. Measured (session 34, ``full`` from ground truth, 240x180 2 s
+    landing seeds 0-23, defaults 5.255 mm / ARE 0.0603 deg; ``/tmp/s34/bias34/``: ``run.sh`` + ``rec.py`` (the CLI's
+    track in-process, bit-identical output), ``cmp.py``): closed loop at (tau, ``registration_offset_ratio``) (0.5, 1)
+    5.430 mm (+0.175 +- 0.094, 8 of 24 better; ARE 0.0634). The recorded fusion inputs replayed open loop
+    (``replay.py``; defaults 5.205 mm there, the closed loop's sign at (0.5, 1)): (0.3, 0.03) +0.040 +- 0.022, (0.3, 0.3)
+    +0.067 +- 0.038, (1, 0.03) +0.059 +- 0.033, (1, 0.3) +0.098 +- 0.054, (3, 0.03) +0.067 +- 0.041, (3, 0.3) +0.133 +-
+    0.075 mm (5-9 of 24 better, ARE worse in all): worse the larger the ratio. Why it does not help: the fused pose itself is free to follow a slow error (its start prior
+    1 cm / 10 mrad, velocity 0.5 m/s, biases unknown), so the offset takes up a slow ridge error only for the first
+    ~0.1 s (``tests/fusion/test_ridge_offset_s34.py``) and otherwise acts as a weaker registration along the ridge,
+    which session 18 (ridge inflated 3x / 10x) and session 33 (``registration_ridge_scale``) found worse as well. Cost:
+    0.80 -> 1.78 ms CPU per fusion update (``cost.py``, seed 0's inputs replayed, best of 5): an extra Pose3 per
+    state in the window. Off."""
+    registration_offset_ratio: float = field(default=1.0, metadata={"min": 1e-3, "max": 1e4, "step": 0.1, "unit": "ratio"})
+    """With ``registration_offset_tau_s``: the offset's stationary variance along the two ridge directions as a multiple
+    of the (scaled) registration covariance's there, ratio."""
     newest_state_last: bool = True
     """The fixed-lag smoother eliminates the newest two states last, so the newest sits in the Bayes tree's root
     (False: gtsam's ``IncrementalFixedLagSmoother`` ordering exactly, one group for every kept key, which leaves
@@ -425,6 +446,10 @@ class FusionConfig:
             raise ConfigError(f"fusion.relinearize_correction_velocity must be >= 0 (0 = off), got {self.relinearize_correction_velocity}")
         if not self.registration_ridge_scale > 0:
             raise ConfigError(f"fusion.registration_ridge_scale must be positive, got {self.registration_ridge_scale}")
+        if not self.registration_offset_tau_s >= 0 or not self.registration_offset_ratio > 0:
+            raise ConfigError(f"fusion.registration_offset_tau_s must be >= 0 and fusion.registration_offset_ratio positive, got {self.registration_offset_tau_s}, {self.registration_offset_ratio}")
+        if self.registration_offset_tau_s > 0 and RegistrationErrorModel(self.registration_error_model) is not RegistrationErrorModel.WHITE:
+            raise ConfigError("fusion.registration_offset_tau_s needs fusion.registration_error_model white (the offset models the errors' time structure itself)")
         if not self.registration_startup_s >= 0 or not self.registration_startup_inflation >= 1:
             raise ConfigError(f"fusion.registration_startup_s must be >= 0 and fusion.registration_startup_inflation >= 1, got {self.registration_startup_s}, {self.registration_startup_inflation}")
         if not self.gyro_bias_hold_s >= 0 or not self.gyro_bias_hold_sigma > 0:
