@@ -42,7 +42,7 @@ from evpose.fusion.config import FusionConfig, RegistrationErrorModel, RobustLos
 from evpose.fusion.fixed_lag import CopyableFixedLagSmoother
 from evpose.fusion.preintegration import ImuBuffer, make_preintegration_params, preintegrate
 from evpose.fusion.propagation import NavPropagator, imu_rate_trajectory
-from evpose.fusion.registration_offset import OffsetChain
+from evpose.fusion.registration_offset import OffsetChain, split_ridge
 from evpose.fusion.startup import gyro_bias_release_due, gyro_bias_release_params, initial_gyro_bias_sigma, startup_inflated
 from evpose.fusion.state import Extrinsic, FusedState
 
@@ -453,9 +453,10 @@ class FactorGraphFusion:
         base = registration_covariance(c, cov_cam)
         widened = startup_inflated(c, self.start_us, t_us, cov_cam)
         cov = base if widened is cov_cam else registration_covariance(c, widened)
-        noise = robust_noise(c, self.extrinsic.imu_covariance(cov), robust=robust)
+        white, slow = split_ridge(float(c.registration_offset_ratio), cov, base)
+        noise = robust_noise(c, self.extrinsic.imu_covariance(white), robust=robust)
         temporary, chained = self.offset.add(self._gtsam, c, self.smoother, graph, values, stamps, j, t_us, dt,
-                                             self._gtsam.Pose3(T_meas_imu), noise, base, self.extrinsic,
+                                             self._gtsam.Pose3(T_meas_imu), noise, slow, self.extrinsic,
                                              nav_pred.pose().matrix())
         # The previous offset's extra prior goes when the chain carries on from it (a restarted chain leaves it: its
         # offset may have left the window; a state without registration forgets it, so it then stays, a little weight

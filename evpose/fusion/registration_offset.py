@@ -13,11 +13,14 @@ an offset ``O_j`` (a world-frame Pose3, gtsam key ``o``) and the registration me
   built-in (serialisable) factors as ``RegistrationErrorModel.AR1_WHITENED`` splits its own: a between factor of
   covariance ``q / rho``, a prior of ``q / (1 - rho)^2`` on every state (``q / (1 - rho)`` on a chain's first) and,
   while ``O_j`` is the newest, one more of ``q / (rho (1 - rho))`` (removed when the next offset takes its place);
-* ``P`` is confined to the ridges: ``registration_offset_ratio`` times the (scaled) registration covariance's part
-  along the two largest eigen-directions of its correlation matrix (:data:`~evpose.fusion.startup.STARTUP_RIDGE_DIRECTIONS`,
-  the directions ``registration_startup_s`` widens), plus :data:`OFF_RIDGE_SHARE` of the whole covariance (so it is
+* ``P`` is confined to the ridges, where it takes a share of the registration's own variance (:func:`split_ridge`):
+  with ``r = registration_offset_ratio`` the registration factor keeps ``1 / (1 + r)`` of the (scaled) covariance's
+  part along the two largest eigen-directions of its correlation matrix
+  (:data:`~evpose.fusion.startup.STARTUP_RIDGE_DIRECTIONS`, the directions ``registration_startup_s`` widens) and the
+  offset gets ``r / (1 + r)`` of it, plus :data:`OFF_RIDGE_SHARE` of the whole covariance over ``1 + r`` (so it is
   positive definite), taken to the IMU frame and to the world frame of ``O`` by the adjoint of the predicted pose
-  (``O = X Exp(eta) X^-1`` for an offset ``eta`` in the body frame).
+  (``O = X Exp(eta) X^-1`` for an offset ``eta`` in the body frame). One registration alone thus weighs as much as
+  without the offset; a run of them carries less about the ridge, as their errors there are correlated.
 
 Only the factor graph models it (the EKF takes the registrations as white). A state without a registration gets no
 offset; the chain carries on across such states while its last offset is still in the window (``rho`` from the time
@@ -54,6 +57,15 @@ def ridge_part(cov: np.ndarray) -> np.ndarray:
     w, V = np.linalg.eigh(c / dd)
     V = V[:, -STARTUP_RIDGE_DIRECTIONS:]
     return ((V * w[-STARTUP_RIDGE_DIRECTIONS:]) @ V.T) * dd
+
+
+def split_ridge(ratio: float, cov: np.ndarray, base: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The registration covariance shared between its white part and the offset: ``(cov`` with its ridge part times
+    ``1 / (1 + ratio)``, ``base / (1 + ratio))``, the second for :func:`stationary_covariance` (whose ``ratio`` times
+    its ridge part is the offset's share, ``ratio / (1 + ratio)`` of the ridge variance). ``cov``: the covariance the
+    registration factor would have (start-up widening included), ``base``: the same without the widening (camera
+    frame, scaled)."""
+    return cov + (1.0 / (1.0 + ratio) - 1.0) * ridge_part(cov), base / (1.0 + ratio)
 
 
 def stationary_covariance(ratio: float, cov_cam: np.ndarray, extrinsic, T_world_imu: np.ndarray) -> np.ndarray:
