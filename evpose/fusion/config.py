@@ -390,12 +390,61 @@ class FusionConfig:
     mm, the gyroscope bias's error about y at 0.5 s +1.54 -> +1.08 mrad/s (seed mean)."""
     registration_startup_inflation: float = field(default=10.0, metadata={"min": 1.0, "max": 1e6, "step": 1.0, "unit": "ratio"})
     """Factor on the variance along those directions during ``registration_startup_s``, ratio."""
+    registration_startup_directions: int = field(default=2, metadata={"min": 1, "max": 6, "step": 1, "unit": "directions"})
+    """How many of the registration covariance's least-constrained directions (the largest eigenvalues of its
+    correlation matrix) ``registration_startup_inflation`` and ``registration_ridge_scale`` widen, directions (2: the
+    two shift / tilt ridges, ``startup.STARTUP_RIDGE_DIRECTIONS``). Session 34, 240x180 2 s seeds 0-23 (``/tmp/s34/bias34/``,
+    ``replay.py``: the recorded fusion inputs of the defaults replayed open loop, 5.205 mm there, where
+    ``registration_startup_s`` 0 gives +0.104 +- 0.044 mm, the closed loop's sign and size): 1 / 3 / 4 / 6 directions
+    5.237 / 5.167 / 5.223 / 5.223 mm; closed loop (``run.sh``, ``cmp.py``) 3 directions 5.255 -> 5.245 mm (-0.009 +-
+    0.080, 11 of 24 better; ARE 0.0603 -> 0.0615 deg). Replayed the same way, ``registration_startup_s`` 0.3 / 0.75 s
+    +0.031 / +0.111 mm, inflation 30 -0.000, and the factor tapered geometrically to 1 over 0.25 / 0.5 / 1.0 s after
+    the 0.5 s +0.083 / +0.103 / +0.243 mm (after 0.3 s, over 0.5 / 1.0 s: +0.048 / +0.134): a longer de-weighting of
+    the ridge is worse. Not changed."""
     registration_ridge_scale: float = field(default=1.0, metadata={"min": 1e-3, "max": 1e6, "step": 0.05, "unit": "ratio"})
     """Factor on the registration covariance's variance along the same two ridge directions after
     ``registration_startup_s`` (the whole run when that is 0), ratio (1 = off). After the start the ridge carries less
     error than its covariance claims relative to the best-observed direction (``registration_startup_s``), so a
     smaller scale would let the fused state return to the registrations faster; session 33, 240x180 2 s seeds 0-23,
     0.5 alone: 5.568 -> 5.654 mm (+0.086 +- 0.083, 11 of 24 better): off."""
+    registration_offset_tau_s: float = field(default=0.0, metadata={"min": 0.0, "max": 100.0, "step": 0.05, "unit": "s"})
+    """Correlation time of a registration offset along the shift / tilt ridges that the factor graph estimates with the
+    poses (a first-order Gauss-Markov state per registered state, :mod:`evpose.fusion.registration_offset`), s (0 =
+    off: the registrations' errors white; the EKF always takes them as white).
+
+    Why: the registrations' ridge error is slow (session 33: +6.6 mm for the flight's first ~0.6 s), and a white model
+    hands it to the pose and the gyroscope bias. What knowing it would be worth (session 34, ``/tmp/s34/bias34/oracle.py``:
+    the defaults' recorded fusion inputs, 240x180 2 s seeds 0-23, replayed open loop with the registrations' ridge
+    component (the two ridge directions of their own covariance) taken out, 5.205 mm as recorded): all of it 4.210 mm
+    (-0.995 +- 0.124, 24 of 24 better), its slow part (0.3 s centred mean) 4.196 (-1.010 +- 0.137), its slow part
+    before 0.6 s only 5.039 (-0.167 +- 0.059); the slow part of the whole error (6 axes) 2.740 (-2.465 +- 0.214). So
+    the start-up swing is a small part: the ridge's slow error after it is worth ~0.8 mm, and depth and the other
+    slow errors more.
+
+    Measured (session 34, ``full`` from ground truth, closed loop: ``run.sh`` + ``rec.py``, the CLI's ``track`` in
+    process with identical output, ``cmp.py``; 240x180 2 s landing, defaults 5.255 mm / ARE 0.0603 deg on seeds
+    0-23): (tau, ``registration_offset_ratio``) (0.3, 3) 5.190 mm (-0.065 +- 0.051, 16 of 24 better; ARE 0.0578);
+    held-out seeds 24-47 5.652 -> 5.627 (-0.025 +- 0.093, 16 of 24; ARE 0.0629 -> 0.0605); the 3 s landing seeds 0-7
+    13.512 -> 14.025 (+0.512 +- 0.431, 2 of 8; ARE 0.1113 -> 0.1000); 346x260 2 s seeds 0-23 4.279 -> 4.497 (+0.218
+    +- 0.052, 4 of 24; ARE 0.0504 -> 0.0533); the demos (``evpose track demo_data/X.h5 --map maps/landing_map.ply``,
+    ``evpose eval --align none``; ``demo.sh``) ``landing`` 6.899 -> 7.974, ``landing_fast`` 9.132 -> 9.285,
+    ``landing_dynamic`` 6.312 -> 6.146 mm. Worse at 346x260, on the 3 s landing and the demo ``landing``: off.
+    Open loop (``replay.py``, 5.205 mm there) seeds 0-23: (0.3, 1) -0.026, (1, 1) -0.006, (0.3, 3) -0.047, (1, 3)
+    -0.036; (0.3, 10) +0.051, (0.15, 10) +0.065, (0.6, 10) +0.045, (0.3, 30) +0.30 mm: a larger slow share is worse.
+    An earlier form that added the offset's variance to the registration's instead of sharing it (the ridge weighed
+    less in all) was worse: closed loop (0.5, 1) 5.430 mm (+0.175 +- 0.094, 8 of 24 better; ARE 0.0634), open loop
+    +0.04 to +0.13 mm for tau 0.3-3 s and ratios 0.03-0.3. Why the gain is small: the fused pose itself is free to
+    follow a slow error (its start prior 1 cm / 10 mrad, velocity 0.5 m/s, biases unknown; a tilt error is an
+    accelerometer bias to the IMU), so with the offset a synthetic flight's pose moves onto a constant ridge error more slowly only for
+    its first ~0.1 s (``tests/fusion/test_ridge_offset_s34.py``), and on the landings the offset only shares the
+    ridge error by its prior's statistics. Cost: 0.63 ->
+    1.55 ms CPU per fusion update at (0.3, 3) (``cost.py``, seed 0's inputs replayed, best of 5): an extra Pose3 and
+    three factors per state in the window."""
+    registration_offset_ratio: float = field(default=3.0, metadata={"min": 1e-3, "max": 1e4, "step": 0.1, "unit": "ratio"})
+    """With ``registration_offset_tau_s``: the offset's stationary variance along the two ridge directions over the
+    registration factor's own (white) variance there. The two share the (scaled, start-up widened) registration
+    covariance's ridge variance, so each registration's total stays as without the offset: the offset takes
+    ``ratio / (1 + ratio)`` of it, ratio."""
     newest_state_last: bool = True
     """The fixed-lag smoother eliminates the newest two states last, so the newest sits in the Bayes tree's root
     (False: gtsam's ``IncrementalFixedLagSmoother`` ordering exactly, one group for every kept key, which leaves
@@ -425,6 +474,12 @@ class FusionConfig:
             raise ConfigError(f"fusion.relinearize_correction_velocity must be >= 0 (0 = off), got {self.relinearize_correction_velocity}")
         if not self.registration_ridge_scale > 0:
             raise ConfigError(f"fusion.registration_ridge_scale must be positive, got {self.registration_ridge_scale}")
+        if not self.registration_offset_tau_s >= 0 or not self.registration_offset_ratio > 0:
+            raise ConfigError(f"fusion.registration_offset_tau_s must be >= 0 and fusion.registration_offset_ratio positive, got {self.registration_offset_tau_s}, {self.registration_offset_ratio}")
+        if self.registration_offset_tau_s > 0 and RegistrationErrorModel(self.registration_error_model) is not RegistrationErrorModel.WHITE:
+            raise ConfigError("fusion.registration_offset_tau_s needs fusion.registration_error_model white (the offset models the errors' time structure itself)")
+        if not 1 <= self.registration_startup_directions <= 6:
+            raise ConfigError(f"fusion.registration_startup_directions must be 1-6, got {self.registration_startup_directions}")
         if not self.registration_startup_s >= 0 or not self.registration_startup_inflation >= 1:
             raise ConfigError(f"fusion.registration_startup_s must be >= 0 and fusion.registration_startup_inflation >= 1, got {self.registration_startup_s}, {self.registration_startup_inflation}")
         if not self.gyro_bias_hold_s >= 0 or not self.gyro_bias_hold_sigma > 0:

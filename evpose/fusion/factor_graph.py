@@ -42,6 +42,7 @@ from evpose.fusion.config import FusionConfig, RegistrationErrorModel, RobustLos
 from evpose.fusion.fixed_lag import CopyableFixedLagSmoother
 from evpose.fusion.preintegration import ImuBuffer, make_preintegration_params, preintegrate
 from evpose.fusion.propagation import NavPropagator, imu_rate_trajectory
+from evpose.fusion.registration_offset import OffsetChain, split_ridge
 from evpose.fusion.startup import gyro_bias_release_due, gyro_bias_release_params, initial_gyro_bias_sigma, startup_inflated
 from evpose.fusion.state import Extrinsic, FusedState
 
@@ -221,6 +222,8 @@ class FactorGraphFusion:
         """Time of the state ``initialize`` set (``FusionConfig.registration_startup_s`` counts from it)."""
         self.hold_start_us: int | None = None
         """Start time of a running gyroscope-bias hold (``FusionConfig.gyro_bias_hold_s``); None: none or released."""
+        self.offset = OffsetChain()
+        """The registration offsets' chain (``FusionConfig.registration_offset_tau_s``)."""
 
     @property
     def initialized(self) -> bool:
@@ -326,7 +329,8 @@ class FactorGraphFusion:
                 "anchor": (p.t_us, p.nav, p.bias), "history": list(self.history),
                 "last_state": None if self.last_state is None else self.last_state.copy(), "imu": self.buffer.samples,
                 "last_registration": self.last_registration, "temporary_factor": self.temporary_factor,
-                "hold_start_us": self.hold_start_us, "start_us": self.start_us}
+                "hold_start_us": self.hold_start_us, "start_us": self.start_us,
+                "offset_last": self.offset.last}
 
     def restore(self, snap: dict) -> None:
         """Put back a snapshot; the snapshot stays usable (its smoother is copied again), and the restored fusion fed
@@ -349,6 +353,7 @@ class FactorGraphFusion:
         self.temporary_factor = snap.get("temporary_factor")
         self.hold_start_us = snap.get("hold_start_us")
         self.start_us = snap.get("start_us")
+        self.offset = OffsetChain(snap.get("offset_last"))
 
     # -------------------------------------------------------------- internals
     def _add_state(self, t_us: int, T_meas_cam: np.ndarray | None, cov_cam: np.ndarray | None) -> FusedState:
@@ -370,22 +375,26 @@ class FactorGraphFusion:
         degraded = T_meas_cam is None
         reacquire = self.degraded and not degraded
         remove, temporary = None, None
+        values = gtsam.Values()
+        stamp = float(j)
+        stamps = {xj: stamp, vj: stamp, bj: stamp}
         if not degraded:
             T_meas_imu = self.extrinsic.imu_pose(T_meas_cam)
-            cov_cam = startup_inflated(c, self.start_us, t_us, cov_cam)
-            remove, temporary = self._add_registration(graph, i, xi, xj, T_meas_imu, cov_cam, robust=not reacquire)
+            if c.registration_offset_tau_s > 0:
+                remove, temporary = self._add_offset_registration(graph, values, stamps, j, t_us, dt, T_meas_imu, cov_cam,
+                                                                  nav_pred, robust=not reacquire)
+            else:
+                cov_cam = startup_inflated(c, self.start_us, t_us, cov_cam)
+                remove, temporary = self._add_registration(graph, i, xi, xj, T_meas_imu, cov_cam, robust=not reacquire)
             self.last_registration = (j, T_meas_imu)
         else:
             self.last_registration = None
         graph.add(gtsam.BetweenFactorVector(vi, vj, np.zeros(3), self._velocity_noise(c.constant_velocity_sigma * np.sqrt(dt))))
-        values = gtsam.Values()
         # Named value arguments select gtsam's insert overload at once: by position pybind11 tries its 45 overloads
         # in order, and the bias is the 44th (~25-40 us per update, the same stored value either way).
         values.insert(xj, pose3=nav_pred.pose())
         values.insert(vj, np.asarray(nav_pred.velocity(), np.float64))
         values.insert(bj, constant_bias=self.propagator.bias)
-        stamp = float(j)
-        stamps = {xj: stamp, vj: stamp, bj: stamp}
         if temporary is None and not remove:  # the white model: the call gtsam's own smoother takes too (tests swap it in)
             self.smoother.update(graph, values, stamps)
             self.temporary_factor = None
@@ -434,6 +443,26 @@ class FactorGraphFusion:
         remove = None if self.temporary_factor is None else [self.temporary_factor]
         graph.add(gtsam.PriorFactorPose3(xj, z, robust_noise(c, q / (rho * (1.0 - rho)), robust=robust)))
         return remove, graph.size() - 1
+
+    def _add_offset_registration(self, graph, values, stamps, j: int, t_us: int, dt: float, T_meas_imu: np.ndarray, cov_cam,
+                                 nav_pred, robust: bool):
+        """Add state j's registration through its offset (``FusionConfig.registration_offset_tau_s``,
+        :mod:`evpose.fusion.registration_offset`); returns ``(smoother factor indices to remove, position in graph of
+        a factor to remove at the next registration)`` as :meth:`_add_registration`."""
+        c = self.config
+        base = registration_covariance(c, cov_cam)
+        widened = startup_inflated(c, self.start_us, t_us, cov_cam)
+        cov = base if widened is cov_cam else registration_covariance(c, widened)
+        white, slow = split_ridge(float(c.registration_offset_ratio), cov, base)
+        noise = robust_noise(c, self.extrinsic.imu_covariance(white), robust=robust)
+        temporary, chained = self.offset.add(self._gtsam, c, self.smoother, graph, values, stamps, j, t_us, dt,
+                                             self._gtsam.Pose3(T_meas_imu), noise, slow, self.extrinsic,
+                                             nav_pred.pose().matrix())
+        # The previous offset's extra prior goes when the chain carries on from it (a restarted chain leaves it: its
+        # offset may have left the window; a state without registration forgets it, so it then stays, a little weight
+        # more on that one offset).
+        remove = [self.temporary_factor] if chained and self.temporary_factor is not None else None
+        return remove, temporary
 
     def _velocity_noise(self, sigma: float):
         """The constant-velocity factor's isotropic noise model; the step (so sigma) rarely changes between updates,

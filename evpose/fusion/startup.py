@@ -42,7 +42,7 @@ directions are then whichever the eigen-solver returns first (deterministic, not
 
 def startup_inflated(config: FusionConfig, start_us: int | None, t_us: int, covariance_6x6):
     """The registration covariance at ``t_us`` of a fusion started at ``start_us``, its correlation matrix's
-    :data:`STARTUP_RIDGE_DIRECTIONS` largest eigenvalues times ``registration_startup_inflation`` within
+    ``registration_startup_directions`` (:data:`STARTUP_RIDGE_DIRECTIONS` by default) largest eigenvalues times ``registration_startup_inflation`` within
     ``registration_startup_s`` of the start and times ``registration_ridge_scale`` after it (unit-free: the
     eigen-decomposition of the correlation matrix, scaled back by the standard deviations); as given when the factor
     is 1, before any start or when unusable."""
@@ -59,5 +59,5 @@ def startup_inflated(config: FusionConfig, start_us: int | None, t_us: int, cova
         return covariance_6x6  # registration_covariance's fallback handles it
     dd = np.outer(d, d)
     w, V = np.linalg.eigh(c / dd)
-    w[-STARTUP_RIDGE_DIRECTIONS:] *= factor
+    w[-int(config.registration_startup_directions):] *= factor
     return ((V * w) @ V.T) * dd
