@@ -118,3 +118,42 @@ def refit_trajectory(K: np.ndarray, t_us: list[int], T_wc: list[np.ndarray], obs
                 T = solve(K, np.r_[Xw, Xe[near]], np.r_[uv, ue[near]], T)
         out[i] = T
     return out
+
+
+def keyframe_interpolated(t_us: list[int], T_wc: list[np.ndarray], placed: set[int], kf_t_us: list[int],
+                          kf_T_wc: list[np.ndarray]) -> list[np.ndarray]:
+    """``T_wc`` (poses at ``t_us``) with every pose whose time is in ``placed`` (the PnP-placed MCIs) and lies strictly
+    between two keyframe times replaced by those two keyframes' poses interpolated at its time (position linear,
+    rotation along the geodesic); keyframe MCIs, poses outside the keyframes' span and the other poses unchanged.
+
+    Why: the keyframes are placed by the local BAs on every point they see, an MCI between them by one PnP on its own
+    tracks, and between two keyframes 20-60 ms apart the motion is smoother than that PnP's noise. Session 34
+    (:attr:`evpose.slam.tracking_config.TrackingConfig.refit_keyframe_interpolation` has the figures)."""
+    if len(kf_t_us) < 2 or not placed:
+        return list(T_wc)
+    kt = np.asarray(kf_t_us, np.int64)
+    if np.any(np.diff(kt) <= 0):
+        # Keyframes share a time only where a map was re-initialised in place; order them and keep the newest pose.
+        order = np.argsort(kt, kind="stable")
+        kt, kf_T_wc = kt[order], [kf_T_wc[i] for i in order]
+        keep = np.r_[kt[1:] != kt[:-1], True]
+        kt, kf_T_wc = kt[keep], [T for T, k in zip(kf_T_wc, keep) if k]
+        if len(kt) < 2:
+            return list(T_wc)
+    out = list(T_wc)
+    for i, t in enumerate(t_us):
+        if int(t) not in placed or not kt[0] < t < kt[-1]:
+            continue
+        j = int(np.searchsorted(kt, t, side="right"))
+        if kt[j - 1] == t:
+            continue  # a keyframe MCI keeps its own (re-solved) pose
+        Ta, Tb = kf_T_wc[j - 1], kf_T_wc[j]
+        f = (t - kt[j - 1]) / (kt[j] - kt[j - 1])
+        R_ab = Ta[:3, :3].T @ Tb[:3, :3]
+        rv, _ = cv2.Rodrigues(R_ab)
+        R_f, _ = cv2.Rodrigues(rv * f)
+        T = np.eye(4)
+        T[:3, :3] = Ta[:3, :3] @ R_f
+        T[:3, 3] = (1.0 - f) * Ta[:3, 3] + f * Tb[:3, 3]
+        out[i] = T
+    return out

@@ -66,6 +66,15 @@ class TrackingConfig:
     reference) poses -0.137, against -0.144 without. CPU (``cpu.py``): the re-solve costs 0.3-0.6 ms per PnP-placed pose
     once, when the trajectory is read (indoor seed 0: 38 poses, 16 ms against 1 ms without; landing seed 0: 77 poses, 43
     ms), and the record about 1.5 kB per pose."""
+    refit_keyframe_interpolation: bool = False
+    """Event-only, with ``refit_tracked_poses``: the refined trajectory places each PnP-placed MCI that lies between two
+    keyframes of its map (not a keyframe MCI itself) on those keyframes' final poses interpolated at its time (position
+    linear, rotation geodesic; :func:`evpose.slam.pose_refit.keyframe_interpolated`) instead of its own re-solved PnP
+    pose. Tracking is unchanged bit for bit; only the output trajectory differs. Why (session 34, ``/tmp/s34/drift34``,
+    indoor event-only seeds 0-19 on main 0f25fde, 2.985 %): the keyframe poses after the local BAs are no better than the
+    per-MCI output at the keyframes' own times (2.76 against 2.74 % per map), but the MCIs between keyframes are noisier
+    than the keyframes around them: their positions replaced offline by the keyframes' interpolation
+    (``kfb.py``) 2.851 % (-0.135 +- 0.023, 20 of 20 better), a half-way blend -0.094."""
     pnp_motion_prior_ratio: float = field(default=0.0, metadata={"min": 0.0, "max": 10.0, "step": 0.05, "unit": "ratio"})
     """Event-only: each PnP pose is refined once more (Gauss-Newton, Huber reprojection errors at ``ba_huber_px``)
     with a prior pulling its camera centre towards the pose the map's camera-frame rotation rate and velocity over
