@@ -66,15 +66,20 @@ class TrackingConfig:
     reference) poses -0.137, against -0.144 without. CPU (``cpu.py``): the re-solve costs 0.3-0.6 ms per PnP-placed pose
     once, when the trajectory is read (indoor seed 0: 38 poses, 16 ms against 1 ms without; landing seed 0: 77 poses, 43
     ms), and the record about 1.5 kB per pose."""
-    refit_keyframe_interpolation: bool = False
+    refit_keyframe_interpolation: bool = True
     """Event-only, with ``refit_tracked_poses``: the refined trajectory places each PnP-placed MCI that lies between two
     keyframes of its map (not a keyframe MCI itself) on those keyframes' final poses interpolated at its time (position
     linear, rotation geodesic; :func:`evpose.slam.pose_refit.keyframe_interpolated`) instead of its own re-solved PnP
-    pose. Tracking is unchanged bit for bit; only the output trajectory differs. Why (session 34, ``/tmp/s34/drift34``,
-    indoor event-only seeds 0-19 on main 0f25fde, 2.985 %): the keyframe poses after the local BAs are no better than the
-    per-MCI output at the keyframes' own times (2.76 against 2.74 % per map), but the MCIs between keyframes are noisier
-    than the keyframes around them: their positions replaced offline by the keyframes' interpolation
-    (``kfb.py``) 2.851 % (-0.135 +- 0.023, 20 of 20 better), a half-way blend -0.094."""
+    pose; off: as re-solved. Tracking is unchanged bit for bit (tracked time, maps, per-MCI statuses); only the output
+    trajectory differs. Why (session 34, ``/tmp/s34/drift34``: ``run.py`` / ``batch.sh`` runs, ``cmp.py`` pairs,
+    ``kfb.py`` / ``kfc.py`` offline; main 0f25fde): the keyframe poses after the local BAs are no better than the
+    per-MCI output at the keyframes' own times (indoor 0-19: 2.76 against 2.72 % per map), but an MCI between keyframes
+    (20-60 ms apart) is placed by one PnP on its own 15-60 tracks and is noisier than the keyframes around it. Offline,
+    a blend w * re-solved + (1 - w) * interpolated: w 0.75 / 0.5 / 0.25 / 0 -0.053 / -0.094 / -0.122 / -0.135 points on
+    indoor 0-19; PCHIP / Akima / cubic through the keyframes -0.082 / -0.088 / -0.001 (linear smooths the keyframes'
+    own noise). In situ, scale-aligned atlas ATE: indoor event-only seeds 0-19 2.985 -> 2.851 % (paired -0.135 +-
+    0.023, 20 of 20 better), held-out 20-39 3.048 -> 2.920 % (-0.128 +- 0.022, 20 of 20), landing event-only 0-23
+    1.561 -> 1.518 % (-0.043 +- 0.010, 20 better, 4 worse by at most 0.04 points; 21 of 24 within 2 % either way)."""
     pnp_motion_prior_ratio: float = field(default=0.0, metadata={"min": 0.0, "max": 10.0, "step": 0.05, "unit": "ratio"})
     """Event-only: each PnP pose is refined once more (Gauss-Newton, Huber reprojection errors at ``ba_huber_px``)
     with a prior pulling its camera centre towards the pose the map's camera-frame rotation rate and velocity over

@@ -1,5 +1,5 @@
 """Refined trajectories may place the PnP-placed MCIs between two keyframes on the keyframes' interpolated pose
-(TrackingConfig.refit_keyframe_interpolation, off by default)."""
+(TrackingConfig.refit_keyframe_interpolation, on by default)."""
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -73,13 +73,13 @@ def test_the_map_option_replaces_the_re_solved_pose_only_when_set():
     assert np.allclose(m_on.trajectory(refit=False).matrices()[1], m_off.trajectory(refit=False).matrices()[1])
 
 
-def test_the_option_is_off_by_default_and_reaches_every_new_map():
+def test_the_option_is_on_by_default_and_reaches_every_new_map():
     from evpose.core.camera import CameraCalibration
     from evpose.slam.system import EventSlam
 
     cal = CameraCalibration(240, 180, 200, 200, 119.5, 89.5)
-    assert SlamConfig().tracking.refit_keyframe_interpolation is False
-    assert EventSlam(SlamConfig(), cal).atlas.new_map().interpolate_between_keyframes is False
+    assert SlamConfig().tracking.refit_keyframe_interpolation is True
+    assert EventSlam(SlamConfig(), cal).atlas.new_map().interpolate_between_keyframes is True
     cfg = SlamConfig()
-    cfg.tracking.refit_keyframe_interpolation = True
-    assert EventSlam(cfg, cal).atlas.new_map().interpolate_between_keyframes is True
+    cfg.tracking.refit_keyframe_interpolation = False
+    assert EventSlam(cfg, cal).atlas.new_map().interpolate_between_keyframes is False
