@@ -68,18 +68,22 @@ class TrackingConfig:
     ms), and the record about 1.5 kB per pose."""
     refit_keyframe_interpolation: bool = True
     """Event-only, with ``refit_tracked_poses``: the refined trajectory places each PnP-placed MCI that lies between two
-    keyframes of its map (not a keyframe MCI itself) on those keyframes' final poses interpolated at its time (position
-    linear, rotation geodesic; :func:`evpose.slam.pose_refit.keyframe_interpolated`) instead of its own re-solved PnP
-    pose; off: as re-solved. Tracking is unchanged bit for bit (tracked time, maps, per-MCI statuses); only the output
-    trajectory differs. Why (session 34, ``/tmp/s34/drift34``: ``run.py`` / ``batch.sh`` runs, ``cmp.py`` pairs,
-    ``kfb.py`` / ``kfc.py`` offline; main 0f25fde): the keyframe poses after the local BAs are no better than the
-    per-MCI output at the keyframes' own times (indoor 0-19: 2.76 against 2.72 % per map), but an MCI between keyframes
-    (20-60 ms apart) is placed by one PnP on its own 15-60 tracks and is noisier than the keyframes around it. Offline,
-    a blend w * re-solved + (1 - w) * interpolated: w 0.75 / 0.5 / 0.25 / 0 -0.053 / -0.094 / -0.122 / -0.135 points on
-    indoor 0-19; PCHIP / Akima / cubic through the keyframes -0.082 / -0.088 / -0.001 (linear smooths the keyframes'
-    own noise). In situ, scale-aligned atlas ATE: indoor event-only seeds 0-19 2.985 -> 2.851 % (paired -0.135 +-
-    0.023, 20 of 20 better), held-out 20-39 3.048 -> 2.920 % (-0.128 +- 0.022, 20 of 20), landing event-only 0-23
-    1.561 -> 1.518 % (-0.043 +- 0.010, 20 better, 4 worse by at most 0.04 points; 21 of 24 within 2 % either way)."""
+    keyframes of its map (not a keyframe MCI itself) on the poses at those keyframes interpolated at its time (position
+    linear, rotation geodesic; the pose at a keyframe is its MCI's re-solved pose, else the keyframe's;
+    :func:`evpose.slam.pose_refit.keyframe_interpolated`) instead of its own re-solved PnP pose; off: as re-solved.
+    Tracking is unchanged bit for bit (tracked time, maps, per-MCI statuses); only the output trajectory differs. Why
+    (session 34, ``/tmp/s34/drift34``: ``run.py`` / ``batch.sh`` runs, ``cmp.py`` pairs, ``kfb.py`` / ``kfc.py`` /
+    ``kfa.py`` / ``kfk.py`` offline; main 0f25fde): the keyframe poses after the local BAs are no better than the
+    per-MCI output at the keyframes' own times (indoor 0-19: 2.76 against 2.72 % per map), but an MCI between
+    keyframes (20-60 ms apart) is placed by one PnP on its own 15-60 tracks and is noisier than the keyframes around
+    it. Offline on indoor 0-19 (2.985 %), anchored on the bundle-adjusted keyframes: a blend w * re-solved + (1 - w) *
+    interpolated, w 0.75 / 0.5 / 0.25 / 0: -0.053 / -0.094 / -0.122 / -0.135 points; PCHIP / Akima / cubic through the
+    keyframes -0.082 / -0.088 / -0.001 (linear smooths the keyframes' own noise); keyframe MCIs moved onto their
+    keyframes as well +0.020; anchored on the re-solved keyframe MCIs (the rule) -0.148. In situ, scale-aligned atlas
+    ATE: indoor event-only seeds 0-19 2.985 -> 2.837 % (paired -0.148 +- 0.020, 20 of 20 better), held-out 20-39 3.048
+    -> 2.912 % (-0.136 +- 0.024, 20 of 20), landing event-only 0-23 1.561 -> 1.508 % (-0.053 +- 0.011, 22 better, 2
+    worse by 0.03 / 0.05 points; 21 of 24 within 2 % either way); anchored on the BA keyframes instead 2.851 / 2.920 /
+    1.518 %."""
     pnp_motion_prior_ratio: float = field(default=0.0, metadata={"min": 0.0, "max": 10.0, "step": 0.05, "unit": "ratio"})
     """Event-only: each PnP pose is refined once more (Gauss-Newton, Huber reprojection errors at ``ba_huber_px``)
     with a prior pulling its camera centre towards the pose the map's camera-frame rotation rate and velocity over

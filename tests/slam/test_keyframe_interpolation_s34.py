@@ -39,6 +39,14 @@ def test_unplaced_keyframe_and_out_of_span_poses_are_kept():
     assert all(np.allclose(a, b) for a, b in zip(keyframe_interpolated([0, 50], [Ta, coasted], {50}, [0], [Ta]), [Ta, coasted]))
 
 
+def test_a_keyframe_mci_s_own_pose_anchors_the_interpolation_over_the_keyframe_pose():
+    Ta, Tb = _T([0, 0, 0], [0, 0, 0]), _T([0, 0, 0], [1.0, 0, 0])
+    resolved_b = _T([0, 0, 0], [2.0, 0, 0])  # the keyframe MCI at t = 100, re-solved on the final points
+    out = keyframe_interpolated([0, 50, 100], [Ta, np.eye(4), resolved_b], {50, 100}, [0, 100], [Ta, Tb])
+    assert np.allclose(out[1][:3, 3], [1.0, 0, 0])  # half-way to the re-solved pose, not to the keyframe's 0.5
+    assert np.allclose(out[2], resolved_b)
+
+
 def test_keyframes_out_of_time_order_are_sorted_first():
     Ta, Tb, Tc = _T([0, 0, 0], [0, 0, 0]), _T([0, 0, 0], [1.0, 0, 0]), _T([0, 0, 0], [3.0, 0, 0])
     out = keyframe_interpolated([150], [np.eye(4)], {150}, [200, 0, 100], [Tc, Ta, Tb])
