@@ -137,7 +137,8 @@ def keyframe_interpolated(t_us: list[int], T_wc: list[np.ndarray], placed: set[i
         return list(T_wc)
     kt = np.asarray(kf_t_us, np.int64)
     if np.any(np.diff(kt) <= 0):
-        # Keyframes share a time only where a map was re-initialised in place; order them and keep the newest pose.
+        # Keyframe times rise along a map (none repeated or out of order in session 34's 64 runs); should they not,
+        # order them and keep the newest keyframe at a repeated time.
         order = np.argsort(kt, kind="stable")
         kt, kf_T_wc = kt[order], [kf_T_wc[i] for i in order]
         keep = np.r_[kt[1:] != kt[:-1], True]
