@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from evpose.core.trajectory import Trajectory
-from evpose.slam.pose_refit import PoseObservations, refit_trajectory
+from evpose.slam.pose_refit import PoseObservations, first_pose_extrapolated, keyframe_interpolated, refit_trajectory
 
 
 @dataclass
@@ -76,6 +76,12 @@ class SlamMap:
     (:mod:`evpose.slam.pose_refit`, :attr:`TrackingConfig.refit_tracked_poses`); None: never."""
     refit_threshold_px: float = 2.5
     """Other tracks of a re-solved MCI join its inliers when they reproject within this, pixels."""
+    interpolate_between_keyframes: bool = False
+    """:meth:`trajectory` places each PnP-placed MCI between two keyframes on the keyframes' interpolated pose
+    (:func:`evpose.slam.pose_refit.keyframe_interpolated`, :attr:`TrackingConfig.refit_keyframe_interpolation`)."""
+    first_pose_span_us: int = 0
+    """> 0: :meth:`trajectory` places the map's first pose by the motion of its next poses over this span, us
+    (:func:`evpose.slam.pose_refit.first_pose_extrapolated`, :attr:`TrackingConfig.first_pose_extrapolation_s`)."""
     segment_start_kf: int = 0
     """Id of the first keyframe of the map's newest visual segment: a lost map re-joined by the next two-view map
     (:mod:`evpose.slam.map_rejoin`) shares no points with it, and the visual local BA stays within the segment."""
@@ -144,6 +150,13 @@ class SlamMap:
             T = [kf_pose[r] @ rel if r in kf_pose else Tw for r, rel, Tw in zip(self.traj_ref, self.traj_rel, self.traj_T)]
             if refit and self.refit_K is not None and self.traj_obs:
                 T = refit_trajectory(self.refit_K, self.traj_t, T, self.traj_obs, self.points, self.refit_threshold_px)
+                if self.interpolate_between_keyframes:
+                    T = keyframe_interpolated(self.traj_t, T, set(self.traj_obs),
+                                              [kf.t_us for kf in self.keyframes], [kf.T_wc for kf in self.keyframes])
+                if self.first_pose_span_us > 0:
+                    # Only maps with PnP poses: a coasted map's poses hold one velocity, and its first pose moved onto
+                    # their line left some maps exactly straight, which no Sim(3) aligns (evaluation drops them).
+                    T = first_pose_extrapolated(self.traj_t, T, self.first_pose_span_us)
         return Trajectory.from_matrices(np.array(self.traj_t, np.int64), np.stack(T))
 
     def point_array(self) -> np.ndarray:
@@ -162,13 +175,18 @@ class Atlas:
     """Given to every new map (:attr:`SlamMap.refit_K`)."""
     refit_threshold_px: float = 2.5
     """Given to every new map (:attr:`SlamMap.refit_threshold_px`)."""
+    interpolate_between_keyframes: bool = False
+    """Given to every new map (:attr:`SlamMap.interpolate_between_keyframes`)."""
+    first_pose_span_us: int = 0
+    """Given to every new map (:attr:`SlamMap.first_pose_span_us`)."""
 
     @property
     def active(self) -> SlamMap | None:
         return self.maps[-1] if self.maps else None
 
     def new_map(self) -> SlamMap:
-        m = SlamMap(id=len(self.maps), refit_K=self.refit_K, refit_threshold_px=self.refit_threshold_px)
+        m = SlamMap(id=len(self.maps), refit_K=self.refit_K, refit_threshold_px=self.refit_threshold_px,
+                    interpolate_between_keyframes=self.interpolate_between_keyframes, first_pose_span_us=self.first_pose_span_us)
         self.maps.append(m)
         return m
 

@@ -99,7 +99,9 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
         """Two-view settings of this run's mode (event-inertial runs keep their own parallax and decomposition choice)."""
         # Event-only maps re-solve their PnP-placed poses on the final points (TrackingConfig.refit_tracked_poses).
         self.atlas = Atlas(refit_K=self.K if self.imu is None and config.tracking.refit_tracked_poses else None,
-                           refit_threshold_px=config.tracking.reprojection_threshold_px)
+                           refit_threshold_px=config.tracking.reprojection_threshold_px,
+                           interpolate_between_keyframes=config.tracking.refit_keyframe_interpolation,
+                           first_pose_span_us=int(round(config.tracking.first_pose_extrapolation_s * 1e6)))
         self.fe = FrontendTracks()
         self.results: list[SlamStepResult] = []
         """One result per processed MCI."""

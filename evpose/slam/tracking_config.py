@@ -66,6 +66,38 @@ class TrackingConfig:
     reference) poses -0.137, against -0.144 without. CPU (``cpu.py``): the re-solve costs 0.3-0.6 ms per PnP-placed pose
     once, when the trajectory is read (indoor seed 0: 38 poses, 16 ms against 1 ms without; landing seed 0: 77 poses, 43
     ms), and the record about 1.5 kB per pose."""
+    refit_keyframe_interpolation: bool = True
+    """Event-only, with ``refit_tracked_poses``: the refined trajectory places each PnP-placed MCI that lies between two
+    keyframes of its map (not a keyframe MCI itself) on the poses at those keyframes interpolated at its time (position
+    linear, rotation geodesic; the pose at a keyframe is its MCI's re-solved pose, else the keyframe's;
+    :func:`evpose.slam.pose_refit.keyframe_interpolated`) instead of its own re-solved PnP pose; off: as re-solved.
+    Tracking is unchanged bit for bit (tracked time, maps, per-MCI statuses); only the output trajectory differs. Why
+    (session 34, ``/tmp/s34/drift34``: ``run.py`` / ``batch.sh`` runs, ``cmp.py`` pairs, ``kfb.py`` / ``kfc.py`` /
+    ``kfa.py`` / ``kfk.py`` offline; main 0f25fde): the keyframe poses after the local BAs are no better than the
+    per-MCI output at the keyframes' own times (indoor 0-19: 2.76 against 2.72 % per map), but an MCI between
+    keyframes (20-60 ms apart) is placed by one PnP on its own 15-60 tracks and is noisier than the keyframes around
+    it. Offline on indoor 0-19 (2.985 %), anchored on the bundle-adjusted keyframes: a blend w * re-solved + (1 - w) *
+    interpolated, w 0.75 / 0.5 / 0.25 / 0: -0.053 / -0.094 / -0.122 / -0.135 points; PCHIP / Akima / cubic through the
+    keyframes -0.082 / -0.088 / -0.001 (linear smooths the keyframes' own noise); keyframe MCIs moved onto their
+    keyframes as well +0.020; anchored on the re-solved keyframe MCIs (the rule) -0.148. In situ, scale-aligned atlas
+    ATE: indoor event-only seeds 0-19 2.985 -> 2.837 % (paired -0.148 +- 0.020, 20 of 20 better), held-out 20-39 3.048
+    -> 2.912 % (-0.136 +- 0.024, 20 of 20), landing event-only 0-23 1.561 -> 1.508 % (-0.053 +- 0.011, 22 better, 2
+    worse by 0.03 / 0.05 points; 21 of 24 within 2 % either way); anchored on the BA keyframes instead 2.851 / 2.920 /
+    1.518 %."""
+    first_pose_extrapolation_s: float = field(default=0.0, metadata={"min": 0.0, "max": 1.0, "step": 0.01, "unit": "s"})
+    """Event-only, with ``refit_tracked_poses``: > 0 places each map's first pose (its two-view reference keyframe) in the
+    refined trajectory by the motion of its next poses over this span, held back to its time
+    (:func:`evpose.slam.pose_refit.first_pose_extrapolated`); 0: as the map holds it, s. Tracking is unchanged; only the
+    output trajectory differs. Session 34 (``/tmp/s34/drift34``, on ``refit_keyframe_interpolation``; indoor 0-19 2.837
+    %, 20-39 2.912 %, landing 0-23 1.508 %): the first pose sits a median 1.8 times its map's RMS off after the map's
+    Sim(3), while the first steps are no worse than the next ones (``firststep.py``): the young map bends away from its
+    gauge. Offline (``first.py``) spans 0.02 / 0.06 / 0.1 / 0.12 / 0.24 s: indoor 0-19 -0.02 / -0.12 / -0.14 / -0.15 /
+    -0.17 points (+-0.06), 20-39 -0.10 / -0.22 / -0.23 / -0.25 / -0.28 (+-0.08), landing +0.001 / +0.001 / +0.000 /
+    -0.000 / -0.001 (every map; the rule skips maps without a PnP-placed pose and maps whose later poses lie on one
+    line, which evaluation could no longer align). In situ at 0.1 (``cmp.py kfi2 fp10``): indoor 0-19 2.837 -> 2.697 %
+    (-0.140 +- 0.063, 16 of 20 better), held-out 20-39 2.912 -> 2.697 % (-0.214 +- 0.083, 16 of 20), landing 0-23
+    1.508 -> 1.509 % (+0.000 +- 0.002); tracked time and maps unchanged. Off although that meets the rule for a
+    default: the first pose is the young maps' (initialisation) work's, which may move it; re-measure after it."""
     pnp_motion_prior_ratio: float = field(default=0.0, metadata={"min": 0.0, "max": 10.0, "step": 0.05, "unit": "ratio"})
     """Event-only: each PnP pose is refined once more (Gauss-Newton, Huber reprojection errors at ``ba_huber_px``)
     with a prior pulling its camera centre towards the pose the map's camera-frame rotation rate and velocity over
