@@ -62,7 +62,17 @@ class FieldSpec:
 
 @functools.lru_cache(maxsize=None)
 def attribute_docs(cls: type) -> dict[str, str]:
-    """Attribute docstrings (a string literal right under a field) of a class, by field name."""
+    """Attribute docstrings (a string literal right under a field) of a class and the classes it derives from (a
+    config split into groups of fields, such as the SLAM's ``TrackingConfig``), by field name."""
+    out: dict[str, str] = {}
+    for base in reversed(cls.__mro__[1:]):
+        if base is not object:
+            out.update(attribute_docs(base))
+    out.update(_own_attribute_docs(cls))
+    return out
+
+
+def _own_attribute_docs(cls: type) -> dict[str, str]:
     try:
         tree = ast.parse(textwrap.dedent(inspect.getsource(cls)))
     except (OSError, TypeError, SyntaxError):
