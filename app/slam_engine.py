@@ -97,6 +97,13 @@ class SlamEngine(Engine):
         window = self._window(k)
         t0 = time.perf_counter()
         result = self.slam.step(window)
+        if k == self.n_steps - 1:
+            # The recording ends here: as run_slam, the events after the last reconstruction window make one more MCI
+            # (EventWindowConfig.flush_min_fraction).
+            end = self.slam.finish()
+            if end is not None:
+                end.mcis += result.mcis
+                result = end
         elapsed = (time.perf_counter() - t0) * 1e3
         self.step_count = k + 1
         if len(window):

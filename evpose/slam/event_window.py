@@ -303,6 +303,28 @@ class EventWindowSelector:
             self.last_event = WindowEvent.WAITING
         return out
 
+    def flush(self) -> ReconstructionWindow | None:
+        """End of the stream: the events after the last reconstruction window as one more, forced window (no ``N_e``
+        adaptation), or None. The partial tiny window left in the buffer goes through the tests of any tiny window
+        (rate, features, KLT) when it holds at least half of ``N_e`` events, else it is dropped; the window is emitted
+        when its own events (without the overlap) number at least ``flush_min_fraction`` of the previous window's
+        own part, so a few stray events do not make an MCI. Needs a previous window (its overlap) and a reference."""
+        s, frac = self.state, self.cfg.flush_min_fraction
+        if frac <= 0 or s.prev_window is None:
+            return None
+        if len(s.buf.t):
+            tiny, s.buf = s.buf, _empty_chunk()
+            if 2 * len(tiny.t) >= s.n_events and self._after_gap(tiny.t) is None:
+                s.last_t_us = int(tiny.t[-1])
+                rw = self._process_tiny(tiny)
+                if rw is not None:
+                    return rw
+        if s.ref_pts is None or not s.chunks or s.prev_window is None:
+            return None
+        if sum(len(c.t) for c in s.chunks) < frac * len(s.prev_window.t):
+            return None
+        return self._dispatch(forced=True)
+
     def _after_gap(self, t: np.ndarray) -> int | None:
         """Index of the first event of ``t`` after the last gap longer than ``max_event_gap_ms``
         (counting the gap since the previous tiny window), else None."""

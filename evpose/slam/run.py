@@ -86,4 +86,5 @@ def run_slam(recording: Recording, config: SlamConfig, chunk_us: int = 5000, sla
         for a, b in zip(idx[:-1], idx[1:]):
             if b > a:
                 slam.step(ev[a:b])
+        slam.finish()  # the events after the last reconstruction window (EventWindowConfig.flush_min_fraction)
     return SlamRun(slam.results, slam.atlas, ev.duration_us / 1e6, time.perf_counter() - t_start, int(ev.t[0]) if len(ev) else 0)

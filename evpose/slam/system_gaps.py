@@ -10,6 +10,10 @@ that after the IMU's last sample (or before its first).
 
 The methods read the system's ``cfg``, ``imu``, ``calib``, ``atlas``, ``fe``, ``results`` and ``_state`` and call
 its ``_lose``.
+
+The end of the stream is the last pause: :meth:`StreamGaps.finish` turns the events collected after the last
+reconstruction window into one more MCI (``EventWindowConfig.flush_min_fraction``), so a recording's tail is tracked
+like the rest of it.
 """
 
 from __future__ import annotations
@@ -99,5 +103,18 @@ class StreamGaps:
         self._rejoin = None
         result = SlamStepResult(gap.t_next_us, SlamStatus.LOST, f"input paused: {reason}; {after}",
                                 failure=SlamFailure.GAP, map_id=m.id if m else -1)
+        self.results.append(result)
+        return result
+
+    def finish(self) -> SlamStepResult | None:
+        """End of the stream: the events the window selection holds after its last reconstruction window become one
+        more, forced window when there are enough of them (``EventWindowConfig.flush_min_fraction``) and are processed
+        as any other; its result (also appended to ``results``), else None. Call once, after the last :meth:`step`."""
+        rw = self.window.flush()
+        if rw is None:
+            return None
+        result = self._process_window(rw)
+        result.mcis = 1
+        result.tiny_frame = self.window.last_tiny_image
         self.results.append(result)
         return result
