@@ -49,7 +49,7 @@ import numpy as np
 
 from evpose.slam.config import EventImageConfig, FeatureConfig, MciConfig
 from evpose.slam.event_image import event_image, local_std_score, to_uint8
-from evpose.slam.event_window import ReconstructionWindow
+from evpose.slam.reconstruction_window import ReconstructionWindow
 from evpose.slam.fine_grid import fine_to_uint8
 from evpose.slam.geometry import rotvec_matrices
 from evpose.slam.parallax_warp import depth_field, fit_twist, sample_depth, warp_events

@@ -34,7 +34,8 @@ from evpose.slam.atlas import Atlas, SlamMap
 from evpose.slam.bundle_adjustment import local_bundle_adjustment
 from evpose.slam.coasting import constant_velocity_pose
 from evpose.slam.config import SlamConfig, SlamMode
-from evpose.slam.event_window import WINDOW_REASONS, EventWindowSelector, ReconstructionWindow
+from evpose.slam.event_window import WINDOW_REASONS, EventWindowSelector
+from evpose.slam.reconstruction_window import ReconstructionWindow
 from evpose.slam.features import FrontendTracks, detect_features, has_support, track_features
 from evpose.slam.track_step import step_consistent
 from evpose.slam.fine_grid import track_features_fine, use_fine_grid

@@ -91,7 +91,7 @@ class PoseTrackingSettings:
     -> 2.912 % (-0.136 +- 0.024, 20 of 20), landing event-only 0-23 1.561 -> 1.508 % (-0.053 +- 0.011, 22 better, 2
     worse by 0.03 / 0.05 points; 21 of 24 within 2 % either way); anchored on the BA keyframes instead 2.851 / 2.920 /
     1.518 %."""
-    first_pose_extrapolation_s: float = field(default=0.0, metadata={"min": 0.0, "max": 1.0, "step": 0.01, "unit": "s"})
+    first_pose_extrapolation_s: float = field(default=0.1, metadata={"min": 0.0, "max": 1.0, "step": 0.01, "unit": "s"})
     """Event-only, with ``refit_tracked_poses``: > 0 places each map's first pose (its two-view reference keyframe) in the
     refined trajectory by the motion of its next poses over this span, held back to its time
     (:func:`evpose.slam.pose_refit.first_pose_extrapolated`); 0: as the map holds it, s. Tracking is unchanged; only the
@@ -103,8 +103,10 @@ class PoseTrackingSettings:
     -0.000 / -0.001 (every map; the rule skips maps without a PnP-placed pose and maps whose later poses lie on one
     line, which evaluation could no longer align). In situ at 0.1 (``cmp.py kfi2 fp10``): indoor 0-19 2.837 -> 2.697 %
     (-0.140 +- 0.063, 16 of 20 better), held-out 20-39 2.912 -> 2.697 % (-0.214 +- 0.083, 16 of 20), landing 0-23
-    1.508 -> 1.509 % (+0.000 +- 0.002); tracked time and maps unchanged. Off although that meets the rule for a
-    default: the first pose is the young maps' (initialisation) work's, which may move it; re-measure after it."""
+    1.508 -> 1.509 % (+0.000 +- 0.002); tracked time and maps unchanged. On since session 34's merge: re-measured by the
+    lead on the merged main (young-map options off, the stream-end flush on; ``/tmp/s34/lead/run.py``, ``sum.py fin
+    fp10``), indoor 0-19 2.845 -> 2.705 % (-0.140 +- 0.063, 16 of 20 better), held-out 20-39 2.914 -> 2.700 % (-0.214 +-
+    0.083, 15 of 20), landing 0-23 1.501 -> 1.502 % (+0.000 +- 0.002), least tracked unchanged (86.3 / 80.5 / 96.5 %)."""
     pnp_motion_prior_ratio: float = field(default=0.0, metadata={"min": 0.0, "max": 10.0, "step": 0.05, "unit": "ratio"})
     """Event-only: each PnP pose is refined once more (Gauss-Newton, Huber reprojection errors at ``ba_huber_px``)
     with a prior pulling its camera centre towards the pose the map's camera-frame rotation rate and velocity over
