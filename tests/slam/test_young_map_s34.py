@@ -4,13 +4,12 @@ reference). Both off by default."""
 
 import numpy as np
 
-from evpose.core.trajectory import invert_pose
 from evpose.slam import SlamConfig, SlamStatus, run_slam
-from evpose.slam.atlas import Keyframe, MapPoint, SlamMap
+from evpose.slam.atlas import Keyframe, SlamMap
 from evpose.slam.config import TrackingConfig
-from evpose.slam.geometry import project
 from evpose.slam.local_map import triangulate_new_points, young_map, young_triangulation
 from slam_synthetic import make_recording
+from tests.slam.test_local_map import _two_keyframes
 
 
 def test_off_by_default():
@@ -28,32 +27,12 @@ def test_a_map_is_young_until_young_map_s_after_its_first_keyframe():
     assert not young_map(m, 1_050_000, TrackingConfig())  # off
 
 
-def _pair(baseline: float):
-    """Two keyframes ``baseline`` apart sideways before points 5 m ahead: 30 with map points, 30 tracks without."""
-    K = np.array([[200.0, 0, 120], [0, 200.0, 90], [0, 0, 1]])
-    rng = np.random.default_rng(1)
-    X = np.c_[rng.uniform(-2, 2, 60), rng.uniform(-1.5, 1.5, 60), rng.uniform(4.5, 5.5, 60)]
-    T1 = np.eye(4)
-    T1[0, 3] = baseline
-    uv0, _ = project(K, np.eye(4), X)
-    uv1, _ = project(K, invert_pose(T1), X)
-    tids = list(range(30)) + list(range(100, 130))
-    m = SlamMap(0)
-    m.keyframes = [Keyframe(0, 0, np.eye(4), {t: uv0[i] for i, t in enumerate(tids)}),
-                   Keyframe(1, 50_000, T1, {t: uv1[i] for i, t in enumerate(tids)})]
-    t2p = {}
-    for i in range(30):
-        m.points[i] = MapPoint(i, X[i].copy(), {0: uv0[i], 1: uv1[i]}, track_id=i)
-        t2p[i] = i
-    return m, K, t2p
-
-
 def test_a_young_maps_keyframe_triangulates_a_pair_the_default_gates_refuse():
     # 0.07 m at 5 m: 0.8 deg, under the default per-point (1 deg) and pair (2 deg) gates, over the young ones (0.5).
     cfg = TrackingConfig(young_map_s=0.3)
-    m, K, t2p = _pair(0.07)
+    m, K, t2p = _two_keyframes(0.07, seed=1)
     assert triangulate_new_points(m, K, m.keyframes[1], t2p, cfg, 1000) == 1000
-    m, K, t2p = _pair(0.07)
+    m, K, t2p = _two_keyframes(0.07, seed=1)
     yc = young_triangulation(cfg)
     assert (yc.min_triangulation_deg, yc.min_pair_parallax_deg) == (0.5, 0.5)
     nxt = triangulate_new_points(m, K, m.keyframes[1], t2p, yc, 1000)
