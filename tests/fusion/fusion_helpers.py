@@ -49,3 +49,17 @@ def points_at(uv) -> np.ndarray:
     K, d = ALIGNED_K, ALIGNED_DEPTH
     return np.c_[(uv[:, 0] - K[0, 2]) / K[0, 0] * d, (uv[:, 1] - K[1, 2]) / K[1, 1] * d, np.full(len(uv), d)]
 
+
+
+def update_with_replay(fusion, times, regs, cov, snapshot_at=None):
+    """Feed ``regs`` (one per time, covariance ``cov``) to ``fusion``; with ``snapshot_at`` also snapshot before that
+    update, restore at the end and feed the rest again. Returns (states, states of the replay or None)."""
+    states, again, snap = [], None, None
+    for k, t in enumerate(times):
+        if k == snapshot_at:
+            snap = fusion.snapshot()
+        states.append(fusion.update(int(t), regs[k], cov))
+    if snap is not None:
+        fusion.restore(snap)
+        again = [fusion.update(int(times[k]), regs[k], cov) for k in range(snapshot_at, len(times))]
+    return states, again

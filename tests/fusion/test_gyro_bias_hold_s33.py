@@ -8,7 +8,7 @@ from evpose.fusion.config import FusionBackend, FusionConfig
 from evpose.fusion.ekf import ErrorStateEkf
 from evpose.fusion.factor_graph import FactorGraphFusion
 
-from fusion_helpers import WHITE, make_motion, noisy_registrations
+from fusion_helpers import WHITE, make_motion, noisy_registrations, update_with_replay
 
 BIAS_G = (0.01, -0.02, 0.015)
 HOLD_S = 0.2
@@ -26,14 +26,7 @@ def _run(backend, calibration, hold_s, duration_s=1.5, snapshot_at=None):
     f.initialize(t0, m.camera_trajectory([t0], calibration.T_cam_imu).matrix(0), m.camera_velocity([t0], calibration.T_cam_imu)[0])
     times = m.config.t0_us + np.arange(5000, int(duration_s * 1e6), 5000)
     _, regs, cov = noisy_registrations(m, calibration.T_cam_imu, times, 0.002, np.radians(0.1), seed=4)
-    states, again, snap = [], None, None
-    for k, t in enumerate(times):
-        if k == snapshot_at:
-            snap = f.snapshot()
-        states.append(f.update(int(t), regs[k], cov))
-    if snap is not None:
-        f.restore(snap)
-        again = [f.update(int(times[k]), regs[k], cov) for k in range(snapshot_at, len(times))]
+    states, again = update_with_replay(f, times, regs, cov, snapshot_at)
     return (times - t0) * 1e-6, states, again
 
 

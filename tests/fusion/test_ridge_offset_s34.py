@@ -11,7 +11,7 @@ from evpose.fusion.factor_graph import FactorGraphFusion
 from evpose.fusion.state import Extrinsic
 from evpose.fusion.registration_offset import OFF_RIDGE_SHARE, offset_key, ridge_part, split_ridge, stationary_covariance
 
-from fusion_helpers import make_motion
+from fusion_helpers import make_motion, update_with_replay
 
 H = 4.0
 """Height the synthetic ridge is made for, m: a shift ``x`` across the optical axis looks like a tilt ``x / H``."""
@@ -61,14 +61,7 @@ def _fly(calibration, tau_s, slow_sigmas=4.0, duration_s=1.5, snapshot_at=None, 
         T[:3, :3] = T[:3, :3] @ Rotation.from_rotvec(e[:3]).as_matrix()
         T[:3, 3] += T[:3, :3] @ e[3:]
         regs.append(T)
-    states, again, snap = [], None, None
-    for k, t in enumerate(times):
-        if k == snapshot_at:
-            snap = f.snapshot()
-        states.append(f.update(int(t), regs[k], C))
-    if snap is not None:
-        f.restore(snap)
-        again = [f.update(int(times[k]), regs[k], C) for k in range(snapshot_at, len(times))]
+    states, again = update_with_replay(f, times, regs, C, snapshot_at)
     ridge = []
     for k, s in enumerate(states):
         G = gt.matrix(k)

@@ -6,13 +6,7 @@ from scipy.spatial.transform import Rotation
 from evpose.slam.atlas import Atlas, Keyframe
 from evpose.slam.config import SlamConfig
 from evpose.slam.pose_refit import first_pose_extrapolated
-
-
-def _T(rotvec, t):
-    T = np.eye(4)
-    T[:3, :3] = Rotation.from_rotvec(rotvec).as_matrix()
-    T[:3, 3] = t
-    return T
+from tests.slam.test_atlas import _pose as _T
 
 
 def test_the_first_pose_follows_the_next_poses_motion_back_to_its_time():

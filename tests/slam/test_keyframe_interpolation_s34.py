@@ -11,13 +11,7 @@ from evpose.slam.geometry import project
 from evpose.slam.pose_refit import keyframe_interpolated
 from slam_pose_scene import K, scene
 from slam_pose_scene import pose as _pose
-
-
-def _T(rotvec, t):
-    T = np.eye(4)
-    T[:3, :3] = Rotation.from_rotvec(rotvec).as_matrix()
-    T[:3, 3] = t
-    return T
+from tests.slam.test_atlas import _pose as _T
 
 
 def test_a_placed_pose_between_keyframes_lands_on_their_interpolation():
