@@ -36,6 +36,7 @@ from evpose.core.camera import CameraCalibration, DistortionModel
 from evpose.core.events import EventArray
 from evpose.core.recording import Recording
 from evpose.errors import InputError
+from evpose.io.hdf5_damage import hdf5_damage, unwritten_problem
 from evpose.io.text_table import TimeUnit
 
 _BATCH = 1 << 22
@@ -72,8 +73,6 @@ class EventH5Reader:
             n = self._cols["t"].shape[0]
             if any(ds.shape[0] != n for ds in self._cols.values()):
                 raise EventH5Error(self.path, "events/x, y, t, p differ in length")
-            from evpose.io.h5 import unwritten_problem
-
             for c, ds in self._cols.items():
                 missing = unwritten_problem(ds)
                 if missing is not None:
@@ -87,8 +86,6 @@ class EventH5Reader:
                 raise EventH5Error(self.path, f"ms_to_idx is not a non-decreasing index into the {n} events (the file is damaged)")
         except BaseException as exc:
             self._f.close()
-            from evpose.io.h5 import hdf5_damage
-
             damage = hdf5_damage(exc)
             if damage is not None:  # a damaged object header or symbol table (see hdf5_damage)
                 raise EventH5Error(self.path, f"the file's HDF5 structure is damaged ({damage})") from None
