@@ -255,6 +255,53 @@ def bench_landing_seed_spread(ctx: BenchContext) -> dict:
     return out
 
 
+INERTIAL_SEEDS = 8
+"""Simulator seeds per scenario of the event-inertial spread benchmark."""
+
+
+def inertial_spread_summary(runs: list[tuple[int, float, float, bool]], trans_target: float = 0.01, rot_target: float = 0.01) -> dict:
+    """Worst RPE, seeds within both targets and seeds never made metric, over ``(seed, RPE m/m, RPE deg/m, metric)`` runs."""
+    t = np.array([r[1] for r in runs], np.float64)
+    r = np.array([r[2] for r in runs], np.float64)
+    within = np.isfinite(t) & np.isfinite(r) & (t <= trans_target) & (r <= rot_target)
+    return {"rpe_trans_per_m_worst": float(np.max(t)) if t.size else float("nan"),
+            "rpe_rot_deg_per_m_worst": float(np.max(r)) if r.size else float("nan"),
+            "within_targets": int(within.sum()), "never_metric": int(sum(not x[3] for x in runs)),
+            "per_seed": "; ".join(f"s{x[0]} {x[1]:.4f} m/m {x[2]:.4f} deg/m{'' if x[3] else ' (not metric)'}" for x in runs)}
+
+
+def bench_inertial_seed_spread(ctx: BenchContext) -> dict:
+    """E-I-C2 SLAM on the ``landing`` and ``indoor`` scenarios over ``INERTIAL_SEEDS`` simulator seeds each (3 s at 346x260,
+    full suite only, recordings cached): the worst RPE per scenario against issue 9's targets (0.01 m/m, 0.01 deg/m),
+    how many seeds meet both, and on how many the IMU initialisation never made a map metric. One seed per scenario
+    (``scenario_*_c2``) hid that indoor seeds 3 and 7 miss the targets, seed 7 by running away (session 35)."""
+    if ctx.quick:
+        return {"skipped": "full suite only (simulating takes minutes)"}
+    import cv2
+
+    from evpose.eval.slam_metrics import atlas_metrics
+    from evpose.slam import SlamConfig, SlamMode, run_slam
+    from evpose.slam.inertial import InertialConfiguration
+
+    cv2.setNumThreads(1)
+    cfg = SlamConfig()
+    cfg.mode = SlamMode.EVENT_INERTIAL
+    cfg.inertial.configuration = InertialConfiguration.C2
+    out = {}
+    for scenario in ("landing", "indoor"):
+        runs = []
+        for seed in range(ctx.seed, ctx.seed + INERTIAL_SEEDS):
+            rec = _scenario_recording(ctx, scenario, seed)
+            if rec is None:
+                return {"skipped": "evpose.sim not available"}
+            run = run_slam(rec, cfg)
+            m = atlas_metrics(run.trajectories(), rec.ground_truth, correct_scale=False, duration_s=run.duration_s)
+            metric = any(mp.imu_initialised for mp in run.atlas.maps if mp.traj_t)
+            runs.append((seed, m.rpe_trans_per_m, m.rpe_rot_deg_per_m, metric))
+        out.update({f"{scenario}_{k}": v for k, v in inertial_spread_summary(runs).items()})
+    return out
+
+
 BENCHMARKS = {
     "event_image": bench_event_image,
     "pipeline_synthetic": bench_pipeline_synthetic,
@@ -264,4 +311,5 @@ BENCHMARKS = {
     "landing_seed_spread": bench_landing_seed_spread,
     "scenario_indoor": _scenario_bench("indoor", None),
     "scenario_indoor_c2": _scenario_bench("indoor", "c2"),
+    "inertial_seed_spread": bench_inertial_seed_spread,
 }
