@@ -31,7 +31,10 @@ because it does not measure multiplicity: on these dumps it is uncorrelated with
 +0.05) and is mostly ``Z / |v|``; it was also read against the built map, whose points' own errors add to these offsets
 (the snapped map here takes them out). What ``Z / |v|`` does pick up is a lag growing with the edge's normal speed (``delay.py``: regressed per
 event, 0.31-0.39 ms for ON, 0.02-0.30 ms for OFF on both flights; the fusion twist's speed error is < 3 %), which
-correlates with the 3 s flight's per-window OFF offsets (-0.40 with ``log |v|``) but not the 2 s one's.
+correlates with the 3 s flight's per-window OFF offsets (-0.40 with ``log |v|``) but not the 2 s one's. The feet of
+vertical faces (whose covered-foot lead flips between the flights): their OFF groups sit +0.03 / +0.10 px (ground /
+face side) from their class leads on the 2 s flight and -0.08 / +0.01 on the 3 s one; the contrast + history model
+has the sign on both but not the size (``feet.py``).
 """
 
 from __future__ import annotations
