@@ -248,6 +248,7 @@ import numpy as np
 from evpose.tracker.event_registration_config import EventRegistrationConfig, scaled_to_pixel  # noqa: F401 (re-exported)
 from evpose.tracker.event_registration_kernels import (NO_EVENT, _associate_nearest, _kept_events, _learn_offsets, _linearise_events,
                                                        _pixel_gaps)
+from evpose.tracker.contrast_leads import PassageCounts
 from evpose.tracker.covered_feet import add_covered_foot_lead, foot_rise
 from evpose.tracker.grazing import crease_points, point_leads
 from evpose.tracker.lapack_calls import inv
@@ -301,13 +302,18 @@ class EventRegistration:
         self._burst = (np.array([float(c.follower_crossings), float(c.first_on_lead_px), float(c.follower_on_lead_px),
                                  float(c.first_off_lead_px), float(c.follower_off_lead_px)])
                        if float(c.follower_crossings) > 0 else _NO_BURST)
-        self._pixel_last = (np.full(2 * self._width * self._height, NO_EVENT, np.int64) if self._burst.size else None)
-        """Each pixel's latest event time per polarity (us), for ``follower_crossings``; None when that is off."""
+        self._passages = PassageCounts(c.contrast, self._base.shape[0]) if float(c.contrast.lone_lead_px) != 0 else None
+        """Events per pixel passage of each point, for ``contrast.lone_lead_px``; None when that is off."""
+        self._pixel_last = (np.full(2 * self._width * self._height, NO_EVENT, np.int64)
+                            if self._burst.size or self._passages is not None else None)
+        """Each pixel's latest event time per polarity (us), for ``follower_crossings`` and ``contrast``; None when off."""
 
     def snapshot(self):
         if self._pixel_last is None:
             return np.copy(self.offsets)
-        return np.copy(self.offsets), np.copy(self._pixel_last)
+        if self._passages is None:
+            return np.copy(self.offsets), np.copy(self._pixel_last)
+        return np.copy(self.offsets), np.copy(self._pixel_last), self._passages.snapshot()
 
     def restore(self, state) -> None:
         offsets = state
@@ -317,6 +323,8 @@ class EventRegistration:
                 self._pixel_last = np.copy(state[1])
         elif self._pixel_last is not None:
             self._pixel_last.fill(NO_EVENT)
+        if self._passages is not None:
+            self._passages.restore(state[2] if isinstance(state, tuple) and len(state) > 2 else None)
         self.offsets = np.copy(offsets)
         self.points = self._base + self.offsets[:, None] * self._normals
         self._last = None
@@ -362,7 +370,11 @@ class EventRegistration:
         info = None
         if prior is not None:
             T_p, info = gtsam.Pose3(prior[0]), prior[1]
-        args = (*self._leads(used, T, xi, K), eg, self._burst, float(c.huber_px), float(c.gate_px), H, b, sw, swr)
+        leads = self._leads(used, T, xi, K)
+        if self._passages is not None:  # this step's events count before its leads are set
+            self._passages.update(n, assoc, used, pts, tg, eg, R_cw, t_cw, K, None if twist is None else xi)
+            self._passages.add_leads(used, *leads)
+        args = (*leads, eg, self._burst, float(c.huber_px), float(c.gate_px), H, b, sw, swr)
         n_it = int(c.iterations)
         t_ref = int(t_us)
         for it in range(n_it + 1):

@@ -9,6 +9,8 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass, field
 
+from evpose.tracker.contrast_leads import ContrastLeadConfig
+
 
 @dataclass
 class EventRegistrationConfig:
@@ -449,6 +451,9 @@ backend (``full:ekf``) 6.05 / 5.36 / 7.41 / 7.41 -> 5.88 / 4.79 / 7.50 / 7.24 (6
     """Largest distance a point may move from the map's position, metres. Session 18 (seeds 0-7, 240x180 / 346x260,
     7.325 / 5.30 mm): 0.005 7.45 / 5.37 mm; no learning at grazing points (``grazing_max_cos``, whose ON events'
     lead the offsets take up, 5-14 mm off the true edges) 7.43 / 5.50; ``offset_gain`` 0 7.59 mm at 240x180."""
+    contrast: ContrastLeadConfig = field(default_factory=ContrastLeadConfig)
+    """Leads of the points whose pixels fire one event per passage of their edge (:mod:`evpose.tracker.contrast_leads`;
+    off by default)."""
 
 
 def scaled_to_pixel(config: EventRegistrationConfig, pixel_mrad: float) -> EventRegistrationConfig:

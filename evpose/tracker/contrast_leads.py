@@ -1,0 +1,182 @@
+"""Per-point event leads from how many events each pixel passage of the point's edge fires (issue 7, session 35).
+
+Physics (ESIM, :mod:`evpose.sim.esim`; any DVS-like pixel): a pixel fires when its log intensity has moved a
+threshold ``C`` from its reference, which then steps by ``C``. An edge of log contrast ``D`` sweeping a pixel moves
+the pixel's area-weighted log intensity along a concave curve of its coverage (``log((1 - f) e^L0 + f e^L1)``), and
+the reference carries over from the pixel's previous passage: after an opposite-polarity passage the first event
+needs ``C``-``2C`` of change, after a same-polarity one ``0``-``C``. So the events of a passage sit at log levels
+``[a, D]`` of the transition (``a`` the carried-over gap), and where the edge is when they fire, hence each point's
+mean event lead along the motion, depends on ``D / C`` and the history, not on the point's class alone.
+:func:`coverage_lead` is that model (events uniform in log level over ``[lo, hi]`` of the transition, the pixel
+sampled by the renderer's ``s x s`` n-rooks pattern); on a synthetic edge through the simulator's ESIM it gives the
+simulated mean lead within 0.07 px for contrasts 0.5-3 at edges 0.3 and 0.8 rad off the pixel rows
+(``/tmp/s35/lead35/synth.py``; up to 0.11 px on an axis-aligned one, whose renders there step in phase with the pixels).
+
+Measured (session 35, ``/tmp/s35/lead35``: ``decomp.py`` oracle dumps at the true pose against the map snapped onto
+the true edges, ``contrast.py`` the rendered contrast per point, ``hist.py`` each event's pixel history, ``ana2-4.py``;
+240x180 landing seeds 0 / 1; groups = a point's events of one polarity and motion sign, >= 10 events, the 'beyond'
+class left out): the model with the rendered contrast and each event's pixel history explains 0.60 / 0.59 of the
+groups' mean-lead variance on the 2 s flight (the class leads 0.58 / 0.53, with no parameter fitted) but only 0.21 /
+0.22 on the 3 s one (class leads 0.38 / -0.14); of what the class leads leave, the true contrast explains 0.06-0.10
+(2 s) / 0.21-0.23 (3 s). The best single online-observable predictor of what they leave is the events per passage:
+groups whose pixels fire one event per passage (events / passage-starting events < 1.15, a quarter of the groups) sit
+-0.033 px (2 s) / -0.096 px (3 s) from their class lead, the others +0.00 to +0.04 (both polarities alike; ``ana4.py``): a
+barely-crossed threshold fires late in the transition. This module counts that ratio online per map point and adds
+``ContrastLeadConfig.lone_lead_px`` to both leads of the points whose ratio says "one event per passage" (online, at
+the end of seed 0's 2 s flight, it flags 19 % of the counted points, the whole-flight offline count 18 %, agreeing on
+90 %; ``online.py``).
+
+Session 34's multiplicity proxy (``/tmp/s34/rim34/mult.py``: events per update times ``Z / |v|``) was inconclusive
+because it does not measure multiplicity: on these dumps it is uncorrelated with the events per passage (+0.00 to
++0.05) and is mostly ``Z / |v|``; it was also read against the built map, whose points' own errors add to these offsets
+(the snapped map here takes them out). What ``Z / |v|`` does pick up is a lag growing with the edge's normal speed (``delay.py``: regressed per
+event, 0.31-0.39 ms for ON, 0.02-0.30 ms for OFF on both flights; the fusion twist's speed error is < 3 %), which
+correlates with the 3 s flight's per-window OFF offsets (-0.40 with ``log |v|``) but not the 2 s one's. The feet of
+vertical faces (whose covered-foot lead flips between the flights): their OFF groups sit +0.03 / +0.10 px (ground /
+face side) from their class leads on the 2 s flight and -0.08 / +0.01 on the 3 s one; the contrast + history model
+has the sign on both but not the size (``feet.py``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numba as nb
+import numpy as np
+
+
+@dataclass
+class ContrastLeadConfig:
+    """Lead of the map points whose pixels fire one event per passage of their edge (see the module)."""
+
+    lone_lead_px: float = field(default=0.0, metadata={"min": -1.0, "max": 1.0, "step": 0.01, "unit": "px"})
+    """Added to both the ON and OFF lead of a point whose events come one per pixel passage (``lone_max_ratio``),
+    pixels (negative = behind the edge along its motion; 0 = off). The oracle dumps put those points (a quarter of the
+    groups, 15-21 % of the events) -0.03 (2 s) / -0.08 to -0.11 px (3 s landing, 240x180) from their class leads, the
+    others +0.00 / +0.01 (``/tmp/s35/lead35/ana5.py``; of the variance the class leads leave this explains 4-5 % on
+    the 2 s flight, 14-22 % on the 3 s one).
+
+    Off: it helps the 3 s flight only (``full`` from ground truth, the CLI path on the cached landings, paired against
+    main's defaults, mean ATE RMSE mm +- standard error, seeds better; ``/tmp/s35/lead35/run.sh``, ``cmp.py``):
+    -0.05: 240x180 2 s seeds 0-23 5.255 -> 5.259 (+0.004 +- 0.045, 11 of 24), held-out 24-47 5.652 -> 5.622 (-0.030 +-
+    0.043, 13 of 24), 3 s seeds 0-7 13.512 -> 13.201 (-0.31 +- 0.24, 6 of 8), 346x260 seeds 0-23 4.279 -> 4.312
+    (+0.033 +- 0.052, 9 of 24); -0.08: 5.317 (+0.062 +- 0.046, 10 of 24), 5.618 (-0.034 +- 0.057, 15 of 24), 12.895
+    (-0.62 +- 0.27, 7 of 8), 346x260 4.350 (+0.071 +- 0.082, 8 of 24). The rotation error falls in every set (ARE
+    0.0603 -> 0.0579 / 0.0565, 0.0629 -> 0.0605 / 0.0594, 0.1113 -> 0.1108 / 0.1096, 346x260 0.0504 -> 0.0480 /
+    0.0473 deg)."""
+    lone_max_ratio: float = field(default=1.15, metadata={"min": 1.0, "max": 5.0, "step": 0.05, "unit": "events/passage"})
+    """A point whose running events per passage (events over the passage-starting ones) is below this fires 'one per
+    passage', events per passage."""
+    crossings: float = field(default=2.0, metadata={"min": 0.1, "max": 10.0, "step": 0.1, "unit": "crossings"})
+    """An event starts a passage when its pixel fired no same-polarity event within this many of its edge's
+    pixel-crossing times (``1 / |v|``, ``v`` the point's normal image speed from the twist), crossings."""
+    memory_events: float = field(default=50.0, metadata={"min": 1.0, "max": 1e6, "step": 1.0, "unit": "events"})
+    """Memory of the running counts: each associated event scales the point's counts by ``1 - 1 / this``, events."""
+    min_events: float = field(default=10.0, metadata={"min": 0.0, "max": 1e6, "step": 1.0, "unit": "events"})
+    """Counted events (running, with the memory) a point needs before its ratio is trusted, events."""
+
+
+def coverage_lead(L0: float, L1: float, motion: np.ndarray, lo: float, hi: float, supersampling: int = 3) -> float:
+    """Mean lead (pixels, + = ahead of the edge along the unit image direction ``motion``) of a pixel's events as an
+    edge moving along ``motion`` turns the pixel from log level ``L0`` to ``L1``, the events uniform in the log
+    change ``|L - L0|`` over ``[lo, hi]`` (clipped to ``|L1 - L0|``; NaN when empty), the pixel's intensity the mean
+    of ``supersampling``-squared n-rooks samples (:func:`evpose.sim.render.subpixel_pattern`)."""
+    from evpose.sim.render import subpixel_pattern
+
+    y = np.sort(subpixel_pattern(int(supersampling)) @ np.asarray(motion, np.float64))  # the order the edge covers them
+    n = y.size
+    f = np.arange(n + 1) / n
+    lev = np.abs(np.log(f * np.exp(L1) + (1 - f) * np.exp(L0)) - L0)
+    hi = min(float(hi), abs(L1 - L0))
+    if not hi > lo:
+        return float("nan")
+    w = np.clip(lev[1:], lo, hi) - np.clip(lev[:-1], lo, hi)
+    return float(-np.sum(y * w) / (hi - lo))
+
+
+@nb.njit(cache=True)
+def _count_passages(n, assoc, used, pts, tg, eg, R_cw, t_cw, fx, fy, cx, cy, twist, crossings, decay, events, starts):  # pragma: no cover
+    # Per point of `used` its normal image speed (the camera's twist moving the point), then per associated event
+    # whether it starts a passage (its pixel's previous same-polarity event older than `crossings` / |v|).
+    m = used.shape[0]
+    speed = np.zeros(m)
+    for k in range(m):
+        X0 = R_cw[0, 0] * pts[k, 0] + R_cw[0, 1] * pts[k, 1] + R_cw[0, 2] * pts[k, 2] + t_cw[0]
+        X1 = R_cw[1, 0] * pts[k, 0] + R_cw[1, 1] * pts[k, 1] + R_cw[1, 2] * pts[k, 2] + t_cw[1]
+        X2 = R_cw[2, 0] * pts[k, 0] + R_cw[2, 1] * pts[k, 1] + R_cw[2, 2] * pts[k, 2] + t_cw[2]
+        if X2 <= 1e-6:
+            continue
+        T0 = R_cw[0, 0] * tg[k, 0] + R_cw[0, 1] * tg[k, 1] + R_cw[0, 2] * tg[k, 2]
+        T1 = R_cw[1, 0] * tg[k, 0] + R_cw[1, 1] * tg[k, 1] + R_cw[1, 2] * tg[k, 2]
+        T2 = R_cw[2, 0] * tg[k, 0] + R_cw[2, 1] * tg[k, 1] + R_cw[2, 2] * tg[k, 2]
+        a = fx * (T0 * X2 - X0 * T2)
+        c = fy * (T1 * X2 - X1 * T2)
+        L = np.sqrt(a * a + c * c)
+        if L <= 0.0:
+            continue
+        # camera body twist (w, v): a static point moves by -(w x X) - v in the camera frame
+        D0 = -(twist[1] * X2 - twist[2] * X1) - twist[3]
+        D1 = -(twist[2] * X0 - twist[0] * X2) - twist[4]
+        D2 = -(twist[0] * X1 - twist[1] * X0) - twist[5]
+        ud = fx * (D0 * X2 - X0 * D2) / (X2 * X2)
+        vd = fy * (D1 * X2 - X1 * D2) / (X2 * X2)
+        speed[k] = abs(-c / L * ud + a / L * vd)
+    for i in range(n):
+        k = assoc[i]
+        g = used[k]
+        start = 1.0 if eg[i] * speed[k] * 1e-6 >= crossings else 0.0
+        events[g] = decay * events[g] + 1.0
+        starts[g] = decay * starts[g] + start
+
+
+@nb.njit(cache=True)
+def _add_lone(used, events, starts, min_events, max_ratio, lead, on, off):  # pragma: no cover
+    for k in range(used.shape[0]):
+        g = used[k]
+        if events[g] >= min_events and starts[g] > 0.0 and events[g] < max_ratio * starts[g]:
+            on[k] += lead
+            off[k] += lead
+
+
+class PassageCounts:
+    """Running events and passage-starting events per map point (the state of :class:`ContrastLeadConfig`)."""
+
+    def __init__(self, config: ContrastLeadConfig, n_points: int):
+        self.config = config
+        self.events = np.zeros(int(n_points))
+        """Running count of each point's associated events (memory ``memory_events``)."""
+        self.starts = np.zeros(int(n_points))
+        """Running count of those that started a pixel passage."""
+
+    def update(self, n: int, assoc, used, pts, tg, eg, R_cw, t_cw, K, twist) -> None:
+        """Counts the first ``n`` associated events (``assoc`` their rows of ``used``, ``pts`` / ``tg`` the gathered
+        points / tangents, ``eg`` their pixels' same-polarity gaps, us) at the camera ``R_cw``, ``t_cw`` moving with the
+        body ``twist`` (per second, gtsam order; none = nothing counted)."""
+        c = self.config
+        if twist is None or len(twist) != 6 or n <= 0:
+            return
+        _count_passages(int(n), assoc, np.ascontiguousarray(used, np.int64), pts, tg, eg, R_cw, t_cw, float(K[0, 0]),
+                        float(K[1, 1]), float(K[0, 2]), float(K[1, 2]), np.ascontiguousarray(twist, np.float64),
+                        float(c.crossings), 1.0 - 1.0 / max(float(c.memory_events), 1.0), self.events, self.starts)
+
+    def add_leads(self, used, on: np.ndarray, off: np.ndarray) -> None:
+        """Adds ``lone_lead_px`` to the ON / OFF leads (as ``used``) of the points firing one event per passage."""
+        c = self.config
+        _add_lone(np.ascontiguousarray(used, np.int64), self.events, self.starts, float(c.min_events), float(c.lone_max_ratio),
+                  float(c.lone_lead_px), on, off)
+
+    def ratio(self) -> np.ndarray:
+        """Each point's running events per passage (NaN before any passage)."""
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return np.where(self.starts > 0, self.events / np.where(self.starts > 0, self.starts, 1.0), np.nan)
+
+    def snapshot(self):
+        return np.copy(self.events), np.copy(self.starts)
+
+    def restore(self, state) -> None:
+        """Back to ``state`` (of :meth:`snapshot`), or to no counts when None."""
+        if state is None:
+            self.events.fill(0.0)
+            self.starts.fill(0.0)
+        else:
+            self.events, self.starts = np.copy(state[0]), np.copy(state[1])
