@@ -107,6 +107,33 @@ outliers) and -10 to -11 % on coasted ones (tracks the coast contradicts). The l
 (``min_triangulated`` 30) all made the rooms worse: a fed map lives on where a starved one would have coasted, and in
 these rooms the coasted maps score better than the visually tracked ones (as the notes of
 ``FeatureConfig.klt_min_support_ratio`` found for the turn).
+
+How map points end and what carries a PnP map's scale (session 35, issue 9; ``/tmp/s35/scale35/``, main a3cb2d0,
+event-only; ``die.py`` follows every (track, point) association across the MCIs placed by PnP on the same map,
+``share.py`` counts the points PnP-placed keyframes share, ``tri.py`` where triangulation candidates go, ``refy.py``
+the projection search's yield, ``kltdie.py`` which KLT filter ends a map point's track). Session 34's "a keyframe
+shares none with the third before" was one map (seed 0's first): over the maps with at least four PnP-placed
+keyframes, indoor seeds 0-5 (10 maps, 69 keyframes) share a median 32 / 25 / 21 / 18 points with the keyframe 1 / 2 /
+3 / 5 before, the landing seeds 0-3 42 / 30 / 23 / 14. Per MCI an association ends indoors (seeds 0-4) at 16.5 %
+(KLT 10.3 away from the border, 1.9 near it, PnP outlier 4.2, culled 0.03), on the landing (seeds 0-3) at 14.5 % (9.6 / 2.3
+/ 2.7 / 0.04); over seeds 0-19 keyframes come on 36 / 35 % of the PnP MCIs and these hold 40 / 41 tracked map points: per MCI the
+two scenes lose points alike, but indoor MCIs come every 15.6 ms against 38 ms, so per second the rooms hand the
+scale on 2.4 times as often (23 against 9.3 keyframes a second). Map-point tracks ended by KLT indoors (seeds 0-5,
+14.9 % per step): the forward-backward error over 1 px 9.7 %, the backward pass not converging 4.0, the forward one
+0.7, leaving the image 0.6; the forward-backward error of converged map tracks is a median 0.03 px, 90 % 1.05, 95 %
+6.5, only 2.1 % of them within 1-2 px: KLT loses them outright, the test is not too strict. The projection search
+(KLT from keyframe MCIs, refine pass) finds 2.1 of 47 untracked window points per MCI indoors (59 tries, 10.2 within
+3 px, 3.15 pass the forward-backward test; forward results a median 7.7 px from the projection; landing 2.4 of 69).
+Triangulation at PnP keyframes indoors (seeds 0-4, per keyframe): 23.2 candidates, 10.0 held back by the pair gate
+(``min_pair_parallax_deg``), 2.9 under ``min_triangulation_deg``, 9.0 made (landing seeds 0-3: 18.5 / 2.4 / 0.7 /
+14.5). Levers tried against main's defaults (indoor seeds 0-19, 2.705 %; paired mean +- standard error, seeds better
+/ worse): ``min_pair_parallax_deg`` 1.5 +0.574 +- 0.266 (6 / 11), 3.0 +0.308 +- 0.300 (10 / 10);
+``intermediate_observations`` +0.142 +- 0.307 (9 / 11); ``ba_scale_anchor`` 0.005 +0.516 +- 0.241 (8 / 12), 0
++0.864 +- 0.457 (5 / 15); ``search.fuse_radius_px`` 1.5 +0.129 +- 0.196 (10 / 10); ``search.refine_radius_px`` 5
++0.179 +- 0.374 (7 / 13); the search's forward-backward limit 2 px instead of 1 (code not kept) +0.237 +- 0.315
+(10 / 10); ``window.feature_displacement_px`` 5 +0.496 +- 0.514 (least tracked 65.7 %); ``window.min_events`` 600
++0.359 +- 0.433 (7 / 13, least tracked 71.5 %); fewer keyframes: ``keyframe_displacement_px`` 30 and
+``keyframe_displacement_min_s`` 0.1 (figures there) gain on seeds 0-19 but not on the held-out seeds or the landing.
 """
 
 from __future__ import annotations
@@ -121,13 +148,17 @@ from evpose.slam.config import TrackingConfig
 from evpose.slam.geometry import good_triangulation, triangulate
 
 
-def need_keyframe(m: SlamMap, tr_ids: np.ndarray, tr_uv: np.ndarray, n_tracked_points: int, cfg: TrackingConfig) -> bool:
-    """The paper's heuristics: tracked map points fell below a share of the last keyframe's, or key points moved far."""
+def need_keyframe(m: SlamMap, tr_ids: np.ndarray, tr_uv: np.ndarray, n_tracked_points: int, cfg: TrackingConfig,
+                  t_us: int | None = None) -> bool:
+    """The paper's heuristics: tracked map points fell below a share of the last keyframe's, or key points moved far
+    (the latter, with ``t_us`` given, only :attr:`TrackingConfig.keyframe_displacement_min_s` after the last keyframe)."""
     last = m.keyframes[-1]
     point_tracks = _point_tracks(m)  # once: a set per key point made this quadratic
     n_last = sum(1 for tid in last.obs if tid in point_tracks)
     if n_last and n_tracked_points < cfg.keyframe_tracked_ratio * n_last:
         return True
+    if t_us is not None and cfg.keyframe_displacement_min_s > 0 and (t_us - last.t_us) / 1e6 < cfg.keyframe_displacement_min_s:
+        return False  # too soon after the last keyframe for a displacement keyframe: each one hands the scale on anew
     common = [(last.obs[t], uv) for t, uv in zip(tr_ids.tolist(), tr_uv) if t in last.obs]
     if not common:
         return True

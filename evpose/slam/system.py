@@ -389,7 +389,7 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
                                        fe.ids[rest], fe.uv[rest], est.prior_sigmas)
         n_tracked = self._inliers = int(est.inliers.sum())
         keyframe = False
-        if need_keyframe(m, fe.ids, fe.uv, n_tracked, tc) or (self.imu is None and young_map(m, mci.t_us, tc, T_wc)):
+        if need_keyframe(m, fe.ids, fe.uv, n_tracked, tc, mci.t_us) or (self.imu is None and young_map(m, mci.t_us, tc, T_wc)):
             keyframe = True
             T_wc = self._new_keyframe(m, mci.t_us, T_wc, mci.image8)
         self._lines_after_pose(m, mci, T_wc, segs)

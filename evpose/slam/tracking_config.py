@@ -141,7 +141,20 @@ class PoseTrackingSettings:
     landing event-only seeds 0-11 (defaults 2.53 %, 5 of 12 within 2 %): 30 -> 2.86 % (5 of 12); 14 -> 2.21 %
     (median 1.77, 9 of 12), 60 runs 2.39 % (33 of 60 within 2 %, baseline 2.62 % and 27), paired -0.23 +- 0.18
     points (better in 31, equal in 4), keyframe rotation error 1.82 -> 1.45 deg, at more CPU per MCI (29.2 against
-    27.4 ms median under the same load, not paired): within the spread."""
+    27.4 ms median under the same load, not paired): within the spread. Session 35 (``/tmp/s35/scale35``, against
+    main's defaults ``fp10``; fewer keyframes, fewer scale hand-overs indoors), 30: indoor event-only 0-19 2.705 ->
+    2.544 % (paired -0.160 +- 0.341, 14 better), held-out 20-39 2.700 -> 2.558 % (-0.142 +- 0.245, 10 better, 10
+    worse), landing event-only 0-23 1.502 -> 2.096 % (+0.595 +- 0.460, 9 better, 15 worse): not changed."""
+    keyframe_displacement_min_s: float = field(default=0.0, metadata={"min": 0.0, "max": 1.0, "step": 0.005, "unit": "s"})
+    """A keyframe for the key points' displacement (``keyframe_displacement_px``) only this long after the last keyframe
+    (0: at once); the tracked-points trigger (``keyframe_tracked_ratio``) is not delayed, s. Session 35
+    (``/tmp/s35/scale35``: ``run.py`` / ``batch.sh`` / ``sum.py``, session 34's harness = ``evpose slam`` + ``evpose
+    eval --atlas --correct-scale``, paired against main's defaults, tag ``fp10``): fewer keyframes should hand a PnP map's
+    scale on fewer times (the indoor maps' scale drift, :mod:`evpose.slam.local_map`). 0.04: indoor seeds 0-15
+    bit-identical (no displacement keyframe comes that soon). 0.1 (keyframes on PnP-placed indoor MCIs 473 -> 402 over
+    seeds 0-39): indoor 0-19 2.705 -> 2.479 % (paired -0.226 +- 0.331, 12 better, 8 worse), held-out 20-39 2.700 ->
+    2.668 % (-0.032 +- 0.227, 6 better, 13 worse), landing 0-23 1.502 -> 1.420 % (-0.082 +- 0.238, 10 better, 14 worse);
+    least tracked 86.0 / 80.5 / 97.0 %. Within the noise everywhere: off."""
     min_triangulation_deg: float = field(default=1.0, metadata={"min": 0.1, "max": 10.0, "step": 0.1, "unit": "deg"})
     """New map points need this parallax between keyframes, degrees. Session 12, landing event-only seeds 0-11
     (defaults 2.53 %, 5 of 12 within 2 %): 2 -> 2.92 % (2 of 12); 17 of the 60 perturbed runs paired +0.31 +- 0.40
