@@ -192,7 +192,7 @@ class Atlas:
     def new_map(self) -> SlamMap:
         m = SlamMap(id=len(self.maps), refit_K=self.refit_K, refit_threshold_px=self.refit_threshold_px,
                     interpolate_between_keyframes=self.interpolate_between_keyframes, first_pose_span_us=self.first_pose_span_us,
-                     young_pose_us=self.young_pose_us)
+                    young_pose_us=self.young_pose_us)
         self.maps.append(m)
         return m
 
