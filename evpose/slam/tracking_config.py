@@ -135,7 +135,8 @@ class PoseTrackingSettings:
     21 either way); tracked time and maps unchanged on all 64 runs (least tracked 86.3 / 80.5 / 96.5 %). Perturbed
     runs, both read-outs of the same runs (``pair.py``): ``ba_huber_px`` 1.9, indoor 0-19 3.200 -> 2.422 % (-0.778 +-
     0.331, 18 of 20), landing 0-11 2.767 -> 2.752 % (-0.015 +- 0.014, 9 of 12); 2.1, indoor 20-39 2.733 -> 2.245 %
-    (-0.488 +- 0.113, 19 of 20). ``evpose slam`` + ``evpose eval --atlas --correct-scale`` on indoor seed 0: 3.616 ->
+    (-0.488 +- 0.113, 19 of 20); new indoor seeds 40-49 (``sim.sh``) 2.252 -> 1.875 % (-0.376 +- 0.172, 8 of 10).
+    ``evpose slam`` + ``evpose eval --atlas --correct-scale`` on indoor seed 0: 3.616 ->
     2.181 %, as the harness (``cli_check.sh``). The rule
     leaves coasted maps (no PnP-placed pose) alone, and falls back to the first pose alone on maps too short for it or
     whose poses from the anchor on lie on one line (which evaluation could not align: offline, without that fallback,
