@@ -82,6 +82,9 @@ class SlamMap:
     first_pose_span_us: int = 0
     """> 0: :meth:`trajectory` places the map's first pose by the motion of its next poses over this span, us
     (:func:`evpose.slam.pose_refit.first_pose_extrapolated`, :attr:`TrackingConfig.first_pose_extrapolation_s`)."""
+    young_pose_us: int = 0
+    """With ``first_pose_span_us``: every pose less than this after the map's first one is placed so as well, us
+    (:attr:`TrackingConfig.young_pose_extrapolation_s`)."""
     segment_start_kf: int = 0
     """Id of the first keyframe of the map's newest visual segment: a lost map re-joined by the next two-view map
     (:mod:`evpose.slam.map_rejoin`) shares no points with it, and the visual local BA stays within the segment."""
@@ -156,7 +159,7 @@ class SlamMap:
                 if self.first_pose_span_us > 0:
                     # Only maps with PnP poses: a coasted map's poses hold one velocity, and its first pose moved onto
                     # their line left some maps exactly straight, which no Sim(3) aligns (evaluation drops them).
-                    T = first_pose_extrapolated(self.traj_t, T, self.first_pose_span_us)
+                    T = first_pose_extrapolated(self.traj_t, T, self.first_pose_span_us, self.young_pose_us)
         return Trajectory.from_matrices(np.array(self.traj_t, np.int64), np.stack(T))
 
     def point_array(self) -> np.ndarray:
@@ -179,6 +182,8 @@ class Atlas:
     """Given to every new map (:attr:`SlamMap.interpolate_between_keyframes`)."""
     first_pose_span_us: int = 0
     """Given to every new map (:attr:`SlamMap.first_pose_span_us`)."""
+    young_pose_us: int = 0
+    """Given to every new map (:attr:`SlamMap.young_pose_us`)."""
 
     @property
     def active(self) -> SlamMap | None:
@@ -186,7 +191,8 @@ class Atlas:
 
     def new_map(self) -> SlamMap:
         m = SlamMap(id=len(self.maps), refit_K=self.refit_K, refit_threshold_px=self.refit_threshold_px,
-                    interpolate_between_keyframes=self.interpolate_between_keyframes, first_pose_span_us=self.first_pose_span_us)
+                    interpolate_between_keyframes=self.interpolate_between_keyframes, first_pose_span_us=self.first_pose_span_us,
+                    young_pose_us=self.young_pose_us)
         self.maps.append(m)
         return m
 

@@ -166,29 +166,50 @@ def keyframe_interpolated(t_us: list[int], T_wc: list[np.ndarray], placed: set[i
     return out
 
 
-def first_pose_extrapolated(t_us: list[int], T_wc: list[np.ndarray], span_us: int) -> list[np.ndarray]:
-    """``T_wc`` (poses at ``t_us``) with the first pose replaced by the motion of the poses from the second one to the
-    first at least ``span_us`` after it, held constant back to the first pose's time (position linear, rotation along
-    the geodesic); unchanged with fewer than four poses or when the later poses lie on one line.
+def first_pose_extrapolated(t_us: list[int], T_wc: list[np.ndarray], span_us: int, young_us: int = 0) -> list[np.ndarray]:
+    """``T_wc`` (poses at ``t_us``) with the map's young poses, those less than ``young_us`` after its first one (at least
+    the first pose itself), replaced by the motion of the poses from the first later one (the anchor) to the first at
+    least ``span_us`` after it, held constant back to each young pose's time (position linear, rotation along the
+    geodesic). ``young_us`` 0 replaces only the first pose, anchored on the second. With fewer than three poses from the
+    anchor on, the first pose alone is replaced; unchanged with fewer than four poses or when the poses from the anchor
+    on lie on one line (then, with ``young_us`` > 0, the first pose alone is replaced if the poses from the second on do
+    not lie on one line).
 
     Why: a map's first pose is its two-view reference keyframe, the gauge every later pose hangs from, and after the
     map's Sim(3) it sits a median 1.8 times the map's RMS off; the young map's next poses, together, place it better
-    (figures: :attr:`evpose.slam.tracking_config.TrackingConfig.first_pose_extrapolation_s`)."""
+    (figures: :attr:`evpose.slam.tracking_config.TrackingConfig.first_pose_extrapolation_s`). The map's other poses of
+    its first ~0.15 s are no better: placed over a few millimetres of baseline on points with almost no depth relief
+    (sideways motion read as yaw), they jump 5-7 times the true step in the first 20 ms and bend away from the rest of
+    the map (session 35; figures: :attr:`evpose.slam.tracking_config.TrackingConfig.young_pose_extrapolation_s`)."""
     if len(t_us) < 4 or span_us <= 0:
         return list(T_wc)
-    P = np.stack([T[:3, 3] for T in T_wc[1:]])
-    sv = np.linalg.svd(P - P.mean(0), compute_uv=False)
-    if not sv[1] > 1e-9 * sv[0]:
-        # The later poses lie on one line (a coast holding one velocity): the first pose moved onto it would leave the
-        # map exactly straight, which no Sim(3) aligns (session 34: held-out indoor seed 34's 4-pose map was dropped).
-        return list(T_wc)
     t = np.asarray(t_us, np.int64)
-    j = min(max(int(np.searchsorted(t, t[1] + span_us)), 2), len(t) - 1)
-    T1, Tj = T_wc[1], T_wc[j]
-    f = (t[1] - t[0]) / (t[j] - t[1])  # how far back, in units of the span actually used
+    i1 = max(int(np.searchsorted(t, t[0] + max(int(young_us), 0))), 1)
+    if i1 > len(t) - 3:
+        i1 = 1  # too short a map for its young stretch: only its first pose
+    if not _spread_off_one_line(T_wc[i1:]):
+        if i1 == 1 or not _spread_off_one_line(T_wc[1:]):
+            # The later poses lie on one line (a coast holding one velocity): the first pose moved onto it would leave
+            # the map exactly straight, which no Sim(3) aligns (session 34: held-out indoor seed 34's 4-pose map was
+            # dropped).
+            return list(T_wc)
+        i1 = 1
+    j = min(max(int(np.searchsorted(t, t[i1] + span_us)), i1 + 1), len(t) - 1)
+    T1, Tj = T_wc[i1], T_wc[j]
     rv, _ = cv2.Rodrigues(T1[:3, :3].T @ Tj[:3, :3])
-    R_back, _ = cv2.Rodrigues(-rv * f)
-    T0 = np.eye(4)
-    T0[:3, :3] = T1[:3, :3] @ R_back
-    T0[:3, 3] = T1[:3, 3] - f * (Tj[:3, 3] - T1[:3, 3])
-    return [T0] + list(T_wc[1:])
+    out = list(T_wc)
+    for k in range(i1):
+        f = (t[i1] - t[k]) / (t[j] - t[i1])  # how far back, in units of the span actually used
+        R_back, _ = cv2.Rodrigues(-rv * f)
+        T0 = np.eye(4)
+        T0[:3, :3] = T1[:3, :3] @ R_back
+        T0[:3, 3] = T1[:3, 3] - f * (Tj[:3, 3] - T1[:3, 3])
+        out[k] = T0
+    return out
+
+
+def _spread_off_one_line(T_wc: list[np.ndarray]) -> bool:
+    """Whether the positions of ``T_wc`` do not all lie on one line."""
+    P = np.stack([T[:3, 3] for T in T_wc])
+    sv = np.linalg.svd(P - P.mean(0), compute_uv=False)
+    return bool(sv[1] > 1e-9 * sv[0])

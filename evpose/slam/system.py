@@ -102,7 +102,8 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
         self.atlas = Atlas(refit_K=self.K if self.imu is None and config.tracking.refit_tracked_poses else None,
                            refit_threshold_px=config.tracking.reprojection_threshold_px,
                            interpolate_between_keyframes=config.tracking.refit_keyframe_interpolation,
-                           first_pose_span_us=int(round(config.tracking.first_pose_extrapolation_s * 1e6)))
+                           first_pose_span_us=int(round(config.tracking.first_pose_extrapolation_s * 1e6)),
+                           young_pose_us=int(round(config.tracking.young_pose_extrapolation_s * 1e6)))
         self.fe = FrontendTracks()
         self.results: list[SlamStepResult] = []
         """One result per processed MCI."""

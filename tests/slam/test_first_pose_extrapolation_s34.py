@@ -1,4 +1,4 @@
-"""A map's first pose may be read off the motion of its next poses (TrackingConfig.first_pose_extrapolation_s, 0.1 s by default)."""
+"""A map's first pose may be read off the motion of its next poses (TrackingConfig.first_pose_extrapolation_s, 0.2 s by default)."""
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -48,7 +48,7 @@ def _map(span_us: int, pnp_placed: bool):
 
 
 def test_the_map_reads_its_first_pose_so_only_when_set_and_the_option_is_on_by_default():
-    assert SlamConfig().tracking.first_pose_extrapolation_s == 0.1
+    assert SlamConfig().tracking.first_pose_extrapolation_s == 0.2
     assert np.allclose(_map(0, True).trajectory().matrices()[0][:3, 3], [3.0, 0, 0])
     m = _map(200, True)
     assert np.allclose(m.trajectory().matrices()[0][:3, 3], [2.5, -0.0625, 0])
