@@ -50,8 +50,8 @@ from evpose.slam.local_map import (cull_points, insert_keyframe, need_keyframe, 
 from evpose.slam.event_image import to_uint8
 from evpose.slam.mci import Hypothesis, MciGenerator, MciResult, MotionPrior
 from evpose.slam.parallax_warp import points_in_view
-from evpose.slam.keyframe_search import keep_keyframe_image, klt_refind_points
-from evpose.slam.projection_search import SearchMatcher, refind_points, store_patches
+from evpose.slam.keyframe_search import keep_keyframe_image
+from evpose.slam.projection_search import SearchMatcher, store_patches
 from evpose.slam.step_result import SlamFailure, SlamStatus, SlamStepResult
 from evpose.slam.system_failures import VisualFailureHandling
 from evpose.slam.system_gaps import StreamGaps, imu_holes
@@ -59,12 +59,13 @@ from evpose.slam.system_gyro import GyroAids
 from evpose.slam.system_initialisation import TwoViewInitialisation
 from evpose.slam.system_inertial import InertialMaps
 from evpose.slam.system_lines import LineAids
+from evpose.slam.system_refind import PointRefinding
 from evpose.slam.line_landmarks import LineMap
 from evpose.slam.track_fusion import fuse_tracks
 from evpose.slam.tracking import PoseEstimate, estimate_pose
 
 
-class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHandling, LineAids, StreamGaps):
+class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHandling, LineAids, StreamGaps, PointRefinding):
     """Map-free event(-inertial) SLAM. Feed events with :meth:`step`; read maps from :attr:`atlas`."""
 
     def __init__(self, config: SlamConfig, calibration: CameraCalibration, imu: ImuSamples | None = None):
@@ -415,37 +416,6 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
             if jump > max_jump:
                 est = PoseEstimate(False, reason=f"PnP pose {jump:.1f} median point depths from the last and the predicted pose > {max_jump:g}")
         return est, sel
-
-    def _matcher(self) -> SearchMatcher | None:
-        """The projection search's matcher; None while it is off (event-inertial runs need ``search.event_inertial``)."""
-        sc = self.cfg.search
-        return sc.matcher if sc.enabled and (self.imu is None or sc.event_inertial) else None
-
-    def _refind(self, m: SlamMap, mci: MciResult, T_wc: np.ndarray, radius: int) -> int:
-        """Re-find untracked local-map points near their projection by ``T_wc``; each found point gets a new track. Returns how many."""
-        matcher, sc, fe = self._matcher(), self.cfg.search, self.fe
-        if matcher is None:
-            return 0
-        tracked = [i for i, t in enumerate(fe.ids.tolist()) if fe.track_to_point.get(t) in m.points]
-        tracked_pids = {fe.track_to_point[int(fe.ids[i])] for i in tracked}
-        if matcher is SearchMatcher.KLT:
-            pids, uv = klt_refind_points(m, mci.image8, self.K, T_wc, tracked_pids, fe.uv[tracked], self.cfg.tracking.local_window,
-                                         radius, self.cfg.features, self.cfg.features.border_px, sc.klt_keyframes)
-        else:
-            pids, uv = refind_points(m, mci.image8, self.K, T_wc, tracked_pids, fe.uv[tracked], self.cfg.tracking.local_window, radius, sc)
-        if not pids:
-            return 0
-        new_ids = np.arange(fe.next_id, fe.next_id + len(pids), dtype=np.int64)
-        fe.next_id += len(pids)
-        for tid, pid in zip(new_ids.tolist(), pids):
-            p = m.points[pid]
-            if fe.track_to_point.get(p.track_id) == pid:
-                del fe.track_to_point[p.track_id]  # the point's old track died; the new one carries it
-            p.track_id = tid
-            fe.track_to_point[tid] = pid
-        fe.ids = np.concatenate([fe.ids, new_ids])
-        fe.uv = np.concatenate([fe.uv, uv.astype(np.float32)])
-        return len(pids)
 
     def _new_keyframe(self, m: SlamMap, t_us: int, T_wc: np.ndarray, img8: np.ndarray | None = None, adjust: bool = True,
                       triangulate: bool = True) -> np.ndarray:
