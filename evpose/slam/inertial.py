@@ -88,6 +88,15 @@ class InertialConfig:
     coast_velocity_span_s: float = field(default=0.03, metadata={"min": 0.005, "max": 0.5, "step": 0.005, "unit": "s"})
     """The coasting velocity is the mean over the newest poses spanning this long (consecutive MCIs are a few ms
     apart and their difference mostly noise), seconds. Not tuned: 0.03 s spans 5-6 MCIs indoors."""
+    coast_hold_velocity: bool = False
+    """Before the IMU initialisation, a coast whose velocity span (``coast_velocity_span_s``) reaches back to a coasted
+    pose keeps the velocity the previous coast held instead of reading it from the trajectory: across a coast and the
+    PnP pose that ends it, the difference is the re-localisation's correction, not motion. Indoor E-I-C2 (session 35,
+    ``/tmp/s35/ei35/diag3.py``): seed 3's map re-localised at 0.561 s with a step 5.5 map units per true metre (its
+    visual steps 0.5) 120 deg off the true direction, then coasted 0.4 s on that, 160-170 deg off (backwards): the
+    IMU initialisation saw a map moving against the IMU, scale -0.04 to -0.28 on all 78 attempts; seed 7's coasts
+    ratcheted 0.34 -> 0.87 -> 6.8 -> 8.4 units per metre, and the PnP poses on points made from them ran away to
+    hundreds (RPE 0.98 m/m)."""
     coast_ba: bool = False
     """Run the visual local BA on keyframes made while coasting. Off: those keyframes carry few points, and a BA with
     one fixed keyframe slid along the scale (indoor seed 3: map scale 3e-5 of the truth, ATE 30852 %); with it off,
