@@ -97,6 +97,11 @@ class InertialConfig:
     IMU initialisation saw a map moving against the IMU, scale -0.04 to -0.28 on all 78 attempts; seed 7's coasts
     ratcheted 0.34 -> 0.87 -> 6.8 -> 8.4 units per metre, and the PnP poses on points made from them ran away to
     hundreds (RPE 0.98 m/m)."""
+    coast_triangulate: bool = True
+    """Triangulate new points from keyframes made while coasting before the IMU initialisation (off: such keyframes
+    only observe, as event-only coasts do with ``TrackingConfig.coast_triangulate``). Points placed from a coasted
+    pose carry the coast's error, and PnP on them carries it on: indoor E-I-C2 seed 7's visual steps grew to
+    160-4000 map units per true metre after coasts at 6.8-8.4 (its earlier steps 0.3-0.9)."""
     coast_ba: bool = False
     """Run the visual local BA on keyframes made while coasting. Off: those keyframes carry few points, and a BA with
     one fixed keyframe slid along the scale (indoor seed 3: map scale 3e-5 of the truth, ATE 30852 %); with it off,
