@@ -88,6 +88,21 @@ class InertialConfig:
     coast_velocity_span_s: float = field(default=0.03, metadata={"min": 0.005, "max": 0.5, "step": 0.005, "unit": "s"})
     """The coasting velocity is the mean over the newest poses spanning this long (consecutive MCIs are a few ms
     apart and their difference mostly noise), seconds. Not tuned: 0.03 s spans 5-6 MCIs indoors."""
+    coast_hold_velocity: bool = False
+    """Before the IMU initialisation, a coast whose velocity span reaches back to a coasted pose keeps the previous
+    coast's velocity: across a coast and the PnP pose ending it the difference is the re-localisation's correction.
+    Indoor E-I-C2 seed 3 re-localised at 0.56 s by 5.5 map units per true metre (visual steps 0.5) and coasted 0.4 s
+    on it 160-170 deg off the true direction: scale -0.04 to -0.28 in all 78 initialisations (on the true keyframe
+    poses the same solve gives 0.99-1.03 of the truth); seed 7's coasts ratcheted 0.34 -> 8.4 units per metre and ran
+    away (RPE 0.98 m/m). ``/tmp/s35/ei35/h.py`` (= ``evpose slam`` + ``eval --atlas``), seeds within both RPE targets:
+    alone 0-7 6 -> 7 of 8, held-out 8-39 24 -> 22 of 32; with ``coast_triangulate`` off 8 of 8 and 24 -> 24 (13, 29,
+    38 gained, 17, 26, 32 lost on rotation), seeds never scaled 9 -> 5 of 40, above 0.01 m/m 6 -> 3 (the multi-map
+    11, 22, 24), above 0.01 deg/m 9 -> 8, median 0.0026 -> 0.0039 deg/m. Landing 0-23: no such coast, bit-identical."""
+    coast_triangulate: bool = True
+    """Triangulate points from keyframes coasted before the IMU initialisation (off: they only observe, as event-only
+    coasts with ``TrackingConfig.coast_triangulate``): PnP on them carries the coast's error on (seed 7's visual steps
+    grew to 160-4000 units per metre after coasts at 6.8-8.4). Off alone, indoor seeds 0-7 6 -> 7 of 8 (3, 6, 7 now
+    initialised; 4 0.0016 -> 0.0176 deg/m), 8-16 7 -> 6 of 9; see ``coast_hold_velocity``. Landing bit-identical."""
     coast_ba: bool = False
     """Run the visual local BA on keyframes made while coasting. Off: those keyframes carry few points, and a BA with
     one fixed keyframe slid along the scale (indoor seed 3: map scale 3e-5 of the truth, ATE 30852 %); with it off,

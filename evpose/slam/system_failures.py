@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from evpose.core.trajectory import invert_pose
-from evpose.slam.coasting import camera_frame_velocity, coast_pose, drop_contradicted
+from evpose.slam.coasting import camera_frame_velocity, coast_pose, drop_contradicted, trajectory_span
 from evpose.slam.edge_tracking import measure_across_edges, solve_pose_across_edges
 from evpose.slam.event_coasting import drop_unconfirmed_poses, event_only_coast_pose
 from evpose.slam.inertial import InertialConfiguration
@@ -23,7 +23,12 @@ from evpose.slam.step_result import SlamStatus
 
 
 class VisualFailureHandling:
-    """Bridging, coasting and losing maps for :class:`evpose.slam.system.EventSlam` (a mixin: it owns no state)."""
+    """Bridging, coasting and losing maps for :class:`evpose.slam.system.EventSlam` (a mixin: its only state is the
+    coast velocity held across re-localisations, ``_coast_hold``)."""
+
+    _coast_hold: tuple[int, int, np.ndarray] | None = None
+    """(map id, time of the newest pre-initialisation coasted pose in us, the camera-frame velocity it coasted on), for
+    ``InertialConfig.coast_hold_velocity``."""
 
     def _lose(self, reason: str) -> tuple[SlamStatus, str, None, bool]:
         m = self.atlas.active
@@ -52,17 +57,31 @@ class VisualFailureHandling:
         if m.imu_initialised:
             T_wc, how = self._imu_prediction(mci.t_us), "propagated by the IMU"
         else:
-            v = camera_frame_velocity(m, int(ic.coast_velocity_span_s * 1e6))
+            v = self._coast_velocity(m)
             if gap_s > ic.coast_s or R_prior is None or v is None:
                 self._rejoin = RejoinCandidate(m, v) if v is not None and ic.rejoin_s > 0 else None
                 return self._lose(reason)
             T_wc, how = coast_pose(m, mci.t_us, R_prior, v), "coasted on the gyro and the last velocity (IMU not initialised)"
+            self._coast_hold = (m.id, mci.t_us, v)
         if T_wc is None:
             return self._lose(reason)
         drop_contradicted(m, self.K, T_wc, fe.ids, fe.uv, fe.track_to_point, 2.0 * tc.reprojection_threshold_px)
         m.add_pose(mci.t_us, T_wc)
-        T_wc = self._new_keyframe(m, mci.t_us, T_wc, mci.image8, adjust=m.imu_initialised or ic.coast_ba)
+        T_wc = self._new_keyframe(m, mci.t_us, T_wc, mci.image8, adjust=m.imu_initialised or ic.coast_ba,
+                                  triangulate=m.imu_initialised or ic.coast_triangulate)
         return SlamStatus.INERTIAL, f"visual tracking failed ({reason}); pose {how}, map {m.id} kept", T_wc.copy(), True
+
+    def _coast_velocity(self, m) -> np.ndarray | None:
+        """Camera-frame velocity a map the IMU initialisation has not reached coasts on: that of its newest poses over
+        ``InertialConfig.coast_velocity_span_s``, or, with ``coast_hold_velocity``, the previous coast's when that span
+        reaches back to a coasted pose (the difference would measure the re-localisation's correction, not motion)."""
+        ic = self.cfg.inertial
+        hold = self._coast_hold
+        if ic.coast_hold_velocity and hold is not None and hold[0] == m.id and m.traj_t:
+            span = trajectory_span(m, int(ic.coast_velocity_span_s * 1e6))
+            if span is None or m.traj_t[span[0]] <= hold[1]:
+                return hold[2]
+        return camera_frame_velocity(m, int(ic.coast_velocity_span_s * 1e6))
 
     def _coast_event_only(self, mci: MciResult, reason: str, gap_s: float, R_wc: np.ndarray | None = None) -> tuple[SlamStatus, str, np.ndarray | None, bool]:
         """Event-only: keep the map through a visual failure of at most ``TrackingConfig.coast_s`` (``SlamStatus.COASTING``).
