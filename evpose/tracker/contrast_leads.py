@@ -76,14 +76,13 @@ class ContrastLeadConfig:
     """Counted events (running, with the memory) a point needs before its ratio is trusted, events."""
 
 
-def coverage_lead(L0: float, L1: float, motion: np.ndarray, lo: float, hi: float, supersampling: int = 3) -> float:
+def coverage_lead(L0: float, L1: float, motion: np.ndarray, lo: float, hi: float, samples: np.ndarray) -> float:
     """Mean lead (pixels, + = ahead of the edge along the unit image direction ``motion``) of a pixel's events as an
     edge moving along ``motion`` turns the pixel from log level ``L0`` to ``L1``, the events uniform in the log
     change ``|L - L0|`` over ``[lo, hi]`` (clipped to ``|L1 - L0|``; NaN when empty), the pixel's intensity the mean
-    of ``supersampling``-squared n-rooks samples (:func:`evpose.sim.render.subpixel_pattern`)."""
-    from evpose.sim.render import subpixel_pattern
-
-    y = np.sort(subpixel_pattern(int(supersampling)) @ np.asarray(motion, np.float64))  # the order the edge covers them
+    of its sub-pixel ``samples`` ((N, 2) offsets from the pixel centre in pixels; the simulator's are
+    :func:`evpose.sim.render.subpixel_pattern`, passed in since the tracker does not depend on the simulator)."""
+    y = np.sort(np.asarray(samples, np.float64) @ np.asarray(motion, np.float64))  # the order the edge covers them
     n = y.size
     f = np.arange(n + 1) / n
     lev = np.abs(np.log(f * np.exp(L1) + (1 - f) * np.exp(L0)) - L0)

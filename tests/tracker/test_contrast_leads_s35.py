@@ -52,7 +52,7 @@ def test_the_coverage_model_gives_the_simulated_esim_lead_of_an_edge():
     for dL in (1.2, 2.0):
         for history, gap in (("opposite", C), ("same", 0.0)):
             sim = _esim_lead(dL, angle, history)
-            model = coverage_lead(Lm, Lm + dL, m, gap, np.inf)
+            model = coverage_lead(Lm, Lm + dL, m, gap, np.inf, subpixel_pattern(3))
             assert abs(sim - model) < 0.05, (dL, history, sim, model)
             got[dL, history] = sim
     # after an opposite passage the first event needs a full threshold more: the events trail, the more so the
@@ -63,10 +63,10 @@ def test_the_coverage_model_gives_the_simulated_esim_lead_of_an_edge():
 
 def test_the_coverage_model_of_a_darkening_edge_mirrors_the_brightening_one():
     m = np.array([np.cos(0.4), np.sin(0.4)])
-    on = coverage_lead(0.0, 1.5, m, 0.0, np.inf)
-    off = coverage_lead(1.5, 0.0, m, 0.0, np.inf)
+    on = coverage_lead(0.0, 1.5, m, 0.0, np.inf, subpixel_pattern(3))
+    off = coverage_lead(1.5, 0.0, m, 0.0, np.inf, subpixel_pattern(3))
     assert on > 0.05 and abs(on + off) < 1e-12  # ON events lead, OFF events trail, by the same amount
-    assert np.isnan(coverage_lead(0.0, 0.3, m, C, np.inf))  # weaker than the carried-over gap: no event
+    assert np.isnan(coverage_lead(0.0, 0.3, m, C, np.inf, subpixel_pattern(3)))  # weaker than the carried-over gap: no event
 
 
 def _one_point(events_per_passage: int, passages: int, cfg: ContrastLeadConfig, follower_gap_us: int = 1000) -> PassageCounts:
