@@ -380,6 +380,7 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
                 est, sel = est2, sel2
                 self._map_tracks = len(sel2)
         jump = self._speed_jump(m, mci.t_us, est.T_wc)
+        self._speed_refusals = self._speed_refusals + 1 if jump is not None else 0
         if jump is not None:
             self._failure = SlamFailure.REJECTED
             return self._bridge_or_lose(mci, jump, R_coast)
@@ -402,6 +403,9 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
         self._lines_after_pose(m, mci, T_wc, segs)
         return SlamStatus.OK, f"{n_tracked} inliers ({n_refound} re-found by projection{fused}), rms {est.rms_px:.2f} px", T_wc.copy(), keyframe
 
+    _speed_refusals = 0
+    """PnP poses refused in a row by ``TrackingConfig.speed_jump_ratio``."""
+
     def _speed_jump(self, m: SlamMap, t_us: int, T_wc: np.ndarray) -> str | None:
         """Why the PnP pose ``T_wc`` is refused for stepping off the map's recent speed (``TrackingConfig.speed_jump_ratio``),
         or None (event-only; off by default)."""
@@ -410,6 +414,8 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
             return None
         if t_us - m.traj_t[0] < tc.speed_jump_min_age_s * 1e6:
             return None
+        if 0 < tc.speed_jump_max_refusals <= self._speed_refusals:
+            return None  # PnP has kept disagreeing with the coast: the map moved on, not one step
         r = speed_jump(m, t_us, T_wc, int(tc.coast_span_s * 1e6))
         return f"PnP step {r:.2f} times the map's recent speed" if is_speed_jump(r, tc.speed_jump_ratio, tc.speed_drop_ratio) else None
 

@@ -135,6 +135,15 @@ class PoseTrackingSettings:
     speed_jump_min_age_s: float = field(default=0.0, metadata={"min": 0.0, "max": 1.0, "step": 0.01, "unit": "s"})
     """Event-only: ``speed_jump_ratio`` / ``speed_drop_ratio`` judge only poses at least this long after their map's
     first pose (a young map's own speed is too noisy to judge by), s. 0.1 in ``speed_jump_ratio``'s ``sjC`` figures."""
+    speed_jump_max_refusals: int = field(default=0, metadata={"min": 0, "max": 100, "step": 1, "unit": "MCIs"})
+    """Event-only: after this many PnP poses refused in a row by ``speed_jump_ratio`` / ``speed_drop_ratio`` the next
+    one is accepted whatever its step (0: no limit), MCIs. Session 35 (``/tmp/s35/out35``, as ``speed_jump_ratio``'s
+    figures), 1 with ``speed_jump_ratio`` 4 and ``speed_jump_min_age_s`` 0.1 (tag ``sjD``): a refused map no longer
+    coasts out (maps 299 -> 298, tracked 146.69 -> 146.46 s over indoor 0-53; least tracked unchanged), indoor 0-19
+    2.161 -> 2.148 % (-0.013 +- 0.064, 3 better, 5 worse), 20-39 2.159 -> 2.012 % (-0.147 +- 0.182, 3 / 1), 40-53
+    2.064 -> 1.987 % (-0.077 +- 0.127, 1 / 3), landing 0-23 1.474 -> 1.476 % (+0.002 +- 0.002); seeds 36 4.88 -> 1.41,
+    52 3.34 -> 1.64 (one refusal each), 5 4.84 -> 4.02, 0 2.18 -> 1.63; worse 31 1.81 -> 2.73, 9 1.37 -> 1.95, 51 2.70
+    -> 2.98; indoor 0-53 mean 2.135 -> 2.056 %, seeds over 3 % 5 -> 3. Off: no better on 0-19."""
     young_pose_extrapolation_s: float = field(default=0.15, metadata={"min": 0.0, "max": 1.0, "step": 0.01, "unit": "s"})
     """Event-only, with ``first_pose_extrapolation_s`` > 0: every pose of a map less than this after its first one is
     placed in the refined trajectory as its first pose is, by the motion of the map's poses from the first one this old

@@ -56,14 +56,14 @@ def test_system_refuses_only_with_the_option_on_and_event_only():
     for ratio, imu, refused in ((0.0, None, False), (4.0, None, True), (4.0, object(), False)):
         cfg = SlamConfig()
         cfg.tracking.speed_jump_ratio = ratio
-        sys_ = SimpleNamespace(cfg=cfg, imu=imu)
+        sys_ = SimpleNamespace(cfg=cfg, imu=imu, _speed_refusals=0)
         why = EventSlam._speed_jump(sys_, m, 110000, _pose(0.16))
         assert (why is not None) == refused
         if refused:
             assert "6.00 times" in why
     cfg = SlamConfig()
     cfg.tracking.speed_jump_ratio = 4.0
-    sys_ = SimpleNamespace(cfg=cfg, imu=None)
+    sys_ = SimpleNamespace(cfg=cfg, imu=None, _speed_refusals=0)
     assert EventSlam._speed_jump(sys_, m, 110000, _pose(0.12)) is None  # twice the speed: kept
     assert EventSlam._speed_jump(sys_, m, 110000, _pose(0.1001)) is None  # a collapse: the drop side is off
     cfg.tracking.speed_drop_ratio = 4.0
@@ -71,3 +71,16 @@ def test_system_refuses_only_with_the_option_on_and_event_only():
     # A map younger than speed_jump_min_age_s (its first pose at 0) is not judged.
     cfg.tracking.speed_jump_min_age_s = 0.2
     assert EventSlam._speed_jump(sys_, m, 110000, _pose(0.16)) is None
+
+
+def test_refusals_in_a_row_are_limited():
+    m = _map()
+    cfg = SlamConfig()
+    cfg.tracking.speed_jump_ratio = 4.0
+    cfg.tracking.speed_jump_max_refusals = 1
+    sys_ = SimpleNamespace(cfg=cfg, imu=None, _speed_refusals=0)
+    assert EventSlam._speed_jump(sys_, m, 110000, _pose(0.16)) is not None
+    sys_._speed_refusals = 1  # one refused already: the next jumped pose is accepted
+    assert EventSlam._speed_jump(sys_, m, 110000, _pose(0.16)) is None
+    cfg.tracking.speed_jump_max_refusals = 0  # no limit
+    assert EventSlam._speed_jump(sys_, m, 110000, _pose(0.16)) is not None
