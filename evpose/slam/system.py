@@ -52,6 +52,7 @@ from evpose.slam.mci import Hypothesis, MciGenerator, MciResult, MotionPrior
 from evpose.slam.parallax_warp import points_in_view
 from evpose.slam.keyframe_search import keep_keyframe_image
 from evpose.slam.projection_search import SearchMatcher, store_patches
+from evpose.slam.speed_jump import is_speed_jump, speed_jump
 from evpose.slam.step_result import SlamFailure, SlamStatus, SlamStepResult
 from evpose.slam.system_failures import VisualFailureHandling
 from evpose.slam.system_gaps import StreamGaps, imu_holes
@@ -378,6 +379,11 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
             if est2.ok:
                 est, sel = est2, sel2
                 self._map_tracks = len(sel2)
+        jump = self._speed_jump(m, mci.t_us, est.T_wc)
+        self._speed_refusals = self._speed_refusals + 1 if jump is not None else 0
+        if jump is not None:
+            self._failure = SlamFailure.REJECTED
+            return self._bridge_or_lose(mci, jump, R_coast)
         for k in np.flatnonzero(~est.inliers):
             fe.track_to_point.pop(int(fe.ids[sel[k]]), None)
         inl = [sel[k] for k in np.flatnonzero(est.inliers)]
@@ -396,6 +402,22 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
             T_wc = self._new_keyframe(m, mci.t_us, T_wc, mci.image8)
         self._lines_after_pose(m, mci, T_wc, segs)
         return SlamStatus.OK, f"{n_tracked} inliers ({n_refound} re-found by projection{fused}), rms {est.rms_px:.2f} px", T_wc.copy(), keyframe
+
+    _speed_refusals = 0
+    """PnP poses refused in a row by ``TrackingConfig.speed_jump_ratio``."""
+
+    def _speed_jump(self, m: SlamMap, t_us: int, T_wc: np.ndarray) -> str | None:
+        """Why the PnP pose ``T_wc`` is refused for stepping off the map's recent speed (``TrackingConfig.speed_jump_ratio``),
+        or None (event-only; off by default)."""
+        tc = self.cfg.tracking
+        if self.imu is not None or max(tc.speed_jump_ratio, tc.speed_drop_ratio) <= 1.0 or not m.traj_t:
+            return None
+        if t_us - m.traj_t[0] < tc.speed_jump_min_age_s * 1e6:
+            return None
+        if 0 < tc.speed_jump_max_refusals <= self._speed_refusals:
+            return None  # PnP has kept disagreeing with the coast: the map moved on, not one step
+        r = speed_jump(m, t_us, T_wc, int(tc.coast_span_s * 1e6))
+        return f"PnP step {r:.2f} times the map's recent speed" if is_speed_jump(r, tc.speed_jump_ratio, tc.speed_drop_ratio) else None
 
     def _estimate(self, m: SlamMap, mci: MciResult, sel: list[int], guess: np.ndarray, R_prior: np.ndarray | None) -> tuple[PoseEstimate, list[int]]:
         """Pose from the map points of the tracks ``sel`` (indices into the frontend's tracks), gyro-refined when a prior exists."""

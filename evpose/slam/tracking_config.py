@@ -108,6 +108,42 @@ class PoseTrackingSettings:
     lead on the merged main (young-map options off, the stream-end flush on; ``/tmp/s34/lead/run.py``, ``sum.py fin
     fp10``), indoor 0-19 2.845 -> 2.705 % (-0.140 +- 0.063, 16 of 20 better), held-out 20-39 2.914 -> 2.700 % (-0.214 +-
     0.083, 15 of 20), landing 0-23 1.501 -> 1.502 % (+0.000 +- 0.002), least tracked unchanged (86.3 / 80.5 / 96.5 %)."""
+    speed_jump_ratio: float = field(default=0.0, metadata={"min": 0.0, "max": 100.0, "step": 0.1, "unit": "ratio"})
+    """Event-only: a PnP pose whose step from the map's last pose is more than this many times the map's mean speed
+    over its newest ``coast_span_s`` is refused as a failed MCI and the map coasts
+    (:mod:`evpose.slam.speed_jump`); 0 or <= 1 disables, ratio. Off: it rescues the worst indoor seeds but trades
+    tracked time and loses elsewhere. Session 35 (``/tmp/s35/out35``: ``run.py`` / ``batch.sh`` = ``evpose slam`` +
+    ``evpose eval --atlas --correct-scale``, ``sum.py`` / ``per.py`` pair against main 964bd51, tag ``m35``; ``loc.py``
+    prints each map's step lengths against the truth, ``modes.py`` splits the error of the seeds over 3 %). Why: seed
+    36's first map (118 mm, 68 % of its error) steps 1.19 times the true step up to 0.175 s, then 2.2, 4.0, 1.8, 0.28,
+    0.02 times within 0.2 s of a keyframe whose new points took over its PnP (19 -> 42 tracked map points); seed 5's
+    last map (120 mm, 76 %) 0.72 -> 1.27 -> 2.05 -> 3.29 -> 1.37 within 0.2 s, then drifts to 0.34; online, the PnP step
+    against the map's speed over 60 ms reads 5.9 / 5.2 there, but single steps are noisy (0.26-3.5 on good stretches).
+    With ``speed_jump_min_age_s`` 0.1 at 4 (tag ``sjC``): indoor 0-19 2.161 -> 2.158 % (-0.003 +- 0.149, 3 better, 5
+    worse), 20-39 2.159 -> 1.954 % (-0.205 +- 0.173, 4 / 0), 40-53 2.064 -> 1.925 % (-0.139 +- 0.134, 2 / 2), landing
+    0-23 1.474 -> 1.477 % (+0.003 +- 0.002, 0 / 2); seeds 36 4.88 -> 1.41, 5 4.84 -> 2.54, 52 3.34 -> 1.64 (tracked
+    unchanged), but 17 1.85 -> 3.32, 6 2.54 -> 3.22, and seeds 2 / 10 / 14 / 51 lose 6-9 points of tracked time (a refused
+    first map coasts out and is lost: 0.84 -> 0.51 s); maps 299 -> 301, tracked 146.7 -> 145.6 s over the 54 indoor
+    runs; least tracked unchanged (80.5 % / 79.1 % on seed 53, as main). Without the age gate (``sjB``): 0-19 -0.018 +-
+    0.149, 20-39 -0.195 +- 0.174, 40-53 -0.136 +- 0.132, but seeds 0 / 2 / 10 / 31 / 51 / 52 lose 9-12 points of
+    tracked time (66 of the 87 refusals fall in the first map before 0.4 s). With ``speed_drop_ratio`` 4 too (``sj4``):
+    0-19 +0.160 +- 0.202 (4 / 6), 20-39 -0.235 +- 0.193, 40-53 -0.036 +- 0.125 (seed 4 3.01 -> 5.14, 14 1.86 -> 3.67)."""
+    speed_drop_ratio: float = field(default=0.0, metadata={"min": 0.0, "max": 100.0, "step": 0.1, "unit": "ratio"})
+    """Event-only, the other side of ``speed_jump_ratio``: a PnP step slower than the map's recent speed divided by
+    this is refused (0 or <= 1 disables), ratio. Off: with it at 4 the indoor 0-19 seeds got worse (``sj4`` in
+    ``speed_jump_ratio``'s figures)."""
+    speed_jump_min_age_s: float = field(default=0.0, metadata={"min": 0.0, "max": 1.0, "step": 0.01, "unit": "s"})
+    """Event-only: ``speed_jump_ratio`` / ``speed_drop_ratio`` judge only poses at least this long after their map's
+    first pose (a young map's own speed is too noisy to judge by), s. 0.1 in ``speed_jump_ratio``'s ``sjC`` figures."""
+    speed_jump_max_refusals: int = field(default=0, metadata={"min": 0, "max": 100, "step": 1, "unit": "MCIs"})
+    """Event-only: after this many PnP poses refused in a row by ``speed_jump_ratio`` / ``speed_drop_ratio`` the next
+    one is accepted whatever its step (0: no limit), MCIs. Session 35 (``/tmp/s35/out35``, as ``speed_jump_ratio``'s
+    figures), 1 with ``speed_jump_ratio`` 4 and ``speed_jump_min_age_s`` 0.1 (tag ``sjD``): a refused map no longer
+    coasts out (maps 299 -> 298, tracked 146.69 -> 146.46 s over indoor 0-53; least tracked unchanged), indoor 0-19
+    2.161 -> 2.148 % (-0.013 +- 0.064, 3 better, 5 worse), 20-39 2.159 -> 2.012 % (-0.147 +- 0.182, 3 / 1), 40-53
+    2.064 -> 1.987 % (-0.077 +- 0.127, 1 / 3), landing 0-23 1.474 -> 1.476 % (+0.002 +- 0.002); seeds 36 4.88 -> 1.41,
+    52 3.34 -> 1.64 (one refusal each), 5 4.84 -> 4.02, 0 2.18 -> 1.63; worse 31 1.81 -> 2.73, 9 1.37 -> 1.95, 51 2.70
+    -> 2.98; indoor 0-53 mean 2.135 -> 2.056 %, seeds over 3 % 5 -> 3. Off: no better on 0-19."""
     young_pose_extrapolation_s: float = field(default=0.15, metadata={"min": 0.0, "max": 1.0, "step": 0.01, "unit": "s"})
     """Event-only, with ``first_pose_extrapolation_s`` > 0: every pose of a map less than this after its first one is
     placed in the refined trajectory as its first pose is, by the motion of the map's poses from the first one this old
