@@ -7,12 +7,11 @@ import numpy as np
 from evpose.slam.atlas import SlamMap
 from evpose.slam.inertial import InertialConfig
 from evpose.slam.system_failures import VisualFailureHandling
+from tests.slam.test_atlas import _pose as _T
 
 
 def _pose(x: float) -> np.ndarray:
-    T = np.eye(4)
-    T[0, 3] = x
-    return T
+    return _T(np.zeros(3), (x, 0.0, 0.0))
 
 
 def _map_after_jump() -> SlamMap:

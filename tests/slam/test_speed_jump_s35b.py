@@ -8,12 +8,11 @@ from evpose.slam.atlas import SlamMap
 from evpose.slam.config import SlamConfig
 from evpose.slam.speed_jump import is_speed_jump, speed_jump
 from evpose.slam.system import EventSlam
+from tests.slam.test_atlas import _pose as _T
 
 
 def _pose(x: float) -> np.ndarray:
-    T = np.eye(4)
-    T[0, 3] = x
-    return T
+    return _T(np.zeros(3), (x, 0.0, 0.0))
 
 
 def _map() -> SlamMap:
