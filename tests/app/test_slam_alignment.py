@@ -18,6 +18,7 @@ from app.scene import SceneView  # noqa: E402
 from app.slam_alignment import AtlasAligner, alignment_note  # noqa: E402
 from evpose.eval.sim3_alignment import Sim3, align_to_ground_truth  # noqa: E402
 from app.slam_engine import SlamEngine, slam_markdown  # noqa: E402
+from tests.app.test_slam_engine import all_steps  # noqa: E402
 from evpose.core.events import EventArray  # noqa: E402
 from evpose.core.trajectory import Trajectory  # noqa: E402
 from evpose.eval.slam_metrics import atlas_metrics  # noqa: E402
@@ -162,9 +163,7 @@ def test_the_scene_draws_every_map_aligned_or_raw_and_resends_only_the_active_on
 def test_slam_engine_frames_carry_their_maps_aligned_to_the_recordings_ground_truth():
     rec = make_recording(duration_s=0.6, speed=1.5, seed=11)
     eng = SlamEngine(rec)
-    frames = []
-    while (f := eng.step()) is not None:
-        frames.append(f)
+    frames = all_steps(eng)
     assert frames[0].slam.map_id == -1 and slam_markdown(frames[0]).startswith("no map yet")  # not "map -1: 0 points"
     last = frames[-1]
     assert last.slam.has_ground_truth and last.slam.atlas and last.slam.atlas[-1].active

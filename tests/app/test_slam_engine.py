@@ -14,6 +14,14 @@ from app.slam_engine import SlamEngine, SlamViewConfig  # noqa: E402
 from evpose.slam import SlamConfig, run_slam  # noqa: E402
 
 
+def all_steps(eng: SlamEngine) -> list:
+    """Every frame of ``eng``, stepped from where it stands to the end of its recording."""
+    frames = []
+    while (f := eng.step()) is not None:
+        frames.append(f)
+    return frames
+
+
 def with_first_mci(frames) -> int:
     return next(f.index for f in frames if f.counts["mcis"])
 
@@ -26,10 +34,7 @@ def moving():
 @pytest.fixture(scope="module")
 def all_frames(moving):
     eng = SlamEngine(moving)
-    frames = []
-    while (f := eng.step()) is not None:
-        frames.append(f)
-    return eng, frames
+    return eng, all_steps(eng)
 
 
 def test_slam_engine_steps_equal_a_headless_run(moving, all_frames):

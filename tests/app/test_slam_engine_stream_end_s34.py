@@ -10,15 +10,14 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "slam"))
 from slam_synthetic import make_recording  # noqa: E402
 
 from app.slam_engine import SlamEngine  # noqa: E402
+from tests.app.test_slam_engine import all_steps  # noqa: E402
 from evpose.slam import SlamConfig, run_slam  # noqa: E402
 
 
 def test_last_step_flushes_the_tail_like_a_headless_run():
     rec = make_recording(duration_s=0.6, speed=2.0, seed=3)
     eng = SlamEngine(rec)
-    frames = []
-    while (f := eng.step()) is not None:
-        frames.append(f)
+    frames = all_steps(eng)
     headless = run_slam(rec, SlamConfig(), chunk_us=eng.config.step_us)
     assert sum(f.counts["mcis"] for f in frames) == len(headless.results)
     # The last step made the flushed MCI: its pose is the headless run's last one, later than any step's before it.
