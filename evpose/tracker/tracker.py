@@ -415,6 +415,8 @@ class Tracker:
         if self.components.drives_pose:
             # Fused output: a failed registration is bridged by IMU propagation (degraded), never dropped.
             self._pose = fused.T_world_cam.copy()
+            if fused.readout_T_world_cam is not None and motion.fusion.config.revision_readout_prior:
+                self._pose = fused.readout_T_world_cam.copy()  # FusionConfig.revision_readout_prior: a closed loop
             covariance = fused.covariance
             status = TrackStatus.OK if ok and not fused.degraded else TrackStatus.DEGRADED
             if status is TrackStatus.DEGRADED and ok:

@@ -3,7 +3,6 @@ pose moved by the smoother's mean revision of the window's older states, never f
 
 import numpy as np
 import pytest
-from dataclasses import replace
 from scipy.spatial.transform import Rotation
 
 from evpose.errors import ConfigError
@@ -35,7 +34,7 @@ def _run(flight, config, stop=None, probe=None):
 
 
 def test_readout_leaves_every_fused_state_bit_identical(flight):
-    _, off = _run(flight, FusionConfig())
+    _, off = _run(flight, FusionConfig(revision_readout_states=0))
     _, on = _run(flight, FusionConfig(revision_readout_states=STATES, revision_readout_gain=2.0))
     assert len(off) == len(on)
     for a, b in zip(off, on):
@@ -92,10 +91,38 @@ def test_a_restored_fusion_reads_out_as_the_uninterrupted_one(flight):
         assert np.array_equal(s.readout_T_world_cam, ref[k].readout_T_world_cam)
 
 
-def test_config_refuses_more_states_than_the_window_holds():
+def test_config_refuses_negative_values_and_uses_at_most_the_window(flight):
     with pytest.raises(ConfigError, match="revision_readout_states"):
-        FusionConfig(window_states=8, revision_readout_states=8).validate()
+        FusionConfig(revision_readout_states=-1).validate()
     with pytest.raises(ConfigError, match="revision_readout_gain"):
-        FusionConfig(revision_readout_states=3, revision_readout_gain=-1.0).validate()
-    FusionConfig(window_states=8, revision_readout_states=7).validate()
-    assert replace(FusionConfig()).revision_readout_states == 0  # off by default
+        FusionConfig(revision_readout_gain=-1.0).validate()
+    assert FusionConfig().revision_readout_states == 7 and FusionConfig().revision_readout_gain == 2.0  # on by default
+    # More states than the window keeps older ones: the window's own (window_states - 1 = 3) are used.
+    short = FusionConfig(window_states=4, revision_readout_states=7)
+    _, states = _run(flight, short, stop=30)
+    same = FusionConfig(window_states=4, revision_readout_states=3)
+    _, ref = _run(flight, same, stop=30)
+    assert states[1].readout_T_world_cam is None and states[2].readout_T_world_cam is not None
+    for a, b in zip(states, ref):
+        assert (a.readout_T_world_cam is None and b.readout_T_world_cam is None) or np.array_equal(a.readout_T_world_cam, b.readout_T_world_cam)
+
+
+def test_moved_like_carries_a_correction_onto_another_pose():
+    from evpose.fusion.revision_readout import moved_like
+
+    rng = np.random.default_rng(2)
+    def pose(rv, p):
+        T = np.eye(4)
+        T[:3, :3] = Rotation.from_rotvec(rv).as_matrix()
+        T[:3, 3] = p
+        return T
+    A = pose(rng.normal(0, 0.3, 3), rng.normal(0, 1, 3))
+    B = pose(rng.normal(0, 0.3, 3), rng.normal(0, 1, 3))
+    dR = Rotation.from_rotvec([1e-3, -2e-3, 5e-4]).as_matrix()
+    A2 = A.copy()
+    A2[:3, :3] = dR @ A[:3, :3]
+    A2[:3, 3] += [0.002, -0.001, 0.003]
+    B2 = moved_like(B, A, A2)
+    assert np.allclose(B2[:3, :3], dR @ B[:3, :3], atol=1e-14)
+    assert np.allclose(B2[:3, 3], B[:3, 3] + [0.002, -0.001, 0.003], atol=1e-15)
+    assert np.allclose(moved_like(B, A, A), B, atol=1e-14)
