@@ -45,6 +45,7 @@ from evpose.fusion.propagation import NavPropagator, imu_rate_trajectory
 from evpose.fusion.registration_offset import OffsetChain, split_ridge
 from evpose.fusion.startup import gyro_bias_release_due, gyro_bias_release_params, initial_gyro_bias_sigma, startup_inflated
 from evpose.fusion.state import Extrinsic, FusedState
+from evpose.fusion.revision_readout import readout_pose
 
 
 def initial_bias_covariance(config: FusionConfig, R_world_imu: np.ndarray) -> np.ndarray | None:
@@ -494,4 +495,6 @@ class FactorGraphFusion:
             del self.history[0]
         cov = np.asarray(self.smoother.marginalCovariance(x)) if self.config.compute_covariance else None
         self.last_state = self.propagator.fused_state(t_us, nav, bias, cov, degraded)
+        if self.config.revision_readout_states > 0:
+            self.last_state.readout_T_world_cam = readout_pose(self, self.last_state.T_world_cam)
         return self.last_state

@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from evpose.core.imu import ImuSamples
+from evpose.fusion.revision_readout import moved_like
 from evpose.fusion.state import FusedState
 
 
@@ -42,7 +43,12 @@ class FusionMotionPredictor:
     def predict(self, t_us: int) -> np.ndarray:
         # The pose alone: a copy of it, not of the whole propagated state, where the backend shares its cache.
         view = getattr(self.fusion, "predict_view", None)
-        return view(int(t_us)).T_world_cam.copy() if view is not None else self.fusion.predict(int(t_us)).T_world_cam
+        T = view(int(t_us)).T_world_cam.copy() if view is not None else self.fusion.predict(int(t_us)).T_world_cam
+        last = self.last
+        if last is not None and last.readout_T_world_cam is not None and getattr(self.fusion.config, "revision_readout_prior", False):
+            # The read-out's correction of the last state carried onto the prediction (FusionConfig.revision_readout_prior).
+            T = moved_like(T, last.T_world_cam, last.readout_T_world_cam)
+        return T
 
     def update(self, t_us: int, T_world_cam: np.ndarray) -> None:
         self.report(t_us, T_world_cam, None)

@@ -36,11 +36,14 @@ class FusedState:
     """True when no registration supported this estimate (IMU propagation only)."""
     omega_cam: np.ndarray | None = None
     """Bias-corrected angular rate of the camera in the camera frame (3,), rad/s, if known."""
+    readout_T_world_cam: np.ndarray | None = None
+    """The pose to write for this state instead of ``T_world_cam`` (4, 4), or None: ``T_world_cam`` moved by the
+    smoother's revisions of older states (``FusionConfig.revision_readout_states``); never fed back."""
 
     def copy(self) -> "FusedState":
         cp = lambda a: None if a is None else np.array(a, copy=True)  # noqa: E731
         return FusedState(int(self.t_us), cp(self.T_world_cam), cp(self.velocity_world), cp(self.acc_bias), cp(self.gyro_bias),
-                          cp(self.covariance), bool(self.degraded), cp(self.omega_cam))
+                          cp(self.covariance), bool(self.degraded), cp(self.omega_cam), cp(self.readout_T_world_cam))
 
 
 def skew(w: np.ndarray) -> np.ndarray:

@@ -415,6 +415,8 @@ class Tracker:
         if self.components.drives_pose:
             # Fused output: a failed registration is bridged by IMU propagation (degraded), never dropped.
             self._pose = fused.T_world_cam.copy()
+            if fused.readout_T_world_cam is not None and motion.fusion.config.revision_readout_prior:
+                self._pose = fused.readout_T_world_cam.copy()  # FusionConfig.revision_readout_prior: a closed loop
             covariance = fused.covariance
             status = TrackStatus.OK if ok and not fused.degraded else TrackStatus.DEGRADED
             if status is TrackStatus.DEGRADED and ok:
@@ -448,7 +450,7 @@ class Tracker:
 
         result = StepResult(
             t_us=until,
-            pose=self._pose.copy(),
+            pose=self._written_pose(fused),
             status=status,
             reason="" if status is TrackStatus.OK else reason,
             registration_pose=None if reg is None else reg.T_world_cam.copy(),
@@ -464,6 +466,13 @@ class Tracker:
         return result
 
     # ---------------------------------------------------------------- helpers
+    def _written_pose(self, fused) -> np.ndarray:
+        """The step's output pose: the fused pose, or its read-out (``FusionConfig.revision_readout_states``), which
+        is only written, never used by the tracker itself."""
+        if self.components.drives_pose and fused is not None and fused.readout_T_world_cam is not None:
+            return fused.readout_T_world_cam.copy()
+        return self._pose.copy()
+
     def _painted_mask(self) -> np.ndarray:
         """(N,) bool over the map: the points the painted-edge refiner owns."""
         mask = np.zeros(self._points.shape[0], dtype=np.bool_)

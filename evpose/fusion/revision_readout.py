@@ -1,0 +1,103 @@
+"""The real-time pose read out with what the fixed-lag smoother has since learnt about the window's older states.
+
+Option ``FusionConfig.revision_readout_states`` (L, 0 = off) and ``revision_readout_gain`` (g), factor graph only.
+When state k is added, each older state k-l of the window (l = 1..L) has two estimates: the one written when it was
+the newest (the real-time output at its time) and the smoother's estimate now, which includes the registrations that
+came after it. Their difference is that state's *revision*. The read-out adds g times the mean revision of states
+k-1..k-L to state k's estimate: positions additively, rotations as a world-frame rotation vector about the camera
+centre. Causal: only states and registrations up to k enter.
+
+What it is for (issue 7, 240x180): the registrations carry slow errors (a few edges' event offsets, session 33/34),
+which the real-time estimate follows and a smoother, fed later registrations that see other edges, partly takes out
+(offline 3.09 mm against 5.26 mm in real time). Re-predicting state k from the smoothed state k-L with the IMU gives
+state k's own estimate back (the IMU factors tie the window together: within 0.2 mm, measured open loop), so the
+smoother's past holds no more than its present; what the present misses is how much the newer registrations revised
+the older states, which is correlated with state k's own slow error. A gain above 1 because a revision is only part
+of the error the state carried.
+
+Only the written pose changes: the fusion's state, its IMU propagation (the registrations' prior), the tracker's
+internal pose and the recorded fusion inputs are untouched, so tracking is bit for bit the same with it on or off.
+Cost: L pose reads from the smoother plus L rotation logs per update (below).
+
+Measured (session 36, rt36), L 7 and gain 2 against off, `full` from ground truth through the CLI (`evpose track
+--config`, `evpose eval --align none`) on the cached 2 s moderate landings and built maps (``/tmp/s36/rt36/run.sh``,
+paired per seed):
+
+* 240x180 seeds 0-23: 5.255 -> 5.060 mm (-0.195 +- 0.031, 24 of 24 better), ARE 0.0603 -> 0.0597 deg;
+* held-out 24-47: 5.652 -> 5.489 (-0.163 +- 0.035, 21 of 24);
+* 240x180 3 s seeds 0-7: 13.512 -> 13.387 (-0.125 +- 0.098, 6 of 8; ARE 0.1113 -> 0.1134 deg);
+* 346x260 seeds 0-23: 4.279 -> 4.169 (-0.110 +- 0.024, 20 of 24), ARE 0.0504 -> 0.0498;
+* demos landing / landing_fast / landing_dynamic / the dynamic one's static twin (``/tmp/s36/rt36/demo.sh``): 6.899 /
+  9.132 / 6.312 / 5.840 -> 6.557 / 8.894 / 6.154 / 5.700 mm (dynamic against static 1.08x either way).
+
+Open-loop replays of the recorded fusion inputs (``/tmp/s36/rt36/revise.py``, 240x180 seeds 0-23, 5.205 mm as
+replayed): the revision of the one state 1 / 3 / 5 / 7 back alone at gain 1: -0.042 / -0.117 / -0.125 / -0.143 mm
+(at gain 2 7 back alone -0.193, 21 of 24); the mean of 1..7 (what the option does) at gain 1 / 1.5 / 2 / 2.5 / 3: -0.116 / -0.161 / -0.197 / -0.223 / -0.239 (24 / 24 / 24 / 22 / 21 of 24 better); a
+21-state window, L 10 / 20 at gain 1: -0.140 / -0.167 (more cost, no better); held-out 24-47 at L 7 gain 2 / 3:
+-0.175 / -0.206; 346x260 L 7 gain 1 / 2 / 3: -0.072 / -0.117 / -0.135. Re-predicting state k from the smoothed
+state k-L through the IMU (``repredict.py``, seeds 0-5): +0.08 (L 5) to +0.14 mm (L 10-40): the IMU factors tie the
+window together, so that gives back state k's own estimate (within 0.2 mm).
+Closing the loop (``FusionConfig.revision_readout_prior``: the tracker's pose and the next registration's predicted
+start moved by the read-out's correction, CLI, 240x180 seeds 0-23): 5.060 -> 5.113 mm against the read-out alone
+(+0.054 +- 0.035, 8 of 24 better), so off: a registration pulled towards the corrected prior feeds the fusion a
+little of the correction back, and the next revision is made against it.
+Cost (``cost.py``, seed 0's inputs replayed, load ~10): the read-out 0.19 ms median per update (p99 0.48), the
+fusion update 0.90 -> 1.07 ms median.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def mean_revision(revisions: list[tuple[np.ndarray, np.ndarray]]) -> tuple[np.ndarray, np.ndarray]:
+    """Mean (world rotation vector rad (3,), position m (3,)) of per-state revisions."""
+    r = np.zeros(3)
+    p = np.zeros(3)
+    for dr, dp in revisions:
+        r += dr
+        p += dp
+    n = float(len(revisions))
+    return r / n, p / n
+
+
+def revision(gtsam, T_now: np.ndarray, T_then: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """One state's revision: (Log(R_now R_then^T) world rad (3,), p_now - p_then m (3,)) of two camera poses (4, 4)."""
+    dR = T_now[:3, :3] @ T_then[:3, :3].T
+    return np.asarray(gtsam.Rot3.Logmap(gtsam.Rot3(dR)), np.float64), T_now[:3, 3] - T_then[:3, 3]
+
+
+def revised_pose(gtsam, T_world_cam: np.ndarray, rotation: np.ndarray, position: np.ndarray, gain: float) -> np.ndarray:
+    """``T_world_cam`` moved by ``gain`` times a (rotation vector, position) revision: rotation about the camera centre
+    in the world frame, position added."""
+    out = np.array(T_world_cam, np.float64, copy=True)
+    out[:3, :3] = np.asarray(gtsam.Rot3.Expmap(gain * rotation).matrix(), np.float64) @ out[:3, :3]
+    out[:3, 3] += gain * position
+    return out
+
+
+def readout_pose(fusion, T_world_cam: np.ndarray) -> np.ndarray | None:
+    """The revised camera pose of ``fusion``'s newest state (a :class:`~evpose.fusion.factor_graph.FactorGraphFusion`
+    whose ``history`` already holds that state), or None while fewer than ``revision_readout_states`` older states
+    are in the window (the start, and after each ``initialize``)."""
+    c = fusion.config
+    n = min(int(c.revision_readout_states), int(c.window_states) - 1)  # older states are marginalised
+    if n <= 0 or fusion.index < n or len(fusion.history) < n + 1:
+        return None
+    gtsam = fusion._gtsam
+    revs = []
+    for lag in range(1, n + 1):
+        then = fusion.extrinsic.cam_pose(fusion.history[-1 - lag][1].pose().matrix())
+        now = fusion.extrinsic.cam_pose(fusion.smoother.calculateEstimatePose3(fusion._keys(fusion.index - lag)[0]).matrix())
+        revs.append(revision(gtsam, now, then))
+    rotation, position = mean_revision(revs)
+    return revised_pose(gtsam, T_world_cam, rotation, position, float(c.revision_readout_gain))
+
+
+def moved_like(T: np.ndarray, T_from: np.ndarray, T_to: np.ndarray) -> np.ndarray:
+    """``T`` (4, 4) moved as ``T_from`` was moved to ``T_to``: rotated by ``R_to R_from^T`` about its own centre, shifted by
+    ``p_to - p_from`` (``FusionConfig.revision_readout_prior``)."""
+    out = np.array(T, np.float64, copy=True)
+    out[:3, :3] = (T_to[:3, :3] @ T_from[:3, :3].T) @ out[:3, :3]
+    out[:3, 3] += T_to[:3, 3] - T_from[:3, 3]
+    return out
