@@ -28,15 +28,25 @@ across the track instead:
   2.064 -> 2.060 % (-0.004 +- 0.156, 10 / 4), all 54 2.135 -> 2.111 % (-0.024 +- 0.107, 36 / 18); held-out 20-53 along
   -0.109 +- 0.083 (26 of 34 better), across +0.166 +- 0.080 (14 of 34). Landing 0-23 1.474 -> 1.270 % (-0.205 +-
   0.242, but 10 better, 14 worse, median change +0.20: seed 4 6.13 -> 1.06 %; within 2 % 21 -> 23; least tracked
-  96.5 -> 97.1 %). Indoor 0-19's mean gain is seed 5 (4.84 -> 1.73 %; the other 19 -0.01).
+  96.5 -> 97.1 %; along -0.094 +- 0.135, across -0.110 +- 0.136). Indoor 0-19's mean gain is seed 5 (4.84 -> 1.73 %; the other 19 -0.01).
 - 0.3 (span 0.3 s) indoor 0-19 2.005 % (-0.156 +- 0.173, 12 / 8); 0.3 with span 10 s (the map's whole life) 2.020 %
   (-0.141 +- 0.164, 11 / 9); 0.1 on maps younger than 0.6 s only (``max_age_s``) 2.079 % (-0.082 +- 0.222, 13 / 7;
-  along -0.188 +- 0.123, across +0.105 +- 0.162). Each gains only through seed 5.
+  along -0.188 +- 0.123, across +0.105 +- 0.162); 0.5 without the Huber kernel (``huber`` 10, a weak quadratic pull
+  that leaves small deviations alone) 2.055 % (-0.106 +- 0.140, 10 / 10; along -0.114, across +0.008) but landing 0-23
+  1.790 % (+0.316 +- 0.448, seed 7 +8.59 points; within 2 % 21 -> 20). Each gains indoors only through seed 5.
+- The ceiling of a step-length source (0.02 over the map's whole life, ``huber`` 10: the rooms' speed is constant, so
+  this is nearly the true length): indoor 0-19 2.144 % (-0.017 +- 0.196, 14 / 6; along -0.162 +- 0.130, 16 of 20
+  better, across +0.144 +- 0.114, 8 of 20; young 0.05 s step direction error 12.3 -> 14.0 deg RMS): the tighter the
+  lengths are held, the more the directions give.
 - With ``TrackingConfig.ba_room_prior_deg`` 0.1 (a rotation source for the across-track part): indoor 0-19 2.039 %
   against the room prior alone 2.143 % (-0.104 +- 0.236, 9 / 11; the room prior alone against main -0.018 +- 0.280).
 
-Off. Holding the keyframe steps' lengths in a BA whose points were triangulated at the old lengths moves the mismatch
-into the steps' directions. Widening the young map's BA window to keep the initial keyframes free was no lever
+CPU per MCI (landing 0-1, back to back at load ~9, ``cpu_mci_median_ms`` of ``run.py``: MCI + tracking CPU, median
+per run): 0.1 26.5 / 26.1 ms against 26.2 / 26.0 ms; indoors the factors join only the few local BAs of PnP keyframes.
+
+Off: level on the held-out seeds, worse on the typical landing seed. A likely reading of the across-track rise (not
+tested): the BA's points were triangulated at the old step lengths, and a held length leaves the mismatch to the steps'
+directions. Widening the young map's BA window to keep the initial keyframes free was no lever
 either (prototype, removed): the event-only local BA ran 14 times on indoor seed 0, every time on a map of at most ten
 keyframes, which ``ba_window`` 10 already covers whole (coasted keyframes skip the BA); indoor seeds 0-3 were
 bit-identical to main.
