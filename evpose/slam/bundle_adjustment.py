@@ -28,7 +28,7 @@ def local_bundle_adjustment(m: SlamMap, K: np.ndarray, window: int, iterations: 
                             rotation_sigmas_rad: dict | None = None, velocity_sigma_ratio: float = 0.0,
                             rotation_rate_sigma_rad_s: float = 0.0, edge_along_sigma_px: float = 0.0,
                             edge_max_ratio: float = 0.1, max_jump_depths: float = 0.0,
-                            attitude_priors: dict | None = None) -> BaReport:
+                            attitude_priors: dict | None = None, extra_factors=None) -> BaReport:
     """Optimise the last ``window`` keyframes of ``m`` and the points they see, in place.
 
     The ``n_fixed`` oldest keyframes of the window (two while the map has only
@@ -48,7 +48,8 @@ def local_bundle_adjustment(m: SlamMap, K: np.ndarray, window: int, iterations: 
     ``image8``) that sigma along the edge, pixels: KLT measures only the motion across an edge.
     ``attitude_priors`` maps keyframe ids to (target ``T_wc``, 6x6 covariance): a prior on each free keyframe of the
     window, with a Huber loss at two sigmas (:func:`evpose.slam.room_axes.room_priors`: the rotation from the room's
-    axis-aligned edges).
+    axis-aligned edges). ``extra_factors(graph, present, free)`` may add factors on the graph's keyframes (``present``
+    the pose variables, ``free`` the optimised ones; :func:`evpose.slam.young_scale.speed_factor_hook`).
     ``max_jump_depths`` > 0 leaves the map as it was when the solution moves a free keyframe's camera centre farther
     than that many median distances of the optimised points from it (:attr:`TrackingConfig.max_jump_depths`).
     """
@@ -122,6 +123,8 @@ def local_bundle_adjustment(m: SlamMap, K: np.ndarray, window: int, iterations: 
         from evpose.slam.motion_prior import add_rotation_rate_factors
 
         add_rotation_rate_factors(graph, m.keyframes[-(window + 1):], used_kfs, in_window - fixed_ids, rotation_rate_sigma_rad_s)
+    if extra_factors is not None:
+        extra_factors(graph, used_kfs, in_window - fixed_ids)
     params = gtsam.LevenbergMarquardtParams()
     params.setMaxIterations(int(iterations))
     e0 = graph.error(values)

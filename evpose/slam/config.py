@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 
 from evpose.slam.inertial import InertialConfig
 from evpose.slam.map_restructure import RestructureConfig
+from evpose.slam.young_scale import YoungScaleConfig
 from evpose.slam.projection_search import ProjectionSearchConfig
 from evpose.slam.visual_gyro import VisualGyroConfig
 from evpose.slam.edge_tracking import EdgeTrackingConfig
@@ -322,5 +323,7 @@ class SlamConfig:
     """Straight MCI edges tracked as 3-D lines that place starved event-only maps (:mod:`evpose.slam.line_landmarks`)."""
     restructure: RestructureConfig = field(default_factory=RestructureConfig)
     """Re-initialising a young event-only map from a wide-baseline keyframe pair."""
+    young_scale: YoungScaleConfig = field(default_factory=YoungScaleConfig)
+    """Speed-only prior on the event-only local BA's keyframe steps (:mod:`evpose.slam.young_scale`)."""
     seed: int = 0
     """Seed of OpenCV's RANSAC generator, reset before every call so runs repeat bit for bit."""

@@ -53,6 +53,7 @@ from evpose.slam.parallax_warp import points_in_view
 from evpose.slam.keyframe_search import keep_keyframe_image
 from evpose.slam.projection_search import SearchMatcher, store_patches
 from evpose.slam.speed_jump import is_speed_jump, speed_jump
+from evpose.slam.young_scale import speed_factor_hook
 from evpose.slam.step_result import SlamFailure, SlamStatus, SlamStepResult
 from evpose.slam.system_failures import VisualFailureHandling
 from evpose.slam.system_gaps import StreamGaps, imu_holes
@@ -477,7 +478,8 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
                                     rotation_rate_sigma_rad_s=np.radians(tc.ba_rotation_rate_prior_deg_s) if self.imu is None else 0.0,
                                     edge_along_sigma_px=tc.ba_edge_along_sigma_px if self.imu is None else 0.0,
                                     edge_max_ratio=tc.ba_edge_max_ratio, max_jump_depths=tc.max_jump_depths,
-                                    attitude_priors=self._room_priors(m, window))
+                                    attitude_priors=self._room_priors(m, window),
+                                    extra_factors=speed_factor_hook(m, self.cfg.young_scale, t_us) if self.imu is None else None)
         if before is not None:
             carry_relative_scale(m, before)
         cull_points(m, self.K, fe.track_to_point, tc)
