@@ -296,6 +296,13 @@ class TrackingSession:
             self.tracker.predictor.reset(t_prev, gt.interpolate(t_prev).matrix(0))
             self.tracker.predictor.update(t_us, pose)
 
+    def _last_estimate(self) -> np.ndarray | None:
+        """The last pose written: where the fusion reads its pose out with the smoother's revisions
+        (``FusionConfig.revision_readout_states``) that one, not the tracker's own, so a restart goes on from what was
+        written rather than jumping back to the fused pose."""
+        last = self.results[-1] if self.results else None
+        return last.pose.copy() if last is not None and last.pose is not None else self.tracker.pose
+
     def _restart_after_gap(self, gap: EventGap, until: int, events, imu) -> StepResult:
         """The update standing for an event gap: the track is lost over it; the tracker starts again at ``until`` (the
         first grid time ``warmup_ms`` after the gap, ``events`` are those since it) as at the start of the recording:
@@ -312,7 +319,7 @@ class TrackingSession:
         self._gate = None  # a gate still waiting from an earlier restart: this one decides anew
         gt = self.recording.ground_truth
         from_truth = self._from_ground_truth and gt is not None and int(gt.t[0]) <= until <= int(gt.t[-1])
-        pose = gt.interpolate(until).matrix(0) if from_truth else self.tracker.pose
+        pose = gt.interpolate(until).matrix(0) if from_truth else self._last_estimate()
         gap_words = (f"no {gap.stream} for {gap.seconds:.3f} s (t={gap.t_last_us * 1e-6:.6f} to {gap.t_next_us * 1e-6:.6f} s):"
                      f" the track is lost over the gap")
         search = self.tracker.reacquisition

@@ -75,5 +75,6 @@ def test_the_fusion_restarts_with_that_velocity_and_without_the_polarity_hold(pa
     t = np.array([r.t_us for r in on[g + 1:]])
     err_on = np.linalg.norm(np.array([r.pose[:3, 3] for r in on[g + 1:]]) - rec.ground_truth.interpolate(t).position, axis=1)
     err_off = np.linalg.norm(np.array([r.pose[:3, 3] for r in off[g + 1:]]) - rec.ground_truth.interpolate(t).position, axis=1)
-    # Small landing paused 2 s at 0.15 s: 30-43 mm after the pause, standing still with the velocity unknown 54-133 mm.
-    assert err_on.max() < 0.06 and err_off[-10:].min() > 0.1
+    # Small landing paused 2 s at 0.15 s: 30-43 mm after the pause, standing still with the velocity unknown 54-147 mm
+    # (its last ten updates at least 3x the carried restart's worst).
+    assert err_on.max() < 0.06 and err_off[-10:].min() > 2.0 * err_on.max()
