@@ -5,6 +5,15 @@ window selection waits for its events and the MCIs come 35-55 ms apart instead o
 in few MCIs; a blank wall (no MCI at all) is already left out of the count (``coast_blank_s``). Session 36: indoor seed
 53's first map coasts from 0.03 s and runs out at 0.437 s in such a stretch (36-44 k events/s at 0.3-0.8 s against
 100-400 k elsewhere), and no two-view start succeeds before 0.889 s, so the seed tracks 79.1 % of its time.
+
+Measured (``/tmp/s36/eo36``: ``batch.sh gc20 indoor 0-53 tracking.coast_gap_cap_ms=20``, the same on landing 0-23,
+``sum.py m35 gc20``; paired against main e1abba0's defaults, mean +- standard error, seeds better / worse): seed 53
+2.583 -> 2.258 %, tracked 79.1 -> 90.8 %; indoor 0-19 2.161 -> 2.043 % (-0.118 +- 0.188, 10 / 10), held-out 20-39
+2.159 -> 2.398 % (+0.240 +- 0.245, 7 / 13), 40-53 2.064 -> 2.249 % (+0.185 +- 0.136, 6 / 8); least tracked over
+the 54 seeds 79.1 -> 81.1 %; landing 1.474 -> 1.523 % (only seed 4 changed, 6.13 -> 7.31 %). Off: every seed then
+tracks at least 80 %, but the held-out ATE is worse. ``coast_s`` 0.5 instead (tag ``c05``) does the same: seed 53
+1.742 % / 83.5 %, indoor 0-19 1.839 % (-0.322 +- 0.226, 13 / 7), 20-39 2.374 % (+0.215 +- 0.218, 8 / 12), 40-53
+2.338 % (+0.274 +- 0.294, 6 / 8), least tracked 81.2 %, landing 1.515 % (seed 4 6.13 -> 7.11 %).
 """
 
 from __future__ import annotations
