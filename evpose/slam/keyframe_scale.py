@@ -25,7 +25,9 @@ Measured (session 36, ``/tmp/s36/eo36``; main e1abba0 defaults, tag ``m35``; eve
 - The option (``batch.sh TAG indoor 0-19 tracking.new_point_depth_ratio=...``, ``sum.py m35 TAG``; paired mean +-
   standard error, seeds better / worse): MEDIAN 1.5 LEVEL 2.238 % (+0.077 +- 0.124, 8 / 6), MEDIAN 1.5 DROP 2.192 %
   (+0.031 +- 0.063, 7 / 7), LOCAL 2 DROP 2.404 % (+0.243 +- 0.166, 6 / 10), LOCAL 2 LEVEL 2.341 % (+0.180 +- 0.188,
-  8 / 8).
+  8 / 8). Held out, MEDIAN 1.5 LEVEL: 20-39 2.159 -> 2.255 % (+0.096 +- 0.071, 4 / 8), 40-53 2.064 -> 2.227 % (+0.163
+  +- 0.135, 2 / 5); DROP: 2.326 % (+0.167 +- 0.184, 5 / 7), 2.176 % (+0.112 +- 0.142, 2 / 5); seed 36 4.88 -> 5.10 /
+  8.49 %.
 - Oracles (``oracle.py``, ``orc.sh``: at every event-only keyframe the new points moved along their ray to the true
   depth times the older points' depth scale there): each point on its own 1.995 % (-0.166 +- 0.115, 9 / 11; seeds
   0 / 1 / 5 -1.0 / -1.0 / -1.6); one factor per keyframe (what a scale check can do at best) 2.265 % (+0.104 +-
