@@ -11,7 +11,9 @@ Measured (``/tmp/s36/eo36``: ``batch.sh gc20 indoor 0-53 tracking.coast_gap_cap_
 2.583 -> 2.258 %, tracked 79.1 -> 90.8 %; indoor 0-19 2.161 -> 2.043 % (-0.118 +- 0.188, 10 / 10), held-out 20-39
 2.159 -> 2.398 % (+0.240 +- 0.245, 7 / 13), 40-53 2.064 -> 2.249 % (+0.185 +- 0.136, 6 / 8); least tracked over
 the 54 seeds 79.1 -> 81.1 %; landing 1.474 -> 1.523 % (only seed 4 changed, 6.13 -> 7.31 %). Off: every seed then
-tracks at least 80 %, but the held-out ATE is worse. ``coast_s`` 0.5 instead (tag ``c05``) does the same: seed 53
+tracks at least 80 %, but the held-out ATE is worse. At 40 ms (tag ``gc40``): seed 53 2.638 % / 81.0 %, 0-19 1.961 %
+(-0.200 +- 0.200, 5 / 4), 20-39 2.418 % (+0.259 +- 0.220, 6 / 7), 40-53 2.507 % (+0.443 +- 0.227, 2 / 7), least
+tracked 81.0 %, landing unchanged on all 24. ``coast_s`` 0.5 instead (tag ``c05``) does the same: seed 53
 1.742 % / 83.5 %, indoor 0-19 1.839 % (-0.322 +- 0.226, 13 / 7), 20-39 2.374 % (+0.215 +- 0.218, 8 / 12), 40-53
 2.338 % (+0.274 +- 0.294, 6 / 8), least tracked 81.2 %, landing 1.515 % (seed 4 6.13 -> 7.11 %).
 """
