@@ -45,6 +45,7 @@ from evpose.slam.inertial_ba import inertial_local_bundle_adjustment
 from evpose.slam.inertial_trajectory import carry_relative_scale, keyframe_positions
 from evpose.slam.map_restructure import maybe_restructure
 from evpose.slam.map_rejoin import RejoinCandidate
+from evpose.slam.keyframe_scale import check_new_points
 from evpose.slam.local_map import (cull_points, insert_keyframe, need_keyframe, triangulate_new_points, visual_ba_window, young_map,
                                    young_triangulation)
 from evpose.slam.event_image import to_uint8
@@ -451,6 +452,8 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
             self._next_point = triangulate_new_points(m, self.K, kf, fe.track_to_point, tt, self._next_point,
                                                       # event-only coasts: event-inertial maps bridge on the IMU
                                                       predicted=self.imu is None and t_us != self._last_pnp_t)
+            if self.imu is None:
+                check_new_points(m, kf, fe.track_to_point, tt)  # off by default (evpose.slam.keyframe_scale)
         if img8 is not None:
             store_patches(m, kf.id, img8, self.cfg.search.patch_px)
             if self._matcher() is SearchMatcher.KLT:

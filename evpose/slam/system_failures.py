@@ -19,6 +19,7 @@ from evpose.slam.event_coasting import drop_unconfirmed_poses, event_only_coast_
 from evpose.slam.inertial import InertialConfiguration
 from evpose.slam.map_rejoin import RejoinCandidate
 from evpose.slam.mci import MciResult
+from evpose.slam.sparse_coast import sparse_gap_excess_s
 from evpose.slam.step_result import SlamStatus
 
 
@@ -93,6 +94,8 @@ class VisualFailureHandling:
             return self._lose(reason)
         # Blank stretches (no MCI: the event rate fell below th_e) up to coast_blank_s do not use up the coast.
         gap_s -= min(self._blank_us / 1e6, tc.coast_blank_s)
+        # Sparse stretches (TrackingConfig.coast_gap_cap_ms, off by default): each gap between MCIs counts up to its cap.
+        gap_s -= max(sparse_gap_excess_s(m.traj_t, self._last_visual_t, mci.t_us, tc.coast_gap_cap_ms) - self._blank_us / 1e6, 0.0)
         after_s = (mci.t_us - self._after_blank_t) / 1e6 if self._after_blank_t is not None else 0.0
         if tc.coast_blank_s > 0 and after_s > tc.coast_after_blank_s:
             gap_s = np.inf  # crossed a blank wall on dead reckoning and not placed again right after it

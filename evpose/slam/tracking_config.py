@@ -11,6 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from evpose.slam.coast_config import CoastSettings
+from evpose.slam.keyframe_scale import KeyframeScaleSettings
 from evpose.slam.local_ba_config import LocalBundleAdjustmentSettings
 
 
@@ -303,7 +304,8 @@ class PoseTrackingSettings:
     See :mod:`evpose.slam.system_gaps`."""
 
 
-# Dataclass fields follow the bases in reverse order: pose tracking first, then the bundle adjustment, then coasting.
+# Dataclass fields follow the bases in reverse order: pose tracking first, then the bundle adjustment, then coasting,
+# then the new-point check.
 @dataclass
-class TrackingConfig(CoastSettings, LocalBundleAdjustmentSettings, PoseTrackingSettings):
+class TrackingConfig(KeyframeScaleSettings, CoastSettings, LocalBundleAdjustmentSettings, PoseTrackingSettings):
     """Local-map tracking, keyframe insertion and local mapping."""
