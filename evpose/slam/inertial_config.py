@@ -76,6 +76,19 @@ class InertialConfig:
     coasts with ``TrackingConfig.coast_triangulate``): PnP on them carries the coast's error on (seed 7's visual steps
     grew to 160-4000 units per metre after coasts at 6.8-8.4). Off alone, indoor seeds 0-7 6 -> 7 of 8 (3, 6, 7 now
     initialised; 4 0.0016 -> 0.0176 deg/m), 8-16 7 -> 6 of 9; see ``coast_hold_velocity``. Landing bit-identical."""
+    ba_gyro_prior_chain: bool = False
+    """The visual local BA's gyro rotation priors (``ba_gyro_prior_uninit_deg``) join consecutive keyframes *of the
+    BA*, chaining the gyro across keyframes that see no point (:func:`evpose.slam.inertial_guards.bundle_keyframes`);
+    off: consecutive keyframes of the map, and a pair with a keyframe the BA leaves out (a coasted one) gets no prior,
+    so the keyframes after it turn with their few points alone. Not measured yet."""
+    init_max_gyro_deg: float = field(default=0.0, metadata={"min": 0.0, "max": 45.0, "step": 0.5, "unit": "deg"})
+    """A two-view start (a new map, or one re-joining the map lost while coasting) whose relative rotation is farther
+    than this from the gyro's over the same interval is refused like a failed attempt (0: never,
+    :mod:`evpose.slam.inertial_guards`), degrees. Not measured yet."""
+    discard_lost_young_s: float = field(default=0.0, metadata={"min": 0.0, "max": 2.0, "step": 0.01, "unit": "s"})
+    """A map lost before the IMU initialisation reached it, whose poses span less than this, is discarded (emptied; no
+    trajectory written) instead of kept in the atlas, as ORB-SLAM3 resets a map lost young (0: kept,
+    :mod:`evpose.slam.inertial_guards`), seconds. Not measured yet."""
     coast_ba: bool = False
     """Run the visual local BA on keyframes made while coasting. Off: those keyframes carry few points, and a BA with
     one fixed keyframe slid along the scale (indoor seed 3: map scale 3e-5 of the truth, ATE 30852 %); with it off,
