@@ -108,7 +108,10 @@ class InertialConfig:
     (seed 1's first map starts at 0.93 s instead of 0.03 s): indoor 0-39 mean tracked 96.7 -> 92.4 % (against
     ``discard_lost_young_s`` alone; seeds 1, 5, 7, 27, 29, 30 lose 17-30 points; least 68.0 -> 66.3 %), 40-53 98.3 -> 98.1 %, landing unchanged. Resolving the
     two-view start with the gyro's rotation instead of refusing it (session 12 tried a re-solve at 0.5-5 deg, mixed)
-    is what is left to win that time back."""
+    is what is left to win that time back. E-I-C3 never refuses: its fixed 8000-event windows' starts were refused so
+    often that indoor seeds 0-3 stayed uninitialised and split (RPE 0.019-0.029 -> 0.027-0.227 m/m, all off the target
+    either way; landing 0-3 bit-identical). E-I-C1 with the three guards: landing 0-3 bit-identical, indoor 0-3 10-16
+    -> 1-3 maps, RPE 0.19-0.44 -> 0.033-0.056 m/m, 0.40-6.3 -> 0.007-0.054 deg/m (off the targets either way)."""
     discard_lost_young_s: float = field(default=0.1, metadata={"min": 0.0, "max": 2.0, "step": 0.01, "unit": "s"})
     """A map lost before the IMU initialisation reached it, whose poses span less than this, is discarded (emptied; no
     trajectory written) instead of kept in the atlas, as ORB-SLAM3 resets a map lost with under 10 keyframes (0: kept,

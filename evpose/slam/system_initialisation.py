@@ -42,6 +42,7 @@ import numpy as np
 from evpose.slam.atlas import Keyframe, MapPoint, SlamMap
 from evpose.slam.bundle_adjustment import local_bundle_adjustment
 from evpose.slam.initialization import initialize_two_view
+from evpose.slam.inertial_config import InertialConfiguration
 from evpose.slam.inertial_guards import two_view_gyro_disagreement_deg
 from evpose.slam.keyframe_search import keep_keyframe_image
 from evpose.slam.local_map import cull_points
@@ -65,7 +66,9 @@ class TwoViewInitialisation:
         p1 = np.array([fe.init_ref[int(t)] for t in ids]).reshape(-1, 2)
         p2 = fe.uv[common].astype(np.float64)
         res = initialize_two_view(self.K, p1, p2, icfg, self.cfg.seed)
-        max_deg = self.cfg.inertial.init_max_gyro_deg if self.imu is not None else 0.0
+        ic = self.cfg.inertial
+        # E-I-C3 never refuses (InertialConfig.init_max_gyro_deg): its fixed windows' starts were refused too often.
+        max_deg = ic.init_max_gyro_deg if self.imu is not None and ic.configuration is not InertialConfiguration.C3 else 0.0
         if res.ok and max_deg > 0:
             off = two_view_gyro_disagreement_deg(res.T_wc2[:3, :3], self._gyro_camera_delta(fe.init_ref_t, mci.t_us))
             if off > max_deg:  # InertialConfig.init_max_gyro_deg: a wrong decomposition, not a start

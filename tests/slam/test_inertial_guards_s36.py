@@ -156,3 +156,31 @@ def test_gyro_priors_chain_across_keyframes_the_ba_leaves_out():
     assert sorted(chained) == [(2, 4), (4, 5)]
     # Each prior is the gyro's turn over its pair: 20 ms at 1 rad/s across the coasted keyframe 3.
     assert abs(two_view_gyro_disagreement_deg(chained[(2, 4)], np.eye(3)) - np.degrees(0.02)) < 1e-6
+
+
+class _MapMade(Exception):
+    """Raised where a start that passed the gyro check goes on to make its map."""
+
+
+def test_e_i_c3_never_refuses_a_two_view_start(monkeypatch):
+    from evpose.slam.inertial import InertialConfiguration
+
+    T = np.eye(4)
+    T[:3, :3] = _rz(12.0)
+    monkeypatch.setattr(si, "initialize_two_view", lambda *a, **k: TwoViewResult(True, T_wc2=T))
+
+    def new_map():
+        raise _MapMade
+
+    for conf, refused in ((InertialConfiguration.C3, False), (InertialConfiguration.C2, True)):
+        s = _Starting(5.0, 1.0)
+        s.cfg.inertial.configuration = conf
+        s.atlas = SimpleNamespace(active=None, new_map=new_map)
+        try:
+            status, _, _ = s._try_initialise(SimpleNamespace(t_us=20000, image8=None))
+            made = False
+        except _MapMade:
+            made = True
+        assert made is not refused
+        if refused:
+            assert status is SlamStatus.NOT_INITIALISED
