@@ -42,6 +42,7 @@ from evpose.slam.fine_grid import track_features_fine, use_fine_grid
 from evpose.slam.geometry import pose_jump_depths
 from evpose.slam.inertial import InertialConfiguration
 from evpose.slam.inertial_ba import inertial_local_bundle_adjustment
+from evpose.slam.inertial_guards import anchored_window
 from evpose.slam.inertial_trajectory import carry_relative_scale, keyframe_positions
 from evpose.slam.map_restructure import maybe_restructure
 from evpose.slam.map_rejoin import RejoinCandidate
@@ -472,6 +473,8 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
             sigma, pair_sigmas = self._ba_rotation_sigmas(m, priors)
             # A re-joined map's older segment shares no points with the newest one (SlamMap.segment_start_kf).
             window, n_fixed = visual_ba_window(m, tc, event_only=self.imu is None)
+            if self.imu is not None and ic.ba_gyro_prior_chain:
+                window = anchored_window(m, window)  # its fixed keyframe must be one the BA holds
             local_bundle_adjustment(m, self.K, window, tc.ba_iterations, tc.ba_huber_px, n_fixed=n_fixed,
                                     rotation_priors=priors, rotation_sigma_rad=sigma, rotation_sigmas_rad=pair_sigmas,
                                     # Event-inertial maps get their scale from the IMU initialisation; anchoring the visual

@@ -17,6 +17,7 @@ from evpose.slam.coasting import camera_frame_velocity, coast_pose, drop_contrad
 from evpose.slam.edge_tracking import measure_across_edges, solve_pose_across_edges
 from evpose.slam.event_coasting import drop_unconfirmed_poses, event_only_coast_pose
 from evpose.slam.inertial import InertialConfiguration
+from evpose.slam.inertial_guards import discard_map, young_lost_map
 from evpose.slam.map_rejoin import RejoinCandidate
 from evpose.slam.mci import MciResult
 from evpose.slam.sparse_coast import sparse_gap_excess_s
@@ -35,6 +36,8 @@ class VisualFailureHandling:
         m = self.atlas.active
         if m is not None:
             m.lost_reason = reason
+            if self.imu is not None and young_lost_map(m, self.cfg.inertial.discard_lost_young_s) and (self._rejoin is None or self._rejoin.map is not m):
+                discard_map(m, reason)  # InertialConfig.discard_lost_young_s: ORB-SLAM3 resets such a map
         self._state = SlamStatus.NOT_INITIALISED
         self.fe.track_to_point = {}
         self.fe.init_ref = None

@@ -16,6 +16,8 @@ from evpose.core.trajectory import invert_pose
 from evpose.slam.atlas import SlamMap
 from evpose.slam.event_coasting import camera_frame_rate, event_only_coast_pose
 from evpose.slam.geometry import project
+from evpose.slam.inertial_guards import bundle_keyframes
+from evpose.slam.local_map import visual_ba_window
 from evpose.slam.gyro_prior import (camera_delta_rotation, gyro_delta_rotation, keyframe_rotation_priors, reanchor_rotations,
                                     refine_pose_with_rotation_prior, rotation_angle_deg, sparse_pair_sigmas)
 from evpose.slam.room_axes import measure_room_rotation, room_frame, room_priors
@@ -76,6 +78,9 @@ class GyroAids:
         if self.imu is None or self.cfg.inertial.gyro_prior_uninit_deg <= 0:
             return None
         kfs = m.keyframes[-(self.cfg.tracking.local_window + 1):]
+        if self.cfg.inertial.ba_gyro_prior_chain:
+            # The BA leaves out keyframes that see no point (coasted ones): chain the gyro across them.
+            kfs = bundle_keyframes(m, kfs, visual_ba_window(m, self.cfg.tracking, event_only=False)[0])
         return keyframe_rotation_priors(kfs, self.imu, self.calib.T_cam_imu, self.calib.time_offset_us) or None
 
     def _ba_rotation_sigmas(self, m: SlamMap, priors: dict | None) -> tuple[float, dict | None]:

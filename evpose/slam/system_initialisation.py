@@ -35,11 +35,15 @@ keeps the new map out of the stretch that starved the old one. For the permissiv
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from evpose.slam.atlas import Keyframe, MapPoint, SlamMap
 from evpose.slam.bundle_adjustment import local_bundle_adjustment
 from evpose.slam.initialization import initialize_two_view
+from evpose.slam.inertial_config import InertialConfiguration
+from evpose.slam.inertial_guards import two_view_gyro_disagreement_deg
 from evpose.slam.keyframe_search import keep_keyframe_image
 from evpose.slam.local_map import cull_points
 from evpose.slam.map_rejoin import merge_into, rejoin_similarity
@@ -62,6 +66,13 @@ class TwoViewInitialisation:
         p1 = np.array([fe.init_ref[int(t)] for t in ids]).reshape(-1, 2)
         p2 = fe.uv[common].astype(np.float64)
         res = initialize_two_view(self.K, p1, p2, icfg, self.cfg.seed)
+        ic = self.cfg.inertial
+        # E-I-C3 never refuses (InertialConfig.init_max_gyro_deg): its fixed windows' starts were refused too often.
+        max_deg = ic.init_max_gyro_deg if self.imu is not None and ic.configuration is not InertialConfiguration.C3 else 0.0
+        if res.ok and max_deg > 0:
+            off = two_view_gyro_disagreement_deg(res.T_wc2[:3, :3], self._gyro_camera_delta(fe.init_ref_t, mci.t_us))
+            if off > max_deg:  # InertialConfig.init_max_gyro_deg: a wrong decomposition, not a start
+                res = replace(res, ok=False, reason=f"two-view rotation {off:.1f} deg off the gyro's")
         if not res.ok:
             if fe.init_frames >= icfg.max_frames or len(common) < icfg.min_matches:
                 fe.init_ref = None  # start over from the next MCI with fresh features
