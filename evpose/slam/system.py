@@ -54,7 +54,6 @@ from evpose.slam.mci import Hypothesis, MciGenerator, MciResult, MotionPrior
 from evpose.slam.parallax_warp import points_in_view
 from evpose.slam.keyframe_search import keep_keyframe_image
 from evpose.slam.projection_search import SearchMatcher, store_patches
-from evpose.slam.speed_jump import is_speed_jump, speed_jump
 from evpose.slam.young_scale import speed_factor_hook
 from evpose.slam.step_result import SlamFailure, SlamStatus, SlamStepResult
 from evpose.slam.system_failures import VisualFailureHandling
@@ -408,19 +407,6 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
 
     _speed_refusals = 0
     """PnP poses refused in a row by ``TrackingConfig.speed_jump_ratio``."""
-
-    def _speed_jump(self, m: SlamMap, t_us: int, T_wc: np.ndarray) -> str | None:
-        """Why the PnP pose ``T_wc`` is refused for stepping off the map's recent speed (``TrackingConfig.speed_jump_ratio``),
-        or None (event-only; off by default)."""
-        tc = self.cfg.tracking
-        if self.imu is not None or max(tc.speed_jump_ratio, tc.speed_drop_ratio) <= 1.0 or not m.traj_t:
-            return None
-        if t_us - m.traj_t[0] < tc.speed_jump_min_age_s * 1e6:
-            return None
-        if 0 < tc.speed_jump_max_refusals <= self._speed_refusals:
-            return None  # PnP has kept disagreeing with the coast: the map moved on, not one step
-        r = speed_jump(m, t_us, T_wc, int(tc.coast_span_s * 1e6))
-        return f"PnP step {r:.2f} times the map's recent speed" if is_speed_jump(r, tc.speed_jump_ratio, tc.speed_drop_ratio) else None
 
     def _estimate(self, m: SlamMap, mci: MciResult, sel: list[int], guess: np.ndarray, R_prior: np.ndarray | None) -> tuple[PoseEstimate, list[int]]:
         """Pose from the map points of the tracks ``sel`` (indices into the frontend's tracks), gyro-refined when a prior exists."""

@@ -5,7 +5,8 @@ has not reached yet coasts on the gyro rotation and its recent velocity. Event-o
 motion for at most ``TrackingConfig.coast_s`` (time at a blank wall excepted, ``coast_blank_s``). Otherwise, or
 when the bridge runs too long, the map is lost and the next two-view initialisation opens a new map of the atlas.
 The methods read the system's ``atlas``, ``fe``, ``cfg``, ``imu``, ``K``, ``_last_visual_t`` and ``_blank_us`` and
-call its ``_new_keyframe`` and ``_imu_prediction``.
+call its ``_new_keyframe`` and ``_imu_prediction``; refusing a PnP pose that steps off the map's speed reads its
+``_speed_refusals``.
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ from evpose.slam.inertial_guards import discard_map, young_lost_map
 from evpose.slam.map_rejoin import RejoinCandidate
 from evpose.slam.mci import MciResult
 from evpose.slam.sparse_coast import sparse_gap_excess_s
+from evpose.slam.speed_jump import is_speed_jump, speed_jump
 from evpose.slam.step_result import SlamStatus
 
 
@@ -170,3 +172,16 @@ class VisualFailureHandling:
         T_wc = self._new_keyframe(m, mci.t_us, T_wc, mci.image8, adjust=ec.adjust_keyframes)
         return (SlamStatus.OK, f"edge-tracked: {res.n_on_edge} of {res.n_view} map points on edges, {res.info_gain:.0f}x the "
                 f"prior ({n_refound} re-found by projection), map {m.id}", T_wc.copy(), True)
+
+    def _speed_jump(self, m: SlamMap, t_us: int, T_wc: np.ndarray) -> str | None:
+        """Why the PnP pose ``T_wc`` is refused for stepping off the map's recent speed (``TrackingConfig.speed_jump_ratio``),
+        or None (event-only; off by default)."""
+        tc = self.cfg.tracking
+        if self.imu is not None or max(tc.speed_jump_ratio, tc.speed_drop_ratio) <= 1.0 or not m.traj_t:
+            return None
+        if t_us - m.traj_t[0] < tc.speed_jump_min_age_s * 1e6:
+            return None
+        if 0 < tc.speed_jump_max_refusals <= self._speed_refusals:
+            return None  # PnP has kept disagreeing with the coast: the map moved on, not one step
+        r = speed_jump(m, t_us, T_wc, int(tc.coast_span_s * 1e6))
+        return f"PnP step {r:.2f} times the map's recent speed" if is_speed_jump(r, tc.speed_jump_ratio, tc.speed_drop_ratio) else None

@@ -82,11 +82,11 @@ def _coast_once(ic: InertialConfig):
 
 
 def test_pre_initialisation_coast_keyframe_triangulates_only_when_asked():
-    s, status, T_wc = _coast_once(InertialConfig())
+    s, status, T_wc = _coast_once(InertialConfig(coast_triangulate=True))
     assert status.name == "INERTIAL" and s.keyframes == [(50000, False, True)]
     # Coasted on the trajectory's 1 unit/s for 5 ms.
     np.testing.assert_allclose(T_wc[0, 3], 0.05, atol=1e-9)
-    s, _, _ = _coast_once(InertialConfig(coast_triangulate=False))
+    s, _, _ = _coast_once(InertialConfig())  # off by default since session 36
     assert s.keyframes == [(50000, False, False)]
     # The coast is remembered for the next one (coast_hold_velocity).
     assert s._coast_hold[0] == 1 and s._coast_hold[1] == 50000
