@@ -114,7 +114,11 @@ class InertialConfig:
     is what is left to win that time back. E-I-C3 never refuses: its fixed 8000-event windows' starts were refused so
     often that indoor seeds 0-3 stayed uninitialised and split (RPE 0.019-0.029 -> 0.027-0.227 m/m, all off the target
     either way; landing 0-3 bit-identical). E-I-C1 with the three guards: landing 0-3 bit-identical, indoor 0-3 10-16
-    -> 1-3 maps, RPE 0.19-0.44 -> 0.033-0.056 m/m, 0.40-6.3 -> 0.007-0.054 deg/m (off the targets either way)."""
+    -> 1-3 maps, RPE 0.19-0.44 -> 0.033-0.056 m/m, 0.40-6.3 -> 0.007-0.054 deg/m (off the targets either way).
+    With session 36's other defaults (the coast options too), indoor 0-19 / 20-39 / 40-53 and landing 0-23 within both
+    RPE targets (``/tmp/s36/lead/eic/h36.py``, ``cmp.py``): 3 deg 20 / 18 / 14 / 24 (tracked 0.939 / 0.910 / 0.981 /
+    0.989), 2.5 deg 18 / 18 / 14 / 24 (0.927 / 0.886 / 0.980 / 0.989; 1 landing seed changed), 2 deg 19 / 19 / 14 / 24
+    (0.911 / 0.876 / 0.949 / 0.983; 2 changed): tighter refuses more starts for no more seeds."""
     discard_lost_young_s: float = field(default=0.1, metadata={"min": 0.0, "max": 2.0, "step": 0.01, "unit": "s"})
     """A map lost before the IMU initialisation reached it, whose poses span less than this, is discarded (emptied; no
     trajectory written) instead of kept in the atlas, as ORB-SLAM3 resets a map lost with under 10 keyframes (0: kept,
