@@ -18,6 +18,11 @@ def project(K: np.ndarray, T_cam_world: np.ndarray, Xw: np.ndarray) -> tuple[np.
     return uv, z
 
 
+def camera_depths(T_wc: np.ndarray, Xw) -> np.ndarray:
+    """Depths (z in the camera ``T_wc``, map units) of the world points ``Xw`` (N, 3), in their order."""
+    return (np.asarray(Xw, np.float64).reshape(-1, 3) - T_wc[:3, 3]) @ T_wc[:3, 2]
+
+
 def triangulate(K: np.ndarray, T_cw1: np.ndarray, T_cw2: np.ndarray, uv1: np.ndarray, uv2: np.ndarray) -> np.ndarray:
     """Linear (DLT) triangulation of matched pixels seen from two ``T_cam_world`` poses -> world points (N, 3)."""
     if len(uv1) == 0:

@@ -22,11 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from evpose.slam.atlas import SlamMap
-
-
-def rotation_angle_deg(R: np.ndarray) -> float:
-    """Angle of the rotation matrix ``R``, degrees."""
-    return float(np.degrees(np.arccos(np.clip((np.trace(R) - 1.0) / 2.0, -1.0, 1.0))))
+from evpose.slam.gyro_prior import rotation_angle_deg
 
 
 def two_view_gyro_disagreement_deg(R_c0_c1: np.ndarray, gyro_c0_c1: np.ndarray | None) -> float:
@@ -34,7 +30,7 @@ def two_view_gyro_disagreement_deg(R_c0_c1: np.ndarray, gyro_c0_c1: np.ndarray |
     frame) and the gyro's over the same interval, degrees (0 without a gyro rotation)."""
     if gyro_c0_c1 is None:
         return 0.0
-    return rotation_angle_deg(np.asarray(gyro_c0_c1, np.float64).T @ np.asarray(R_c0_c1, np.float64))
+    return rotation_angle_deg(np.asarray(gyro_c0_c1, np.float64), np.asarray(R_c0_c1, np.float64))
 
 
 def young_lost_map(m: SlamMap | None, max_span_s: float) -> bool:

@@ -49,6 +49,7 @@ from enum import Enum
 import numpy as np
 
 from evpose.slam.atlas import Keyframe, SlamMap
+from evpose.slam.geometry import camera_depths
 
 
 class NewPointCheck(str, Enum):
@@ -90,11 +91,6 @@ class KeyframeScaleSettings:
     points."""
 
 
-def _depths(kf: Keyframe, X: np.ndarray) -> np.ndarray:
-    """Depths (z in ``kf``'s camera, map units) of the world points ``X`` (N, 3)."""
-    return (np.asarray(X, np.float64).reshape(-1, 3) - kf.T_wc[:3, 3]) @ kf.T_wc[:3, 2]
-
-
 def new_point_ratios(m: SlamMap, kf: Keyframe, check: NewPointCheck, neighbours: int = 3, min_old: int = 5) -> dict[int, float]:
     """Point id -> depth of each point created at ``kf`` over its reference depth (MEDIAN: the older points' median
     depth in ``kf``; LOCAL: the median depth of its ``neighbours`` nearest older points in ``kf``'s image), for the
@@ -103,13 +99,13 @@ def new_point_ratios(m: SlamMap, kf: Keyframe, check: NewPointCheck, neighbours:
     old = [p for _, p in sorted(m.points.items()) if p.created_kf != kf.id and kf.id in p.obs]
     if not new or not old:
         return {}
-    z_old = _depths(kf, np.stack([p.xyz for p in old]))
+    z_old = camera_depths(kf.T_wc, np.stack([p.xyz for p in old]))
     front = z_old > 0
     if front.sum() < min_old:
         return {}
     z_old = z_old[front]
     uv_old = np.stack([p.obs[kf.id] for p, f in zip(old, front) if f])
-    z_new = _depths(kf, np.stack([p.xyz for p in new]))
+    z_new = camera_depths(kf.T_wc, np.stack([p.xyz for p in new]))
     out: dict[int, float] = {}
     if check is NewPointCheck.MEDIAN:
         ok = z_new > 0

@@ -145,7 +145,7 @@ import numpy as np
 from evpose.core.trajectory import invert_pose
 from evpose.slam.atlas import Keyframe, MapPoint, SlamMap
 from evpose.slam.config import TrackingConfig
-from evpose.slam.geometry import good_triangulation, triangulate
+from evpose.slam.geometry import camera_depths, good_triangulation, triangulate
 
 
 def need_keyframe(m: SlamMap, tr_ids: np.ndarray, tr_uv: np.ndarray, n_tracked_points: int, cfg: TrackingConfig,
@@ -280,7 +280,7 @@ def _depths(kf: Keyframe, X: list) -> np.ndarray:
     """Depths (z in ``kf``'s camera) of the points ``X`` in front of it."""
     if not X:
         return np.zeros(0)
-    z = (np.asarray(X) - kf.T_wc[:3, 3]) @ kf.T_wc[:3, 2]
+    z = camera_depths(kf.T_wc, X)
     return z[z > 0]
 
 
