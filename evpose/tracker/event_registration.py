@@ -246,6 +246,7 @@ import gtsam
 import numpy as np
 
 from evpose.tracker.event_registration_config import EventRegistrationConfig, scaled_to_pixel  # noqa: F401 (re-exported)
+from evpose.tracker.event_lag import lead_terms
 from evpose.tracker.event_registration_kernels import (NO_EVENT, _associate_nearest, _kept_events, _learn_offsets, _linearise_events,
                                                        _pixel_gaps)
 from evpose.tracker.contrast_leads import PassageCounts
@@ -374,7 +375,8 @@ class EventRegistration:
         if self._passages is not None:  # this step's events count before its leads are set
             self._passages.update(n, assoc, used, pts, tg, eg, R_cw, t_cw, K, None if twist is None else xi)
             self._passages.add_leads(used, *leads)
-        args = (*leads, eg, self._burst, float(c.huber_px), float(c.gate_px), H, b, sw, swr)
+        burst = self._burst if xi is _NO_TWIST else lead_terms(self._burst, c.lag, fx)  # no twist: no speeds
+        args = (*leads, eg, burst, float(c.huber_px), float(c.gate_px), H, b, sw, swr)
         n_it = int(c.iterations)
         t_ref = int(t_us)
         for it in range(n_it + 1):

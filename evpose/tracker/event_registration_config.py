@@ -10,6 +10,7 @@ import dataclasses
 from dataclasses import dataclass, field
 
 from evpose.tracker.contrast_leads import ContrastLeadConfig
+from evpose.tracker.event_lag import EventLagConfig
 
 
 @dataclass
@@ -454,6 +455,8 @@ backend (``full:ekf``) 6.05 / 5.36 / 7.41 / 7.41 -> 5.88 / 4.79 / 7.50 / 7.24 (6
     contrast: ContrastLeadConfig = field(default_factory=ContrastLeadConfig)
     """Leads of the points whose pixels fire one event per passage of their edge (:mod:`evpose.tracker.contrast_leads`;
     off by default)."""
+    lag: EventLagConfig = field(default_factory=EventLagConfig)
+    """Leads growing with each edge's normal image speed (:mod:`evpose.tracker.event_lag`; off by default)."""
 
 
 def scaled_to_pixel(config: EventRegistrationConfig, pixel_mrad: float) -> EventRegistrationConfig:
