@@ -10,6 +10,7 @@ import dataclasses
 from dataclasses import dataclass, field
 
 from evpose.tracker.contrast_leads import ContrastLeadConfig
+from evpose.tracker.edge_clusters import EdgeClusterConfig
 from evpose.tracker.event_lag import EventLagConfig
 
 
@@ -457,6 +458,8 @@ backend (``full:ekf``) 6.05 / 5.36 / 7.41 / 7.41 -> 5.88 / 4.79 / 7.50 / 7.24 (6
     off by default)."""
     lag: EventLagConfig = field(default_factory=EventLagConfig)
     """Leads growing with each edge's normal image speed (:mod:`evpose.tracker.event_lag`; off by default)."""
+    edge_clusters: EdgeClusterConfig = field(default_factory=EdgeClusterConfig)
+    """Each edge's events sharing one offset in the normal equations (:mod:`evpose.tracker.edge_clusters`; off)."""
 
 
 def scaled_to_pixel(config: EventRegistrationConfig, pixel_mrad: float) -> EventRegistrationConfig:

@@ -140,7 +140,7 @@ def _associate_nearest(points, tangents, used, R_cw, t_cw, fx, fy, cx, cy, radiu
 
 @nb.njit(cache=True)
 def _linearise_events(n_events, ex, ey, et, ep, assoc, points, tangents, R_cw, t_cw, fx, fy, cx, cy, twist, t_ref, on_lead, off_lead,
-                      eg, burst, huber, gate, H, b, sw, swr):
+                      eg, burst, huber, gate, H, b, sw, swr, swj, pscale):
     """Robust normal equations of the first ``n_events`` events' distances to their points' edge lines (event ``i``'s
     point the row ``assoc[i]`` of ``points`` / ``tangents``), each point projected at its
     event's time (the pose ``t_ref - t`` earlier along ``twist``, body frame, rotation then translation, per
@@ -151,10 +151,17 @@ def _linearise_events(n_events, ex, ey, et, ep, assoc, points, tangents, R_cw, t
     ``burst[3]`` (see ``EventRegistrationConfig.follower_crossings``). With 8 entries (``burst[0]`` may then be 0) an
     ON / OFF event's lead also falls by ``burst[5]`` / ``burst[6]`` seconds times how much its edge's normal image
     speed exceeds ``burst[7]`` pixels per second (:mod:`evpose.tracker.event_lag`). ``sw`` / ``swr`` (M,) get each
-    point's sums of the robust weights and weighted residuals. Returns (cost, events used, sum of w r^2)."""
+    point's sums of the robust weights and weighted residuals, ``swj`` (M, 6) of the weighted Jacobians when it has
+    M rows (else it is left alone; :mod:`evpose.tracker.edge_clusters`), and each robust weight is multiplied by its
+    point's ``pscale`` when that has M entries. Returns (cost, events used, sum of w r^2)."""
+    with_j = swj.shape[0] == sw.shape[0]
+    with_scale = pscale.shape[0] == sw.shape[0]
     for k in range(sw.shape[0]):
         sw[k] = 0.0
         swr[k] = 0.0
+        if with_j:
+            for a in range(6):
+                swj[k, a] = 0.0
     for r in range(6):
         b[r] = 0.0
         for c in range(6):
@@ -218,11 +225,17 @@ def _linearise_events(n_events, ex, ey, et, ep, assoc, points, tangents, R_cw, t
         if abs(res) > gate:
             continue
         rho, w = _rho_weight(res, 1, huber)
+        if with_scale:
+            rho *= pscale[k]
+            w *= pscale[k]
         sw[k] += w
         swr[k] += w * res
         cost += rho
         used += 1
         swr2 += w * res * res
+        if with_j:
+            for a in range(6):
+                swj[k, a] += w * J[a]
         for a in range(6):
             b[a] += w * res * J[a]
             for c in range(6):

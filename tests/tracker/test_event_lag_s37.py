@@ -25,7 +25,7 @@ def residual(polarity: int, offset_px: float, burst: np.ndarray, speed_m_s: floa
     assoc, eg = np.array([0], np.int64), np.array([2 ** 62], np.int64)
     H, b, sw, swr = np.zeros((6, 6)), np.zeros(6), np.empty(1), np.empty(1)
     _linearise_events(1, ex, ey, et, ep, assoc, pts, tg, R_cw, t_cw, FX, FX, 100.0, 100.0, twist, 1000,
-                      np.array([0.0]), np.array([0.0]), eg, burst, 0.24, 0.72, H, b, sw, swr)
+                      np.array([0.0]), np.array([0.0]), eg, burst, 0.24, 0.72, H, b, sw, swr, np.zeros((0, 6)), np.zeros(0))
     return float(swr[0] / sw[0])
 
 
