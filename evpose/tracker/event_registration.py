@@ -246,6 +246,8 @@ import gtsam
 import numpy as np
 
 from evpose.tracker.event_registration_config import EventRegistrationConfig, scaled_to_pixel  # noqa: F401 (re-exported)
+from evpose.tracker.edge_clusters import EdgeTerms, edge_ids_for
+from evpose.tracker.event_lag import lead_terms
 from evpose.tracker.event_registration_kernels import (NO_EVENT, _associate_nearest, _kept_events, _learn_offsets, _linearise_events,
                                                        _pixel_gaps)
 from evpose.tracker.contrast_leads import PassageCounts
@@ -292,6 +294,8 @@ class EventRegistration:
             if not config.covered_foot_wall_side:  # the ground's side of the foot only
                 self._rise[np.abs(self._plane_normals[:, 2]) < 0.3] = 0.0
         """How far each point's vertical face rises above it (m, 0 = not a foot) for ``covered_foot_off_lead_px``; None = off."""
+        self._clusters = edge_ids_for(config.edge_clusters, self._base, self._normals, region_id)
+        """Edge id of each map point for ``edge_clusters``; None when that is off."""
         self.offsets = np.zeros(self._base.shape[0])
         """Learned offset of each map point along its unit edge normal, metres."""
         self._width, self._height = int(width), int(height)
@@ -374,7 +378,9 @@ class EventRegistration:
         if self._passages is not None:  # this step's events count before its leads are set
             self._passages.update(n, assoc, used, pts, tg, eg, R_cw, t_cw, K, None if twist is None else xi)
             self._passages.add_leads(used, *leads)
-        args = (*leads, eg, self._burst, float(c.huber_px), float(c.gate_px), H, b, sw, swr)
+        burst = self._burst if xi is _NO_TWIST else lead_terms(self._burst, c.lag, fx)  # no twist: no speeds
+        edges = EdgeTerms(c.edge_clusters, self._clusters, used)
+        args = (*leads, eg, burst, float(c.huber_px), float(c.gate_px), H, b, sw, swr, edges.swj, edges.pscale)
         n_it = int(c.iterations)
         t_ref = int(t_us)
         for it in range(n_it + 1):
@@ -384,6 +390,7 @@ class EventRegistration:
             _, n_used, swr2 = _linearise_events(n, ex, ey, et, ep, assoc, pts, tg, R_cw, t_cw, fx, fy, cx, cy, xi, t_ref, *args)
             if n_used < int(c.min_events):
                 return None
+            edges.after_pass(it == n_it, sw, swr, H, b)  # per-edge terms (evpose.tracker.edge_clusters), when on
             if it == n_it:
                 break  # the last pass measures the covariance and the points' distances at the final pose
             if info is not None:  # H + info, b + info e, the damped solve and its finiteness test in one call

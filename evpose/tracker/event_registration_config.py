@@ -10,6 +10,8 @@ import dataclasses
 from dataclasses import dataclass, field
 
 from evpose.tracker.contrast_leads import ContrastLeadConfig
+from evpose.tracker.edge_clusters import EdgeClusterConfig
+from evpose.tracker.event_lag import EventLagConfig
 
 
 @dataclass
@@ -423,7 +425,8 @@ backend (``full:ekf``) 6.05 / 5.36 / 7.41 / 7.41 -> 5.88 / 4.79 / 7.50 / 7.24 (6
     prior_residual_px: float = field(default=0.5, metadata={"min": 0.0, "max": 10.0, "step": 0.05, "unit": "px"})
     """Typical distance of one event from its edge, which converts registration's isotropic pose prior (``prior_*``,
     towards the prediction) into the events' units; 0 = no prior, pixels (0: 6.23 mm against 6.08; session 29, 240x180
-    seeds 0-7, 0.3: 6.932 mm against 6.955)."""
+    seeds 0-7, 0.3: 6.932 mm against 6.955; session 37, ``full`` at 240x180 2 s seeds 0-23, the
+    CLI path paired against the defaults, ``/tmp/s37/rt37/run.sh``, 0.35: 5.060 -> 5.135 mm, +0.076 +- 0.055, 10 of 24 better)."""
     min_events: int = field(default=100, metadata={"min": 6, "max": 100000, "step": 10, "unit": "events"})
     """Fewer associated events than this: the field registration stands alone, events."""
     skip_painted: bool = True
@@ -454,6 +457,10 @@ backend (``full:ekf``) 6.05 / 5.36 / 7.41 / 7.41 -> 5.88 / 4.79 / 7.50 / 7.24 (6
     contrast: ContrastLeadConfig = field(default_factory=ContrastLeadConfig)
     """Leads of the points whose pixels fire one event per passage of their edge (:mod:`evpose.tracker.contrast_leads`;
     off by default)."""
+    lag: EventLagConfig = field(default_factory=EventLagConfig)
+    """Leads growing with each edge's normal image speed (:mod:`evpose.tracker.event_lag`; off by default)."""
+    edge_clusters: EdgeClusterConfig = field(default_factory=EdgeClusterConfig)
+    """Each edge's events sharing one offset in the normal equations (:mod:`evpose.tracker.edge_clusters`; off)."""
 
 
 def scaled_to_pixel(config: EventRegistrationConfig, pixel_mrad: float) -> EventRegistrationConfig:

@@ -140,7 +140,7 @@ def _associate_nearest(points, tangents, used, R_cw, t_cw, fx, fy, cx, cy, radiu
 
 @nb.njit(cache=True)
 def _linearise_events(n_events, ex, ey, et, ep, assoc, points, tangents, R_cw, t_cw, fx, fy, cx, cy, twist, t_ref, on_lead, off_lead,
-                      eg, burst, huber, gate, H, b, sw, swr):
+                      eg, burst, huber, gate, H, b, sw, swr, swj, pscale):
     """Robust normal equations of the first ``n_events`` events' distances to their points' edge lines (event ``i``'s
     point the row ``assoc[i]`` of ``points`` / ``tangents``), each point projected at its
     event's time (the pose ``t_ref - t`` earlier along ``twist``, body frame, rotation then translation, per
@@ -148,11 +148,20 @@ def _linearise_events(n_events, ex, ey, et, ep, assoc, points, tangents, R_cw, t
     event ``off_lead[k]`` (see ``EventRegistrationConfig.on_lead_px`` and ``grazing_max_cos``); with ``burst[0]`` > 0 an
     event whose pixel fired the same polarity ``eg[i]`` us before, less than ``burst[0]`` of the edge's pixel-crossing
     times (1 / its normal speed) ago, adds ``burst[2]`` (ON) / ``burst[4]`` (OFF) to that lead, any other ``burst[1]`` /
-    ``burst[3]`` (see ``EventRegistrationConfig.follower_crossings``). ``sw`` / ``swr`` (M,) get each point's sums of the robust weights
-    and weighted residuals. Returns (cost, events used, sum of w r^2)."""
+    ``burst[3]`` (see ``EventRegistrationConfig.follower_crossings``). With 8 entries (``burst[0]`` may then be 0) an
+    ON / OFF event's lead also falls by ``burst[5]`` / ``burst[6]`` seconds times how much its edge's normal image
+    speed exceeds ``burst[7]`` pixels per second (:mod:`evpose.tracker.event_lag`). ``sw`` / ``swr`` (M,) get each
+    point's sums of the robust weights and weighted residuals, ``swj`` (M, 6) of the weighted Jacobians when it has
+    M rows (else it is left alone; :mod:`evpose.tracker.edge_clusters`), and each robust weight is multiplied by its
+    point's ``pscale`` when that has M entries. Returns (cost, events used, sum of w r^2)."""
+    with_j = swj.shape[0] == sw.shape[0]
+    with_scale = pscale.shape[0] == sw.shape[0]
     for k in range(sw.shape[0]):
         sw[k] = 0.0
         swr[k] = 0.0
+        if with_j:
+            for a in range(6):
+                swj[k, a] = 0.0
     for r in range(6):
         b[r] = 0.0
         for c in range(6):
@@ -161,7 +170,8 @@ def _linearise_events(n_events, ex, ey, et, ep, assoc, points, tangents, R_cw, t
     used = 0
     swr2 = 0.0
     J = np.zeros(6)
-    with_burst = burst.shape[0] == 5 and burst[0] > 0.0
+    with_burst = burst.shape[0] >= 5 and burst[0] > 0.0
+    with_lag = burst.shape[0] == 8 and (burst[5] != 0.0 or burst[6] != 0.0)
     wx, wy, wz, vx, vy, vz = twist[0], twist[1], twist[2], twist[3], twist[4], twist[5]
     for i in range(n_events):
         k = assoc[i]
@@ -192,10 +202,14 @@ def _linearise_events(n_events, ex, ey, et, ep, assoc, points, tangents, R_cw, t
         J[5] = -(nu * (-puz) + nv * (-pvz))
         res = nu * (ex[i] - u) + nv * (ey[i] - v)
         lead = on_lead[k] if ep[i] > 0 else off_lead[k]
-        if lead != 0.0 or with_burst:
+        if lead != 0.0 or with_burst or with_lag:
             vn = 0.0  # the edge's image speed along n: -J . twist
             for a in range(6):
                 vn -= J[a] * twist[a]
+            if with_lag:
+                # A pixel's threshold crossing fires late by a time, so its event trails the edge by that time
+                # times the edge's speed, about the reference speed at which the class leads were measured.
+                lead -= (burst[5] if ep[i] > 0 else burst[6]) * (abs(vn) - burst[7])
             if with_burst and vn != 0.0:
                 # The pixel's previous same-polarity event less than burst[0] crossing times ago: the same edge's
                 # passage, whose later events trail its first (the threshold crossings of a pixel-integrated edge).
@@ -211,11 +225,17 @@ def _linearise_events(n_events, ex, ey, et, ep, assoc, points, tangents, R_cw, t
         if abs(res) > gate:
             continue
         rho, w = _rho_weight(res, 1, huber)
+        if with_scale:
+            rho *= pscale[k]
+            w *= pscale[k]
         sw[k] += w
         swr[k] += w * res
         cost += rho
         used += 1
         swr2 += w * res * res
+        if with_j:
+            for a in range(6):
+                swj[k, a] += w * J[a]
         for a in range(6):
             b[a] += w * res * J[a]
             for c in range(6):

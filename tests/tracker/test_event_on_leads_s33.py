@@ -58,7 +58,8 @@ def test_the_on_lead_moves_the_events_optimum_behind_the_edge():
     for on in (TrackerConfig().event_registration.crease_on_lead_px, coarse.crease_on_lead_px):
         H, b, sw, swr = np.zeros((6, 6)), np.zeros(6), np.empty(1), np.empty(1)
         _linearise_events(1, ex.copy(), ey.copy(), et, ep, assoc, pts, tg, R_cw, t_cw, fx, fx, 100.0, 100.0, twist, 1000,
-                          np.array([on]), np.array([0.0]), eg, np.zeros(0), 0.24, 0.72, H, b, sw, swr)
+                          np.array([on]), np.array([0.0]), eg, np.zeros(0), 0.24, 0.72, H, b, sw, swr,
+                          np.zeros((0, 6)), np.zeros(0))
         res.append(swr[0] / sw[0])
     assert abs(abs(res[0]) - 0.07) < 1e-9
     assert abs(res[1]) < 1e-9
