@@ -73,6 +73,7 @@ def test_depth_ratio_moves_only_the_written_depth(flight):
 
 
 def test_depth_ratio_must_not_be_negative():
+    assert FusionConfig().revision_readout_depth_ratio == 2.0 and FusionConfig().revision_readout_position_smoothing == 0.5
     FusionConfig(revision_readout_depth_ratio=0.0).validate()
     with pytest.raises(ConfigError, match="revision_readout_depth_ratio"):
         FusionConfig(revision_readout_depth_ratio=-0.5).validate()
