@@ -5,7 +5,9 @@ When state k is added, each older state k-l of the window (l = 1..L) has two est
 the newest (the real-time output at its time) and the smoother's estimate now, which includes the registrations that
 came after it. Their difference is that state's *revision*. The read-out adds g times the mean revision of states
 k-1..k-L to state k's estimate: positions additively, rotations as a world-frame rotation vector about the camera
-centre. Causal: only states and registrations up to k enter.
+centre; the position's component along the camera's optical axis times ``revision_readout_depth_ratio`` more, and
+the position correction written is ``revision_readout_position_smoothing`` (a) times this one plus 1 - a times the
+previous state's (session 37, below). Causal: only states and registrations up to k enter.
 
 What it is for (issue 7, 240x180): the registrations carry slow errors (a few edges' event offsets, session 33/34),
 which the real-time estimate follows and a smoother, fed later registrations that see other edges, partly takes out
