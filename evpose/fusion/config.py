@@ -428,16 +428,16 @@ class FusionConfig:
     revision_readout_depth_ratio: float = field(default=2.0, metadata={"min": 0.0, "max": 10.0, "step": 0.1, "unit": "ratio"})
     """With ``revision_readout_states``: the position revision's component along the camera's optical axis gets
     ``revision_readout_gain`` times this (1 = the same gain on every axis): depth is what the registrations observe
-    least, and its revision the smallest part of its error. Session 37 with ``revision_readout_position_smoothing``
-    0.5, against both off (``/tmp/s37/ar37/run.sh``, ``cmp.py``): 240x180 5.060 -> 4.984 mm (held-out 5.489 ->
-    5.411), 346x260 4.169 -> 4.162, 3 s 13.387 -> 13.392, ARE unchanged; every figure in
-    :mod:`evpose.fusion.revision_readout`, ratio."""
+    least, and its revision the smallest part of its error. Not within ``registration_startup_s`` of the start (the
+    registrations widened). Session 37 with ``revision_readout_position_smoothing`` 0.5, against both off
+    (``/tmp/s37/ar37/run.sh``, ``cmp.py``): 240x180 5.060 -> 4.982 mm (held-out 5.489 -> 5.410), 346x260 4.169 ->
+    4.161, 3 s 13.387 -> 13.392, ARE unchanged; every figure in :mod:`evpose.fusion.revision_readout`, ratio."""
     revision_readout_position_smoothing: float = field(default=0.5, metadata={"min": 0.01, "max": 1.0, "step": 0.05, "unit": "ratio"})
     """With ``revision_readout_states``: the written position correction is this times the new one plus the rest
     times the previous state's (a causal exponential average; 1 = none): the corrections jitter from update to
     update, which the written trajectory's RTE shows. Session 37 with ``revision_readout_depth_ratio`` 2: RTE 0.518
-    -> 0.434 mm at 240x180 (0.310 -> 0.280 at 346x260; 0.679 with the depth ratio alone), ATE +0.006 mm against the
-    depth ratio alone (replayed); figures in :mod:`evpose.fusion.revision_readout`, ratio."""
+    -> 0.395 mm at 240x180 (0.310 -> 0.263 at 346x260; 0.679 with the depth ratio alone, ungated), ATE +0.006 mm
+    against the depth ratio alone (replayed); figures in :mod:`evpose.fusion.revision_readout`, ratio."""
     revision_readout_prior: bool = False
     """Also move the tracker's pose and the next prediction by the read-out's correction (a closed loop): +0.054 +-
     0.035 mm against the read-out alone (240x180 seeds 0-23, 8 of 24 better), so off."""

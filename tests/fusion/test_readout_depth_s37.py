@@ -19,7 +19,7 @@ def flight():
     return flight_with_registrations(1.0, 200.0, seed=7)
 
 
-def _states(flight, config, stop=120):
+def _states(flight, config, stop=180):
     cal, imu, (t0, T0, v0), times, regs, cov = flight
     f = FactorGraphFusion(config, cal)
     f.add_imu(imu)
@@ -54,6 +54,9 @@ def test_depth_ratio_moves_only_the_written_depth(flight):
     one = _states(flight, FusionConfig(revision_readout_depth_ratio=1.0, **plain))
     two = _states(flight, FusionConfig(revision_readout_depth_ratio=2.0, **plain))
     moved = 0.0
+    t0 = flight[2][0]
+    startup_us = FusionConfig().registration_startup_s * 1e6
+    early = late = 0
     for a, b in zip(one, two):
         # The fusion itself is the same bit for bit: only the written pose differs.
         assert np.array_equal(a.T_world_cam, b.T_world_cam)
@@ -62,6 +65,12 @@ def test_depth_ratio_moves_only_the_written_depth(flight):
             assert b.readout_T_world_cam is None
             continue
         assert np.array_equal(a.readout_T_world_cam[:3, :3], b.readout_T_world_cam[:3, :3])
+        if a.t_us - t0 < startup_us:
+            # Within the registrations' start-up widening the ratio is not applied.
+            assert np.array_equal(a.readout_T_world_cam, b.readout_T_world_cam)
+            early += 1
+            continue
+        late += 1
         axis = a.T_world_cam[:3, 2]
         da = a.readout_T_world_cam[:3, 3] - a.T_world_cam[:3, 3]
         db = b.readout_T_world_cam[:3, 3] - b.T_world_cam[:3, 3]
@@ -70,6 +79,7 @@ def test_depth_ratio_moves_only_the_written_depth(flight):
         assert np.allclose(db - (axis @ db) * axis, da - (axis @ da) * axis, atol=1e-14)
         moved = max(moved, abs(axis @ da))
     assert moved > 1e-6  # the smoother did revise depth, so the test saw the ratio act
+    assert early > 10 and late > 10
 
 
 def test_depth_ratio_must_not_be_negative():
