@@ -96,8 +96,8 @@ seeds 0-23 5.060 -> **4.982** mm (-0.078 +- 0.024, 18 of 24), held-out 5.489 -> 
 Against the EKF (``--fusion ekf``, ``ekf.sh``, ``cmpekf.py``; 240x180 seeds 0-47 and 346x260 0-23, 72 pairs): ATE
 4.851 against 5.085 mm (-0.235 +- 0.045, 56 of 72 better), ARE 0.0574 against 0.0583 deg (-0.0010 +- 0.0005, 44 of
 72), RTE 0.352 against 0.214 mm (0 of 72: the read-out's corrections still jitter more than the EKF's estimate).
-Cost (``cost.py`` 346x260, seed 0's inputs replayed, load ~9; before the gate): the read-out 0.094 -> 0.099 ms
-median per update.
+Cost (``cost.py`` 346x260, seed 0's inputs replayed, alternated, load ~8.6): the read-out 0.078 -> 0.084 ms median
+per update, the fusion update 0.512 -> 0.513 ms.
 """
 
 from __future__ import annotations
