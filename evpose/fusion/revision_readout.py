@@ -21,7 +21,8 @@ Only the written pose changes: the fusion's state, its IMU propagation (the regi
 internal pose and the recorded fusion inputs are untouched, so tracking is bit for bit the same with it on or off.
 Cost: L pose reads from the smoother plus L rotation logs per update (below). The IMU-rate poses between updates
 (``StepResult.imu_poses``, a debug product the viewer draws) are propagated from the fused states and not moved, so
-they sit off the written poses by the read-out's correction (0.2 mm on average at 240x180, session 36, before the depth ratio).
+they sit off the written poses by the read-out's correction (0.2 mm on average at 240x180, session 36, before the
+depth ratio).
 
 Measured (session 36, rt36), L 7 and gain 2 against off, `full` from ground truth through the CLI (`evpose track
 --config`, `evpose eval --align none`) on the cached 2 s moderate landings and built maps (``/tmp/s36/rt36/run.sh``,
@@ -160,8 +161,8 @@ def readout_pose(fusion, T_world_cam: np.ndarray, previous=None) -> np.ndarray |
 
 def depth_ratio(fusion) -> float:
     """``FusionConfig.revision_readout_depth_ratio`` for ``fusion``'s newest state, or 1 while the registrations are
-    widened after the start (within ``registration_startup_s`` of it, as :func:`~evpose.fusion.startup.startup_inflated`):
-    then the depth revisions do not follow the error the same way (session 37: the first 0.5 s at 240x180 +0.006 mm
+    widened after the start (within ``registration_startup_s`` of it, as
+    :func:`~evpose.fusion.startup.startup_inflated`): then the depth revisions do not follow the error the same way (session 37: the first 0.5 s at 240x180 +0.006 mm
     with the ratio, -0.006 without; the bench's 0.5 s landing +0.32 mm)."""
     c = fusion.config
     start = fusion.start_us
