@@ -162,8 +162,9 @@ def readout_pose(fusion, T_world_cam: np.ndarray, previous=None) -> np.ndarray |
 def depth_ratio(fusion) -> float:
     """``FusionConfig.revision_readout_depth_ratio`` for ``fusion``'s newest state, or 1 while the registrations are
     widened after the start (within ``registration_startup_s`` of it, as
-    :func:`~evpose.fusion.startup.startup_inflated`): then the depth revisions do not follow the error the same way (session 37: the first 0.5 s at 240x180 +0.006 mm
-    with the ratio, -0.006 without; the bench's 0.5 s landing +0.32 mm)."""
+    :func:`~evpose.fusion.startup.startup_inflated`): then the depth revisions do not follow the error the same way
+    (session 37, the first 0.5 s at 240x180, replayed: +0.006 mm with the ratio there, -0.006 without; the quick
+    bench's 0.5 s landing +0.32 mm)."""
     c = fusion.config
     start = fusion.start_us
     if start is not None and fusion.history[-1][0] - start < c.registration_startup_s * 1e6:
