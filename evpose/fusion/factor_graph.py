@@ -491,10 +491,9 @@ class FactorGraphFusion:
         nav = self._gtsam.NavState(pose, vel)
         self.propagator.anchor(t_us, nav, bias)
         self.history.append((t_us, nav, bias))
-        if len(self.history) > self.config.window_states + 2:
-            del self.history[0]
+        del self.history[: -(self.config.window_states + 2)]  # keeps the newest window_states + 2
         cov = np.asarray(self.smoother.marginalCovariance(x)) if self.config.compute_covariance else None
-        self.last_state = self.propagator.fused_state(t_us, nav, bias, cov, degraded)
+        previous, self.last_state = self.last_state, self.propagator.fused_state(t_us, nav, bias, cov, degraded)
         if self.config.revision_readout_states > 0:
-            self.last_state.readout_T_world_cam = readout_pose(self, self.last_state.T_world_cam)
+            self.last_state.readout_T_world_cam = readout_pose(self, self.last_state.T_world_cam, previous)
         return self.last_state

@@ -49,7 +49,8 @@ def test_readout_leaves_every_fused_state_bit_identical(flight):
 
 
 def test_readout_is_the_gain_times_the_mean_revision(flight):
-    config = FusionConfig(revision_readout_states=STATES, revision_readout_gain=1.5)
+    config = FusionConfig(revision_readout_states=STATES, revision_readout_gain=1.5, revision_readout_depth_ratio=1.0,
+                          revision_readout_position_smoothing=1.0)  # the plain formula, no depth ratio or smoothing
     checked = []
 
     def probe(k, f, state):
