@@ -119,6 +119,29 @@ class InertialConfig:
     RPE targets (``/tmp/s36/lead/eic/h36.py``, ``cmp.py``): 3 deg 20 / 18 / 14 / 24 (tracked 0.939 / 0.910 / 0.981 /
     0.989), 2.5 deg 18 / 18 / 14 / 24 (0.927 / 0.886 / 0.980 / 0.989; 1 landing seed changed), 2 deg 19 / 19 / 14 / 24
     (0.911 / 0.876 / 0.949 / 0.983; 2 changed): tighter refuses more starts for no more seeds."""
+    init_gyro_two_view: bool = False
+    """Resolve a two-view start (a new map, or one re-joining the map lost while coasting) with the gyro's rotation
+    between the two views instead of refusing it (:mod:`evpose.slam.gyro_two_view`): the relative rotation is the
+    gyro's (bias-corrected once known, through ``T_cam_imu``), only the translation direction is estimated (2-point
+    RANSAC, then a refinement with the gyro rotation as a prior of ``init_gyro_two_view_sigma_deg``), then the points
+    are triangulated as before. Applies to the starts the decomposition accepted that are at least
+    ``init_gyro_two_view_min_deg`` off the gyro (those beyond ``init_max_gyro_deg`` included: resolved, not refused);
+    a start the gyro solution cannot triangulate falls back to the guard. E-I-C3 is left alone (as the guard)."""
+    init_gyro_two_view_min_deg: float = field(default=0.0, metadata={"min": 0.0, "max": 45.0, "step": 0.5, "unit": "deg"})
+    """With ``init_gyro_two_view``: starts whose decomposed rotation is closer than this to the gyro's keep it (0:
+    every start takes the gyro's rotation), degrees."""
+    init_gyro_two_view_min_parallax_deg: float = field(default=0.3, metadata={"min": 0.0, "max": 10.0, "step": 0.05, "unit": "deg"})
+    """With ``init_gyro_two_view``: the median parallax a gyro-resolved start needs, in place of
+    ``InitializationConfig.min_parallax_deg_inertial`` (1 deg), degrees. The decomposition's rotation error passes
+    for parallax: indoor seed 26's starts, accepted at 1.3-1.7 deg, have 0.37-0.88 deg with the gyro's rotation, so
+    the 1 deg bar refused every one of them."""
+    init_gyro_two_view_refuse_unsolved: bool = False
+    """With ``init_gyro_two_view``: a start the gyro's rotation cannot triangulate (too few points, or less parallax
+    than ``init_gyro_two_view_min_parallax_deg``) is refused; off, the decomposition's own start goes on to the
+    ``init_max_gyro_deg`` guard."""
+    init_gyro_two_view_sigma_deg: float = field(default=0.1, metadata={"min": 0.001, "max": 10.0, "step": 0.01, "unit": "deg"})
+    """With ``init_gyro_two_view``: the gyro rotation prior's standard deviation in the two-view refinement, degrees
+    (over 0.01-0.1 s a bias of a few mrad/s turns the camera by hundredths of a degree). Not tuned."""
     discard_lost_young_s: float = field(default=0.1, metadata={"min": 0.0, "max": 2.0, "step": 0.01, "unit": "s"})
     """A map lost before the IMU initialisation reached it, whose poses span less than this, is discarded (emptied; no
     trajectory written) instead of kept in the atlas, as ORB-SLAM3 resets a map lost with under 10 keyframes (0: kept,
