@@ -125,7 +125,7 @@ def test_a_start_far_off_the_gyro_is_resolved_with_the_gyro_instead_of_refused(m
     assert "11.0 deg off the gyro" in _outcome(_Resolving(False))  # off: refused as before, the solver never asked
     assert asked == []
     assert _outcome(_Resolving(True)) == "map"
-    assert asked[0][0] == pytest.approx(1.0) and asked[0][1].startswith("homography+gyro 11.0 deg") and asked[0][2] == 0.3
+    assert asked[0][0] == pytest.approx(1.0) and asked[0][1].startswith("homography+gyro 11.0 deg") and asked[0][2] == 0.4
 
     # A start the gyro's rotation cannot triangulate goes on to the guard with the decomposition's rotation (the
     # default); with init_gyro_two_view_refuse_unsolved it is refused for that.
