@@ -92,7 +92,7 @@ def translation_direction_ransac(K: np.ndarray, p1: np.ndarray, p2: np.ndarray, 
         return None
     thr2 = threshold_px**2
     counts = (_sampson_px2_many(K, R, T, p1, p2) < thr2).sum(axis=1)
-    best = T[int(np.argmax(counts))]  # the first of the best, as a loop keeping strict improvements would
+    best = T[int(np.argmax(counts))]  # ties: the first drawn (deterministic)
     best_in = sampson_px2(K, R, best, p1, p2) < thr2
     if best_in.sum() < 2:
         return None

@@ -142,8 +142,15 @@ class InertialConfig:
     reached (their scale is the first start's and the re-joins' coasting, and a start resolved at 0.3-0.5 deg of
     true parallax can set it several times too large: seed 2 at 0.3 deg, its decomposition 25.5 deg off the gyro).
     Landing 0-23: all 24 within both targets, none bit-identical, medians 0.0027 -> 0.0025 m/m and 0.0013 deg/m.
-    With ``init_gyro_two_view_refuse_unsolved``: 0.3 deg 19 / 19 / 14 / 24, 0.5 deg 19 / 18 / 12 / 24 (tracked 0.963 /
-    0.928 / 0.969). Cost: 4 ms of CPU per resolved start (matches of 100 points), at most a few per map start."""
+    Fresh indoor seeds 54-61 (``/tmp/s37/ei37/rec``, simulated after the choice): 8 / 8 both ways, tracked 0.952 ->
+    0.974 (least 0.688 -> 0.852), rotation RPE +0.0005 +- 0.0006 deg/m (3 of 8 better), medians 0.0051 -> 0.0050 m/m,
+    0.0014 -> 0.0015 deg/m. Resolving only the starts the guard refuses (``init_gyro_two_view_min_deg`` 3, g8) wins
+    the same tracked time (0.982 / 0.941 / 0.982 / 0.974) and leaves landing bit-identical, but not the rotation:
+    20 / 17 / 14 / 8 / 24, seeds 26 and 32 unchanged (their re-joins are 1.5-3.0 deg off, under the guard) and seed
+    35 running away on translation (0.153 m/m, never initialised). With ``init_gyro_two_view_refuse_unsolved``: 0.3
+    deg 19 / 19 / 14 / 24, 0.5 deg 19 / 18 / 12 / 24 (tracked 0.963 / 0.928 / 0.969). Cost: 4 ms of CPU per resolved
+    start (matches of 100 points, ``/tmp/s37/ei37/chk_many.py``); the tracking thread's CPU per MCI on indoor 26 / 55
+    (CLI) median 9.1 / 8.7 ms against 8.5 / 8.5 off."""
     init_gyro_two_view_min_deg: float = field(default=0.0, metadata={"min": 0.0, "max": 45.0, "step": 0.5, "unit": "deg"})
     """With ``init_gyro_two_view``: starts whose decomposed rotation is closer than this to the gyro's keep it (0:
     every start takes the gyro's rotation), degrees. Only 0 was measured."""
