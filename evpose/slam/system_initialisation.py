@@ -41,6 +41,7 @@ import numpy as np
 
 from evpose.slam.atlas import Keyframe, MapPoint, SlamMap
 from evpose.slam.bundle_adjustment import local_bundle_adjustment
+from evpose.slam.gyro_two_view import two_view_with_rotation
 from evpose.slam.initialization import initialize_two_view
 from evpose.slam.inertial_config import InertialConfiguration
 from evpose.slam.inertial_guards import two_view_gyro_disagreement_deg
@@ -69,9 +70,17 @@ class TwoViewInitialisation:
         ic = self.cfg.inertial
         # E-I-C3 never refuses (InertialConfig.init_max_gyro_deg): its fixed windows' starts were refused too often.
         max_deg = ic.init_max_gyro_deg if self.imu is not None and ic.configuration is not InertialConfiguration.C3 else 0.0
-        if res.ok and max_deg > 0:
-            off = two_view_gyro_disagreement_deg(res.T_wc2[:3, :3], self._gyro_camera_delta(fe.init_ref_t, mci.t_us))
-            if off > max_deg:  # InertialConfig.init_max_gyro_deg: a wrong decomposition, not a start
+        gyro_solve = ic.init_gyro_two_view and self.imu is not None and ic.configuration is not InertialConfiguration.C3
+        if res.ok and (max_deg > 0 or gyro_solve):
+            R_gyro = self._gyro_camera_delta(fe.init_ref_t, mci.t_us)
+            off = two_view_gyro_disagreement_deg(res.T_wc2[:3, :3], R_gyro)
+            if gyro_solve and R_gyro is not None and off >= ic.init_gyro_two_view_min_deg:
+                # InertialConfig.init_gyro_two_view: the gyro's rotation, only the translation direction estimated.
+                solved = two_view_with_rotation(self.K, p1, p2, R_gyro, icfg, self.cfg.seed, ic.init_gyro_two_view_sigma_deg,
+                                                model=f"{res.model}+gyro {off:.1f} deg", min_parallax_deg=ic.init_gyro_two_view_min_parallax_deg)
+                if solved.ok or ic.init_gyro_two_view_refuse_unsolved:
+                    res, off = solved, 0.0
+            if max_deg > 0 and off > max_deg:  # InertialConfig.init_max_gyro_deg: a wrong decomposition, not a start
                 res = replace(res, ok=False, reason=f"two-view rotation {off:.1f} deg off the gyro's")
         if not res.ok:
             if fe.init_frames >= icfg.max_frames or len(common) < icfg.min_matches:
