@@ -85,6 +85,10 @@ class SlamMap:
     young_pose_us: int = 0
     """With ``first_pose_span_us``: every pose less than this after the map's first one is placed so as well, us
     (:attr:`TrackingConfig.young_pose_extrapolation_s`)."""
+    traj_alt: dict[int, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
+    """Per coasted MCI time (us) -> (its written pose ``T_world_cam`` as placed online, that pose relative to the coasted
+    pose's reference keyframe): :meth:`trajectory` writes it in place of the coasted pose
+    (:mod:`evpose.slam.written_coast`); empty unless ``VisualGyroConfig.written_coasts``."""
     segment_start_kf: int = 0
     """Id of the first keyframe of the map's newest visual segment: a lost map re-joined by the next two-view map
     (:mod:`evpose.slam.map_rejoin`) shares no points with it, and the visual local BA stays within the segment."""
@@ -103,11 +107,24 @@ class SlamMap:
             self.traj_T[-1] = T_wc.copy()
             self.traj_ref[-1] = ref.id if ref is not None else -1
             self.traj_rel[-1] = rel
+            alt = self.traj_alt.get(self.traj_t[-1])
+            if alt is not None:
+                # A keyframe made at the pose: the written alternative hangs from it too.
+                self.traj_alt[self.traj_t[-1]] = (alt[0], np.linalg.solve(ref.T_wc, alt[0]) if ref is not None else alt[0].copy())
             return
         self.traj_t.append(int(t_us))
         self.traj_T.append(T_wc.copy())
         self.traj_ref.append(ref.id if ref is not None else -1)
         self.traj_rel.append(rel)
+
+    def add_written_alternative(self, t_us: int, T_wc: np.ndarray) -> None:
+        """Write ``T_wc`` in place of the pose just added at ``t_us`` (same reference keyframe, so later BA moves of it
+        carry both alike); tracking keeps reading the added pose."""
+        if not self.traj_t or self.traj_t[-1] != t_us:
+            return
+        ref = self.keyframe(self.traj_ref[-1]) if self.traj_ref[-1] >= 0 else None
+        rel = np.linalg.solve(ref.T_wc, T_wc) if ref is not None else T_wc.copy()
+        self.traj_alt[int(t_us)] = (T_wc.copy(), rel)
 
     def record_pose_observations(self, t_us: int, point_ids: np.ndarray, uv: np.ndarray, track_ids: np.ndarray, track_uv: np.ndarray,
                                  prior_sigmas: tuple[float, float] | None = None) -> None:
@@ -134,6 +151,10 @@ class SlamMap:
         self.traj_T = [tf(T) for T in self.traj_T]
         for rel in self.traj_rel:
             rel[:3, 3] *= s  # a relative pose only feels the scale of a world transform
+        for t, (T, rel) in list(self.traj_alt.items()):
+            rel = rel.copy()
+            rel[:3, 3] *= s
+            self.traj_alt[t] = (tf(T), rel)
 
     def trajectory(self, refined: bool = True, refit: bool = True) -> Trajectory:
         """Per-MCI poses of this map as a :class:`Trajectory` (``T_world_cam``).
@@ -151,6 +172,11 @@ class SlamMap:
         if refined:
             kf_pose = {kf.id: kf.T_wc for kf in self.keyframes}
             T = [kf_pose[r] @ rel if r in kf_pose else Tw for r, rel, Tw in zip(self.traj_ref, self.traj_rel, self.traj_T)]
+            if refit and self.traj_alt:
+                # Written coasted poses (evpose.slam.written_coast): output only, as the re-solve below.
+                alt = self.traj_alt
+                T = [(kf_pose[r] @ alt[t][1] if r in kf_pose else alt[t][0]) if t in alt else Tk
+                     for t, r, Tk in zip(self.traj_t, self.traj_ref, T)]
             if refit and self.refit_K is not None and self.traj_obs:
                 T = refit_trajectory(self.refit_K, self.traj_t, T, self.traj_obs, self.points, self.refit_threshold_px)
                 if self.interpolate_between_keyframes:

@@ -251,6 +251,7 @@ def drop_unconfirmed_poses(m: SlamMap, t_last_visual_us: int) -> int:
     """
     n = 0
     while m.traj_t and m.traj_t[-1] > t_last_visual_us:
+        m.traj_alt.pop(m.traj_t[-1], None)
         for lst in (m.traj_t, m.traj_T, m.traj_ref, m.traj_rel):
             lst.pop()
         n += 1

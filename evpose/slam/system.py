@@ -352,9 +352,6 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
         pred = self._imu_prediction(mci.t_us)
         if pred is not None:
             guess = pred  # metric maps: the IMU predicts position as well
-        R_coast = R_prior
-        if R_coast is None and self.imu is None and self.cfg.visual_gyro.enabled:
-            R_coast = self._visual_gyro(m, mci)
         sel = [i for i, t in enumerate(fe.ids.tolist()) if fe.track_to_point.get(t) in m.points]
         n_refound = 0
         if len(sel) < self.cfg.search.prepass_below:
@@ -363,11 +360,11 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
         self._map_tracks = len(sel)
         if len(sel) < tc.min_inliers:
             self._failure = SlamFailure.STARVED
-            return self._bridge_or_lose(mci, f"{len(sel)} tracked map points < {tc.min_inliers}", R_coast)
+            return self._bridge_or_lose(mci, f"{len(sel)} tracked map points < {tc.min_inliers}", self._coast_rotation(m, mci, R_prior))
         est, sel = self._estimate(m, mci, sel, guess, R_prior)
         if not est.ok:
             self._failure = SlamFailure.REJECTED
-            return self._bridge_or_lose(mci, est.reason, R_coast)
+            return self._bridge_or_lose(mci, est.reason, self._coast_rotation(m, mci, R_prior))
         more = self._refind(m, mci, est.T_wc, self.cfg.search.refine_radius_px)
         n_refound += more
         fused = ""
@@ -385,7 +382,7 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
         self._speed_refusals = self._speed_refusals + 1 if jump is not None else 0
         if jump is not None:
             self._failure = SlamFailure.REJECTED
-            return self._bridge_or_lose(mci, jump, R_coast)
+            return self._bridge_or_lose(mci, jump, self._coast_rotation(m, mci, R_prior))
         for k in np.flatnonzero(~est.inliers):
             fe.track_to_point.pop(int(fe.ids[sel[k]]), None)
         inl = [sel[k] for k in np.flatnonzero(est.inliers)]

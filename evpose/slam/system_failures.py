@@ -120,8 +120,11 @@ class VisualFailureHandling:
         edge = self._line_track(m, mci, T_wc) or self._edge_track(m, mci, T_wc)
         if edge is not None:
             return edge
+        T_written = self._written_coast(m, mci) if R_wc is None else None
         drop_contradicted(m, self.K, T_wc, fe.ids, fe.uv, fe.track_to_point, 2.0 * tc.reprojection_threshold_px)
         m.add_pose(mci.t_us, T_wc)
+        if T_written is not None:
+            m.add_written_alternative(mci.t_us, T_written)
         # No BA on a keyframe at a predicted pose (InertialConfig.coast_ba: with one fixed keyframe it slid along the scale).
         # No points from dead reckoning either (TrackingConfig.coast_triangulate off): they let PnP place the map again
         # on the coast's own error.

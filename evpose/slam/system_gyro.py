@@ -24,6 +24,7 @@ from evpose.slam.room_axes import measure_room_rotation, room_frame, room_priors
 from evpose.slam.pnp_motion_prior import refine_pose_with_pose_prior
 from evpose.slam.tracking import PoseEstimate
 from evpose.slam.visual_gyro import visual_rotation
+from evpose.slam.written_coast import written_coast_pose
 
 
 class GyroAids:
@@ -45,6 +46,31 @@ class GyroAids:
         # few mrad/s turns the camera by hundredths of a degree: far less than the visual rotation error indoors.
         bias = m.inertial.bias_gyro if m.imu_initialised and m.inertial is not None else np.zeros(3)
         reanchor_rotations(m, self.imu, self.calib.T_cam_imu, self.calib.time_offset_us, bias, refs)
+
+    def _coast_rotation(self, m: SlamMap, mci, R_prior: np.ndarray | None) -> np.ndarray | None:
+        """Orientation a failed MCI bridges or coasts on: the gyro's (``R_prior``, event-inertial), else, event-only with
+        :attr:`VisualGyroConfig.enabled`, the visual gyro's. Asked only once the MCI has failed: the visual gyro costs
+        ~7 ms per MCI (indoor, 240x180), which the tracked MCIs need not pay."""
+        if R_prior is None and self.imu is None and self.cfg.visual_gyro.enabled:
+            return self._visual_gyro(m, mci)
+        return R_prior
+
+    def _written_coast(self, m: SlamMap, mci) -> np.ndarray | None:
+        """Event-only with :attr:`VisualGyroConfig.written_coasts`: the pose to write for the coasted ``mci``
+        (:mod:`evpose.slam.written_coast`), else None."""
+        vg, tc = self.cfg.visual_gyro, self.cfg.tracking
+        if not vg.written_coasts or vg.enabled or self.imu is not None:
+            return None
+        if vg.written_coasts_max_map_s > 0 and m.traj_t and (self._last_pnp_t - m.traj_t[0]) / 1e6 >= vg.written_coasts_max_map_s:
+            return None  # a mature map: its coast is written as tracked
+        prev8, prev_t = self._prev_mci
+
+        def measure(dR0):
+            if prev8 is None or not m.traj_t or m.traj_t[-1] != prev_t:
+                return None
+            return visual_rotation(prev8, mci.image8, self.K, dR0, vg)
+
+        return written_coast_pose(m, mci.t_us, int(tc.coast_span_s * 1e6), int(tc.coast_young_span_s * 1e6), measure)
 
     def _visual_gyro(self, m: SlamMap, mci) -> np.ndarray | None:
         """Event-only: orientation at ``mci`` from the map's pose at the previous MCI and the rotation measured between the

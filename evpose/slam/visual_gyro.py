@@ -51,6 +51,7 @@ from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
+from scipy.ndimage import distance_transform_edt
 from scipy.spatial.transform import Rotation
 
 
@@ -66,7 +67,35 @@ class VisualGyroConfig:
     that session's defaults: 6.84 -> 3.23 % (8 of 8 better), from the events 40.8 -> 27.6 %, maps 30 -> 40; a coast
     turning by the true rotation (a perfect gyro) 4.83 % with 35 maps. Session 28: the lower share is the map no longer
     placed again after a coast on points the coast's own rotation error triangulated; where both runs track as one map
-    the error is unchanged (module docstring)."""
+    the error is unchanged (module docstring). Session 37 on session 36's defaults (coasted keyframes triangulate
+    nothing, so coasts seldom re-place a map; ``/tmp/s37/eo37``, tag ``vg``, paired against ``m35``): indoor 0-19 2.161
+    -> 1.822 % (-0.339 +- 0.200, 12 of 20 better), held-out 20-39 2.159 -> 2.143 (-0.016 +- 0.201), 40-53 2.064 -> 1.771
+    (-0.292 +- 0.176), landing 0-23 1.474 -> 1.554 (+0.079 +- 0.053, 3 worse, none better); the online coast changes the
+    MCIs' warp priors and with them every later map. ``written_coasts`` keeps its gain without that."""
+    written_coasts: bool = True
+    """Event-only: each coasted pose of a young map is written (the map's output trajectory) as the coast would have
+    placed it on the measured rotations, chained over the written poses, while tracking coasts on as without it
+    (bit-identical maps, statuses and tracked time); ignored with ``enabled`` (which coasts on them online). Why:
+    :mod:`evpose.slam.written_coast`. Session 37 (``/tmp/s37/eo37``: ``run.py`` / ``batch.sh`` = session 35's harness,
+    ``evpose slam`` + ``evpose eval --atlas --correct-scale``; ``sum.py m35 fin``, paired against session 36's defaults,
+    tag ``m35``; ``maps.py`` splits the ATE by map class): indoor 0-19 2.161 -> 1.888 % (-0.273 +- 0.096, 15 of 20
+    better), held-out 20-39 2.159 -> 1.915 (-0.244 +- 0.080, 14 better), 40-53 2.064 -> 1.828 (-0.236 +- 0.134, 7
+    better, 7 worse); over 0-53 median 1.867 -> 1.720 %, within 2 % 29 -> 43 of 54; landing 0-23 bit-identical (1.474
+    %). The gain is in the maps with at most two PnP poses before their coast: 0.646 -> 0.385 / 0.768 -> 0.529 / 0.753
+    -> 0.505 points of 0-19 / 20-39 / 40-53 (the true rotation rate held, an oracle, 0.361 on 0-19). Seed 53 still
+    tracks 79.1 %, the others at least 80.5 % (unchanged). Without
+    ``written_coasts_max_map_s`` (tag ``wc``) the indoor figures are the same to 0.001 and the landing 1.474 -> 1.477
+    (+0.003 +- 0.003: seed 4's 2.4 s map coasting at its end 7.09 -> 7.17 %). Writing each pose at the mean of the old and
+    measured orientations (``coasting.coast_pose``, tag ``wcmid``, 15 seeds of 0-19): +0.013 +- 0.007 against this, not
+    kept. Cost: the visual gyro on each coasted MCI of a young map; main-thread CPU per MCI (``cpu.py``, indoor seed
+    0, one run each) coasted MCIs median 6.7 -> 15.1 ms (90th percentile 13.0 -> 20.1, most 19.9 -> 28.2), all MCIs
+    median 8.0 -> 15.1, tracked MCIs unchanged (16.6). Figures measured with this exact distance field (scipy's: with
+    OpenCV's the written poses differed run to run in the 9th digit); tags ``wc`` / ``wcg`` were run with OpenCV's and
+    agree with ``fin`` (this) to 0.001 points."""
+    written_coasts_max_map_s: float = field(default=0.5, metadata={"min": 0.0, "max": 10.0, "step": 0.05, "unit": "s"})
+    """With ``written_coasts``: only a map whose trajectory up to its last PnP pose spans less than this writes its
+    coast on the measured rotations (0: every map), seconds. 0.5 as ``TrackingConfig.coast_triangulate_min_map_s``:
+    the landing's mature maps keep their slow, steady coasts (figures above)."""
     edge_fraction: float = field(default=0.25, metadata={"min": 0.0, "max": 1.0, "step": 0.05, "unit": "ratio"})
     """Edge pixels are ridge pixels of the MCI at or above this share of its robust maximum (99.5th percentile of the
     non-zero pixels), ratio."""
@@ -125,7 +154,12 @@ def edge_field(image8: np.ndarray, cfg: VisualGyroConfig) -> EdgeField | None:
     edges = _edges(image8, cfg)
     if edges is None:
         return None
-    dist = cv2.distanceTransform(np.where(edges, 0, 255).astype(np.uint8), cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
+    # The exact Euclidean distance: scipy's, not OpenCV's DIST_MASK_PRECISE, whose result changed in the last bits from
+    # call to call on the same image (session 37; up to 4e-6 px), which a coast chained over the measured rotations
+    # carried into every later pose.
+    if not edges.any():
+        return None  # nothing to align with (scipy, unlike OpenCV, has no "far from everything" for an empty mask)
+    dist = distance_transform_edt(~edges).astype(np.float32)
     dist = np.minimum(dist, np.float32(cfg.max_distance_px))
     # A light blur rounds the kink on the crest, so the alignment settles on it instead of hopping across.
     dist = cv2.GaussianBlur(dist, (5, 5), 1.0)
