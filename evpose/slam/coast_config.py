@@ -91,7 +91,8 @@ class CoastSettings:
     """Event-only coasting: each gap between consecutive MCIs uses up at most this much of ``coast_s`` (a sparse
     scene's MCIs come 35-55 ms apart where a textured one's come 8-15 ms apart; the excess beyond the blank time,
     which ``coast_blank_s`` handles, is not counted; 0: off), ms. Why and what 20 ms measured (every indoor seed
-    tracks at least 80 %, but held-out seeds 20-53 get worse): :mod:`evpose.slam.sparse_coast`."""
+    tracks at least 80 %, but held-out seeds 20-53 get worse; session 37, with ``VisualGyroConfig.written_coasts``,
+    20 / 30 / 35 / 40 ms likewise: seeds 40-53 +0.30 / +0.22 / +0.12 / +0.14 points): :mod:`evpose.slam.sparse_coast`."""
     coast_after_blank_s: float = field(default=0.0, metadata={"min": 0.0, "max": 2.0, "step": 0.01, "unit": "s"})
     """Event-only coasting: a coast that ``coast_blank_s`` (> 0) carried across a blank wall ends this long after the
     first MCI past it unless an MCI is tracked visually (0: at the next failure; 2: as any coast), seconds."""
