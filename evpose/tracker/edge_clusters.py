@@ -119,26 +119,32 @@ def edge_cluster_ids(points: np.ndarray, edge_normals: np.ndarray, region_id: np
 
 
 @nb.njit(cache=True)
+def _edge_sums(cluster, sw, swr):  # pragma: no cover
+    """Per edge id (0 .. max): the summed robust weights and weighted residuals of its points."""
+    c_max = 0
+    for k in range(cluster.shape[0]):
+        if cluster[k] > c_max:
+            c_max = cluster[k]
+    n = np.zeros(c_max + 1)
+    s = np.zeros(c_max + 1)
+    for k in range(cluster.shape[0]):
+        n[cluster[k]] += sw[k]
+        s[cluster[k]] += swr[k]
+    return n, s
+
+
+@nb.njit(cache=True)
 def shared_offset_correction(cluster, sw, swr, swj, edge_var, event_var, H, b):  # pragma: no cover
     """Takes each edge's shared offset out of the events' normal equations ``H`` / ``b`` in place (see the module):
     ``cluster`` (M,) the edge ids of the used points (0 .. C-1), ``sw`` / ``swr`` / ``swj`` (M,) / (M,) / (M, 6)
     each point's summed robust weights, weighted residuals and weighted Jacobians, ``edge_var`` / ``event_var`` the
     two variances (px^2)."""
-    m = cluster.shape[0]
-    c_max = 0
-    for k in range(m):
-        if cluster[k] > c_max:
-            c_max = cluster[k]
-    n = np.zeros(c_max + 1)
-    s = np.zeros(c_max + 1)
-    g = np.zeros((c_max + 1, 6))
-    for k in range(m):
-        c = cluster[k]
-        n[c] += sw[k]
-        s[c] += swr[k]
+    n, s = _edge_sums(cluster, sw, swr)
+    g = np.zeros((n.shape[0], 6))
+    for k in range(cluster.shape[0]):
         for a in range(6):
-            g[c, a] += swj[k, a]
-    for c in range(c_max + 1):
+            g[cluster[k], a] += swj[k, a]
+    for c in range(n.shape[0]):
         if n[c] <= 0.0:
             continue
         # Per-event GLS weight on the unit-noise scale of H: (I - rho 1 1^T) / event_var, H and b in event_var units.
@@ -154,17 +160,8 @@ def edge_weights(cluster, sw, swr, pscale, huber):  # pragma: no cover
     """Each used point's weight ``pscale`` (M,) for the next pass: ``huber / |mean|`` where its edge's mean residual
     (from the points' summed weights ``sw`` and weighted residuals ``swr`` of this pass, which include the current
     ``pscale``) exceeds ``huber``, else 1."""
-    m = cluster.shape[0]
-    c_max = 0
-    for k in range(m):
-        if cluster[k] > c_max:
-            c_max = cluster[k]
-    n = np.zeros(c_max + 1)
-    s = np.zeros(c_max + 1)
-    for k in range(m):
-        n[cluster[k]] += sw[k]
-        s[cluster[k]] += swr[k]
-    for k in range(m):
+    n, s = _edge_sums(cluster, sw, swr)
+    for k in range(cluster.shape[0]):
         c = cluster[k]
         a = abs(s[c]) / n[c] if n[c] > 0.0 else 0.0
         pscale[k] = huber / a if a > huber else 1.0
