@@ -217,12 +217,22 @@ def triangulate_new_points(m: SlamMap, K: np.ndarray, kf: Keyframe, track_to_poi
     """Triangulate tracks of ``kf`` without a point against the oldest keyframe that saw them; returns the next free point id.
 
     ``predicted``: ``kf`` sits at a pose no image placed (an event-only coast's prediction); with
-    :attr:`TrackingConfig.coast_depth_level` its new points then take the depth level of the older points."""
+    :attr:`TrackingConfig.coast_depth_level` its new points then take the depth level of the older points.
+
+    Only keyframes of the map's newest visual segment (:attr:`SlamMap.segment_start_kf`) pair with ``kf``: a KLT track
+    can outlive the loss of a map, drifting onto whatever the events show next, so in a re-joined map
+    (:mod:`evpose.slam.map_rejoin`) the same track id in a keyframe of the older segment may be another scene point.
+    The scene-switch test of ``tests/slam/test_configurations.py`` with ``InertialConfig.init_gyro_two_view`` (session
+    37, ``/tmp/s37/gx37/d1.py``): track 33, alive from 0.055 s through the switch at 1.4-1.6 s to 2.39 s, lost its
+    point of the fresh map and was triangulated against keyframe 0 (0.055 s, the other scene); with that point the
+    segment's local BA, holding keyframe 0 fixed, slid its scale 17 times (kf 2.05 s 7 -> 385 cm off, 2.39 s 1010 cm)
+    and the points it moved spoilt the refit poses before the switch (ATE 1.29 -> 15.0 %)."""
     by_kf: dict[int, list[int]] = {}
+    segment = [old for old in m.keyframes[:-1] if old.id >= m.segment_start_kf]
     for tid in sorted(kf.obs):
         if tid in track_to_point:
             continue
-        for old in m.keyframes[:-1]:
+        for old in segment:
             if tid in old.obs:
                 by_kf.setdefault(old.id, []).append(tid)
                 break
