@@ -138,7 +138,8 @@ class InertialConfig:
     :func:`evpose.slam.local_map.triangulate_new_points`, which now checks such pairs: whole run 1.25 % on, 1.29 %
     off; before the switch 0.58 / 0.38 %, ``/tmp/s37/gx37/rj2.py``). With that check (``/tmp/s37/gx37/h.py``, tag
     ``v7`` against ``g7``), indoor 0-19 / 20-39 / 40-53 within both targets 20 / 19 / 14 as before (seed 27 0.0136 m/m),
-    rotation RPE +0.0003 +- 0.0004 / +0.0003 +- 0.0002 / -0.0001 +- 0.0001 deg/m, 35 of 54 seeds unchanged. Session 37 (``/tmp/s37/ei37/h.py`` = ``evpose slam --mode event-inertial`` + ``evpose
+    rotation RPE +0.0003 +- 0.0004 / +0.0003 +- 0.0002 / -0.0001 +- 0.0001 deg/m, 35 of 54 seeds unchanged (54-61 and
+    landing 0-1 bit-identical). Session 37 (``/tmp/s37/ei37/h.py`` = ``evpose slam --mode event-inertial`` + ``evpose
     eval --atlas``, ``batch.sh``, ``cmp.py``, ``initc.py``), seeds within both RPE targets (0.01 m/m, 0.01 deg/m) on
     indoor 0-19 / 20-39 / 40-53 / landing 0-23, main's defaults (tag ``rv``) 20 / 18 / 14 / 24, mean tracked
     0.939 / 0.910 / 0.981 / 0.989 (least 0.697 / 0.663 / 0.840 / 0.982), seeds never IMU-initialised 4 / 1 / 2 / 0.

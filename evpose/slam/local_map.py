@@ -233,7 +233,8 @@ def triangulate_new_points(m: SlamMap, K: np.ndarray, kf: Keyframe, track_to_poi
     their ties hold the segment's scale: E-I-C2 indoor 20-39 went 18 -> 16 of 20 within the RPE targets. With the check
     (``/tmp/s37/gx37/h.py``, tag ``v0`` against main's ``rv``) indoor 0-19 / 20-39 / 40-53 stay 20 / 18 / 14 within
     both targets (seed 32 in, 29 out at 0.0136 deg/m), rotation RPE -0.0002 +- 0.0003 / -0.0002 +- 0.0007 / -0.00002
-    +- 0.00001 deg/m, 39 of 54 seeds bit-identical; event-only maps never re-join (``segment_start_kf`` stays 0)."""
+    +- 0.00001 deg/m, 39 of 54 seeds bit-identical; fresh 54-61 8 / 8 (+0.0004 +- 0.0003 deg/m, 5 identical); landing
+    0-1 bit-identical (no re-joins); event-only maps never re-join (``segment_start_kf`` stays 0)."""
     by_kf: dict[int, list[int]] = {}
     for tid in sorted(kf.obs):
         if tid in track_to_point:
