@@ -58,7 +58,8 @@ def test_a_gyro_started_map_rejoined_after_the_scene_switch_keeps_its_scale(scen
     cfg.inertial.configuration = InertialConfiguration.C2
     cfg.inertial.init_keyframes, cfg.inertial.init_min_span_s, cfg.inertial.init_min_gap_s = 50, 0.6, 0.15
     cfg.inertial.coast_s, cfg.inertial.rejoin_s = 0.05, 1.0
-    cfg.inertial.init_gyro_two_view = True
+    # Every start gyro-resolved (min_deg 0): the first start, 0.3 deg off the gyro, is the one that crossed the switch.
+    cfg.inertial.init_gyro_two_view, cfg.inertial.init_gyro_two_view_min_deg = True, 0.0
     run = run_slam(scene_switch, cfg)
     assert any("+gyro" in r.reason for r in run.results), "the first map is a gyro start"
     maps = [m for m in run.atlas.maps if m.traj_t]
