@@ -219,22 +219,10 @@ def triangulate_new_points(m: SlamMap, K: np.ndarray, kf: Keyframe, track_to_poi
     ``predicted``: ``kf`` sits at a pose no image placed (an event-only coast's prediction); with
     :attr:`TrackingConfig.coast_depth_level` its new points then take the depth level of the older points.
 
-    In a re-joined map (:mod:`evpose.slam.map_rejoin`) a pair reaching back past the newest visual segment
-    (:attr:`SlamMap.segment_start_kf`) makes a point only if it also reprojects in every keyframe between the pair that
-    saw the track: a KLT track can outlive the loss of a map, drifting onto whatever the events show next, so the same
-    track id in the older segment may be another scene point. Such points are the only ones that hold the segment's
-    scale in its local BA (one fixed keyframe, no scale anchor event-inertial), so the wrong ones set it. The
-    scene-switch test of ``tests/slam/test_configurations.py`` with ``InertialConfig.init_gyro_two_view`` (session 37,
-    ``/tmp/s37/gx37/d1.py``): track 33, alive from 0.055 s through the switch at 1.4-1.6 s to 2.39 s, lost its point of
-    the fresh map and was triangulated against keyframe 0 (0.055 s, the other scene); with it and one more such point
-    the segment's BA (keyframe 0 fixed, outside the window) slid its scale 17 times (keyframe 2.05 s 7 -> 385 cm off,
-    2.39 s 1010 cm) and the points it moved spoilt the refit poses before the switch (ATE 1.29 -> 15.0 %). Leaving
-    those pairs out altogether mends it too, but indoors the tracks that outlive a loss are mostly the same points and
-    their ties hold the segment's scale: E-I-C2 indoor 20-39 went 18 -> 16 of 20 within the RPE targets. With the check
-    (``/tmp/s37/gx37/h.py``, tag ``v0`` against main's ``rv``) indoor 0-19 / 20-39 / 40-53 stay 20 / 18 / 14 within
-    both targets (seed 32 in, 29 out at 0.0136 deg/m), rotation RPE -0.0002 +- 0.0003 / -0.0002 +- 0.0007 / -0.00002
-    +- 0.00001 deg/m, 39 of 54 seeds bit-identical; fresh 54-61 8 / 8 (+0.0004 +- 0.0003 deg/m, 5 identical); landing
-    0-1 bit-identical (no re-joins); event-only maps never re-join (``segment_start_kf`` stays 0)."""
+    With :attr:`TrackingConfig.rejoin_pair_check`, in a re-joined map (:mod:`evpose.slam.map_rejoin`) a pair reaching
+    back past the newest visual segment (:attr:`SlamMap.segment_start_kf`) makes a point only if it also reprojects in
+    every keyframe between the pair that saw the track: a KLT track can outlive the loss of a map, drifting onto
+    whatever the events show next, so the same track id in the older segment may be another scene point."""
     by_kf: dict[int, list[int]] = {}
     for tid in sorted(kf.obs):
         if tid in track_to_point:
@@ -255,7 +243,7 @@ def triangulate_new_points(m: SlamMap, K: np.ndarray, kf: Keyframe, track_to_poi
         X = triangulate(K, invert_pose(old.T_wc), invert_pose(kf.T_wc), uv1, uv2)
         good = good_triangulation(K, old.T_wc, kf.T_wc, uv1, uv2, X, 2.0 * cfg.reprojection_threshold_px, cfg.min_triangulation_deg)
         between = [b for b in m.keyframes if old.id < b.id < kf.id] if cfg.intermediate_observations else []
-        across = [b for b in m.keyframes if old.id < b.id < kf.id] if old.id < m.segment_start_kf else []
+        across = [b for b in m.keyframes if old.id < b.id < kf.id] if cfg.rejoin_pair_check and old.id < m.segment_start_kf else []
         for k in np.flatnonzero(good):
             tid = tids[k]
             if not all(_reprojects(K, b.T_wc, X[k], b.obs[tid], 2.0 * cfg.reprojection_threshold_px) for b in across if tid in b.obs):

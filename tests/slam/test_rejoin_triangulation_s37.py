@@ -36,7 +36,8 @@ def _three_keyframes(segment_start: int, shift_px: float):
 
 
 def test_a_pair_across_a_rejoin_needs_the_keyframes_between_to_agree():
-    cfg = TrackingConfig(min_triangulation_deg=1.0, min_pair_parallax_deg=2.0, intermediate_observations=False)
+    cfg = TrackingConfig(min_triangulation_deg=1.0, min_pair_parallax_deg=2.0, intermediate_observations=False,
+                         rejoin_pair_check=True)
     # Within one segment the pair (0, 2) triangulates whatever keyframe 1 saw.
     m, K, t2p = _three_keyframes(0, 20.0)
     nxt = triangulate_new_points(m, K, m.keyframes[2], t2p, cfg, 1000)
@@ -60,6 +61,7 @@ def test_a_gyro_started_map_rejoined_after_the_scene_switch_keeps_its_scale(scen
     cfg.inertial.coast_s, cfg.inertial.rejoin_s = 0.05, 1.0
     # Every start gyro-resolved (min_deg 0): the first start, 0.3 deg off the gyro, is the one that crossed the switch.
     cfg.inertial.init_gyro_two_view, cfg.inertial.init_gyro_two_view_min_deg = True, 0.0
+    cfg.tracking.rejoin_pair_check = True
     run = run_slam(scene_switch, cfg)
     assert any("+gyro" in r.reason for r in run.results), "the first map is a gyro start"
     maps = [m for m in run.atlas.maps if m.traj_t]
