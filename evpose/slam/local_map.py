@@ -217,7 +217,12 @@ def triangulate_new_points(m: SlamMap, K: np.ndarray, kf: Keyframe, track_to_poi
     """Triangulate tracks of ``kf`` without a point against the oldest keyframe that saw them; returns the next free point id.
 
     ``predicted``: ``kf`` sits at a pose no image placed (an event-only coast's prediction); with
-    :attr:`TrackingConfig.coast_depth_level` its new points then take the depth level of the older points."""
+    :attr:`TrackingConfig.coast_depth_level` its new points then take the depth level of the older points.
+
+    With :attr:`TrackingConfig.rejoin_pair_check`, in a re-joined map (:mod:`evpose.slam.map_rejoin`) a pair reaching
+    back past the newest visual segment (:attr:`SlamMap.segment_start_kf`) makes a point only if it also reprojects in
+    every keyframe between the pair that saw the track: a KLT track can outlive the loss of a map, drifting onto
+    whatever the events show next, so the same track id in the older segment may be another scene point."""
     by_kf: dict[int, list[int]] = {}
     for tid in sorted(kf.obs):
         if tid in track_to_point:
@@ -238,8 +243,11 @@ def triangulate_new_points(m: SlamMap, K: np.ndarray, kf: Keyframe, track_to_poi
         X = triangulate(K, invert_pose(old.T_wc), invert_pose(kf.T_wc), uv1, uv2)
         good = good_triangulation(K, old.T_wc, kf.T_wc, uv1, uv2, X, 2.0 * cfg.reprojection_threshold_px, cfg.min_triangulation_deg)
         between = [b for b in m.keyframes if old.id < b.id < kf.id] if cfg.intermediate_observations else []
+        across = [b for b in m.keyframes if old.id < b.id < kf.id] if cfg.rejoin_pair_check and old.id < m.segment_start_kf else []
         for k in np.flatnonzero(good):
             tid = tids[k]
+            if not all(_reprojects(K, b.T_wc, X[k], b.obs[tid], 2.0 * cfg.reprojection_threshold_px) for b in across if tid in b.obs):
+                continue  # a pair across a re-join whose track changed scene point on the way
             obs = {old.id: uv1[k], kf.id: uv2[k]}
             for b in between:
                 uv = b.obs.get(tid)
