@@ -120,8 +120,8 @@ class InertialConfig:
     0.989), 2.5 deg 18 / 18 / 14 / 24 (0.927 / 0.886 / 0.980 / 0.989; 1 landing seed changed), 2 deg 19 / 19 / 14 / 24
     (0.911 / 0.876 / 0.949 / 0.983; 2 changed): tighter refuses more starts for no more seeds."""
     init_gyro_two_view: bool = True
-    """Resolve a two-view start (a new map, or one re-joining the map lost while coasting) with the gyro's rotation between
-    the two views instead of refusing it (:mod:`evpose.slam.gyro_two_view`): the relative rotation is the gyro's
+    """Resolve a two-view start (a new map, or one re-joining the map lost while coasting) with the gyro's rotation
+    between the two views instead of refusing it (:mod:`evpose.slam.gyro_two_view`): the relative rotation is the gyro's
     (bias-corrected once known, through ``T_cam_imu``), only the translation direction is estimated (2-point RANSAC,
     then a refinement with the gyro rotation as a prior of ``init_gyro_two_view_sigma_deg``), then the points are
     triangulated as before. Applies to the starts the decomposition accepted that are at least
