@@ -71,23 +71,31 @@ def test_a_keyframe_pair_with_too_short_a_baseline_for_the_scene_depth_triangula
     assert all(t2p[t] >= 1000 for t in range(100, 130) if t in t2p)
 
 
-def test_a_new_point_keeps_its_tracks_observations_in_the_keyframes_between_the_pair_it_is_triangulated_from():
+def add_third_keyframe(m, K, x2: float, observe_points: bool = True) -> None:
+    """Appends keyframe 2 of :func:`_two_keyframes`' map, ``x2`` m sideways, seeing its 60 tracks without noise; with
+    ``observe_points`` the 30 map points get that observation too."""
     from evpose.core.trajectory import invert_pose
     from evpose.slam.geometry import project
+
+    rng = np.random.default_rng(0)
+    X = np.c_[rng.uniform(-2, 2, 60), rng.uniform(-1.5, 1.5, 60), rng.uniform(4.5, 5.5, 60)]
+    T2 = np.eye(4)
+    T2[0, 3] = x2
+    uv2, _ = project(K, invert_pose(T2), X)
+    tids = list(range(30)) + list(range(100, 130))
+    m.keyframes.append(Keyframe(2, 200_000, T2, {t: uv2[i] for i, t in enumerate(tids)}))
+    if observe_points:
+        for i in range(30):
+            m.points[i].obs[2] = uv2[i]
+
+
+def test_a_new_point_keeps_its_tracks_observations_in_the_keyframes_between_the_pair_it_is_triangulated_from():
     from evpose.slam.local_map import triangulate_new_points
 
     # Keyframes 0, 1, 2 at 0, 0.1 and 0.3 m sideways, points 5 m ahead: the pair (0, 1) is too short for new points
     # (1.1 deg < 2 deg), so tracks 100-129 are triangulated from (0, 2); keyframe 1 saw them too.
     m, K, t2p = _two_keyframes(0.1)
-    rng = np.random.default_rng(0)
-    X = np.c_[rng.uniform(-2, 2, 60), rng.uniform(-1.5, 1.5, 60), rng.uniform(4.5, 5.5, 60)]
-    T2 = np.eye(4)
-    T2[0, 3] = 0.3
-    uv2, _ = project(K, invert_pose(T2), X)
-    tids = list(range(30)) + list(range(100, 130))
-    m.keyframes.append(Keyframe(2, 200_000, T2, {t: uv2[i] for i, t in enumerate(tids)}))
-    for i in range(30):
-        m.points[i].obs[2] = uv2[i]
+    add_third_keyframe(m, K, 0.3)
     cfg = TrackingConfig(min_triangulation_deg=1.0, min_pair_parallax_deg=2.0, intermediate_observations=True)
     nxt = triangulate_new_points(m, K, m.keyframes[2], t2p, cfg, 1000)
     new = [m.points[p] for p in range(1000, nxt)]
@@ -95,14 +103,14 @@ def test_a_new_point_keeps_its_tracks_observations_in_the_keyframes_between_the_
     assert all(sorted(p.obs) == [0, 1, 2] for p in new)
     # A track whose view in keyframe 1 is off by 20 px is not given that observation.
     m, K, t2p = _two_keyframes(0.1)
-    m.keyframes.append(Keyframe(2, 200_000, T2, {t: uv2[i] for i, t in enumerate(tids)}))
+    add_third_keyframe(m, K, 0.3, observe_points=False)
     m.keyframes[1].obs[100] = m.keyframes[1].obs[100] + 20.0
     nxt = triangulate_new_points(m, K, m.keyframes[2], t2p, cfg, 1000)
     p100 = m.points[t2p[100]]
     assert sorted(p100.obs) == [0, 2]
     # Off: only the pair observes a new point.
     m, K, t2p = _two_keyframes(0.1)
-    m.keyframes.append(Keyframe(2, 200_000, T2, {t: uv2[i] for i, t in enumerate(tids)}))
+    add_third_keyframe(m, K, 0.3, observe_points=False)
     nxt = triangulate_new_points(m, K, m.keyframes[2], t2p, TrackingConfig(min_pair_parallax_deg=2.0, intermediate_observations=False), 1000)
     assert all(sorted(m.points[p].obs) == [0, 2] for p in range(1000, nxt))
 

@@ -4,33 +4,22 @@ outlive the loss of a map, so in the older segment's keyframes the same track id
 
 import numpy as np
 
-from evpose.core.trajectory import invert_pose
 from evpose.eval.slam_metrics import atlas_metrics
 from evpose.slam import SlamConfig, SlamMode, run_slam
-from evpose.slam.atlas import Keyframe
 from evpose.slam.config import TrackingConfig
-from evpose.slam.geometry import project
 from evpose.slam.inertial import InertialConfiguration
 from evpose.slam.local_map import triangulate_new_points
 from tests.slam.test_configurations import scene_switch  # noqa: F401  (the fixture)
-from tests.slam.test_local_map import _two_keyframes
+from tests.slam.test_local_map import _two_keyframes, add_third_keyframe
 
 
 def _three_keyframes(segment_start: int, shift_px: float):
     """Keyframes 0 / 1 / 2 at 0 / 0.1 / 0.6 m sideways; tracks 100-129 have no point yet, and keyframe 1 sees them
     ``shift_px`` off their points (another scene point); the map's newest segment starts at ``segment_start``."""
     m, K, t2p = _two_keyframes(0.1)
-    rng = np.random.default_rng(0)
-    X = np.c_[rng.uniform(-2, 2, 60), rng.uniform(-1.5, 1.5, 60), rng.uniform(4.5, 5.5, 60)]
-    T2 = np.eye(4)
-    T2[0, 3] = 0.6
-    uv2, _ = project(K, invert_pose(T2), X)
-    tids = list(range(30)) + list(range(100, 130))
     for t in range(100, 130):
         m.keyframes[1].obs[t] = m.keyframes[1].obs[t] + np.array([0.0, shift_px])
-    m.keyframes.append(Keyframe(2, 200_000, T2, {t: uv2[i] for i, t in enumerate(tids)}))
-    for i in range(30):
-        m.points[i].obs[2] = uv2[i]
+    add_third_keyframe(m, K, 0.6)
     m.segment_start_kf = segment_start
     return m, K, t2p
 
