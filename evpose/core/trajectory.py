@@ -40,6 +40,12 @@ MAX_COORDINATE_M = 1e7
 garbage; 1e300 overflowed the KD-tree of a map with a traceback, and evo's alignment of a trajectory with numpy's warnings)."""
 
 
+def skew(w: np.ndarray) -> np.ndarray:
+    """The 3x3 cross-product matrix of ``w`` (``skew(w) @ v == cross(w, v)``)."""
+    x, y, z = np.asarray(w, dtype=np.float64).tolist()  # Python floats: the same values, a third of the indexing cost
+    return np.array(((0.0, -z, y), (z, 0.0, -x), (-y, x, 0.0)))
+
+
 def quaternion_problem(quat_xyzw: np.ndarray) -> tuple[int, str] | None:
     """(index, problem) of the first quaternion that cannot be normalised, or None; NaNs are left to ``validate``.
 

@@ -37,12 +37,12 @@ from scipy.spatial.transform import Rotation
 
 from evpose.core.camera import CameraCalibration
 from evpose.core.imu import ImuSamples
-from evpose.core.trajectory import Trajectory
+from evpose.core.trajectory import Trajectory, skew
 from evpose.fusion.config import FusionConfig, RobustLoss
 from evpose.fusion.factor_graph import initial_bias_covariance, registration_covariance, usable_pose
 from evpose.fusion.startup import gyro_bias_release_due, initial_gyro_bias_sigma, startup_inflated
 from evpose.fusion.preintegration import ImuBuffer
-from evpose.fusion.state import Extrinsic, FusedState, skew
+from evpose.fusion.state import Extrinsic, FusedState
 
 
 def _exp(w: np.ndarray) -> np.ndarray:

@@ -105,6 +105,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from evpose.fusion.startup import in_startup
+
 
 def mean_revision(revisions: list[tuple[np.ndarray, np.ndarray]]) -> tuple[np.ndarray, np.ndarray]:
     """Mean (world rotation vector rad (3,), position m (3,)) of per-state revisions."""
@@ -162,14 +164,11 @@ def readout_pose(fusion, T_world_cam: np.ndarray, previous=None) -> np.ndarray |
 def depth_ratio(fusion) -> float:
     """``FusionConfig.revision_readout_depth_ratio`` for ``fusion``'s newest state, or 1 while the registrations are
     widened after the start (within ``registration_startup_s`` of it, as
-    :func:`~evpose.fusion.startup.startup_inflated`): then the depth revisions do not follow the error the same way
+    :func:`~evpose.fusion.startup.in_startup`): then the depth revisions do not follow the error the same way
     (session 37, the first 0.5 s at 240x180, replayed: +0.006 mm with the ratio there, -0.006 without; the quick
     bench's 0.5 s landing +0.32 mm)."""
     c = fusion.config
-    start = fusion.start_us
-    if start is not None and fusion.history[-1][0] - start < c.registration_startup_s * 1e6:
-        return 1.0
-    return float(c.revision_readout_depth_ratio)
+    return 1.0 if in_startup(c, fusion.start_us, fusion.history[-1][0]) else float(c.revision_readout_depth_ratio)
 
 
 def smoothed_position(out: np.ndarray, T_world_cam: np.ndarray, previous, alpha: float) -> np.ndarray:

@@ -40,6 +40,12 @@ landing (seed 0, every update, ``/tmp/s33/gyro33/eig.py``) those two stand out (
 directions are then whichever the eigen-solver returns first (deterministic, not meaningful)."""
 
 
+def in_startup(config: FusionConfig, start_us: int | None, t_us: int) -> bool:
+    """Whether ``t_us`` lies within ``registration_startup_s`` of a fusion started at ``start_us`` (False before any
+    start): the registrations are widened then, and the read-out's depth ratio waits."""
+    return start_us is not None and t_us - start_us < config.registration_startup_s * 1e6
+
+
 def startup_inflated(config: FusionConfig, start_us: int | None, t_us: int, covariance_6x6):
     """The registration covariance at ``t_us`` of a fusion started at ``start_us``, its correlation matrix's
     ``registration_startup_directions`` (:data:`STARTUP_RIDGE_DIRECTIONS` by default) largest eigenvalues times ``registration_startup_inflation`` within
@@ -48,7 +54,7 @@ def startup_inflated(config: FusionConfig, start_us: int | None, t_us: int, cova
     is 1, before any start or when unusable."""
     if start_us is None or covariance_6x6 is None:
         return covariance_6x6
-    startup = t_us - start_us < config.registration_startup_s * 1e6
+    startup = in_startup(config, start_us, t_us)
     factor = float(config.registration_startup_inflation if startup else config.registration_ridge_scale)
     if factor == 1.0:
         return covariance_6x6

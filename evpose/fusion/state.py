@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from evpose.core.trajectory import invert_pose
+from evpose.core.trajectory import invert_pose, skew
 
 
 @dataclass
@@ -44,11 +44,6 @@ class FusedState:
         cp = lambda a: None if a is None else np.array(a, copy=True)  # noqa: E731
         return FusedState(int(self.t_us), cp(self.T_world_cam), cp(self.velocity_world), cp(self.acc_bias), cp(self.gyro_bias),
                           cp(self.covariance), bool(self.degraded), cp(self.omega_cam), cp(self.readout_T_world_cam))
-
-
-def skew(w: np.ndarray) -> np.ndarray:
-    x, y, z = np.asarray(w, dtype=np.float64).tolist()  # Python floats: the same values, a third of the indexing cost
-    return np.array(((0.0, -z, y), (z, 0.0, -x), (-y, x, 0.0)))
 
 
 def adjoint(T: np.ndarray) -> np.ndarray:

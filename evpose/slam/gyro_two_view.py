@@ -27,6 +27,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from evpose.core.trajectory import skew
 from evpose.slam.geometry import parallax_deg
 from evpose.slam.init_parallax import bearings
 from evpose.slam.initialization import TwoViewResult, _evaluate
@@ -40,14 +41,10 @@ def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
 
 
-def _skew(v: np.ndarray) -> np.ndarray:
-    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
-
-
 def sampson_px(K: np.ndarray, R: np.ndarray, t: np.ndarray, p1: np.ndarray, p2: np.ndarray) -> np.ndarray:
     """Signed Sampson distance, pixels (N,), of matches ``p1 -> p2`` under ``x2 = R x1 + t`` (camera-1-from-camera-0)."""
     Ki = np.linalg.inv(K)
-    F = Ki.T @ _skew(np.asarray(t, np.float64)) @ R @ Ki
+    F = Ki.T @ skew(t) @ R @ Ki
     x1 = np.c_[p1, np.ones(len(p1))]
     x2 = np.c_[p2, np.ones(len(p2))]
     l2 = x1 @ F.T
