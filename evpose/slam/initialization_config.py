@@ -181,6 +181,10 @@ class InitializationConfig:
     13 of 16 worse, least tracked 72.0 %."""
     max_frames: int = field(default=8, metadata={"min": 1, "max": 100, "step": 1, "unit": "MCIs"})
     """The reference view is replaced after this many MCIs without success, MCIs."""
+    drop_static_matches: bool = False
+    """A two-view attempt whose median match moved less than a pixel ("features barely moved") but at least
+    ``min_matches`` of whose matches moved a pixel or more is tried on those alone
+    (:func:`evpose.slam.initialization.moved_matches`); off: refused. Measurements: session 38 (el38)."""
     restart_at_failed_mci: bool = False
     """When a two-view attempt gives up its reference (too few matches left, or ``max_frames`` used up), make the
     failing MCI the new reference at once instead of the next MCI (off: the next one), one MCI interval earlier.
