@@ -106,8 +106,18 @@ class CoastSettings:
     """Event-only coasting: a coast that ends in a loss is removed from the map's trajectory (as
     ``coast_drop_unconfirmed``) when the map spans at least this up to its last PnP pose (0: never; a younger map's
     coast is kept, and written on the visual gyro's rotations, ``VisualGyroConfig.written_coasts_max_map_s``), s.
-    Tracking is unchanged (the map is lost either way); only the written trajectory loses the unconfirmed tail.
-    Measurements: session 38 (el38)."""
+    Tracking is unchanged (the map is lost either way); only the written trajectory loses the unconfirmed tail. Why:
+    landing seed 4 (6.13 %, main's worst landing) coasts its 2.4 s map for 0.38 s at its end on a held rotation of
+    68.6 deg/s where the truth turns 12-37 (``coast_hold_motion``), 1.15 m off at the end: 4.0 of its 6.13 points. A
+    mature map's coast is not written on the visual gyro's rotations (with them seed 4's map scores 7.09 -> 7.17 %:
+    the held camera-frame velocity points the wrong way, ``VisualGyroConfig.written_coasts``). Session 38
+    (``/tmp/s38/el38``: ``droptail_all.py`` offline on main's default runs, tag ``fin``; in situ ``batch.sh`` tag
+    ``cdm``), 0.5 (as ``coast_triangulate_min_map_s``): landing 0-23 1.474 -> 1.307 % (only seed 4 changes: 6.13 ->
+    2.11 %, tracked 96.5 -> 83.8 %; 21 of 24 within 2 % either way), held-out landing 24-35 (simulated for it: every
+    run one map, none lost) and indoor 0-61 bit-identical (no indoor map that long ends on a coast). 0.25 (offline) reaches
+    the rooms: indoor 0-53 1.882 -> 1.846 % (seed 36 4.68 -> 3.17, 44 2.02 -> 1.58 %), fresh 54-61 1.836 -> 1.771
+    (seed 58 1.83 -> 1.32 %), but seeds 44 / 58 then track 75.9 / 76.5 % (93.4 / 94.5). Off: one seed, and no held-out
+    recording that it changes."""
     coast_triangulate: bool = False
     """Event-only coasting: the keyframe made at each coasted pose triangulates new points (before session 28). Off
     (the default since): it only records the tracks, so no point comes from dead reckoning and PnP places the map again
