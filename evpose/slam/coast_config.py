@@ -110,7 +110,9 @@ class CoastSettings:
     landing seed 4 (6.13 %, main's worst landing) coasts its 2.4 s map for 0.38 s at its end on a held rotation of
     68.6 deg/s where the truth turns 12-37 (``coast_hold_motion``), 1.15 m off at the end: 4.0 of its 6.13 points. A
     mature map's coast is not written on the visual gyro's rotations (with them seed 4's map scores 7.09 -> 7.17 %:
-    the held camera-frame velocity points the wrong way, ``VisualGyroConfig.written_coasts``). Session 38
+    the held camera-frame velocity points the wrong way, ``VisualGyroConfig.written_coasts``; coasting such a map
+    online on the visual gyro, a scratch variant, 6.20 %: its coast turns 35-40 deg/s as the truth does, yet its
+    steps end 52 deg off the true direction, as by default, ``/tmp/s38/el38/coast4.py``). Session 38
     (``/tmp/s38/el38``: ``droptail_all.py`` offline on main's default runs, tag ``fin``; in situ ``batch.sh`` tag
     ``cdm``), 0.5 (as ``coast_triangulate_min_map_s``): landing 0-23 1.474 -> 1.307 % (only seed 4 changes: 6.13 ->
     2.11 %, tracked 96.5 -> 83.8 %; 21 of 24 within 2 % either way), held-out landing 24-35 (simulated for it: every
