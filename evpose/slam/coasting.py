@@ -33,27 +33,29 @@ def constant_velocity_pose(m: SlamMap, t_us: int) -> np.ndarray:
     return guess
 
 
-def camera_frame_velocity(m: SlamMap, min_span_us: int) -> np.ndarray | None:
-    """Velocity of the camera in its own frame (map units per us), averaged over the newest poses spanning ``min_span_us``.
+def camera_frame_velocity(m: SlamMap, min_span_us: int, end: int = -1) -> np.ndarray | None:
+    """Velocity of the camera in its own frame (map units per us), averaged over the newest poses spanning ``min_span_us``
+    (up to the pose at index ``end``).
 
     Two consecutive MCIs are a few ms apart and a few mm of motion; their difference is mostly pose noise, so the
     coasting speed comes from a longer stretch of the trajectory. None when the map has not moved for that long.
     """
-    span = trajectory_span(m, min_span_us)
+    span = trajectory_span(m, min_span_us, end)
     if span is None:
         return None
     k, dt = span
-    T_end = m.traj_T[-1]
+    T_end = m.traj_T[end]
     return T_end[:3, :3].T @ (T_end[:3, 3] - m.traj_T[k][:3, 3]) / dt
 
 
-def trajectory_span(m: SlamMap, min_span_us: int) -> tuple[int, int] | None:
-    """(index of the newest pose at least ``min_span_us`` before the map's last one, that span in us); None when the
-    map's trajectory is shorter than that."""
-    if len(m.traj_t) < 2:
+def trajectory_span(m: SlamMap, min_span_us: int, end: int = -1) -> tuple[int, int] | None:
+    """(index of the newest pose at least ``min_span_us`` before the map's last one (or the one at index ``end``), that
+    span in us); None when the map's trajectory is shorter than that."""
+    end = end % len(m.traj_t) if m.traj_t else 0
+    if end < 1:
         return None
-    t_end = m.traj_t[-1]
-    k = len(m.traj_t) - 2
+    t_end = m.traj_t[end]
+    k = end - 1
     while k > 0 and t_end - m.traj_t[k] < min_span_us:
         k -= 1
     dt = t_end - m.traj_t[k]

@@ -219,28 +219,39 @@ from evpose.slam.atlas import SlamMap
 from evpose.slam.coasting import camera_frame_velocity, coast_pose, trajectory_span
 
 
-def camera_frame_rate(m: SlamMap, min_span_us: int) -> np.ndarray | None:
-    """Angular velocity of the camera in its own frame (rad per us), over the newest poses spanning ``min_span_us``.
+def camera_frame_rate(m: SlamMap, min_span_us: int, end: int = -1) -> np.ndarray | None:
+    """Angular velocity of the camera in its own frame (rad per us), over the newest poses spanning ``min_span_us`` (up
+    to the pose at index ``end``).
 
     None when the map's trajectory is shorter than that.
     """
-    span = trajectory_span(m, min_span_us)
+    span = trajectory_span(m, min_span_us, end)
     if span is None:
         return None
     k, dt = span
-    R_rel = m.traj_T[k][:3, :3].T @ m.traj_T[-1][:3, :3]
+    R_rel = m.traj_T[k][:3, :3].T @ m.traj_T[end][:3, :3]
     return Rotation.from_matrix(R_rel).as_rotvec() / dt
 
 
-def event_only_coast_pose(m: SlamMap, t_us: int, min_span_us: int) -> np.ndarray | None:
-    """``T_world_cam`` at ``t_us`` with the map's recent camera-frame rotation rate and velocity held; None without them."""
-    w = camera_frame_rate(m, min_span_us)
-    v = camera_frame_velocity(m, min_span_us)
+def event_only_coast_pose(m: SlamMap, t_us: int, min_span_us: int, end: int = -1) -> np.ndarray | None:
+    """``T_world_cam`` at ``t_us`` with the map's recent camera-frame rotation rate and velocity held; None without them.
+
+    ``end``: the rate and velocity are measured over the poses up to this index (``TrackingConfig.coast_hold_motion``:
+    the map's last visually placed pose, so a coast holds one motion), the pose extrapolated from the map's last one."""
+    w = camera_frame_rate(m, min_span_us, end)
+    v = camera_frame_velocity(m, min_span_us, end)
     if w is None or v is None:
         return None
     dt = t_us - m.traj_t[-1]
     R_wc = m.traj_T[-1][:3, :3] @ Rotation.from_rotvec(w * dt).as_matrix()
     return coast_pose(m, t_us, R_wc, v)
+
+
+def held_motion_end(traj_t: list[int], t_last_visual_us: int) -> int:
+    """Index of the map's newest pose at or before ``t_last_visual_us`` (its last visually placed one), -1 when none is:
+    where ``TrackingConfig.coast_hold_motion`` ends the stretch a coast measures its held motion on."""
+    i = int(np.searchsorted(np.asarray(traj_t, np.int64), t_last_visual_us, side="right")) - 1
+    return i if i >= 0 else -1
 
 
 def drop_unconfirmed_poses(m: SlamMap, t_last_visual_us: int) -> int:

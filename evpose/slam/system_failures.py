@@ -16,7 +16,7 @@ import numpy as np
 from evpose.core.trajectory import invert_pose
 from evpose.slam.coasting import camera_frame_velocity, coast_pose, drop_contradicted, trajectory_span
 from evpose.slam.edge_tracking import measure_across_edges, solve_pose_across_edges
-from evpose.slam.event_coasting import drop_unconfirmed_poses, event_only_coast_pose
+from evpose.slam.event_coasting import drop_unconfirmed_poses, event_only_coast_pose, held_motion_end
 from evpose.slam.inertial import InertialConfiguration
 from evpose.slam.inertial_guards import discard_map, young_lost_map
 from evpose.slam.map_rejoin import RejoinCandidate
@@ -104,14 +104,15 @@ class VisualFailureHandling:
         after_s = (mci.t_us - self._after_blank_t) / 1e6 if self._after_blank_t is not None else 0.0
         if tc.coast_blank_s > 0 and after_s > tc.coast_after_blank_s:
             gap_s = np.inf  # crossed a blank wall on dead reckoning and not placed again right after it
-        T_wc = event_only_coast_pose(m, mci.t_us, int(tc.coast_span_s * 1e6)) if gap_s <= tc.coast_s else None
+        end = held_motion_end(m.traj_t, self._last_visual_t) if tc.coast_hold_motion else -1
+        T_wc = event_only_coast_pose(m, mci.t_us, int(tc.coast_span_s * 1e6), end) if gap_s <= tc.coast_s else None
         if T_wc is None and gap_s <= tc.coast_s and tc.coast_young_span_s > 0 and m.traj_t:
             # A young map: hold the motion of its whole trajectory, if that spans long enough to mean anything.
-            span_us = m.traj_t[-1] - m.traj_t[0]
+            span_us = m.traj_t[end] - m.traj_t[0]
             if span_us >= tc.coast_young_span_s * 1e6:
-                T_wc = event_only_coast_pose(m, mci.t_us, span_us)
+                T_wc = event_only_coast_pose(m, mci.t_us, span_us, end)
         if T_wc is None:
-            if tc.coast_drop_unconfirmed:
+            if tc.coast_drop_unconfirmed or self._mature_unconfirmed(m):
                 drop_unconfirmed_poses(m, self._last_visual_t)
             return self._lose(reason)
         if R_wc is not None:
@@ -133,6 +134,13 @@ class VisualFailureHandling:
         if self.cfg.lines.update_from_coast:
             self._lines_after_pose(m, mci, T_wc)
         return SlamStatus.COASTING, f"visual tracking failed ({reason}); pose coasted on the map's recent motion, map {m.id} kept", T_wc.copy(), True
+
+    def _mature_unconfirmed(self, m) -> bool:
+        """Whether a coast that ends in a loss leaves the map's trajectory under ``TrackingConfig.coast_drop_mature_s``:
+        the map spans at least that up to its last PnP pose (its coast is neither written on the visual gyro's rotations,
+        ``VisualGyroConfig.written_coasts_max_map_s``, nor anything the images confirmed)."""
+        lim = self.cfg.tracking.coast_drop_mature_s
+        return lim > 0 and bool(m.traj_t) and (self._last_pnp_t - m.traj_t[0]) / 1e6 >= lim
 
     def _coast_triangulates(self, m, t_us: int, T_wc: np.ndarray) -> bool:
         """Whether the keyframe at coasted pose ``T_wc`` triangulates: always with ``TrackingConfig.coast_triangulate``;

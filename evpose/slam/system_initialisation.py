@@ -42,7 +42,7 @@ import numpy as np
 from evpose.slam.atlas import Keyframe, MapPoint, SlamMap
 from evpose.slam.bundle_adjustment import local_bundle_adjustment
 from evpose.slam.gyro_two_view import two_view_with_rotation
-from evpose.slam.initialization import initialize_two_view
+from evpose.slam.initialization import initialize_two_view, moved_matches
 from evpose.slam.inertial_config import InertialConfiguration
 from evpose.slam.inertial_guards import two_view_gyro_disagreement_deg
 from evpose.slam.keyframe_search import keep_keyframe_image
@@ -66,6 +66,10 @@ class TwoViewInitialisation:
         ids = fe.ids[common]
         p1 = np.array([fe.init_ref[int(t)] for t in ids]).reshape(-1, 2)
         p2 = fe.uv[common].astype(np.float64)
+        moved = moved_matches(p1, p2, icfg) if icfg.drop_static_matches else None
+        if moved is not None:
+            # InitializationConfig.drop_static_matches: the tracks that stood still are noise, not the scene.
+            common, ids, p1, p2 = [common[k] for k in np.flatnonzero(moved)], ids[moved], p1[moved], p2[moved]
         res = initialize_two_view(self.K, p1, p2, icfg, self.cfg.seed)
         ic = self.cfg.inertial
         # E-I-C3 never refuses (InertialConfig.init_max_gyro_deg): its fixed windows' starts were refused too often.
