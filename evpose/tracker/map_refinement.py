@@ -73,7 +73,9 @@ class MapRefinementConfig:
     seeds 0 / 2), the roll ends at -0.21 / -0.17 deg in the last 0.2 s without the refiner, -0.05 / -0.08 deg with it
     (true-edge map, refiner on: -0.07 / -0.02): the refiner corrects the map rather than following the pose. The edge
     offsets' pose fit handed to it as a gauge (``edge_offsets`` on at 346x260 with ``gain`` 0, the registration's lag
-    kept): ``full`` seeds 0-3 6.40 mm against 6.38."""
+    kept): ``full`` seeds 0-3 6.40 mm against 6.38. Session 38 (``full``, 240x180 2 s seeds 0-23, CLI path paired against
+    main's defaults 4.982 mm, ``/tmp/s38/tr38`` ``run.sh``, ``cmp.py``): off 6.152 mm (+1.17 +- 0.19, 3 of 24 better), the
+    learned map state that matters most at 240x180 (the events' own offsets: none, see ``offset_gain``)."""
     gain: float = field(default=0.05, metadata={"min": 0.0, "max": 1.0, "step": 0.01, "unit": "ratio"})
     """Share of each update's measured step a point moves by (an average over ~1 / gain updates), ratio.
 
