@@ -87,7 +87,8 @@ class MapRefinementConfig:
 
     Session 38 (``full``, landing from ground truth, CLI path paired per seed against ``gain`` 0.05, main fd512ff;
     ``/tmp/s38/tr38`` ``run.sh``, ``cmp.py``, ``demo.sh``; mean ATE RMSE mm +- standard error, seeds better): 240x180
-    2 s seeds 0-23 4.982 -> 0.03: **4.934** (-0.048 +- 0.033, 16 of 24), 0.1: 5.148 (+0.167 +- 0.037, 2 of 24);
+    2 s seeds 0-23 4.982 -> 0.03: **4.934** (-0.048 +- 0.033, 16 of 24), 0.1: 5.148 (+0.167 +- 0.037, 2 of 24), 0.02
+    (after the choice; 24-47 5.309) 4.924: against 0.03 on 0-47 -0.027 +- 0.023 (29 of 48), not kept without other seeds;
     with 0.03, held-out seeds 24-47 5.410 -> **5.352** (-0.058 +- 0.025, 16 of 24, RTE 0.398 -> 0.395), 346x260 seeds
     0-23 4.161 -> **4.136** (-0.024 +- 0.013, 17 of 24), 240x180 3 s seeds 0-7 13.392 -> 13.236 (-0.16 +- 0.15, 4 of
     8); ARE within +-0.002 deg everywhere. Bundled demos (``--align none``): ``landing`` 6.556 -> 6.595,
