@@ -35,6 +35,16 @@ correlates with the 3 s flight's per-window OFF offsets (-0.40 with ``log |v|``)
 vertical faces (whose covered-foot lead flips between the flights): their OFF groups sit +0.03 / +0.10 px (ground /
 face side) from their class leads on the 2 s flight and -0.08 / +0.01 on the 3 s one; the contrast + history model
 has the sign on both but not the size (``feet.py``).
+
+Session 38 (``/tmp/s38/tr38``: ``exmodel.py``, ``resid.py``, ``ana.py``): the coverage model per (point, polarity,
+motion sign) group from the events per passage (``|D| = C E/X``) instead of the rendered contrast predicts what the
+class leads leave nearly as well (correlation 0.31 / 0.34 against 0.35 / 0.38 on the 2 s flight's seeds 0 / 1, 0.63 /
+0.75 against 0.65 / 0.76 on the 3 s one). But only its mean per (polarity, class) moves the registrations' slow
+tilt-vs-sideways bias at the true pose (events against the tracker's learned map, slow part 2.61 / 3.25 -> 2.46 /
+2.53 mm, 2 s seeds 0 / 1), which is a class lead shift; with that mean taken out the per-point spread changes it by
+nothing (2.64 / 3.30; 3 s 3.34 / 1.97 -> 3.32 / 2.01 mm), even on the 3 s flight, where it still correlates 0.54 /
+0.40 per point with what the events leave against their learned map (2 s: -0.24 / -0.03): the contrast's offsets within
+a class hardly project on the pose (the events' learned offsets take up the rest, :mod:`evpose.tracker.event_registration`).
 """
 
 from __future__ import annotations

@@ -72,7 +72,11 @@ class EdgeOffsetConfig:
     without ``gauge_painted`` 7.86), at 4.0 ms 7.42 / 8.30 mm (base 7.77 / 7.95), at 3.5 ms 7.64 / 8.48 mm, at
     5.0 ms 8.83 mm (seeds 0-3); registration's lag alone at 4.0 ms 7.82 mm. Session 12, with the events registered
     (:mod:`evpose.tracker.event_registration`; 6.38 / 7.25 mm at 346x260 / 240x180, seeds 0-3): on at 346x260 too,
-    ``full_field_lag_ms`` 5.0 / 4.0, 6.96 / 6.48 mm; off at 240x180 7.55 mm."""
+    ``full_field_lag_ms`` 5.0 / 4.0, 6.96 / 6.48 mm; off at 240x180 7.55 mm. Session 38 (240x180 2 s seeds 0-23, CLI
+    path paired against main's defaults 4.982 mm, ``/tmp/s38/tr38`` ``run.sh``, ``cmp.py``): off 5.242 mm (+0.26 +- 0.12,
+    8 of 24 better), but ``gain`` 0 (the learner kept, its ``full_field_lag_ms`` too, no point moved) 5.040 (+0.058 +-
+    0.068, 13 of 24): what pays now is the lag this brings, not the learned offsets (the events' own: neither, see
+    ``EventRegistrationConfig.offset_gain``)."""
     full_field_lag_ms: float = field(default=5.0, metadata={"min": 0.0, "max": 50.0, "step": 0.1, "unit": "ms"})
     """``registration.field_lag_ms`` in ``full`` while the offsets are learned (0 = keep that), milliseconds.
 

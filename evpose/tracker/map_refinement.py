@@ -73,12 +73,27 @@ class MapRefinementConfig:
     seeds 0 / 2), the roll ends at -0.21 / -0.17 deg in the last 0.2 s without the refiner, -0.05 / -0.08 deg with it
     (true-edge map, refiner on: -0.07 / -0.02): the refiner corrects the map rather than following the pose. The edge
     offsets' pose fit handed to it as a gauge (``edge_offsets`` on at 346x260 with ``gain`` 0, the registration's lag
-    kept): ``full`` seeds 0-3 6.40 mm against 6.38."""
+    kept): ``full`` seeds 0-3 6.40 mm against 6.38. Session 38 (``full``, 240x180 2 s seeds 0-23, CLI path paired against
+    main's defaults 4.982 mm, ``/tmp/s38/tr38`` ``run.sh``, ``cmp.py``): off 6.152 mm (+1.17 +- 0.19, 3 of 24 better), the
+    learned map state that matters most at 240x180 (the events' own offsets: none, see ``offset_gain``)."""
     gain: float = field(default=0.05, metadata={"min": 0.0, "max": 1.0, "step": 0.01, "unit": "ratio"})
     """Share of each update's measured step a point moves by (an average over ~1 / gain updates), ratio.
 
     Mean of seeds 0-3 at 346x260 / 240x180: 0.03 / 0.05 / 0.1 gave 26.5 / 26.2 / 26.8 mm and
     32.3 / 33.4 / 34.3 mm (most steps are clipped by ``step_clip_px``: 0.5 with 0.05 equals 0.1)."""
+    fused_gain: float = field(default=0.03, metadata={"min": 0.0, "max": 1.0, "step": 0.01, "unit": "ratio"})
+    """``gain`` in the fused modes (``full``, where the fused pose the refiner reads carries the registrations' slow
+    tilt-vs-sideways bias, which a slower average follows less; 0 = ``gain``), ratio.
+
+    Session 38 (``full``, landing from ground truth, CLI path paired per seed against ``gain`` 0.05, main fd512ff;
+    ``/tmp/s38/tr38`` ``run.sh``, ``cmp.py``, ``demo.sh``; mean ATE RMSE mm +- standard error, seeds better): 240x180
+    2 s seeds 0-23 4.982 -> 0.03: **4.934** (-0.048 +- 0.033, 16 of 24), 0.1: 5.148 (+0.167 +- 0.037, 2 of 24), 0.02
+    (after the choice; 24-47 5.309) 4.924: against 0.03 on 0-47 -0.027 +- 0.023 (29 of 48), not kept without other seeds;
+    with 0.03, held-out seeds 24-47 5.410 -> **5.352** (-0.058 +- 0.025, 16 of 24, RTE 0.398 -> 0.395), 346x260 seeds
+    0-23 4.161 -> **4.136** (-0.024 +- 0.013, 17 of 24), 240x180 3 s seeds 0-7 13.392 -> 13.236 (-0.16 +- 0.15, 4 of
+    8); ARE within +-0.002 deg everywhere. Bundled demos (``--align none``): ``landing`` 6.556 -> 6.595,
+    ``landing_fast`` 8.880 -> 8.972, ``landing_dynamic`` 6.131 -> 6.015 mm (its static twin 5.697 -> 5.626: 1.07x),
+    none lost."""
     first_updates: int = field(default=10, metadata={"min": 0, "max": 1000, "step": 1, "unit": "updates"})
     """For a point's first this many updates the gain is at least 1 / (updates it took part in) (a running mean
     from the start; 0 = the fixed gain throughout), updates.

@@ -106,6 +106,8 @@ class Tracker:
         """Optional coarser field registered first (coarse-to-fine), None when ``coarse_blur_px`` is 0."""
         self.components = components if components is not None else MotionComponents()
         mr = config.map_refinement
+        if self.components.drives_pose and float(mr.fused_gain) > 0:  # the fused modes' own gain (see its docstring)
+            mr = dataclasses.replace(mr, gain=float(mr.fused_gain))
         self.refiner = (PaintedEdgeRefiner(mr, contour_map)
                         if mr.enabled and (mr.fused_modes or not self.components.drives_pose) else None)
         """Online refinement of the map's painted edges (None when off, or in the fused modes unless asked for)."""
