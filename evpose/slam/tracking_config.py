@@ -144,7 +144,12 @@ class PoseTrackingSettings:
     2.161 -> 2.148 % (-0.013 +- 0.064, 3 better, 5 worse), 20-39 2.159 -> 2.012 % (-0.147 +- 0.182, 3 / 1), 40-53
     2.064 -> 1.987 % (-0.077 +- 0.127, 1 / 3), landing 0-23 1.474 -> 1.476 % (+0.002 +- 0.002); seeds 36 4.88 -> 1.41,
     52 3.34 -> 1.64 (one refusal each), 5 4.84 -> 4.02, 0 2.18 -> 1.63; worse 31 1.81 -> 2.73, 9 1.37 -> 1.95, 51 2.70
-    -> 2.98; indoor 0-53 mean 2.135 -> 2.056 %, seeds over 3 % 5 -> 3. Off: no better on 0-19."""
+    -> 2.98; indoor 0-53 mean 2.135 -> 2.056 %, seeds over 3 % 5 -> 3. Off: no better on 0-19. Session 38 (eo38,
+    ``/tmp/s38/eo38``, tag ``sjD``, the same three settings, paired against main fd512ff with the written coasts on,
+    tag ``fin``): indoor 0-53 1.882 -> 1.828 % (-0.055 +- 0.070, 7 better, 9 worse; median 1.720 -> 1.723 %; within 2 %
+    43 -> 44 of 54), fresh 54-61 1.836 -> 1.842 % (0 / 1), landing 0-23 1.474 -> 1.476 %; seeds 36 4.68 -> 1.93, 52
+    3.39 -> 1.69, 5 4.38 -> 3.56, but 51 1.58 -> 3.23; least tracked unchanged. Still off: it mends the seeds whose map
+    adopts one PnP jump (36, 52) and little else."""
     young_pose_extrapolation_s: float = field(default=0.15, metadata={"min": 0.0, "max": 1.0, "step": 0.01, "unit": "s"})
     """Event-only, with ``first_pose_extrapolation_s`` > 0: every pose of a map less than this after its first one is
     placed in the refined trajectory as its first pose is, by the motion of the map's poses from the first one this old
