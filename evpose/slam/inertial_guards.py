@@ -76,3 +76,10 @@ def anchored_window(m: SlamMap, window: int) -> int:
         if kf.id in used:
             return window - i
     return window
+
+
+def starts_at_rejoin(m: SlamMap, window: int) -> bool:
+    """Whether the visual local BA's window of the newest ``window`` keyframes starts at the first keyframe of a
+    re-joined segment (:mod:`evpose.slam.map_rejoin`), whose first two keyframes the coasting placed and scaled
+    (``InertialConfig.rejoin_scale_anchor``)."""
+    return m.segment_start_kf > 0 and 2 <= window <= len(m.keyframes) and m.keyframes[-window].id == m.segment_start_kf

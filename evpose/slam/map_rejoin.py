@@ -31,12 +31,37 @@ class RejoinCandidate:
     """Camera-frame velocity of the map when it was lost, map units per us."""
 
 
-def rejoin_similarity(old: SlamMap, new: SlamMap, R0_wc: np.ndarray, R1_wc: np.ndarray, v_cam: np.ndarray
-                      ) -> tuple[np.ndarray, np.ndarray, float] | None:
+def scene_depth(m: SlamMap, kf, min_points: int) -> float | None:
+    """Median depth (camera z, map units) of the points of ``m`` that keyframe ``kf`` observes; None under ``min_points``."""
+    Tcw = np.linalg.inv(kf.T_wc)
+    z = [float(Tcw[2, :3] @ p.xyz + Tcw[2, 3]) for p in m.points.values() if kf.id in p.obs]
+    z = [v for v in z if v > 0]
+    return float(np.median(z)) if len(z) >= max(min_points, 1) else None
+
+
+def depth_scale(old: SlamMap, new: SlamMap, min_points: int) -> float | None:
+    """Scale taking ``new``'s units to ``old``'s so that the scene depth agrees across the gap: the median point depth of
+    ``old``'s newest keyframe that observes at least ``min_points`` of its points, over that of ``new``'s first keyframe
+    (``InertialConfig.rejoin_scale_depth_weight``); None when either has too few points."""
+    d_new = scene_depth(new, new.keyframes[0], min_points)
+    if d_new is None:
+        return None
+    for kf in reversed(old.keyframes):
+        d_old = scene_depth(old, kf, min_points)
+        if d_old is not None:
+            return d_old / d_new
+    return None
+
+
+def rejoin_similarity(old: SlamMap, new: SlamMap, R0_wc: np.ndarray, R1_wc: np.ndarray, v_cam: np.ndarray,
+                      depth_weight: float = 0.0, depth_min_points: int = 8) -> tuple[np.ndarray, np.ndarray, float] | None:
     """``(R, t, s)`` taking the two-keyframe map ``new`` (first keyframe at the origin) into ``old``'s frame, ``x -> s R x + t``.
 
     ``R0_wc``/``R1_wc``: the old map's camera orientation at the two keyframes' times (from the gyro). None when the
-    coasting covers no distance or the new map has no baseline.
+    coasting covers no distance or the new map has no baseline. ``depth_weight`` > 0: the scale is the weighted
+    geometric mean of the baseline's (the two-view baseline against the coasted distance) and the scene depth's
+    (:func:`depth_scale`, keyframes seeing at least ``depth_min_points`` points; the baseline's alone where they do not),
+    ``s_baseline^(1 - w) s_depth^w``.
     """
     kf0, kf1 = new.keyframes[0], new.keyframes[1]
     T0 = coast_pose(old, kf0.t_us, R0_wc, v_cam)
@@ -48,6 +73,10 @@ def rejoin_similarity(old: SlamMap, new: SlamMap, R0_wc: np.ndarray, R1_wc: np.n
     # The new frame is that of its first keyframe (identity pose): its orientation becomes the coasted one.
     R = T0[:3, :3] @ kf0.T_wc[:3, :3].T
     s = baseline_old / baseline_new
+    if depth_weight > 0:
+        s_depth = depth_scale(old, new, depth_min_points)
+        if s_depth is not None and s_depth > 0:
+            s = s_depth if depth_weight >= 1 else float(np.exp((1.0 - depth_weight) * np.log(s) + depth_weight * np.log(s_depth)))
     t = T0[:3, 3] - s * (R @ kf0.T_wc[:3, 3])
     return R, t, s
 

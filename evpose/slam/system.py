@@ -42,7 +42,7 @@ from evpose.slam.fine_grid import track_features_fine, use_fine_grid
 from evpose.slam.geometry import pose_jump_depths
 from evpose.slam.inertial import InertialConfiguration
 from evpose.slam.inertial_ba import inertial_local_bundle_adjustment
-from evpose.slam.inertial_guards import anchored_window
+from evpose.slam.inertial_guards import anchored_window, starts_at_rejoin
 from evpose.slam.inertial_trajectory import carry_relative_scale, keyframe_positions
 from evpose.slam.map_restructure import maybe_restructure
 from evpose.slam.map_rejoin import RejoinCandidate
@@ -458,11 +458,13 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
             window, n_fixed = visual_ba_window(m, tc, event_only=self.imu is None)
             if self.imu is not None and ic.ba_gyro_prior_chain:
                 window = anchored_window(m, window)  # its fixed keyframe must be one the BA holds
+            # InertialConfig.rejoin_scale_anchor: a young re-joined segment keeps the scale the re-join gave it.
+            anchor = tc.ba_scale_anchor if self.imu is None else (ic.rejoin_scale_anchor if starts_at_rejoin(m, window) else 0.0)
             local_bundle_adjustment(m, self.K, window, tc.ba_iterations, tc.ba_huber_px, n_fixed=n_fixed,
                                     rotation_priors=priors, rotation_sigma_rad=sigma, rotation_sigmas_rad=pair_sigmas,
                                     # Event-inertial maps get their scale from the IMU initialisation; anchoring the visual
                                     # scale before it made E-I-C2 worse (TrackingConfig.ba_scale_anchor).
-                                    scale_anchor=tc.ba_scale_anchor if self.imu is None else 0.0,
+                                    scale_anchor=anchor,
                                     velocity_sigma_ratio=tc.ba_velocity_prior if self.imu is None else 0.0,
                                     rotation_rate_sigma_rad_s=np.radians(tc.ba_rotation_rate_prior_deg_s) if self.imu is None else 0.0,
                                     edge_along_sigma_px=tc.ba_edge_along_sigma_px if self.imu is None else 0.0,

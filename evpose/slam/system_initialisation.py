@@ -144,9 +144,15 @@ class TwoViewInitialisation:
             return None
         R0 = self._gyro_rotation(old.traj_t[-1], m.keyframes[0].t_us, old.traj_T[-1])
         R1 = self._gyro_rotation(old.traj_t[-1], m.keyframes[1].t_us, old.traj_T[-1])
-        sim = None if R0 is None or R1 is None else rejoin_similarity(old, m, R0, R1, cand.v_cam)
+        ic = self.cfg.inertial
+        sim = None if R0 is None or R1 is None else rejoin_similarity(
+            old, m, R0, R1, cand.v_cam, ic.rejoin_scale_depth_weight, max(ic.min_inliers, 1))
         if sim is None:
             return None
         merge_into(old, m, *sim)
         self.atlas.maps.remove(m)
+        if ic.rejoin_holds_velocity and ic.coast_hold_velocity:
+            # Both two-view keyframes were placed by the coasting (InertialConfig.rejoin_holds_velocity): until the
+            # coasting velocity's span lies past them, a coast keeps the velocity that placed them.
+            self._coast_hold = (old.id, int(m.keyframes[1].t_us), np.asarray(cand.v_cam).copy())
         return f"map {old.id} re-joined by a two-view map ({len(m.points)} points, scale {sim[2]:.3g} of it)"
