@@ -191,6 +191,7 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
             "scale_refinement": self.last_scale_refinement, "rejoin": self._rejoin, "blank_us": self._blank_us,
             "after_blank_t": self._after_blank_t, "last_pnp_t": self._last_pnp_t, "lines": self._lines,
             "gap_last_t": self._gap_last_t, "imu_end_reported": self._imu_end_reported,
+            "coast_hold": self._coast_hold, "speed_refusals": self._speed_refusals,
         })
 
     def restore(self, snap: dict) -> None:
@@ -209,6 +210,7 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
         self._last_pnp_t = s.get("last_pnp_t", 0)
         self._lines = s.get("lines", LineMap())
         self._gap_last_t, self._imu_end_reported = s.get("gap_last_t"), s.get("imu_end_reported", False)
+        self._coast_hold, self._speed_refusals = s.get("coast_hold"), s.get("speed_refusals", 0)
         del self.results[s["n_results"]:]
 
     # ------------------------------------------------------------- pipeline
