@@ -16,7 +16,7 @@ from evpose.core.events import EventArray
 from evpose.core.imu import ImuSamples
 from evpose.core.recording import Recording
 from evpose.core.trajectory import Trajectory, invert_pose
-from evpose.slam.atlas import SlamMap
+from evpose.slam.atlas import Keyframe, MapPoint, SlamMap
 from evpose.slam.event_image import event_image, to_uint8
 
 
@@ -96,6 +96,25 @@ def circle_pose(t_s: float, radius: float = 1.6, speed: float = 1.2) -> np.ndarr
     T[:3, :3] = np.stack([np.cross(y, z), y, z], axis=1)
     T[:3, 3] = radius * z
     return T
+
+
+def in_units(T: np.ndarray, units: float) -> np.ndarray:
+    """``T`` with its translation expressed in units of ``units`` metres."""
+    out = T.copy()
+    out[:3, 3] /= units
+    return out
+
+
+def lost_circle_map(units: float, points_world: dict[int, np.ndarray]) -> SlamMap:
+    """The circling camera's map lost at 60 ms (13 poses 5 ms apart), in units of ``units`` metres: one keyframe at
+    t = 0 observing ``points_world`` (id -> world point, metres); what a re-join continues."""
+    m = SlamMap(0)
+    m.keyframes = [Keyframe(0, 0, in_units(circle_pose(0.0), units))]
+    for i, X in points_world.items():
+        m.points[i] = MapPoint(i, np.asarray(X, np.float64) / units, {0: np.zeros(2)})
+    for k in range(13):
+        m.add_pose(k * 5000, in_units(circle_pose(k * 0.005), units))
+    return m
 
 
 def circle_map(n: int, step_us: int) -> SlamMap:

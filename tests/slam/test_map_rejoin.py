@@ -6,23 +6,12 @@ from evpose.core.trajectory import invert_pose
 from evpose.slam.atlas import Keyframe, MapPoint, SlamMap
 from evpose.slam.coasting import camera_frame_velocity
 from evpose.slam.map_rejoin import merge_into, rejoin_similarity
-from slam_synthetic import circle_pose
+from slam_synthetic import circle_pose, in_units, lost_circle_map
 
 
 def _old_map(scale: float) -> SlamMap:
     """A map of the circling camera up to 60 ms, in units of ``1 / scale`` metres, with one keyframe and point."""
-    m = SlamMap(0)
-    m.keyframes = [Keyframe(0, 0, _scaled(circle_pose(0.0), scale))]
-    m.points[7] = MapPoint(7, np.array([0.5, 0.1, 2.0]) / scale, {0: np.zeros(2)})
-    for k in range(13):
-        m.add_pose(k * 5000, _scaled(circle_pose(k * 0.005), scale))
-    return m
-
-
-def _scaled(T: np.ndarray, s: float) -> np.ndarray:
-    out = T.copy()
-    out[:3, 3] /= s
-    return out
+    return lost_circle_map(scale, {7: np.array([0.5, 0.1, 2.0])})
 
 
 def _two_view_map(t0_us: int, t1_us: int, baseline: float) -> tuple[SlamMap, np.ndarray]:
@@ -51,7 +40,7 @@ def test_the_new_map_lands_where_the_lost_map_coasts_to_at_its_scale():
     R, t, s = rejoin_similarity(old, new, R0, R1, v)
     first = merge_into(old, new, R, t, s)
     assert first == 1 and [k.id for k in old.keyframes] == [0, 1, 2]
-    truth0, truth1 = _scaled(circle_pose(0.3), scale), _scaled(circle_pose(0.33), scale)
+    truth0, truth1 = in_units(circle_pose(0.3), scale), in_units(circle_pose(0.33), scale)
     # Coasting on the circle's camera-frame velocity places the keyframes within a few percent of the 0.24 m gap.
     gap = np.linalg.norm(truth0[:3, 3] - old.traj_T[12][:3, 3])
     assert np.linalg.norm(old.keyframes[1].T_wc[:3, 3] - truth0[:3, 3]) < 0.05 * gap

@@ -6,7 +6,7 @@ from evpose.core.trajectory import invert_pose
 from evpose.slam.atlas import Keyframe, MapPoint, SlamMap
 from evpose.slam.coasting import camera_frame_velocity
 from evpose.slam.map_rejoin import depth_scale, rejoin_similarity, scene_depth
-from slam_synthetic import circle_pose
+from slam_synthetic import circle_pose, in_units, lost_circle_map
 
 SCENE = np.array([[0.5, 0.1, 2.0], [-0.4, 0.3, 2.6], [0.2, -0.5, 3.1], [0.0, 0.2, 2.2], [-0.3, -0.2, 2.9]])
 """Points in front of the circling camera at t = 0 (camera frame, metres)."""
@@ -14,20 +14,8 @@ SCENE = np.array([[0.5, 0.1, 2.0], [-0.4, 0.3, 2.6], [0.2, -0.5, 3.1], [0.0, 0.2
 
 def _old_map(units: float, n_points: int = 5) -> SlamMap:
     """The circling camera's map up to 60 ms in units of ``units`` metres; its keyframe at t = 0 sees ``n_points``."""
-    m = SlamMap(0)
     T = circle_pose(0.0)
-    m.keyframes = [Keyframe(0, 0, _in_units(T, units))]
-    for i, X in enumerate(SCENE[:n_points]):
-        m.points[i] = MapPoint(i, (T[:3, :3] @ X + T[:3, 3]) / units, {0: np.zeros(2)})
-    for k in range(13):
-        m.add_pose(k * 5000, _in_units(circle_pose(k * 0.005), units))
-    return m
-
-
-def _in_units(T: np.ndarray, units: float) -> np.ndarray:
-    out = T.copy()
-    out[:3, 3] /= units
-    return out
+    return lost_circle_map(units, {i: T[:3, :3] @ X + T[:3, 3] for i, X in enumerate(SCENE[:n_points])})
 
 
 def _two_view_map(t0_us: int, t1_us: int, baseline: float, depth_units: float) -> SlamMap:
