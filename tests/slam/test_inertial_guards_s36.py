@@ -9,6 +9,7 @@ from scipy.spatial.transform import Rotation
 import evpose.slam.system_initialisation as si
 from evpose.slam.atlas import SlamMap
 from evpose.slam.features import FrontendTracks
+from evpose.slam.initialization_config import InitializationConfig
 from evpose.slam.inertial import InertialConfig
 from evpose.slam.inertial_guards import discard_map, two_view_gyro_disagreement_deg, young_lost_map
 from evpose.slam.initialization import TwoViewResult
@@ -86,7 +87,7 @@ class _Starting(si.TwoViewInitialisation):
         self.fe.uv = np.zeros((30, 2), np.float32)
         self.fe.init_ref = {k: np.zeros(2) for k in range(30)}
         self.fe.init_ref_t = 0
-        self._init_cfg = SimpleNamespace(max_frames=5, min_matches=20, restart_at_failed_mci=False)
+        self._init_cfg = InitializationConfig(max_frames=5, min_matches=20)
         # The guard alone: a gyro-resolved start (init_gyro_two_view) is tests/slam/test_gyro_two_view_s37.py's.
         self.cfg = SimpleNamespace(inertial=InertialConfig(init_max_gyro_deg=max_deg, init_gyro_two_view=False), seed=0)
         self.K, self.imu = np.eye(3), object()
