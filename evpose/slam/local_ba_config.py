@@ -130,7 +130,13 @@ class LocalBundleAdjustmentSettings:
     (12 seeds better, 12 worse); indoor seeds 0-3 8.76 -> 8.57 % at the same tracked time (49-54 %). With
     ``local_window`` 8 (seeds 0-4, 8-15 only): 2.47 % against 3.19 % (CPU 31.9 against ~25 ms per MCI); 3 fixed of 8:
     2.62 %. Single changes re-draw every seed's outcome by +-1-2 points here (dropping single observations over 2.5 px
-    instead of whole points: 2.62 %, 8 within 2 %), so none of these is a default, keyframes."""
+    instead of whole points: 2.62 %, 8 within 2 %), so none of these is a default. Session 38 (``/tmp/s38/lm38``,
+    figures as at ``TrackingConfig.min_triangulation_deg``; paired against main fd512ff's defaults, tag ``fin``): 2 ->
+    landing 0-23 1.474 -> 1.258 % (-0.216 +- 0.222, 13 better, 11 worse; within 2 % 21 -> 22: seeds 4 / 12 / 17 6.13 /
+    2.45 / 2.58 -> 1.30 / 2.41 / 1.49, seed 8 1.50 -> 3.02, the other 21 +0.037), held-out 24-35 1.286 -> 1.286 %
+    (-0.001 +- 0.143, 6 / 6, within 2 % 10 -> 12), indoor 0-39 1.901 -> 1.902 % (only seeds 5 and 36 differ, by 0.005
+    points: the rooms' maps rarely outgrow the window); the landing map's spread over 1.95-2.25 s (log chord sd 0.18 /
+    0.18 / 0.15) is no smaller (0.23 / 0.20 / 0.12), keyframes."""
     ba_velocity_prior: float = field(default=0.0, metadata={"min": 0.0, "max": 2.0, "step": 0.05, "unit": "ratio"})
     """Event-only local BA: sigma of a constant-velocity factor per three consecutive keyframes, as a share of their
     speed (:mod:`evpose.slam.motion_prior`; 0 disables), ratio. Landing event-only seeds 0-23: 0.2 -> mean ATE 2.75 %

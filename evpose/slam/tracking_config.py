@@ -235,7 +235,15 @@ class PoseTrackingSettings:
     """New map points need this parallax between keyframes, degrees. Session 12, landing event-only seeds 0-11
     (defaults 2.53 %, 5 of 12 within 2 %): 2 -> 2.92 % (2 of 12); 17 of the 60 perturbed runs paired +0.31 +- 0.40
     points. Session 27 (``/tmp/s27/turn27``), indoor event-only seeds 0-7 (defaults 6.84 %): 2 -> 9.39 % (paired +2.55
-    +- 1.59), degrees."""
+    +- 1.59). Session 38 (``/tmp/s38/lm38``: ``run.py`` / ``batch.sh`` = ``evpose slam`` + ``evpose eval --atlas
+    --correct-scale``, ``cmp.py`` paired against main fd512ff's defaults, tag ``fin``; held-out landing 24-35 from
+    ``/tmp/s38/el38/rec``), aimed at the thin stretch of the landing's mature map (:mod:`evpose.slam.local_map`,
+    session 38): 0.5 adds 5 % map points (final 457 -> 480) but not the points PnP holds there (mean inliers at
+    2.10 s 26 -> 25); landing 0-23 1.474 -> 1.165 % (paired -0.309 +- 0.234, 13 better, 11 worse, median change
+    -0.012; within 2 % 21 -> 24: seeds 4 / 12 / 17 6.13 / 2.45 / 2.58 -> 0.90 / 1.57 / 1.08, the other 21 +0.009),
+    held-out 24-35 1.286 -> 1.408 % (+0.121 +- 0.196, 5 / 7; seed 29 0.81 -> 2.79), indoor 0-39 1.901 -> 1.897 %
+    (-0.004 +- 0.072, 17 / 17); 0.7 landing 0-23 1.226 % (-0.248 +- 0.219, 13 / 11; the other 21 +0.050): a re-draw
+    of the worst seeds, not a fix, degrees."""
     young_map_s: float = field(default=0.0, metadata={"min": 0.0, "max": 2.0, "step": 0.01, "unit": "s"})
     """Event-only: a map younger than this (time since its first keyframe) makes every MCI placed by PnP a keyframe,
     and those keyframes triangulate with ``young_min_triangulation_deg`` / ``young_min_pair_parallax_deg`` in place of
