@@ -9,7 +9,7 @@ adopts the jump; its local BA then hands the wrong scale on. Refusing the jumpin
 Here the check sits at keyframe time, where the scale is handed on: the candidate keyframe's camera centre against the
 previous keyframe's, over their time apart, against the map's keyframe speed before it (its newest
 ``keyframe_step_ref_steps`` keyframe steps). A keyframe off by more than
-``keyframe_step_ratio`` either way, with at most ``keyframe_step_max_inliers`` PnP inliers, is either not inserted
+``keyframe_step_ratio`` (or under 1 / ``keyframe_step_drop_ratio``), at least ``keyframe_step_min_age_s`` into its map, with at most ``keyframe_step_max_inliers`` PnP inliers, is either not inserted
 (``skip``: the map tracks on its older keyframes and the next MCI may try again) or inserted with its position moved
 along its own step direction to the length the reference speed gives (``rescale``: the direction, which the images
 see, is kept; the length, which they do not, is the map's), so that its new points are triangulated at the map's scale.
@@ -37,8 +37,14 @@ class KeyframeStepSettings:
 
     keyframe_step_ratio: float = field(default=0.0, metadata={"min": 0.0, "max": 100.0, "step": 0.1, "unit": "ratio"})
     """Event-only: a keyframe whose step from the previous keyframe (centre distance over time) is more than this many
-    times, or less than 1 / this of, the map's keyframe speed before it (``keyframe_step_ref_steps``)
-    is acted on by ``keyframe_step_action`` (:mod:`evpose.slam.keyframe_step`); 0 or <= 1 disables, ratio."""
+    times the map's keyframe speed before it (``keyframe_step_ref_steps``) is acted on by ``keyframe_step_action``
+    (:mod:`evpose.slam.keyframe_step`); 0 or <= 1 disables, ratio."""
+    keyframe_step_drop_ratio: float = field(default=0.0, metadata={"min": 0.0, "max": 100.0, "step": 0.1, "unit": "ratio"})
+    """Event-only, the other side: a keyframe stepping less than the reference speed divided by this is acted on as
+    well (0 or <= 1 disables), ratio."""
+    keyframe_step_min_age_s: float = field(default=0.0, metadata={"min": 0.0, "max": 2.0, "step": 0.01, "unit": "s"})
+    """Event-only: only keyframes at least this long after their map's first keyframe are checked, s. Why: the first
+    steps after the two-view start are measured against the start's own baseline, a few ms long and noisy."""
     keyframe_step_action: KeyframeStepAction = KeyframeStepAction.RESCALE
     """What happens to a keyframe whose step is off (:class:`KeyframeStepAction`)."""
     keyframe_step_max_inliers: int = field(default=0, metadata={"min": 0, "max": 1000, "step": 1, "unit": "points"})
@@ -89,11 +95,13 @@ def keyframe_step_ratio(kfs: list, t_us: int, T_wc: np.ndarray, n_steps: int) ->
 def check_keyframe_step(kfs: list, t_us: int, T_wc: np.ndarray, n_inliers: int, cfg: KeyframeStepSettings) -> tuple[bool, np.ndarray]:
     """Apply :attr:`KeyframeStepSettings.keyframe_step_ratio` to a candidate keyframe: (whether to insert it, its pose).
     The pose is ``T_wc`` itself unless the step is off and the action is ``rescale``."""
-    lim = cfg.keyframe_step_ratio
-    if lim <= 1.0 or (cfg.keyframe_step_max_inliers > 0 and n_inliers > cfg.keyframe_step_max_inliers):
+    up, down = cfg.keyframe_step_ratio, cfg.keyframe_step_drop_ratio
+    if max(up, down) <= 1.0 or (cfg.keyframe_step_max_inliers > 0 and n_inliers > cfg.keyframe_step_max_inliers):
+        return True, T_wc
+    if not kfs or (t_us - kfs[0].t_us) / 1e6 < cfg.keyframe_step_min_age_s:
         return True, T_wc
     r = keyframe_step_ratio(kfs, t_us, T_wc, cfg.keyframe_step_ref_steps)
-    if r is None or 1.0 / lim <= r[0] <= lim:
+    if r is None or not ((up > 1.0 and r[0] > up) or (down > 1.0 and r[0] < 1.0 / down)):
         return True, T_wc
     if KeyframeStepAction(cfg.keyframe_step_action) is KeyframeStepAction.SKIP:
         return False, T_wc

@@ -23,9 +23,11 @@ def _kfs():
     return [SimpleNamespace(id=i, t_us=50000 * i, T_wc=_T(x)) for i, x in enumerate(xs)]
 
 
-def _cfg(ratio: float, action=KeyframeStepAction.RESCALE, max_inliers: int = 0, steps: int = 1):
+def _cfg(ratio: float, action=KeyframeStepAction.RESCALE, max_inliers: int = 0, steps: int = 1, drop: float = 0.0,
+         min_age_s: float = 0.0):
     cfg = SlamConfig().tracking
     cfg.keyframe_step_ratio, cfg.keyframe_step_action = ratio, action
+    cfg.keyframe_step_drop_ratio, cfg.keyframe_step_min_age_s = drop, min_age_s
     cfg.keyframe_step_max_inliers, cfg.keyframe_step_ref_steps = max_inliers, steps
     return cfg
 
@@ -67,9 +69,17 @@ def test_a_jumping_keyframe_is_rescaled_along_its_own_direction():
     # The step now has the reference's length (2 units/s * 50 ms = 0.1) and the candidate's direction; rotation kept.
     assert np.allclose(out[:3, 3], (0.2 + 0.06, 0.08, 0.0))
     assert np.array_equal(out[:3, :3], T[:3, :3])
-    # A collapsing step (a twentieth of the reference) is stretched to it as well.
+    # A collapsing step (a twentieth of the reference) is kept unless the drop side is on, then stretched to it.
     ok, out = check_keyframe_step(kfs, 200000, _T(0.205), 20, _cfg(3.0))
+    assert ok and np.array_equal(out, _T(0.205))
+    ok, out = check_keyframe_step(kfs, 200000, _T(0.205), 20, _cfg(3.0, drop=3.0))
     assert ok and np.allclose(out[:3, 3], (0.3, 0.0, 0.0))
+
+
+def test_young_maps_are_not_judged():
+    kfs, T = _kfs(), _T(0.8)  # the candidate is 0.2 s after the map's first keyframe
+    assert check_keyframe_step(kfs, 200000, T, 20, _cfg(3.0, min_age_s=0.25))[1] is T
+    assert check_keyframe_step(kfs, 200000, T, 20, _cfg(3.0, min_age_s=0.2))[1] is not T
 
 
 def test_skip_and_the_inlier_gate():
@@ -89,3 +99,27 @@ def test_config_round_trip_keeps_the_action():
     cfg.tracking.keyframe_step_action = KeyframeStepAction.SKIP
     back = config_from_dict(SlamConfig, config_to_dict(cfg))
     assert back.tracking.keyframe_step_ratio == 3.0 and back.tracking.keyframe_step_action is KeyframeStepAction.SKIP
+
+
+def test_the_slam_system_consults_the_check_event_only(monkeypatch):
+    # End to end on the tiny synthetic recording (its keyframes are too far apart in time for a speed reading, so
+    # the check itself is stood in for): a keyframe the check refuses is not made, a re-scaled pose is the one used.
+    import sys
+    from pathlib import Path
+    sys.path.insert(0, str(Path(__file__).parent))
+    from slam_synthetic import make_recording
+    import evpose.slam.system as system
+    from evpose.slam.run import run_slam
+
+    rec = make_recording(duration_s=0.8, speed=1.5, seed=7, shake=0.08)
+    n_default = sum(1 for r in run_slam(rec, SlamConfig()).results if r.keyframe)
+    calls = []
+
+    def refuse(kfs, t_us, T_wc, n_inliers, cfg):
+        calls.append((len(kfs), n_inliers, cfg.keyframe_step_ratio))
+        return False, T_wc
+
+    monkeypatch.setattr(system, "check_keyframe_step", refuse)
+    n_refused = sum(1 for r in run_slam(rec, SlamConfig()).results if r.keyframe)
+    assert n_default > 0 and n_refused == 0 and calls
+    assert all(k >= 2 and n >= 12 and ratio == 0.0 for k, n, ratio in calls)
