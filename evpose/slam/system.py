@@ -399,7 +399,7 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
         keyframe = False
         if need_keyframe(m, fe.ids, fe.uv, n_tracked, tc, mci.t_us) or (self.imu is None and young_map(m, mci.t_us, tc, T_wc)):
             # Event-only: a keyframe stepping a multiple of the map's keyframe speed would hand a wrong scale on
-            # (TrackingConfig.keyframe_step_ratio, off by default).
+            # (TrackingConfig.keyframe_step_ratio).
             keyframe, T_kf = check_keyframe_step(m.keyframes, mci.t_us, T_wc, n_tracked, tc) if self.imu is None else (True, T_wc)
             if keyframe:
                 if T_kf is not T_wc:

@@ -50,10 +50,13 @@ def test_ratio_is_the_candidate_step_speed_over_the_reference():
     assert keyframe_step_ratio(kfs, 400000, _T(0.5), 1) is None  # too long after it to be a speed
 
 
-def test_off_by_default_and_within_the_limit_nothing_changes():
+def test_off_at_ratio_one_and_within_the_limit_nothing_changes():
     kfs, T = _kfs(), _T(0.8)  # 12 units/s: six times the reference
-    ok, out = check_keyframe_step(kfs, 200000, T, 20, SlamConfig().tracking)
+    ok, out = check_keyframe_step(kfs, 200000, T, 20, _cfg(1.0))
     assert ok and out is T
+    # The defaults (3, jump side, rescale) judge it.
+    ok, out = check_keyframe_step(kfs, 200000, T, 20, SlamConfig().tracking)
+    assert ok and out is not T and np.allclose(out[:3, 3], (0.3, 0.0, 0.0))
     ok, out = check_keyframe_step(kfs, 200000, _T(0.3), 20, _cfg(3.0))  # 2 units/s: ratio 1
     assert ok and np.array_equal(out, _T(0.3))
     ok, out = check_keyframe_step(kfs, 200000, _T(0.24), 20, _cfg(3.0))  # 0.8 units/s: ratio 0.4 > 1 / 3
@@ -122,4 +125,4 @@ def test_the_slam_system_consults_the_check_event_only(monkeypatch):
     monkeypatch.setattr(system, "check_keyframe_step", refuse)
     n_refused = sum(1 for r in run_slam(rec, SlamConfig()).results if r.keyframe)
     assert n_default > 0 and n_refused == 0 and calls
-    assert all(k >= 2 and n >= 12 and ratio == 0.0 for k, n, ratio in calls)
+    assert all(k >= 2 and n >= 12 and ratio == 3.0 for k, n, ratio in calls)
