@@ -54,7 +54,9 @@ class KeyframeStepSettings:
     after a two-view start, against the start's few-ms baseline). Quick seeds 36 / 5 / 16 / 19 / 24 / 26 / 51 / 21 /
     52: drop side 3 and age 0.1 (``ka3``) 36 -> 2.48 only; 2.5 both sides, age 0.1 (``kc25``) 36 -> 2.48, 21 3.97 ->
     3.77; ``skip`` at 3 both sides, no age gate (``k3s``) 36 4.68 -> 5.34, 5 4.38 -> 1.37, 21 -> 3.79, 52 -> 3.23; 2
-    both sides, no gate (``k2r``) 51 1.58 -> 1.95, 52 3.39 -> 4.76."""
+    both sides, no gate (``k2r``) 51 1.58 -> 1.95, 52 3.39 -> 4.76. Sensitivity: 2.5 with the default gate (``kb25``,
+    indoor 0-53) against 3: +0.003 +- 0.008 (2 better, 3 worse; 4 1.79 -> 2.06, 20 2.12 -> 1.87, 37 1.51 -> 1.67),
+    within 2 % 43 -> 43."""
     keyframe_step_drop_ratio: float = field(default=0.0, metadata={"min": 0.0, "max": 100.0, "step": 0.1, "unit": "ratio"})
     """Event-only, the other side: a keyframe stepping less than the reference speed divided by this is acted on as
     well (0 or <= 1 disables), ratio. Off: with it at 3 and the age gate at 0.1 (``ka3`` in
