@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 
 from evpose.slam.coast_config import CoastSettings
 from evpose.slam.keyframe_scale import KeyframeScaleSettings
+from evpose.slam.keyframe_step import KeyframeStepSettings
 from evpose.slam.local_ba_config import LocalBundleAdjustmentSettings
 
 
@@ -339,5 +340,5 @@ class PoseTrackingSettings:
 # Dataclass fields follow the bases in reverse order: pose tracking first, then the bundle adjustment, then coasting,
 # then the new-point check.
 @dataclass
-class TrackingConfig(KeyframeScaleSettings, CoastSettings, LocalBundleAdjustmentSettings, PoseTrackingSettings):
+class TrackingConfig(KeyframeStepSettings, KeyframeScaleSettings, CoastSettings, LocalBundleAdjustmentSettings, PoseTrackingSettings):
     """Local-map tracking, keyframe insertion and local mapping."""
