@@ -196,6 +196,20 @@ class InitializationConfig:
     0.091, 4 better, 2 worse; within 2 % 6 -> 7), landing 0-23 bit-identical (no landing start is refused so). Recordings
     meeting both targets (>= 80 % tracked, <= 2 %): 0-53 42 -> 41, 54-61 6 -> 7. Off: the earlier starts cost as much
     as they bring (the start after a loss, :mod:`evpose.slam.system_initialisation`)."""
+    drop_static_after_s: float = field(default=0.0, metadata={"min": 0.0, "max": 2.0, "step": 0.01, "unit": "s"})
+    """``drop_static_matches`` acts only on a two-view attempt at least this long after the newest pose of any map (the
+    loss of the last map; the recording's start before the first), seconds (0: on every attempt). The ordinary start
+    gets its chance first; only a run left without a map for a while takes the moved matches alone. Why: of the starts
+    ``drop_static_matches`` made (``/tmp/s39/el39/dsdiag.py``), the one that mends seed 53 (0.527 s) came 0.145 s after
+    its first map's last pose, where those that cost seeds 19, 31 and 49 (0.88 / 0.88 / 1.28 s: maps started just after
+    the first blank wall that then live through a later turn) came 0.053 / 0.043 / 0.021 s after; the static matches'
+    share does not tell them apart (0.69 against 0.61 / 0.66 / 0.67). Session 39 (``/tmp/s39/el39``: ``run.py`` /
+    ``batch.sh`` / ``cnt.py`` = ``evpose slam`` + ``evpose eval --atlas --correct-scale``, tag ``ds10``), 0.1 with
+    ``drop_static_matches``, paired against main's defaults (tag ``kb3``): indoor 0-53 1.822 -> 1.825 % (+0.003 +-
+    0.009, 3 better, 4 worse; median 1.712 -> 1.708), within target 43 -> 44, least tracked 79.1 -> 80.5 % (seed 53
+    1.47 -> 1.66 %, tracked 79.1 -> 90.8; 43 1.76 -> 1.68, 80.6 -> 88.8 %; 17 1.80 -> 1.44; 26 1.31 -> 1.50, 28 1.71 ->
+    1.89, 6 2.10 -> 2.15; seeds 19, 31, 49 unchanged), fresh 54-61 1.836 -> 1.744 % (-0.092 +- 0.090, 2 better, 0
+    worse), within target 6 -> 7 (seed 55 2.22 -> 1.49). Without the gate (session 38): 0-53 within 2 % 43 -> 41."""
     restart_at_failed_mci: bool = False
     """When a two-view attempt gives up its reference (too few matches left, or ``max_frames`` used up), make the
     failing MCI the new reference at once instead of the next MCI (off: the next one), one MCI interval earlier.
