@@ -27,8 +27,8 @@ def _lost_map_at(run: _Run, times_us):
     run.atlas.new_map()  # the empty map the next start fills, as EventSlam._lose leaves it
 
 
-def test_off_by_default():
-    assert SlamConfig().initialization.drop_static_after_s == 0.0
+def test_default_waits_a_tenth_of_a_second():
+    assert SlamConfig().initialization.drop_static_after_s == 0.1
 
 
 def test_unmapped_time_counts_from_the_newest_pose_of_any_map_or_the_start():
