@@ -216,7 +216,11 @@ class InitializationConfig:
     1.89, 6 2.10 -> 2.15; seeds 19, 31, 49 unchanged), fresh 54-61 1.836 -> 1.744 % (-0.092 +- 0.090, 2 better, 0
     worse), within target 6 -> 7 (seed 55 2.22 -> 1.49); landing 0-23 and held-out 24-35 bit-identical (no landing
     start is refused as barely moved). 0.075 (tag ``ds075``): every indoor run of 0-61 identical to 0.1; the gate keeps
-    seed 53's start and leaves seeds 19, 31 and 49 for any value between 0.053 and 0.145 s. Without the gate (session
+    seed 53's start and leaves seeds 19, 31 and 49 for any value between 0.053 and 0.145 s. Under the neutral
+    perturbations ``TrackingConfig.ba_huber_px`` 1.9 / 2.1, indoor 40-61 against the same perturbation with the rule
+    off (tags ``kh19`` / ``dh19``, ``kh21`` / ``dh21``): within target 18 -> 19 (seed 53 tracked 79.1 -> 90.8 %, 43
+    1.85 -> 1.73, 55 1.98 -> 1.89; paired 40-53 +0.004 +- 0.016, 54-61 -0.014 +- 0.011) and 17 -> 17 (seed 53 in, but
+    seed 50 1.64 -> 2.57 % out; 40-53 +0.058 +- 0.073, 54-61 -0.053 +- 0.048). Without the gate (session
     38): 0-53 within 2 % 43 -> 41. The default since."""
     restart_at_failed_mci: bool = False
     """When a two-view attempt gives up its reference (too few matches left, or ``max_frames`` used up), make the
