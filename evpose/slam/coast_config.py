@@ -202,6 +202,27 @@ class CoastSettings:
     worse; median 1.720 -> 1.736, within 2 % 43 -> 34), fresh 54-61 1.836 -> 2.958 % (+1.12 +- 0.90, 3 better). Off:
     the rooms' coasts are mostly placed again or written by the visual gyro, and a steadier dead reckoning does not
     make those maps better."""
+    coast_mature_span_s: float = field(default=0.0, metadata={"min": 0.0, "max": 2.0, "step": 0.05, "unit": "s"})
+    """Event-only coasting: a map whose trajectory up to its last visually placed pose spans at least this coasts on
+    the rotation rate and chord velocity of its refined poses over this span ending at that pose, held for the whole
+    coast (:func:`evpose.slam.event_coasting.mature_coast_pose`; 0: off, every map coasts on ``coast_span_s``), s.
+    Why: landing seed 4 (6.13 %) spends 4.0 points on its mature map's last 0.38 s coast, which held 48.5 -> 68.6
+    deg/s where the truth turned 12-37 (``coast_hold_motion``). Session 39 (``/tmp/s39/el39``: ``run.py`` /
+    ``batch.sh`` / ``cnt.py`` = ``evpose slam`` + ``evpose eval --atlas --correct-scale``, tag ``ms30``, paired against
+    main's defaults, tag ``kb3``), 0.3: landing 0-23 1.470 -> 1.554 % (median 1.172 -> 1.190; within target 21 -> 20:
+    seed 4 6.13 -> 3.41 %, one map placed again by PnP, tracked 96.5 -> 98.2 %, but seed 18 1.14 -> 5.82 %: its
+    2-MCI coast lasts one MCI longer, fewer tracks survive ``drop_contradicted`` at the new prediction and PnP re-places
+    it on other points; seed 20 1.18 -> 1.23), held-out landing 24-35 1.237 -> 1.238 % (only seed 32, 2.07 -> 2.08),
+    indoor 0-61 bit-identical (no room map spans 0.3 s when it starts to coast: none of indoor 0-11's coasts,
+    ``coastdump.py``). Seed 4 at 0.2 / 0.5: 3.65 / 5.76 %. Why it cannot be made a rule (``coastdump.py`` +
+    ``estest.py``: the four mature coast starts of landing 0-35, camera-frame rate and velocity of each estimator against
+    the truth's over the next 100 ms): the truth itself changes there (seed 4: 30 deg/s over the last tracked 60 ms,
+    12.5 over the next 100 ms, its velocity 22 deg off the 60 ms one), so no estimate from the past predicts it: rate
+    error / velocity angle of the default 60 ms chord 59.9 / 53.8, 28.5 / 16.2, 28.6 / 19.5, 12.5 / 17.1 (seeds 4, 18,
+    20, 32); 0.3 s refined chord 40.0 / 53.3, 23.5 / 43.1, 30.2 / 42.8, 46.8 / 33.7; 0.12 s 42.6 / 51.3, 20.5 / 20.7, 22.2
+    / 30.7, 25.4 / 29.2; median of the steps over 0.15 s 64.0 / 54.4, 20.6 / 21.2, 23.0 / 30.4, 15.6 / 14.7; the 60 ms
+    chord without the last pose 24.0 / 24.8, 16.5 / 35.4, 27.0 / 50.1, 16.7 / 8.5. No estimator is nearer on all four,
+    and on seed 4 every one holds a direction 25-54 deg off. Off."""
     coast_young_span_s: float = field(default=0.005, metadata={"min": 0.0, "max": 0.5, "step": 0.005, "unit": "s"})
     """Event-only coasting: a map whose whole trajectory spans less than ``coast_span_s`` (a two-view map a few MCIs
     old) coasts on that whole trajectory's motion if it spans at least this (0: it is lost at its first visual

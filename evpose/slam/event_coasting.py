@@ -247,6 +247,38 @@ def event_only_coast_pose(m: SlamMap, t_us: int, min_span_us: int, end: int = -1
     return coast_pose(m, t_us, R_wc, v)
 
 
+def mature_coast_pose(m: SlamMap, t_us: int, span_us: int, end: int) -> np.ndarray | None:
+    """``T_world_cam`` at ``t_us`` holding the motion of the map's refined poses over ``span_us`` ending at index ``end``
+    (its last visually placed pose): the rotation rate and the chord velocity, expressed in the camera frame half way
+    through the turn (``TrackingConfig.coast_mature_span_s``); None when the map's trajectory is shorter than that.
+
+    Why: a mature map that starves coasts on the motion of its last ``coast_span_s`` (60 ms), and that stretch can end on
+    one stepped PnP pose whose turn and direction the coast then holds for up to ``coast_s`` (landing seed 4: a last
+    step turning 99 deg/s where the truth turned 14). Over a longer stretch the step is diluted, and the poses' refined
+    form (their reference keyframes after the local bundle adjustments) is steadier than the online one. The chord of a
+    turning camera lies along its velocity at mid-turn, so that is the frame the velocity is held in."""
+    span = trajectory_span(m, span_us, end)
+    if span is None:
+        return None
+    k, dt = span
+    T_k, T_e = _refined_pose(m, k), _refined_pose(m, end)
+    w = Rotation.from_matrix(T_k[:3, :3].T @ T_e[:3, :3]).as_rotvec() / dt
+    R_mid = T_k[:3, :3] @ Rotation.from_rotvec(w * dt / 2).as_matrix()
+    v = R_mid.T @ (T_e[:3, 3] - T_k[:3, 3]) / dt
+    R_wc = m.traj_T[-1][:3, :3] @ Rotation.from_rotvec(w * (t_us - m.traj_t[-1])).as_matrix()
+    return coast_pose(m, t_us, R_wc, v)
+
+
+def _refined_pose(m: SlamMap, i: int) -> np.ndarray:
+    """The map's pose at trajectory index ``i`` composed with its reference keyframe's current pose (as
+    :meth:`SlamMap.trajectory` refines), or the online pose when that keyframe is gone."""
+    ref = m.traj_ref[i]
+    for kf in reversed(m.keyframes):
+        if kf.id == ref:
+            return kf.T_wc @ m.traj_rel[i]
+    return m.traj_T[i]
+
+
 def held_motion_end(traj_t: list[int], t_last_visual_us: int) -> int:
     """Index of the map's newest pose at or before ``t_last_visual_us`` (its last visually placed one), -1 when none is:
     where ``TrackingConfig.coast_hold_motion`` ends the stretch a coast measures its held motion on."""

@@ -16,7 +16,7 @@ import numpy as np
 from evpose.core.trajectory import invert_pose
 from evpose.slam.coasting import camera_frame_velocity, coast_pose, drop_contradicted, trajectory_span
 from evpose.slam.edge_tracking import measure_across_edges, solve_pose_across_edges
-from evpose.slam.event_coasting import drop_unconfirmed_poses, event_only_coast_pose, held_motion_end
+from evpose.slam.event_coasting import drop_unconfirmed_poses, event_only_coast_pose, held_motion_end, mature_coast_pose
 from evpose.slam.inertial import InertialConfiguration
 from evpose.slam.inertial_guards import discard_map, young_lost_map
 from evpose.slam.map_rejoin import RejoinCandidate
@@ -105,7 +105,12 @@ class VisualFailureHandling:
         if tc.coast_blank_s > 0 and after_s > tc.coast_after_blank_s:
             gap_s = np.inf  # crossed a blank wall on dead reckoning and not placed again right after it
         end = held_motion_end(m.traj_t, self._last_visual_t) if tc.coast_hold_motion else -1
-        T_wc = event_only_coast_pose(m, mci.t_us, int(tc.coast_span_s * 1e6), end) if gap_s <= tc.coast_s else None
+        T_wc = None
+        if gap_s <= tc.coast_s and tc.coast_mature_span_s > 0:
+            # TrackingConfig.coast_mature_span_s: a long-lived map holds its longer-term motion, not its last step's.
+            T_wc = mature_coast_pose(m, mci.t_us, int(tc.coast_mature_span_s * 1e6), held_motion_end(m.traj_t, self._last_visual_t))
+        if T_wc is None and gap_s <= tc.coast_s:
+            T_wc = event_only_coast_pose(m, mci.t_us, int(tc.coast_span_s * 1e6), end)
         if T_wc is None and gap_s <= tc.coast_s and tc.coast_young_span_s > 0 and m.traj_t:
             # A young map: hold the motion of its whole trajectory, if that spans long enough to mean anything.
             span_us = m.traj_t[end] - m.traj_t[0]

@@ -66,7 +66,7 @@ class TwoViewInitialisation:
         ids = fe.ids[common]
         p1 = np.array([fe.init_ref[int(t)] for t in ids]).reshape(-1, 2)
         p2 = fe.uv[common].astype(np.float64)
-        moved = moved_matches(p1, p2, icfg) if icfg.drop_static_matches else None
+        moved = moved_matches(p1, p2, icfg) if self._drops_static(mci.t_us) else None
         if moved is not None:
             # InitializationConfig.drop_static_matches: the tracks that stood still are noise, not the scene.
             common, ids, p1, p2 = [common[k] for k in np.flatnonzero(moved)], ids[moved], p1[moved], p2[moved]
@@ -127,6 +127,19 @@ class TwoViewInitialisation:
             if joined is not None:
                 return SlamStatus.OK, joined, self.atlas.active.keyframes[-1].T_wc.copy()
         return SlamStatus.OK, f"map {m.id} initialised ({res.model}, {len(m.points)} points, parallax {res.median_parallax_deg:.1f} deg)", m.keyframes[-1].T_wc.copy()
+
+    def _drops_static(self, t_us: int) -> bool:
+        """Whether an event-only two-view attempt at ``t_us`` may drop its still matches
+        (``InitializationConfig.drop_static_matches``, once the run has gone ``drop_static_after_s`` without a map; the
+        event-inertial starts keep every match, see ``drop_static_after_s``)."""
+        icfg = self._init_cfg
+        return self.imu is None and icfg.drop_static_matches and self._unmapped_s(t_us) >= icfg.drop_static_after_s
+
+    def _unmapped_s(self, t_us: int) -> float:
+        """Seconds from the newest pose of any map (0 when no map has one: the recording's start) to ``t_us``: how long
+        the run has gone without a map (``InitializationConfig.drop_static_after_s``)."""
+        last = max((m.traj_t[-1] for m in self.atlas.maps if m.traj_t and m.traj_t[-1] <= t_us), default=0)
+        return (t_us - last) / 1e6
 
     def _set_init_reference(self, mci: MciResult) -> None:
         """Make ``mci`` the two-view reference: its tracked features topped up with fresh ones."""

@@ -32,8 +32,10 @@ def _pair(n_scene: int, n_still: int, seed: int = 0):
     return p1, p2
 
 
-def test_off_by_default():
-    assert SlamConfig().initialization.drop_static_matches is False
+def test_on_by_default_behind_its_gate():
+    # Session 39: on, gated by drop_static_after_s (tests/slam/test_drop_static_after_s39.py).
+    assert SlamConfig().initialization.drop_static_matches is True
+    assert SlamConfig().initialization.drop_static_after_s > 0
 
 
 def test_a_moving_third_among_still_noise_is_kept_and_starts_where_the_whole_set_is_refused():
