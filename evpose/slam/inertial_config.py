@@ -299,7 +299,7 @@ class InertialConfig:
     ``rha``): runs never IMU-initialised 7 -> 0; indoor 0-19 / 20-39 / 40-53 / 54-61 / landing 0-23 within both RPE
     targets 20 / 20 / 14 / 8 / 24 as before; 27 of 62 indoor runs changed (the 7, and 20 whose whole-map attempts were
     refused for a while: first initialisation 1.64 / 1.81 / 1.59 / 1.54 -> 1.54 / 1.66 / 1.52 / 1.42 s), landing
-    bit-identical, tracked time unchanged (0.982 / 0.941 / 0.981 / 0.974 / 0.989). Translation RPE paired -0.00020 +-
+    bit-identical (held-out landing 24-29 too, tags ``hon`` / ``hoff``), tracked time unchanged (0.982 / 0.941 / 0.981 / 0.974 / 0.989). Translation RPE paired -0.00020 +-
     0.00019 / +0.00002 +- 0.00009 / -0.00022 +- 0.00019 / +0.00006 +- 0.00006 m/m (0-61 -0.00010 +- 0.00008, 15 better,
     12 worse; worst 0.0086 unchanged), rotation -0.00015 +- 0.00025 / +0.00005 +- 0.00027 / -0.00029 +- 0.00023 /
     -0.00014 +- 0.00010 deg/m (0-61 -0.00012 +- 0.00013, 17 better, 10 worse; worst 0.0075 unchanged; seed 7 0.0029 ->
