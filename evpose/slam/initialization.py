@@ -122,6 +122,9 @@ class TwoViewResult:
     homography_ratio: float = 0.0
     """``S_H / (S_H + S_E)``."""
     median_parallax_deg: float = 0.0
+    direction_std_deg: float = float("nan")
+    """Standard deviation of the translation direction of a gyro-resolved start, degrees (NaN: not computed;
+    :func:`evpose.slam.gyro_two_view.translation_direction_std_deg`)."""
 
 
 def _score_h(H: np.ndarray, p1: np.ndarray, p2: np.ndarray) -> float:

@@ -26,7 +26,19 @@ class InertialMaps:
         if not imu_init_due([k.t_us for k in m.keyframes], self.cfg.inertial):
             return
         kfs = m.keyframes
-        res = initialize_imu([k.t_us for k in kfs], [k.T_wc for k in kfs], self.imu, self.calib.T_cam_imu, self.calib.time_offset_us, self.cfg.inertial)
+        ic0 = self.cfg.inertial
+        res = initialize_imu([k.t_us for k in kfs], [k.T_wc for k in kfs], self.imu, self.calib.T_cam_imu, self.calib.time_offset_us, ic0)
+        if not res.ok and ic0.init_trailing_fallback:
+            # InertialConfig.init_trailing_fallback: the map's older re-joined segments carry other scales; the newest
+            # init_min_span_s of keyframes spans fewer re-joins.
+            t0 = kfs[-1].t_us - int(ic0.init_min_span_s * 1e6)
+            first = next(i for i, k in enumerate(kfs) if k.t_us >= t0)
+            if first > 0 and len(kfs) - first >= ic0.init_keyframes:
+                sub = kfs[first:]
+                res2 = initialize_imu([k.t_us for k in sub], [k.T_wc for k in sub], self.imu, self.calib.T_cam_imu, self.calib.time_offset_us, ic0)
+                if res2.ok:
+                    res2.used = [first + k for k in res2.used]
+                    res = res2
         self.last_imu_init = res
         if res.ok:
             m.transform(res.R_align, res.scale)

@@ -81,7 +81,8 @@ class TwoViewInitialisation:
             if gyro_solve and R_gyro is not None and off >= ic.init_gyro_two_view_min_deg:
                 # InertialConfig.init_gyro_two_view: the gyro's rotation, only the translation direction estimated.
                 solved = two_view_with_rotation(self.K, p1, p2, R_gyro, icfg, self.cfg.seed, ic.init_gyro_two_view_sigma_deg,
-                                                model=f"{res.model}+gyro {off:.1f} deg", min_parallax_deg=ic.init_gyro_two_view_min_parallax_deg)
+                                                model=f"{res.model}+gyro {off:.1f} deg", min_parallax_deg=ic.init_gyro_two_view_min_parallax_deg,
+                                                max_direction_std_deg=ic.init_gyro_two_view_max_direction_std_deg)
                 if solved.ok or ic.init_gyro_two_view_refuse_unsolved:
                     res, off = solved, 0.0
             if max_deg > 0 and off > max_deg:  # InertialConfig.init_max_gyro_deg: a wrong decomposition, not a start

@@ -112,8 +112,8 @@ def test_a_start_far_off_the_gyro_is_resolved_with_the_gyro_instead_of_refused(m
     monkeypatch.setattr(si, "initialize_two_view", lambda *a, **k: TwoViewResult(True, T_wc2=T, model="homography"))
     asked = []
 
-    def solved(K, p1, p2, R, cfg, seed, sigma, model, min_parallax_deg):
-        asked.append((two_view_gyro_deg(R), model, min_parallax_deg))
+    def solved(K, p1, p2, R, cfg, seed, sigma, model, min_parallax_deg, max_direction_std_deg):
+        asked.append((two_view_gyro_deg(R), model, min_parallax_deg, max_direction_std_deg))
         G = np.eye(4)
         G[:3, :3] = R
         return TwoViewResult(True, T_wc2=G, model=model)
@@ -126,6 +126,7 @@ def test_a_start_far_off_the_gyro_is_resolved_with_the_gyro_instead_of_refused(m
     assert asked == []
     assert _outcome(_Resolving(True)) == "map"
     assert asked[0][0] == pytest.approx(1.0) and asked[0][1].startswith("homography+gyro 11.0 deg") and asked[0][2] == 0.4
+    assert asked[0][3] == 0.0  # InertialConfig.init_gyro_two_view_max_direction_std_deg: off
 
     # A start the gyro's rotation cannot triangulate goes on to the guard with the decomposition's rotation (the
     # default); with init_gyro_two_view_refuse_unsolved it is refused for that.
