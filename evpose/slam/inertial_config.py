@@ -240,19 +240,12 @@ class InertialConfig:
     """With ``init_gyro_two_view``: a gyro-resolved start under ``init_gyro_two_view_min_parallax_deg`` is taken when its
     translation direction's standard deviation is at most this (the matches' Sampson information with the gyro rotation
     prior, the noise's own share taken out, :func:`evpose.slam.gyro_two_view.translation_direction_std_deg`; 0: the
-    parallax bar alone), degrees: a well-observed low-parallax start goes, a poorly observed one still waits. On
-    synthetic matches the std is within 0.6-1.6 times the solver's actual direction scatter (``tests/slam/
-    test_direction_std_s39.py``, ``/tmp/s39/ei39/probe3.py``). On the indoor starts of main (``/tmp/s39/ei39/cal.py``,
-    seeds 2 5 7 15 26 50), of the 15 the 0.4 deg bar accepts 10 are undetermined (fewer than 30 inlier matches, or
-    what the noise leaves does not fix the direction) and 5 have 2.3-9.8 deg; of the 13 under the bar 9 are undetermined
-    and 4 have 2.1-8.0 deg: few indoor starts are well observed either way. Session 39 (ei39; ``/tmp/s39/ei39`` ``h.py`` +
-    ``batch.sh`` + ``pair.py`` / ``cmp.py`` / ``initc.py``, tag ``ds4`` against main's ``rha``), 4 deg: indoor 0-19 /
-    20-39 / 40-53 / 54-61 / landing 0-23 within both RPE targets 20 / 20 / 14 / 8 / 24 as before, 12 of 62 indoor runs
-    changed, landing bit-identical, tracked time unchanged (0.982 / 0.941 / 0.981 / 0.974 / 0.989); indoor 0-61
-    translation RPE -0.00002 +- 0.00006 m/m (6 better, 6 worse; 54-61 +0.00030 +- 0.00020, 3 worse), rotation -0.00008
-    +- 0.00006 deg/m (7 better, 5 worse), worst 0.0086 m/m and 0.0075 deg/m unchanged; the runs never IMU-initialised
-    are the same 7 (indoor 5 7 15 20 23 40 50): their refusals are not the start's parallax but the map's scale jumping
-    at the re-joins (see ``max_scale_std_ratio``). Neutral, so off."""
+    parallax bar alone), degrees. On synthetic matches the std is within 0.6-1.6x the solver's actual scatter
+    (``tests/slam/test_direction_std_s39.py``); on real indoor starts (``/tmp/s39/ei39/cal.py``, seeds 2 5 7 15 26 50)
+    10 of the 15 the 0.4 deg bar accepts and 9 of the 13 under it are undetermined, the rest 2.1-9.8 deg. Session 39
+    (ei39, tag ``ds4`` against main's ``rha``), 4 deg: within both RPE targets unchanged (indoor 62 of 62, landing 24 of
+    24, landing bit-identical), indoor 0-61 translation RPE -0.00002 +- 0.00006 m/m, rotation -0.00008 +- 0.00006 deg/m,
+    the same 7 runs never IMU-initialised (refused for the map's scale jumps at re-joins, not parallax). Neutral, so off."""
     init_gyro_two_view_refuse_unsolved: bool = False
     """With ``init_gyro_two_view``: a start the gyro's rotation cannot triangulate (too few points, or less parallax
     than ``init_gyro_two_view_min_parallax_deg``) is refused; off, the decomposition's own start goes on to the
@@ -286,31 +279,22 @@ class InertialConfig:
     """Time the keyframes must span before initialising, seconds."""
     init_min_gap_s: float = field(default=0.3, metadata={"min": 0.0, "max": 2.0, "step": 0.05, "unit": "s"})
     """Keyframes used by the initialisation are thinned to at least this spacing: the acceleration signal grows with the square of the gap while visual position noise does not, and a noisy displacement regressor biases the scale towards zero, seconds."""
-    init_trailing_fallback: bool = True
+    init_trailing_fallback: bool = False
     """When the IMU initialisation over all of a map's keyframes is refused, try it once more over the keyframes of the
-    newest ``init_min_span_s`` (at least ``init_keyframes`` of them) and take that when it passes. Why: the 7 indoor
-    E-I-C2 runs of main (session 38) never initialised (indoor 5 7 15 20 23 40 50) are refused on every attempt for a
-    negative scale; on the ground-truth poses at the same keyframe times every one of those attempts passes at 1.00-1.06
-    of the true scale, but the map's keyframes change scale by 2-8 times at its re-joins (truth metres per map unit per
-    0.3 s keyframe pair, seed 5: 1.9 2.3 1.9 7.8 15.9 14.3 14.2; seed 15: 2.7 5.6 12.9 11.3 11.7 28.4 38.3 38.5;
-    ``/tmp/s39/ei39`` ``diag.py`` + ``ana.py``); one scale per re-joined segment does not help (segments of 0.3-0.6 s
-    leave each scale undetermined, ``segana.py``), nor does dropping the coasted keyframes (too few left, ``vis.py``).
-    Session 39 (ei39, ``h.py`` + ``batch.sh`` + ``pair.py`` / ``cmp.py`` / ``initc.py``, tag ``tf`` against main's
-    ``rha``): runs never IMU-initialised 7 -> 0; indoor 0-19 / 20-39 / 40-53 / 54-61 / landing 0-23 within both RPE
-    targets 20 / 20 / 14 / 8 / 24 as before; 27 of 62 indoor runs changed (the 7, and 20 whose whole-map attempts were
-    refused for a while: first initialisation 1.64 / 1.81 / 1.59 / 1.54 -> 1.54 / 1.66 / 1.52 / 1.42 s), landing
-    bit-identical (held-out landing 24-29 too, tags ``hon`` / ``hoff``), tracked time unchanged (0.982 / 0.941 / 0.981 / 0.974 / 0.989). Translation RPE paired -0.00020 +-
-    0.00019 / +0.00002 +- 0.00009 / -0.00022 +- 0.00019 / +0.00006 +- 0.00006 m/m (0-61 -0.00010 +- 0.00008, 15 better,
-    12 worse; worst 0.0086 unchanged), rotation -0.00015 +- 0.00025 / +0.00005 +- 0.00027 / -0.00029 +- 0.00023 /
-    -0.00014 +- 0.00010 deg/m (0-61 -0.00012 +- 0.00013, 17 better, 10 worse; worst 0.0075 unchanged; seed 7 0.0029 ->
-    0.0060), ATE -0.02 +- 0.45 points. On since session 39. CAVEAT, measured offline against the truth: an indoor
-    initialisation does not make the map metric, with or without this. The 14 accepted whole-map initialisations of
-    indoor seeds 0-16 gave 0.001-1.76 times the scale of their keyframes (median 0.27, ``scalechk.py``), and the trailing
-    windows 0.03-0.18 (seeds 5, 7, 50; ``trail.py``); at the end of main's runs not one of the 55 initialised indoor
-    maps has its median 0.5 s-segment scale within 0.8-1.25 (median 3.1 m per unit; landing: all 24, median 1.005).
-    ``max_scale_std_ratio`` 0.2 refuses exactly the gross ones (it keeps seeds 1 2 9 12, 0.49-1.76 of the truth), but
-    then 44 indoor runs never initialise and 3 miss the targets (tag ``ss2``): a wrongly scaled map bridged by the IMU
-    still does better on these targets than a coasted one."""
+    newest ``init_min_span_s`` (at least ``init_keyframes`` of them) and take that when it passes. Why it was built: the
+    7 indoor E-I-C2 runs never initialised (session 38: indoor 5 7 15 20 23 40 50) are refused on every attempt for a
+    negative scale, while the same attempts on the true poses pass at 1.00-1.06 of the true scale: the map's keyframes
+    change scale 2-8x at its re-joins (truth metres per map unit per 0.3 s keyframe pair, seed 5: 1.9 2.3 1.9 7.8 15.9
+    14.3 14.2; ``/tmp/s39/ei39`` ``diag.py`` + ``ana.py``); one scale per re-joined segment leaves each undetermined
+    (``segana.py``), dropping coasted keyframes leaves too few (``vis.py``). Session 39 (ei39, ``h.py`` + ``batch.sh`` +
+    ``pair.py`` / ``initc.py``, tag ``tf`` against main's ``rha``): never initialised 7 -> 0, within both RPE targets
+    unchanged (indoor 62 of 62, landing 24 of 24, landing bit-identical), indoor 0-61 translation RPE -0.00010 +- 0.00008
+    m/m, rotation -0.00012 +- 0.00013 deg/m, tracked time unchanged. Off because what it initialises is not metric: the
+    trailing windows' scales are 0.03-0.18 of the truth (seeds 5, 7, 50; ``trail.py``) and the ATE without scale
+    correction is level (indoor 0-61 16.96 -> 16.94 % of the distance, -0.02 +- 0.45 points; seed 20 4.5 -> 23.1 %). No
+    indoor initialisation is metric yet, with or without this: the 14 accepted whole-map ones of indoor seeds 0-16 are
+    0.001-1.76 of their keyframes' scale (median 0.27, ``scalechk.py``); ``max_scale_std_ratio`` 0.2 refuses the gross
+    ones but leaves 44 runs uninitialised and 3 outside the targets (tag ``ss2``)."""
     refine_after_s: float = field(default=1.2, metadata={"min": 0.0, "max": 30.0, "step": 0.1, "unit": "s"})
     """This long after the IMU initialisation, scale and gravity are re-estimated once over all keyframes of the map
     (the initialisation's alignment, now on a metric map twice as long), and the map is rescaled, re-aligned and given
