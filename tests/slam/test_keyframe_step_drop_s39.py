@@ -67,3 +67,31 @@ def test_drop_side_ignores_a_reference_step_of_a_few_ms():
     assert ok and out is T
     ok, out = check_keyframe_step(kfs, 150000, _T(0.9), 20, cfg)  # 15 units/s: still re-scaled to 2 units/s
     assert ok and np.allclose(out[:3, 3], (0.3, 0.0, 0.0))
+
+
+def test_drop_side_ignores_a_short_step_after_a_jump():
+    """Landing seed 9's case: the jump side caught a step three times too long, the BA kept it, and the next keyframe's
+    step back to the map's speed looked like a collapse against it. With ``keyframe_step_drop_ref_max_ratio`` 3 a
+    reference step that itself jumped is no reference for the shrinking side."""
+    kfs = _kfs()[:3] + [SimpleNamespace(id=3, t_us=150000, T_wc=_T(0.2 + 0.4))]  # last step 8 units/s after 2
+    cfg = _cfg(KeyframeStepAction.SKIP)
+    T = _T(0.7)  # 2 units/s again: a quarter of the jumped reference
+    ok, _ = check_keyframe_step(kfs, 200000, T, 20, cfg)
+    assert not ok
+    cfg.keyframe_step_drop_ref_max_ratio = 3.0
+    ok, out = check_keyframe_step(kfs, 200000, T, 20, cfg)
+    assert ok and out is T
+    # After a steady reference the shrinking side still acts.
+    ok, _ = check_keyframe_step(_kfs(), 200000, _T(0.31), 20, cfg)
+    assert not ok
+
+
+def test_drop_side_ignores_the_two_view_baseline_with_min_keyframes():
+    cfg = _cfg(KeyframeStepAction.SKIP)
+    two = _kfs()[:2]  # the reference step is the two-view start's own baseline
+    ok, _ = check_keyframe_step(two, 100000, _T(0.105), 20, cfg)
+    assert not ok
+    cfg.keyframe_step_drop_min_keyframes = 3
+    T = _T(0.105)
+    ok, out = check_keyframe_step(two, 100000, T, 20, cfg)
+    assert ok and out is T
