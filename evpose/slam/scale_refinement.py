@@ -30,6 +30,9 @@ def refine_map_scale(m: SlamMap, K: np.ndarray, imu: ImuSamples, T_cam_imu: np.n
                          replace(ic, max_residual_ratio=ic.refine_max_residual_ratio, max_motion_residual_ratio=0.0))
     if not res.ok:
         return res
+    if ic.refine_min_scale > 0 and res.scale < ic.refine_min_scale:
+        # InertialConfig.refine_min_scale: the alignment's bias towards zero, not a correction of a metric map.
+        return replace(res, ok=False, reason=f"refined scale {res.scale:.3g} shrinks the map below {ic.refine_min_scale:g} of its size")
     m.transform(res.R_align, res.scale)
     m.scale *= res.scale
     st = m.inertial
