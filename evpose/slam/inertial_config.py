@@ -281,20 +281,14 @@ class InertialConfig:
     """Keyframes used by the initialisation are thinned to at least this spacing: the acceleration signal grows with the square of the gap while visual position noise does not, and a noisy displacement regressor biases the scale towards zero, seconds."""
     init_trailing_fallback: bool = False
     """When the IMU initialisation over all of a map's keyframes is refused, try it once more over the keyframes of the
-    newest ``init_min_span_s`` (at least ``init_keyframes`` of them) and take that when it passes. Why it was built: the
-    7 indoor E-I-C2 runs never initialised (session 38: indoor 5 7 15 20 23 40 50) are refused on every attempt for a
-    negative scale, while the same attempts on the true poses pass at 1.00-1.06 of the true scale: the map's keyframes
-    change scale 2-8x at its re-joins (truth metres per map unit per 0.3 s keyframe pair, seed 5: 1.9 2.3 1.9 7.8 15.9
-    14.3 14.2; ``/tmp/s39/ei39`` ``diag.py`` + ``ana.py``); one scale per re-joined segment leaves each undetermined
-    (``segana.py``), dropping coasted keyframes leaves too few (``vis.py``). Session 39 (ei39, ``h.py`` + ``batch.sh`` +
-    ``pair.py`` / ``initc.py``, tag ``tf`` against main's ``rha``): never initialised 7 -> 0, within both RPE targets
-    unchanged (indoor 62 of 62, landing 24 of 24, landing bit-identical), indoor 0-61 translation RPE -0.00010 +- 0.00008
-    m/m, rotation -0.00012 +- 0.00013 deg/m, tracked time unchanged. Off because what it initialises is not metric: the
-    trailing windows' scales are 0.03-0.18 of the truth (seeds 5, 7, 50; ``trail.py``) and the ATE without scale
-    correction is level (indoor 0-61 16.96 -> 16.94 % of the distance, -0.02 +- 0.45 points; seed 20 4.5 -> 23.1 %). No
-    indoor initialisation is metric yet, with or without this: the 14 accepted whole-map ones of indoor seeds 0-16 are
-    0.001-1.76 of their keyframes' scale (median 0.27, ``scalechk.py``); ``max_scale_std_ratio`` 0.2 refuses the gross
-    ones but leaves 44 runs uninitialised and 3 outside the targets (tag ``ss2``)."""
+    newest ``init_min_span_s`` (at least ``init_keyframes``) and take that when it passes. Session 39 (ei39, ``/tmp/s39/
+    ei39`` ``h.py`` + ``pair.py`` / ``initc.py``, tag ``tf`` against main's ``rha``): the 7 indoor runs never initialised
+    (5 7 15 20 23 40 50; refused for a negative scale, while the same attempts on the true poses pass at 1.00-1.06: the
+    keyframes' scale changes 2-8x along the map, ``diag.py`` + ``ana.py``) 7 -> 0, RPE within both targets unchanged,
+    translation -0.00010 +- 0.00008 m/m, rotation -0.00012 +- 0.00013 deg/m, landing bit-identical. Off because what it
+    initialises is not metric: trailing scales 0.03-0.18 of the truth (``trail.py``), ATE without scale correction level
+    (indoor 16.96 -> 16.94 %, -0.02 +- 0.45 points; seed 20 4.5 -> 23.1 %). No indoor initialisation is metric yet: the
+    accepted ones are a median 0.25 of the truth (``scalechk.py``; ``/tmp/s39/ms39/README.txt``)."""
     refine_after_s: float = field(default=1.2, metadata={"min": 0.0, "max": 30.0, "step": 0.1, "unit": "s"})
     """This long after the IMU initialisation, scale and gravity are re-estimated once over all keyframes of the map
     (the initialisation's alignment, now on a metric map twice as long), and the map is rescaled, re-aligned and given
@@ -305,17 +299,12 @@ class InertialConfig:
     (negative scale); the few it accepted shrank the map 5-30 times the wrong way (``refine_min_scale`` refuses them)."""
     refine_min_scale: float = field(default=0.33, metadata={"min": 0.0, "max": 1.0, "step": 0.01, "unit": "ratio"})
     """A scale refinement (``refine_after_s``) that would shrink the map below this share of its size is refused (0: no
-    test), ratio. The alignment's noisy displacement regressor biases the scale towards zero (``init_min_gap_s``), so a
-    large shrink of an already metric map is the bias, not a correction. Session 39 (``/tmp/s39/ms39``: ``trace.py`` +
-    ``trsum.py``, main's defaults, indoor E-I-C2 seeds 0-19): the refinements accepted on indoor seeds 2 / 9 / 18 had
-    scales 0.204 / 0.139 / 0.031 and took the map from 1.12 / 4.23 / 2.43 to 5.36 / 30.4 / 6.58 true metres per map
-    unit (all three in the wrong direction); landing seeds 0-3 refined by 0.78-0.94 (0.92-1.01 -> 0.99-1.09).
-    0.33 (``h.py`` + ``batch.sh`` + ``cmp.py`` / ``pair.py``, tag ``rm33`` against main's ``rha``): indoor 0-61 11 seeds
-    change, ATE without scale correction mean 16.96 -> 16.23 % (paired -0.73 +- 0.27 points, 10 better, 1 worse: seed
-    56 7.93 -> 13.36), median 17.41 -> 15.74, ``scale_drift_percent_max`` median 928 -> 849 %, RPE translation -0.00001
-    +- 0.00004 m/m, rotation -0.00018 +- 0.00009 deg/m (worst 0.0086 m/m and 0.0075 deg/m unchanged), all 62 within both
-    targets as before; landing 0-23 and held-out 24-35 bit-identical. On since session 39. The initialisation's own
-    scale (median 0.25 of the map's true one indoors) is not touched; see ``/tmp/s39/ms39/README.txt``."""
+    test), ratio: the alignment's noisy displacement regressor biases the scale towards zero (``init_min_gap_s``). Session
+    39 (``/tmp/s39/ms39`` ``trace.py``): the refinements accepted on indoor seeds 2 / 9 / 18 (scales 0.204 / 0.139 / 0.031)
+    took the map from 1.12 / 4.23 / 2.43 to 5.36 / 30.4 / 6.58 true metres per map unit; landing seeds 0-3 refine by
+    0.78-0.94. 0.33 (not tuned; tag ``rm33`` against main's ``rha``): indoor 0-61 ATE without scale correction 16.96 ->
+    16.23 % (-0.73 +- 0.27 points, 10 better, 1 worse: seed 56 7.93 -> 13.36), RPE translation -0.00001 +- 0.00004 m/m,
+    rotation -0.00018 +- 0.00009 deg/m, all 62 within both targets; landing 0-23 and 24-35 bit-identical. On."""
     refine_max_residual_ratio: float = field(default=0.2, metadata={"min": 0.001, "max": 1.0, "step": 0.001, "unit": "ratio"})
     """``max_residual_ratio`` of the refinement: the map it corrects is already metric, and a scale error since the
     initialisation is what leaves the residual (landing seeds 2, 6, 7: 6.4, 2.8, 8.6 %; the 0.02 of the first
