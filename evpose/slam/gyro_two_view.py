@@ -164,9 +164,8 @@ def translation_direction_std_deg(K: np.ndarray, p1: np.ndarray, p2: np.ndarray,
     Gauss-Newton information of :func:`refine_with_gyro_prior`'s residuals at ``(R, t)``, the rotation marginalised out.
     The pixel noise ``sigma`` is the matches' own RMS Sampson distance, so fewer than ``min_matches`` matches (whose
     RMS is itself too uncertain: 16 synthetic matches at 1 px claimed 2.5 deg for a direction 69 deg off) give
-    infinity. The direction's
-    rows of the information are built from the measured epipolar vectors ``a = R f1 x f2``, which carry the noise as well
-    as the translation's flow: with no translation at all the noise alone would claim ``1 / sqrt(n)`` radians. That
+    infinity. The direction's rows of the information are built from the measured epipolar vectors ``a = R f1 x f2``,
+    which carry the noise as well as the translation's flow: with no translation at all the noise alone would claim ``1 / sqrt(n)`` radians. That
     noise part is taken out: per match, its expected contribution ``sigma^2 (P b_k . P b_l) / |P t|^2`` (``P`` the
     projection orthogonal to ``R f1``, ``b_k`` the direction increments; the Sampson distance and the direction's
     derivative see the same noise vector in the plane orthogonal to ``R f1``). Infinite when what is left does not
