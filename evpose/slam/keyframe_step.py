@@ -10,8 +10,8 @@ adopts the jump; its local BA then hands the wrong scale on. Refusing the jumpin
 Here the check sits at keyframe time, where the scale is handed on: the candidate keyframe's camera centre against the
 previous keyframe's, over their time apart, against the map's keyframe speed before it (its newest
 ``keyframe_step_ref_steps`` keyframe steps). A keyframe off by more than
-``keyframe_step_ratio`` (or under 1 / ``keyframe_step_drop_ratio``), at least ``keyframe_step_min_age_s`` into its map, with at most ``keyframe_step_max_inliers`` PnP inliers, is either not inserted
-(``skip``: the map tracks on its older keyframes and the next MCI may try again) or inserted with its position moved
+``keyframe_step_ratio`` (or under 1 / ``keyframe_step_drop_ratio``), at least ``keyframe_step_min_age_s`` into its
+map, with at most ``keyframe_step_max_inliers`` PnP inliers, is either not inserted (``skip``: the map tracks on its older keyframes and the next MCI may try again) or inserted with its position moved
 along its own step direction to the length the reference speed gives (``rescale``: the direction, which the images
 see, is kept; the length, which they do not, is the map's), so that its new points are triangulated at the map's scale.
 The shrinking side (off) has its own action and gates (``keyframe_step_drop_*``, session 39: figures in
