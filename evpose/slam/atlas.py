@@ -25,6 +25,8 @@ class Keyframe:
     """Camera-from-room rotation (3, 3) measured from the MCI's axis-aligned edges, or None (:mod:`evpose.slam.room_axes`)."""
     R_cm_info: np.ndarray | None = None
     """Information (3, 3) of ``R_cm`` as a camera-frame rotation, 1/rad^2."""
+    visual: bool = True
+    """Placed by the images (PnP, a two-view map), not coasted or IMU-predicted (``InertialConfig.init_visual``)."""
 
 
 @dataclass

@@ -6,6 +6,8 @@ from __future__ import annotations
 import enum
 from dataclasses import dataclass, field
 
+from evpose.slam.inertial_init_visual import InitVisualConfig
+
 
 class InertialConfiguration(str, enum.Enum):
     """The event-inertial configurations of the paper's Tables I and III (event-only is ``SlamMode.EVENT``)."""
@@ -289,6 +291,8 @@ class InertialConfig:
     initialises is not metric: trailing scales 0.03-0.18 of the truth (``trail.py``), ATE without scale correction level
     (indoor 16.96 -> 16.94 %, -0.02 +- 0.45 points; seed 20 4.5 -> 23.1 %). No indoor initialisation is metric yet: the
     accepted ones are a median 0.25 of the truth (``scalechk.py``; ``/tmp/s39/ms39/README.txt``)."""
+    init_visual: InitVisualConfig = field(default_factory=InitVisualConfig)
+    """The initialisation over visually tracked keyframes of one visual segment (:mod:`evpose.slam.inertial_init_visual`)."""
     refine_after_s: float = field(default=1.2, metadata={"min": 0.0, "max": 30.0, "step": 0.1, "unit": "s"})
     """This long after the IMU initialisation, scale and gravity are re-estimated once over all keyframes of the map
     (the initialisation's alignment, now on a metric map twice as long), and the map is rescaled, re-aligned and given

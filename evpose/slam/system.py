@@ -438,6 +438,7 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
         """Insert a keyframe, triangulate, run local (inertial) BA, cull, try the IMU initialisation; returns the adjusted pose."""
         fe, tc = self.fe, self.cfg.tracking
         kf = insert_keyframe(m, t_us, T_wc, fe.ids, fe.uv.astype(np.float64), fe.track_to_point)
+        kf.visual = t_us == self._last_pnp_t  # coasted / IMU-predicted keyframes are not (InertialConfig.init_visual)
         self._measure_room(kf, img8)
         if triangulate:
             tt = young_triangulation(tc) if self.imu is None and young_map(m, t_us, tc, T_wc) else tc  # feed a young map

@@ -13,6 +13,7 @@ from evpose.slam.atlas import SlamMap
 from evpose.slam.inertial import imu_init_due, initialize_imu
 from evpose.slam.inertial_ba import InertialState, inertial_local_bundle_adjustment
 from evpose.slam.inertial_bridge import predict_camera_pose
+from evpose.slam.inertial_init_visual import initialize_on_visual_keyframes
 from evpose.slam.inertial_trajectory import carry_relative_scale, keyframe_positions
 from evpose.slam.scale_refinement import refine_map_scale
 
@@ -27,8 +28,12 @@ class InertialMaps:
             return
         kfs = m.keyframes
         ic0 = self.cfg.inertial
-        res = initialize_imu([k.t_us for k in kfs], [k.T_wc for k in kfs], self.imu, self.calib.T_cam_imu, self.calib.time_offset_us, ic0)
-        if not res.ok and ic0.init_trailing_fallback:
+        if ic0.init_visual.enabled:
+            # InertialConfig.init_visual: coasted keyframes carry no true acceleration, older segments other scales.
+            res = initialize_on_visual_keyframes(kfs, m.segment_start_kf, self.imu, self.calib.T_cam_imu, self.calib.time_offset_us, ic0)
+        else:
+            res = initialize_imu([k.t_us for k in kfs], [k.T_wc for k in kfs], self.imu, self.calib.T_cam_imu, self.calib.time_offset_us, ic0)
+        if not res.ok and ic0.init_trailing_fallback and not ic0.init_visual.enabled:
             # InertialConfig.init_trailing_fallback: the map's older re-joined segments carry other scales; the newest
             # init_min_span_s of keyframes spans fewer re-joins.
             t0 = kfs[-1].t_us - int(ic0.init_min_span_s * 1e6)
