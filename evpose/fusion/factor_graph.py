@@ -212,8 +212,7 @@ class FactorGraphFusion:
         self.n_updates = 0
         self.propagator = NavPropagator(self.buffer, self.params, self.extrinsic)
         self.history: list[tuple] = []
-        self.readout_written: dict[int, tuple] = {}
-        """Scratch of :func:`~evpose.fusion.revision_readout.written_poses` (NavState id -> (NavState, camera pose))."""
+        self.readout_written: dict[int, tuple] = {}  # revision_readout.written_poses' scratch (NavState id -> (it, pose))
         self.degraded = False
         self.last_state: FusedState | None = None
         self.last_registration: tuple[int, np.ndarray] | None = None
