@@ -429,7 +429,7 @@ class FactorGraphFusion:
         c = self.config
         model = RegistrationErrorModel(c.registration_error_model)  # a config loaded from text holds the string
         prev = self.last_registration
-        z = gtsam.Pose3(T_meas_imu)
+        z = gtsam.Pose3(mat=T_meas_imu)  # by name: the matrix overload at once (as ``values.insert`` below)
         rho = float(c.registration_ar_rho)
         if model is RegistrationErrorModel.WHITE or prev is None or prev[0] != i or rho == 0.0:
             cov = self.extrinsic.imu_covariance(registration_covariance(c, cov_cam))
