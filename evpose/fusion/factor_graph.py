@@ -212,6 +212,7 @@ class FactorGraphFusion:
         self.n_updates = 0
         self.propagator = NavPropagator(self.buffer, self.params, self.extrinsic)
         self.history: list[tuple] = []
+        self.readout_written: dict[int, tuple] = {}  # revision_readout.written_poses' scratch (NavState id -> (it, pose))
         self.degraded = False
         self.last_state: FusedState | None = None
         self.last_registration: tuple[int, np.ndarray] | None = None
@@ -428,7 +429,7 @@ class FactorGraphFusion:
         c = self.config
         model = RegistrationErrorModel(c.registration_error_model)  # a config loaded from text holds the string
         prev = self.last_registration
-        z = gtsam.Pose3(T_meas_imu)
+        z = gtsam.Pose3(mat=T_meas_imu)  # by name: the matrix overload at once (as ``values.insert`` below)
         rho = float(c.registration_ar_rho)
         if model is RegistrationErrorModel.WHITE or prev is None or prev[0] != i or rho == 0.0:
             cov = self.extrinsic.imu_covariance(registration_covariance(c, cov_cam))

@@ -152,13 +152,35 @@ def readout_pose(fusion, T_world_cam: np.ndarray, previous=None) -> np.ndarray |
         return None
     gtsam = fusion._gtsam
     revs = []
-    for lag in range(1, n + 1):
-        then = fusion.extrinsic.cam_pose(fusion.history[-1 - lag][1].pose().matrix())
+    for lag, then in enumerate(written_poses(fusion, n), 1):
         now = fusion.extrinsic.cam_pose(fusion.smoother.calculateEstimatePose3(fusion._keys(fusion.index - lag)[0]).matrix())
         revs.append(revision(gtsam, now, then))
     rotation, position = mean_revision(revs)
     out = revised_pose(gtsam, T_world_cam, rotation, position, float(c.revision_readout_gain), depth_ratio(fusion))
     return smoothed_position(out, T_world_cam, previous, float(c.revision_readout_position_smoothing))
+
+
+def written_poses(fusion, n: int) -> list[np.ndarray]:
+    """The camera poses (4, 4) the ``n`` states before ``fusion``'s newest were written with, newest first.
+
+    Each is a pure function of its history entry's NavState (immutable), so it is computed once, when the state is
+    first one back, and kept in ``fusion.readout_written`` (keyed by the NavState's id, which the entry's reference
+    keeps unique; emptied by the fusion's ``_reset``, so a restore recomputes the same values): one pose conversion per
+    update instead of ``n``. Session 40 (``/tmp/s40/lt40/rdbench.py``: both read-outs on the same state at every update
+    of ``full`` 346x260 seed 0, order alternated, outputs equal, load ~8): 122-126 -> 114-117 us median per update.
+    """
+    cache = fusion.readout_written
+    kept = {}
+    out = []
+    for lag in range(1, n + 1):
+        nav = fusion.history[-1 - lag][1]
+        hit = cache.get(id(nav))
+        if hit is None or hit[0] is not nav:
+            hit = (nav, fusion.extrinsic.cam_pose(nav.pose().matrix()))
+        kept[id(nav)] = hit
+        out.append(hit[1])
+    fusion.readout_written = kept
+    return out
 
 
 def depth_ratio(fusion) -> float:

@@ -233,6 +233,7 @@ no longer depends on its length.
 
 from __future__ import annotations
 
+import bisect
 import dataclasses
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
@@ -285,6 +286,10 @@ class UpdateSchedule:
         self._u0 = np.concatenate([[1], 1 + np.cumsum(lengths)[:-1]]).astype(np.int64) if keep else np.zeros(0, np.int64)
         self._len = lengths
         self._gaps = [jumps[i] for i in keep]
+        self._u0_list = [int(v) for v in self._u0]
+        self._k0_list = [int(v) for v in self._k0]
+        """The segments' first updates and grid indices as Python ints: every update looks them up two or three times,
+        and ``bisect`` on a short list costs ~0.3 us against ~2 us for ``np.searchsorted`` and its scalar conversions."""
         self.total = int(lengths.sum())
         """Number of updates a full run makes."""
 
@@ -297,15 +302,15 @@ class UpdateSchedule:
         """Grid index of update ``u`` (1-based; 0 -> 0, the start)."""
         if u <= 0 or not self.total:
             return 0
-        s = int(np.searchsorted(self._u0, u, side="right")) - 1
-        return int(self._k0[s] + (u - self._u0[s]))
+        s = bisect.bisect_right(self._u0_list, u) - 1  # np.searchsorted(self._u0, u, side="right") - 1
+        return int(self._k0_list[s] + (u - self._u0_list[s]))
 
     def gap_of(self, u: int) -> EventGap | None:
         """The gap update ``u`` stands for, None for a regular update."""
         if u <= 0 or u > self.total:
             return None
-        s = int(np.searchsorted(self._u0, u, side="right")) - 1
-        return self._gaps[s] if u == self._u0[s] else None
+        s = bisect.bisect_right(self._u0_list, u) - 1
+        return self._gaps[s] if u == self._u0_list[s] else None
 
     def updates_until(self, k: int) -> int:
         """How many updates lie at grid index ``k`` or before."""

@@ -363,7 +363,7 @@ class Tracker:
                 # Its fitted twist: the prediction also carries a smoothing correction of the last pose, not motion.
                 twist = self.predictor.twist()
             else:
-                twist = gtsam.Pose3(self._pose).logmap(gtsam.Pose3(predicted)) / dt_s if dt_s > 0 else None
+                twist = gtsam.Pose3(mat=self._pose).logmap(gtsam.Pose3(mat=predicted)) / dt_s if dt_s > 0 else None
             prior_info = None
             if isinstance(self.predictor, ConstantVelocityKalman):
                 # The filter fuses the prediction itself; the registration's isotropic prior would count it twice
