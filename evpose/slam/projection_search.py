@@ -300,7 +300,12 @@ class ProjectionSearchConfig:
     prepass_below: int = field(default=0, metadata={"min": 0, "max": 1000, "step": 1, "unit": "points"})
     """The first pass (motion-model pose, wide radius) runs only while KLT carries fewer map points than this; the second
     pass (estimated pose) always runs. 0 by default: as a rescue of a failing KLT step the first pass "re-found" points of
-    an unrelated scene among look-alike blobs and kept a map that should have been lost, points."""
+    an unrelated scene among look-alike blobs and kept a map that should have been lost, points. Session 40
+    (``/tmp/s40/cv40``, README.txt there): 12, indoor event-only seeds 0-9 against main's defaults: more time from the
+    events (28.0 -> 34.6 % mean; seeds 1, 3, 4: 31 -> 46, 23 -> 39, 24 -> 41 %) but a worse scale-aligned ATE
+    (1.96 -> 2.26 %, paired +0.30 +- 0.14 points; within target 8 -> 4 of 10): the maps it keeps are the small young
+    ones, which drift. An oracle KLT search at the true pose finds >= 12 points in only 0.7 % of the indoor coasted
+    MCIs (1.3 % at the coast pose), seeds 0-7: in 87 % fewer than 12 of the map's points are in view at all."""
     refine_radius_px: int = field(default=3, metadata={"min": 1, "max": 15, "step": 1, "unit": "px"})
     """Search radius around the projection with the estimated pose (second pass), pixels. KLT matcher on landing seeds
     0-23 (event-only): 3 px gave a mean ATE of 2.63 % (median 2.53), 5 px 3.22 % (median 2.34)."""
