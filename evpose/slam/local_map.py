@@ -329,8 +329,12 @@ def _median_depth(m: SlamMap, kf: Keyframe, track_to_point: dict[int, int]) -> f
     return float(np.median(z)) if z.size else None
 
 
-def cull_points(m: SlamMap, K: np.ndarray, track_to_point: dict[int, int], cfg: TrackingConfig) -> int:
-    """Remove points behind a keyframe or reprojecting badly, and young points few keyframes confirmed; returns how many."""
+def cull_points(m: SlamMap, K: np.ndarray, track_to_point: dict[int, int], cfg: TrackingConfig, min_depth_ratio: float = 0.0) -> int:
+    """Remove points behind a keyframe or reprojecting badly, and young points few keyframes confirmed; returns how many.
+
+    ``min_depth_ratio`` > 0 also removes points nearer a keyframe observing them than that share of the keyframe's
+    median point depth (:attr:`TrackingConfig.cull_min_depth_ratio`): a point slid into a camera centre makes the
+    local BA's normal equations singular."""
     if not m.points:
         return 0
     kf_index = {kf.id: i for i, kf in enumerate(m.keyframes)}
@@ -351,6 +355,14 @@ def cull_points(m: SlamMap, K: np.ndarray, track_to_point: dict[int, int], cfg: 
             proj = Xc[:, :2] / z[:, None] * np.array([K[0, 0], K[1, 1]]) + np.array([K[0, 2], K[1, 2]])
             err = np.linalg.norm(proj - uv, axis=1)
         obs_bad = ~(z > 0) | ~np.isfinite(err) | (err > 2.0 * cfg.reprojection_threshold_px)
+        if min_depth_ratio > 0:
+            med = np.full(len(m.keyframes), np.nan)
+            for i in np.unique(kk):
+                zi = z[(kk == i) & (z > 0)]
+                if zi.size:
+                    med[i] = np.median(zi)
+            with np.errstate(invalid="ignore"):
+                obs_bad |= z < min_depth_ratio * med[kk]  # a keyframe without a depth in front (nan) culls nothing here
         np.logical_or.at(bad, pj, obs_bad)
     removed = []
     for j, pid in enumerate(pids):
