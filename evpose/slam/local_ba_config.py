@@ -148,6 +148,25 @@ class LocalBundleAdjustmentSettings:
     :mod:`evpose.slam.event_coasting`), indoor event-only seeds 0-7 (defaults 6.84 %; under the defaults and the four
     neutral perturbations 7.63 %): 0.1 / 0.2 -> 9.04 / 10.00 % (paired +2.19 +- 1.74 / +3.16 +- 1.17); 0.2 with MCIs
     warped by the true motion in the turns 9.25 -> 8.34 %. Off."""
+    cull_min_depth_ratio: float = field(default=0.0, metadata={"min": 0.0, "max": 0.5, "step": 0.005, "unit": "ratio"})
+    """Event-only maps: after each local BA a point that lies nearer a keyframe observing it than this share of that
+    keyframe's median point depth is culled (:func:`evpose.slam.local_map.cull_points`; 0: off), ratio. Session 40
+    (``/tmp/s40/eo40``: ``whyba.py`` finds the BAs whose LM took no step, ``tridiag.py`` the depths triangulation
+    accepts; truth offline only): a track at the epipole of its keyframe pair (the camera closing on the scene: the
+    rooms' last stretch, the landing's descent) holds nothing of its point's place along the baseline, and the BA slid
+    such points into a keyframe's camera centre (indoor seed 5's point 202 at 3e-5 of its keyframe's median depth 0.24,
+    landing seed 17's point 284 at 9e-5 of 0.74). There its Jacobian (8e6 against 1e4 for the others) makes the normal
+    equations singular: LM tried every lambda without a step and left the map as it was, silently, while the point
+    stayed in the window (indoor 5: the 7 BAs of 2.72-2.93 s; landing 17: the 5 BAs of 2.50-2.84 s, after which its
+    keyframe steps fell to 0.4 of the truth). Triangulation accepts no point nearer than 0.07 of the median (indoor 0-2,
+    5, 21, 52: 837 points, 0.1 % quantile 0.12; landing 0, 1, 12, 17: 1627 points, minimum 0.29), so 0.01 culls only
+    collapsed ones. 0.01 against main 8b52aca's defaults (tag ``ds10``, ``run.py`` / ``batch.sh`` / ``cnt.py`` = ``evpose
+    slam`` + ``evpose eval --atlas --correct-scale``): indoor 0-53 1.825 -> 1.875 % (paired +0.050 +- 0.049, 5 better, 3
+    worse; within both targets 44 -> 43: seed 5 4.38 -> 6.96, 8 1.96 -> 2.51, 15 1.62 -> 1.36, 41 1.71 -> 1.59), fresh
+    54-61 unchanged, landing 0-23 1.470 -> 1.463 % (-0.007 +- 0.020; seed 17 2.58 -> 2.17, 3 1.08 -> 1.31), 24-35
+    unchanged. Off: once its BA runs, seed 5's map shrinks in the BA itself (its keyframe steps' log scale hand-on summed
+    -3.76 after the BAs against -1.05 at PnP), which the stalled BA had spared. Four runs keep a stalled BA, all at a
+    young map's second or third keyframe (indoor 11, 18, 40, landing 1): another cause."""
     ba_rotation_rate_prior_deg_s: float = field(default=0.0, metadata={"min": 0.0, "max": 200.0, "step": 1.0, "unit": "deg/s"})
     """Event-only local BA: sigma of a constant-rotation-rate factor per three consecutive keyframes, the change of the
     body-frame rate between the two keyframe steps (:func:`evpose.slam.motion_prior.add_rotation_rate_factors`; Huber

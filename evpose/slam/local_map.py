@@ -150,6 +150,19 @@ inliers) and the shrink stays. Over the mature pieces of seeds 0-23 the error gr
 -0.16), but seeds 12 and 17 are not the starved ones (mean inliers over 1.9-2.4 s 30.2 and 26.2 against 22.0-37.0 over
 seeds; without seed 4's loss the per-seed Spearman of ATE with it is -0.41, p 0.05). Existing levers on it, paired
 against ``fin``, did not hold on held-out seeds (figures at ``min_triangulation_deg`` and ``ba_fixed_keyframes``).
+
+Which stage hands a shrunk step on (session 40, ``/tmp/s40/eo40``: ``kfdiag.py`` hooks every keyframe insertion and
+local BA, ``kfana.py`` gives each insertion's h = log of its new keyframe step over the step before, both over the true
+steps: as PnP hands it in, after the insertion's BA, in the final map; main 8b52aca's defaults; truth offline only).
+At PnP-placed insertions indoors the new step comes in shorter than the one before on all 18 seeds looked at (0-13, 21,
+33, 44, 52; mean h -0.09 to -0.53 per insertion, 53-100 % of insertions below 0), and the final maps keep much of it
+(mean h -0.53 to +0.07); on the landing (0, 1, 2, 12, 17) PnP hands in -0.02 to -0.14 and the mature map's BAs take it
+back (final -0.04 to +0.02). Indoors h is lower where the MCIs come farther apart than at the keyframe before (event
+rate falling as the room's turn slows: -0.45 against -0.17 at a level rate; Spearman -0.14, p 0.03, 228 insertions;
+``lagcorr.py``); the true rate falls from 74 to 21 deg/s over 0-0.8 s and from 109 to 22 over 1.65-2.65 s, the
+over-2 % rooms' bad maps lie mostly there (0.47-0.85 s, 1.9-3.0 s), and the maps of 0.86-1.9 s hold their scale.
+A young map's BA can also make it worse (indoor 5's last map, the BA stall of ``TrackingConfig.cull_min_depth_ratio``
+removed: -1.05 summed at PnP, -3.76 after the BAs).
 """
 
 from __future__ import annotations
@@ -329,8 +342,12 @@ def _median_depth(m: SlamMap, kf: Keyframe, track_to_point: dict[int, int]) -> f
     return float(np.median(z)) if z.size else None
 
 
-def cull_points(m: SlamMap, K: np.ndarray, track_to_point: dict[int, int], cfg: TrackingConfig) -> int:
-    """Remove points behind a keyframe or reprojecting badly, and young points few keyframes confirmed; returns how many."""
+def cull_points(m: SlamMap, K: np.ndarray, track_to_point: dict[int, int], cfg: TrackingConfig, min_depth_ratio: float = 0.0) -> int:
+    """Remove points behind a keyframe or reprojecting badly, and young points few keyframes confirmed; returns how many.
+
+    ``min_depth_ratio`` > 0 also removes points nearer a keyframe observing them than that share of the keyframe's
+    median point depth (:attr:`TrackingConfig.cull_min_depth_ratio`): a point slid into a camera centre makes the
+    local BA's normal equations singular."""
     if not m.points:
         return 0
     kf_index = {kf.id: i for i, kf in enumerate(m.keyframes)}
@@ -351,6 +368,14 @@ def cull_points(m: SlamMap, K: np.ndarray, track_to_point: dict[int, int], cfg: 
             proj = Xc[:, :2] / z[:, None] * np.array([K[0, 0], K[1, 1]]) + np.array([K[0, 2], K[1, 2]])
             err = np.linalg.norm(proj - uv, axis=1)
         obs_bad = ~(z > 0) | ~np.isfinite(err) | (err > 2.0 * cfg.reprojection_threshold_px)
+        if min_depth_ratio > 0:
+            med = np.full(len(m.keyframes), np.nan)
+            for i in np.unique(kk):
+                zi = z[(kk == i) & (z > 0)]
+                if zi.size:
+                    med[i] = np.median(zi)
+            with np.errstate(invalid="ignore"):
+                obs_bad |= z < min_depth_ratio * med[kk]  # a keyframe without a depth in front (nan) culls nothing here
         np.logical_or.at(bad, pj, obs_bad)
     removed = []
     for j, pid in enumerate(pids):

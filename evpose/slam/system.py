@@ -482,7 +482,7 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
                                     extra_factors=speed_factor_hook(m, self.cfg.young_scale, t_us) if self.imu is None else None)
         if before is not None:
             carry_relative_scale(m, before)
-        cull_points(m, self.K, fe.track_to_point, tc)
+        cull_points(m, self.K, fe.track_to_point, tc, min_depth_ratio=tc.cull_min_depth_ratio if self.imu is None else 0.0)
         if self.imu is None and adjust:
             maybe_restructure(m, self.K, self.cfg.restructure, self._init_cfg, tc, fe.track_to_point, self.cfg.seed)
         # BA moved the newest keyframe: the trajectory's last pose follows it.
