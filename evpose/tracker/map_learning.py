@@ -41,6 +41,9 @@ def learn_map_points(tracker: Tracker, status: TrackStatus, used: np.ndarray, fi
         counts["points_offset"] = tracker.edge_offsets.update(tracker._points, used, levels[-1], T_field, tracker.K, twist,
                                                               float(tracker._registration.field_lag_ms) * 1e-3,
                                                               float(tracker._registration.lag_floor_px), trail)
+        if tracker.anchored_rims is not None:
+            # The rims' absolute steps, only while the points no refiner moves anchor the pose (see its module).
+            counts["points_rim_refined"] = tracker.anchored_rims.update(tracker._points, used, levels[-1], T_field, tracker.K)
         timings["edge_offsets"] = elapsed_ms(t0)
     if tracker.refiner is not None and status is TrackStatus.OK and field_polarity is None and tracker.hold.never_lost:
         # Registration read slot 0. A regained track may be a wrong lock the map would learn, so only a track
