@@ -483,10 +483,11 @@ class Tracker:
         return self._pose.copy()
 
     def _painted_mask(self) -> np.ndarray:
-        """(N,) bool over the map: the points the painted-edge refiner owns."""
-        mask = np.zeros(self._points.shape[0], dtype=np.bool_)
-        mask[self.refiner.index] = True
-        return mask
+        """(N,) bool over the map: the points the painted-edge refiner owns (built once; do not write)."""
+        if getattr(self, "_painted", None) is None:
+            self._painted = np.zeros(self._points.shape[0], dtype=np.bool_)
+            self._painted[self.refiner.index] = True
+        return self._painted
 
     def _field_box(self, pts: np.ndarray, T_world_cam: np.ndarray, coarse: bool = False) -> tuple[int, int, int, int] | None:
         """The rows/columns of the field this update needs (:func:`~evpose.tracker.visible_map.field_box`)."""
