@@ -34,6 +34,7 @@ import numba as nb
 import numpy as np
 
 from evpose.frontend.distance_field import bilinear_curvature_from_value, bilinear_sample
+from evpose.tracker.anchored_rims import AnchoredRimConfig
 from evpose.tracker.camera_point import camera_point
 from evpose.tracker.offset_fit import add_offset_row, apply_offset_fit, normal_px_per_m
 from evpose.tracker.registration_kernels import _NO_EXTRA, _NO_TWIST, _floor_shift, _projected_normal
@@ -123,6 +124,8 @@ class EdgeOffsetConfig:
     """Only points where the Newton curvature along the normal (``g^2 + f h``) is at least this take part, TDF/px^2."""
     min_px_per_m: float = field(default=5.0, metadata={"min": 0.0, "max": 1000.0, "step": 1.0, "unit": "px/m"})
     """Points whose map edge normal projects to less than this along the image normal are left alone, px/m."""
+    anchored_rims: AnchoredRimConfig = field(default_factory=AnchoredRimConfig)
+    """The rims' absolute refinement while other edges anchor the pose (:mod:`evpose.tracker.anchored_rims`; off)."""
 
 
 @nb.njit(cache=True)

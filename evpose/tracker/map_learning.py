@@ -41,8 +41,16 @@ def learn_map_points(tracker: Tracker, status: TrackStatus, used: np.ndarray, fi
         counts["points_offset"] = tracker.edge_offsets.update(tracker._points, used, levels[-1], T_field, tracker.K, twist,
                                                               float(tracker._registration.field_lag_ms) * 1e-3,
                                                               float(tracker._registration.lag_floor_px), trail)
+        if tracker.anchored_rims is not None:
+            # The rims' absolute steps, only while the points no refiner moves anchor the pose (see its module).
+            counts["points_rim_refined"] = tracker.anchored_rims.update(tracker._points, used, levels[-1], T_field, tracker.K)
         timings["edge_offsets"] = elapsed_ms(t0)
-    if tracker.refiner is not None and status is TrackStatus.OK and field_polarity is None and tracker.hold.never_lost:
+    share = float(tracker.config.map_refinement.fused_refine_max_share)
+    anchored = (share <= 0 or tracker.refiner is None or not tracker.components.drives_pose or not used.size
+                or np.count_nonzero(tracker._painted_mask()[used]) <= share * used.size)
+    if (tracker.refiner is not None and status is TrackStatus.OK and field_polarity is None and tracker.hold.never_lost
+            and anchored):
+        # (``map_refinement.fused_refine_max_share``: in the fused modes only while the other points anchor the pose.)
         # Registration read slot 0. A regained track may be a wrong lock the map would learn, so only a track
         # never lost since its start refines (indoor demo, stpe: refining after regains 192 -> 861 mm ATE).
         # Painted edges move towards where this update's events put them, seen from the pose the field shows.

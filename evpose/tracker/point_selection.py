@@ -39,6 +39,9 @@ def registered_points(tracker: Tracker, predicted: np.ndarray) -> tuple:
         if 2 * int(np.count_nonzero(ready)) >= visible.size:  # else the painted points are the map: keep them
             # T_align shows the composed points' patches alone: a point left out of them would never be refined.
             candidates, skip = (visible[ready], None) if tracker.polarity_selector is None else (visible, held)
+    cap = float(tracker.config.map_refinement.fused_painted_max_share)
+    if cap > 0 and tracker.refiner is not None and tracker.components.drives_pose and candidates.size:
+        candidates, skip = capped_painted(tracker, candidates, skip, cap)
     used = strided_subset(candidates, int(tracker.config.registration.max_points))
     vm = tracker.config.visible_map
     used_tangents = None  # the rows of ``used`` of ``_tangents`` once gathered
@@ -49,3 +52,23 @@ def registered_points(tracker: Tracker, predicted: np.ndarray) -> tuple:
     else:
         pts = np.take(tracker._points, used, axis=0)  # the rows of ``used``; 3x cheaper than fancy indexing
     return visible, used, pts, used_tangents, skip
+
+
+def capped_painted(tracker: Tracker, candidates: np.ndarray, skip: np.ndarray | None, cap: float) -> tuple:
+    """``(candidates, skip)`` with the painted points among ``candidates`` thinned (an even stride) to ``cap`` of them
+    (``MapRefinementConfig.fused_painted_max_share``); the dropped ones are skipped by registration but, with the
+    polarity filter, keep their ``T_align`` patches (``skip``, bool over the map), so the refiner still reads them."""
+    painted = tracker._painted_mask()
+    is_p = painted[candidates]
+    n_p = int(np.count_nonzero(is_p))
+    keep = int(cap / (1.0 - cap) * (candidates.size - n_p)) if cap < 1.0 else n_p
+    if n_p <= keep:
+        return candidates, skip
+    p_idx = candidates[is_p]
+    dropped = np.ones(n_p, dtype=np.bool_)
+    dropped[(np.arange(keep) * (n_p / max(keep, 1))).astype(np.int64) if keep > 0 else np.zeros(0, np.int64)] = False
+    if tracker.polarity_selector is None:
+        return np.sort(np.concatenate([candidates[~is_p], p_idx[~dropped]])), skip
+    out = np.zeros(painted.shape[0], dtype=np.bool_) if skip is None else skip.copy()
+    out[p_idx[dropped]] = True
+    return candidates, out

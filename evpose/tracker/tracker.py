@@ -39,6 +39,7 @@ from evpose.fusion.aligned_surface import AlignedTimeSurface
 from evpose.tracker.chance_level import chance_counts
 from evpose.tracker.config import MotionModel, TrackerConfig
 from evpose.tracker.ego_motion_events import ego_motion_keep, empty_ego_history
+from evpose.tracker.anchored_rims import AnchoredRims
 from evpose.tracker.edge_offsets import EdgeOffsetLearner
 from evpose.tracker.event_registration import event_registration_for
 from evpose.tracker.grazing import add_crease_off_trail, add_grazing_off_trail, crease_points
@@ -155,6 +156,11 @@ class Tracker:
         then stays the config's)."""
         if self.edge_offsets is not None and self.edge_offsets.owned == 0:
             self.edge_offsets = None
+        ar = eo.anchored_rims
+        self.anchored_rims = (AnchoredRims(ar, contour_map, float(config.map_refinement.max_curvature), self.edge_offsets,
+                                           None if self.refiner is None else self._painted_mask())
+                              if self.edge_offsets is not None and ar.anchor_share > 0 else None)
+        """The rims' absolute refinement while other edges anchor (:mod:`evpose.tracker.anchored_rims`), None when off."""
         lag_ms = float(eo.full_field_lag_ms if self.components.drives_pose
                        else eo.stpe_filter_field_lag_ms if polarity_selector is not None else eo.field_lag_ms)
         if self.edge_offsets is not None and lag_ms > 0:
@@ -217,7 +223,8 @@ class Tracker:
         return {"noise_filter": self.noise_filter, "time_surface": self.time_surface, "predictor": self.predictor,
                 "motion": self._side_motion(),
                 "selector": self.polarity_selector if hasattr(self.polarity_selector, "snapshot") else None,
-                "visible_map": self.visible_map, "map_refinement": self.refiner, "edge_offsets": self.edge_offsets,
+                "visible_map": self.visible_map, "map_refinement": self.refiner,
+                "anchored_rims": self.anchored_rims, "edge_offsets": self.edge_offsets,
                 "event_registration": self.event_registration}
 
     def snapshot(self) -> dict:
@@ -476,10 +483,11 @@ class Tracker:
         return self._pose.copy()
 
     def _painted_mask(self) -> np.ndarray:
-        """(N,) bool over the map: the points the painted-edge refiner owns."""
-        mask = np.zeros(self._points.shape[0], dtype=np.bool_)
-        mask[self.refiner.index] = True
-        return mask
+        """(N,) bool over the map: the points the painted-edge refiner owns (built once; do not write)."""
+        if getattr(self, "_painted", None) is None:
+            self._painted = np.zeros(self._points.shape[0], dtype=np.bool_)
+            self._painted[self.refiner.index] = True
+        return self._painted
 
     def _field_box(self, pts: np.ndarray, T_world_cam: np.ndarray, coarse: bool = False) -> tuple[int, int, int, int] | None:
         """The rows/columns of the field this update needs (:func:`~evpose.tracker.visible_map.field_box`)."""
