@@ -6,6 +6,8 @@ from __future__ import annotations
 import enum
 from dataclasses import dataclass, field
 
+from evpose.slam.inertial_window_config import InertialWindowConfig
+
 
 class InertialConfiguration(str, enum.Enum):
     """The event-inertial configurations of the paper's Tables I and III (event-only is ``SlamMode.EVENT``)."""
@@ -495,3 +497,5 @@ class InertialConfig:
     fails (2 deg) changed only seed 7 and fixed neither (not kept)."""
     gyro_prior_uninit_deg: float = field(default=0.2, metadata={"min": 0.0, "max": 5.0, "step": 0.01, "unit": "deg"})
     """The same prior before the IMU initialisation, with an unknown gyro bias, also used by the visual local BA (0 disables it): chained step after step, an uncorrected bias would bend the visual map, so it is looser or off, degrees."""
+    window: InertialWindowConfig = field(default_factory=InertialWindowConfig)
+    """Scale anchors of the inertial local BA after the initialisation (:mod:`evpose.slam.inertial_window_config`)."""
