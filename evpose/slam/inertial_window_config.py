@@ -30,7 +30,9 @@ IMU-propagated keyframes with them. Measured, each against main's defaults (rm33
   ``velocity_span_s`` 0.3 + ``velocity_sigma`` 0.1, oracle, indoor 0-19: 13.75 -> 11.50 % (-2.25 +- 0.91, 11 better,
   6 worse; seeds 2 / 6 / 12 / 14 / 18: 15.3 / 11.5 / 14.6 / 14.8 / 10.5 -> 5.5 / 6.8 / 5.7 / 6.3 / 5.1), scale drift
   median 475 -> 126 %, post-init rigid ATE median 14.7 -> 9.0 %, its 0.25 s windows |log| 0.53 -> 0.33; 19 of 20 within
-  the RPE targets (seed 11 0.0139 m/m). Without the oracle it holds the init's wrong scale: indoor 0-61 16.23 -> 16.58 %
+  the RPE targets (seed 11 0.0139 m/m). Oracle, indoor 0-61: 13.28 -> 11.73 % (-1.55 +- 0.50, 34 better, 21 worse),
+  scale drift median 348 -> 118 %, but the post-init part's overall scale no closer (|log| median 0.40 -> 0.54, 13 -> 11
+  of 53 within 0.8-1.25) and 58 of 62 within the RPE targets (seeds 11 / 29 / 53 / 60: 0.011-0.014 m/m). Without the oracle it holds the init's wrong scale: indoor 0-61 16.23 -> 16.58 %
   (+0.34 +- 0.38, 16 better, 39 worse; post-init truth m/unit median 1.45 -> 2.22), RPE 62/62; landing 0-23 1.04 ->
   1.64 % (23 worse: the backward difference over 0.3 s lags the landing's deceleration), 24/24. Off until the IMU
   initialisation's scale is right; then the first candidate (with a centred difference for the landing).
