@@ -7,6 +7,7 @@ import enum
 from dataclasses import dataclass, field
 
 from evpose.slam.inertial_init_visual import InitVisualConfig
+from evpose.slam.inertial_window_config import InertialWindowConfig
 
 
 class InertialConfiguration(str, enum.Enum):
@@ -283,14 +284,10 @@ class InertialConfig:
     """Keyframes used by the initialisation are thinned to at least this spacing: the acceleration signal grows with the square of the gap while visual position noise does not, and a noisy displacement regressor biases the scale towards zero, seconds."""
     init_trailing_fallback: bool = False
     """When the IMU initialisation over all of a map's keyframes is refused, try it once more over the keyframes of the
-    newest ``init_min_span_s`` (at least ``init_keyframes``) and take that when it passes. Session 39 (ei39, ``/tmp/s39/
-    ei39`` ``h.py`` + ``pair.py`` / ``initc.py``, tag ``tf`` against main's ``rha``): the 7 indoor runs never initialised
-    (5 7 15 20 23 40 50; refused for a negative scale, while the same attempts on the true poses pass at 1.00-1.06: the
-    keyframes' scale changes 2-8x along the map, ``diag.py`` + ``ana.py``) 7 -> 0, RPE within both targets unchanged,
-    translation -0.00010 +- 0.00008 m/m, rotation -0.00012 +- 0.00013 deg/m, landing bit-identical. Off because what it
-    initialises is not metric: trailing scales 0.03-0.18 of the truth (``trail.py``), ATE without scale correction level
-    (indoor 16.96 -> 16.94 %, -0.02 +- 0.45 points; seed 20 4.5 -> 23.1 %). No indoor initialisation is metric yet: the
-    accepted ones are a median 0.25 of the truth (``scalechk.py``; ``/tmp/s39/ms39/README.txt``)."""
+    newest ``init_min_span_s`` (at least ``init_keyframes``). Session 39 (``/tmp/s39/ei39`` ``h.py`` + ``pair.py``, tag
+    ``tf`` against ``rha``): the 7 indoor runs never initialised (5 7 15 20 23 40 50) 7 -> 0, RPE unchanged, landing
+    bit-identical; off because what it initialises is 0.03-0.18 of the true scale (``trail.py``): indoor ATE without
+    scale correction 16.96 -> 16.94 % (-0.02 +- 0.45 points; seed 20 4.5 -> 23.1 %)."""
     init_visual: InitVisualConfig = field(default_factory=InitVisualConfig)
     """The initialisation over visually tracked keyframes of one visual segment (:mod:`evpose.slam.inertial_init_visual`)."""
     refine_after_s: float = field(default=1.2, metadata={"min": 0.0, "max": 30.0, "step": 0.1, "unit": "s"})
@@ -499,3 +496,5 @@ class InertialConfig:
     fails (2 deg) changed only seed 7 and fixed neither (not kept)."""
     gyro_prior_uninit_deg: float = field(default=0.2, metadata={"min": 0.0, "max": 5.0, "step": 0.01, "unit": "deg"})
     """The same prior before the IMU initialisation, with an unknown gyro bias, also used by the visual local BA (0 disables it): chained step after step, an uncorrected bias would bend the visual map, so it is looser or off, degrees."""
+    ba_window: InertialWindowConfig = field(default_factory=InertialWindowConfig)
+    """Scale anchors of the inertial local BA after the initialisation (:mod:`evpose.slam.inertial_window_config`)."""

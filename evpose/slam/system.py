@@ -459,7 +459,8 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
             inertial_local_bundle_adjustment(m, m.inertial, self.K, self.imu, self.calib.T_cam_imu, self.calib.time_offset_us,
                                              tc.local_window, tc.ba_iterations, tc.ba_huber_px, ic.acc_noise, ic.gyro_noise,
                                              ic.acc_bias_sigma, ic.gyro_bias_sigma, ic.velocity_from_imu,
-                                             velocity_prior_sigma=ic.ba_velocity_prior_sigma, min_span_s=ic.ba_min_span_s, span_keyframes=ic.ba_span_keyframes)
+                                             velocity_prior_sigma=ic.ba_velocity_prior_sigma, min_span_s=ic.ba_min_span_s, span_keyframes=ic.ba_span_keyframes,
+                                             anchors=ic.ba_window)
         else:
             priors = self._keyframe_rotation_priors(m)
             sigma, pair_sigmas = self._ba_rotation_sigmas(m, priors)
