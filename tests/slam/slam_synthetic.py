@@ -3,7 +3,8 @@
 Each visible point emits events at a constant rate (independent of its image
 speed), so a faster camera yields fewer events per pixel of motion, which is
 what the ``N_e`` adaptation of Algorithm 1 reacts to. ``circle_pose`` / ``circle_map``: a camera circling
-the origin, shared by the coasting and map re-join tests.
+the origin, shared by the coasting and map re-join tests. ``sideways_map`` / ``inertial_truth_map``: small keyframe
+maps for the bundle adjustment tests.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from evpose.core.recording import Recording
 from evpose.core.trajectory import Trajectory, invert_pose
 from evpose.slam.atlas import Keyframe, MapPoint, SlamMap
 from evpose.slam.event_image import event_image, to_uint8
+from evpose.slam.geometry import project
 
 
 def make_points(n: int, seed: int, depth=(3.0, 6.0), half_width: float = 3.0) -> np.ndarray:
@@ -135,3 +137,60 @@ def shifted_image_pair(rng: np.random.Generator, shift, width: int, height: int)
     a = to_uint8(event_image(x, y, None, width, height, 1.0))
     b = to_uint8(event_image(x + shift[0], y + shift[1], None, width, height, 1.0))
     return a, b
+
+
+def sideways_map(rng: np.random.Generator, K: np.ndarray, n_kf: int, n_pts: int, step, point_noise: float,
+                 perturb=None) -> tuple[SlamMap, np.ndarray, list[np.ndarray]]:
+    """Keyframes ``k * step`` apart (turning 0.02 rad per keyframe about y) before points 3-6 units away, every point
+    seen by every keyframe with 0.2 px noise; ``perturb(k, T)`` may move keyframe ``k``'s stored pose in place, and the
+    stored points are ``point_noise`` off. Returns the map, the true points and the true poses."""
+    X = np.c_[rng.uniform(-2, 2, n_pts), rng.uniform(-1.5, 1.5, n_pts), rng.uniform(3, 6, n_pts)]
+    m = SlamMap(0)
+    true_T = []
+    for k in range(n_kf):
+        T = np.eye(4)
+        T[:3, :3] = Rotation.from_rotvec([0, 0.02 * k, 0]).as_matrix()
+        T[:3, 3] = np.multiply(step, k)
+        true_T.append(T)
+        Tn = T.copy()
+        if perturb is not None:
+            perturb(k, Tn)
+        m.keyframes.append(Keyframe(k, k * 1000, Tn, {}))
+    for j in range(n_pts):
+        obs = {k: project(K, invert_pose(T), X[j][None])[0][0] + rng.normal(0, 0.2, 2) for k, T in enumerate(true_T)}
+        m.points[j] = MapPoint(j, X[j] + rng.normal(0, point_noise, 3), obs, j, 1)
+    return m, X, true_T
+
+
+def inertial_truth_map(rec: Recording, K: np.ndarray, idx, stretch: float = 1.0,
+                       point_noise: float = 0.0) -> tuple[SlamMap, dict[int, np.ndarray]]:
+    """Keyframes at samples ``idx`` of ``rec``'s truth, rotated so gravity (+y in the simulator) points along gtsam's
+    -z, seeing 120 points (0.3 px noise, inside 240x180); positions and points stretched by ``stretch`` about the
+    first keyframe (a map whose scale is off), points ``point_noise`` off. Returns the map and the keyframes' metric
+    velocities from the truth."""
+    R = Rotation.from_rotvec([-np.pi / 2, 0, 0]).as_matrix()
+    gt = rec.ground_truth
+    T = gt.matrices()
+    X = make_points(120, 1) @ R.T
+    m = SlamMap(0)
+    rng = np.random.default_rng(0)
+    vel = {}
+    origin = R @ T[idx[0]][:3, 3]
+    for k, i in enumerate(idx):
+        Tw = T[i].copy()
+        Tw[:3, :3] = R @ Tw[:3, :3]
+        Tw[:3, 3] = R @ Tw[:3, 3]
+        uv, z = project(K, invert_pose(Tw), X)
+        inside = (z > 0) & (uv[:, 0] > 0) & (uv[:, 0] < 240) & (uv[:, 1] > 0) & (uv[:, 1] < 180)
+        obs = {j: uv[j] + rng.normal(0, 0.3, 2) for j in np.flatnonzero(inside)}
+        Ts = Tw.copy()
+        if stretch != 1.0:
+            Ts[:3, 3] = origin + stretch * (Tw[:3, 3] - origin)
+        m.keyframes.append(Keyframe(k, int(gt.t[i]), Ts, {}))
+        for j, o in obs.items():
+            Xj = X[j] if stretch == 1.0 else origin + stretch * (X[j] - origin)
+            if point_noise > 0:  # drawn for every observation, as the points are created on first sight
+                Xj = Xj + rng.normal(0, point_noise, 3)
+            m.points.setdefault(j, MapPoint(j, Xj, {}, j, 0)).obs[k] = o
+        vel[k] = R @ ((gt.position[i + 1] - gt.position[i]) / 1e-3)
+    return m, vel

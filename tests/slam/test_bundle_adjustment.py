@@ -1,35 +1,20 @@
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from evpose.core.trajectory import invert_pose
-from evpose.slam.atlas import Keyframe, MapPoint, SlamMap
 from evpose.slam.bundle_adjustment import local_bundle_adjustment
-from evpose.slam.geometry import project
+from slam_synthetic import sideways_map
 
 K = np.array([[200.0, 0, 120], [0, 200.0, 90], [0, 0, 1]])
 
 
 def _map(seed=0, n_kf=4, n_pts=80, point_noise=0.2, pose_noise=0.03):
     rng = np.random.default_rng(seed)
-    X = np.c_[rng.uniform(-2, 2, n_pts), rng.uniform(-1.5, 1.5, n_pts), rng.uniform(3, 6, n_pts)]
-    m = SlamMap(0)
-    true_T = []
-    for k in range(n_kf):
-        T = np.eye(4)
-        T[:3, :3] = Rotation.from_rotvec([0, 0.02 * k, 0]).as_matrix()
-        T[:3, 3] = [0.15 * k, 0.01 * k, 0]
-        true_T.append(T)
-        Tn = T.copy()
+
+    def perturb(k, T):
         if k >= 1:  # keyframe 0 (and 1 for scale) keep their true pose
-            Tn[:3, 3] += rng.normal(0, pose_noise, 3) * (k >= 2)
-        m.keyframes.append(Keyframe(k, k * 1000, Tn, {}))
-    for j in range(n_pts):
-        obs = {}
-        for k, T in enumerate(true_T):
-            uv, z = project(K, invert_pose(T), X[j][None])
-            obs[k] = uv[0] + rng.normal(0, 0.2, 2)
-        m.points[j] = MapPoint(j, X[j] + rng.normal(0, point_noise, 3), obs, j, 1)
-    return m, X, true_T
+            T[:3, 3] += rng.normal(0, pose_noise, 3) * (k >= 2)
+
+    return sideways_map(rng, K, n_kf, n_pts, [0.15, 0.01, 0], point_noise, perturb)
 
 
 def test_local_bundle_adjustment_reduces_point_and_pose_error():

@@ -1,14 +1,14 @@
 """A point slid into a keyframe's camera centre: it stalls the local BA, and ``cull_min_depth_ratio`` culls it."""
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from evpose.core.trajectory import invert_pose
-from evpose.slam.atlas import Keyframe, MapPoint, SlamMap
+from evpose.slam.atlas import MapPoint
 from evpose.slam.bundle_adjustment import local_bundle_adjustment
 from evpose.slam.config import TrackingConfig
 from evpose.slam.geometry import project
 from evpose.slam.local_map import cull_points
+from slam_synthetic import sideways_map
 
 K = np.array([[200.0, 0, 120], [0, 200.0, 90], [0, 0, 1]])
 
@@ -16,22 +16,12 @@ K = np.array([[200.0, 0, 120], [0, 200.0, 90], [0, 0, 1]])
 def _map(seed=0, n_kf=5, n_pts=60, collapsed=True):
     """Keyframes stepping sideways and forwards before a scene 3-6 units away, points and keyframe 4 a little off;
     with ``collapsed`` one more point sits 1e-5 units in front of keyframe 3's centre."""
-    rng = np.random.default_rng(seed)
-    X = np.c_[rng.uniform(-2, 2, n_pts), rng.uniform(-1.5, 1.5, n_pts), rng.uniform(3, 6, n_pts)]
-    m = SlamMap(0)
-    true_T = []
-    for k in range(n_kf):
-        T = np.eye(4)
-        T[:3, :3] = Rotation.from_rotvec([0, 0.02 * k, 0]).as_matrix()
-        T[:3, 3] = [0.1 * k, 0.01 * k, 0.05 * k]  # closing on the scene: the epipoles lie in the images
-        true_T.append(T)
-        Tn = T.copy()
+    def perturb(k, T):
         if k == n_kf - 1:
-            Tn[:3, 3] += [0.01, -0.005, 0.005]
-        m.keyframes.append(Keyframe(k, k * 1000, Tn, {}))
-    for j in range(n_pts):
-        obs = {k: project(K, invert_pose(T), X[j][None])[0][0] + rng.normal(0, 0.2, 2) for k, T in enumerate(true_T)}
-        m.points[j] = MapPoint(j, X[j] + rng.normal(0, 0.01, 3), obs, j, 1)
+            T[:3, 3] += [0.01, -0.005, 0.005]
+
+    # closing on the scene (0.05 units forward per keyframe): the epipoles lie in the images
+    m, _, true_T = sideways_map(np.random.default_rng(seed), K, n_kf, n_pts, [0.1, 0.01, 0.05], 0.01, perturb)
     if collapsed:
         # On the baseline from keyframe 2 through keyframe 3's centre: at keyframe 2's epipole, where that view holds
         # nothing of the point's place along the baseline (where the local BA of indoor seed 5 had slid its point 202).

@@ -1,12 +1,9 @@
 import numpy as np
 import pytest
-from scipy.spatial.transform import Rotation
 
-from evpose.core.trajectory import invert_pose
-from evpose.slam.atlas import Keyframe, MapPoint, SlamMap
-from evpose.slam.geometry import project
+from evpose.slam.atlas import Keyframe
 from evpose.slam.inertial_ba import InertialState, inertial_local_bundle_adjustment
-from slam_synthetic import make_points, make_recording
+from slam_synthetic import inertial_truth_map, make_recording
 
 K = np.array([[200.0, 0, 119.5], [0, 200.0, 89.5], [0, 0, 1]])
 
@@ -17,26 +14,8 @@ def shaken():
 
 
 def test_inertial_bundle_adjustment_pulls_a_perturbed_keyframe_back(shaken):
-    # Rotate the synthetic world (gravity +y) into gtsam's gravity -z frame.
-    R = Rotation.from_rotvec([-np.pi / 2, 0, 0]).as_matrix()
-    assert np.allclose(R @ [0, 1, 0], [0, 0, -1])
-    gt = shaken.ground_truth
-    T = gt.matrices()
     idx = list(range(50, 1150, 150))
-    X = make_points(120, 1) @ R.T
-    m = SlamMap(0)
-    rng = np.random.default_rng(0)
-    vel = {}
-    for k, i in enumerate(idx):
-        Tw = T[i].copy()
-        Tw[:3, :3] = R @ Tw[:3, :3]
-        Tw[:3, 3] = R @ Tw[:3, 3]
-        uv, z = project(K, invert_pose(Tw), X)
-        obs = {j: uv[j] + rng.normal(0, 0.3, 2) for j in np.flatnonzero((z > 0) & (uv[:, 0] > 0) & (uv[:, 0] < 240) & (uv[:, 1] > 0) & (uv[:, 1] < 180))}
-        m.keyframes.append(Keyframe(k, int(gt.t[i]), Tw, {}))
-        for j, o in obs.items():
-            m.points.setdefault(j, MapPoint(j, X[j] + rng.normal(0, 0.02, 3), {}, j, 0)).obs[k] = o
-        vel[k] = R @ ((gt.position[i + 1] - gt.position[i]) / 1e-3)
+    m, vel = inertial_truth_map(shaken, K, idx, point_noise=0.02)  # gravity rotated into gtsam's -z
     truth = m.keyframes[-1].T_wc.copy()
     m.keyframes[-1].T_wc = truth.copy()
     m.keyframes[-1].T_wc[:3, 3] += [0.05, -0.03, 0.02]

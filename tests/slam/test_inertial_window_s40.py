@@ -2,15 +2,12 @@
 
 import numpy as np
 import pytest
-from scipy.spatial.transform import Rotation
 
-from evpose.core.trajectory import invert_pose
-from evpose.slam.atlas import Keyframe, MapPoint, SlamMap
+from evpose.slam.atlas import Keyframe
 from evpose.slam.config import SlamConfig
-from evpose.slam.geometry import project
 from evpose.slam.inertial_ba import InertialState, fixed_keyframes, inertial_local_bundle_adjustment, spread_ratio
 from evpose.slam.inertial_window_config import InertialWindowConfig
-from slam_synthetic import make_points, make_recording
+from slam_synthetic import inertial_truth_map, make_recording
 
 K = np.array([[200.0, 0, 119.5], [0, 200.0, 89.5], [0, 0, 1]])
 
@@ -23,26 +20,7 @@ def shaken():
 def _map(rec, idx, stretch):
     """Keyframes at samples ``idx`` of the truth (gravity rotated to -z), their positions and the points stretched by
     ``stretch`` about the first keyframe (a map whose scale is off), with metric velocities from the truth."""
-    R = Rotation.from_rotvec([-np.pi / 2, 0, 0]).as_matrix()
-    gt = rec.ground_truth
-    T = gt.matrices()
-    X = make_points(120, 1) @ R.T
-    m = SlamMap(0)
-    rng = np.random.default_rng(0)
-    vel = {}
-    origin = R @ T[idx[0]][:3, 3]
-    for k, i in enumerate(idx):
-        Tw = T[i].copy()
-        Tw[:3, :3] = R @ Tw[:3, :3]
-        Tw[:3, 3] = R @ Tw[:3, 3]
-        uv, z = project(K, invert_pose(Tw), X)
-        obs = {j: uv[j] + rng.normal(0, 0.3, 2) for j in np.flatnonzero((z > 0) & (uv[:, 0] > 0) & (uv[:, 0] < 240) & (uv[:, 1] > 0) & (uv[:, 1] < 180))}
-        Ts = Tw.copy()
-        Ts[:3, 3] = origin + stretch * (Tw[:3, 3] - origin)
-        m.keyframes.append(Keyframe(k, int(gt.t[i]), Ts, {}))
-        for j, o in obs.items():
-            m.points.setdefault(j, MapPoint(j, origin + stretch * (X[j] - origin), {}, j, 0)).obs[k] = o
-        vel[k] = R @ ((gt.position[i + 1] - gt.position[i]) / 1e-3)
+    m, vel = inertial_truth_map(rec, K, idx, stretch)
     return m, InertialState(vel, np.zeros(3), np.zeros(3))
 
 
