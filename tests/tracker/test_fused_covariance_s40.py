@@ -11,8 +11,7 @@ from evpose.io.h5 import write_recording_h5
 from evpose.io.map_ply import read_contour_map, write_contour_map
 from evpose.io.open import open_recording
 from evpose.io.tum import read_tum, write_tum
-from evpose.tracker.config import TrackerConfig, TrackerMode
-from evpose.tracker.session import TrackingSession
+from tracker_synthetic import run_full
 
 
 @pytest.fixture(scope="module")
@@ -20,17 +19,9 @@ def head(landing_head):
     return landing_head(0.25)
 
 
-def _session(rec, cmap, covariance: bool) -> TrackingSession:
-    cfg = TrackerConfig(mode=TrackerMode.FULL)
-    cfg.fusion.compute_covariance = covariance
-    s = TrackingSession(rec, cmap, cfg)
-    s.run()
-    return s
-
-
 def test_the_fused_poses_do_not_depend_on_the_reported_covariance(head):
     rec, cmap = head
-    on, off = _session(rec, cmap, True), _session(rec, cmap, False)
+    on, off = run_full(rec, cmap, compute_covariance=True), run_full(rec, cmap, compute_covariance=False)
     assert len(on.results) == len(off.results) > 20
     for a, b in zip(on.results, off.results):
         assert np.array_equal(a.pose, b.pose) and a.status == b.status
@@ -46,7 +37,7 @@ def test_track_writes_the_default_sessions_poses(head, tmp_path):
     assert run(["track", str(tmp_path / "rec.h5"), "--map", str(tmp_path / "map.ply"), "--out", str(tmp_path / "e.txt"),
                 "--mode", "full", "--no-progress"]) == 0
     # The same inputs as the command reads them (the map's PLY round trip included), the default configuration.
-    s = _session(open_recording(tmp_path / "rec.h5"), read_contour_map(tmp_path / "map.ply"), True)
+    s = run_full(open_recording(tmp_path / "rec.h5"), read_contour_map(tmp_path / "map.ply"), compute_covariance=True)
     write_tum(tmp_path / "expected.txt", s.trajectory())
     assert len(read_tum(tmp_path / "e.txt")) > 20
     assert (tmp_path / "e.txt").read_bytes() == (tmp_path / "expected.txt").read_bytes()

@@ -8,6 +8,7 @@ import pytest
 
 from evpose.tracker.config import TrackerConfig, TrackerMode
 from evpose.tracker.session import TrackingSession
+from tracker_synthetic import run_full
 
 
 @pytest.fixture(scope="module")
@@ -15,18 +16,10 @@ def landing(landing_head):
     return landing_head(0.15)
 
 
-def _run(rec, cmap, states: int):
-    config = TrackerConfig(mode=TrackerMode.FULL)
-    config.fusion.revision_readout_states = states
-    s = TrackingSession(rec, cmap, config)
-    s.run()
-    return s
-
-
 def test_readout_changes_the_written_poses_only(landing):
     assert TrackerConfig().fusion.revision_readout_prior is False
     rec, cmap = landing
-    off, on = _run(rec, cmap, 0), _run(rec, cmap, 7)
+    off, on = run_full(rec, cmap, revision_readout_states=0), run_full(rec, cmap, revision_readout_states=7)
     assert len(off.results) == len(on.results) > 10
     for a, b in zip(off.results, on.results):
         assert a.t_us == b.t_us and a.status == b.status
@@ -47,7 +40,7 @@ def test_readout_prior_closes_the_loop_through_the_tracker_pose(landing):
     config.fusion.revision_readout_prior = True
     s = TrackingSession(rec, cmap, config)
     s.run()
-    ref = _run(rec, cmap, 7)
+    ref = run_full(rec, cmap, revision_readout_states=7)
     # The next registrations start from the moved prediction, so they differ; the tracker's pose is the written one.
     assert any(a.registration_pose is not None and b.registration_pose is not None
                and not np.array_equal(a.registration_pose, b.registration_pose) for a, b in zip(s.results, ref.results))

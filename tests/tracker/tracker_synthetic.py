@@ -136,3 +136,16 @@ def assert_restore_replays_bit_identically(started, events: EventArray, n_before
     for x, y in zip(straight[n_before:], replay):
         assert np.array_equal(x.pose, y.pose) and x.counts == y.counts
     return straight
+
+
+def run_full(rec: Recording, cmap: ContourMap, **fusion) -> "TrackingSession":
+    """A ``full``-mode session over all of ``rec`` with the given ``FusionConfig`` fields set."""
+    from evpose.tracker.config import TrackerConfig, TrackerMode
+    from evpose.tracker.session import TrackingSession
+
+    cfg = TrackerConfig(mode=TrackerMode.FULL)
+    for name, value in fusion.items():
+        setattr(cfg.fusion, name, value)
+    s = TrackingSession(rec, cmap, cfg)
+    s.run()
+    return s
