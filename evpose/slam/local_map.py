@@ -163,6 +163,20 @@ rate falling as the room's turn slows: -0.45 against -0.17 at a level rate; Spea
 over-2 % rooms' bad maps lie mostly there (0.47-0.85 s, 1.9-3.0 s), and the maps of 0.86-1.9 s hold their scale.
 A young map's BA can also make it worse (indoor 5's last map, the BA stall of ``TrackingConfig.cull_min_depth_ratio``
 removed: -1.05 summed at PnP, -3.76 after the BAs).
+
+Not the MCI's time stamp (session 40, ``/tmp/s40/mt40``: ``tdiag.py`` logs each MCI's window event times, ``tana.py``,
+``kfpred.py``, ``dphase.py``; truth offline). Within a window the event rate barely changes. Indoor 0-15 (3078 MCIs),
+the stamp being the window's middle (``MciConfig.reference_fraction`` 0.5), the median event time sits -0.96 to +0.65 ms
+(10-90 %; median -0.07, mean -0.84) from it in the slowing turns (0.05-0.8 s, 1.65-2.65 s; windows a median 35 ms: a
+linear rate change of -2 % per window), -0.16 to +0.30 ms elsewhere (12 ms windows); landing 0-6 -4.3 to +2.5 ms of 67
+ms. Moving the true poses to those times changes the PnP insertions' h (``kfpred.py``, eo40's 177 insertions of seeds
+0-13, measured mean -0.245) by +0.004 on average (RMS 0.035, correlation with h -0.15), and consecutive OK steps' h by
++0.0002 (RMS 0.036 against the measured 0.81). Per map the estimated rotations fit the truth no better at the median
+event times than at the stamps (pooled squared angle 5.501 -> 5.499). Online, the stamp and warp reference at the median
+event (option tried, not kept; ``q.sh mc``, ``cnt.py ds10 mc``): indoor 0-53 1.825 -> 1.816 % (-0.009 +- 0.110, 28
+better, 26 worse), fresh 54-61 1.744 -> 1.949 (+0.205 +- 0.219; within 2 % 7 -> 5), landing 0-23 1.470 -> 1.799 (+0.329
++- 0.435, 15 worse; median change without 4 / 12 / 17 +0.144), 24-35 1.237 -> 1.534: chaotic re-draws, worse on the
+landing.
 """
 
 from __future__ import annotations
