@@ -61,3 +61,31 @@ def carry_relative_scale(m: SlamMap, before: dict[int, np.ndarray], half_window:
             m.traj_rel[i][:3, 3] *= r
             changed += 1
     return changed
+
+
+def path_velocities(keyframes: list, T_cam_imu: np.ndarray, span_s: float) -> dict[int, np.ndarray]:
+    """Keyframe id -> world velocity of the IMU from the map's own keyframe path (:attr:`InertialWindowConfig.init_velocity_span_s`).
+
+    The slope of a straight line fitted to the IMU positions (``p_wc + R_wc t_cb``) of the keyframes within
+    ``span_s / 2`` either side of each keyframe (centred; one-sided at the map's ends), over the visually tracked
+    keyframes (``Keyframe.visual``) when at least three of them are there, else over all of them: a fit over many
+    keyframes made a few ms apart, not a difference of two, whose centimetre jumps were metres per second off. Keyframes
+    with fewer than two neighbours in time get none. Map units per second.
+    """
+    if span_s <= 0 or len(keyframes) < 2:
+        return {}
+    t_cb = np.asarray(T_cam_imu, np.float64)[:3, 3]
+    t = np.array([kf.t_us for kf in keyframes], np.float64) / 1e6
+    p = np.stack([kf.T_wc[:3, 3] + kf.T_wc[:3, :3] @ t_cb for kf in keyframes])
+    vis = np.array([bool(getattr(kf, "visual", True)) for kf in keyframes])
+    out = {}
+    half = 0.5 * span_s
+    for i, kf in enumerate(keyframes):
+        sel = np.flatnonzero(np.abs(t - t[i]) <= half)
+        if vis[sel].sum() >= 3:
+            sel = sel[vis[sel]]
+        if len(sel) < 2 or np.ptp(t[sel]) <= 0:
+            continue
+        dt = t[sel] - t[sel].mean()
+        out[kf.id] = (dt @ (p[sel] - p[sel].mean(0))) / (dt @ dt)
+    return out

@@ -14,7 +14,7 @@ from evpose.slam.inertial import imu_init_due, initialize_imu
 from evpose.slam.inertial_ba import InertialState, inertial_local_bundle_adjustment
 from evpose.slam.inertial_bridge import predict_camera_pose
 from evpose.slam.inertial_init_visual import initialize_on_visual_keyframes
-from evpose.slam.inertial_trajectory import carry_relative_scale, keyframe_positions
+from evpose.slam.inertial_trajectory import carry_relative_scale, keyframe_positions, path_velocities
 from evpose.slam.scale_refinement import refine_map_scale
 
 
@@ -62,6 +62,7 @@ class InertialMaps:
                                              velocity_prior_sigma=ic.ba_velocity_prior_sigma, min_span_s=ic.ba_min_span_s, span_keyframes=ic.ba_span_keyframes)
                 if before is not None:
                     carry_relative_scale(m, before)
+            self._path_velocities(m)
             self._reanchor_rotations(m)
 
     def _refine_scale(self, m: SlamMap) -> None:
@@ -74,7 +75,14 @@ class InertialMaps:
             if self.cfg.inertial.carry_mci_scale:
                 # The similarity already scaled the relative poses; what is left is the BA's reshaping.
                 carry_relative_scale(m, {k: res.scale * (res.R_align @ p) for k, p in before.items()})
+            self._path_velocities(m)
             self._reanchor_rotations(m)
+
+    def _path_velocities(self, m: SlamMap) -> None:
+        """``InertialWindowConfig.init_velocity_span_s``: the keyframes' velocities from the map's own path, in place."""
+        span = self.cfg.inertial.ba_window.init_velocity_span_s
+        if span > 0 and m.inertial is not None:
+            m.inertial.velocities.update(path_velocities(m.keyframes, self.calib.T_cam_imu, span))
 
     def _imu_prediction(self, t_us: int) -> np.ndarray | None:
         """``T_world_cam`` at ``t_us`` propagated by the IMU from the newest keyframe of a metric map, else None."""
