@@ -29,6 +29,7 @@ import numpy as np
 from evpose.core.contour_map import ContourMap
 from evpose.tracker.lapack_calls import inv
 from evpose.tracker.map_refinement import _NO_GAUGE, _refine_kernel
+from evpose.tracker.registration_kernels import _NO_EXTRA, _NO_TANGENTS, _NO_TWIST
 
 
 @dataclass
@@ -89,7 +90,7 @@ class AnchoredRims:
                                    np.ascontiguousarray(T_cw[:3, :3]), np.ascontiguousarray(T_cw[:3, 3]), float(K[0, 0]),
                                    float(K[1, 1]), float(K[0, 2]), float(K[1, 2]), field_.value, field_.grad_u, field_.grad_v,
                                    field_.box, float(c.gain), float(c.max_offset_m), float(c.step_clip_px), mr_thr, mr_grad, 0,
-                                   _NO_GAUGE, False))
+                                   _NO_GAUGE, False, _NO_TANGENTS, _NO_TWIST, 0.0, 0.0, _NO_EXTRA))
         self._write_base()
         return moved
 

@@ -59,7 +59,17 @@ def learn_map_points(tracker: Tracker, status: TrackStatus, used: np.ndarray, fi
         gauge = None
         if tracker.edge_offsets is not None and tracker.config.edge_offsets.gauge_painted and np.all(np.isfinite(tracker.edge_offsets.last_fit)):
             gauge = tracker.edge_offsets.last_fit
-        counts["points_refined"] = tracker.refiner.update(tracker._points, levels[-1], T_field, tracker.K, gauge)
+        shift = {}
+        if tracker.config.map_refinement.fused_registration_shift and tracker.components.drives_pose and twist is not None:
+            # Read the field where registration does (see ``MapRefinementConfig.fused_registration_shift``).
+            trail_px = None
+            if trail is not None:
+                per_point = np.zeros(len(tracker._points))
+                per_point[used] = trail
+                trail_px = per_point[tracker.refiner.index]
+            shift = dict(twist=twist, lag_s=float(tracker._registration.field_lag_ms) * 1e-3,
+                         floor_px=float(tracker._registration.lag_floor_px), trail_px=trail_px)
+        counts["points_refined"] = tracker.refiner.update(tracker._points, levels[-1], T_field, tracker.K, gauge, **shift)
         timings["map_refinement"] = elapsed_ms(t0)
 
 

@@ -33,6 +33,7 @@ from evpose.core.contour_map import ContourMap
 from evpose.frontend.distance_field import _bilinear_weights
 from evpose.tracker.camera_point import camera_point
 from evpose.tracker.lapack_calls import inv
+from evpose.tracker.registration_kernels import _NO_EXTRA, _NO_TANGENTS, _NO_TWIST, _floor_shift
 
 
 @dataclass
@@ -117,6 +118,28 @@ class MapRefinementConfig:
     ``fused_painted_max_share``, ``cfg/rs*.yaml``): 240x180 seeds 0-23 4.934 mm -> 0.15: 4.908 (-0.027 +- 0.092, 14 of
     24 better), 0.2: 4.906 (-0.028 +- 0.096, 15 of 24; RTE 0.396 -> 0.399): within the noise, which freezing the 'H'
     for the last 0.5-0.9 s makes large per seed. Off."""
+    fused_registration_shift: bool = False
+    """In the fused modes, measure each painted point's step where registration reads the field: behind its projection
+    by the lag floor (``registration.fused_lag_floor_px``) and, for registered points, their polarity trail, as
+    :mod:`evpose.tracker.edge_offsets` does (off: at the projection, i.e. at the field's trailing minimum).
+
+    Why (session 40, ``/tmp/s40/hb40`` ``blame2.py``, ``sum.py``; DIAGNOSTIC, 240x180 2 s seeds 0/3/17/24/27/43): the
+    field registration's step from the TRUE pose in 1.6-2 s, split by point class, has the painted 'H' (as refined with
+    main's defaults) pull camera x +23.2 / +15.5 mm on seeds 43 / 27 (y -11.3 on 24), RMS over the six seeds 15.3 mm;
+    the same points put on the true H edges (same events, same field) pull 5.7 mm RMS (43: x -2.3, 27: -1.4, 24: y
+    +0.6): the H's events are not what pulls, its learned positions are. Started from the true H (oracle map), the
+    refiner moves every vertical H edge by +3 to +14 mm in world x on every seed (the H's pull 5.0 -> 8.4 mm RMS), and
+    its own clipped step from the true pose at the true edges is +x on all 6 vertical edges and -y on 5 of 6 horizontal
+    ones: the field's minimum trails the edge, which registration's lag floor and trail model and the refiner did not.
+
+    Measured (``full``, 2 s landing from ground truth, built maps, CLI path paired per seed against main's defaults,
+    ``/tmp/s40/hb40`` ``run.sh``, ``cmp.py``, ``cfg/rs.yaml``; mean ATE RMSE mm +- standard error, seeds better):
+    240x180 seeds 0-23 4.934 -> 4.763 (-0.171 +- 0.044, 17 of 24; ARE 0.0592 -> 0.0587, RTE 0.396 -> 0.392), held-out
+    seeds 24-47 5.352 -> 5.210 (-0.142 +- 0.026, 21 of 24; ARE 0.0624 -> 0.0618), 346x260 seeds 0-23 4.136 -> 4.118
+    (-0.018 +- 0.013, 15 of 24), 240x180 3 s seeds 0-7 13.236 -> 13.301 (+0.065 +- 0.119, 4 of 8; RTE 0.761 -> 0.736,
+    6 of 8). Bundled demos (``--align none``, ``/tmp/s40/hb40`` ``demo.sh``): ``landing`` 6.595 -> 6.554, ``landing_fast``
+    8.972 -> 9.035, ``landing_dynamic`` 6.015 -> 6.011 mm (its static twin 5.626 -> 5.657: 1.06x), none lost. Off only
+    because the SLAM landings were not measured with it (session 40 ran out of time): a candidate default."""
     first_updates: int = field(default=10, metadata={"min": 0, "max": 1000, "step": 1, "unit": "updates"})
     """For a point's first this many updates the gain is at least 1 / (updates it took part in) (a running mean
     from the start; 0 = the fixed gain throughout), updates.
@@ -193,8 +216,14 @@ def painted_points(contour_map: ContourMap, max_curvature: float) -> np.ndarray:
 
 @nb.njit(cache=True)
 def _refine_kernel(points, idx, base, normals, offsets, seen, R_cw, t_cw, fx, fy, cx, cy, value, grad_u, grad_v, box,
-                   gain, max_offset, clip_px, thr, min_grad, first_updates, gauge, use_gauge):
-    """One update of every painted point's offset, written into ``points`` (rows ``idx``); returns how many moved."""
+                   gain, max_offset, clip_px, thr, min_grad, first_updates, gauge, use_gauge, tangents, twist, lag_s, floor_px,
+                   extra):
+    """One update of every painted point's offset, written into ``points`` (rows ``idx``); returns how many moved.
+    With ``floor_px`` > 0 or a non-empty ``extra`` (per painted point, px) the field is sampled where registration
+    reads it (:func:`evpose.tracker.registration_kernels._floor_shift`, ``tangents`` per painted point)."""
+    shifted = floor_px > 0.0 or extra.shape[0] > 0
+    Ju = np.zeros(6)
+    Jv = np.zeros(6)
     r0, r1, c0, c1 = box[0], box[1], box[2], box[3]
     moved = 0
     for j in range(idx.shape[0]):
@@ -216,6 +245,30 @@ def _refine_kernel(points, idx, base, normals, offsets, seen, R_cw, t_cw, fx, fy
         L = np.sqrt(du * du + dv * dv)
         if L < 1e-6:
             continue
+        if shifted:
+            # Registration reads this point's field behind its projection (lag floor, polarity trail): the edge is
+            # where the field's minimum lies seen from there.
+            iz = 1.0 / Z
+            pux = fx * iz
+            puz = -fx * X * iz * iz
+            pvy = fy * iz
+            pvz = -fy * Y * iz * iz
+            Ju[0] = -puz * Y
+            Ju[1] = puz * X - pux * Z
+            Ju[2] = pux * Y
+            Ju[3] = -pux
+            Ju[5] = -puz
+            Jv[0] = pvy * Z - pvz * Y
+            Jv[1] = pvz * X
+            Jv[2] = -pvy * X
+            Jv[4] = -pvy
+            Jv[5] = -pvz
+            su, sv = _floor_shift(tangents, j, R_cw, X, Y, Z, fx, fy, Ju, Jv, twist, lag_s, floor_px,
+                                  extra[j] if extra.shape[0] else 0.0)
+            u += su
+            v += sv
+            if not (u >= c0 and v >= r0 and u <= c1 - 1.0 and v <= r1 - 1.0):
+                continue
         x0, y0, w00, w01, w10, w11 = _bilinear_weights(u, v, r1, c1)
         f = w00 * value[0, y0, x0] + w01 * value[0, y0, x0 + 1] + w10 * value[0, y0 + 1, x0] + w11 * value[0, y0 + 1, x0 + 1]
         gu = w00 * grad_u[0, y0, x0] + w01 * grad_u[0, y0, x0 + 1] + w10 * grad_u[0, y0 + 1, x0] + w11 * grad_u[0, y0 + 1, x0 + 1]
@@ -262,6 +315,8 @@ class PaintedEdgeRefiner:
         self.index = painted_points(contour_map, float(config.max_curvature))
         self._base = np.ascontiguousarray(contour_map.points[self.index], dtype=np.float64)
         n = np.asarray(contour_map.edge_normal[self.index], dtype=np.float64)
+        self._tangents = np.ascontiguousarray(np.cross(np.asarray(contour_map.plane_normal[self.index], dtype=np.float64), n))
+        """Edge direction per painted point (as the tracker's), for ``fused_registration_shift``."""
         self._normals = np.ascontiguousarray(n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12))
         self.offsets = np.zeros(self.index.size)
         """Current offset of each painted point along its unit edge normal, metres."""
@@ -280,18 +335,27 @@ class PaintedEdgeRefiner:
         """(N,) bool over the map's points: painted points registration should skip for now, or None if none is."""
         return self._held if self.index.size and int(self.config.register_after_updates) > 0 and self._held[self.index].any() else None
 
-    def update(self, points: np.ndarray, field_, T_world_cam_field: np.ndarray, K: np.ndarray, gauge: np.ndarray | None = None) -> int:
+    def update(self, points: np.ndarray, field_, T_world_cam_field: np.ndarray, K: np.ndarray, gauge: np.ndarray | None = None,
+               twist: np.ndarray | None = None, lag_s: float = 0.0, floor_px: float = 0.0, trail_px: np.ndarray | None = None) -> int:
         """Refine with one update's field (combined slot), the pose it shows (lag included); returns the points moved.
-        ``gauge`` (6,): a pose change (right-perturbation tangent) whose image motion is taken out of every step."""
+        ``gauge`` (6,): a pose change (right-perturbation tangent) whose image motion is taken out of every step.
+        With ``twist`` (6,) body twist per second and ``floor_px`` > 0 or ``trail_px`` ((n,) per painted point, px), the
+        field is read where registration reads it (``lag_s`` the lag the field pose carries)."""
         if self.index.size == 0 or not self.config.enabled or self.config.gain <= 0:
             return 0
+        tg, xi, extra, floor = _NO_TANGENTS, _NO_TWIST, _NO_EXTRA, 0.0
+        if twist is not None and (floor_px > 0 or trail_px is not None) and np.all(np.isfinite(twist)):
+            tg, xi, floor = self._tangents, np.ascontiguousarray(twist, dtype=np.float64).reshape(6), float(floor_px)
+            if trail_px is not None:
+                extra = np.ascontiguousarray(trail_px, dtype=np.float64).reshape(self.index.size)
         T_cw = inv(np.asarray(T_world_cam_field, dtype=np.float64))
         c = self.config
         moved = int(_refine_kernel(points, self.index, self._base, self._normals, self.offsets, self.seen, np.ascontiguousarray(T_cw[:3, :3]),
                                   np.ascontiguousarray(T_cw[:3, 3]), float(K[0, 0]), float(K[1, 1]), float(K[0, 2]), float(K[1, 2]),
                                   field_.value, field_.grad_u, field_.grad_v, field_.box, float(c.gain), float(c.max_offset_m),
                                   float(c.step_clip_px), float(c.inlier_threshold), float(c.min_gradient), int(c.first_updates),
-                                  _NO_GAUGE if gauge is None else np.ascontiguousarray(gauge, dtype=np.float64), gauge is not None))
+                                  _NO_GAUGE if gauge is None else np.ascontiguousarray(gauge, dtype=np.float64), gauge is not None,
+                                  tg, xi, float(lag_s), floor, extra))
         if moved:
             self._update_held()
         return moved
