@@ -118,7 +118,7 @@ class MapRefinementConfig:
     ``fused_painted_max_share``, ``cfg/rs*.yaml``): 240x180 seeds 0-23 4.934 mm -> 0.15: 4.908 (-0.027 +- 0.092, 14 of
     24 better), 0.2: 4.906 (-0.028 +- 0.096, 15 of 24; RTE 0.396 -> 0.399): within the noise, which freezing the 'H'
     for the last 0.5-0.9 s makes large per seed. Off."""
-    fused_registration_shift: bool = False
+    fused_registration_shift: bool = True
     """In the fused modes, measure each painted point's step where registration reads the field: behind its projection
     by the lag floor (``registration.fused_lag_floor_px``) and, for registered points, their polarity trail, as
     :mod:`evpose.tracker.edge_offsets` does (off: at the projection, i.e. at the field's trailing minimum).
@@ -138,8 +138,8 @@ class MapRefinementConfig:
     seeds 24-47 5.352 -> 5.210 (-0.142 +- 0.026, 21 of 24; ARE 0.0624 -> 0.0618), 346x260 seeds 0-23 4.136 -> 4.118
     (-0.018 +- 0.013, 15 of 24), 240x180 3 s seeds 0-7 13.236 -> 13.301 (+0.065 +- 0.119, 4 of 8; RTE 0.761 -> 0.736,
     6 of 8). Bundled demos (``--align none``, ``/tmp/s40/hb40`` ``demo.sh``): ``landing`` 6.595 -> 6.554, ``landing_fast``
-    8.972 -> 9.035, ``landing_dynamic`` 6.015 -> 6.011 mm (its static twin 5.626 -> 5.657: 1.06x), none lost. Off only
-    because the SLAM landings were not measured with it (session 40 ran out of time): a candidate default."""
+    8.972 -> 9.035, ``landing_dynamic`` 6.015 -> 6.011 mm (its static twin 5.626 -> 5.657: 1.06x), none lost. On since
+    session 40 (the SLAM does not use this refiner)."""
     first_updates: int = field(default=10, metadata={"min": 0, "max": 1000, "step": 1, "unit": "updates"})
     """For a point's first this many updates the gain is at least 1 / (updates it took part in) (a running mean
     from the start; 0 = the fixed gain throughout), updates.

@@ -42,8 +42,8 @@ def converge(**shift) -> np.ndarray:
     return refiner.offsets
 
 
-def test_off_by_default():
-    assert TrackerConfig().map_refinement.fused_registration_shift is False
+def test_on_by_default():
+    assert TrackerConfig().map_refinement.fused_registration_shift is True
 
 
 def test_without_a_shift_the_points_stay_on_the_fields_minimum_bit_for_bit():
