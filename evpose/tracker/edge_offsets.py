@@ -35,7 +35,7 @@ import numpy as np
 
 from evpose.frontend.distance_field import bilinear_curvature_from_value, bilinear_sample
 from evpose.tracker.anchored_rims import AnchoredRimConfig
-from evpose.tracker.camera_point import camera_point
+from evpose.tracker.camera_point import camera_point, fill_image_rows
 from evpose.tracker.offset_fit import add_offset_row, apply_offset_fit, normal_px_per_m
 from evpose.tracker.registration_kernels import _NO_EXTRA, _NO_TWIST, _floor_shift, _projected_normal
 
@@ -168,16 +168,7 @@ def _offset_kernel(points, idx, base, normals, tangents, offsets, R_cw, t_cw, fx
         if shifted:
             # Registration reads this point's field behind its projection (the fused modes' lag floor and
             # polarity trail): the offset to learn is the one from there.
-            Ju[0] = -puz * Y
-            Ju[1] = puz * X - pux * Z
-            Ju[2] = pux * Y
-            Ju[3] = -pux
-            Ju[5] = -puz
-            Jv[0] = pvy * Z - pvz * Y
-            Jv[1] = pvz * X
-            Jv[2] = -pvy * X
-            Jv[4] = -pvy
-            Jv[5] = -pvz
+            fill_image_rows(X, Y, Z, pux, puz, pvy, pvz, Ju, Jv)
             du, dv = _floor_shift(tangents, j, R_cw, X, Y, Z, fx, fy, Ju, Jv, twist, lag_s, floor_px,
                                   extra[j] if extra.shape[0] else 0.0)
             us += du

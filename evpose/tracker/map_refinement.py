@@ -31,7 +31,7 @@ import numpy as np
 
 from evpose.core.contour_map import ContourMap
 from evpose.frontend.distance_field import _bilinear_weights
-from evpose.tracker.camera_point import camera_point
+from evpose.tracker.camera_point import camera_point, fill_image_rows
 from evpose.tracker.lapack_calls import inv
 from evpose.tracker.registration_kernels import _NO_EXTRA, _NO_TANGENTS, _NO_TWIST, _floor_shift
 
@@ -253,16 +253,7 @@ def _refine_kernel(points, idx, base, normals, offsets, seen, R_cw, t_cw, fx, fy
             puz = -fx * X * iz * iz
             pvy = fy * iz
             pvz = -fy * Y * iz * iz
-            Ju[0] = -puz * Y
-            Ju[1] = puz * X - pux * Z
-            Ju[2] = pux * Y
-            Ju[3] = -pux
-            Ju[5] = -puz
-            Jv[0] = pvy * Z - pvz * Y
-            Jv[1] = pvz * X
-            Jv[2] = -pvy * X
-            Jv[4] = -pvy
-            Jv[5] = -pvz
+            fill_image_rows(X, Y, Z, pux, puz, pvy, pvz, Ju, Jv)
             su, sv = _floor_shift(tangents, j, R_cw, X, Y, Z, fx, fy, Ju, Jv, twist, lag_s, floor_px,
                                   extra[j] if extra.shape[0] else 0.0)
             u += su

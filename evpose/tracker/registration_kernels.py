@@ -17,7 +17,7 @@ import numba as nb
 import numpy as np
 
 from evpose.frontend.distance_field import bilinear_curvature_from_value, bilinear_sample
-from evpose.tracker.camera_point import camera_point
+from evpose.tracker.camera_point import camera_point, fill_image_rows
 
 
 @nb.njit(cache=True, inline="always")
@@ -124,18 +124,9 @@ def _linearise(points, slots, R_cw, t_cw, fx, fy, cx, cy, value, grad_u, grad_v,
         puz = -fx * X * iz * iz
         pvy = fy * iz
         pvz = -fy * Y * iz * iz
-        Ju[0] = -puz * Y
-        Ju[1] = puz * X - pux * Z
-        Ju[2] = pux * Y
-        Ju[3] = -pux
         Ju[4] = 0.0
-        Ju[5] = -puz
-        Jv[0] = pvy * Z - pvz * Y
-        Jv[1] = pvz * X
-        Jv[2] = -pvy * X
         Jv[3] = 0.0
-        Jv[4] = -pvy
-        Jv[5] = -pvz
+        fill_image_rows(X, Y, Z, pux, puz, pvy, pvz, Ju, Jv)
         us = u
         vs = v
         if floor_px > 0.0 or extra.shape[0]:
