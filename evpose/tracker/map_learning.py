@@ -28,6 +28,7 @@ def learn_map_points(tracker: Tracker, status: TrackStatus, used: np.ndarray, fi
     """
     if tracker.edge_offsets is not None:
         tracker.edge_offsets.last_fit[:] = np.nan
+    T_field = None
     if tracker.event_registration is not None and status is TrackStatus.OK and tracker.hold.never_lost and counts.get("events_registered"):
         # Only what an accepted update's events say, and only while the track was never lost (a wrong lock must not
         # be learned).
@@ -55,18 +56,14 @@ def learn_map_points(tracker: Tracker, status: TrackStatus, used: np.ndarray, fi
         # never lost since its start refines (indoor demo, stpe: refining after regains 192 -> 861 mm ATE).
         # Painted edges move towards where this update's events put them, seen from the pose the field shows.
         t0 = time.perf_counter()
-        T_field = field_pose(tracker, twist)
+        T_field = field_pose(tracker, twist) if T_field is None else T_field  # as the edge offsets read it
         gauge = None
         if tracker.edge_offsets is not None and tracker.config.edge_offsets.gauge_painted and np.all(np.isfinite(tracker.edge_offsets.last_fit)):
             gauge = tracker.edge_offsets.last_fit
         shift = {}
         if tracker.config.map_refinement.fused_registration_shift and tracker.components.drives_pose and twist is not None:
             # Read the field where registration does (see ``MapRefinementConfig.fused_registration_shift``).
-            trail_px = None
-            if trail is not None:
-                per_point = np.zeros(len(tracker._points))
-                per_point[used] = trail
-                trail_px = per_point[tracker.refiner.index]
+            trail_px = None if trail is None else tracker.refiner.painted_values(used, trail)
             shift = dict(twist=twist, lag_s=float(tracker._registration.field_lag_ms) * 1e-3,
                          floor_px=float(tracker._registration.lag_floor_px), trail_px=trail_px)
         counts["points_refined"] = tracker.refiner.update(tracker._points, levels[-1], T_field, tracker.K, gauge, **shift)

@@ -304,6 +304,9 @@ class PaintedEdgeRefiner:
     def __init__(self, config: MapRefinementConfig, contour_map: ContourMap):
         self.config = config
         self.index = painted_points(contour_map, float(config.max_curvature))
+        self._slot = np.full(len(contour_map), -1, dtype=np.int64)
+        self._slot[self.index] = np.arange(self.index.size)
+        """Per map point its row in ``index`` (-1: not painted)."""
         self._base = np.ascontiguousarray(contour_map.points[self.index], dtype=np.float64)
         n = np.asarray(contour_map.edge_normal[self.index], dtype=np.float64)
         self._tangents = np.ascontiguousarray(np.cross(np.asarray(contour_map.plane_normal[self.index], dtype=np.float64), n))
@@ -325,6 +328,14 @@ class PaintedEdgeRefiner:
     def held_out(self) -> np.ndarray | None:
         """(N,) bool over the map's points: painted points registration should skip for now, or None if none is."""
         return self._held if self.index.size and int(self.config.register_after_updates) > 0 and self._held[self.index].any() else None
+
+    def painted_values(self, used: np.ndarray, values: np.ndarray) -> np.ndarray:
+        """(n,) per painted point: ``values`` of the map points ``used`` that are painted, 0 for the others."""
+        out = np.zeros(self.index.size)
+        slot = self._slot[used]
+        keep = slot >= 0
+        out[slot[keep]] = values[keep]
+        return out
 
     def update(self, points: np.ndarray, field_, T_world_cam_field: np.ndarray, K: np.ndarray, gauge: np.ndarray | None = None,
                twist: np.ndarray | None = None, lag_s: float = 0.0, floor_px: float = 0.0, trail_px: np.ndarray | None = None) -> int:
