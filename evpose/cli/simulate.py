@@ -42,6 +42,7 @@ def main(
     seconds: float = 2.0,
     resolution: str = "346x260",
     seed: int = 0,
+    flight: int = 0,
     distortion: bool = False,
     rotated_extrinsic: bool = False,
     noise_free: bool = False,
@@ -62,6 +63,8 @@ def main(
         seconds: Duration in seconds.
         resolution: Sensor size WIDTHxHEIGHT (240x180, 346x260, 640x480, 1280x720 or any within 16..4096).
         seed: Seed of every random draw; same seed, same bytes.
+        flight: Which flight of the scenario: 0 its own path; N > 0 another path of the same kind and speed class
+            (the spiral turned about the pad, other legs, descent and oscillation phases), independent of the seed.
         distortion: Give the lens radial-tangential distortion.
         rotated_extrinsic: Use a non-identity camera-IMU extrinsic.
         noise_free: No sensor noise (threshold spread, background activity, IMU noise).
@@ -87,6 +90,7 @@ def main(
         seconds=float(seconds),
         resolution=parse_resolution(resolution),
         seed=int(seed),
+        flight=int(flight),
         distortion=distortion,
         extrinsic=Extrinsic.ROTATED if rotated_extrinsic else Extrinsic.IDENTITY,
         noise_free=noise_free,

@@ -22,6 +22,7 @@ from evpose.core.events import EventArray
 from evpose.core.recording import Recording
 from evpose.errors import ConfigError
 from evpose.sim.esim import EsimConfig, EventGenerator
+from evpose.sim.flight_variants import vary_flight
 from evpose.sim.imu_model import ImuConfig, ImuTruth, simulate_imu
 from evpose.sim.lidar import LidarConfig, sample_cloud
 from evpose.sim.noise import NoiseConfig, noise_events
@@ -66,6 +67,9 @@ class SimulationConfig:
     """Sensor width and height, pixels."""
     seed: int = 0
     """Seed of every random draw (thresholds, noise, IMU, cloud)."""
+    flight: int = 0
+    """Which flight of the scenario: 0 its own path, N > 0 another path of the same kind and speed
+    (:func:`evpose.sim.flight_variants.vary_flight`), independent of ``seed``."""
     hfov_deg: float = 70.0
     """Horizontal field of view of the ideal pinhole, degrees."""
     distortion: bool = False
@@ -145,6 +149,8 @@ def validate_config(cfg: SimulationConfig) -> None:
         raise ConfigError(f"IMU rate {cfg.imu.rate_hz} Hz must be within 200..1000 and divide 1 s into whole microseconds")
     if cfg.seed < 0:
         raise ConfigError(f"seed must be non-negative, got {cfg.seed}")
+    if cfg.flight < 0:
+        raise ConfigError(f"flight must be non-negative, got {cfg.flight}")
 
 
 def _image_speed(renderer: Renderer, out, traj: RigTrajectory, scene: Scene, t_s: float, T_wc: np.ndarray) -> float:
@@ -254,7 +260,7 @@ def simulate(config: SimulationConfig) -> SimulationResult:
     sc = SCENARIOS[config.scenario]
     esim = config.esim or sc.esim
     noise = config.noise or sc.noise
-    traj_cfg = config.trajectory or sc.trajectory
+    traj_cfg = vary_flight(config.trajectory or sc.trajectory, int(config.flight))
     imu_cfg = config.imu
     if config.noise_free:
         from dataclasses import replace

@@ -66,6 +66,11 @@ class TrajectoryConfig:
     """Camera height of the room loop, metres."""
     room_pitch_deg: float = 10.0
     """Downward pitch of the room camera, degrees."""
+    heading_deg: float = 0.0
+    """Spiral: direction of the first leg, degrees from +x about the vertical (the spiral turns about the pad, so
+    it still ends over it); room: angle on the ellipse where the loop starts, degrees."""
+    oscillation_phase_deg: float = 0.0
+    """Phase added to the yaw and tilt oscillations, degrees."""
 
 
 def _spiral_waypoints(cfg: TrajectoryConfig, seconds: float) -> np.ndarray:
@@ -82,6 +87,9 @@ def _spiral_waypoints(cfg: TrajectoryConfig, seconds: float) -> np.ndarray:
         pts.append(pts[-1] + 0.5 * leg * d)
         pts.append(pts[-1] + 0.5 * leg * d)
     xy = np.array(pts) - pts[-1]
+    if cfg.heading_deg:
+        c, s_ = np.cos(np.deg2rad(cfg.heading_deg)), np.sin(np.deg2rad(cfg.heading_deg))
+        xy = xy @ np.array([[c, s_], [-s_, c]])
     s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(xy, axis=0), axis=1))])
     drop = min(cfg.descent_ratio * length, cfg.start_altitude_m - cfg.end_altitude_m)
     z = cfg.end_altitude_m + drop * (1.0 - s / s[-1])
@@ -92,7 +100,7 @@ def _room_waypoints(cfg: TrajectoryConfig, seconds: float) -> np.ndarray:
     rx, ry = cfg.room_radii_m
     circ = np.pi * (3 * (rx + ry) - np.sqrt((3 * rx + ry) * (rx + 3 * ry)))  # Ramanujan
     angle = 2 * np.pi * cfg.speed_m_s * seconds / circ
-    th = np.linspace(0.0, angle, max(8, int(np.ceil(angle / 0.1)) + 1))
+    th = np.linspace(0.0, angle, max(8, int(np.ceil(angle / 0.1)) + 1)) + np.deg2rad(cfg.heading_deg)
     return np.column_stack([rx * np.cos(th), ry * np.sin(th), np.full_like(th, cfg.room_height_m)])
 
 
@@ -119,9 +127,10 @@ class RigTrajectory:
         t = np.atleast_1d(np.asarray(t, np.float64))
         c = self.cfg
         w = 2 * np.pi * c.oscillation_hz
-        yaw = np.deg2rad(c.yaw_rate_deg_s) * t + np.deg2rad(c.yaw_amplitude_deg) * np.sin(w * t)
-        tilt_a = np.deg2rad(c.tilt_amplitude_deg) * np.sin(1.3 * w * t + 0.5)
-        tilt_b = np.deg2rad(c.tilt_amplitude_deg) * np.sin(0.9 * w * t + 1.7)
+        ph = np.deg2rad(c.oscillation_phase_deg)
+        yaw = np.deg2rad(c.yaw_rate_deg_s) * t + np.deg2rad(c.yaw_amplitude_deg) * np.sin(w * t + ph)
+        tilt_a = np.deg2rad(c.tilt_amplitude_deg) * np.sin(1.3 * w * t + 0.5 + ph)
+        tilt_b = np.deg2rad(c.tilt_amplitude_deg) * np.sin(0.9 * w * t + 1.7 + ph)
         if c.shape is TrajectoryShape.SPIRAL_LANDING:
             base = Rotation.from_matrix(_R_DOWN)
             world = Rotation.from_euler("zxy", np.column_stack([yaw, tilt_a, tilt_b]).reshape(-1, 3))

@@ -27,6 +27,21 @@ def test_simulate_writes_readable_h5(tmp_path):
     assert not (tmp_path / "rec_cloud.ply").exists()
 
 
+def test_simulate_flight_flies_another_path_of_the_scenario(tmp_path):
+    from evpose.io.h5 import read_recording_h5
+
+    paths = {}
+    for flight in (0, 4):
+        out = tmp_path / f"f{flight}.h5"
+        assert run(["simulate", "--scenario", "landing", "--out", str(out), "--seconds", "0.03", "--resolution", "64x48", "--no-cloud", "--flight", str(flight)]) == 0
+        paths[flight] = read_recording_h5(out)
+    assert paths[4].metadata["config"]["flight"] == 4
+    # A 0.03 s flight is a 9 cm spiral: the flights leave the pad's vertical in different directions.
+    heading = [np.diff(paths[f].ground_truth.position[[0, -1], :2], axis=0)[0] for f in (0, 4)]
+    cos = heading[0] @ heading[1] / np.linalg.norm(heading[0]) / np.linalg.norm(heading[1])
+    assert cos < 0.9
+
+
 @pytest.mark.parametrize(
     "args, message",
     [
@@ -38,6 +53,7 @@ def test_simulate_writes_readable_h5(tmp_path):
         # 1e12 points per m^2 ended in a MemoryError traceback (22 PiB of points).
         (["--scenario", "landing", "--cloud-density", "1e12"], "--cloud-density must be within 1..5000 points/m^2, got 1e+12"),
         (["--scenario", "landing", "--range-noise", "5"], "--range-noise must be within 0..0.1 m, got 5"),
+        (["--scenario", "landing", "--flight", "-1"], "flight must be non-negative"),
     ],
 )
 def test_bad_input_prints_one_line_and_exits_2(tmp_path, capsys, args, message):
