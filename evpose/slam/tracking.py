@@ -56,7 +56,7 @@ def estimate_pose(K: np.ndarray, Xw: np.ndarray, uv: np.ndarray, T_wc_guess: np.
     +0.05 (+0.02), landing ATE 1.09 / 1.97 -> 0.53 / 0.53 % at the same tracked time (indoor mixed: such tracks outlive
     occlusions, tracked 66-91 %). Correcting only the tracks within 3 px of the truth, or dropping those further off,
     leaves it (-0.24 / -0.19, indoor 0-3). The true camera rotation as a gyro prior (``ORACLE_ROT=1``) makes it worse
-    (-0.41, BA gain +0.60), though the event-only maps turn 1.28 times the true rotation over 0.1 s (median of 45
+    (-0.41, BA gain +0.60, indoor 0-2), though the event-only maps turn 1.28 times the true rotation over 0.1 s (median of 45
     indoor maps, 0.73-4.69; landing 1.04). Triangulating a keyframe's new points from its pose after its BA instead of
     the PnP pose (harness ``TRI_AFTER=1``, ``pair.py``): indoor 0-9 1.959 -> 1.714 % (paired -0.245 +- 0.258, 6 better,
     4 worse; seed 5 4.32 -> 1.98), landing 0 / 1 1.09 -> 1.27 / 1.97 -> 8.92 %, h -0.33: not kept. The lever is the
