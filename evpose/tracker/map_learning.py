@@ -75,4 +75,5 @@ def field_pose(tracker: Tracker, twist: np.ndarray | None) -> np.ndarray:
     lag = float(tracker._registration.field_lag_ms) * 1e-3
     if twist is None or lag <= 0:
         return tracker._pose
-    return gtsam.Pose3(tracker._pose).compose(gtsam.Pose3.Expmap(-np.asarray(twist, dtype=np.float64) * lag)).matrix()
+    # ``mat=`` by name: pybind11 takes the matrix overload at once (the same pose).
+    return gtsam.Pose3(mat=tracker._pose).compose(gtsam.Pose3.Expmap(-np.asarray(twist, dtype=np.float64) * lag)).matrix()
