@@ -152,6 +152,10 @@ def usable_pose(T: np.ndarray | None) -> np.ndarray | None:
     return T if np.isfinite(T).all() else None
 
 
+_ZERO3 = np.zeros(3)
+_ZERO3.setflags(write=False)
+"""The constant-velocity factor's measured velocity change (gtsam copies it into the factor)."""
+
 _X, _V, _B = (ord(c) << 56 for c in "xvb")
 """gtsam ``Symbol`` keys of index 0 of the pose, velocity and bias states (tests check them against gtsam's)."""
 
@@ -391,7 +395,7 @@ class FactorGraphFusion:
             self.last_registration = (j, T_meas_imu)
         else:
             self.last_registration = None
-        graph.add(gtsam.BetweenFactorVector(vi, vj, np.zeros(3), self._velocity_noise(c.constant_velocity_sigma * np.sqrt(dt))))
+        graph.add(gtsam.BetweenFactorVector(vi, vj, _ZERO3, self._velocity_noise(c.constant_velocity_sigma * math.sqrt(dt))))
         # Named value arguments select gtsam's insert overload at once: by position pybind11 tries its 45 overloads
         # in order, and the bias is the 44th (~25-40 us per update, the same stored value either way).
         values.insert(xj, pose3=nav_pred.pose())
@@ -427,7 +431,9 @@ class FactorGraphFusion:
         registration)``, either None."""
         gtsam = self._gtsam
         c = self.config
-        model = RegistrationErrorModel(c.registration_error_model)  # a config loaded from text holds the string
+        model = c.registration_error_model
+        if model is not RegistrationErrorModel.WHITE:
+            model = RegistrationErrorModel(model)  # a config loaded from text holds the string
         prev = self.last_registration
         z = gtsam.Pose3(mat=T_meas_imu)  # by name: the matrix overload at once (as ``values.insert`` below)
         rho = float(c.registration_ar_rho)

@@ -108,23 +108,6 @@ import numpy as np
 from evpose.fusion.startup import in_startup
 
 
-def mean_revision(revisions: list[tuple[np.ndarray, np.ndarray]]) -> tuple[np.ndarray, np.ndarray]:
-    """Mean (world rotation vector rad (3,), position m (3,)) of per-state revisions."""
-    r = np.zeros(3)
-    p = np.zeros(3)
-    for dr, dp in revisions:
-        r += dr
-        p += dp
-    n = float(len(revisions))
-    return r / n, p / n
-
-
-def revision(gtsam, T_now: np.ndarray, T_then: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """One state's revision: (Log(R_now R_then^T) world rad (3,), p_now - p_then m (3,)) of two camera poses (4, 4)."""
-    dR = T_now[:3, :3] @ T_then[:3, :3].T
-    return np.asarray(gtsam.Rot3.Logmap(gtsam.Rot3(dR)), np.float64), T_now[:3, 3] - T_then[:3, 3]
-
-
 def revised_pose(gtsam, T_world_cam: np.ndarray, rotation: np.ndarray, position: np.ndarray, gain: float,
                  depth_ratio: float = 1.0) -> np.ndarray:
     """``T_world_cam`` moved by ``gain`` times a (rotation vector, position) revision: rotation about the camera centre
@@ -151,11 +134,20 @@ def readout_pose(fusion, T_world_cam: np.ndarray, previous=None) -> np.ndarray |
     if n <= 0 or fusion.index < n or len(fusion.history) < n + 1:
         return None
     gtsam = fusion._gtsam
-    revs = []
+    # Each state's revision is (Log(R_now R_then^T) world rad, p_now - p_then m) of its camera poses now and as written;
+    # their mean is summed in place from zero, newest first (one loop, no per-state tuples or helper calls: it runs
+    # ``n`` times per update).
+    Logmap, Rot3, estimate = gtsam.Rot3.Logmap, gtsam.Rot3, fusion.smoother.calculateEstimatePose3
+    T_imu_cam = fusion.extrinsic.T_imu_cam
+    key = fusion._keys(fusion.index)[0]
+    rotation = np.zeros(3)
+    position = np.zeros(3)
     for lag, then in enumerate(written_poses(fusion, n), 1):
-        now = fusion.extrinsic.cam_pose(fusion.smoother.calculateEstimatePose3(fusion._keys(fusion.index - lag)[0]).matrix())
-        revs.append(revision(gtsam, now, then))
-    rotation, position = mean_revision(revs)
+        now = estimate(key - lag).matrix() @ T_imu_cam  # Extrinsic.cam_pose (``matrix()`` is a float64 array)
+        rotation += Logmap(Rot3(now[:3, :3] @ then[:3, :3].T))
+        position += now[:3, 3] - then[:3, 3]
+    rotation /= float(n)
+    position /= float(n)
     out = revised_pose(gtsam, T_world_cam, rotation, position, float(c.revision_readout_gain), depth_ratio(fusion))
     return smoothed_position(out, T_world_cam, previous, float(c.revision_readout_position_smoothing))
 

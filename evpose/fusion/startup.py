@@ -8,6 +8,7 @@ import numpy as np
 
 from evpose.fusion.config import FusionConfig
 from evpose.fusion.preintegration import make_preintegration_params
+from evpose.tracker.lapack_calls import eigh
 
 
 def initial_gyro_bias_sigma(config: FusionConfig) -> float:
@@ -60,10 +61,13 @@ def startup_inflated(config: FusionConfig, start_us: int | None, t_us: int, cova
         return covariance_6x6
     c = np.asarray(covariance_6x6, np.float64).reshape(6, 6)
     c = 0.5 * (c + c.T)
-    d = np.sqrt(np.diag(c)) if np.isfinite(c).all() and np.all(np.diag(c) > 0) else None
-    if d is None:
+    # Methods and numpy's own expressions instead of the np.diag / np.all / np.outer / np.linalg.eigh wrappers: the
+    # same operations on the same values (every update of a track's first ``registration_startup_s`` runs this).
+    diag = c.diagonal()
+    if not (np.isfinite(c).all() and (diag > 0).all()):
         return covariance_6x6  # registration_covariance's fallback handles it
-    dd = np.outer(d, d)
-    w, V = np.linalg.eigh(c / dd)
+    d = np.sqrt(diag)
+    dd = d[:, None] * d[None, :]
+    w, V = eigh(c / dd)
     w[-int(config.registration_startup_directions):] *= factor
     return ((V * w) @ V.T) * dd

@@ -474,7 +474,7 @@ def combine_poses(T_f: np.ndarray, cov_f: np.ndarray, T_e: np.ndarray, cov_e: np
     I_e = _inv(cov_e)  # positive definite (checked by the caller), as the sum below
     P = _inv(I_f + I_e)
     if convex:
-        d_f, d_e = np.diag(I_f), np.diag(I_e)
+        d_f, d_e = I_f.diagonal(), I_e.diagonal()  # np.diag's own call, without its wrapper
         step = d_e / (d_f + d_e) * e
     else:
         step = P @ (I_e @ e)

@@ -58,7 +58,7 @@ def learn_map_points(tracker: Tracker, status: TrackStatus, used: np.ndarray, fi
         t0 = time.perf_counter()
         T_field = field_pose(tracker, twist) if T_field is None else T_field  # as the edge offsets read it
         gauge = None
-        if tracker.edge_offsets is not None and tracker.config.edge_offsets.gauge_painted and np.all(np.isfinite(tracker.edge_offsets.last_fit)):
+        if tracker.edge_offsets is not None and tracker.config.edge_offsets.gauge_painted and np.isfinite(tracker.edge_offsets.last_fit).all():
             gauge = tracker.edge_offsets.last_fit
         shift = {}
         if tracker.config.map_refinement.fused_registration_shift and tracker.components.drives_pose and twist is not None:
@@ -75,4 +75,5 @@ def field_pose(tracker: Tracker, twist: np.ndarray | None) -> np.ndarray:
     lag = float(tracker._registration.field_lag_ms) * 1e-3
     if twist is None or lag <= 0:
         return tracker._pose
-    return gtsam.Pose3(tracker._pose).compose(gtsam.Pose3.Expmap(-np.asarray(twist, dtype=np.float64) * lag)).matrix()
+    # ``mat=`` by name: pybind11 takes the matrix overload at once (the same pose).
+    return gtsam.Pose3(mat=tracker._pose).compose(gtsam.Pose3.Expmap(-np.asarray(twist, dtype=np.float64) * lag)).matrix()

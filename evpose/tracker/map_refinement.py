@@ -346,7 +346,7 @@ class PaintedEdgeRefiner:
         if self.index.size == 0 or not self.config.enabled or self.config.gain <= 0:
             return 0
         tg, xi, extra, floor = _NO_TANGENTS, _NO_TWIST, _NO_EXTRA, 0.0
-        if twist is not None and (floor_px > 0 or trail_px is not None) and np.all(np.isfinite(twist)):
+        if twist is not None and (floor_px > 0 or trail_px is not None) and np.isfinite(twist).all():
             tg, xi, floor = self._tangents, np.ascontiguousarray(twist, dtype=np.float64).reshape(6), float(floor_px)
             if trail_px is not None:
                 extra = np.ascontiguousarray(trail_px, dtype=np.float64).reshape(self.index.size)

@@ -56,7 +56,12 @@ class RegistrationConfig:
     with the event registration, seeds 0-3 / 4-7: 700 / 800 points 6.69 / 6.07 and 6.60 / 5.94 mm at 346x260, 7.43 /
     9.11 and 7.49 / 8.89 mm at 240x180, against 6.38 / 5.91 and 7.25 / 8.49 mm with 1000 (~0.3-0.5 ms less CPU per
     update at 700, unpaired): not changed. Session 29, ``full`` at 240x180 seeds 0-7 (6.955 mm; ``/tmp/s29/reg29/``):
-    1500 gave 6.918 mm (ARE 0.0772 -> 0.0817 deg)."""
+    1500 gave 6.918 mm (ARE 0.0772 -> 0.0817 deg). Session 41 (lat41, ``/tmp/s41/lat41/``), 700 against 1000: CPU per
+    update of ``full`` at 346x260 (seed 0, the two configurations stepped alternately in one process, ``pairstep.py``,
+    load ~18) -0.277 +- 0.031 ms of 4.39 (-6 %); ATE at 240x180 2 s seeds 0-12 4.614 -> 4.693 mm (+0.078 +- 0.106, 3
+    of 13 better; ``acc/run.sh``, ``acc/cmp.py``), 346x260 seed 0 3.647 -> 3.729 mm; and with fewer points the map
+    acquisition's chance z-score falls below ``map_acquisition.min_chance_z`` (15.6-15.8 against 16) on 3 of those 13
+    right maps, which ``evpose track`` then refuses (run with ``--acquire-s 0``): not changed."""
 
     second_order: bool = True
     """Newton steps using the TDF's curvature (points on the TDF minimum still constrain the pose) instead of Gauss-Newton.
