@@ -308,25 +308,26 @@ class MciConfig:
     two half-overlapping windows KLT's flow is a median 0.00 of the true 3.2-3.3 px (the events both windows share sit
     unmoved in both images, and pass the forward-backward test; 31 % of tracks within 2 px of the truth), between the
     windows' own halves 0.99 (41-42 %), H2 to H2 0.96-0.98. Indoors H4 images carry half the tracked event-only steps
-    (23 of 44-45 on seeds 0 and 1, most of them kept by ``keep_hypothesis_survival``) and 13 of 37 two-view starts,
-    whose matches then lie within 2 px of the truth for 33 % against 56 % (:mod:`evpose.slam.initialization`). With
-    this, H4 (half the events) hardly ever wins. Paired against the defaults (``h.py``, ``cmp.py base uo``): indoor
-    event-only seeds 0-7 2.006 -> 2.042 % (+0.037 +- 0.535, 3 better, 5 worse), tracked 91.4 -> 89.4 % (least 88.3 ->
-    84.9), median points at a map's start 30 -> 23; landing 0-1 bit-identical (no H4 MCI wins there). Tried alike:
-    ``EventWindowConfig.overlap`` 0 (every hypothesis on its own events) indoor 0-4 1.624 -> 2.147 % (+0.523 +- 0.471;
-    seed 3 1.31 -> 3.53); ``keep_hypothesis_survival`` 0 indoor 0-3 1.584 -> 1.739 % (+0.155 +- 0.094), least tracked
-    90.5 -> 85.8 %; two-view starts that skip H4 MCIs (code not kept) indoor 0-2 1.674 -> 1.471 %, tracked 93.5 ->
-    60.3 % (as references only: 1.819 %, 60.5 %): the H4 stretches before a map last up to 0.56 s. Off."""
+    (23 of 44-45 on seeds 0 and 1, most of them kept by ``keep_hypothesis_survival``) and 20 of 53 two-view starts
+    (seeds 0-9), whose matches then lie within 2 px of the truth for 34 % against 52 %
+    (:mod:`evpose.slam.initialization`). With this, H4 (half the events) hardly ever wins. Paired against the defaults
+    (``h.py``, ``cmp.py base uo``): indoor event-only seeds 0-7 2.006 -> 2.042 % (+0.037 +- 0.535, 3 better, 5 worse),
+    tracked 91.4 -> 89.4 % (least 88.3 -> 84.9), median points at a map's start 30 -> 23; landing 0-1 bit-identical (no
+    H4 MCI wins there). Tried alike: ``EventWindowConfig.overlap`` 0 (every hypothesis on its own events) indoor 0-4
+    1.624 -> 2.147 % (+0.523 +- 0.471; seed 3 1.31 -> 3.53); ``keep_hypothesis_survival`` 0 indoor 0-3 1.584 -> 1.739 %
+    (+0.155 +- 0.094), least tracked 90.5 -> 85.8 %; two-view starts that skip H4 MCIs (code not kept) indoor 0-2 1.674
+    -> 1.471 %, tracked 93.5 -> 60.3 % (as references only: 1.819 %, 60.5 %): the H4 stretches before a map last up to
+    0.56 s. Off."""
     unwarped_own_events_before_map: bool = False
     """Event-only: ``unwarped_own_events`` only while no map is tracked, for the two-view start's MCIs (off: as
     ``unwarped_own_events``). Session 41 (``/tmp/s41/tv41``, ``cmp.py base ub``), paired against the defaults: indoor
     event-only seeds 0-9 1.959 -> 1.879 % (-0.079 +- 0.429, 6 better, 4 worse; seed 5 4.32 -> 1.20, seed 9 1.51 ->
     3.95), within 2 % 7 -> 8, tracked 91.1 -> 87.7 % (seed 8 92.2 -> 79.2 %, under the 80 % target), coasted share of
     the ok and coasted steps 76.2 -> 81.0 %, maps 53 -> 61, median points at a map's start 30 -> 26; the starts' true
-    share is unchanged (seeds 0-4 with ``DIAG=1``: 53 -> 54 % of their points within 2 px of the truth: the warped
-    pairs that replace the H4 ones are half false too). Under the neutral perturbation ``TrackingConfig.ba_huber_px``
-    1.9 on both sides, seeds 0-7: 1.807 -> 1.813 % (+0.006 +- 0.173, 3 better, 5 worse; within 2 % 7 -> 5). Landing
-    0-1 bit-identical. Off."""
+    share is unchanged (seeds 0-4 with ``DIAG=1``: 54 -> 54 % of their points within 2 px of the truth, a median 13 -> 9
+    true points per start: the warped pairs that replace the H4 ones are half false too). Under the neutral perturbation
+    ``TrackingConfig.ba_huber_px`` 1.9 on both sides, seeds 0-7: 1.807 -> 1.813 % (+0.006 +- 0.173, 3 better, 5 worse;
+    within 2 % 7 -> 5). Landing 0-1 bit-identical. Off."""
 
 @dataclass
 class SlamConfig:

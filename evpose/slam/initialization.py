@@ -87,16 +87,17 @@ Why an indoor start makes only 20-40 points of the reference's 150 tracks (sessi
 runs ``evpose slam`` + ``evpose eval --atlas --correct-scale`` in-process, identical to the CLI, and with ``DIAG=1``
 logs every two-view attempt against the truth: the scene point under each reference pixel, a ray cast into the
 simulated room from the reference's true pose, projected at the second view's true pose; ``ana2.py`` / ``ana3.py``
-sum it up). Indoor event-only seeds 0-6 on main's defaults, 37 starts (medians): 150 reference tracks -> 43 matches
+sum it up). Indoor event-only seeds 0-9 on main's defaults, 53 starts (medians): 150 reference tracks -> 44 matches
 in the second view (39 % of the reference tracks over 1-3 MCIs, a median 14 ms; tracks carried into the reference
-keep 53 %, the reference's fresh corners 39 %, seeds 5-6) -> 38 in front of both views -> 29 within 2 px reprojection
-(78 % of the matches) -> 29 after the two-view BA and cull (they remove none on any start). No gate is too strict: the
-start loses its tracks in KLT before it. Nor are the kept tracks good: 45 % of the matches lie within 2 px of their
-true projection (56 % once each attempt's common image shift is removed; after it the per-match error is a median 1.5
-px, 25 % over 3.8 px, and those move 0.3-2.3 times the true flow); at the starts' true parallax (a median 0.32 deg) the
-2 px reprojection gate cannot tell a wrong track from a right one. Pairs with an unwarped MCI (H4) are worse: 33 % of
-matches true (51 % after the shift) against 56 % (59 %), since KLT between the plain histograms of half-overlapping
-windows holds the events they share at zero flow (``MciConfig.unwarped_own_events``, figures there).
+keep 51 %, the reference's fresh corners 35 %, seeds 5-9) -> 38 in front of both views -> 31 within 2 px reprojection
+(78 % of the matches) -> 31 after the two-view BA and cull (they remove none on any start). No gate is too strict: the
+start loses its tracks in KLT before it. Nor are the kept tracks good: 46 % of the matches lie within 2 px of their
+true projection (55 % of the map points); once each attempt's common image shift is removed the per-match error is a
+median 1.5 px, 25 % over 3.8 px, and those move 0.3-2.2 times the true flow: at the starts' true parallax (a median
+0.33 deg) the 2 px reprojection gate cannot tell a wrong track from a right one (``points_essential_inliers``). The 20
+starts on a pair with an unwarped MCI (H4) are worse: 34 % of matches true against 52 % (attempts: 35 -> 50 % once the
+common shift is removed, against 56 -> 58 %), since KLT between the plain histograms of half-overlapping windows holds
+the events they share at zero flow (``MciConfig.unwarped_own_events``, figures there).
 """
 
 from __future__ import annotations
