@@ -299,7 +299,35 @@ class MciConfig:
     (seeds 0-3) three runs were unchanged, one split into two maps. 0.5 tracks longer indoors (60 % / 57 %) but changed
     landing more, ratio. Stamping H4 (unwarped) MCIs with their events' mean time instead of the window's end (the
     time H1-H3 warp to): indoor event-only seeds 0-3 ATE 8.57 -> 11.79 %, tracked 52.4 -> 51.2 %; not kept."""
-
+    unwarped_own_events: bool = False
+    """H4 (no motion compensation) renders only the events its window does not share with the previous window
+    (``EventWindowConfig.overlap``) and, when it wins, stamps the MCI at their middle (off: every event of the window,
+    stamped at the window's). Why (session 41, ``/tmp/s41/tv41``: ``mcibias.py`` captures every MCI's H2 / H4 images in
+    a run, ``mciana.py`` tracks FAST corners from each MCI into the next with the SLAM's KLT against their true flow, a
+    ray cast into the simulated room; indoor seeds 0 / 5, 184-186 consecutive pairs): between the plain histograms of
+    two half-overlapping windows KLT's flow is a median 0.00 of the true 3.2-3.3 px (the events both windows share sit
+    unmoved in both images, and pass the forward-backward test; 31 % of tracks within 2 px of the truth), between the
+    windows' own halves 0.99 (41-42 %), H2 to H2 0.96-0.98. Indoors H4 images carry half the tracked event-only steps
+    (23 of 44-45 on seeds 0 and 1, most of them kept by ``keep_hypothesis_survival``) and 20 of 53 two-view starts
+    (seeds 0-9), whose matches then lie within 2 px of the truth for 34 % against 52 %
+    (:mod:`evpose.slam.initialization`). With this, H4 (half the events) hardly ever wins. Paired against the defaults
+    (``h.py``, ``cmp.py base uo``): indoor event-only seeds 0-7 2.006 -> 2.042 % (+0.037 +- 0.535, 3 better, 5 worse),
+    tracked 91.4 -> 89.4 % (least 88.3 -> 84.9), median points at a map's start 30 -> 23; landing 0-1 bit-identical (no
+    H4 MCI wins there). Tried alike: ``EventWindowConfig.overlap`` 0 (every hypothesis on its own events) indoor 0-4
+    1.624 -> 2.147 % (+0.523 +- 0.471; seed 3 1.31 -> 3.53); ``keep_hypothesis_survival`` 0 indoor 0-3 1.584 -> 1.739 %
+    (+0.155 +- 0.094), least tracked 90.5 -> 85.8 %; two-view starts that skip H4 MCIs (code not kept) indoor 0-2 1.674
+    -> 1.471 %, tracked 93.5 -> 60.3 % (as references only: 1.819 %, 60.5 %): the H4 stretches before a map last up to
+    0.56 s. Off."""
+    unwarped_own_events_before_map: bool = False
+    """Event-only: ``unwarped_own_events`` only while no map is tracked, for the two-view start's MCIs (off: as
+    ``unwarped_own_events``). Session 41 (``/tmp/s41/tv41``, ``cmp.py base ub``), paired against the defaults: indoor
+    event-only seeds 0-11 2.043 -> 1.890 % (-0.153 +- 0.365, 7 better, 5 worse; seed 5 4.32 -> 1.20, seed 9 1.51 ->
+    3.95), within 2 % 7 -> 9, tracked 91.5 -> 87.0 % (seeds 8 / 10 92.2 / 94.5 -> 79.2 / 78.1 %, under the 80 % target),
+    coasted share of the ok and coasted steps 76.1 -> 81.5 %, maps 64 -> 72, median points at a map's start 31 -> 27;
+    the starts' true share is unchanged (seeds 0-4 with ``DIAG=1``: 54 -> 54 % of their points within 2 px of the truth,
+    a median 13 -> 9 true points per start: the warped pairs that replace the H4 ones are half false too). Under the
+    neutral perturbation ``TrackingConfig.ba_huber_px`` 1.9 on both sides, seeds 0-7: 1.807 -> 1.813 % (+0.006 +- 0.173,
+    3 better, 5 worse; within 2 % 7 -> 5). Landing 0-1 bit-identical. Off."""
 
 @dataclass
 class SlamConfig:

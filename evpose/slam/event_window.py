@@ -449,7 +449,7 @@ class EventWindowSelector:
             cur_pts=s.cur_pts[alive].copy() if s.cur_pts is not None else np.zeros((0, 2), np.float32),
             t_ref_us=s.t_ref_us, t_cur_us=s.t_cur_us, n_frames=s.n_frames,
             median_displacement_px=s.median_displacement_px, forced=forced, blank_us=s.blank_us,
-            whole_pts=whole_pts, whole_t_us=whole_t,
+            whole_pts=whole_pts, whole_t_us=whole_t, n_overlap=len(ev.t) - len(cur.t),
         )
         s.blank_us = 0
         if not forced and cfg.adapt_events and not self._incoherent():

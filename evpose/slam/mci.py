@@ -110,6 +110,13 @@ class MciResult:
     """Every rendered hypothesis ("H1".."H5") -> float32 image: the tracker may prefer the previous MCI's hypothesis."""
     splats: dict = field(default_factory=dict, repr=False)
     """Every rendered hypothesis -> its :class:`Splat`, to render it again on a finer grid (:meth:`fine_image`)."""
+    t_by_hypothesis: dict = field(default_factory=dict, repr=False)
+    """Reference times of the hypotheses whose image is not stamped at the window's (``MciConfig.unwarped_own_events``:
+    H4) -> us; the others are stamped at the window's, as ``t_us`` is when they win."""
+
+    def time_of(self, hypothesis: str) -> int:
+        """Reference time of ``hypothesis``'s image, us (:attr:`t_by_hypothesis`)."""
+        return self.t_by_hypothesis.get(hypothesis, self.t_by_hypothesis.get("window", self.t_us))
 
     def fine_image(self, hypothesis: str, scale: float, sigma_px: float) -> np.ndarray:
         """``hypothesis``'s image on the grid ``scale`` times finer with a splat of ``sigma_px`` sensor pixels, float32
@@ -336,7 +343,8 @@ class MciGenerator:
         """The window carries enough tracks from its start (``MciConfig.whole_window_min_tracks``)."""
         return rw.whole_pts.shape[1] >= self.cfg.whole_window_min_tracks and whole_span_s(rw.whole_t_us) > 0
 
-    def generate(self, rw: ReconstructionWindow, prior: MotionPrior | None = None) -> MciResult:
+    def generate(self, rw: ReconstructionWindow, prior: MotionPrior | None = None, mapped: bool = True) -> MciResult:
+        """The sharpest hypothesis's MCI of ``rw``; ``mapped``: a map is tracked (``MciConfig.unwarped_own_events_before_map``)."""
         prior = prior or MotionPrior()
         cands: dict[Hypothesis, tuple[np.ndarray, Splat]] = {}
         frac = self.cfg.reference_fraction
@@ -369,11 +377,23 @@ class MciGenerator:
         h5 = self._parallax(rw, prior, idx, dts, track_s, sim2)
         if h5 is not None:
             cands[Hypothesis.H5_PARALLAX] = h5
-        cands[Hypothesis.H4_NONE] = self._render(rw, None, None)
+        t_ref = reference_time_us(rw.t, frac) if len(rw.t) else rw.t_end_us
+        t_by = {}
+        own = self.cfg.unwarped_own_events or (self.cfg.unwarped_own_events_before_map and not mapped)
+        k = rw.n_overlap if own else 0
+        if 0 < k < len(rw.t):
+            # MciConfig.unwarped_own_events: the events this window shares with the previous one would sit unmoved in
+            # both plain histograms and hold KLT at zero flow.
+            p = rw.p[k:] if self.icfg.use_polarity else None
+            sp = Splat(rw.x[k:], rw.y[k:], p, self.width, self.height)
+            cands[Hypothesis.H4_NONE] = (sp.render(1.0, self.icfg.sigma_px), sp)
+            t_by[Hypothesis.H4_NONE.value] = reference_time_us(rw.t[k:], frac)
+        else:
+            cands[Hypothesis.H4_NONE] = self._render(rw, None, None)
         scores = {h.value: local_std_score(img, self.cfg.patch_px) for h, (img, _) in cands.items()}
         # Highest score wins; ties go to the earlier hypothesis in H1..H5 order (deterministic).
         best = max(sorted(cands, key=lambda h: h.value), key=lambda h: scores[h.value])
         img = cands[best][0]
-        t_ref = reference_time_us(rw.t, frac) if len(rw.t) else rw.t_end_us
-        return MciResult(t_us=t_ref, image=img, image8=to_uint8(img), hypothesis=best, scores=scores, n_events=len(rw.t), sim2=sim2, depth=depth,
-                         candidates={h.value: im for h, (im, _) in cands.items()}, splats={h.value: sp for h, (_, sp) in cands.items()})
+        return MciResult(t_us=t_by.get(best.value, t_ref), image=img, image8=to_uint8(img), hypothesis=best, scores=scores, n_events=len(rw.t), sim2=sim2, depth=depth,
+                         candidates={h.value: im for h, (im, _) in cands.items()}, splats={h.value: sp for h, (_, sp) in cands.items()},
+                         t_by_hypothesis={**t_by, "window": t_ref} if t_by else {})

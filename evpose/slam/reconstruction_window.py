@@ -62,6 +62,8 @@ class ReconstructionWindow:
     one, float32 (F, M, 2) px; only tracks alive in every frame; empty without an overlap or when not carried."""
     whole_t_us: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
     """Mean event time of each of those tiny frames, int64 (F,) us."""
+    n_overlap: int = 0
+    """How many of the first events are the previous window's (``EventWindowConfig.overlap``), events."""
 
     @property
     def t_end_us(self) -> int:

@@ -93,7 +93,8 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
             wcfg = replace(wcfg, adapt_events=False, min_event_rate=0.0)
         mcfg = config.mci
         if self.imu is not None:
-            mcfg = replace(mcfg, reference_fraction=mcfg.reference_fraction_inertial, use_parallax=mcfg.use_parallax_inertial)
+            mcfg = replace(mcfg, reference_fraction=mcfg.reference_fraction_inertial, use_parallax=mcfg.use_parallax_inertial,
+                           unwarped_own_events_before_map=False)  # event-only
         # Tracks carried through the next window cost a KLT pass per tiny frame: only for a hypothesis that uses them.
         carry = mcfg.sim2_whole_window or (mcfg.use_parallax and mcfg.parallax_whole_window)
         self.window = EventWindowSelector(wcfg, config.features, config.image, self.width, self.height, config.seed, carry_tracks=carry)
@@ -257,7 +258,7 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
             prev_h = self._prev_hypothesis
             if keep > 0 and prev_h is not None and prev_h != mci.hypothesis.value and prev_h in mci.candidates and ok.sum() < keep * len(ok):
                 img = mci.candidates[prev_h]
-                alt = replace(mci, image=img, image8=to_uint8(img), hypothesis=Hypothesis(prev_h))
+                alt = replace(mci, image=img, image8=to_uint8(img), hypothesis=Hypothesis(prev_h), t_us=mci.time_of(prev_h))
                 new2, ok2, fine2 = self._klt(alt, prev_h, guess, min_ncc, fine)
                 if ok2.sum() > ok.sum():
                     mci, new, ok, fine8 = alt, new2, ok2, fine2
@@ -307,7 +308,7 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
         t0, c0 = time.perf_counter(), time.thread_time()
         # What the pose estimate of this MCI saw and why it failed (StepResult.counts, .failure); set by _track_map.
         self._map_tracks, self._inliers, self._failure = -1, -1, SlamFailure.NONE
-        mci = self.mci_gen.generate(rw, self._prior(rw))
+        mci = self.mci_gen.generate(rw, self._prior(rw), mapped=self._state is SlamStatus.OK)
         self._blank_us += rw.blank_us
         if rw.blank_us:
             self._after_blank_t = mci.t_us
