@@ -302,9 +302,10 @@ class FusionConfig:
     half of it), and the fused tilt drifts past them (+413 against +290 mdeg at 1.75-2 s): the graph learns that
     ridge as a gyroscope bias. A tighter prior holds it: 0.003 flights 1-10 14.391 -> 11.927 mm (-2.46 +- 0.72, 7 of
     10 better; ARE 0.191 -> 0.151 deg), but the nominal flight's seeds 0-11 4.630 -> 5.919 (+1.29 +- 0.72, 4 of 12;
-    seed 4 5.12 -> 13.42 mm); 0.005 flights 1-11 15.122 -> 13.191 (-1.93 +- 0.41, 10 of 11; ARE 0.200 -> 0.175),
-    nominal seeds 0-11 4.630 -> 5.130 (+0.50 +- 0.36, 4 of 12; seed 4 5.12 -> 9.06; ARE 0.057 -> 0.063). It trades
-    the nominal flight for the others: not changed."""
+    seed 4 5.12 -> 13.42 mm); 0.005 flights 1-12 14.187 -> 12.412 (-1.78 +- 0.41, 11 of 12; ARE 0.189 -> 0.165),
+    held-out flights 13-16 12.612 -> 12.522 (-0.09 +- 0.55, 2 of 4), nominal seeds 0-11 4.630 -> 5.130 (+0.50 +-
+    0.36, 4 of 12; seed 4 5.12 -> 9.06; ARE 0.057 -> 0.063). It trades the nominal flight for some others: not
+    changed."""
     gyro_bias_hold_s: float = field(default=0.0, metadata={"min": 0.0, "max": 10.0, "step": 0.05, "unit": "s"})
     """For this long after each start of the fusion (``initialize``) the gyroscope bias is held at its initial value
     (prior sigma ``gyro_bias_hold_sigma`` instead of ``init_sigma_gyro_bias``), then released: the first state at or
