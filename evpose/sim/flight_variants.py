@@ -6,6 +6,13 @@ seeds (session 40) and seeds 24-47 are no independent held-out set. A flight num
 same kind and speed class: the spiral turned about the pad (it still ends over it, so the pad and its marker are
 seen from another side), other leg lengths, other oscillation phases; the room loop
 started elsewhere on a slightly different ellipse and height. Flight 0 is the scenario's own path, bit for bit.
+
+The landing's camera is not turned with the path (``RigTrajectory.camera_rotation`` ignores ``heading_deg``): its x
+axis stays along the world's x, so a flight of heading ``h`` moves the image at ``-h`` from the camera's x axis
+(flight 2, ``h`` 215 deg: +146 deg). That is not what makes those flights track worse (session 41, fl41,
+``/tmp/s41/fl41/yawsim.py``, main's defaults, 240x180 2 s): flight 2's path with the camera yawed by its heading
+(image motion along x) 17.68 mm against 19.83, the nominal path (seed 0) yawed so that its image moves at +146 deg
+4.91 mm against 6.42; what a flight passes over is (see ``FusionConfig.init_sigma_gyro_bias``).
 """
 
 from __future__ import annotations
