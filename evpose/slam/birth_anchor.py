@@ -12,10 +12,17 @@ that fail are kept (or ended, ``klt_birth_anchor_drop``).
 Measured (session 41, ``/tmp/s41/ta41/``: ``h.py`` = pnp41's harness reproducing ``evpose slam`` + ``evpose eval
 --atlas --correct-scale``, ``ANCH_DIAG=1`` records every attempt against the true projection of the track's birth
 ray-cast, ``adiag.py`` sums it up; ``pair.py`` pairs against main's defaults). ``klt_birth_anchor_px`` 8, min age 2,
-keep on failure: ATE landing seeds 0 / 1 (3 s, 346x260) 1.09 / 1.97 -> 4.95 / 4.17 %, indoor 0 / 1 1.85 / 1.67 -> 1.86
-/ 2.51 % (tracked 93.6 -> 90.0 % on seed 1): worse on all four, so off. It does not re-anchor: 23 % (landing 0) / 29 %
-(indoor 1) of the attempts move the track, by a median 0.20 / 0.25 px, and the moved ones end closer to the truth for
-39 / 48 % of them; the tracks 3-30 px off stay there (median after 4.2-15.6 px). Why: the birth patch looks like the
+keep on failure: ATE landing seeds 0 / 1 (3 s, 346x260) 1.09 / 1.97 -> 4.95 / 4.17 %; indoor seeds 0-9 1.96 -> 1.76 %
+(paired -0.19 +- 0.32 points, 3 better and 7 worse; seed 5 4.32 -> 1.44 %, the rest 1.31-2.19 -> 1.44-2.51 %). The
+keyframe step's shortness (pnp41's ``ana2.py``, h_rel = log step ratio against the map's three previous keyframes) is
+not reduced: indoor -0.258 +- 0.070 -> -0.292 +- 0.067, landing -0.123 +- 0.032 -> -0.208 +- 0.040. It does not
+re-anchor: of the tracks old enough, 17-37 % (landing 0, by age) / 43-60 % (indoor 1) pass the birth KLT within the
+radius, and those move a median 0.20 / 0.25 px, ending closer to the truth for 39 / 48 % of them; the tracks 3-30 px
+off stay there (median after 4.2-15.6 px). Ending the tracks that fail (``klt_birth_anchor_drop``) ends most old tracks:
+landing 0 / 1 7.80 / 3.61 % (tracked 98.2 -> 91.1 / 92.9 %); indoor 0-9 1.96 -> 1.53 % (-0.43 +- 0.30, 6 better, all
+ten within 2 %) but tracked as little as 78.1 % (against 87.3 %), and the share of time tracked from the events
+(``visual_fraction`` of ``e.slam.json``) falls 0.280 -> 0.227 indoors (keeping: 0.260), 0.982 -> 0.660 on the landing:
+the indoor gain is more coasting, as with ``FeatureConfig.klt_min_support_ratio``, not better tracks. Why: the birth patch looks like the
 drifted position, not like the birth point's true projection. NCC of the 11 px birth patch against the current MCI,
 median at the chained position / at the truth (landing 0; indoor 1): tracks 0-1 px off 0.93 / 0.93 (0.90 / 0.85), 3-6
 px off 0.74 / 0.56 (0.68 / -0.06), 6-10 px 0.74 / 0.37 (0.50 / -0.06), 10-30 px 0.69 / 0.31 (0.27 / -0.08); the truth
