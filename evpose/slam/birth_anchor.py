@@ -22,7 +22,10 @@ off stay there (median after 4.2-15.6 px). Ending the tracks that fail (``klt_bi
 landing 0 / 1 7.80 / 3.61 % (tracked 98.2 -> 91.1 / 92.9 %); indoor 0-9 1.96 -> 1.53 % (-0.43 +- 0.30, 6 better, all
 ten within 2 %) but tracked as little as 78.1 % (against 87.3 %), and the share of time tracked from the events
 (``visual_fraction`` of ``e.slam.json``) falls 0.280 -> 0.227 indoors (keeping: 0.260), 0.982 -> 0.660 on the landing:
-the indoor gain is more coasting, as with ``FeatureConfig.klt_min_support_ratio``, not better tracks. Why: the birth patch looks like the
+the indoor gain is more coasting, as with ``FeatureConfig.klt_min_support_ratio``, not better tracks. Held-out indoor
+seeds 10-12 (main's defaults run here, tag ``off``): 2.15 -> 1.59 % (2 better; tracked least 91.4 -> 79.7 %). Ending
+only tracks at least 8 MCIs old (``klt_birth_anchor_min_age`` 8): landing 0 / 1 3.64 / 4.13 %, indoor 0-5 2.07 -> 1.77 %
+(3 better, 3 worse; seed 3 1.31 -> 2.18 %). Why: the birth patch looks like the
 drifted position, not like the birth point's true projection. NCC of the 11 px birth patch against the current MCI,
 median at the chained position / at the truth (landing 0; indoor 1): tracks 0-1 px off 0.93 / 0.93 (0.90 / 0.85), 3-6
 px off 0.74 / 0.56 (0.68 / -0.06), 6-10 px 0.74 / 0.37 (0.50 / -0.06), 10-30 px 0.69 / 0.31 (0.27 / -0.08); the truth

@@ -265,7 +265,8 @@ class FeatureConfig:
     klt_birth_anchor_drop: bool = False
     """``klt_birth_anchor_px``: end the tracks whose re-anchoring fails instead of keeping their chained position.
     Session 41, 8 px: landing seeds 0 / 1 1.09 / 1.97 -> 7.80 / 3.61 %; indoor 0-9 1.96 -> 1.53 % (6 better) at less
-    time tracked (least 87.3 -> 78.1 %): more coasting, not better tracks. So off."""
+    time tracked (least 87.3 -> 78.1 %), held-out indoor 10-12 2.15 -> 1.59 %: more coasting, not better tracks
+    (module notes of :mod:`evpose.slam.birth_anchor`). So off."""
     target_tracks: int = field(default=150, metadata={"min": 20, "max": 1000, "step": 10, "unit": "tracks"})
     """New features are detected on an MCI when fewer tracks survive, tracks. Session 17, indoor event-only seeds
     0-7: 300 -> ATE 7.39 -> 8.02 %, time tracked from the events 44.7 -> 40.2 % (:mod:`evpose.slam.event_coasting`)."""
