@@ -252,6 +252,21 @@ class FeatureConfig:
     at 70-86 %. With two of the four off by more than 3 px: indoor seeds 0-2 10.59 / 6.49 / 4.25 % (defaults 7.84 /
     3.61 / 9.89), landing seeds 0-5 3.95 / 4.70 / 3.78 / 3.50 / 6.83 / 6.91 % (1.50 / 1.72 / 1.87 / 3.06 / 5.58 /
     1.96). So off, ratio."""
+    klt_birth_anchor_px: float = field(default=0.0, metadata={"min": 0.0, "max": 30.0, "step": 0.5, "unit": "px"})
+    """After each MCI-to-MCI step, tracks at least ``klt_birth_anchor_min_age`` MCIs old are tracked again by KLT from
+    the MCI they were born in (at their birth pixel), started at the chained position, and moved where that lands
+    within this distance of it and passes the forward-backward test (0: off), pixels (:mod:`evpose.slam.birth_anchor`).
+    Session 41, 8 px: ATE landing seeds 0 / 1 1.09 / 1.97 -> 4.95 / 4.17 %, indoor 0-9 1.96 -> 1.76 % (7 of 10 worse); it
+    moves a quarter of the tracks by ~0.2 px, as often away from the truth as towards it, since the birth patch
+    correlates better with the drifted position than with the birth point's true projection (figures in the module
+    notes). So off."""
+    klt_birth_anchor_min_age: int = field(default=2, metadata={"min": 1, "max": 100, "step": 1, "unit": "MCIs"})
+    """``klt_birth_anchor_px``: youngest track re-anchored, MCIs since its birth."""
+    klt_birth_anchor_drop: bool = False
+    """``klt_birth_anchor_px``: end the tracks whose re-anchoring fails instead of keeping their chained position.
+    Session 41, 8 px: landing seeds 0 / 1 1.09 / 1.97 -> 7.80 / 3.61 %; indoor 0-9 1.96 -> 1.53 % (6 better) at less
+    time tracked (least 87.3 -> 78.1 %), held-out indoor 10-12 2.15 -> 1.59 %: more coasting, not better tracks
+    (module notes of :mod:`evpose.slam.birth_anchor`). So off."""
     target_tracks: int = field(default=150, metadata={"min": 20, "max": 1000, "step": 10, "unit": "tracks"})
     """New features are detected on an MCI when fewer tracks survive, tracks. Session 17, indoor event-only seeds
     0-7: 300 -> ATE 7.39 -> 8.02 %, time tracked from the events 44.7 -> 40.2 % (:mod:`evpose.slam.event_coasting`)."""

@@ -349,6 +349,12 @@ of a default landing run): the fine-grid calls 673 -> 642 ms (138 calls), the re
 trajectories and every step's tracks bit for bit those of main (``ident.py``, ``ident2.py``)."""
 
 
+def _birth_anchors():
+    from evpose.slam.birth_anchor import BirthAnchors  # birth_anchor imports keyframe_search, which imports this module
+
+    return BirthAnchors()
+
+
 def track_features(prev8: np.ndarray, cur8: np.ndarray, pts: np.ndarray, cfg: FeatureConfig, guess: np.ndarray | None = None,
                    guess_back: bool = False, min_ncc: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """Track ``pts`` from ``prev8`` into ``cur8``; returns (new positions (N, 2) float32, ok mask (N,)).
@@ -425,6 +431,8 @@ class FrontendTracks:
     """Time between the last two MCIs tracked across, s (0 before the first step)."""
     fine_density: list = field(default_factory=list)
     """Events per sensor pixel of the recording's first MCIs, while ``FeatureConfig.klt_upsample_warmup_mcis`` counts."""
+    birth: "BirthAnchors" = field(default_factory=lambda: _birth_anchors())
+    """Each track's birth MCI and pixel (``FeatureConfig.klt_birth_anchor_px``; empty when off)."""
     fine_on: bool | None = None
     """Whether the warm-up let the fine grid on (None while it counts; :func:`evpose.slam.fine_grid.use_fine_grid`)."""
 

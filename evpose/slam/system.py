@@ -251,6 +251,8 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
         fe = self.fe
         fine = use_fine_grid(fe, mci.n_events, mci.image.size, self.cfg.features)
         if fe.prev8 is not None and len(fe.ids):
+            if self.cfg.features.klt_birth_anchor_px > 0:
+                fe.birth.register(fe.ids, fe.uv, fe.prev8)  # tracks detected or re-found since the last step
             guess = self._gyro_flow(fe.prev_t, mci.t_us, fe.uv)
             min_ncc = self.cfg.features.klt_min_ncc
             new, ok, fine8 = self._klt(mci, mci.hypothesis.value, guess, min_ncc, fine)
@@ -271,6 +273,8 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
                 ok &= has_support(mci.image, new, fc.support_window_px, fc.klt_min_support_ratio)
             if self.cfg.features.klt_curvature_gain > 0:
                 new = fe.remove_curvature_shift(new, ok, mci.t_us, self.cfg.features, self.cfg.window.overlap)
+            if fc.klt_birth_anchor_px > 0:
+                new, ok = fe.birth.anchor(mci.image8, fe.ids, new, ok, fc)
             fe.ids, fe.uv = fe.ids[ok], new[ok]
             if gate:  # only the gate reads which tracks have stepped: no per-MCI set otherwise
                 fe.stepped = set(fe.ids.tolist())
