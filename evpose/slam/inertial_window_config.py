@@ -89,6 +89,14 @@ class InertialWindowConfig:
     Without the oracle (tag iv2 against main's rm33), indoor 0-61: 16.23 -> 16.52 % (+0.29 +- 0.23, 29 better, 26
     worse), post-init truth m/unit median 1.45 -> 1.35 (|log| 0.37 -> 0.31, 14 -> 17 of 53 within 0.8-1.25), RPE 62/62;
     landing 0-23: 1.04 -> 1.09 % (+0.06 +- 0.04, median change +0.02, 10 better), 24/24."""
+    velocity_marginal: bool = False
+    """The prior on the velocity of the window's oldest keyframe takes that velocity's marginal covariance in the
+    inertial BA that last held it (the full BA after the initialisation for the first window) instead of the isotropic
+    ``InertialConfig.ba_velocity_prior_sigma``, which stays its upper bound (:mod:`evpose.slam.velocity_marginal`)."""
+    velocity_marginal_inflation: float = field(default=1.0, metadata={"min": 1.0, "max": 100.0, "step": 0.5, "unit": "ratio"})
+    """Factor on that marginal covariance (the next window re-uses some of the observations behind it), ratio."""
+    velocity_marginal_min_sigma: float = field(default=0.0, metadata={"min": 0.0, "max": 5.0, "step": 0.005, "unit": "m/s"})
+    """Floor added to that prior's sigma in every direction, m/s."""
     clamp_scale: bool = False
     """With ``max_scale_change``: instead of refusing the result, keep it rescaled about the window's fixed first
     camera (poses, points, velocities) so its scale changes by exactly that bound."""
