@@ -51,7 +51,8 @@ def inertial_local_bundle_adjustment(m: SlamMap, state: InertialState, K: np.nda
     off by default) add fixed older keyframes, an IMU factor from an older fixed keyframe, a prior on the oldest
     velocity from the map's own keyframe path, the refusal or clamping of a result that rescales the window, and the
     oldest velocity's prior from its marginal covariance in the previous BA (``velocity_marginal``, which ``marginals``
-    also turns on for a call without ``anchors``: the full BA after the initialisation). Returns the final graph error (nan if skipped or refused).
+    also turns on for a call without ``anchors``: the full BA after the initialisation). Returns the final graph error
+    (nan if skipped or refused).
     """
     import gtsam
     from gtsam.symbol_shorthand import B, L, V, X
