@@ -97,3 +97,26 @@ def test_a_carried_prior_holds_the_oldest_velocity_tighter_than_the_fixed_one(sh
                                          anchors=InertialWindowConfig(velocity_marginal=carried))
         outs.append(np.linalg.norm(state.velocities[kf0.id] - wrong))
     assert outs[1] < 0.1 * outs[0]
+
+
+def test_a_scale_refinement_rescales_the_carried_covariances_with_the_map():
+    from evpose.slam import SlamConfig, SlamMode
+    from evpose.slam.atlas import Keyframe, SlamMap
+    from evpose.slam.scale_refinement import refine_map_scale
+
+    rec = make_recording(duration_s=2.0, speed=1.0, seed=5, shake=0.08)
+    T = rec.ground_truth.matrices()
+    m = SlamMap(0)
+    for i, k in enumerate(range(0, 1900, 100)):
+        P = T[k].copy()
+        P[:3, 3] *= 5.0  # the first initialisation left the map 5 times too large
+        m.keyframes.append(Keyframe(i, int(rec.ground_truth.t[k]), P))
+    m.imu_initialised = True
+    m.inertial = InertialState({}, np.zeros(3), np.zeros(3), {0: np.eye(3), 18: 4.0 * np.eye(3)})
+    cfg = SlamConfig(mode=SlamMode.EVENT_INERTIAL)
+    cfg.inertial.refine_min_scale = 0.0
+    cfg.inertial.inertial_ba = False  # the covariances as the similarity leaves them (the BA would renew them)
+    res = refine_map_scale(m, K, rec.imu, rec.calibration.T_cam_imu, rec.calibration.time_offset_us, cfg.inertial, 5, 2.0)
+    assert res.ok and res.scale == pytest.approx(0.2, rel=0.02)
+    assert np.allclose(m.inertial.velocity_cov[0], res.scale**2 * np.eye(3))
+    assert np.allclose(m.inertial.velocity_cov[18], 4.0 * res.scale**2 * np.eye(3))
