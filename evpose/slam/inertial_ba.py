@@ -8,7 +8,7 @@ the window. Camera poses are recovered through ``T_cam_imu``.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -17,6 +17,7 @@ from evpose.core.trajectory import invert_pose
 from evpose.slam.atlas import SlamMap
 from evpose.slam.inertial import GRAVITY, preintegrated_measurements  # noqa: F401 - re-exported
 from evpose.slam.inertial_window_config import InertialWindowConfig
+from evpose.slam.velocity_marginal import carried_velocity_noise, store_velocity_covariances
 
 
 @dataclass
@@ -29,13 +30,16 @@ class InertialState:
     """Accelerometer bias (3,), m/s^2."""
     bias_gyro: np.ndarray
     """Gyroscope bias (3,), rad/s."""
+    velocity_cov: dict = field(default_factory=dict)
+    """Keyframe id -> marginal covariance (3, 3) of its velocity in the last inertial BA that held it, (m/s)^2; kept
+    only with ``InertialWindowConfig.velocity_marginal`` (:mod:`evpose.slam.velocity_marginal`)."""
 
 
 def inertial_local_bundle_adjustment(m: SlamMap, state: InertialState, K: np.ndarray, imu: ImuSamples, T_cam_imu: np.ndarray, time_offset_us: int,
                                      window: int, iterations: int, huber_px: float, acc_sigma: float = 0.01, gyro_sigma: float = 0.001,
                                      acc_bias_sigma: float = 0.1, gyro_bias_sigma: float = 0.01,
                                      fill_from_imu: bool = False, velocity_prior_sigma: float = 0.5, min_span_s: float = 0.0,
-                                     span_keyframes: int = 4, anchors: InertialWindowConfig | None = None) -> float:
+                                     span_keyframes: int = 4, anchors: InertialWindowConfig | None = None, marginals: bool = False) -> float:
     """Optimise the last ``window`` keyframes (poses, velocities), the window's bias and the points they see, in place.
 
     The oldest keyframe of the window is held by a tight prior (the IMU fixes scale and
@@ -45,8 +49,10 @@ def inertial_local_bundle_adjustment(m: SlamMap, state: InertialState, K: np.nda
     (keyframes made a few ms apart), up to ``span_keyframes`` older keyframes, thinned in time, extend it back to that
     span (:func:`spanning_window`). ``anchors`` (:class:`evpose.slam.inertial_window_config.InertialWindowConfig`, all
     off by default) add fixed older keyframes, an IMU factor from an older fixed keyframe, a prior on the oldest
-    velocity from the map's own keyframe path, and the refusal or clamping of a result that rescales the window.
-    Returns the final graph error (nan if skipped or refused).
+    velocity from the map's own keyframe path, the refusal or clamping of a result that rescales the window, and the
+    oldest velocity's prior from its marginal covariance in the previous BA (``velocity_marginal``, which ``marginals``
+    also turns on for a call without ``anchors``: the full BA after the initialisation). Returns the final graph error
+    (nan if skipped or refused).
     """
     import gtsam
     from gtsam.symbol_shorthand import B, L, V, X
@@ -83,7 +89,11 @@ def inertial_local_bundle_adjustment(m: SlamMap, state: InertialState, K: np.nda
     graph.add(gtsam.PriorFactorPose3(X(ids[0]), gtsam.Pose3(kfs[0].T_wc @ T_cb), gtsam.noiseModel.Isotropic.Sigma(6, 1e-6)))
     anc = anchors if anchors is not None else InertialWindowConfig()
     v_map = map_velocity(m.keyframes, kfs[0], anc.velocity_span_s) if anc.velocity_span_s > 0 else None
-    if v_map is None:
+    keep_cov = marginals or anc.velocity_marginal
+    if v_map is None and anc.velocity_marginal and ids[0] in state.velocity_cov:
+        graph.add(gtsam.PriorFactorVector(V(ids[0]), values.atVector(V(ids[0])),
+                                          carried_velocity_noise(state.velocity_cov[ids[0]], anc, velocity_prior_sigma)))
+    elif v_map is None:
         graph.add(gtsam.PriorFactorVector(V(ids[0]), values.atVector(V(ids[0])), gtsam.noiseModel.Isotropic.Sigma(3, velocity_prior_sigma)))
     else:  # InertialWindowConfig.velocity_span_s: the velocity the map's own keyframe path has there
         graph.add(gtsam.PriorFactorVector(V(ids[0]), v_map, gtsam.noiseModel.Isotropic.Sigma(3, anc.velocity_sigma or velocity_prior_sigma)))
@@ -139,6 +149,8 @@ def inertial_local_bundle_adjustment(m: SlamMap, state: InertialState, K: np.nda
             state.velocities[kf.id] = f * state.velocities[kf.id]
         for pid in pts:
             m.points[pid].xyz = c0 + f * (m.points[pid].xyz - c0)
+    if keep_cov:
+        store_velocity_covariances(graph, result, ids, state, f)
     b = result.atConstantBias(B(0))
     state.bias_acc, state.bias_gyro = np.asarray(b.accelerometer()), np.asarray(b.gyroscope())
     return float(graph.error(result))

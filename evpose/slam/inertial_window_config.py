@@ -89,6 +89,27 @@ class InertialWindowConfig:
     Without the oracle (tag iv2 against main's rm33), indoor 0-61: 16.23 -> 16.52 % (+0.29 +- 0.23, 29 better, 26
     worse), post-init truth m/unit median 1.45 -> 1.35 (|log| 0.37 -> 0.31, 14 -> 17 of 53 within 0.8-1.25), RPE 62/62;
     landing 0-23: 1.04 -> 1.09 % (+0.06 +- 0.04, median change +0.02, 10 better), 24/24."""
+    velocity_marginal: bool = False
+    """The prior on the velocity of the window's oldest keyframe takes that velocity's marginal covariance in the
+    inertial BA that last held it (the full BA after the initialisation for the first window) instead of the isotropic
+    ``InertialConfig.ba_velocity_prior_sigma``, which stays its upper bound (:mod:`evpose.slam.velocity_marginal`, where
+    session 41's diagnosis is). The carried sigmas stay 0.004-0.03 m/s over a run (indoor seed 2). Off: it holds the
+    velocity the initialisation hands over, right or wrong. Session 41 (ba41, /tmp/s41/ba41: run.py + queue.sh,
+    pair.py, post.py; E-I-C2 paired against main, ATE without scale correction): indoor 0-14 (the tuning
+    seeds recorded in time) 16.52 -> 16.89 % (+0.37 +- 1.09, 4 better, 9 worse, 2 not initialised; seeds 2 / 11 / 14
+    13.3 / 17.0 / 16.7 -> 4.5 / 12.4 / 10.4, but 3 / 4 / 6 / 12 19.9 / 16.0 / 16.5 / 12.8 -> 22.2 / 19.7 / 20.0 / 20.3),
+    14 of 15 within both RPE targets (seed 11 0.0102 m/m); held-out 20-23: 15.61 -> 12.68 % (-2.93 +- 2.02, 2 better, 2
+    not initialised), 4 of 4; landing 0-13: 0.86 -> 0.69 % (-0.18 +- 0.07, 9 better, 5 worse), 14 of 14 (worst 0.0032
+    m/m, 0.0023 deg/m); tracked unchanged. The runs' part after 1.5 s (post.py, truth m per map unit): indoor median
+    1.33 -> 1.82, within 0.8-1.25 6 -> 4 of 19 (seeds 1 / 3 / 4: 1.6 / 2.0 / 1.7 -> 4.2 / 6.0 / 7.4, the
+    initialisation's scale held); landing 0.97-1.04 both. Tracking CPU per MCI mean 13.9 -> 13.2 ms indoors, 23.8 ->
+    24.5 landing (p99 median +8-10 ms; loaded machine). The first candidate once the initialisation's scale is right
+    (with an oracle-scaled init, vi40's fixed 0.05 m/s prior took seed 2 15.3 -> 3.9 %)."""
+    velocity_marginal_inflation: float = field(default=1.0, metadata={"min": 1.0, "max": 100.0, "step": 0.5, "unit": "ratio"})
+    """Factor on that marginal covariance (the next window re-uses some of the observations behind it; only 1 was
+    measured), ratio."""
+    velocity_marginal_min_sigma: float = field(default=0.0, metadata={"min": 0.0, "max": 5.0, "step": 0.005, "unit": "m/s"})
+    """Floor added to that prior's variance in every direction, as a sigma (only 0 was measured), m/s."""
     clamp_scale: bool = False
     """With ``max_scale_change``: instead of refusing the result, keep it rescaled about the window's fixed first
     camera (poses, points, velocities) so its scale changes by exactly that bound."""

@@ -39,8 +39,11 @@ def refine_map_scale(m: SlamMap, K: np.ndarray, imu: ImuSamples, T_cam_imu: np.n
     # Velocities live in the map frame and follow the similarity; the alignment's own estimates replace those it solved.
     st.velocities = {k: res.scale * (res.R_align @ v) for k, v in st.velocities.items()}
     st.velocities.update({kfs[k].id: v for k, v in zip(res.used, res.velocities)})
+    # InertialWindowConfig.velocity_marginal: the carried covariances follow the similarity too (the BA below renews them).
+    st.velocity_cov = {k: res.scale**2 * (res.R_align @ c @ res.R_align.T) for k, c in st.velocity_cov.items()}
     if ic.inertial_ba:
         inertial_local_bundle_adjustment(m, st, K, imu, T_cam_imu, time_offset_us, len(kfs), ba_iterations, ba_huber_px,
                                          ic.acc_noise, ic.gyro_noise, ic.acc_bias_sigma, ic.gyro_bias_sigma, ic.velocity_from_imu,
-                                         velocity_prior_sigma=ic.ba_velocity_prior_sigma, min_span_s=ic.ba_min_span_s, span_keyframes=ic.ba_span_keyframes)
+                                         velocity_prior_sigma=ic.ba_velocity_prior_sigma, min_span_s=ic.ba_min_span_s, span_keyframes=ic.ba_span_keyframes,
+                                         marginals=ic.ba_window.velocity_marginal)
     return res

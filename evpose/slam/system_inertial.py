@@ -59,7 +59,8 @@ class InertialMaps:
                 inertial_local_bundle_adjustment(m, m.inertial, self.K, self.imu, self.calib.T_cam_imu, self.calib.time_offset_us,
                                                  len(m.keyframes), tc.ba_iterations, tc.ba_huber_px, ic.acc_noise, ic.gyro_noise,
                                                  ic.acc_bias_sigma, ic.gyro_bias_sigma, ic.velocity_from_imu,
-                                             velocity_prior_sigma=ic.ba_velocity_prior_sigma, min_span_s=ic.ba_min_span_s, span_keyframes=ic.ba_span_keyframes)
+                                             velocity_prior_sigma=ic.ba_velocity_prior_sigma, min_span_s=ic.ba_min_span_s, span_keyframes=ic.ba_span_keyframes,
+                                                 marginals=ic.ba_window.velocity_marginal)
                 if before is not None:
                     carry_relative_scale(m, before)
             self._path_velocities(m)
