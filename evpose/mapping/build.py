@@ -189,6 +189,10 @@ class MapBuildConfig:
     """As albedo_axis_snap_deg, but only for straight brightness edges along the rim of a proud panel (albedo_panel_rims), degrees; 0 = free tilt. A door or picture is square to its wall, while the landing's painted 'H' (one layer) keeps its free tilt, which tracks better there. Measured 0 -> 12 on seven indoor clouds (with albedo_panel_gap_m 0.3): recall 87.0 -> 90.2 %, recall_faces 89.0 -> 91.3 %, precision 95.5 -> 96.1 %; landing unchanged. The outline direction is the region's crease lines' (:func:`evpose.mapping.adjacency.crease_axes`): the traced outline's own direction is up to 1.3 deg off on the walls (1.4 cm along a 2 m door), with it four-cloud indoor recall was 2.2 points lower."""
     albedo_panel_gap_m: float = field(default=0.3, metadata={"min": 0.0, "max": 2.0, "step": 0.01, "unit": "m"})
     """A placed panel rim (albedo_panel_rims) that stops at most this short of a square rim's line is continued to their corner where the panel's points still border it (Canny loses stretches near a panel's corners), metres; 0 = off. Measured 0 -> 0.3 on seven indoor clouds: recall 89.9 -> 90.2 %, recall_faces 91.1 -> 91.3 %, precision 96.2 -> 96.1 % (0.2 and 0.4 alike); landing unchanged."""
+    albedo_corner_reach_m: float = field(default=0.0, metadata={"min": 0.0, "max": 1.0, "step": 0.01, "unit": "m"})
+    """Where two straight brightness edges of one traced chain meet at a corner, continue both fitted lines to their crossing if it lies within this distance of each, dropping the rounded curve Canny traced between them (:mod:`evpose.mapping.albedo_corners`), metres; 0 = off."""
+    albedo_marker_snap_deg: float = field(default=0.0, metadata={"min": 0.0, "max": 45.0, "step": 0.5, "unit": "deg"})
+    """Fit a region's straight brightness edges freely first, take their common direction up to quarter turns (length-weighted) as the region's marker axis (:mod:`evpose.mapping.marker_axis`), then fit the edges within this angle of square to it exactly square, degrees; 0 = off (albedo_axis_snap_deg's outline direction applies)."""
     albedo_mid_depth: bool = True
     """Put a brightness edge with two layers across it (a panel proud of a wall, its wall sampled behind it) at the step's mid-depth instead of in the region's plane."""
     albedo_mid_radius: float = field(default=5.0, metadata={"min": 1.0, "max": 20.0, "step": 0.5, "unit": "spacings"})
@@ -444,6 +448,7 @@ def build_contour_map(
             axis_angles=axis_angles, axis_snap_deg=cfg.albedo_axis_snap_deg,
             plane_normals=plane_n if cfg.albedo_panel_rims else None, layer_m=cfg.albedo_layer_m,
             panel_snap_deg=cfg.albedo_panel_snap_deg, panel_gap=cfg.albedo_panel_gap_m,
+            corner_reach=cfg.albedo_corner_reach_m, marker_snap_deg=cfg.albedo_marker_snap_deg,
         )
         if apts.shape[0]:
             if cfg.albedo_mid_depth:
