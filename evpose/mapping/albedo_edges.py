@@ -135,7 +135,8 @@ def albedo_contours(
     both (:func:`albedo_corners.complete_corners`); 0: off. ``marker_snap_deg`` > 0: the region's
     straight edges are first fitted freely, their common direction up to quarter turns taken as the
     region's marker axis (:func:`marker_axis.marker_axis`), and straight edges within this angle of
-    it are then fitted square to it (instead of ``axis_angle``/``axis_snap_deg``); 0: off.
+    it are then fitted square to it (a proud panel's rim keeps ``axis_angle`` and ``panel_snap_deg``;
+    other edges take the marker's axis instead of ``axis_angle``/``axis_snap_deg``); 0: off.
     """
     if fit2d is None:
         fit2d, fit_intensity = own2d, intensity
@@ -200,7 +201,7 @@ def albedo_contours(
     min_pix = max(3, int(math.ceil(min_length / cell)))
     half_across = max(2.5 * spacing, 1.2 * sigma)
     half_along = max(3.0 * spacing, 1.5 * sigma)
-    def trace(axis_angle, axis_snap_deg, lines_out=None):
+    def trace(marker_angle, lines_out=None):
         pts_out, nrm_out, con_out = [], [], []
         for c in range(starts.size - 1):
             a, b = starts[c], starts[c + 1]
@@ -246,7 +247,8 @@ def albedo_contours(
                                            min_points=max(8, int(round(4 * spacing / contour_spacing))),
                                            half_across=half_across, width=0.5 * spacing,
                                            axis_angle=axis_angle, axis_snap_deg=axis_snap_deg, fit_layer=fit_layer,
-                                           panel_snap_deg=panel_snap_deg)
+                                           panel_snap_deg=panel_snap_deg, marker_angle=marker_angle,
+                                           marker_snap_deg=marker_snap_deg)
                 fitted |= on_line
             chain_lines = fitted_lines(p, nrm, on_line) if lines_out is not None else []
             if corner_reach > 0:
@@ -275,11 +277,11 @@ def albedo_contours(
         # A marker's straight edges share one direction up to quarter turns: found from every
         # freely fitted line of the region at once, then each line is fitted square to it.
         found: list = []
-        trace(None, 0.0, found)
+        trace(None, found)
         marker = marker_axis(found)
-        if marker is not None:
-            axis_angle, axis_snap_deg = marker, marker_snap_deg
-    pts_out, nrm_out, con_out = trace(axis_angle, axis_snap_deg)
+    else:
+        marker = None
+    pts_out, nrm_out, con_out = trace(marker)
     if not pts_out:
         return empty
     p, nrm, con = np.concatenate(pts_out), np.concatenate(nrm_out), np.concatenate(con_out)
