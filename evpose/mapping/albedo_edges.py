@@ -36,7 +36,9 @@ import cv2
 import numpy as np
 from scipy.spatial import cKDTree
 
+from evpose.mapping.albedo_corners import complete_corners
 from evpose.mapping.edge_chains import _trace_chains
+from evpose.mapping.marker_axis import fitted_lines, marker_axis
 from evpose.mapping.panel_rims import join_panel_rims
 from evpose.mapping.step_fit import fit_step_lines, local_steps, side_contrast, step_fit_points
 
@@ -45,6 +47,8 @@ _MAX_CELLS = 16_000_000
 _NOISE_SAMPLES = 100_000
 """Most points the intensity-noise estimate of one region queries (an even stride beyond)."""
 """Largest raster per region; bigger regions get a coarser cell (bounds memory and time)."""
+CORNER_MIN_ANGLE_DEG = 45.0
+"""Two fitted lines of a chain meet at a corner (:func:`albedo_corners.complete_corners`) if their normals differ by at least this, degrees."""
 
 
 @dataclass
@@ -105,6 +109,8 @@ def albedo_contours(
     fit_layer: np.ndarray | None = None,
     panel_snap_deg: float = 0.0,
     panel_gap: float = 0.0,
+    corner_reach: float = 0.0,
+    marker_snap_deg: float = 0.0,
 ) -> AlbedoContour:
     """Brightness-edge contour of one region (see the module docstring).
 
@@ -124,7 +130,13 @@ def albedo_contours(
     proud panel's rim are placed by where the panel's points end, and squared to the outline
     within ``panel_snap_deg`` (:func:`step_fit.fit_step_lines`), the pieces of one rim placed
     together and continued across gaps up to ``panel_gap`` m to their corners
-    (:func:`panel_rims.join_panel_rims`).
+    (:func:`panel_rims.join_panel_rims`). ``corner_reach`` > 0: consecutive fitted lines of a chain
+    meeting at a corner are continued to their crossing when it lies within this many metres of
+    both (:func:`albedo_corners.complete_corners`); 0: off. ``marker_snap_deg`` > 0: the region's
+    straight edges are first fitted freely, their common direction up to quarter turns taken as the
+    region's marker axis (:func:`marker_axis.marker_axis`), and straight edges within this angle of
+    it are then fitted square to it (a proud panel's rim keeps ``axis_angle`` and ``panel_snap_deg``;
+    other edges take the marker's axis instead of ``axis_angle``/``axis_snap_deg``); 0: off.
     """
     if fit2d is None:
         fit2d, fit_intensity = own2d, intensity
@@ -189,66 +201,87 @@ def albedo_contours(
     min_pix = max(3, int(math.ceil(min_length / cell)))
     half_across = max(2.5 * spacing, 1.2 * sigma)
     half_along = max(3.0 * spacing, 1.5 * sigma)
-    pts_out, nrm_out, con_out = [], [], []
-    for c in range(starts.size - 1):
-        a, b = starts[c], starts[c + 1]
-        if b - a < min_pix:
-            continue
-        chain = (np.stack([cols[a:b], rows[a:b]], axis=1).astype(np.float64) - margin) * cell + lo
-        chain = _smooth_open(chain, 2)
-        p = _resample_open(chain, contour_spacing)
-        if p.shape[0] < 3:
-            continue
-        span = max(1, int(round(cell / contour_spacing)))
-        idx = np.arange(p.shape[0])
-        tangent = p[np.minimum(idx + span, idx[-1])] - p[np.maximum(idx - span, 0)]
-        tangent /= np.maximum(np.linalg.norm(tangent, axis=1, keepdims=True), 1e-12)
-        normal = np.stack([-tangent[:, 1], tangent[:, 0]], axis=1)
-        pix = np.clip(np.floor((p - lo) / cell + 0.5).astype(np.int64) + margin, 0, [w - 1, h - 1])
-        g = np.stack([gx[pix[:, 1], pix[:, 0]], gy[pix[:, 1], pix[:, 0]]], axis=1)
-        flip = np.einsum("md,md->m", normal, g) < 0
-        normal[flip] *= -1.0
-        k = int(min(fit2d.shape[0], max(16, 4 * math.ceil(half_across * half_along / (spacing * spacing)))))
-        dist, nb = own_tree.query(p, k=k, distance_upper_bound=math.hypot(half_across, half_along))
-        nb = np.asarray(nb, np.int64).reshape(p.shape[0], -1)
-        n_nb = np.isfinite(np.asarray(dist).reshape(p.shape[0], -1)).sum(axis=1)
-        offset, step = step_fit_points(p, normal, tangent, fit2d, fit_intensity, nb, n_nb, half_across, half_along, 2)
-        # The fitted step must rise along the normal (bright side where the gradient said).
-        offset[~(step > 0)] = np.nan
-        step = np.where(step > 0, step, np.nan)
-        smooth = max(2, int(round(1.5 * spacing / contour_spacing)))
-        offset = _running_nanmedian(offset, smooth)
-        good = np.isfinite(offset)
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", RuntimeWarning)
-            chain_step = float(np.nanmedian(step)) if np.isfinite(step).any() else 0.0
-        if good.sum() < 3 or not chain_step >= high:
-            continue
-        p = p[good] + np.clip(offset[good], -half_across, half_across)[:, None] * normal[good]
-        nrm = normal[good]
-        # Man-made albedo edges are mostly straight: fit lines to straight runs (averages the scatter).
-        # Twice: runs split by the raw chain's jaggedness are collinear after the first fit and merge.
-        for _ in range(2):
-            p, nrm, _ = fit_step_lines(p, nrm, fit2d, fit_intensity, own_tree, eps=2.0 * spacing,
-                                       min_points=max(8, int(round(4 * spacing / contour_spacing))),
-                                       half_across=half_across, width=0.5 * spacing,
-                                       axis_angle=axis_angle, axis_snap_deg=axis_snap_deg, fit_layer=fit_layer,
-                                       panel_snap_deg=panel_snap_deg)
-        # Keep only the stretches that still separate two brightness levels (a chain can run
-        # from a real edge into a patch of noise or of two mixed layers).
-        # (A window of ~15 point spacings along the chain holds ~8 points on either side.)
-        local = local_steps(p, nrm, fit2d, fit_intensity, own_tree, half_across, 0.2 * spacing,
-                            max(2, int(round(7.0 * spacing / contour_spacing))))
-        keep = ~(local < min_step)  # NaN (too few points to tell) keeps the point
-        if keep.sum() < 3:
-            continue
-        p, nrm = p[keep], nrm[keep]
-        step_all, t_stat = side_contrast(p, nrm, fit2d, fit_intensity, own_tree, half_across, 0.2 * spacing)
-        if not (step_all >= min_step and t_stat >= min_t):
-            continue
-        pts_out.append(p)
-        nrm_out.append(nrm)
-        con_out.append(np.full(p.shape[0], step_all))
+    def trace(marker_angle, lines_out=None):
+        pts_out, nrm_out, con_out = [], [], []
+        for c in range(starts.size - 1):
+            a, b = starts[c], starts[c + 1]
+            if b - a < min_pix:
+                continue
+            chain = (np.stack([cols[a:b], rows[a:b]], axis=1).astype(np.float64) - margin) * cell + lo
+            chain = _smooth_open(chain, 2)
+            p = _resample_open(chain, contour_spacing)
+            if p.shape[0] < 3:
+                continue
+            span = max(1, int(round(cell / contour_spacing)))
+            idx = np.arange(p.shape[0])
+            tangent = p[np.minimum(idx + span, idx[-1])] - p[np.maximum(idx - span, 0)]
+            tangent /= np.maximum(np.linalg.norm(tangent, axis=1, keepdims=True), 1e-12)
+            normal = np.stack([-tangent[:, 1], tangent[:, 0]], axis=1)
+            pix = np.clip(np.floor((p - lo) / cell + 0.5).astype(np.int64) + margin, 0, [w - 1, h - 1])
+            g = np.stack([gx[pix[:, 1], pix[:, 0]], gy[pix[:, 1], pix[:, 0]]], axis=1)
+            flip = np.einsum("md,md->m", normal, g) < 0
+            normal[flip] *= -1.0
+            k = int(min(fit2d.shape[0], max(16, 4 * math.ceil(half_across * half_along / (spacing * spacing)))))
+            dist, nb = own_tree.query(p, k=k, distance_upper_bound=math.hypot(half_across, half_along))
+            nb = np.asarray(nb, np.int64).reshape(p.shape[0], -1)
+            n_nb = np.isfinite(np.asarray(dist).reshape(p.shape[0], -1)).sum(axis=1)
+            offset, step = step_fit_points(p, normal, tangent, fit2d, fit_intensity, nb, n_nb, half_across, half_along, 2)
+            # The fitted step must rise along the normal (bright side where the gradient said).
+            offset[~(step > 0)] = np.nan
+            step = np.where(step > 0, step, np.nan)
+            smooth = max(2, int(round(1.5 * spacing / contour_spacing)))
+            offset = _running_nanmedian(offset, smooth)
+            good = np.isfinite(offset)
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", RuntimeWarning)
+                chain_step = float(np.nanmedian(step)) if np.isfinite(step).any() else 0.0
+            if good.sum() < 3 or not chain_step >= high:
+                continue
+            p = p[good] + np.clip(offset[good], -half_across, half_across)[:, None] * normal[good]
+            nrm = normal[good]
+            # Man-made albedo edges are mostly straight: fit lines to straight runs (averages the scatter).
+            # Twice: runs split by the raw chain's jaggedness are collinear after the first fit and merge.
+            fitted = np.zeros(p.shape[0], bool)
+            for _ in range(2):
+                p, nrm, on_line = fit_step_lines(p, nrm, fit2d, fit_intensity, own_tree, eps=2.0 * spacing,
+                                           min_points=max(8, int(round(4 * spacing / contour_spacing))),
+                                           half_across=half_across, width=0.5 * spacing,
+                                           axis_angle=axis_angle, axis_snap_deg=axis_snap_deg, fit_layer=fit_layer,
+                                           panel_snap_deg=panel_snap_deg, marker_angle=marker_angle,
+                                           marker_snap_deg=marker_snap_deg)
+                fitted |= on_line
+            chain_lines = fitted_lines(p, nrm, on_line) if lines_out is not None else []
+            if corner_reach > 0:
+                p, nrm = complete_corners(p, nrm, fitted, contour_spacing, CORNER_MIN_ANGLE_DEG, corner_reach,
+                                          max(8, int(round(4 * spacing / contour_spacing))))
+            # Keep only the stretches that still separate two brightness levels (a chain can run
+            # from a real edge into a patch of noise or of two mixed layers).
+            # (A window of ~15 point spacings along the chain holds ~8 points on either side.)
+            local = local_steps(p, nrm, fit2d, fit_intensity, own_tree, half_across, 0.2 * spacing,
+                                max(2, int(round(7.0 * spacing / contour_spacing))))
+            keep = ~(local < min_step)  # NaN (too few points to tell) keeps the point
+            if keep.sum() < 3:
+                continue
+            p, nrm = p[keep], nrm[keep]
+            step_all, t_stat = side_contrast(p, nrm, fit2d, fit_intensity, own_tree, half_across, 0.2 * spacing)
+            if not (step_all >= min_step and t_stat >= min_t):
+                continue
+            if lines_out is not None:
+                lines_out.extend(chain_lines)
+            pts_out.append(p)
+            nrm_out.append(nrm)
+            con_out.append(np.full(p.shape[0], step_all))
+        return pts_out, nrm_out, con_out
+
+    if marker_snap_deg > 0:
+        # A marker's straight edges share one direction up to quarter turns: found from every
+        # freely fitted line of the region at once, then each line is fitted square to it.
+        found: list = []
+        trace(None, found)
+        marker = marker_axis(found)
+    else:
+        marker = None
+    pts_out, nrm_out, con_out = trace(marker)
     if not pts_out:
         return empty
     p, nrm, con = np.concatenate(pts_out), np.concatenate(nrm_out), np.concatenate(con_out)
@@ -279,6 +312,8 @@ def region_albedo_edges(
     layer_m: float = 0.0,
     panel_snap_deg: float = 0.0,
     panel_gap: float = 0.0,
+    corner_reach: float = 0.0,
+    marker_snap_deg: float = 0.0,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Brightness-edge contour points of every region, in the world.
 
@@ -293,7 +328,7 @@ def region_albedo_edges(
     its front layer, and edges along the rim of such a layer are placed by where its points
     end and squared to the outline within ``panel_snap_deg`` (:func:`step_fit.fit_step_lines`),
     and continued across gaps up to ``panel_gap`` m to their corners (:func:`panel_rims.join_panel_rims`);
-    None or 0: off. Returns points (M, 3), unit
+    None or 0: off. ``corner_reach``, ``marker_snap_deg``: see :func:`albedo_contours`. Returns points (M, 3), unit
     edge normals (M, 3) pointing dark -> bright, region ids (M,) int32.
     """
     lo_i, hi_i = float(np.min(intensity)), float(np.max(intensity))
@@ -321,7 +356,8 @@ def region_albedo_edges(
             ac = albedo_contours(own2d, vals, spacing, sigma, high, low, min_length, contour_spacing,
                                  all2d, inten[all_idx], min_t,
                                  None if axis_angles is None or not np.isfinite(axis_angles[r]) else float(axis_angles[r]),
-                                 axis_snap_deg, layer, panel_snap_deg, panel_gap)
+                                 axis_snap_deg, layer, panel_snap_deg, panel_gap, corner_reach,
+                                 marker_snap_deg)
             if ac.points2d.shape[0] == 0:
                 continue
             out_p.append(c + ac.points2d[:, :1] * ax[0] + ac.points2d[:, 1:] * ax[1])

@@ -139,7 +139,8 @@ def fit_step_lines(p: np.ndarray, normals: np.ndarray, fit2d: np.ndarray, fit_in
                    eps: float, min_points: int, half_across: float, width: float,
                    min_band_points: int = 8, max_tilt_deg: float = 12.0, n_tilts: int = 25,
                    axis_angle: float | None = None, axis_snap_deg: float = 0.0,
-                   fit_layer: np.ndarray | None = None, panel_snap_deg: float = 0.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                   fit_layer: np.ndarray | None = None, panel_snap_deg: float = 0.0,
+                   marker_angle: float | None = None, marker_snap_deg: float = 0.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Replace straight runs of an open edge chain by the step line fitted to all raw points along them.
 
     Per-point step fits on a sparse, mixed scan scatter by centimetres; a straight painted
@@ -162,6 +163,9 @@ def fit_step_lines(p: np.ndarray, normals: np.ndarray, fit2d: np.ndarray, fit_in
     panel's own points end (:func:`panel_rims.panel_edge_shift`), not by the step fit, and squared to
     ``axis_angle`` within ``panel_snap_deg`` (a door or picture is square to its wall; a
     painted marker, on one layer, keeps ``axis_snap_deg``). None: off.
+    ``marker_angle`` (radians, modulo 90 degrees): the direction the region's painted marker is
+    square to (:func:`marker_axis.marker_axis`); runs that are no proud panel's rim and lie within
+    ``marker_snap_deg`` of it or its perpendicular are fitted at exactly that direction. None: off.
     Returns the points, their normals and a mask (M,) of the points on a fitted line.
     """
     from evpose.mapping.contours import _dp_indices
@@ -205,12 +209,14 @@ def fit_step_lines(p: np.ndarray, normals: np.ndarray, fit2d: np.ndarray, fit_in
         if vals.size < min_band_points:
             continue
         # Decided before the tilt search, about the run's own line: only a panel's rim is squared.
-        snap_deg = axis_snap_deg
+        snap_deg, angle = axis_snap_deg, axis_angle
         if lay is not None and panel_snap_deg > axis_snap_deg and panel_side(rel @ n0, lay) != 0.0:
             snap_deg = panel_snap_deg
+        elif marker_angle is not None and marker_snap_deg > 0:
+            snap_deg, angle = marker_snap_deg, marker_angle
         run_tilts, fine_turns, margin_turn = tilts, np.radians(np.arange(-1.5, 1.5001, 0.1)), 8.0
-        if axis_angle is not None and snap_deg > 0:
-            to_axis = (axis_angle - math.atan2(n0[1], n0[0]) + 0.25 * math.pi) % (0.5 * math.pi) - 0.25 * math.pi
+        if angle is not None and snap_deg > 0:
+            to_axis = (angle - math.atan2(n0[1], n0[0]) + 0.25 * math.pi) % (0.5 * math.pi) - 0.25 * math.pi
             if abs(to_axis) <= math.radians(snap_deg):
                 run_tilts, fine_turns, margin_turn = np.array([to_axis]), np.zeros(1), 0.0
         # Coarse: a blurred step of the point spacing over all tilts; fine: a sharp step around
