@@ -253,6 +253,15 @@ def _jsonable(obj):
     return obj
 
 
+_FLIGHT_FIELDS = ("heading_deg", "oscillation_phase_deg")
+
+
+def _without_zero(d: dict, keys: tuple[str, ...]) -> dict:
+    """``d`` without the ``keys`` whose value is 0: a recording of a scenario's own flight keeps the metadata, and so
+    the bytes, it had before flights existed (``scripts/make_demo_data.py --check``)."""
+    return {k: v for k, v in d.items() if not (k in keys and not v)}
+
+
 def simulate(config: SimulationConfig) -> SimulationResult:
     """Simulate ``config``: events, IMU, ground truth, calibration, raw cloud and true edges."""
     validate_config(config)
@@ -303,8 +312,8 @@ def simulate(config: SimulationConfig) -> SimulationResult:
         "seconds": float(config.seconds),
         "width": cal.width,
         "height": cal.height,
-        "config": _jsonable(asdict(config)),
-        "effective": _jsonable({"esim": asdict(esim), "noise": asdict(noise), "trajectory": asdict(traj_cfg), "imu": asdict(imu_cfg), "scene_options": asdict(sc.options)}),
+        "config": _jsonable(_without_zero(asdict(config), ("flight",))),
+        "effective": _jsonable({"esim": asdict(esim), "noise": asdict(noise), "trajectory": _without_zero(asdict(traj_cfg), _FLIGHT_FIELDS), "imu": asdict(imu_cfg), "scene_options": asdict(sc.options)}),
     }
     rec = Recording(events=events, imu=imu.samples, ground_truth=gt, calibration=cal, metadata=metadata)
     return SimulationResult(rec, cloud, intensity, scene.edges.copy(), scene.albedo_edges.copy(), scene, traj, imu, stats)

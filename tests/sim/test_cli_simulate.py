@@ -36,6 +36,7 @@ def test_simulate_flight_flies_another_path_of_the_scenario(tmp_path):
         assert run(["simulate", "--scenario", "landing", "--out", str(out), "--seconds", "0.03", "--resolution", "64x48", "--no-cloud", "--flight", str(flight)]) == 0
         paths[flight] = read_recording_h5(out)
     assert paths[4].metadata["config"]["flight"] == 4
+    assert "flight" not in paths[0].metadata["config"]  # the scenario's own flight keeps its old metadata and bytes
     # A 0.03 s flight is a 9 cm spiral: the flights leave the pad's vertical in different directions.
     heading = [np.diff(paths[f].ground_truth.position[[0, -1], :2], axis=0)[0] for f in (0, 4)]
     cos = heading[0] @ heading[1] / np.linalg.norm(heading[0]) / np.linalg.norm(heading[1])
