@@ -304,8 +304,11 @@ class FusionConfig:
     10 better; ARE 0.191 -> 0.151 deg), but the nominal flight's seeds 0-11 4.630 -> 5.919 (+1.29 +- 0.72, 4 of 12;
     seed 4 5.12 -> 13.42 mm); 0.005 flights 1-12 14.187 -> 12.412 (-1.78 +- 0.41, 11 of 12; ARE 0.189 -> 0.165),
     held-out flights 13-16 12.612 -> 12.522 (-0.09 +- 0.55, 2 of 4), nominal seeds 0-11 4.630 -> 5.130 (+0.50 +-
-    0.36, 4 of 12; seed 4 5.12 -> 9.06; ARE 0.057 -> 0.063). It trades the nominal flight for some others: not
-    changed."""
+    0.36, 4 of 12; seed 4 5.12 -> 9.06; ARE 0.057 -> 0.063). The lead, 0.005 on the whole sets
+    (``/tmp/s41/lead/trk/runc.sh gb5 CFG CASE...``, pairs against ``out/main``): 240x180 held-out flights 13-24 14.906 ->
+    13.811 mm (-1.10 +- 0.43, 9 of 12), 346x260 flights 1-12 and 15 12.956 -> 11.722 (-1.23 +- 0.53, 10 of 13), nominal
+    240x180 seeds 0-23 4.770 -> 5.365 (+0.60 +- 0.22, 6 of 24). It trades the nominal flight for the others: not
+    changed in session 41; the first candidate once tuning moves to the flights."""
     gyro_bias_hold_s: float = field(default=0.0, metadata={"min": 0.0, "max": 10.0, "step": 0.05, "unit": "s"})
     """For this long after each start of the fusion (``initialize``) the gyroscope bias is held at its initial value
     (prior sigma ``gyro_bias_hold_sigma`` instead of ``init_sigma_gyro_bias``), then released: the first state at or
