@@ -8,7 +8,7 @@ import numpy as np
 
 from evpose.fusion.config import FusionConfig
 from evpose.fusion.preintegration import make_preintegration_params
-from evpose.tracker.lapack_calls import eigh
+from evpose.core.lapack_calls import eigh
 
 
 def initial_gyro_bias_sigma(config: FusionConfig) -> float:

@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from evpose.core.contour_map import ContourMap
-from evpose.tracker.lapack_calls import inv
+from evpose.core.lapack_calls import inv
 from evpose.tracker.map_refinement import _NO_GAUGE, _refine_kernel
 from evpose.tracker.registration_kernels import _NO_EXTRA, _NO_TANGENTS, _NO_TWIST
 

@@ -253,7 +253,7 @@ from evpose.tracker.event_registration_kernels import (NO_EVENT, _associate_near
 from evpose.tracker.contrast_leads import PassageCounts
 from evpose.tracker.covered_feet import add_covered_foot_lead, foot_rise
 from evpose.tracker.grazing import crease_points, point_leads
-from evpose.tracker.lapack_calls import inv
+from evpose.core.lapack_calls import inv
 from evpose.tracker.registration import _eigvalsh, _inv, _isotropic_information
 from evpose.tracker.registration_kernels import _lm_step
 

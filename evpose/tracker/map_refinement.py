@@ -32,7 +32,7 @@ import numpy as np
 from evpose.core.contour_map import ContourMap
 from evpose.frontend.distance_field import _bilinear_weights
 from evpose.tracker.camera_point import camera_point, fill_image_rows
-from evpose.tracker.lapack_calls import inv
+from evpose.core.lapack_calls import inv
 from evpose.tracker.registration_kernels import _NO_EXTRA, _NO_TANGENTS, _NO_TWIST, _floor_shift
 
 

@@ -27,7 +27,7 @@ import gtsam
 import numba as nb
 import numpy as np
 
-from evpose.tracker.lapack_calls import eigh as _eigh, inv as _inv, solve as _solve
+from evpose.core.lapack_calls import eigh as _eigh, inv as _inv, solve as _solve
 # The settings live in their own module; re-exported here, where they were (imports and docs name them here).
 from evpose.tracker.motion_filter_config import MotionFilterConfig, VelocityFrame  # noqa: F401
 

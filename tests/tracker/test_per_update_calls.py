@@ -5,7 +5,7 @@ import evpose  # noqa: F401  (BLAS pin before numpy)
 import numpy as np
 import pytest
 
-from evpose.tracker import lapack_calls
+from evpose.core import lapack_calls
 from evpose.tracker.crowding import crowded_points, uncrowded
 from evpose.tracker.registration import polarity_trail, strided_subset, subsample_indices
 from evpose.tracker.visible_map import VisibleMap, VisibleMapConfig, visible_points
