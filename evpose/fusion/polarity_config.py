@@ -241,4 +241,10 @@ class PolarityFilterConfig:
     Session 17 (346x260 seeds 0-3, mean ATE, 4 -> 3 px): plain landing ``stpe+filter`` 12.00 -> 13.40, ``full`` 6.38 ->
     6.70 mm; textured 23.84 -> 22.83 and 9.12 -> 8.00 mm; events removed 10.5 -> 15.6 % (plain), 63.5 -> 66.6 %
     (textured); ``T_align`` composition -0.14 / -0.16 ms CPU, but ``stpe+filter``'s registration latency (prediction,
-    composition, field, registration) stays 2.07-2.20x / 1.83x ``stpe``'s (plain / textured), pixels."""
+    composition, field, registration) stays 2.07-2.20x / 1.83x ``stpe``'s (plain / textured). Session 42 (lat42,
+    ``/tmp/s42/lat42/``), 3.5 as a speed lever: CPU per update of ``full`` at 346x260 (seed 0, paired in one process,
+    ``pairstep.py``, load ~13) -0.098 +- 0.022 ms mean (-0.056 median, ~2 %); ATE (CLI, 240x180 2 s, paired against
+    main's defaults): nominal seeds 0-23 4.770 -> 4.773 mm (+0.003 +- 0.041, 12 of 24 better), flights 1-12 14.187 ->
+    14.136 (-0.051 +- 0.123, 6 of 12), flights 13-24 14.906 -> 15.260 (+0.354 +- 0.200, 1 of 12); with
+    ``registration.max_iterations`` 2 too (-0.173 +- 0.019 ms mean): 4.740 (-0.029 +- 0.048, 15 of 24), 14.162 (-0.025
+    +- 0.159, 5 of 12), 15.348 (+0.442 +- 0.371, 4 of 12): not kept, pixels."""

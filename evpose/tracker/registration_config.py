@@ -105,7 +105,12 @@ class RegistrationConfig:
     gave 8.35 / 9.36 mm against 7.77 / 9.40 at 346x260 / 240x180, 0.1-0.15 ms less registration CPU: not kept.
     Session 13, ``full`` with the event registration after it, mean ATE of seeds 0-3 / 4-7: 1 gave 6.43 / 5.86 mm at
     346x260 and 7.40 / 8.97 at 240x180, 2 gave 6.38 / 5.89 and 7.49 / 8.56, against 6.38 / 5.91 and 7.25 / 8.49 mm
-    (mean iterations per update 2.4 / 2.7 -> 1.6 with 2): not kept.)"""
+    (mean iterations per update 2.4 / 2.7 -> 1.6 with 2): not kept. Session 42 (lat42, ``/tmp/s42/lat42/``), as a
+    speed lever: CPU per update of ``full`` at 346x260 (seed 0, both configurations stepped alternately in one process,
+    ``pairstep.py``, load ~13) 2: -0.167 +- 0.019 ms mean (-0.12 median, ~4 %), 1: -0.226 +- 0.056; ATE with 2 (CLI,
+    240x180 2 s, paired against main's defaults, ``acc/run.sh``, ``acc/cmp.py``): nominal seeds 0-23 4.770 -> 4.795 mm
+    (+0.026 +- 0.040, 11 of 24 better), flights 1-12 14.187 -> 14.153 (-0.034 +- 0.149, 6 of 12), flights 13-24
+    14.906 -> 15.138 (+0.232 +- 0.098, 2 of 12): not kept.)"""
     robust_loss: RobustLoss = RobustLoss.HUBER
     """Robust loss on the residual."""
     robust_scale: float = field(default=0.3, metadata={"min": 0.01, "max": 2.0, "step": 0.01, "unit": "TDF"})
