@@ -22,6 +22,13 @@ class FeatureConfig:
     had an eigenvalue ratio of at least 0.1 in the keyframe MCI: 3.79 % (0 of 12); only edge tracks that moved across
     their edge (|cos| to the gradient 0.3 / 0.5): 2.98 / 4.61 % (2 of 12 each). New points within 2 / 3 times the
     keyframe's median depth: 3.36 / 2.86 % (1 / 4 of 12)."""
+    blob_max_quality: float = field(default=0.0, metadata={"min": 0.0, "max": 0.5, "step": 0.001, "unit": "ratio"})
+    """FAST corners whose Shi-Tomasi score is below this share of the image's best (as ``min_eigen_quality``) and whose
+    structure tensor over the ``klt_window_px`` square is near isotropic (eigenvalue ratio above ``blob_min_ratio``)
+    are not detected: weak dots, not corners or edges (0: no test), ratio (:mod:`evpose.slam.edge_slide` notes: such
+    tracks drift most)."""
+    blob_min_ratio: float = field(default=0.4, metadata={"min": 0.0, "max": 1.0, "step": 0.05, "unit": "ratio"})
+    """``blob_max_quality``: smaller-over-larger eigenvalue ratio above which a weak corner counts as a dot, ratio."""
     grid_cols: int = field(default=8, metadata={"min": 1, "max": 32, "step": 1, "unit": "cells"})
     """Bucketing grid columns, cells."""
     grid_rows: int = field(default=6, metadata={"min": 1, "max": 32, "step": 1, "unit": "cells"})
@@ -149,6 +156,11 @@ class FeatureConfig:
     """KLT pyramid levels above the base image, levels. Session 27 (``/tmp/s27/turn27/kltdiag.py``): in the indoor rooms'
     turns the true MCI-to-MCI step is a median 2.8 px (90th percentile 4.2) and 4 levels keep no more tracks (0.51 ->
     0.50 of all per step, map-point tracks 0.66 -> 0.64; module notes of :mod:`evpose.slam.event_coasting`)."""
+    klt_min_eig: float = field(default=1e-4, metadata={"min": 0.0, "max": 0.1, "step": 1e-4, "unit": "(grey levels/px)^2"})
+    """OpenCV KLT's ``minEigThreshold``: a track whose window's spatial-gradient matrix has a smaller minimum eigenvalue
+    (divided by the window's pixel count, on OpenCV's scaled derivatives) is lost at the base level; 1e-4 is OpenCV's
+    default, (grey levels/px)^2 as OpenCV scales them. Applies to every KLT call through
+    :func:`evpose.slam.features.track_features` (the fine grid's too)."""
     klt_max_bidir_error_px: float = field(default=1.0, metadata={"min": 0.1, "max": 5.0, "step": 0.1, "unit": "px"})
     """Tracks whose forward-backward KLT error exceeds this are dropped, pixels. Landing event-only seeds 0-11, 60 runs
     (see ``MciConfig.reference_fraction``; 1.0 there): 0.5 -> mean ATE 3.34 -> 3.38 %, within 2 % 9 -> 3 of 60. Session 24
@@ -267,6 +279,16 @@ class FeatureConfig:
     Session 41, 8 px: landing seeds 0 / 1 1.09 / 1.97 -> 7.80 / 3.61 %; indoor 0-9 1.96 -> 1.53 % (6 better) at less
     time tracked (least 87.3 -> 78.1 %), held-out indoor 10-12 2.15 -> 1.59 %: more coasting, not better tracks
     (module notes of :mod:`evpose.slam.birth_anchor`). So off."""
+    klt_edge_slide_px: float = field(default=0.0, metadata={"min": 0.0, "max": 30.0, "step": 0.5, "unit": "px"})
+    """A track is ended once the sum over its MCI-to-MCI steps of the step's component along its birth patch's edge
+    direction, minus that of the median step of its ``klt_edge_slide_neighbours`` nearest live tracks, exceeds this
+    (0: off), pixels (:mod:`evpose.slam.edge_slide`)."""
+    klt_edge_follow_max_ratio: float = field(default=0.0, metadata={"min": 0.0, "max": 1.0, "step": 0.05, "unit": "ratio"})
+    """Tracks born on a patch whose structure tensor (``klt_window_px`` square) has an eigenvalue ratio below this take,
+    along their birth edge direction, the median step of their ``klt_edge_slide_neighbours`` nearest live tracks
+    instead of their own KLT step (0: off), ratio (:mod:`evpose.slam.edge_slide`)."""
+    klt_edge_slide_neighbours: int = field(default=8, metadata={"min": 2, "max": 50, "step": 1, "unit": "tracks"})
+    """``klt_edge_slide_px``: nearest live tracks whose median step a track's step is compared with, tracks."""
     target_tracks: int = field(default=150, metadata={"min": 20, "max": 1000, "step": 10, "unit": "tracks"})
     """New features are detected on an MCI when fewer tracks survive, tracks. Session 17, indoor event-only seeds
     0-7: 300 -> ATE 7.39 -> 8.02 %, time tracked from the events 44.7 -> 40.2 % (:mod:`evpose.slam.event_coasting`)."""
