@@ -1,17 +1,37 @@
-"""Ending MCI-to-MCI tracks that slide along the edge they were born on (``FeatureConfig.klt_edge_slide_px``, off).
+"""Birth-patch structure tensors, and tracks that slide along the edge they were born on (``FeatureConfig.klt_edge_slide_px``,
+``klt_edge_follow_max_ratio``, ``blob_max_quality``; all off).
 
 Session 41 (pnp41) found a third of the event-only PnP inliers 3-20 px off their birth point's true projection, two
-thirds of them ahead along the image motion. Session 42 (drift42, ``/tmp/s42/drift42/st.py``: the structure tensor of
-the birth MCI over 23 / 11 px squares at the birth pixel, against each inlier's error from its birth point's true
-projection): the drift lies along the edge the track was born on, the aperture problem: the |cos| between a
-drifting track's error (3-20 px) and its birth edge direction is a mean 0.76-0.78 (59-61 % within 30 deg; directions
-uniform in angle give 0.637 and 33 %), 0.87-0.91 for the most edge-like fifth (eigenvalue ratio under 0.05); against
-the current MCI's edge direction only 0.65 on the landing. But the drift is not concentrated on edge-like patches.
+thirds of them ahead along the image motion. Is that the aperture problem? Session 42 (drift42, ``/tmp/s42/drift42``:
+``h.py`` is pnp41's harness also recording the structure tensor of the birth MCI at each new track's birth pixel,
+Sobel gradients summed over 23 and 11 px squares, and the Shi-Tomasi score (blockSize 5) as a share of the image's
+best, the quantity ``min_eigen_quality`` gates; ``st.py`` the tables, ``diag_*.txt`` its output; main's defaults, indoor
+seeds 0-8, landing 0-4, every inlier of every PnP estimate against its birth point's true projection). The DIRECTION is
+the aperture: a drifting inlier's error (3-20 px off) lies along the edge of its birth patch (the structure tensor's
+minor eigenvector), |cos| mean 0.76 on the landing / 0.78 indoors, 59 / 61 % within 30 deg, against 0.637 and 33 % for
+directions uniform in angle (inliers 0.5-3 px off: 0.69 / 0.71); per track (its last inlier observation) 0.79 / 0.76,
+and 0.93-0.95 / 0.89-0.92 for the most edge-like fifth (eigenvalue ratio under 0.02-0.05); against the edge of the
+CURRENT MCI at the track only 0.66 on the landing (0.77 indoors), which is why the current tensor's along-edge sigma of
+``TrackingConfig.ba_edge_along_sigma_px`` could not see it. It is the track's own slide, not its neighbours': the
+error minus the median error of its 8 nearest inliers is still a median 4.6 / 4.8 px (71 / 70 % of drifting inliers
+still over 3 px), and that residual lies along the birth edge as much (0.78 / 0.76). But the drift is NOT concentrated
+on edge-like tracks: per track, the share drifting by quintile of the birth eigenvalue ratio (23 px), landing 0.43 /
+0.51 / 0.35 / 0.40 / 0.62, indoor 0.47 / 0.34 / 0.37 / 0.55 / 0.76 (quintile edges landing 0.015 / 0.061 / 0.12 / 0.37,
+indoor 0.05 / 0.16 / 0.39 / 0.82): the near-isotropic patches drift most, and in no preferred direction (|cos| 0.60-0.61)
+-- a right-angle corner is isotropic too, but those drifting are weak dots: with a Shi-Tomasi share under 0.0118 (the
+lower two thirds) the patches above 0.4 drift 0.67-0.83 of the time, above 0.0118 0.17-0.52. By the Shi-Tomasi share,
+the strongest fifth drifts least (landing 0.28, indoor 0.31-0.33 against 0.44-0.61 for the rest). The drift grows with
+age (Spearman |e| vs age +0.44 landing, +0.34-0.38 indoor; vs eigenvalue ratio -0.07 / +0.15). OpenCV's KLT minimum
+eigenvalue per step (``FeatureConfig.klt_min_eig``, recorded by ``KLTREC=1``): indoor seed 9, 23 px windows, quantiles
+1 / 5 / 10 / 25 / 50 % 0.00012 / 0.00023 / 0.00033 / 0.00085 / 0.0048; landing seed 2 on the sensor grid 0.00028 /
+0.00081 / 0.0017 / 0.0081 / 0.026, on the fine grid (35 px) 0.00014 / 0.00034 / 0.00056 / 0.0013 / 0.0029.
 
-Here each track keeps the edge direction of its birth patch (the minor eigenvector of the structure tensor over the
-KLT window in the MCI it is first stepped from) and, over its MCI-to-MCI steps, the sum of its step's component along
-that direction minus the same component of the median step of its ``klt_edge_slide_neighbours`` nearest live tracks;
-a track whose sum exceeds ``klt_edge_slide_px`` is ended (its map point stays for the projection search).
+What was tried (ATE of ``evpose eval --atlas --correct-scale``, paired per recording against main's defaults; runs by
+``/tmp/s42/drift42/runner.sh``, sums by ``pair.py``; the step shortness h_rel of pnp41's ``ana2.py``, mean over the
+PnP-placed keyframes, by ``hrel.py``; main: indoor 0-8 -0.270 +- 0.075 (85 keyframes), landing 0-4 -0.118 +- 0.020
+(130)): see the fields' docstrings. Forward-backward KLT is already on (``klt_max_bidir_error_px``), and a higher
+``min_eigen_quality`` (detection's Shi-Tomasi gate) 0.004: indoor 0-7 2.006 -> 3.035 % (+1.03 +- 1.45, 3 better; seed 3
+1.31 -> 12.15 %), landing 0-2 1.331 -> 1.704 % (+0.37 +- 0.74), h_rel indoor -0.349, landing -0.122.
 """
 
 from __future__ import annotations
@@ -82,8 +102,13 @@ class EdgeSlide:
               cfg: FeatureConfig) -> np.ndarray:
         """``ok`` with the tracks whose summed along-edge slide now exceeds ``cfg.klt_edge_slide_px`` ended; ``uv`` are
         the tracks' positions in ``prev8`` (the MCI stepped from), ``new`` in the current MCI. Forgets dead tracks."""
+        return self.slid(prev8, ids, uv, new, ok, cfg)[0]
+
+    def slid(self, prev8: np.ndarray, ids: np.ndarray, uv: np.ndarray, new: np.ndarray, ok: np.ndarray,
+             cfg: FeatureConfig) -> tuple[np.ndarray, np.ndarray]:
+        """(``ok`` without the tracks that slid past ``cfg.klt_edge_slide_px``, those tracks' mask); see :meth:`check`."""
         self._register(prev8, ids, uv, cfg.klt_window_px)
-        ok = ok.copy()
+        ok_in, ok = ok, ok.copy()
         idx = np.flatnonzero(ok)
         k = int(cfg.klt_edge_slide_neighbours)
         if len(idx) > k:
@@ -94,6 +119,19 @@ class EdgeSlide:
                 if abs(s[1]) > cfg.klt_edge_slide_px:
                     ok[i] = False
         self._forget(ids[ok])
+        return ok, np.asarray(ok_in, bool) & ~ok
+
+    def step(self, fe, new: np.ndarray, ok: np.ndarray, cfg: FeatureConfig) -> np.ndarray:
+        """:meth:`slid` on the front end ``fe``'s step into ``new`` (``fe.prev8``, ``fe.ids``, ``fe.uv`` before it);
+        returns ``ok`` without the slid tracks, or with ``cfg.klt_edge_slide_renew`` keeps them under new ids of
+        ``fe`` (``fe.ids`` replaced, ``fe.next_id`` advanced)."""
+        ok, slid = self.slid(fe.prev8, fe.ids, fe.uv, new, ok, cfg)
+        if cfg.klt_edge_slide_renew and slid.any():
+            n = int(slid.sum())
+            fe.ids = fe.ids.copy()
+            fe.ids[slid] = np.arange(fe.next_id, fe.next_id + n, dtype=np.int64)
+            fe.next_id += n
+            ok = ok | slid
         return ok
 
     def follow(self, prev8: np.ndarray, ids: np.ndarray, uv: np.ndarray, new: np.ndarray, ok: np.ndarray,

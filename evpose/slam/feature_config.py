@@ -283,6 +283,9 @@ class FeatureConfig:
     """A track is ended once the sum over its MCI-to-MCI steps of the step's component along its birth patch's edge
     direction, minus that of the median step of its ``klt_edge_slide_neighbours`` nearest live tracks, exceeds this
     (0: off), pixels (:mod:`evpose.slam.edge_slide`)."""
+    klt_edge_slide_renew: bool = False
+    """``klt_edge_slide_px``: carry a track that slid on under a new id (no map point; its old point left to the
+    projection search) instead of ending it."""
     klt_edge_follow_max_ratio: float = field(default=0.0, metadata={"min": 0.0, "max": 1.0, "step": 0.05, "unit": "ratio"})
     """Tracks born on a patch whose structure tensor (``klt_window_px`` square) has an eigenvalue ratio below this take,
     along their birth edge direction, the median step of their ``klt_edge_slide_neighbours`` nearest live tracks

@@ -278,7 +278,7 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
             if fc.klt_edge_follow_max_ratio > 0:
                 new = fe.slide.follow(fe.prev8, fe.ids, fe.uv, new, ok, fc)
             if fc.klt_edge_slide_px > 0:
-                ok = fe.slide.check(fe.prev8, fe.ids, fe.uv, new, ok, fc)
+                ok = fe.slide.step(fe, new, ok, fc)
             fe.ids, fe.uv = fe.ids[ok], new[ok]
             if gate:  # only the gate reads which tracks have stepped: no per-MCI set otherwise
                 fe.stepped = set(fe.ids.tolist())

@@ -103,3 +103,21 @@ def test_edge_follow_gives_an_edge_track_its_neighbours_step_along_the_edge_and_
     out = EdgeSlide().follow(img, np.arange(5), uv, new, np.ones(5, bool), cfg)
     assert np.allclose(out[0], uv[0] + (0.7, 0.2))  # along the (vertical) edge: the neighbours' 0.2; across: its own 0.7
     assert np.allclose(out[1:], new[1:])  # the flat-patch tracks (ratio 1) keep their steps
+
+
+def test_edge_slide_renew_carries_the_slid_track_on_under_a_new_id_without_its_map_point():
+    from evpose.slam.features import FrontendTracks
+
+    img = _step_image()
+    cfg = FeatureConfig(klt_edge_slide_px=1.0, klt_edge_slide_neighbours=3, klt_edge_slide_renew=True)
+    uv = np.array([[60.0, 40.0], [30.0, 20.0], [90.0, 20.0], [30.0, 80.0], [90.0, 80.0]], np.float32)
+    fe = FrontendTracks(ids=np.arange(5, dtype=np.int64), uv=uv, prev8=img, next_id=5, track_to_point={0: 7})
+    new = uv + np.float32(0.5)
+    new[0, 1] += 2.0  # track 0 slides 2 px down its edge in one step
+    ok = fe.slide.step(fe, new, np.ones(5, bool), cfg)
+    assert ok.all()
+    assert fe.ids.tolist() == [5, 1, 2, 3, 4] and fe.next_id == 6
+    assert 5 not in fe.track_to_point
+    cfg.klt_edge_slide_renew = False
+    fe2 = FrontendTracks(ids=np.arange(5, dtype=np.int64), uv=uv, prev8=img, next_id=5)
+    assert fe2.slide.step(fe2, new, np.ones(5, bool), cfg).tolist() == [False, True, True, True, True]
