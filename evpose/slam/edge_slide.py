@@ -29,7 +29,10 @@ eigenvalue per step (``FeatureConfig.klt_min_eig``, recorded by ``KLTREC=1``): i
 What was tried (ATE of ``evpose eval --atlas --correct-scale``, paired per recording against main's defaults; runs by
 ``/tmp/s42/drift42/runner.sh``, sums by ``pair.py``; the step shortness h_rel of pnp41's ``ana2.py``, mean over the
 PnP-placed keyframes, by ``hrel.py``; main: indoor 0-8 -0.270 +- 0.075 (85 keyframes), landing 0-4 -0.118 +- 0.020
-(130)): see the fields' docstrings. Forward-backward KLT is already on (``klt_max_bidir_error_px``), and a higher
+(130)): see the fields' docstrings. In short: ending (or renewing) the tracks that slide past 4-8 px shortens the
+short steps (h_rel landing -0.074 to -0.098, indoor -0.12 to -0.25) but moves the ATE only within its scatter, with a
+runaway here and there (indoor 0-18 -0.10 to +0.27 points, landing 0-4 -0.21 to +1.39); following the neighbours along
+the edge, gating weak dots or weak corners at detection, or a higher KLT eigenvalue floor are no better. Forward-backward KLT is already on (``klt_max_bidir_error_px``), and a higher
 ``min_eigen_quality`` (detection's Shi-Tomasi gate) 0.004: indoor 0-7 2.006 -> 3.035 % (+1.03 +- 1.45, 3 better; seed 3
 1.31 -> 12.15 %), landing 0-2 1.331 -> 1.704 % (+0.37 +- 0.74), h_rel indoor -0.349, landing -0.122.
 """
