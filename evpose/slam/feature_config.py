@@ -22,6 +22,16 @@ class FeatureConfig:
     had an eigenvalue ratio of at least 0.1 in the keyframe MCI: 3.79 % (0 of 12); only edge tracks that moved across
     their edge (|cos| to the gradient 0.3 / 0.5): 2.98 / 4.61 % (2 of 12 each). New points within 2 / 3 times the
     keyframe's median depth: 3.36 / 2.86 % (1 / 4 of 12)."""
+    blob_max_quality: float = field(default=0.0, metadata={"min": 0.0, "max": 0.5, "step": 0.001, "unit": "ratio"})
+    """FAST corners whose Shi-Tomasi score is below this share of the image's best (as ``min_eigen_quality``) and whose
+    structure tensor over the ``klt_window_px`` square is near isotropic (eigenvalue ratio above ``blob_min_ratio``)
+    are not detected: weak dots, not corners or edges (0: no test), ratio. Session 42 (module notes of
+    :mod:`evpose.slam.edge_slide`: such tracks drift 0.67-0.83 of the time, against 0.17-0.52 for strong ones). 0.01,
+    paired against main: indoor seeds 0-18 1.899 -> 2.042 % (+0.14 +- 0.14, 7 better, 12 worse; within both targets
+    13 -> 10, least tracked 0.860 -> 0.712), landing 0-4 1.363 -> 1.633 % (+0.27 +- 0.45, 2 better); step shortness
+    (pnp41's h_rel) indoor 0-8 -0.270 -> -0.353, landing 0-4 -0.118 -> -0.092. Off."""
+    blob_min_ratio: float = field(default=0.4, metadata={"min": 0.0, "max": 1.0, "step": 0.05, "unit": "ratio"})
+    """``blob_max_quality``: smaller-over-larger eigenvalue ratio above which a weak corner counts as a dot, ratio."""
     grid_cols: int = field(default=8, metadata={"min": 1, "max": 32, "step": 1, "unit": "cells"})
     """Bucketing grid columns, cells."""
     grid_rows: int = field(default=6, metadata={"min": 1, "max": 32, "step": 1, "unit": "cells"})
@@ -149,6 +159,16 @@ class FeatureConfig:
     """KLT pyramid levels above the base image, levels. Session 27 (``/tmp/s27/turn27/kltdiag.py``): in the indoor rooms'
     turns the true MCI-to-MCI step is a median 2.8 px (90th percentile 4.2) and 4 levels keep no more tracks (0.51 ->
     0.50 of all per step, map-point tracks 0.66 -> 0.64; module notes of :mod:`evpose.slam.event_coasting`)."""
+    klt_min_eig: float = field(default=1e-4, metadata={"min": 0.0, "max": 0.1, "step": 1e-4, "unit": "(grey levels/px)^2"})
+    """OpenCV KLT's ``minEigThreshold``: a track whose window's spatial-gradient matrix has a smaller minimum eigenvalue
+    (divided by the window's pixel count, on OpenCV's scaled derivatives) is lost at the base level; 1e-4 is OpenCV's
+    default, (grey levels/px)^2 as OpenCV scales them. Applies to every KLT call through
+    :func:`evpose.slam.features.track_features` (the fine grid's too). Session 42 (``/tmp/s42/drift42``, module notes
+    of :mod:`evpose.slam.edge_slide`: the drifting tracks are the weak ones): per-step minimum eigenvalues, median 0.0048
+    indoors, 0.026 / 0.0029 on the landing's sensor / fine grid. 3e-4 (a 10th / 2nd / 4th percentile): event-only ATE
+    (``evpose eval --atlas --correct-scale``) paired against main, indoor seeds 0-8 2.008 -> 1.982 % (-0.03 +- 0.22, 4
+    better, 5 worse; least tracked 0.883 -> 0.832), landing 0-2 1.331 -> 3.220 % (+1.89 +- 1.75; seed 2 0.93 -> 6.31 %);
+    step shortness (pnp41's h_rel) indoor -0.270 -> -0.272, landing -0.118 -> -0.145. So 1e-4."""
     klt_max_bidir_error_px: float = field(default=1.0, metadata={"min": 0.1, "max": 5.0, "step": 0.1, "unit": "px"})
     """Tracks whose forward-backward KLT error exceeds this are dropped, pixels. Landing event-only seeds 0-11, 60 runs
     (see ``MciConfig.reference_fraction``; 1.0 there): 0.5 -> mean ATE 3.34 -> 3.38 %, within 2 % 9 -> 3 of 60. Session 24
@@ -267,6 +287,38 @@ class FeatureConfig:
     Session 41, 8 px: landing seeds 0 / 1 1.09 / 1.97 -> 7.80 / 3.61 %; indoor 0-9 1.96 -> 1.53 % (6 better) at less
     time tracked (least 87.3 -> 78.1 %), held-out indoor 10-12 2.15 -> 1.59 %: more coasting, not better tracks
     (module notes of :mod:`evpose.slam.birth_anchor`). So off."""
+    klt_edge_slide_px: float = field(default=0.0, metadata={"min": 0.0, "max": 30.0, "step": 0.5, "unit": "px"})
+    """A track is ended once the sum over its MCI-to-MCI steps of the step's component along its birth patch's edge
+    direction, minus that of the median step of its ``klt_edge_slide_neighbours`` nearest live tracks, exceeds this
+    (0: off), pixels (:mod:`evpose.slam.edge_slide`: the drift pnp41 found lies along the birth edge, relative to the
+    neighbours). Session 42 (``/tmp/s42/drift42``, event-only ATE of ``evpose eval --atlas --correct-scale`` paired
+    per recording against main; "within" = ATE <= 2 % and tracked >= 80 %): 4 px indoor 0-18 1.899 -> 2.173 % (+0.27 +- 0.28, 7 better,
+    12 worse; within 13 -> 9, least tracked 0.860 -> 0.799), held-out 19-25 2.005 -> 2.025 % (+0.02 +- 0.18; within 6
+    -> 4), landing 0-4 1.363 -> 2.752 % (+1.39 +- 1.59; seed 0 1.09 -> 8.78 %), 5-8 1.612 -> 1.037 % (-0.58 +- 0.34, 3
+    better); on landing 0 / indoor 1
+    the inliers 3-20 px off their birth point's true projection 0.41 / 0.37 -> 0.30 / 0.33 of them, still along their
+    birth edge (|cos| 0.78 / 0.77), and the step shortness (pnp41's h_rel) indoor 0-8 -0.270 +- 0.075 -> -0.201 +-
+    0.050, landing 0-4 -0.118 +- 0.020 -> -0.074 +- 0.023: it shortens the short steps, but the ATE does not follow. 8 px: indoor 0-18 1.899 -> 1.796 % (-0.10 +- 0.17, 9 better,
+    10 worse; within 13 -> 14), held-out 19-25 2.005 -> 2.389 % (+0.38 +- 0.50; within 6 -> 3), landing 0-4 1.363 ->
+    1.302 % (-0.06 +- 0.13), 5-8 1.612 -> 3.352 % (seed 7 0.96 -> 9.13 %); h_rel indoor -0.242, landing -0.098. Off."""
+    klt_edge_slide_renew: bool = False
+    """``klt_edge_slide_px``: carry a track that slid on under a new id (no map point; its old point left to the
+    projection search, its birth edge measured anew) instead of ending it. Session 42, 4 px: indoor 0-18 1.899 -> 1.905
+    % (+0.01 +- 0.21, 9 better, 10 worse; within 13 -> 11, least tracked 0.860 -> 0.781), held-out 19-26 1.942 -> 1.887
+    % (-0.06 +- 0.45; within 7 -> 5), landing 0-4 1.363 -> 1.156 % (-0.21 +- 0.24, 3 better), 5-12 1.386 -> 1.342 %
+    (-0.04 +- 0.26; within 7 -> 6); h_rel indoor 0-8 -0.247 +- 0.066, landing 0-4 -0.094 +- 0.022 (main -0.270 /
+    -0.118). 8 px: indoor 0-18 1.899 -> 2.084 % (+0.18 +- 0.26, 6 better, 13 worse; within 13 -> 12), landing 0-4 1.363
+    -> 1.164 % (-0.20 +- 0.25), 5-9 1.497 -> 2.889 % (+1.39 +- 1.82, one run away); h_rel indoor -0.121 +- 0.083, landing
+    -0.078 +- 0.020. Off."""
+    klt_edge_follow_max_ratio: float = field(default=0.0, metadata={"min": 0.0, "max": 1.0, "step": 0.05, "unit": "ratio"})
+    """Tracks born on a patch whose structure tensor (``klt_window_px`` square) has an eigenvalue ratio below this take,
+    along their birth edge direction, the median step of their ``klt_edge_slide_neighbours`` nearest live tracks
+    instead of their own KLT step (0: off), ratio (:mod:`evpose.slam.edge_slide`). Session 42, 0.25: indoor 0-18 1.899
+    -> 1.931 % (+0.03 +- 0.19, 9 better, 10 worse; within 13 -> 11), landing 0-4 1.363 -> 2.150 % (+0.79 +- 0.51, 1
+    better); it does not take the drift out (landing 0 / indoor 1: inliers 3-20 px off 0.41 / 0.37 -> 0.43 / 0.41, still
+    along the birth edge), h_rel indoor 0-8 -0.312, landing 0-4 -0.155 (main -0.270 / -0.118). Off."""
+    klt_edge_slide_neighbours: int = field(default=8, metadata={"min": 2, "max": 50, "step": 1, "unit": "tracks"})
+    """``klt_edge_slide_px``: nearest live tracks whose median step a track's step is compared with, tracks."""
     target_tracks: int = field(default=150, metadata={"min": 20, "max": 1000, "step": 10, "unit": "tracks"})
     """New features are detected on an MCI when fewer tracks survive, tracks. Session 17, indoor event-only seeds
     0-7: 300 -> ATE 7.39 -> 8.02 %, time tracked from the events 44.7 -> 40.2 % (:mod:`evpose.slam.event_coasting`)."""

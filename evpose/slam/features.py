@@ -262,6 +262,7 @@ import cv2
 import numpy as np
 
 from evpose.slam.config import FeatureConfig
+from evpose.slam.edge_slide import EdgeSlide, tensor_ratio
 from evpose.slam.track_step import patch_ncc, remove_curvature_shift
 
 
@@ -290,6 +291,9 @@ def detect_features(img8: np.ndarray, cfg: FeatureConfig, existing: np.ndarray |
     b = cfg.border_px
     keep = (pts[:, 0] >= b) & (pts[:, 0] < w - b) & (pts[:, 1] >= b) & (pts[:, 1] < h - b)
     keep &= resp >= cfg.min_eigen_quality * float(eig.max())
+    if cfg.blob_max_quality > 0:
+        # weak and isotropic over the KLT window: a dot (a background-activity blob), not a corner or an edge
+        keep &= ~((resp < cfg.blob_max_quality * float(eig.max())) & (tensor_ratio(img8, pts, cfg.klt_window_px) > cfg.blob_min_ratio))
     if support is not None and cfg.min_support_ratio > 0:
         # A background-activity event splats an isolated blob that FAST and Shi-Tomasi both take for a
         # corner; KLT on it follows noise and a map point on it is garbage. Real corners gather many events.
@@ -376,12 +380,14 @@ def track_features(prev8: np.ndarray, cur8: np.ndarray, pts: np.ndarray, cfg: Fe
     if guess is not None:
         p1_init = np.ascontiguousarray(guess, np.float32).reshape(-1, 1, 2).copy()
         flags |= cv2.OPTFLOW_USE_INITIAL_FLOW
-    p1, st1, _ = cv2.calcOpticalFlowPyrLK(prev8, cur8, p0, p1_init, winSize=win, maxLevel=int(cfg.klt_levels), criteria=crit, flags=flags)
+    p1, st1, _ = cv2.calcOpticalFlowPyrLK(prev8, cur8, p0, p1_init, winSize=win, maxLevel=int(cfg.klt_levels), criteria=crit, flags=flags,
+                                        minEigThreshold=float(cfg.klt_min_eig))
     p0_init, flags_b = None, KLT_NO_ERROR
     if guess_back and p1_init is not None:
         p0_init = (p0 + (p1 - p1_init)).astype(np.float32)
         flags_b |= cv2.OPTFLOW_USE_INITIAL_FLOW
-    p0b, st2, _ = cv2.calcOpticalFlowPyrLK(cur8, prev8, p1, p0_init, winSize=win, maxLevel=int(cfg.klt_levels), criteria=crit, flags=flags_b)
+    p0b, st2, _ = cv2.calcOpticalFlowPyrLK(cur8, prev8, p1, p0_init, winSize=win, maxLevel=int(cfg.klt_levels), criteria=crit, flags=flags_b,
+                                         minEigThreshold=float(cfg.klt_min_eig))
     p1 = p1.reshape(-1, 2)
     fb = np.linalg.norm(p0b.reshape(-1, 2) - p0.reshape(-1, 2), axis=1)
     h, w = cur8.shape
@@ -433,6 +439,8 @@ class FrontendTracks:
     """Events per sensor pixel of the recording's first MCIs, while ``FeatureConfig.klt_upsample_warmup_mcis`` counts."""
     birth: "BirthAnchors" = field(default_factory=lambda: _birth_anchors())
     """Each track's birth MCI and pixel (``FeatureConfig.klt_birth_anchor_px``; empty when off)."""
+    slide: EdgeSlide = field(default_factory=EdgeSlide)
+    """Each track's birth edge direction and summed slide along it (``FeatureConfig.klt_edge_slide_px``; empty when off)."""
     fine_on: bool | None = None
     """Whether the warm-up let the fine grid on (None while it counts; :func:`evpose.slam.fine_grid.use_fine_grid`)."""
 

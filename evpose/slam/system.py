@@ -275,6 +275,10 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
                 new = fe.remove_curvature_shift(new, ok, mci.t_us, self.cfg.features, self.cfg.window.overlap)
             if fc.klt_birth_anchor_px > 0:
                 new, ok = fe.birth.anchor(mci.image8, fe.ids, new, ok, fc)
+            if fc.klt_edge_follow_max_ratio > 0:
+                new = fe.slide.follow(fe.prev8, fe.ids, fe.uv, new, ok, fc)
+            if fc.klt_edge_slide_px > 0:
+                ok = fe.slide.step(fe, new, ok, fc)
             fe.ids, fe.uv = fe.ids[ok], new[ok]
             if gate:  # only the gate reads which tracks have stepped: no per-MCI set otherwise
                 fe.stepped = set(fe.ids.tolist())
