@@ -134,7 +134,26 @@ class CoastSettings:
     """Event-only, with ``VisualGyroConfig.written_coasts``: a young map's written coast holds the camera-frame velocity
     of its written poses over this span (its whole trajectory when shorter) instead of ``coast_span_s``, while the
     rotation rate stays read over ``coast_span_s`` (0 or at most ``coast_span_s``: as the rate), s. Tracking is
-    unchanged; only the written trajectory moves."""
+    unchanged; only the written trajectory moves. Why: the rooms' maps started at about 0.48 s track 0.1-0.2 s by PnP
+    on shrinking steps, coast one MCI across the blank wall (to ~0.83 s) and are lost at the next; that one pose,
+    extrapolated over 0.15-0.23 s on the last 60 ms's velocity, steps 0.32-0.63 of the true step and carries most of
+    the map's RMS (indoor 21 77.7 mm, 29.2 without it: 1.42 of its 4.17 points; 11 40.6 -> 21.3; 16 20.6 -> 6.8;
+    ``/tmp/s42/young42/tailcut.py``, ``coastres.py``). Session 42 (``/tmp/s42/young42``, ``run.sh`` / ``sum.py``
+    against main 0b81d0c's defaults), 0.15 (tag ``wv15``): indoor 0-26 1.912 -> 1.905 % (-0.007 +- 0.062, 7 better,
+    20 worse; within 2 % and 80 % tracked 20 -> 20 of 27; 21 4.17 -> 2.81, 16 2.13 -> 1.74, 11 2.60 -> 2.20, 10
+    2.33 -> 2.21, 6 2.19 -> 2.10, but 0 1.85 -> 2.21, 9 1.51 -> 1.86, 25 1.70 -> 1.93, 19 1.57 -> 1.78, 2 1.50 ->
+    1.71): the first maps' long coasts (0.28-0.84 s on sparse MCIs) get worse on the longer span. Off; the
+    blank-only form is ``coast_written_velocity_span_by_gap``."""
+    coast_written_velocity_span_by_gap: bool = False
+    """With ``coast_written_velocity_span_s``: the longer span is used only as far as the step being written reaches
+    back (the time since the previous MCI, at least ``coast_span_s``): a coast across a blank reads its velocity over
+    about as long as it extrapolates it, a dense coast as before. Session 42 (``/tmp/s42/young42``, tag ``wg15``:
+    with ``coast_written_velocity_span_s`` 0.15, against main 0b81d0c's defaults): indoor 0-26 and 28 1.900 -> 1.841 %
+    (-0.059 +- 0.055, 15 better, 13 worse; within 2 % and 80 % tracked 21 -> 22 of 28; tracked time unchanged),
+    its gain the seeds it was shaped on (0, 1, 2, 11, 16, 21: -0.359 +- 0.228; 21 4.17 -> 2.77, 11 2.60 -> 2.17, 16
+    2.13 -> 1.69 but 0 1.85 -> 1.96), the other 22 +0.022 +- 0.012 (11 better, 11 worse; 25 1.70 -> 1.93, its map
+    started at 0.47 s 0.23 -> 0.46 points: the same post-blank pose, now worse; 20 1.70 -> 1.80, 24 1.36 -> 1.45).
+    Off: the longer read helps the post-blank pose of some maps and not of others."""
     coast_drop_mature_s: float = field(default=0.0, metadata={"min": 0.0, "max": 3.0, "step": 0.05, "unit": "s"})
     """Event-only coasting: a coast that ends in a loss is removed from the map's trajectory (as
     ``coast_drop_unconfirmed``) when the map spans at least this up to its last PnP pose (0: never; a younger map's

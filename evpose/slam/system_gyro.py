@@ -72,7 +72,7 @@ class GyroAids:
 
         return written_coast_pose(m, mci.t_us, int(tc.coast_span_s * 1e6), int(tc.coast_young_span_s * 1e6), measure,
                                   depth_in_view(m, self.K, mci.image8.shape) if tc.coast_written_parallax else None,
-                                  int(tc.coast_written_velocity_span_s * 1e6))
+                                  int(tc.coast_written_velocity_span_s * 1e6), tc.coast_written_velocity_span_by_gap)
 
     def _visual_gyro(self, m: SlamMap, mci) -> np.ndarray | None:
         """Event-only: orientation at ``mci`` from the map's pose at the previous MCI and the rotation measured between the

@@ -64,7 +64,7 @@ def _long_velocity_coast_pose(w: WrittenPoses, t_us: int, span_us: int, velocity
 
 
 def written_coast_pose(m: SlamMap, t_us: int, span_us: int, young_span_us: int, measure, parallax_depth=None,
-                       velocity_span_us: int = 0) -> np.ndarray | None:
+                       velocity_span_us: int = 0, velocity_span_by_gap: bool = False) -> np.ndarray | None:
     """The written pose of the coasted MCI at ``t_us``: the event-only coast (rate and camera-frame velocity over the
     newest ``span_us`` of written poses, or over all of them when the map is younger and they span at least
     ``young_span_us``) with its orientation replaced by the written previous pose's turned by ``measure(dR0)``, the
@@ -74,6 +74,9 @@ def written_coast_pose(m: SlamMap, t_us: int, span_us: int, young_span_us: int, 
     the camera's rotation plus the image motion its translation makes at that depth from the newest written pose
     (:func:`parallax_rotation`), which is removed."""
     w = written_poses(m)
+    if velocity_span_by_gap and w.traj_t:
+        # Read the velocity over about as long as it is to be extrapolated (a blank's 0.15-0.3 s), not longer.
+        velocity_span_us = min(velocity_span_us, max(span_us, t_us - w.traj_t[-1]))
     T = event_only_coast_pose(w, t_us, span_us) if velocity_span_us <= span_us else _long_velocity_coast_pose(w, t_us, span_us, velocity_span_us)
     if T is None and young_span_us > 0 and w.traj_t and w.traj_t[-1] - w.traj_t[0] >= young_span_us:
         T = event_only_coast_pose(w, t_us, w.traj_t[-1] - w.traj_t[0])

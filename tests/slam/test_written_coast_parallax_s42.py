@@ -71,3 +71,23 @@ def test_long_velocity_span_holds_the_older_speed_of_a_slowing_map():
     k0 = m.traj_t.index(m.traj_t[-1] - 150_000)
     speed = (x - m.traj_T[k0][0, 3]) / 150_000  # the mean over the newest 150 ms: 21 full steps and 9 shrunk ones
     assert abs((long_[0, 3] - x) - speed * 10_000) < 1e-9 and speed * 10_000 > 2 * 0.01 / 3
+
+
+def test_span_by_gap_keeps_a_dense_coast_and_lengthens_a_step_across_a_blank():
+    from evpose.slam.atlas import SlamMap
+
+    m = SlamMap(0)
+    x = 0.0
+    for k in range(40):  # as above: the last 9 steps shrank to a third
+        x += 0.005 if k <= 30 else 0.005 / 3
+        T = np.eye(4)
+        T[:3, 3] = (x, 0.0, 0.0)
+        m.add_pose(k * 5000, T)
+    dense = m.traj_t[-1] + 10_000
+    np.testing.assert_allclose(written_coast_pose(m, dense, 30_000, 5000, lambda dR0: None, None, 150_000, True),
+                               written_coast_pose(m, dense, 30_000, 5000, lambda dR0: None), atol=1e-15)
+    blank = m.traj_t[-1] + 150_000  # across a 150 ms blank: the velocity over the newest 150 ms
+    np.testing.assert_allclose(written_coast_pose(m, blank, 30_000, 5000, lambda dR0: None, None, 150_000, True),
+                               written_coast_pose(m, blank, 30_000, 5000, lambda dR0: None, None, 150_000), atol=1e-15)
+    assert written_coast_pose(m, blank, 30_000, 5000, lambda dR0: None, None, 150_000, True)[0, 3] > \
+        written_coast_pose(m, blank, 30_000, 5000, lambda dR0: None)[0, 3] + 0.03
