@@ -148,12 +148,13 @@ class CoastSettings:
     """With ``coast_written_velocity_span_s``: the longer span is used only as far as the step being written reaches
     back (the time since the previous MCI, at least ``coast_span_s``): a coast across a blank reads its velocity over
     about as long as it extrapolates it, a dense coast as before. Session 42 (``/tmp/s42/young42``, tag ``wg15``:
-    with ``coast_written_velocity_span_s`` 0.15, against main 0b81d0c's defaults): indoor 0-26 and 28 1.900 -> 1.841 %
-    (-0.059 +- 0.055, 15 better, 13 worse; within 2 % and 80 % tracked 21 -> 22 of 28; tracked time unchanged),
+    with ``coast_written_velocity_span_s`` 0.15, against main 0b81d0c's defaults): indoor 0-28 1.896 -> 1.839 %
+    (-0.058 +- 0.053, 16 better, 13 worse; within 2 % and 80 % tracked 22 -> 23 of 29; tracked time unchanged),
     its gain the seeds it was shaped on (0, 1, 2, 11, 16, 21: -0.359 +- 0.228; 21 4.17 -> 2.77, 11 2.60 -> 2.17, 16
-    2.13 -> 1.69 but 0 1.85 -> 1.96), the other 22 +0.022 +- 0.012 (11 better, 11 worse; 25 1.70 -> 1.93, its map
+    2.13 -> 1.69 but 0 1.85 -> 1.96), the other 23 +0.021 +- 0.011 (12 better, 11 worse; 25 1.70 -> 1.93, its map
     started at 0.47 s 0.23 -> 0.46 points: the same post-blank pose, now worse; 20 1.70 -> 1.80, 24 1.36 -> 1.45).
-    Off: the longer read helps the post-blank pose of some maps and not of others."""
+    Landing 0-12 byte-identical (its maps coast as mature maps, not written). Off: the longer read helps the
+    post-blank pose of some maps and not of others."""
     coast_drop_mature_s: float = field(default=0.0, metadata={"min": 0.0, "max": 3.0, "step": 0.05, "unit": "s"})
     """Event-only coasting: a coast that ends in a loss is removed from the map's trajectory (as
     ``coast_drop_unconfirmed``) when the map spans at least this up to its last PnP pose (0: never; a younger map's
