@@ -286,6 +286,14 @@ def held_motion_end(traj_t: list[int], t_last_visual_us: int) -> int:
     return i if i >= 0 else -1
 
 
+def drop_past_blank(m: SlamMap, t_after_blank_us: int | None, t_last_visual_us: int) -> int:
+    """Remove the trajectory poses from ``t_after_blank_us`` (the first MCI past the newest blank stretch) on, when no
+    MCI was placed visually since that blank (``TrackingConfig.coast_drop_past_blank``); returns how many."""
+    if t_after_blank_us is None or t_after_blank_us <= t_last_visual_us:
+        return 0
+    return drop_unconfirmed_poses(m, t_after_blank_us - 1)
+
+
 def drop_unconfirmed_poses(m: SlamMap, t_last_visual_us: int) -> int:
     """Remove the trajectory poses after ``t_last_visual_us`` (coasted, and no MCI placed the map again); returns how many.
 

@@ -47,7 +47,7 @@ from evpose.slam.inertial_trajectory import carry_relative_scale, keyframe_posit
 from evpose.slam.map_restructure import maybe_restructure
 from evpose.slam.map_rejoin import RejoinCandidate
 from evpose.slam.keyframe_scale import check_new_points
-from evpose.slam.keyframe_step import check_keyframe_step
+from evpose.slam.keyframe_step import check_keyframe_step, keyframe_step_collapse
 from evpose.slam.local_map import (cull_points, insert_keyframe, need_keyframe, triangulate_new_points, visual_ba_window, young_map,
                                    young_triangulation)
 from evpose.slam.event_image import to_uint8
@@ -411,6 +411,9 @@ class EventSlam(TwoViewInitialisation, GyroAids, InertialMaps, VisualFailureHand
         if need_keyframe(m, fe.ids, fe.uv, n_tracked, tc, mci.t_us) or (self.imu is None and young_map(m, mci.t_us, tc, T_wc)):
             # Event-only: a keyframe stepping a multiple of the map's keyframe speed would hand a wrong scale on
             # (TrackingConfig.keyframe_step_ratio).
+            collapse = keyframe_step_collapse(m.keyframes, mci.t_us, T_wc, n_tracked, tc) if self.imu is None else None
+            if collapse is not None:
+                return self._lose(collapse)
             keyframe, T_kf = check_keyframe_step(m.keyframes, mci.t_us, T_wc, n_tracked, tc) if self.imu is None else (True, T_wc)
             if keyframe:
                 if T_kf is not T_wc:

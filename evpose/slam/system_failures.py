@@ -16,7 +16,7 @@ import numpy as np
 from evpose.core.trajectory import invert_pose
 from evpose.slam.coasting import camera_frame_velocity, coast_pose, drop_contradicted, trajectory_span
 from evpose.slam.edge_tracking import measure_across_edges, solve_pose_across_edges
-from evpose.slam.event_coasting import drop_unconfirmed_poses, event_only_coast_pose, held_motion_end, mature_coast_pose
+from evpose.slam.event_coasting import drop_past_blank, drop_unconfirmed_poses, event_only_coast_pose, held_motion_end, mature_coast_pose
 from evpose.slam.inertial import InertialConfiguration
 from evpose.slam.inertial_guards import discard_map, young_lost_map
 from evpose.slam.map_rejoin import RejoinCandidate
@@ -119,6 +119,8 @@ class VisualFailureHandling:
         if T_wc is None:
             if tc.coast_drop_unconfirmed or self._mature_unconfirmed(m):
                 drop_unconfirmed_poses(m, self._last_visual_t)
+            elif tc.coast_drop_past_blank:
+                drop_past_blank(m, self._after_blank_t, self._last_visual_t)
             return self._lose(reason)
         if R_wc is not None:
             T_wc = T_wc.copy()

@@ -24,7 +24,7 @@ from evpose.slam.room_axes import measure_room_rotation, room_frame, room_priors
 from evpose.slam.pnp_motion_prior import refine_pose_with_pose_prior
 from evpose.slam.tracking import PoseEstimate
 from evpose.slam.visual_gyro import visual_rotation
-from evpose.slam.written_coast import written_coast_pose
+from evpose.slam.written_coast import depth_in_view, written_coast_pose
 
 
 class GyroAids:
@@ -70,7 +70,9 @@ class GyroAids:
                 return None
             return visual_rotation(prev8, mci.image8, self.K, dR0, vg)
 
-        return written_coast_pose(m, mci.t_us, int(tc.coast_span_s * 1e6), int(tc.coast_young_span_s * 1e6), measure)
+        return written_coast_pose(m, mci.t_us, int(tc.coast_span_s * 1e6), int(tc.coast_young_span_s * 1e6), measure,
+                                  depth_in_view(m, self.K, mci.image8.shape) if tc.coast_written_parallax else None,
+                                  int(tc.coast_written_velocity_span_s * 1e6), tc.coast_written_velocity_span_by_gap)
 
     def _visual_gyro(self, m: SlamMap, mci) -> np.ndarray | None:
         """Event-only: orientation at ``mci`` from the map's pose at the previous MCI and the rotation measured between the

@@ -64,6 +64,14 @@ With ``local_reference`` (tag ``ysl``, figures in that field's docstring) the la
 rooms' mean, median and count within 2 % and on the landing's mean and count, but worse on most landing seeds
 (the lead's call; ``ysa`` is the candidate).
 
+Session 42 (young42, ``/tmp/s42/young42``: ``run.sh`` / ``sum.py`` against main 0b81d0c's defaults on the recordings
+re-simulated in session 41, ``/tmp/s41/data/slam``), ``ysa`` again (``speed_prior`` 0.1, ``max_age_s`` 1.0): indoor
+0-28 1.896 -> 1.700 % (-0.196 +- 0.119, 18 better, 11 worse; median 1.703 -> 1.568; within 2 % and 80 % tracked 22 ->
+24 of 29; least tracked 86.0 -> 86.3 %; 5 4.32 -> 1.46, 10 2.33 -> 1.47, 16 2.13 -> 1.37, 21 4.17 -> 3.05, 8 2.03
+-> 1.68, but 0 1.85 -> 2.03, 15 1.54 -> 2.10, 2 1.50 -> 1.96, 7 1.41 -> 1.96, 17 1.45 -> 1.90), landing 0-12 1.377 ->
+1.345 % (-0.032 +- 0.172, 5 better, 8 worse; median 1.118 -> 1.297, median paired change +0.10; within 2 % 12 -> 13:
+5 2.24 -> 1.12, but 10 0.78 -> 1.62, 2 0.93 -> 1.75): session 38's picture on new recordings.
+
 Off: level on the held-out seeds, worse on the typical landing seed. A likely reading of the across-track rise (not
 tested): the BA's points were triangulated at the old step lengths, and a held length leaves the mismatch to the steps'
 directions. Widening the young map's BA window to keep the initial keyframes free was no lever

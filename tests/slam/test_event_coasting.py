@@ -7,7 +7,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from evpose.slam import EventSlam, SlamConfig, SlamStatus
-from evpose.slam.event_coasting import camera_frame_rate, drop_unconfirmed_poses, event_only_coast_pose
+from evpose.slam.event_coasting import camera_frame_rate, drop_past_blank, drop_unconfirmed_poses, event_only_coast_pose
 from slam_synthetic import circle_map, circle_pose, make_recording
 
 
@@ -184,3 +184,17 @@ def test_edge_tracking_declines_a_blank_mci_and_the_map_coasts(early_map):
     mci = SimpleNamespace(t_us=m.traj_t[-1] + 4000, image8=np.zeros((slam.height, slam.width), np.uint8))
     status, _, _, _ = slam._bridge_or_lose(mci, "no tracks")
     assert status is SlamStatus.COASTING
+
+
+def test_poses_past_an_unconfirmed_blank_are_dropped_and_the_coast_before_it_kept():
+    """``coast_drop_past_blank``: poses from the first MCI past the blank on go; the map's poses before it stay."""
+    m = circle_map(10, 5000)  # poses at 0, 5, ..., 45 ms
+    assert drop_past_blank(m, 35_000, 20_000) == 3
+    assert m.traj_t[-1] == 30_000 and len(m.traj_T) == len(m.traj_ref) == len(m.traj_rel) == 7
+
+
+def test_a_blank_crossed_before_the_last_visual_pose_drops_nothing():
+    m = circle_map(10, 5000)
+    assert drop_past_blank(m, 20_000, 30_000) == 0
+    assert drop_past_blank(m, None, 30_000) == 0
+    assert len(m.traj_t) == 10
