@@ -56,8 +56,10 @@ theirs; left out of the map (an oracle), the ridge from the truth over 0.25-1.25
 but the built map holds a point every few millimetres, so each had only a median 3.9 counted events at 0.8 s and 4 %
 of them passed ``min_events``: hence ``pool_radius_m``, which sums the counts of the parallel neighbours. The ridge
 from the truth (``ridge.py`` on ``oracle.py`` runs): ``lone_lead_px`` -0.2 alone -9.3 / +136 and -11.8 / +166 (flight
-9), with ``min_events`` 3 -7.2 / +100 and -8.5 / +114, pooled over 5 cm -4.9 / +64 and -7.5 / +98. Closed loop: see
-``ContrastLeadConfig.lone_lead_px``.
+9), with ``min_events`` 3 -7.2 / +100 and -8.5 / +114, pooled over 5 cm -4.9 / +64 and -7.5 / +98; the defaults
+(-0.1, pooled) -7.0 / +102 and -9.8 / +139. Closed loop: see ``ContrastLeadConfig.lone_lead_px``. What is left: the
+lead is one number for every lone point, where the coverage model gives -0.26 px for this foot and about -0.03 on the
+nominal flight's lone points (a per-point lead from the pooled ratio through :func:`coverage_lead` is the next step).
 """
 
 from __future__ import annotations
@@ -98,7 +100,12 @@ class ContrastLeadConfig:
     path sessions 12-40 tuned on) 4.770 -> 4.922 (+0.15 +- 0.16, 10 of 24), ARE 0.0588 -> 0.0562. -0.2 pooled:
     14.187 -> 10.629 (-3.56 +- 1.23, 7 of 12), ARE 0.1381; 14.906 -> 13.074 (-1.83 +- 0.77, 10 of 12); 12.956 -> 9.091
     (-3.87 +- 0.94, 12 of 13), ARE 0.1271; but nominal 4.770 -> 5.802 (+1.03 +- 0.28, 6 of 24), ARE 0.0588 -> 0.0709.
-    -0.2 unpooled with ``min_events`` 3: flights 1-12 11.474 (-2.71 +- 0.96, 8 of 12)."""
+    -0.2 unpooled with ``min_events`` 3: flights 1-12 11.474 (-2.71 +- 0.96, 8 of 12). The bundled demos (346x260,
+    4 s, the nominal spiral) with -0.1 pooled: ``landing`` 6.554 -> 7.530 mm (ARE 0.058 -> 0.076 deg), ``landing_fast``
+    9.035 -> 8.718, ``landing_dynamic`` 6.012 -> 7.748 (``demo.sh``): the nominal flight's lone points sit only -0.03
+    px from their class leads (session 35), so there the lead over-corrects; 0 restores session 41's outputs bit for
+    bit. CPU of a whole ``evpose track`` (240x180 flight 2, 3 alternated runs each, ``cpu.sh``): 5.00 s off, 5.06 s on
+    (user; noise +-0.5 s)."""
     lone_max_ratio: float = field(default=1.15, metadata={"min": 1.0, "max": 5.0, "step": 0.05, "unit": "events/passage"})
     """A point whose running events per passage (events over the passage-starting ones) is below this fires 'one per
     passage', events per passage."""
