@@ -30,6 +30,23 @@ events' slow error along the shift-x / tilt-about-y ridge (``(x - h ry) / 2``) g
 mean normal speed is 176 px/s on the nearest fifth of them (2.1-3.1 m) and 109 px/s on the farthest (beyond 4.7 m;
 240x180 seed 1), so 0.2 ms moves the near edges' leads against the far ones' by 0.013 px, where the segments'
 means spread by 0.08-0.12 px.
+
+Session 42 (``/tmp/s42/lag42``), the other flights' ridge (registrations from the TRUE pose biased along shift-x /
+tilt-about-y, 240x180 flights 2 / 9, 0.25-1.25 s: -9.5 mm / +145 mdeg and -11.9 / +179, which removing the 1 m box
+from the map mostly removes): not a lag either, nor one image shift of the box. Each registration's events
+linearised at the true pose (``perpt.py``: the events' per-point robust mean residual, leads applied, ``shiftfit.py``)
+and fitted per group as one common image shift or one time lag ``r = -eps v_n``: the box's rims sit +0.03 / +0.05 px
+along their motion (lag -0.22 / -0.34 ms), the ground-level points -0.20 / -0.21 px (lag +1.66 / +1.70 ms), other
+raised points -0.04 / -0.03: no common lag; what the ground shows is one edge, a 4 m building's foot beside the box
+(true segment 16, ``bygroup.py``, ``bypol.py``), whose ON events trail it by 0.27 / 0.31 px against a -0.07 lead.
+The events' Gauss-Newton step from the truth those residuals ask for (``whatif.py``, ``leadsweep.py``; x mm / ry
+mdeg) is -8.3 / +120 and -17.7 / +218; with this module's lag at 0.2 / 0.5 / 1.0 ms on both polarities -8.2 / +121,
+-8.1 / +122, -7.9 / +124 (flight 9 -17.8 / +220, -18.0 / +224, -18.2 / +230), -0.5 ms -8.4 / +118 (-17.5 / +212);
+a lead scaled with depth (0.1 px x (Z_mean / Z - 1)) -7.2 / +107 (-16.5 / +201); that foot's points left out -2.7 /
++38 (-8.2 / +86). Leaving the foot out of the map in the oracle (``or_d16_*``) takes the ridge to -2.2 / +32 and
+-0.5 / +10: the foot, not the box, is what is off, by the contrast mechanism of
+:mod:`evpose.tracker.contrast_leads` (its log contrast 0.50 against the simulator's 0.40 threshold: one event per
+passage, fired about three quarters through the transition).
 """
 
 from __future__ import annotations

@@ -468,7 +468,7 @@ backend (``full:ekf``) 6.05 / 5.36 / 7.41 / 7.41 -> 5.88 / 4.79 / 7.50 / 7.24 (6
     lead the offsets take up, 5-14 mm off the true edges) 7.43 / 5.50; ``offset_gain`` 0 7.59 mm at 240x180."""
     contrast: ContrastLeadConfig = field(default_factory=ContrastLeadConfig)
     """Leads of the points whose pixels fire one event per passage of their edge (:mod:`evpose.tracker.contrast_leads`;
-    off by default)."""
+    on since session 42)."""
     lag: EventLagConfig = field(default_factory=EventLagConfig)
     """Leads growing with each edge's normal image speed (:mod:`evpose.tracker.event_lag`; off by default)."""
     edge_clusters: EdgeClusterConfig = field(default_factory=EdgeClusterConfig)

@@ -139,4 +139,8 @@ def test_the_option_reads_from_a_config_file_mapping():
 
     cfg = config_from_dict(TrackerConfig, {"event_registration": {"contrast": {"lone_lead_px": -0.05, "lone_max_ratio": 1.3}}})
     assert cfg.event_registration.contrast.lone_lead_px == -0.05 and cfg.event_registration.contrast.lone_max_ratio == 1.3
-    assert TrackerConfig().event_registration.contrast.lone_lead_px == 0.0
+    # on by default since session 42, its counts pooled along each edge
+    default = TrackerConfig().event_registration.contrast
+    assert default.lone_lead_px == -0.1 and default.pool_radius_m == 0.05
+    cfg = config_from_dict(TrackerConfig, {"event_registration": {"contrast": {"lone_lead_px": 0.0, "pool_radius_m": 0.0}}})
+    assert cfg.event_registration.contrast.lone_lead_px == 0.0 and cfg.event_registration.contrast.pool_radius_m == 0.0

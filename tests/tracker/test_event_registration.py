@@ -8,6 +8,7 @@ from tracker_synthetic import generate
 
 from evpose.core.contour_map import ContourMap
 from evpose.tracker.config import TrackerConfig, TrackerMode
+from evpose.tracker.contrast_leads import ContrastLeadConfig
 from evpose.tracker.event_registration import EventRegistration, EventRegistrationConfig
 from evpose.tracker.modes import MotionComponents
 from evpose.tracker.tracker import Tracker
@@ -69,8 +70,12 @@ def error(T: np.ndarray) -> np.ndarray:
     return gtsam.Pose3.Logmap(gtsam.Pose3(pose_at(T_REF)).between(gtsam.Pose3(T)))
 
 
+_NO_LONE = ContrastLeadConfig(lone_lead_px=0.0)
+"""The lone-point lead (on by default) off: these synthetic events carry no pixel history, so every point is 'lone'."""
+
+
 def registration(cmap: ContourMap, **config) -> EventRegistration:
-    cfg = EventRegistrationConfig(**{"on_lead_px": 0.0, "off_lead_px": 0.0, "iterations": 5, **config})
+    cfg = EventRegistrationConfig(**{"on_lead_px": 0.0, "off_lead_px": 0.0, "iterations": 5, "contrast": _NO_LONE, **config})
     return EventRegistration(cfg, W, H, cmap.points, np.cross(cmap.plane_normal, cmap.edge_normal), cmap.edge_normal)
 
 
@@ -105,7 +110,7 @@ def test_grazing_points_take_their_own_lead():
     events = tuple(np.concatenate(a) for a in zip(*parts))
     tangents = np.cross(lines.plane_normal, lines.edge_normal)
     def run(**config):
-        cfg = EventRegistrationConfig(**{"on_lead_px": 0.0, "off_lead_px": -0.1, "iterations": 5, **config})
+        cfg = EventRegistrationConfig(**{"on_lead_px": 0.0, "off_lead_px": -0.1, "iterations": 5, "contrast": _NO_LONE, **config})
         reg = EventRegistration(cfg, W, H, cmap.points, tangents, cmap.edge_normal, plane_normal=cmap.plane_normal)
         return error(reg.refine(perturbed(), np.arange(len(cmap)), None, *events, T_REF, TWIST, K, None)[0])
     assert np.abs(run(grazing_max_cos=0.6, grazing_off_lead_px=-0.3)).max() < 2e-5
@@ -127,7 +132,8 @@ def test_crease_points_take_their_own_lead():
     events = tuple(np.concatenate(a) for a in zip(*parts))
     tangents = np.concatenate([np.cross(lines.plane_normal, lines.edge_normal), np.tile([0.0, 1.0, 0.0], (n_side, 1))])
     def run(**config):
-        cfg = EventRegistrationConfig(**{"on_lead_px": 0.0, "off_lead_px": -0.1, "iterations": 5, "grazing_max_cos": 0.0, **config})
+        cfg = EventRegistrationConfig(**{"on_lead_px": 0.0, "off_lead_px": -0.1, "iterations": 5, "grazing_max_cos": 0.0,
+                                         "contrast": _NO_LONE, **config})
         reg = EventRegistration(cfg, W, H, cmap.points, tangents, cmap.edge_normal, plane_normal=cmap.plane_normal,
                                 region_id=cmap.region_id)
         return error(reg.refine(perturbed(), np.arange(len(cmap)), None, *events, T_REF, TWIST, K, None)[0])
@@ -148,7 +154,8 @@ def test_points_whose_edge_the_camera_sees_past_take_their_own_lead():
     events = tuple(np.concatenate(a) for a in zip(*parts))
     tangents = np.cross(lines.plane_normal, lines.edge_normal)
     def run(**config):
-        cfg = EventRegistrationConfig(**{"on_lead_px": 0.0, "off_lead_px": -0.1, "iterations": 5, "grazing_max_cos": 0.0, **config})
+        cfg = EventRegistrationConfig(**{"on_lead_px": 0.0, "off_lead_px": -0.1, "iterations": 5, "grazing_max_cos": 0.0,
+                                         "contrast": _NO_LONE, **config})
         reg = EventRegistration(cfg, W, H, cmap.points, tangents, cmap.edge_normal, plane_normal=cmap.plane_normal,
                                 region_id=cmap.region_id)
         return error(reg.refine(perturbed(), np.arange(len(cmap)), None, *events, T_REF, TWIST, K, None)[0])
