@@ -318,35 +318,12 @@ class FusionConfig:
     240x180 seeds 0-23 4.770 -> 5.365 (+0.60 +- 0.22, 6 of 24). It trades the nominal flight for the others: not
     changed in session 41; the first candidate once tuning moves to the flights.
 
-    Session 42 (tune42, ``/tmp/s42/tune42``: ``camp.sh``, ``run.sh``, ``cmp.py``; the same CLI path, paired against
-    main's defaults; tuning set 240x180 flights 1-12, held out 240x180 flights 13-24 and 346x260 flights 1-12 and 15,
-    checked on the nominal flight's 240x180 seeds 0-23), mean ATE mm, paired difference, how many better: 0.007: flights
-    1-12 14.187 -> 13.366 (-0.82 +- 0.20, 10 of 12; ARE 0.189 -> 0.179 deg), 13-24 14.906 -> 14.317 (-0.59 +- 0.19, 9 of
-    12), 346x260 12.956 -> 12.349 (-0.61 +- 0.28, 9 of 13), nominal 4.770 -> 4.954 (+0.18 +- 0.10, 9 of 24; ARE 0.0588
-    -> 0.0598); 0.006: 12.922 (-1.27 +- 0.33, 11 of 12), 13-24 13.992 (-0.91 +- 0.31, 9 of 12), 346x260 12.040 (-0.92 +-
-    0.40, 9 of 13), nominal 5.092 (+0.32 +- 0.15, 8 of 24); 0.005 (above): -1.78 / -1.10 / -1.23 / +0.60. A smooth
-    trade, about 0.2-0.35 mm of the nominal flight per mm of the others. The demos (``demo.sh``: ``evpose track
-    demo_data/X.h5 --map maps/landing_map.ply``, ``evpose eval --align none``) at 0.007: ``landing`` 6.554 -> 7.904,
-    ``landing_fast`` 9.035 -> 9.204, ``landing_dynamic`` 6.011 -> 6.078 mm (demo hash bbb38bb9bc719eb3 ->
-    56e121421f23d1bf).
-
-    What the nominal flight's loose prior is for: a real bias. The simulator's true biases (``truebias.py``: re-drawn
-    from each recording's seed with its own RNG stream, bit-identical to the recording's IMU samples on all 61
-    recordings) explain its loss: the paired difference follows the true |bg_xy| (correlation +0.89 over seeds 0-23 at
-    0.005, +0.88 at 0.007; seed 4, (+4.95, +2.93, +3.17) mrad/s, 5.12 -> 9.06 mm at 0.005), and the flights' gain
-    follows no true bias (-0.40 to +0.26 per set). In-process dumps (``biasdump.py``, ``biasana.py``, ``errwin.py``;
-    identical poses to the CLI's): on seed 4 the graph's estimate is within 0.45 mrad/s of the truth from 1 s on at
-    0.01, but still (-2.0, -0.7, -0.5) at 1 s and (-1.2, -0.7, -0.2) at 2 s at 0.005; with the learnt bias the fused
-    tilt about y stays at -0 / +25 mdeg over 1.5-2 s while the registrations there sit +107 / +147 mdeg off. On flight 2
-    (true bias about y +0.09 mrad/s) the estimate about y runs -3.1 mrad/s off by 1 s and -3.6 at 2 s (0.005: -2.1 /
-    -3.0), and the fused tilt about y goes past the registrations (+413 against +290 mdeg at 1.75-2 s; 0.005 +356). Real
-    and ridge-made biases have the same size and are learnt over the same first second, so no prior width separates
-    them. Other knobs tried on the flights (their docstrings): ``gyro_bias_random_walk`` 1e-3,
-    ``registration_startup_s`` 1.0, ``registration_offset_tau_s`` 0.3, ``revision_readout_states`` 0 gain nothing;
-    ``registration_covariance_scale`` 15 with 0.005 moves along the same trade (flights 1-12 / 13-24 / 346x260 -0.97 /
-    -0.75 / -0.72 mm, nominal +0.12 +- 0.10; against 0.007 alone -0.15 +- 0.18, -0.16 +- 0.15, -0.11 +- 0.14, -0.07 +-
-    0.06: a little better in every set, none beyond its noise). The simulator draws 0.002 rad/s per axis; a real IMU's
-    prior belongs to its datasheet."""
+    Session 42 (tune42, ``/tmp/s42/tune42``; tuning set 240x180 flights 1-12, held out flights 13-24 and 346x260
+    flights; every figure in docs/measurements.md): 0.007 / 0.006 / 0.005 move the flights by -0.82 / -1.27 / -1.78 mm
+    and the nominal flight by +0.18 / +0.32 / +0.60 mm, the demo ``landing`` 6.554 -> 7.904 mm at 0.007. The nominal
+    flight's loose prior learns a real bias (its loss follows the simulator's true |bg_xy|, correlation +0.89), while
+    on the flights the graph learns the registrations' ridge error; the two have the same size and are learnt in the
+    same first second, so no prior width separates them. Not changed; a real IMU's prior belongs to its datasheet."""
     gyro_bias_hold_s: float = field(default=0.0, metadata={"min": 0.0, "max": 10.0, "step": 0.05, "unit": "s"})
     """For this long after each start of the fusion (``initialize``) the gyroscope bias is held at its initial value
     (prior sigma ``gyro_bias_hold_sigma`` instead of ``init_sigma_gyro_bias``), then released: the first state at or
