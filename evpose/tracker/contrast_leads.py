@@ -97,7 +97,9 @@ class ContrastLeadConfig:
     better, ARE deg). -0.1 pooled: 240x180 flights 1-12 (tuning) 14.187 -> 12.126 (-2.06 +- 0.57, 9 of 12), ARE 0.1885
     -> 0.1597; held-out flights 13-24 14.906 -> 13.798 (-1.11 +- 0.43, 10 of 12), ARE 0.1741 -> 0.1608; 346x260 flights
     1-12 and 15 12.956 -> 11.198 (-1.76 +- 0.40, 12 of 13), ARE 0.1836 -> 0.1569; the nominal flight, seeds 0-23 (the
-    path sessions 12-40 tuned on) 4.770 -> 4.922 (+0.15 +- 0.16, 10 of 24), ARE 0.0588 -> 0.0562. -0.2 pooled:
+    path sessions 12-40 tuned on) 4.770 -> 4.922 (+0.15 +- 0.16, 10 of 24), ARE 0.0588 -> 0.0562. The lead, same path: nominal
+    346x260 seeds 0-23 4.144 -> 4.204 (+0.059 +- 0.118, 10 of 24), 240x180 24-35 5.419 -> 5.292 (-0.127 +- 0.246, 6 of
+    12). -0.2 pooled:
     14.187 -> 10.629 (-3.56 +- 1.23, 7 of 12), ARE 0.1381; 14.906 -> 13.074 (-1.83 +- 0.77, 10 of 12); 12.956 -> 9.091
     (-3.87 +- 0.94, 12 of 13), ARE 0.1271; but nominal 4.770 -> 5.802 (+1.03 +- 0.28, 6 of 24), ARE 0.0588 -> 0.0709.
     -0.2 unpooled with ``min_events`` 3: flights 1-12 11.474 (-2.71 +- 0.96, 8 of 12). The bundled demos (346x260,
