@@ -8,6 +8,7 @@ from evpose.slam.config import FeatureConfig
 from evpose.slam.edge_slide import EdgeSlide, edge_directions, tensor_ratio
 from evpose.slam.event_image import event_image, to_uint8
 from evpose.slam.features import detect_features, track_features
+from tests.slam.test_features import _corners_and_noise
 
 
 def _step_image() -> np.ndarray:
@@ -58,20 +59,8 @@ def test_edge_slide_ignores_motion_across_the_edge_shared_with_the_neighbours():
     assert ok.all()
 
 
-def _dots_and_corners():
-    rng = np.random.default_rng(1)
-    xs, ys = [], []
-    for cx, cy in ((50, 40), (150, 40), (50, 120), (150, 120)):
-        s = rng.uniform(0, 25, 400)
-        xs += [cx + s[:200], np.full(200, cx) + rng.normal(0, 0.3, 200)]
-        ys += [np.full(200, cy) + rng.normal(0, 0.3, 200), cy + s[200:]]
-    xs.append(rng.uniform(10, 230, 60))
-    ys.append(rng.uniform(10, 170, 60))
-    return np.concatenate(xs), np.concatenate(ys)
-
-
 def test_weak_dot_gate_drops_isolated_dots_and_keeps_the_corners():
-    x, y = _dots_and_corners()
+    x, y = _corners_and_noise()
     img8 = to_uint8(event_image(x, y, None, 240, 180, 1.0))
     cfg = FeatureConfig()
     plain = detect_features(img8, cfg)

@@ -1,24 +1,13 @@
 """The shrinking side of the keyframe step check can give a young map up (``keyframe_step_drop_action`` ``lose``,
 :mod:`evpose.slam.keyframe_step`): a young map whose keyframe step collapsed is lost, an older one is left alone."""
 
-from types import SimpleNamespace
 
 import numpy as np
 
 from evpose.io.config_file import config_from_dict, config_to_dict
 from evpose.slam.config import SlamConfig
 from evpose.slam.keyframe_step import KeyframeStepAction, KeyframeStepDropAction, check_keyframe_step, keyframe_step_collapse
-
-
-def _T(x: float) -> np.ndarray:
-    T = np.eye(4)
-    T[:3, 3] = (x, 0.0, 0.0)
-    return T
-
-
-def _kfs():
-    """Keyframes every 50 ms at 2 units/s along x."""
-    return [SimpleNamespace(id=i, t_us=50000 * i, T_wc=_T(0.1 * i)) for i in range(4)]
+from tests.slam.test_keyframe_step_drop_s39 import _T, _kfs
 
 
 def _cfg(drop_action=KeyframeStepDropAction.LOSE, max_age_s=0.3):
