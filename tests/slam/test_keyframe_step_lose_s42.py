@@ -1,7 +1,6 @@
 """The shrinking side of the keyframe step check can give a young map up (``keyframe_step_drop_action`` ``lose``,
 :mod:`evpose.slam.keyframe_step`): a young map whose keyframe step collapsed is lost, an older one is left alone."""
 
-
 import numpy as np
 
 from evpose.io.config_file import config_from_dict, config_to_dict
