@@ -323,7 +323,10 @@ class FusionConfig:
     and the nominal flight by +0.18 / +0.32 / +0.60 mm, the demo ``landing`` 6.554 -> 7.904 mm at 0.007. The nominal
     flight's loose prior learns a real bias (its loss follows the simulator's true |bg_xy|, correlation +0.89), while
     on the flights the graph learns the registrations' ridge error; the two have the same size and are learnt in the
-    same first second, so no prior width separates them. Not changed; a real IMU's prior belongs to its datasheet."""
+    same first second, so no prior width separates them. With the lone lead on (the lead, ``/tmp/s42/lead/trk``:
+    ``runtc.sh``, ``sum.py``, against ``contrast.lone_lead_px`` -0.1 alone): 0.007 240x180 flights 1-24 12.962 -> 12.404
+    (-0.56 +- 0.16, 18 of 24), 346x260 flights 11.198 -> 10.637 (-0.56 +- 0.26, 11 of 13), nominal seeds 0-23 4.922 ->
+    5.151 (+0.23 +- 0.09, 6 of 24). Not changed; a real IMU's prior belongs to its datasheet."""
     gyro_bias_hold_s: float = field(default=0.0, metadata={"min": 0.0, "max": 10.0, "step": 0.05, "unit": "s"})
     """For this long after each start of the fusion (``initialize``) the gyroscope bias is held at its initial value
     (prior sigma ``gyro_bias_hold_sigma`` instead of ``init_sigma_gyro_bias``), then released: the first state at or
