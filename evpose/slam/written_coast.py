@@ -30,10 +30,11 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from evpose.core.trajectory import invert_pose
 from evpose.slam.atlas import SlamMap
 from evpose.slam.coasting import camera_frame_velocity, coast_pose
 from evpose.slam.event_coasting import camera_frame_rate, event_only_coast_pose
-from evpose.slam.geometry import camera_depths
+from evpose.slam.geometry import project
 
 
 @dataclass
@@ -130,11 +131,8 @@ def depth_in_view(m: SlamMap, K: np.ndarray, shape: tuple[int, int], min_points:
     def depth(T_wc: np.ndarray) -> float | None:
         if len(X) < min_points:
             return None
-        z = camera_depths(T_wc, X)
-        Xc = (X - T_wc[:3, 3]) @ T_wc[:3, :3]
-        front = z > 1e-9
-        uv = (Xc[front] / z[front, None]) @ K.T
-        inside = (uv[:, 0] >= 0) & (uv[:, 0] < shape[1]) & (uv[:, 1] >= 0) & (uv[:, 1] < shape[0])
-        return float(np.median(z[front][inside])) if inside.sum() >= min_points else None
+        uv, z = project(K, invert_pose(T_wc), X)
+        inside = (z > 1e-9) & (uv[:, 0] >= 0) & (uv[:, 0] < shape[1]) & (uv[:, 1] >= 0) & (uv[:, 1] < shape[0])
+        return float(np.median(z[inside])) if inside.sum() >= min_points else None
 
     return depth

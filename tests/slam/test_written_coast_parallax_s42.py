@@ -91,3 +91,21 @@ def test_span_by_gap_keeps_a_dense_coast_and_lengthens_a_step_across_a_blank():
                                written_coast_pose(m, blank, 30_000, 5000, lambda dR0: None, None, 150_000), atol=1e-15)
     assert written_coast_pose(m, blank, 30_000, 5000, lambda dR0: None, None, 150_000, True)[0, 3] > \
         written_coast_pose(m, blank, 30_000, 5000, lambda dR0: None)[0, 3] + 0.03
+
+
+def test_depth_in_view_is_the_median_depth_of_the_points_inside_the_image():
+    from evpose.slam.atlas import MapPoint, SlamMap
+    from evpose.slam.written_coast import depth_in_view
+
+    K = np.array([[100.0, 0, 50], [0, 100.0, 40], [0, 0, 1]])
+    m = SlamMap(0)
+    xyz = [(0, 0, 2.0), (0.1, 0, 3.0), (0, 0.1, 4.0), (-0.1, 0, 5.0), (0, -0.1, 6.0),  # in view, depths 2-6
+           (5.0, 0, 1.0), (0, 0, -3.0)]  # outside the image, behind the camera
+    for k, X in enumerate(xyz):
+        m.points[k] = MapPoint(k, np.array(X, float))
+    depth = depth_in_view(m, K, (80, 100))
+    assert depth(np.eye(4)) == 4.0
+    assert depth_in_view(m, K, (80, 100), min_points=6)(np.eye(4)) is None
+    T = np.eye(4)
+    T[2, 3] = -1.0  # one unit back: every in-view depth grows by one
+    assert depth(T) == 5.0
