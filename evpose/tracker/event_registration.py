@@ -247,15 +247,15 @@ import numpy as np
 
 from evpose.tracker.event_registration_config import EventRegistrationConfig, scaled_to_pixel  # noqa: F401 (re-exported)
 from evpose.tracker.edge_clusters import EdgeTerms, edge_ids_for
+from evpose.tracker.event_gauss_newton import passes_compiled, passes_python
 from evpose.tracker.event_lag import lead_terms
-from evpose.tracker.event_registration_kernels import (NO_EVENT, _associate_nearest, _kept_events, _learn_offsets, _linearise_events,
+from evpose.tracker.event_registration_kernels import (NO_EVENT, _associate_nearest, _kept_events, _learn_offsets,
                                                        _pixel_gaps)
 from evpose.tracker.contrast_leads import PassageCounts
 from evpose.tracker.covered_feet import add_covered_foot_lead, foot_rise
 from evpose.tracker.grazing import crease_points, point_leads
 from evpose.core.lapack_calls import inv
 from evpose.tracker.registration import _eigvalsh, _inv, _isotropic_information
-from evpose.tracker.registration_kernels import _lm_step
 
 _NO_POLARITY = np.zeros(0, np.int8)
 _NO_TWIST = np.zeros(6)
@@ -371,10 +371,7 @@ class EventRegistration:
             return None
         H, b = np.zeros((6, 6)), np.zeros(6)
         sw, swr = np.empty(m), np.empty(m)
-        pose = gtsam.Pose3(mat=T)  # by name: pybind11 takes the matrix overload at once (the 5th of 5, ~1.7 us less)
-        info = None
-        if prior is not None:
-            T_p, info = gtsam.Pose3(mat=prior[0]), prior[1]
+        info = None if prior is None else prior[1]
         leads = self._leads(used, T, xi, K)
         if self._passages is not None:  # this step's events count before its leads are set
             self._passages.update(n, assoc, used, pts, tg, eg, R_cw, t_cw, K, None if twist is None else xi)
@@ -382,31 +379,17 @@ class EventRegistration:
         burst = self._burst if xi is _NO_TWIST else lead_terms(self._burst, c.lag, fx)  # no twist: no speeds
         edges = EdgeTerms(c.edge_clusters, self._clusters, used)
         args = (*leads, eg, burst, float(c.huber_px), float(c.gate_px), H, b, sw, swr, edges.swj, edges.pscale)
-        n_it = int(c.iterations)
-        t_ref = int(t_us)
-        for it in range(n_it + 1):
-            mat = pose.matrix()
-            R_cw = np.ascontiguousarray(mat[:3, :3].T)
-            t_cw = -R_cw @ mat[:3, 3]
-            _, n_used, swr2 = _linearise_events(n, ex, ey, et, ep, assoc, pts, tg, R_cw, t_cw, fx, fy, cx, cy, xi, t_ref, *args)
-            if n_used < int(c.min_events):
-                return None
-            edges.after_pass(it == n_it, sw, swr, H, b)  # per-edge terms (evpose.tracker.edge_clusters), when on
-            if it == n_it:
-                break  # the last pass measures the covariance and the points' distances at the final pose
-            if info is not None:  # H + info, b + info e, the damped solve and its finiteness test in one call
-                delta, finite = _lm_step(H, b, info, info @ T_p.logmap(pose), True, 0.0)
-            else:
-                delta, finite = _lm_step(H, b, H, b, False, 0.0)
-            if not finite:
-                return None
-            pose = pose.compose(gtsam.Pose3.Expmap(delta))
+        out = (passes_python if edges.swj.size or edges.pscale.size else passes_compiled)(  # per-edge terms: between passes
+            int(c.iterations), int(c.min_events), T, prior, edges, n, ex, ey, et, ep, assoc, pts, tg, fx, fy, cx, cy, xi, int(t_us), args)
+        if out is None:
+            return None
+        pose_mat, n_used, swr2, R_cw, t_cw = out
         Hf = H + info if info is not None else H
         if not _eigvalsh(0.5 * (Hf + Hf.T))[0] > 0:
             return None
         cov = _inv(Hf) * (swr2 / max(n_used - 6, 1)) * float(c.covariance_scale)
         self._last = (used, sw, swr, R_cw, t_cw, (fx, fy, cx, cy))
-        return pose.matrix(), 0.5 * (cov + cov.T)
+        return pose_mat, 0.5 * (cov + cov.T)
 
     def _leads(self, used: np.ndarray, T: np.ndarray, twist: np.ndarray | None = None,
                K: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
