@@ -3,7 +3,7 @@
 Each step of that loop was a numba pass over the events plus ~15 small Python, numpy and gtsam calls (the pose's
 matrix, the camera-from-world rotation, the prior's residual, the damped solve, ``Exp`` and ``compose``), which cost
 about what the pass itself does. Here the passes, the prior's terms, the solve and the pose's step run in one call,
-the SE(3) algebra in :mod:`evpose.tracker.se3_kernels`: the poses agree with the Python loop's to rounding (~1e-16
+the SE(3) algebra in :mod:`evpose.core.se3_kernels`: the poses agree with the Python loop's to rounding (~1e-16
 relative per step), not bit for bit. The Python loop (:func:`passes_python`) stays for the per-edge terms
 (``edge_clusters``), whose weights it updates between passes.
 
@@ -22,7 +22,7 @@ import numpy as np
 
 from evpose.tracker.event_registration_kernels import _linearise_events
 from evpose.tracker.registration_kernels import _damped_step, _lm_step
-from evpose.tracker.se3_kernels import between_log, inverse_into, step_pose
+from evpose.core.se3_kernels import between_log, inverse_into, step_pose
 
 _EYE4 = np.eye(4)
 _ZERO6x6 = np.zeros((6, 6))

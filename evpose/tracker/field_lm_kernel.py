@@ -4,7 +4,7 @@ one compiled call.
 Each iteration was two numba calls (the damped solve and a 26-argument linearisation, ~4 us of dispatch each) and
 ~10 gtsam / numpy calls in Python (``Exp``, ``compose``, ``inverse().matrix()``, the prior's ``logmap`` and its two
 products, the step's norms). Here the linearisations, the prior's terms, the damping and the acceptance test run in
-one call, the SE(3) algebra in :mod:`evpose.tracker.se3_kernels`: the same algorithm, its poses equal to the Python
+one call, the SE(3) algebra in :mod:`evpose.core.se3_kernels`: the same algorithm, its poses equal to the Python
 loop's to rounding (~1e-16 relative per step), not bit for bit (an acceptance test on the edge may then go the
 other way).
 """
@@ -15,7 +15,7 @@ import numba as nb
 import numpy as np
 
 from evpose.tracker.registration_kernels import _damped_step, _linearise
-from evpose.tracker.se3_kernels import between_log, compose_into, inverse_into, se3_exp
+from evpose.core.se3_kernels import between_log, compose_into, inverse_into, se3_exp
 
 
 @nb.njit(cache=True, inline="always")

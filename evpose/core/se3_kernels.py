@@ -1,7 +1,7 @@
 """SE(3) algebra for the compiled registration loops: a pose is a rotation ``R`` (3, 3) and a translation ``t`` (3,),
 tangent vectors are in gtsam's order (rotation, translation) with the right perturbation ``T Exp(xi)``.
 
-The loops of :mod:`evpose.tracker.field_lm_kernel` and :mod:`evpose.tracker.event_gauss_newton` step their pose
+The registrations' loops (:mod:`evpose.tracker.field_lm_kernel`, :mod:`evpose.tracker.event_gauss_newton`) step their pose
 here instead of through gtsam's ``Pose3`` in Python (a Python round trip per step cost more than the step). The
 formulas are gtsam's (``Pose3::Expmap`` / ``Logmap``: Rodrigues' rotation and the left Jacobian of SO(3) on the
 translation, its inverse for the logarithm, series near zero angle) in a different summation order, so a pose
