@@ -242,7 +242,6 @@ into the next prediction (+3.1 mm). Weighing each tangent component on its own k
 
 from __future__ import annotations
 
-import gtsam
 import numpy as np
 
 from evpose.tracker.event_registration_config import EventRegistrationConfig, scaled_to_pixel  # noqa: F401 (re-exported)
@@ -254,8 +253,9 @@ from evpose.tracker.event_registration_kernels import (NO_EVENT, _associate_near
 from evpose.tracker.contrast_leads import PassageCounts
 from evpose.tracker.covered_feet import add_covered_foot_lead, foot_rise
 from evpose.tracker.grazing import crease_points, point_leads
-from evpose.core.lapack_calls import inv
-from evpose.tracker.registration import _eigvalsh, _inv, _isotropic_information
+from evpose.tracker.pose_combination import combine_poses
+from evpose.core.spd_kernels import spd_inverse
+from evpose.tracker.registration import _isotropic_information
 
 _NO_POLARITY = np.zeros(0, np.int8)
 _NO_TWIST = np.zeros(6)
@@ -384,12 +384,11 @@ class EventRegistration:
         if out is None:
             return None
         pose_mat, n_used, swr2, R_cw, t_cw = out
-        Hf = H + info if info is not None else H
-        if not _eigvalsh(0.5 * (Hf + Hf.T))[0] > 0:
+        cov = np.empty((6, 6))
+        if not spd_inverse(H + info if info is not None else H, cov):  # not positive definite
             return None
-        cov = _inv(Hf) * (swr2 / max(n_used - 6, 1)) * float(c.covariance_scale)
         self._last = (used, sw, swr, R_cw, t_cw, (fx, fy, cx, cy))
-        return pose_mat, 0.5 * (cov + cov.T)
+        return pose_mat, cov * ((swr2 / max(n_used - 6, 1)) * float(c.covariance_scale))
 
     def _leads(self, used: np.ndarray, T: np.ndarray, twist: np.ndarray | None = None,
                K: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -444,25 +443,6 @@ class EventRegistration:
         else:
             reg.T_world_cam, reg.covariance = out
         return True
-
-
-def combine_poses(T_f: np.ndarray, cov_f: np.ndarray, T_e: np.ndarray, cov_e: np.ndarray, convex: bool = False):
-    """(pose, covariance) of the field registration's pose ``T_f`` (covariance ``cov_f``, its tangent space, gtsam
-    order) combined with the events' ``T_e`` (``cov_e``) by their informations, in ``T_f``'s tangent space. The
-    covariance is the full combination's; the pose its information-weighted mean, or with ``convex`` each tangent
-    component weighted by the two diagonal informations alone (between the two poses, never beyond: see
-    ``EventRegistrationConfig.combine_convex``)."""
-    T_f = gtsam.Pose3(mat=T_f)  # named: see _refine
-    e = T_f.logmap(gtsam.Pose3(mat=T_e))
-    I_f = inv(cov_f)  # a singular one raises as np.linalg.inv
-    I_e = _inv(cov_e)  # positive definite (checked by the caller), as the sum below
-    P = _inv(I_f + I_e)
-    if convex:
-        d_f, d_e = I_f.diagonal(), I_e.diagonal()  # np.diag's own call, without its wrapper
-        step = d_e / (d_f + d_e) * e
-    else:
-        step = P @ (I_e @ e)
-    return T_f.compose(gtsam.Pose3.Expmap(step)).matrix(), 0.5 * (P + P.T)
 
 
 def event_registration_for(config, contour_map, tangents: np.ndarray, width: int, height: int,

@@ -96,3 +96,47 @@ def test_compiled_field_lm_loop_equals_the_python_loop_to_rounding(with_prior):
     assert np.abs(start.logmap(new[0])).max() > 1e-2  # it moved
     assert np.abs(new[0].logmap(old[0])).max() < 1e-13
     assert abs(new[1] - old[1]) <= 1e-10 * abs(old[1]) and np.allclose(new[6], old[4], rtol=1e-9, atol=1e-12)
+
+
+def _spd(rng, scale):
+    M = rng.normal(size=(6, 6))
+    return (M @ M.T + 0.1 * np.eye(6)) * scale
+
+
+def test_compiled_pose_combination_equals_the_gtsam_recipe_to_rounding():
+    from evpose.tracker.pose_combination import _combine_python, combine_poses
+
+    rng = np.random.default_rng(6)
+    for _ in range(50):
+        T_f = gtsam.Pose3.Expmap(rng.normal(size=6)).matrix()
+        T_e = (gtsam.Pose3(mat=T_f) * gtsam.Pose3.Expmap(rng.normal(size=6) * 2e-3)).matrix()
+        cov_f, cov_e = _spd(rng, 1e-6), _spd(rng, 1e-6)
+        for convex in (False, True):
+            T, P = combine_poses(T_f, cov_f, T_e, cov_e, convex)
+            T_ref, P_ref = _combine_python(T_f, cov_f, T_e, cov_e, convex)
+            assert np.abs(T - T_ref).max() < 1e-14 and np.array_equal(T[3], [0, 0, 0, 1])
+            assert np.allclose(P, P_ref, rtol=1e-9, atol=0) and np.array_equal(P, P.T)
+
+
+def test_a_singular_field_covariance_still_raises_and_an_indefinite_events_one_is_not_combined_by_cholesky():
+    from evpose.tracker.pose_combination import _combine_kernel, combine_poses
+
+    rng = np.random.default_rng(7)
+    T = np.eye(4)
+    with pytest.raises(np.linalg.LinAlgError):
+        combine_poses(T, np.zeros((6, 6)), T, _spd(rng, 1.0))
+    indefinite = _spd(rng, 1.0) - 50.0 * np.eye(6)
+    assert not _combine_kernel(T, _spd(rng, 1.0), T, indefinite, False, np.empty((4, 4)), np.empty((6, 6)))
+
+
+def test_spd_inverse_equals_lapack_to_rounding_and_rejects_what_is_not_positive_definite():
+    from evpose.core.spd_kernels import spd_inverse
+
+    rng = np.random.default_rng(8)
+    out = np.empty((6, 6))
+    for _ in range(50):
+        A = _spd(rng, 10.0 ** rng.uniform(-6, 6))
+        assert spd_inverse(A, out) and np.allclose(out, np.linalg.inv(A), rtol=1e-8, atol=0) and np.array_equal(out, out.T)
+    assert not spd_inverse(-np.eye(6), out)
+    assert not spd_inverse(np.diag([1.0, 1, 1, 1, 1, 0]), out)
+    assert not spd_inverse(np.full((6, 6), np.nan), out)
