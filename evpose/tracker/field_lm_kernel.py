@@ -16,6 +16,7 @@ import numpy as np
 
 from evpose.tracker.registration_kernels import _damped_step, _linearise
 from evpose.core.se3_kernels import between_log, compose_into, inverse_into, se3_exp
+from evpose.core.spd_kernels import spd_inverse, sym_eigenvalues
 
 
 @nb.njit(cache=True, inline="always")
@@ -105,3 +106,51 @@ def lm_loop(R, t, pts, slots, fx, fy, cx, cy, value, grad_u, grad_v, box, second
             if lam > 1e6:
                 break
     return cost, inside, inl, swr2, swr2_in, it, swapped
+
+
+OK, NON_FINITE, DEGENERATE, NO_WEIGHT, NO_COVARIANCE = 0, 1, 2, 3, 4
+""":func:`health_and_covariance`'s outcomes: covariance written; ``H`` not finite; not all 6 degrees of freedom
+constrained; the residual variance not > 0; success without a covariance (the caller's prior taken out leaves
+``H`` not positive definite)."""
+
+
+@nb.njit(cache=True)
+def health_and_covariance(H, max_condition, sigma2, without_prior, prior_info, ad, cov):
+    """The registration's final checks on its normal matrix ``H`` (prior included) and its covariance ``ad (H -
+    [prior_info if without_prior]) ^-1 ad^T sigma2`` into ``cov`` (exactly symmetric): one of the outcomes above.
+    Degenerate: the diagonally normalised ``H`` not positive definite or conditioned worse than ``max_condition``."""
+    for i in range(6):
+        for j in range(6):
+            if not np.isfinite(H[i, j]):
+                return NON_FINITE
+    d = np.empty(6)
+    for i in range(6):
+        d[i] = np.sqrt(max(H[i, i], 1e-300))
+    Hn = np.empty((6, 6))
+    for i in range(6):
+        for j in range(6):
+            Hn[i, j] = H[i, j] / (d[i] * d[j])
+    w = np.empty(6)
+    sym_eigenvalues(Hn, w)
+    if not w[0] > 0 or w[5] / w[0] > max_condition:  # not > 0: also NaN
+        return DEGENERATE
+    if not sigma2 > 0:
+        return NO_WEIGHT
+    C = np.empty((6, 6))
+    if not spd_inverse(H - prior_info if without_prior else H, C):
+        return NO_COVARIANCE if without_prior else DEGENERATE
+    A = np.empty((6, 6))
+    for i in range(6):
+        for j in range(6):
+            acc = 0.0
+            for k in range(6):
+                acc += ad[i, k] * C[k, j]
+            A[i, j] = acc * sigma2
+    for i in range(6):
+        for j in range(i, 6):  # the upper triangle, mirrored: exactly symmetric
+            acc = 0.0
+            for k in range(6):
+                acc += A[i, k] * ad[j, k]
+            cov[i, j] = acc
+            cov[j, i] = acc
+    return OK

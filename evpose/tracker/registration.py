@@ -31,9 +31,9 @@ from evpose.tracker.registration_kernels import (  # noqa: F401 (_rho_weight, _l
     _NO_EXTRA, _NO_PRIOR_TERMS, _NO_TANGENTS, _NO_TWIST, _damped_step, _linearise, _linearise_at, _lm_step, _rho_weight,
     _polarity_trail_kernel, _strided_kernel)
 from evpose.tracker.registration_config import RegistrationConfig, ResidualVariance, RobustLoss  # noqa: F401 (re-exported)
-from evpose.tracker.field_lm_kernel import lm_loop
+from evpose.tracker.field_lm_kernel import DEGENERATE, NO_COVARIANCE, NO_WEIGHT, NON_FINITE, health_and_covariance, lm_loop
 
-_EYE4 = np.eye(4)
+_EYE4, _ZERO6x6 = np.eye(4), np.zeros((6, 6))
 _LOSS_ID = {RobustLoss.L2: 0, RobustLoss.HUBER: 1, RobustLoss.CAUCHY: 2, RobustLoss.TUKEY: 3}
 
 
@@ -255,26 +255,21 @@ def register_to_map(
         return result(False, f"only {inside} map points project into the image (need {config.min_points})", None)
     if inl < config.min_inlier_ratio * inside:
         return result(False, f"only {inl} of {inside} map points lie on recent events (TDF < {thr:g})", None)
-    if not np.isfinite(H).all():
-        return result(False, "registration produced non-finite values", None)
-    d = np.sqrt(np.maximum(H.diagonal(), 1e-300))
-    eig = _eigvalsh(H / (d[:, None] * d[None, :]))  # np.outer's own expression, without its wrapper
-    if not eig[0] > 0 or eig[-1] / eig[0] > config.max_condition:  # not > 0: also NaN from a failed solver
-        return result(False, "degenerate geometry: the visible map does not constrain all 6 degrees of freedom", None)
     # Points reading TDF ~1 (their edge did not fire) add nothing to H but w r^2 ~ w each: counted in the residual
     # variance they inflate the covariance several times over (see ``ResidualVariance``).
     sigma2 = (swr2[1] if ResidualVariance(config.residual_variance) is ResidualVariance.INLIERS else swr2[0]) / max(inl - 6, 1)
-    if not sigma2 > 0:
+    # With ``prior_information`` the caller fuses the prior itself (a motion filter): the covariance is the events' alone.
+    # Moving the pose by ``lag`` (right) maps a body perturbation d to Ad(lag^-1) d.
+    without_prior = prior is not None and prior_information is not None
+    cov = np.empty((6, 6))
+    status = health_and_covariance(H, float(config.max_condition), sigma2, without_prior, prior[1] if without_prior else _ZERO6x6,
+                                   lag_inv.AdjointMap(), cov)
+    if status == NON_FINITE:
+        return result(False, "registration produced non-finite values", None)
+    if status == DEGENERATE:
+        return result(False, "degenerate geometry: the visible map does not constrain all 6 degrees of freedom", None)
+    if status == NO_WEIGHT:
         # Every residual outside the loss's support (Tukey with a scale below the residuals: weight 0): H is the prior's
         # alone and the covariance would be 0, which made the fused modes raise "Singular matrix" (session 25).
         return result(False, f"no map point's residual lies within the {RobustLoss(config.robust_loss).value} loss's scale {k:g} (all weights 0)", None)
-    if prior is not None and prior_information is not None:
-        # The caller fuses the prior itself (a motion filter): report what the events alone say.
-        H = H - prior[1]
-        if not _eigvalsh(0.5 * (H + H.T))[0] > 0:
-            return result(True, "", None)
-    cov = _inv(H) * sigma2
-    # Moving the pose by ``lag`` (right) maps a body perturbation d to Ad(lag^-1) d.
-    ad = lag_inv.AdjointMap()
-    cov = ad @ cov @ ad.T
-    return result(True, "", 0.5 * (cov + cov.T))
+    return result(True, "", None if status == NO_COVARIANCE else cov)

@@ -140,3 +140,38 @@ def test_spd_inverse_equals_lapack_to_rounding_and_rejects_what_is_not_positive_
     assert not spd_inverse(-np.eye(6), out)
     assert not spd_inverse(np.diag([1.0, 1, 1, 1, 1, 0]), out)
     assert not spd_inverse(np.full((6, 6), np.nan), out)
+
+
+def test_jacobi_eigenvalues_equal_lapack_on_normalised_normal_matrices():
+    from evpose.core.spd_kernels import sym_eigenvalues
+
+    rng = np.random.default_rng(9)
+    w = np.empty(6)
+    for _ in range(200):
+        Q, _ = np.linalg.qr(rng.normal(size=(6, 6)))
+        A = Q @ np.diag(10.0 ** rng.uniform(-8, 0, 6)) @ Q.T
+        d = np.sqrt(A.diagonal())
+        A = A / (d[:, None] * d[None, :])
+        sym_eigenvalues(A, w)
+        ref = np.linalg.eigvalsh(A)
+        assert np.abs(w - ref).max() < 1e-14 * ref[-1] and np.all(np.diff(w) >= 0)
+
+
+def test_field_health_and_covariance_match_the_lapack_recipe_and_report_each_failure():
+    from evpose.tracker import field_lm_kernel as fk
+
+    rng = np.random.default_rng(10)
+    H, info = _spd(rng, 1e4), np.diag([1e3] * 6)
+    ad = gtsam.Pose3.Expmap(rng.normal(size=6) * 1e-2).AdjointMap()
+    cov = np.empty((6, 6))
+    for without_prior in (False, True):
+        assert fk.health_and_covariance(H + info, 1e8, 0.3, without_prior, info, ad, cov) == fk.OK
+        ref = ad @ (np.linalg.inv(H if without_prior else H + info) * 0.3) @ ad.T
+        assert np.allclose(cov, ref, rtol=1e-9, atol=0) and np.array_equal(cov, cov.T)
+    assert fk.health_and_covariance(np.full((6, 6), np.nan), 1e8, 0.3, False, info, ad, cov) == fk.NON_FINITE
+    flat = np.eye(6)
+    flat[0, 3] = flat[3, 0] = 1.0 - 1e-10  # two directions nearly alike: condition ~2e10 (the scale alone does not count)
+    assert fk.health_and_covariance(flat, 1e8, 0.3, False, info, ad, cov) == fk.DEGENERATE
+    assert fk.health_and_covariance(flat, 1e12, 0.3, False, info, ad, cov) == fk.OK
+    assert fk.health_and_covariance(H, 1e8, 0.0, False, info, ad, cov) == fk.NO_WEIGHT
+    assert fk.health_and_covariance(H, 1e8, 0.3, True, H + np.eye(6), ad, cov) == fk.NO_COVARIANCE
