@@ -6,7 +6,14 @@ Each iteration was two numba calls (the damped solve and a 26-argument linearisa
 products, the step's norms). Here the linearisations, the prior's terms, the damping and the acceptance test run in
 one call, the SE(3) algebra in :mod:`evpose.core.se3_kernels`: the same algorithm, its poses equal to the Python
 loop's to rounding (~1e-16 relative per step), not bit for bit (an acceptance test on the edge may then go the
-other way).
+other way). :func:`health_and_covariance` does the final checks and the covariance alike (Jacobi eigenvalues and a
+Cholesky inverse, :mod:`evpose.core.spd_kernels`, instead of ~12 numpy / LAPACK calls).
+
+Measured (session 43, ``/tmp/s43/lm43``; 346x260 2 s landing seed 0, main 29e1c44 against these kernels with the
+event registration's and the read-out's, two sessions stepped alternately in one process, 1181 updates, load ~5):
+CPU per update 3.540 -> 3.316 ms median (paired -0.214 +- 0.008 ms), p99 5.35 -> 4.87; the registration stage -0.188
+ms (the field's -0.092, the events' -0.096), the fusion's read-out -0.021. Every issue-7 set's ATE the same to
+1e-10 mm, poses within 5e-13 m of main's.
 """
 
 from __future__ import annotations
