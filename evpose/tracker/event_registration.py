@@ -242,20 +242,20 @@ into the next prediction (+3.1 mm). Weighing each tangent component on its own k
 
 from __future__ import annotations
 
-import gtsam
 import numpy as np
 
 from evpose.tracker.event_registration_config import EventRegistrationConfig, scaled_to_pixel  # noqa: F401 (re-exported)
 from evpose.tracker.edge_clusters import EdgeTerms, edge_ids_for
+from evpose.tracker.event_gauss_newton import passes_compiled, passes_python
 from evpose.tracker.event_lag import lead_terms
-from evpose.tracker.event_registration_kernels import (NO_EVENT, _associate_nearest, _kept_events, _learn_offsets, _linearise_events,
+from evpose.tracker.event_registration_kernels import (NO_EVENT, _associate_nearest, _kept_events, _learn_offsets,
                                                        _pixel_gaps)
 from evpose.tracker.contrast_leads import PassageCounts
 from evpose.tracker.covered_feet import add_covered_foot_lead, foot_rise
 from evpose.tracker.grazing import crease_points, point_leads
-from evpose.core.lapack_calls import inv
-from evpose.tracker.registration import _eigvalsh, _inv, _isotropic_information
-from evpose.tracker.registration_kernels import _lm_step
+from evpose.tracker.pose_combination import combine_poses
+from evpose.core.spd_kernels import spd_inverse
+from evpose.tracker.registration import _isotropic_information
 
 _NO_POLARITY = np.zeros(0, np.int8)
 _NO_TWIST = np.zeros(6)
@@ -371,10 +371,7 @@ class EventRegistration:
             return None
         H, b = np.zeros((6, 6)), np.zeros(6)
         sw, swr = np.empty(m), np.empty(m)
-        pose = gtsam.Pose3(mat=T)  # by name: pybind11 takes the matrix overload at once (the 5th of 5, ~1.7 us less)
-        info = None
-        if prior is not None:
-            T_p, info = gtsam.Pose3(mat=prior[0]), prior[1]
+        info = None if prior is None else prior[1]
         leads = self._leads(used, T, xi, K)
         if self._passages is not None:  # this step's events count before its leads are set
             self._passages.update(n, assoc, used, pts, tg, eg, R_cw, t_cw, K, None if twist is None else xi)
@@ -382,31 +379,16 @@ class EventRegistration:
         burst = self._burst if xi is _NO_TWIST else lead_terms(self._burst, c.lag, fx)  # no twist: no speeds
         edges = EdgeTerms(c.edge_clusters, self._clusters, used)
         args = (*leads, eg, burst, float(c.huber_px), float(c.gate_px), H, b, sw, swr, edges.swj, edges.pscale)
-        n_it = int(c.iterations)
-        t_ref = int(t_us)
-        for it in range(n_it + 1):
-            mat = pose.matrix()
-            R_cw = np.ascontiguousarray(mat[:3, :3].T)
-            t_cw = -R_cw @ mat[:3, 3]
-            _, n_used, swr2 = _linearise_events(n, ex, ey, et, ep, assoc, pts, tg, R_cw, t_cw, fx, fy, cx, cy, xi, t_ref, *args)
-            if n_used < int(c.min_events):
-                return None
-            edges.after_pass(it == n_it, sw, swr, H, b)  # per-edge terms (evpose.tracker.edge_clusters), when on
-            if it == n_it:
-                break  # the last pass measures the covariance and the points' distances at the final pose
-            if info is not None:  # H + info, b + info e, the damped solve and its finiteness test in one call
-                delta, finite = _lm_step(H, b, info, info @ T_p.logmap(pose), True, 0.0)
-            else:
-                delta, finite = _lm_step(H, b, H, b, False, 0.0)
-            if not finite:
-                return None
-            pose = pose.compose(gtsam.Pose3.Expmap(delta))
-        Hf = H + info if info is not None else H
-        if not _eigvalsh(0.5 * (Hf + Hf.T))[0] > 0:
+        out = (passes_python if edges.swj.size or edges.pscale.size else passes_compiled)(  # per-edge terms: between passes
+            int(c.iterations), int(c.min_events), T, prior, edges, n, ex, ey, et, ep, assoc, pts, tg, fx, fy, cx, cy, xi, int(t_us), args)
+        if out is None:
             return None
-        cov = _inv(Hf) * (swr2 / max(n_used - 6, 1)) * float(c.covariance_scale)
+        pose_mat, n_used, swr2, R_cw, t_cw = out
+        cov = np.empty((6, 6))
+        if not spd_inverse(H + info if info is not None else H, cov):  # not positive definite
+            return None
         self._last = (used, sw, swr, R_cw, t_cw, (fx, fy, cx, cy))
-        return pose.matrix(), 0.5 * (cov + cov.T)
+        return pose_mat, cov * ((swr2 / max(n_used - 6, 1)) * float(c.covariance_scale))
 
     def _leads(self, used: np.ndarray, T: np.ndarray, twist: np.ndarray | None = None,
                K: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -461,25 +443,6 @@ class EventRegistration:
         else:
             reg.T_world_cam, reg.covariance = out
         return True
-
-
-def combine_poses(T_f: np.ndarray, cov_f: np.ndarray, T_e: np.ndarray, cov_e: np.ndarray, convex: bool = False):
-    """(pose, covariance) of the field registration's pose ``T_f`` (covariance ``cov_f``, its tangent space, gtsam
-    order) combined with the events' ``T_e`` (``cov_e``) by their informations, in ``T_f``'s tangent space. The
-    covariance is the full combination's; the pose its information-weighted mean, or with ``convex`` each tangent
-    component weighted by the two diagonal informations alone (between the two poses, never beyond: see
-    ``EventRegistrationConfig.combine_convex``)."""
-    T_f = gtsam.Pose3(mat=T_f)  # named: see _refine
-    e = T_f.logmap(gtsam.Pose3(mat=T_e))
-    I_f = inv(cov_f)  # a singular one raises as np.linalg.inv
-    I_e = _inv(cov_e)  # positive definite (checked by the caller), as the sum below
-    P = _inv(I_f + I_e)
-    if convex:
-        d_f, d_e = I_f.diagonal(), I_e.diagonal()  # np.diag's own call, without its wrapper
-        step = d_e / (d_f + d_e) * e
-    else:
-        step = P @ (I_e @ e)
-    return T_f.compose(gtsam.Pose3.Expmap(step)).matrix(), 0.5 * (P + P.T)
 
 
 def event_registration_for(config, contour_map, tangents: np.ndarray, width: int, height: int,

@@ -10,17 +10,16 @@ IRLS: the robust weight multiplies residual *and* Jacobian (normal equations
 ``J^T W J xi = -J^T W r``), unlike ESVO which weights the residual only.
 Covariance is ``(J^T W J)^-1 * sigma^2`` with the weighted residual variance.
 All per-point work for one linearisation is one numba pass, and the damped 6x6
-solve (prior added) another (:mod:`evpose.tracker.registration_kernels`); the SE(3) algebra (gtsam ``Pose3``) and the prior's
-terms stay in gtsam / numpy, whose rounding a compiled copy would not reproduce
-(numpy's small products go through OpenBLAS). What a call costs besides its
-points, from ``tracking.registration_cost`` (2 s landing, 346x260, load ~6):
+solve (prior added) another (:mod:`evpose.tracker.registration_kernels`); the whole LM loop, the SE(3) algebra
+and the prior's terms included, is one compiled call (:mod:`evpose.tracker.field_lm_kernel`, session 43; before,
+gtsam and numpy in Python, whose rounding the compiled loop matches only to ~1e-16). What a call cost besides its
+points before that, from ``tracking.registration_cost`` (2 s landing, 346x260, load ~6):
 25-65 us per call and 8-11 us per linearisation (57-90 and 12-17 before these
 helpers), next to ~65-90 ns per point and linearisation.
 """
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -32,7 +31,9 @@ from evpose.tracker.registration_kernels import (  # noqa: F401 (_rho_weight, _l
     _NO_EXTRA, _NO_PRIOR_TERMS, _NO_TANGENTS, _NO_TWIST, _damped_step, _linearise, _linearise_at, _lm_step, _rho_weight,
     _polarity_trail_kernel, _strided_kernel)
 from evpose.tracker.registration_config import RegistrationConfig, ResidualVariance, RobustLoss  # noqa: F401 (re-exported)
+from evpose.tracker.field_lm_kernel import DEGENERATE, NO_COVARIANCE, NO_WEIGHT, NON_FINITE, health_and_covariance, lm_loop
 
+_EYE4, _ZERO6x6 = np.eye(4), np.zeros((6, 6))
 _LOSS_ID = {RobustLoss.L2: 0, RobustLoss.HUBER: 1, RobustLoss.CAUCHY: 2, RobustLoss.TUKEY: 3}
 
 
@@ -87,15 +88,6 @@ def polarity_trail(polarity: np.ndarray, off: float, on: float, both: float) -> 
     _polarity_trail_kernel(p, float(off), float(on), float(both), out)
     return out
 
-def _prior_terms(pose: gtsam.Pose3, prior):
-    """(cost, gradient, information) of the pose prior at ``pose`` (right-perturbation tangent), or None for no prior."""
-    if prior is None:
-        return 0.0, None, None
-    T_prior, info = prior
-    e = T_prior.logmap(pose)  # Logmap(T_prior.between(pose)) in one gtsam call, the same C++
-    return 0.5 * float(e @ info @ e), info @ e, info
-
-
 _ISOTROPIC: dict[tuple, np.ndarray] = {}
 
 
@@ -111,11 +103,6 @@ def _isotropic_information(rotation_deg: float, translation_m: float, residual_s
         info = _ISOTROPIC[key] = np.diag([1 / s_r**2] * 3 + [1 / s_t**2] * 3) * residual_sigma**2
         info.setflags(write=False)
     return info
-
-
-def _norm3(v: np.ndarray) -> float:
-    """``np.linalg.norm`` of a 3-vector by its own recipe (``sqrt(v.dot(v))``), without its dispatch (two per LM step)."""
-    return math.sqrt(v.dot(v))
 
 
 try:  # numpy's own LAPACK gufuncs behind np.linalg.eigvalsh / inv (the same call, the same bits)
@@ -145,46 +132,21 @@ def _levenberg_marquardt(pts, slots, fld, pose, K, config, loss, k, thr, prior=N
     normal_only = normal_tangents is not None
     if normal_only:
         tangents = normal_tangents
-    cur = [np.zeros((6, 6)), np.zeros(6), np.empty(m), np.empty(m), np.empty((m, 2))]
-    trial = [np.zeros((6, 6)), np.zeros(6), np.empty(m), np.empty(m), np.empty((m, 2))]
-    cost, inside, inl, swr2, swr2_in = _linearise_at(pts, slots, pose.inverse().matrix(), fx, fy, cx, cy, value, grad_u, grad_v,
-                                                     box, second, loss, k, thr, *cur, tangents, twist, lag_s, floor_px, extra,
-                                                     normal_only)
-    pc, pg, pI = _prior_terms(pose, prior)
-    with_prior = pI is not None
-    lam = float(config.lm_lambda)
-    min_lam = float(config.lm_lambda_min)
-    conv_rot, conv_trans, conv_ratio = config.convergence_rotation_rad, config.convergence_translation_m, config.convergence_cost_ratio
-    it = 0
-    for it in range(1, int(config.max_iterations) + 1):
-        if inside < 6:
-            break
-        prior_H, prior_b = (pI, pg) if with_prior else _NO_PRIOR_TERMS
-        delta, finite = _lm_step(cur[0], cur[1], prior_H, prior_b, with_prior, lam)
-        if not finite:
-            break  # singular (NaN) or overflowing system
-        cand = pose.compose(gtsam.Pose3.Expmap(delta))
-        c_cost, c_inside, c_inl, c_swr2, c_swr2_in = _linearise_at(pts, slots, cand.inverse().matrix(), fx, fy, cx, cy, value, grad_u,
-                                                                   grad_v, box, second, loss, k, thr, *trial, tangents, twist, lag_s,
-                                                                   floor_px, extra, normal_only)
-        c_pc, c_pg, _ = _prior_terms(cand, prior)
-        # Compare mean cost: the set of points inside the image may change with the pose.
-        old_mean = (cost + pc) / max(inside, 1)
-        new_mean = (c_cost + c_pc) / c_inside if c_inside > 0 else np.inf
-        if c_inside >= 6 and new_mean <= old_mean:
-            pose = cand
-            cost, inside, inl, swr2, swr2_in = c_cost, c_inside, c_inl, c_swr2, c_swr2_in
-            pc, pg = c_pc, c_pg
-            cur, trial = trial, cur
-            lam = max(lam * 0.3, min_lam)
-            small = _norm3(delta[:3]) < conv_rot and _norm3(delta[3:]) < conv_trans
-            if small or old_mean - new_mean < conv_ratio * old_mean:
-                break
-        else:
-            lam = lam * 10.0 if lam > 0 else 1e-4
-            if lam > 1e6:
-                break
-    return pose, cost, inside, inl, [swr2, swr2_in], cur[0].copy() if pI is None else cur[0] + pI, cur[2], cur[3], cur[4], it
+    cur = (np.zeros((6, 6)), np.zeros(6), np.empty(m), np.empty(m), np.empty((m, 2)))
+    trial = (np.zeros((6, 6)), np.zeros(6), np.empty(m), np.empty(m), np.empty((m, 2)))
+    with_prior = prior is not None
+    T = pose.matrix()
+    R, t = T[:3, :3].copy(), T[:3, 3].copy()
+    T_p, info = (prior[0].matrix(), prior[1]) if with_prior else (_EYE4, _NO_PRIOR_TERMS[0])
+    cost, inside, inl, swr2, swr2_in, it, swapped = lm_loop(
+        R, t, pts, slots, fx, fy, cx, cy, value, grad_u, grad_v, box, second, loss, k, thr, tangents, twist, lag_s, floor_px, extra,
+        normal_only, with_prior, T_p[:3, :3], T_p[:3, 3], info, float(config.lm_lambda), float(config.lm_lambda_min),
+        int(config.max_iterations), float(config.convergence_rotation_rad), float(config.convergence_translation_m),
+        float(config.convergence_cost_ratio), cur, trial)
+    if swapped:
+        cur = trial
+    T[:3, :3], T[:3, 3] = R, t
+    return gtsam.Pose3(mat=T), cost, inside, inl, [swr2, swr2_in], cur[0] + info if with_prior else cur[0].copy(), cur[2], cur[3], cur[4], it
 
 
 def register_to_map(
@@ -293,26 +255,21 @@ def register_to_map(
         return result(False, f"only {inside} map points project into the image (need {config.min_points})", None)
     if inl < config.min_inlier_ratio * inside:
         return result(False, f"only {inl} of {inside} map points lie on recent events (TDF < {thr:g})", None)
-    if not np.isfinite(H).all():
-        return result(False, "registration produced non-finite values", None)
-    d = np.sqrt(np.maximum(H.diagonal(), 1e-300))
-    eig = _eigvalsh(H / (d[:, None] * d[None, :]))  # np.outer's own expression, without its wrapper
-    if not eig[0] > 0 or eig[-1] / eig[0] > config.max_condition:  # not > 0: also NaN from a failed solver
-        return result(False, "degenerate geometry: the visible map does not constrain all 6 degrees of freedom", None)
     # Points reading TDF ~1 (their edge did not fire) add nothing to H but w r^2 ~ w each: counted in the residual
     # variance they inflate the covariance several times over (see ``ResidualVariance``).
     sigma2 = (swr2[1] if ResidualVariance(config.residual_variance) is ResidualVariance.INLIERS else swr2[0]) / max(inl - 6, 1)
-    if not sigma2 > 0:
+    # With ``prior_information`` the caller fuses the prior itself (a motion filter): the covariance is the events' alone.
+    # Moving the pose by ``lag`` (right) maps a body perturbation d to Ad(lag^-1) d.
+    without_prior = prior is not None and prior_information is not None
+    cov = np.empty((6, 6))
+    status = health_and_covariance(H, float(config.max_condition), sigma2, without_prior, prior[1] if without_prior else _ZERO6x6,
+                                   lag_inv.AdjointMap(), cov)
+    if status == NON_FINITE:
+        return result(False, "registration produced non-finite values", None)
+    if status == DEGENERATE:
+        return result(False, "degenerate geometry: the visible map does not constrain all 6 degrees of freedom", None)
+    if status == NO_WEIGHT:
         # Every residual outside the loss's support (Tukey with a scale below the residuals: weight 0): H is the prior's
         # alone and the covariance would be 0, which made the fused modes raise "Singular matrix" (session 25).
         return result(False, f"no map point's residual lies within the {RobustLoss(config.robust_loss).value} loss's scale {k:g} (all weights 0)", None)
-    if prior is not None and prior_information is not None:
-        # The caller fuses the prior itself (a motion filter): report what the events alone say.
-        H = H - prior[1]
-        if not _eigvalsh(0.5 * (H + H.T))[0] > 0:
-            return result(True, "", None)
-    cov = _inv(H) * sigma2
-    # Moving the pose by ``lag`` (right) maps a body perturbation d to Ad(lag^-1) d.
-    ad = lag_inv.AdjointMap()
-    cov = ad @ cov @ ad.T
-    return result(True, "", 0.5 * (cov + cov.T))
+    return result(True, "", None if status == NO_COVARIANCE else cov)
