@@ -22,9 +22,9 @@ groups' mean-lead variance on the 2 s flight (the class leads 0.58 / 0.53, with 
 groups whose pixels fire one event per passage (events / passage-starting events < 1.15, a quarter of the groups) sit
 -0.033 px (2 s) / -0.096 px (3 s) from their class lead, the others +0.00 to +0.04 (both polarities alike; ``ana4.py``): a
 barely-crossed threshold fires late in the transition. This module counts that ratio online per map point and adds
-``ContrastLeadConfig.lone_lead_px`` to both leads of the points whose ratio says "one event per passage" (online, at
-the end of seed 0's 2 s flight, it flags 19 % of the counted points, the whole-flight offline count 18 %, agreeing on
-90 %; ``online.py``).
+``ContrastLeadConfig.lone_lead_px`` (since session 43 ``lone_on_lead_px`` / ``lone_off_lead_px``) to both leads of
+the points whose ratio says "one event per passage" (online, at the end of seed 0's 2 s flight, it flags 19 % of the
+counted points, the whole-flight offline count 18 %, agreeing on 90 %; ``online.py``).
 
 Session 34's multiplicity proxy (``/tmp/s34/rim34/mult.py``: events per update times ``Z / |v|``) was inconclusive
 because it does not measure multiplicity: on these dumps it is uncorrelated with the events per passage (+0.00 to
@@ -57,9 +57,33 @@ but the built map holds a point every few millimetres, so each had only a median
 of them passed ``min_events``: hence ``pool_radius_m``, which sums the counts of the parallel neighbours. The ridge
 from the truth (``ridge.py`` on ``oracle.py`` runs): ``lone_lead_px`` -0.2 alone -9.3 / +136 and -11.8 / +166 (flight
 9), with ``min_events`` 3 -7.2 / +100 and -8.5 / +114, pooled over 5 cm -4.9 / +64 and -7.5 / +98; the defaults
-(-0.1, pooled) -7.0 / +102 and -9.8 / +139. Closed loop: see ``ContrastLeadConfig.lone_lead_px``. What is left: the
-lead is one number for every lone point, where the coverage model gives -0.26 px for this foot and about -0.03 on the
-nominal flight's lone points (a per-point lead from the pooled ratio through :func:`coverage_lead` is the next step).
+(-0.1, pooled) -7.0 / +102 and -9.8 / +139. Closed loop: see ``ContrastLeadConfig.lone_on_lead_px``. What is left: the
+lead was one number for every lone point, where the coverage model gives -0.26 px for this foot and about -0.03 on the
+nominal flight's lone points.
+
+Session 43 (``/tmp/s43/lead43``: ``evdump.py`` dumps every associated event of oracle runs, each registration from the
+true pose, with its offset along its point's image motion at the truth; ``ana.py`` / ``ana2.py`` / ``ana3.py``; lone =
+the pooled whole-run ratio < 1.15 with >= 10 events; px beyond the class leads): what separates the lone points whose
+events trail from those that do not is their polarity, not the point. Lone ON events sit -0.22 / -0.15 / +0.03 px
+(240x180 flights 2 / 9 / 1) and -0.18 / -0.16 / -0.20 (nominal seeds 0 / 1 / 2) against the other ON events' +0.02 /
++0.05 / +0.04 and 0.00 / -0.00 / -0.00: they trail by 0.16-0.24 px on both (flight 1 -0.01). Lone OFF events sit -0.19 /
+-0.35 / -0.12 and -0.04 / -0.06 / -0.05 against the other OFF events' -0.22 / -0.19 / -0.16 and -0.15 / -0.15 / -0.13:
+nothing common (+0.03 / -0.17 / +0.04, +0.11 / +0.09 / +0.09). (Session 35's "both polarities alike" was read against
+the map snapped onto the true edges, these against the built map the tracker registers.) The foot's events are all ON,
+the nominal flight's lone events 91-94 % OFF (the flights' other lone events 58-85 % OFF), so one lead for both
+polarities over-corrected the nominal flight. Hence ``lone_on_lead_px`` / ``lone_off_lead_px``. Per-point observables
+did not separate them: the share of a point's passage-starting events whose pixel had never fired (foot 0.94 / 0.83, the
+nominal flight's lone points 0.43 / 0.42 / 0.38, the flights' other lone points 0.52 / 0.45; by its terciles the other
+lone points trail less the higher it is, the opposite of the foot), the normal image speed (by terciles no common
+order), the events per swept pixel (the pool's events over its extent times ``|v|`` times the update window: too noisy
+to read a contrast from). Nor can the counts give :func:`coverage_lead` a per-point contrast: a fresh passage (reference
+reset, the first event at ``C``) of any ``D`` in ``[C, 2C)`` fires exactly one event, while its lead runs from -0.64 px
+(ON, ``D`` = 1.05 ``C``) through -0.29 (the foot's 1.25 ``C``) to +0.11 (2 ``C``); what would tell them apart is the
+events' timing, i.e. the residual the learned offsets already take. Closed loop: ``ContrastLeadConfig.lone_on_lead_px``
+(ON -0.2 with OFF -0.05 is better on every set of runs, the nominal flight's included, but not on the bundled demos: not
+changed). What is left: in the third second of the demo ``landing`` (normal image speed median 214 px/s) 54 % of the ON
+events count as lone and they do not trail (+0.04 px; ``ana4.py``, the passage start at 4 crossings instead of 2 the
+same); why the flag loses its meaning there is not known.
 """
 
 from __future__ import annotations
@@ -75,11 +99,11 @@ from scipy.spatial import cKDTree
 class ContrastLeadConfig:
     """Lead of the map points whose pixels fire one event per passage of their edge (see the module)."""
 
-    lone_lead_px: float = field(default=-0.1, metadata={"min": -1.0, "max": 1.0, "step": 0.01, "unit": "px"})
-    """Added to both the ON and OFF lead of a point whose events come one per pixel passage (``lone_max_ratio``),
-    pixels (negative = behind the edge along its motion; 0 = off). The oracle dumps put those points (a quarter of the
-    groups, 15-21 % of the events) -0.03 (2 s) / -0.08 to -0.11 px (3 s landing, 240x180) from their class leads, the
-    others +0.00 / +0.01 (``/tmp/s35/lead35/ana5.py``; of the variance the class leads leave this explains 4-5 % on
+    lone_on_lead_px: float = field(default=-0.1, metadata={"min": -1.0, "max": 1.0, "step": 0.01, "unit": "px"})
+    """Added to the ON lead of a point whose events come one per pixel passage (``lone_max_ratio``), pixels
+    (negative = behind the edge along its motion; 0 = off; its OFF lead takes ``lone_off_lead_px``; before session 43
+    one field, ``lone_lead_px``, set both). The oracle dumps put those points (a quarter of the groups, 15-21 % of the
+    events) -0.03 (2 s) / -0.08 to -0.11 px (3 s landing, 240x180) from their class leads, the others +0.00 / +0.01 (``/tmp/s35/lead35/ana5.py``; of the variance the class leads leave this explains 4-5 % on
     the 2 s flight, 14-22 % on the 3 s one).
 
     Off: it helps the 3 s flight only (``full`` from ground truth, the CLI path on the cached landings, paired against
@@ -107,7 +131,31 @@ class ContrastLeadConfig:
     9.035 -> 8.718, ``landing_dynamic`` 6.012 -> 7.748 (``demo.sh``): the nominal flight's lone points sit only -0.03
     px from their class leads (session 35), so there the lead over-corrects; 0 restores session 41's outputs bit for
     bit. CPU of a whole ``evpose track`` (240x180 flight 2, 3 alternated runs each, ``cpu.sh``): 5.00 s off, 5.06 s on
-    (user; noise +-0.5 s)."""
+    (user; noise +-0.5 s).
+
+    Per polarity since session 43 (the module has why: lone ON events trail the other ON events by 0.16-0.24 px on the
+    flights and the nominal flight alike, lone OFF events do not; ``/tmp/s43/lead43``: ``sets.sh``, ``sets.py``,
+    ``demo.sh``; ``full`` from ground truth, the CLI path on ``/tmp/s41/data/track``, paired against main 29e1c44 =
+    -0.1 / -0.1, mean ATE RMSE mm +- standard error, runs better, ARE deg). ON -0.2, OFF -0.05: 240x180 flights 1-12
+    (tuning) 12.126 -> 10.949 (-1.18 +- 0.41, 9 of 12), ARE 0.1597 -> 0.1429; held-out flights 13-24 13.798 -> 13.578
+    (-0.22 +- 0.34, 8 of 12), ARE 0.1608 -> 0.1571; 346x260 flights 1-12 and 15 11.198 -> 9.239 (-1.96 +- 0.99, 12 of
+    13), ARE 0.1569 -> 0.1320; nominal 240x180 seeds 0-23 4.922 -> 4.787 (-0.13 +- 0.09, 14 of 24), ARE 0.0562 ->
+    0.0547; nominal 346x260 seeds 0-23 4.204 -> 4.051 (-0.15 +- 0.06, 16 of 24), ARE 0.0471 -> 0.0462; nominal
+    240x180 seeds 24-35 5.292 -> 5.219 (-0.07 +- 0.14, 7 of 12), ARE 0.0592 -> 0.0609. ON -0.2, OFF 0:
+    11.054 (-1.07 +- 0.39, 11 of 12); 13.895 (+0.10 +- 0.35, 6 of 12); 10.163 (-1.04 +- 0.48, 11 of 13); 4.776 (-0.15 +-
+    0.15, 15 of 24); 4.027 (-0.18 +- 0.11, 14 of 24). ON -0.15, OFF 0: 11.774 (-0.35 +- 0.22, 10 of 12); nominal
+    240x180 4.802 (-0.12 +- 0.15, 15 of 24). But the bundled demos (346x260, 4 s; main 7.530 / 8.718 / 7.748
+    mm, session 41's 0 / 0 6.554 / 9.035 / 6.012) do not come back: ``landing`` / ``landing_fast`` /
+    ``landing_dynamic`` 8.261 / 9.342 / 6.796 (-0.2 / -0.05), 8.249 / 9.659 / 6.067 (-0.2 / 0), 7.719 / 9.508 / 6.073
+    (-0.15 / 0). On ``landing`` (``evdump.py``, counts pooled per second) the lone ON events trail the other ON events
+    by only 0.07 px over its 4 s (0.15 in its first second; in its third, where 54 % of its ON events count as lone,
+    they lead them by 0.04), the lone OFF events +0.01 px from the other OFF ones.
+    So not changed: -0.1 / -0.1 as session 42 (bit for bit); ``lone_off_lead_px`` has the rest."""
+    lone_off_lead_px: float = field(default=-0.1, metadata={"min": -1.0, "max": 1.0, "step": 0.01, "unit": "px"})
+    """Added to the OFF lead of a point whose events come one per pixel passage, pixels (0 = off). Session 43's oracle
+    dumps put the lone OFF events +0.03 / -0.17 / +0.04 px (240x180 flights 2 / 9 / 1) and +0.11 / +0.09 / +0.09
+    (nominal seeds 0 / 1 / 2) from the other OFF events; with ``lone_on_lead_px`` -0.2, -0.05 and 0 were measured (the
+    figures there)."""
     lone_max_ratio: float = field(default=1.15, metadata={"min": 1.0, "max": 5.0, "step": 0.05, "unit": "events/passage"})
     """A point whose running events per passage (events over the passage-starting ones) is below this fires 'one per
     passage', events per passage."""
@@ -123,7 +171,7 @@ class ContrastLeadConfig:
     edges run parallel to its own (absolute tangent cosine at least ``pool_min_cos``), metres (0 = its own counts
     only). The built maps hold a point every few millimetres, so along a low-contrast edge each point sees only 2-5
     events in its first second (session 42: a building's foot on flights 2 / 9, ratio 1.0, median 3.9 counted
-    events at 0.8 s) and is never trusted alone. 0.05 since session 42 (figures at ``lone_lead_px``); building the
+    events at 0.8 s) and is never trusted alone. 0.05 since session 42 (figures at ``lone_on_lead_px``); building the
     neighbour lists takes ~1 s at start-up on a 97,000-point map (``pool_neighbours``, under load)."""
     pool_min_cos: float = field(default=0.9, metadata={"min": 0.0, "max": 1.0, "step": 0.01, "unit": "cos"})
     """Least absolute cosine between two points' edge tangents for ``pool_radius_m`` to pool their counts, cosine."""
@@ -182,7 +230,7 @@ def _count_passages(n, assoc, used, pts, tg, eg, R_cw, t_cw, fx, fy, cx, cy, twi
 
 
 @nb.njit(cache=True)
-def _add_lone(used, events, starts, min_events, max_ratio, lead, on, off, indptr, indices):  # pragma: no cover
+def _add_lone(used, events, starts, min_events, max_ratio, lead_on, lead_off, on, off, indptr, indices):  # pragma: no cover
     # With neighbour lists (``indptr`` of N + 1 entries, CSR, each point's own row included) a point reads the sums of
     # its neighbours' counts; an empty ``indptr`` = its own counts.
     pooled = indptr.shape[0] > 0
@@ -195,8 +243,8 @@ def _add_lone(used, events, starts, min_events, max_ratio, lead, on, off, indptr
                 e += events[indices[q]]
                 s += starts[indices[q]]
         if e >= min_events and s > 0.0 and e < max_ratio * s:
-            on[k] += lead
-            off[k] += lead
+            on[k] += lead_on
+            off[k] += lead_off
 
 
 def pool_neighbours(points: np.ndarray, tangents: np.ndarray, radius: float, min_cos: float) -> tuple[np.ndarray, np.ndarray]:
@@ -255,10 +303,11 @@ class PassageCounts:
                         float(c.crossings), 1.0 - 1.0 / max(float(c.memory_events), 1.0), self.events, self.starts)
 
     def add_leads(self, used, on: np.ndarray, off: np.ndarray) -> None:
-        """Adds ``lone_lead_px`` to the ON / OFF leads (as ``used``) of the points firing one event per passage."""
+        """Adds ``lone_on_lead_px`` / ``lone_off_lead_px`` to the ON / OFF leads (as ``used``) of the points firing one
+        event per passage."""
         c = self.config
         _add_lone(np.ascontiguousarray(used, np.int64), self.events, self.starts, float(c.min_events), float(c.lone_max_ratio),
-                  float(c.lone_lead_px), on, off, self._indptr, self._indices)
+                  float(c.lone_on_lead_px), float(c.lone_off_lead_px), on, off, self._indptr, self._indices)
 
     def ratio(self) -> np.ndarray:
         """Each point's running events per passage (NaN before any passage)."""

@@ -307,8 +307,8 @@ class EventRegistration:
                                  float(c.first_off_lead_px), float(c.follower_off_lead_px)])
                        if float(c.follower_crossings) > 0 else _NO_BURST)
         self._passages = (PassageCounts(c.contrast, self._base.shape[0], self._base, self._tangents)
-                          if float(c.contrast.lone_lead_px) != 0 else None)
-        """Events per pixel passage of each point, for ``contrast.lone_lead_px``; None when that is off."""
+                          if float(c.contrast.lone_on_lead_px) != 0 or float(c.contrast.lone_off_lead_px) != 0 else None)
+        """Events per pixel passage of each point, for ``contrast.lone_on_lead_px`` / ``lone_off_lead_px``; None when both are off."""
         self._pixel_last = (np.full(2 * self._width * self._height, NO_EVENT, np.int64)
                             if self._burst.size or self._passages is not None else None)
         """Each pixel's latest event time per polarity (us), for ``follower_crossings`` and ``contrast``; None when off."""

@@ -81,7 +81,7 @@ def _one_point(events_per_passage: int, passages: int, cfg: ContrastLeadConfig, 
 
 
 def test_the_running_events_per_passage_converge_to_the_pixels_passage_size():
-    cfg = ContrastLeadConfig(lone_lead_px=-0.1, memory_events=50.0)
+    cfg = ContrastLeadConfig(memory_events=50.0)
     for k in (1, 2, 3):
         r = _one_point(k, 60, cfg).ratio()
         assert abs(r[1] - k) < 0.05 * k and np.isnan(r[0]) and np.isnan(r[2])
@@ -93,7 +93,7 @@ def test_the_running_events_per_passage_converge_to_the_pixels_passage_size():
 
 
 def test_only_points_firing_one_event_per_passage_take_the_lead():
-    cfg = ContrastLeadConfig(lone_lead_px=-0.1)
+    cfg = ContrastLeadConfig(lone_on_lead_px=-0.1, lone_off_lead_px=-0.1)
     for k, expect in ((1, -0.1), (2, 0.0)):
         counts = _one_point(k, 30, cfg)
         on, off = np.array([0.05, 0.05]), np.array([-0.1, -0.1])
@@ -105,13 +105,21 @@ def test_only_points_firing_one_event_per_passage_take_the_lead():
     assert on[0] == 0 and off[0] == 0
 
 
+def test_each_polarity_of_a_lone_point_takes_its_own_lead():
+    counts = _one_point(1, 30, ContrastLeadConfig(lone_on_lead_px=-0.2, lone_off_lead_px=0.05))
+    on, off = np.array([0.05, 0.05]), np.array([-0.1, -0.1])
+    counts.add_leads(np.array([1, 0]), on, off)
+    assert np.allclose(on, [-0.15, 0.05]) and np.allclose(off, [-0.05, -0.1])
+
+
 def test_the_registration_takes_the_lone_points_lead_out():
-    # Every event trails its edge by 0.1 px and starts its pixel's passage: with the option the lead is taken out.
+    # Every (OFF) event trails its edge by 0.1 px and starts its pixel's passage: the OFF lone lead takes that out;
+    # the ON one, far off, touches no OFF event.
     cmap = ground_lines()
     events = exact_events(cmap, lead_px=-0.1, polarity=-1, seed=1, n=3000)
     gaps = np.full(3000, 2 ** 62)
     used = np.arange(len(cmap))
-    on = registration(cmap, contrast=ContrastLeadConfig(lone_lead_px=-0.1, min_events=0.0))
+    on = registration(cmap, contrast=ContrastLeadConfig(lone_on_lead_px=-0.5, lone_off_lead_px=-0.1, min_events=0.0))
     with_lead = on.refine(perturbed(), used, None, *events, T_REF, TWIST, K, None, gaps)
     without = registration(cmap).refine(perturbed(), used, None, *events, T_REF, TWIST, K, None, gaps)
     assert np.abs(error(with_lead[0])).max() < 2e-5
@@ -120,7 +128,7 @@ def test_the_registration_takes_the_lone_points_lead_out():
 
 def test_the_counts_are_snapshotted_and_restored_and_off_keeps_the_old_state():
     cmap = ground_lines()
-    reg = registration(cmap, contrast=ContrastLeadConfig(lone_lead_px=-0.1))
+    reg = registration(cmap, contrast=ContrastLeadConfig(lone_on_lead_px=-0.1))
     assert reg._pixel_last is not None  # the pixel history is kept for the passages
     reg._passages.events[4], reg._passages.starts[4] = 7.0, 3.0
     state = reg.snapshot()
@@ -131,16 +139,19 @@ def test_the_counts_are_snapshotted_and_restored_and_off_keeps_the_old_state():
     assert not reg._passages.events.any()
     off = registration(cmap)
     assert off._passages is None and isinstance(off.snapshot(), np.ndarray)
+    assert registration(cmap, contrast=ContrastLeadConfig(lone_on_lead_px=0.0, lone_off_lead_px=-0.1))._passages is not None
 
 
 def test_the_option_reads_from_a_config_file_mapping():
     from evpose.io.config_file import config_from_dict
     from evpose.tracker.config import TrackerConfig
 
-    cfg = config_from_dict(TrackerConfig, {"event_registration": {"contrast": {"lone_lead_px": -0.05, "lone_max_ratio": 1.3}}})
-    assert cfg.event_registration.contrast.lone_lead_px == -0.05 and cfg.event_registration.contrast.lone_max_ratio == 1.3
+    cfg = config_from_dict(TrackerConfig, {"event_registration": {"contrast": {"lone_on_lead_px": -0.05, "lone_off_lead_px": 0.02,
+                                                                              "lone_max_ratio": 1.3}}})
+    c = cfg.event_registration.contrast
+    assert c.lone_on_lead_px == -0.05 and c.lone_off_lead_px == 0.02 and c.lone_max_ratio == 1.3
     # on by default since session 42, its counts pooled along each edge
     default = TrackerConfig().event_registration.contrast
-    assert default.lone_lead_px == -0.1 and default.pool_radius_m == 0.05
-    cfg = config_from_dict(TrackerConfig, {"event_registration": {"contrast": {"lone_lead_px": 0.0, "pool_radius_m": 0.0}}})
-    assert cfg.event_registration.contrast.lone_lead_px == 0.0 and cfg.event_registration.contrast.pool_radius_m == 0.0
+    assert default.lone_on_lead_px == -0.1 and default.lone_off_lead_px == -0.1 and default.pool_radius_m == 0.05
+    cfg = config_from_dict(TrackerConfig, {"event_registration": {"contrast": {"lone_on_lead_px": 0.0, "pool_radius_m": 0.0}}})
+    assert cfg.event_registration.contrast.lone_on_lead_px == 0.0 and cfg.event_registration.contrast.pool_radius_m == 0.0

@@ -28,13 +28,13 @@ def test_pooled_counts_trust_points_whose_own_counts_are_too_few():
     pts, tg = _line_and_cross()
     on_own, on_pool = np.zeros(5), np.zeros(5)
     for radius, on in ((0.0, on_own), (0.05, on_pool)):
-        counts = PassageCounts(ContrastLeadConfig(lone_lead_px=-0.2, min_events=10.0, pool_radius_m=radius), len(pts), pts, tg)
+        counts = PassageCounts(ContrastLeadConfig(lone_on_lead_px=-0.2, min_events=10.0, pool_radius_m=radius), len(pts), pts, tg)
         counts.events[:5], counts.starts[:5] = 3.0, 3.0  # each point: 3 events, one per passage
         counts.events[5], counts.starts[5] = 3.0, 1.0  # the crossing edge fires 3 per passage
         counts.add_leads(np.arange(5), on, np.zeros(5))
     assert not on_own.any()  # 3 events each: below min_events alone
     assert np.allclose(on_pool, -0.2)  # 15 pooled events at one per passage
-    mixed = PassageCounts(ContrastLeadConfig(lone_lead_px=-0.2, min_events=10.0, pool_radius_m=0.05), len(pts), pts, tg)
+    mixed = PassageCounts(ContrastLeadConfig(lone_on_lead_px=-0.2, min_events=10.0, pool_radius_m=0.05), len(pts), pts, tg)
     mixed.events[:5], mixed.starts[:5] = 6.0, 3.0  # two per passage: not lone, pooled or not
     on = np.zeros(5)
     mixed.add_leads(np.arange(5), on, np.zeros(5))

@@ -70,7 +70,7 @@ def error(T: np.ndarray) -> np.ndarray:
     return gtsam.Pose3.Logmap(gtsam.Pose3(pose_at(T_REF)).between(gtsam.Pose3(T)))
 
 
-_NO_LONE = ContrastLeadConfig(lone_lead_px=0.0)
+_NO_LONE = ContrastLeadConfig(lone_on_lead_px=0.0, lone_off_lead_px=0.0)
 """The lone-point lead (on by default) off: these synthetic events carry no pixel history, so every point is 'lone'."""
 
 
