@@ -78,6 +78,21 @@ directions. Widening the young map's BA window to keep the initial keyframes fre
 either (prototype, removed): the event-only local BA ran 14 times on indoor seed 0, every time on a map of at most ten
 keyframes, which ``ba_window`` 10 already covers whole (coasted keyframes skip the BA); indoor seeds 0-3 were
 bit-identical to main.
+
+Session 43 (ysa43, ``/tmp/s43/ysa43``: ``run.sh`` / ``sum.py`` as young42's, main 29e1c44's defaults; fresh
+recordings ``gen.sh indoor 29-44`` / ``landing 13-20``), held-out: ``ysa`` indoor 29-44 1.598 -> 2.077 % (+0.479 +-
+0.469, 10 better, 6 worse; median 1.578 -> 1.475; within 2 % and 80 % tracked 16 -> 14 of 16; 36 1.84 -> 9.25,
+44 1.99 -> 3.05), landing 13-20 1.204 -> 2.169 % (+0.965 +- 0.864, 2 / 6; median 1.158 -> 1.217; within 8 -> 7;
+19 1.72 -> 8.66, 15 0.85 -> 1.86). Variants on the landing 0-12 (tuning), all worse than ``ysa`` there, so not run
+indoors: ``speed_prior`` 0.3 1.377 -> 2.282 % (+0.904 +- 0.736, 3 / 10; 8 1.98 -> 11.07, 6 1.27 -> 4.36),
+``max_age_s`` 0.5 1.583 % (+0.206 +- 0.177, 3 / 7; within 12 -> 10), ``span_s`` 0.15 1.725 % (+0.348 +- 0.381,
+3 / 6; 6 1.27 -> 5.97). Why the landing's typical seed loses: the flight speeds up 2.3 -> 4.4 m/s over its first
+second (the same flight on every seed), when the prior acts (age 0.27-1 s); ``ysa`` pulls every landing seed towards
+1.1-1.9 % (0.78-1.12 % seeds worse, 1.7-2.2 % seeds better), the worse ones in the map's last third (seed 10 40 ->
+133 mm RMS). In main's landing maps the first second's keyframe steps already differ from the reference speed by
+0.40-1.59 times (``diag.py``, seeds 2 and 10), as much as the rooms' (0.13-2.16 under the prior), so a gate on the
+steps' disagreement would not tell the scenes apart (not run): a constant-speed prior cannot tell a speeding camera
+from a drifting scale without an IMU. Off.
 """
 
 from __future__ import annotations
