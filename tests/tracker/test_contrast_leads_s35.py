@@ -152,6 +152,6 @@ def test_the_option_reads_from_a_config_file_mapping():
     assert c.lone_on_lead_px == -0.05 and c.lone_off_lead_px == 0.02 and c.lone_max_ratio == 1.3
     # on by default since session 42, its counts pooled along each edge
     default = TrackerConfig().event_registration.contrast
-    assert default.lone_on_lead_px == -0.1 and default.lone_off_lead_px == -0.1 and default.pool_radius_m == 0.05
+    assert default.lone_on_lead_px == -0.2 and default.lone_off_lead_px == -0.05 and default.pool_radius_m == 0.05
     cfg = config_from_dict(TrackerConfig, {"event_registration": {"contrast": {"lone_on_lead_px": 0.0, "pool_radius_m": 0.0}}})
     assert cfg.event_registration.contrast.lone_on_lead_px == 0.0 and cfg.event_registration.contrast.pool_radius_m == 0.0
