@@ -22,7 +22,8 @@ import numpy as np
 
 from evpose.tracker.event_registration_kernels import _linearise_events
 from evpose.tracker.registration_kernels import _damped_step, _lm_step
-from evpose.core.se3_kernels import between_log, inverse_into, step_pose
+from evpose.core.se3_kernels import inverse_into, step_pose
+from evpose.tracker.field_lm_kernel import prior_cost_gradient
 
 _EYE4 = np.eye(4)
 _ZERO6x6 = np.zeros((6, 6))
@@ -37,6 +38,7 @@ def gauss_newton_passes(iterations, min_events, R, t, with_prior, R_p, t_p, info
     ``swr`` there and its camera-from-world pose in ``R_cw``, ``t_cw``. Returns (ok, events used, sum of w r^2):
     not ok when a pass uses fewer than ``min_events`` events or a step is not finite (the pose is then undefined)."""
     e = np.empty(6)
+    g = np.empty(6)
     Hp = np.empty((6, 6))
     bp = np.empty(6)
     for it in range(iterations + 1):
@@ -48,13 +50,11 @@ def gauss_newton_passes(iterations, min_events, R, t, with_prior, R_p, t_p, info
         if it == iterations:
             return True, n_used, swr2
         if with_prior:  # H + info, b + info Log(T_p^-1 T)
-            between_log(R_p, t_p, R, t, e)
+            prior_cost_gradient(R, t, R_p, t_p, info, e, g)
             for r in range(6):
-                acc = 0.0
                 for c in range(6):
                     Hp[r, c] = H[r, c] + info[r, c]
-                    acc += info[r, c] * e[c]
-                bp[r] = b[r] + acc
+                bp[r] = b[r] + g[r]
             delta = _damped_step(Hp, bp, 0.0)
         else:
             delta = _damped_step(H, b, 0.0)

@@ -27,7 +27,7 @@ from evpose.core.spd_kernels import spd_inverse, sym_eigenvalues
 
 
 @nb.njit(cache=True, inline="always")
-def _prior_cost_gradient(R, t, R_p, t_p, info, e, g):
+def prior_cost_gradient(R, t, R_p, t_p, info, e, g):
     """0.5 e^T info e of ``e = Log(T_p^-1 T)``, with ``g`` := info e (the pose prior's cost and gradient)."""
     between_log(R_p, t_p, R, t, e)
     cost = 0.0
@@ -65,7 +65,7 @@ def lm_loop(R, t, pts, slots, fx, fy, cx, cy, value, grad_u, grad_v, box, second
     cost, inside, inl, swr2, swr2_in = _linearise(pts, slots, R_cw, t_cw, fx, fy, cx, cy, value, grad_u, grad_v, box, second, loss, k, thr,
                                                   cur[0], cur[1], cur[2], cur[3], cur[4], tangents, twist, lag_s, floor_px, extra,
                                                   normal_only)
-    pc = _prior_cost_gradient(R, t, R_p, t_p, info, e, pg) if with_prior else 0.0
+    pc = prior_cost_gradient(R, t, R_p, t_p, info, e, pg) if with_prior else 0.0
     swapped = False
     it = 0
     for it in range(1, max_iterations + 1):
@@ -91,7 +91,7 @@ def lm_loop(R, t, pts, slots, fx, fy, cx, cy, value, grad_u, grad_v, box, second
         c_cost, c_inside, c_inl, c_swr2, c_swr2_in = _linearise(pts, slots, R_cw, t_cw, fx, fy, cx, cy, value, grad_u, grad_v, box, second,
                                                                 loss, k, thr, trial[0], trial[1], trial[2], trial[3], trial[4], tangents,
                                                                 twist, lag_s, floor_px, extra, normal_only)
-        c_pc = _prior_cost_gradient(Rc, tc, R_p, t_p, info, e, c_pg) if with_prior else 0.0
+        c_pc = prior_cost_gradient(Rc, tc, R_p, t_p, info, e, c_pg) if with_prior else 0.0
         # Compare mean cost: the set of points inside the image may change with the pose.
         old_mean = (cost + pc) / max(inside, 1)
         new_mean = (c_cost + c_pc) / c_inside if c_inside > 0 else np.inf

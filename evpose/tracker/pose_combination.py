@@ -64,9 +64,10 @@ def _combine_kernel(T_f, cov_f, T_e, cov_e, convex, T, P):
     t = np.empty(3)
     se3_exp(step, dR, dt)
     compose_into(T_f[:3, :3], T_f[:3, 3], dR, dt, R, t)
-    for i in range(4):
-        for j in range(4):
-            T[i, j] = R[i, j] if i < 3 and j < 3 else (t[i] if j == 3 and i < 3 else (1.0 if i == 3 and j == 3 else 0.0))
+    T[:] = 0.0
+    T[:3, :3] = R
+    T[:3, 3] = t
+    T[3, 3] = 1.0
     return True
 
 

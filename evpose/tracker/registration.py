@@ -105,19 +105,14 @@ def _isotropic_information(rotation_deg: float, translation_m: float, residual_s
     return info
 
 
-try:  # numpy's own LAPACK gufuncs behind np.linalg.eigvalsh / inv (the same call, the same bits)
+try:  # numpy's own LAPACK gufunc behind np.linalg.inv (the same call, the same bits)
     from numpy.linalg import _umath_linalg as _lapack
-
-    def _eigvalsh(a: np.ndarray) -> np.ndarray:
-        """``np.linalg.eigvalsh`` of a finite symmetric float64 matrix without its wrapper's checks and error-state
-        context (~6 us of the ~10 it costs on a 6x6); a LAPACK failure reads NaN, which the callers' tests reject."""
-        return _lapack.eigvalsh_lo(a, signature="d->d")
 
     def _inv(a: np.ndarray) -> np.ndarray:
         """``np.linalg.inv`` of a positive-definite float64 matrix (checked by the caller), without its wrapper."""
         return _lapack.inv(a, signature="d->d")
-except (ImportError, AttributeError):  # another numpy layout: the public functions
-    _eigvalsh, _inv = np.linalg.eigvalsh, np.linalg.inv
+except (ImportError, AttributeError):  # another numpy layout: the public function
+    _inv = np.linalg.inv
 
 
 def _levenberg_marquardt(pts, slots, fld, pose, K, config, loss, k, thr, prior=None, floor=None, normal_tangents=None):
