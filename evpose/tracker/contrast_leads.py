@@ -80,8 +80,8 @@ to read a contrast from). Nor can the counts give :func:`coverage_lead` a per-po
 reset, the first event at ``C``) of any ``D`` in ``[C, 2C)`` fires exactly one event, while its lead runs from -0.64 px
 (ON, ``D`` = 1.05 ``C``) through -0.29 (the foot's 1.25 ``C``) to +0.11 (2 ``C``); what would tell them apart is the
 events' timing, i.e. the residual the learned offsets already take. Closed loop: ``ContrastLeadConfig.lone_on_lead_px``
-(ON -0.2 with OFF -0.05 is better on every set of runs, the nominal flight's included, but not on the bundled demos: not
-changed). What is left: in the third second of the demo ``landing`` (normal image speed median 214 px/s) 54 % of the ON
+(ON -0.2 with OFF -0.05 is better on every set of runs, the nominal flight's included, though not on two of the three
+bundled demos: the default since session 43). What is left: in the third second of the demo ``landing`` (normal image speed median 214 px/s) 54 % of the ON
 events count as lone and they do not trail (+0.04 px; ``ana4.py``, the passage start at 4 crossings instead of 2 the
 same); why the flag loses its meaning there is not known.
 """
